@@ -37,9 +37,17 @@ impl Frame {
         let sign = f32::from_bits(1.0f32.to_bits() | (normal.z.to_bits() & 0x8000_0000));
         let a = -1.0 / (sign + normal.z);
         let b = normal.x * normal.y * a;
-        let tangent = Vec3::new(1.0 + sign * normal.x * normal.x * a, sign * b, -sign * normal.x);
+        let tangent = Vec3::new(
+            1.0 + sign * normal.x * normal.x * a,
+            sign * b,
+            -sign * normal.x,
+        );
         let bitangent = Vec3::new(b, sign + normal.y * normal.y * a, -normal.y);
-        Self { tangent, bitangent, normal }
+        Self {
+            tangent,
+            bitangent,
+            normal,
+        }
     }
 
     /// Maps a vector given in local coordinates to world coordinates.
@@ -53,7 +61,11 @@ impl Frame {
     #[inline]
     #[must_use]
     pub fn to_local(&self, world: Vec3) -> Vec3 {
-        Vec3::new(world.dot(self.tangent), world.dot(self.bitangent), world.dot(self.normal))
+        Vec3::new(
+            world.dot(self.tangent),
+            world.dot(self.bitangent),
+            world.dot(self.normal),
+        )
     }
 }
 
@@ -76,7 +88,11 @@ mod tests {
             Vec3::new(0.3, -0.9, 1e-7).normalize(),
         ];
         for n in dirs {
-            let n = if n.length_squared() == 0.0 { Vec3::Z } else { n };
+            let n = if n.length_squared() == 0.0 {
+                Vec3::Z
+            } else {
+                n
+            };
             let f = Frame::from_normal(n);
             for v in [f.tangent, f.bitangent, f.normal] {
                 assert!((v.length() - 1.0).abs() < 1e-6, "{n}: {v}");

@@ -51,6 +51,8 @@
 #![no_std]
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
+// `!(x > 0.0)` is how this crate rejects NaN together with the out-of-range values.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 #![cfg_attr(docsrs, feature(doc_cfg))]
 
 #[cfg(feature = "std")]
@@ -74,8 +76,15 @@ mod features {
 
 pub use error::{MixtureError, VmfError};
 pub use frame::Frame;
-pub use mean_cosine::{KAPPA_MAX, kappa_from_mean_cosine, kappa_from_mean_cosine_exact, mean_cosine_from_kappa};
+pub use mean_cosine::{
+    KAPPA_MAX, kappa_from_mean_cosine, kappa_from_mean_cosine_exact, mean_cosine_from_kappa,
+};
 pub use mixture::VmfMixture;
 pub use product::CLAMPED_COSINE_KAPPA;
 pub use sufficient_stats::{FitParams, MapPrior, MeanCosineUpdate, PriorDecay, SufficientStats};
 pub use vmf::{UNIFORM_SPHERE_PDF, Vmf};
+
+/// The README's example, compiled and run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

@@ -51,7 +51,11 @@ impl<const K: usize> VmfMixture<K> {
             sum += w;
         }
         if !(sum > 0.0 && sum.is_finite()) {
-            return Err(if sum > 0.0 { MixtureError::WeightNotFinite } else { MixtureError::WeightsSumToZero });
+            return Err(if sum > 0.0 {
+                MixtureError::WeightNotFinite
+            } else {
+                MixtureError::WeightsSumToZero
+            });
         }
         let weights = weights.map(|w| w / sum);
         Ok(Self { lobes, weights })
@@ -128,11 +132,26 @@ mod tests {
     #[test]
     fn validates_weights() {
         let l = [Vmf::uniform(); 2];
-        assert_eq!(VmfMixture::new(l, [1.0, f32::NAN]), Err(MixtureError::WeightNotFinite));
-        assert_eq!(VmfMixture::new(l, [1.0, -0.5]), Err(MixtureError::WeightNegative));
-        assert_eq!(VmfMixture::new(l, [0.0, 0.0]), Err(MixtureError::WeightsSumToZero));
-        assert_eq!(VmfMixture::new(l, [f32::MAX, f32::MAX]), Err(MixtureError::WeightNotFinite));
-        assert_eq!(VmfMixture::<0>::new([], []), Err(MixtureError::WeightsSumToZero));
+        assert_eq!(
+            VmfMixture::new(l, [1.0, f32::NAN]),
+            Err(MixtureError::WeightNotFinite)
+        );
+        assert_eq!(
+            VmfMixture::new(l, [1.0, -0.5]),
+            Err(MixtureError::WeightNegative)
+        );
+        assert_eq!(
+            VmfMixture::new(l, [0.0, 0.0]),
+            Err(MixtureError::WeightsSumToZero)
+        );
+        assert_eq!(
+            VmfMixture::new(l, [f32::MAX, f32::MAX]),
+            Err(MixtureError::WeightNotFinite)
+        );
+        assert_eq!(
+            VmfMixture::<0>::new([], []),
+            Err(MixtureError::WeightsSumToZero)
+        );
         let m = VmfMixture::new(l, [1.0, 3.0]).unwrap();
         assert_eq!(m.weights(), &[0.25, 0.75]);
     }

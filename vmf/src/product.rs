@@ -84,18 +84,38 @@ mod tests {
     #[test]
     fn product_is_pointwise_exact() {
         let pairs = [
-            (Vmf::new(Vec3::Z, 10.0).unwrap(), Vmf::new(Vec3::new(1.0, 0.0, 1.0), 3.0).unwrap()),
-            (Vmf::new(Vec3::X, 0.0).unwrap(), Vmf::new(Vec3::Y, 50.0).unwrap()),
-            (Vmf::new(Vec3::Z, 200.0).unwrap(), Vmf::new(Vec3::Z, 300.0).unwrap()),
-            (Vmf::new(Vec3::Z, 4.0).unwrap(), Vmf::new(-Vec3::Z, 4.0).unwrap()),
+            (
+                Vmf::new(Vec3::Z, 10.0).unwrap(),
+                Vmf::new(Vec3::new(1.0, 0.0, 1.0), 3.0).unwrap(),
+            ),
+            (
+                Vmf::new(Vec3::X, 0.0).unwrap(),
+                Vmf::new(Vec3::Y, 50.0).unwrap(),
+            ),
+            (
+                Vmf::new(Vec3::Z, 200.0).unwrap(),
+                Vmf::new(Vec3::Z, 300.0).unwrap(),
+            ),
+            (
+                Vmf::new(Vec3::Z, 4.0).unwrap(),
+                Vmf::new(-Vec3::Z, 4.0).unwrap(),
+            ),
         ];
         for (a, b) in pairs {
             let (c, scale) = a.product(&b);
             assert!(scale.is_finite() && scale > 0.0);
-            for w in [Vec3::Z, Vec3::X, Vec3::new(0.3, 0.1, 0.9).normalize(), Vec3::new(0.6, 0.0, 0.8)] {
+            for w in [
+                Vec3::Z,
+                Vec3::X,
+                Vec3::new(0.3, 0.1, 0.9).normalize(),
+                Vec3::new(0.6, 0.0, 0.8),
+            ] {
                 let lhs = a.pdf(w) * b.pdf(w);
                 let rhs = scale * c.pdf(w);
-                assert!((lhs - rhs).abs() <= 1e-4 * lhs.max(1e-30), "{a:?} {b:?} {w}: {lhs} vs {rhs}");
+                assert!(
+                    (lhs - rhs).abs() <= 1e-4 * lhs.max(1e-30),
+                    "{a:?} {b:?} {w}: {lhs} vs {rhs}"
+                );
             }
         }
     }

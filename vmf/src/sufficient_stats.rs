@@ -95,13 +95,21 @@ pub struct MapPrior {
 
 impl MapPrior {
     /// No prior at all: the lobe is the plain maximum-likelihood fit.
-    pub const NONE: Self = Self { mean_cosine: 0.0, weight: 0.0, decay: PriorDecay::SquaredCount };
+    pub const NONE: Self = Self {
+        mean_cosine: 0.0,
+        weight: 0.0,
+        decay: PriorDecay::SquaredCount,
+    };
 
     /// An uninformed prior r_p = 0 with `weight` virtual samples and the N² decay of the papers.
     #[inline]
     #[must_use]
     pub const fn uninformed(weight: f32) -> Self {
-        Self { mean_cosine: 0.0, weight, decay: PriorDecay::SquaredCount }
+        Self {
+            mean_cosine: 0.0,
+            weight,
+            decay: PriorDecay::SquaredCount,
+        }
     }
 
     /// MCPG's distance prior (sec. 4 "Step 2", Alg. 2 line 7): r_p = 0 and
@@ -144,8 +152,12 @@ impl Default for MapPrior {
 /// for y in [Vec3::new(0.1, 0.0, 5.0), Vec3::new(-0.1, 0.05, 5.0), Vec3::new(0.0, -0.1, 5.0)] {
 ///     stats.update(x, y, 2.0, &FitParams::MCMM);
 /// }
-/// let lobe = stats.to_vmf(x, MapPrior::uninformed(0.2)).unwrap();
-/// assert!(lobe.mu().z > 0.99 && lobe.kappa() > 100.0);
+/// // Three samples 0.02 rad apart: the plain fit is very narrow ...
+/// let fit = stats.to_vmf(x, MapPrior::NONE).unwrap();
+/// assert!(fit.mu().z > 0.999 && fit.kappa() > 1000.0);
+/// // ... while 0.2 virtual samples of a uniform prior (r_p = 0) keep it wider while N is small.
+/// let map = stats.to_vmf(x, MapPrior::uninformed(0.2)).unwrap();
+/// assert!(map.kappa() > 20.0 && map.kappa() < 100.0);
 /// ```
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -165,7 +177,12 @@ const _: () = assert!(core::mem::size_of::<SufficientStats>() == 24);
 
 impl SufficientStats {
     /// Empty statistics (all zero): no lobe can be reconstructed.
-    pub const EMPTY: Self = Self { mean_target: Vec3::ZERO, weight_sum: 0.0, mean_cosine: 0.0, sample_count: 0 };
+    pub const EMPTY: Self = Self {
+        mean_target: Vec3::ZERO,
+        weight_sum: 0.0,
+        mean_cosine: 0.0,
+        sample_count: 0,
+    };
 
     /// `true` when the statistics carry weight (`w̄ > 0`, MCMM sec. 4.1 "valid").
     #[inline]
@@ -199,7 +216,9 @@ impl SufficientStats {
         }
         let max_count = params.max_count.max(1);
         let count = self.sample_count.saturating_add(1).min(max_count);
-        let alpha = (1.0 / count as f32).max(params.alpha_min.clamp(0.0, 1.0)).min(1.0);
+        let alpha = (1.0 / count as f32)
+            .max(params.alpha_min.clamp(0.0, 1.0))
+            .min(1.0);
         let weight_sum = self.weight_sum + alpha * (weight - self.weight_sum);
         self.sample_count = count;
         if !(weight_sum > 0.0) {
@@ -215,14 +234,13 @@ impl SufficientStats {
             direction
         };
         self.mean_cosine = match params.mean_cosine_update {
-            MeanCosineUpdate::Resultant => {
-                (mean_direction * ((1.0 - beta) * self.mean_cosine) + direction * beta)
-                    .length()
-                    .min(1.0)
-            }
-            MeanCosineUpdate::Projected => {
-                ((1.0 - beta) * self.mean_cosine + beta * direction.dot(mean_direction)).clamp(-1.0, 1.0)
-            }
+            MeanCosineUpdate::Resultant => (mean_direction * ((1.0 - beta) * self.mean_cosine)
+                + direction * beta)
+                .length()
+                .min(1.0),
+            MeanCosineUpdate::Projected => ((1.0 - beta) * self.mean_cosine
+                + beta * direction.dot(mean_direction))
+            .clamp(-1.0, 1.0),
         };
         self.mean_target += (y - self.mean_target) * beta;
         self.weight_sum = weight_sum;
@@ -311,16 +329,29 @@ mod tests {
     fn matches_paper_mix_form() {
         // Unnormalised mix form of MCMM Alg. 3 lines 13-16 against the β form.
         let x = Vec3::new(0.2, -0.1, 0.0);
-        let ys = [Vec3::new(1.0, 2.0, 3.0), Vec3::new(-1.0, 2.5, 2.0), Vec3::new(0.0, 1.0, 4.0), Vec3::new(2.0, 0.0, 1.0)];
+        let ys = [
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(-1.0, 2.5, 2.0),
+            Vec3::new(0.0, 1.0, 4.0),
+            Vec3::new(2.0, 0.0, 1.0),
+        ];
         let fs = [1.0_f32, 3.0, 0.5, 2.0];
-        let params = FitParams { max_count: 2, alpha_min: 0.3, mean_cosine_update: MeanCosineUpdate::Resultant };
+        let params = FitParams {
+            max_count: 2,
+            alpha_min: 0.3,
+            mean_cosine_update: MeanCosineUpdate::Resultant,
+        };
         let mut s = SufficientStats::EMPTY;
         let (mut w, mut yb, mut r, mut n) = (0.0_f32, Vec3::ZERO, 0.0_f32, 0_u32);
         for (y, f) in ys.iter().zip(fs) {
             s.update(x, *y, f, &params);
             n = (n + 1).min(2);
             let a = (1.0 / n as f32).max(0.3);
-            let mu = if w > 0.0 { (yb - x).normalize() } else { Vec3::ZERO };
+            let mu = if w > 0.0 {
+                (yb - x).normalize()
+            } else {
+                Vec3::ZERO
+            };
             let w_new = w * (1.0 - a) + f * a;
             yb = (w * yb * (1.0 - a) + f * *y * a) / w_new;
             r = ((w * r * mu) * (1.0 - a) + f * (*y - x).normalize() * a).length() / w_new;
@@ -357,21 +388,42 @@ mod tests {
         let mut s = SufficientStats::EMPTY;
         for f in [f32::MAX, 1.0, f32::MAX / 2.0] {
             s.update(Vec3::ZERO, Vec3::new(1e30, 0.0, 0.0), f, &FitParams::MCPG);
-            assert!(s.mean_target.is_finite() && s.weight_sum.is_finite() && s.mean_cosine.is_finite());
+            assert!(
+                s.mean_target.is_finite() && s.weight_sum.is_finite() && s.mean_cosine.is_finite()
+            );
         }
     }
 
     #[test]
     fn prior_forms() {
-        let s = SufficientStats { mean_target: Vec3::Z, weight_sum: 1.0, mean_cosine: 0.8, sample_count: 2 };
-        let sq = s.posterior_mean_cosine(MapPrior { mean_cosine: 0.2, weight: 4.0, decay: PriorDecay::SquaredCount });
+        let s = SufficientStats {
+            mean_target: Vec3::Z,
+            weight_sum: 1.0,
+            mean_cosine: 0.8,
+            sample_count: 2,
+        };
+        let sq = s.posterior_mean_cosine(MapPrior {
+            mean_cosine: 0.2,
+            weight: 4.0,
+            decay: PriorDecay::SquaredCount,
+        });
         assert!((sq - (4.0 * 0.8 + 4.0 * 0.2) / 8.0).abs() < 1e-6);
-        let lin = s.posterior_mean_cosine(MapPrior { mean_cosine: 0.2, weight: 4.0, decay: PriorDecay::Count });
+        let lin = s.posterior_mean_cosine(MapPrior {
+            mean_cosine: 0.2,
+            weight: 4.0,
+            decay: PriorDecay::Count,
+        });
         assert!((lin - (2.0 * 0.8 + 4.0 * 0.2) / 6.0).abs() < 1e-6);
         let inf = MapPrior::inverse_square_distance(1.0, 1e-4, 0.0);
         assert_eq!(s.posterior_mean_cosine(inf), 0.0);
-        assert_eq!(MapPrior::inverse_square_distance(0.25, 1e-4, 0.5).weight, 1.0);
-        assert_eq!(MapPrior::inverse_square_distance(0.25, 1e-4, 1e4).weight, 1e-4);
+        assert_eq!(
+            MapPrior::inverse_square_distance(0.25, 1e-4, 0.5).weight,
+            1.0
+        );
+        assert_eq!(
+            MapPrior::inverse_square_distance(0.25, 1e-4, 1e4).weight,
+            1e-4
+        );
         // ȳ at the shading point: no direction.
         assert!(s.to_vmf(Vec3::Z, MapPrior::NONE).is_none());
     }

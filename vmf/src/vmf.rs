@@ -1,6 +1,6 @@
 //! The von Mises-Fisher lobe on the unit sphere S².
 
-use core::f32::consts::{FRAC_1_PI, TAU};
+use core::f32::consts::FRAC_1_PI;
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
@@ -43,8 +43,9 @@ const KAPPA_TINY: f32 = 1.0e-7;
 /// ```
 ///
 /// # Notes
-/// Sampling draws `cos θ − 1 = ln(1 + ξ (e^{−2κ} − 1)) / κ` with `ln_1p`/`expm1` (Jakob 2012,
-/// eq. 8 rearranged) and φ = 2πξ₁ around μ in a [`Frame`].
+/// Sampling draws `cos θ − 1 = ln(1 + ξ (e^{−2κ} − 1)) / κ` in its `ln_1p`/`expm1` form
+/// (Jakob 2012, eq. 8 rearranged), which keeps full relative precision of 1 − cos θ near the
+/// peak, and φ = 2πξ₁ around μ in a [`Frame`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Vmf {
@@ -78,7 +79,10 @@ impl Vmf {
     #[inline]
     #[must_use]
     pub const fn uniform() -> Self {
-        Self { mu: Vec3::Z, kappa: 0.0 }
+        Self {
+            mu: Vec3::Z,
+            kappa: 0.0,
+        }
     }
 
     /// Builds a lobe from parts the caller has already validated: `mu` unit length, `kappa`
@@ -159,7 +163,7 @@ impl Vmf {
     fn direction_from(&self, r: f32, u_phi: f32) -> Vec3 {
         let cos_theta = 1.0 + r;
         let sin_theta = math::sqrt((-r * (2.0 + r)).max(0.0));
-        let (sin_phi, cos_phi) = math::sin_cos(TAU * u_phi);
+        let (sin_phi, cos_phi) = math::sin_cos_turns(u_phi);
         Frame::from_normal(self.mu).to_world(Vec3::new(
             cos_phi * sin_theta,
             sin_phi * sin_theta,
@@ -175,8 +179,9 @@ impl Default for Vmf {
     }
 }
 
-/// Above this κ, 1 − e^{−2κ} rounds to exactly 1 in f32 (e^{−32} < 2⁻²⁴), so C(κ) = κ/(2π).
-const KAPPA_SATURATED: f32 = 16.0;
+/// Above this κ, e^{−2κ} < 2⁻²⁵ vanishes next to 1 in f32: 1 − e^{−2κ} rounds to exactly 1,
+/// so C(κ) = κ/(2π) and expm1(−2κ) = −1 exactly.
+const KAPPA_SATURATED: f32 = 9.0;
 
 /// C(κ) = g(−2κ)/(4π) with g(x) = x/expm1(x), g(0) = 1; κ/(2π) once e^{−2κ} vanishes, which
 /// also keeps `2κ` from overflowing for κ near `f32::MAX`.
@@ -191,12 +196,27 @@ pub(crate) fn normalization(kappa: f32) -> f32 {
 }
 
 /// Inverse CDF of `cos θ − 1` for concentration κ: `ln_1p(ξ expm1(−2κ)) / κ`, in [−2, 0].
+///
+/// `ln_1p` is inlined as Goldberg's `ln(u) · x / (u − 1)` with u = fl(1 + x), folding the
+/// division by κ into the same division; `expm1(−2κ)` is exactly −1 above [`KAPPA_SATURATED`],
+/// so the common guiding lobes pay one `ln` and no `exp`.
 #[inline(always)]
 pub(crate) fn cos_theta_minus_one(kappa: f32, xi: f32) -> f32 {
     let r = if kappa < KAPPA_TINY {
         -2.0 * xi
     } else {
-        math::ln_1p(xi * math::exp_m1(-2.0 * kappa)) / kappa
+        let scale = if kappa > KAPPA_SATURATED {
+            -1.0
+        } else {
+            math::exp_m1(-2.0 * kappa)
+        };
+        let x = xi * scale;
+        let u = 1.0 + x;
+        if u == 1.0 {
+            x / kappa
+        } else {
+            math::ln(u) * (x / ((u - 1.0) * kappa))
+        }
     };
     r.clamp(-2.0, 0.0)
 }
@@ -207,11 +227,20 @@ mod tests {
 
     #[test]
     fn new_validates() {
-        assert_eq!(Vmf::new(Vec3::new(f32::NAN, 0.0, 1.0), 1.0), Err(VmfError::MeanNotFinite));
-        assert_eq!(Vmf::new(Vec3::new(f32::INFINITY, 0.0, 1.0), 1.0), Err(VmfError::MeanNotFinite));
+        assert_eq!(
+            Vmf::new(Vec3::new(f32::NAN, 0.0, 1.0), 1.0),
+            Err(VmfError::MeanNotFinite)
+        );
+        assert_eq!(
+            Vmf::new(Vec3::new(f32::INFINITY, 0.0, 1.0), 1.0),
+            Err(VmfError::MeanNotFinite)
+        );
         assert_eq!(Vmf::new(Vec3::ZERO, 1.0), Err(VmfError::MeanZeroLength));
         assert_eq!(Vmf::new(Vec3::Z, f32::NAN), Err(VmfError::KappaNotFinite));
-        assert_eq!(Vmf::new(Vec3::Z, f32::INFINITY), Err(VmfError::KappaNotFinite));
+        assert_eq!(
+            Vmf::new(Vec3::Z, f32::INFINITY),
+            Err(VmfError::KappaNotFinite)
+        );
         assert_eq!(Vmf::new(Vec3::Z, -1e-30), Err(VmfError::KappaNegative));
         let v = Vmf::new(Vec3::new(3.0, 0.0, 4.0), 2.0).unwrap();
         assert!((v.mu() - Vec3::new(0.6, 0.0, 0.8)).length() < 1e-7);
@@ -225,7 +254,10 @@ mod tests {
         for w in [Vec3::X, -Vec3::Z, Vec3::new(0.6, 0.0, -0.8)] {
             assert_eq!(v.pdf(w), UNIFORM_SPHERE_PDF);
         }
-        assert_eq!(Vmf::new(Vec3::Y, 1e-30).unwrap().pdf(-Vec3::Y), UNIFORM_SPHERE_PDF);
+        assert_eq!(
+            Vmf::new(Vec3::Y, 1e-30).unwrap().pdf(-Vec3::Y),
+            UNIFORM_SPHERE_PDF
+        );
         assert_eq!(v.sample_with_pdf(Vec2::new(0.3, 0.7)).1, UNIFORM_SPHERE_PDF);
     }
 
@@ -236,9 +268,13 @@ mod tests {
             let v = Vmf::new(Vec3::Z, kappa as f32).unwrap();
             for cos in [-1.0_f64, -0.3, 0.2, 0.9, 1.0] {
                 let w = Vec3::new((1.0 - cos * cos).sqrt() as f32, 0.0, cos as f32);
-                let want = kappa / (4.0 * core::f64::consts::PI * kappa.sinh()) * (kappa * cos).exp();
+                let want =
+                    kappa / (4.0 * core::f64::consts::PI * kappa.sinh()) * (kappa * cos).exp();
                 let got = v.pdf(w) as f64;
-                assert!((got / want - 1.0).abs() < 2e-5, "kappa {kappa} cos {cos}: {got} vs {want}");
+                assert!(
+                    (got / want - 1.0).abs() < 2e-5,
+                    "kappa {kappa} cos {cos}: {got} vs {want}"
+                );
             }
         }
     }
@@ -247,9 +283,16 @@ mod tests {
     fn extreme_kappa_is_finite() {
         for kappa in [0.0, 1e-38, 1e-8, 1.0, 1e3, 1e6, 1e12, f32::MAX] {
             let v = Vmf::new(Vec3::new(0.3, -0.4, 0.5), kappa).unwrap();
-            for u in [Vec2::ZERO, Vec2::new(0.5, 0.5), Vec2::splat(1.0 - f32::EPSILON)] {
+            for u in [
+                Vec2::ZERO,
+                Vec2::new(0.5, 0.5),
+                Vec2::splat(1.0 - f32::EPSILON),
+            ] {
                 let (w, p) = v.sample_with_pdf(u);
-                assert!(w.is_finite() && (w.length() - 1.0).abs() < 1e-6, "{kappa} {u}: {w}");
+                assert!(
+                    w.is_finite() && (w.length() - 1.0).abs() < 1e-6,
+                    "{kappa} {u}: {w}"
+                );
                 assert!(p.is_finite() && p >= 0.0, "{kappa} {u}: {p}");
                 let q = v.pdf(w);
                 assert!(q.is_finite() && q >= 0.0);
