@@ -1,1 +1,130 @@
-fn main() {}
+//! `mcg-demo`: writes the mcg demo report (see the library docs of `mcg_demo`).
+//!
+//! ```text
+//! cargo run --release -p mcg-demo [-- --out DIR] [--quick] [--samples N] [--seed N] [--no-progress]
+//! ```
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use mcg_demo::Config;
+
+const USAGE: &str = "\
+Usage: mcg-demo [OPTIONS]
+
+Writes an HTML report with PNG charts that shows the mcg crates at work.
+
+Options:
+  --out DIR       output folder (default: out)
+  --quick         fewer samples (100 000 per experiment instead of 1 000 000)
+  --samples N     samples per experiment
+  --seed N        seed of the random number generators (decimal or 0x-hex)
+  --no-progress   no progress bars
+  -h, --help      this text";
+
+/// What the command line asks for.
+enum Command {
+    Run(Config),
+    Help,
+}
+
+fn parse_args(args: impl IntoIterator<Item = String>) -> Result<Command, String> {
+    let mut config = Config::default();
+    let mut args = args.into_iter();
+    while let Some(arg) = args.next() {
+        let mut value = |name: &str| args.next().ok_or_else(|| format!("{name} needs a value"));
+        match arg.as_str() {
+            "-h" | "--help" => return Ok(Command::Help),
+            "--out" => config.out_dir = PathBuf::from(value("--out")?),
+            "--quick" => config.samples = Config::QUICK_SAMPLES,
+            "--samples" => {
+                let v = value("--samples")?;
+                config.samples = v
+                    .replace('_', "")
+                    .parse()
+                    .map_err(|_| format!("--samples: not a count: {v}"))?;
+                if config.samples < 1000 {
+                    return Err("--samples: use at least 1000".to_owned());
+                }
+            }
+            "--seed" => {
+                let v = value("--seed")?;
+                let parsed = match v.strip_prefix("0x") {
+                    Some(hex) => u64::from_str_radix(hex, 16),
+                    None => v.parse(),
+                };
+                config.seed = parsed.map_err(|_| format!("--seed: not a number: {v}"))?;
+            }
+            "--no-progress" => config.progress = false,
+            other => return Err(format!("unknown argument: {other}")),
+        }
+    }
+    Ok(Command::Run(config))
+}
+
+fn main() -> ExitCode {
+    let config = match parse_args(std::env::args().skip(1)) {
+        Ok(Command::Run(config)) => config,
+        Ok(Command::Help) => {
+            println!("{USAGE}");
+            return ExitCode::SUCCESS;
+        }
+        Err(message) => {
+            eprintln!("mcg-demo: {message}\n\n{USAGE}");
+            return ExitCode::from(2);
+        }
+    };
+    let started = Instant::now();
+    match mcg_demo::run(&config) {
+        Ok(index) => {
+            println!(
+                "report written to {} — open it in a browser ({:.1} s)",
+                index.display(),
+                started.elapsed().as_secs_f64()
+            );
+            ExitCode::SUCCESS
+        }
+        Err(error) => {
+            eprintln!("mcg-demo: {error}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(args: &[&str]) -> Result<Command, String> {
+        parse_args(args.iter().map(|s| (*s).to_owned()))
+    }
+
+    #[test]
+    fn arguments() {
+        let Ok(Command::Run(c)) = parse(&[]) else {
+            panic!()
+        };
+        assert_eq!(
+            (c.out_dir, c.samples),
+            (PathBuf::from("out"), Config::DEFAULT_SAMPLES)
+        );
+        let Ok(Command::Run(c)) =
+            parse(&["--out", "x", "--quick", "--seed", "0x10", "--no-progress"])
+        else {
+            panic!()
+        };
+        assert_eq!(
+            (c.out_dir, c.samples, c.seed, c.progress),
+            (PathBuf::from("x"), Config::QUICK_SAMPLES, 16, false)
+        );
+        let Ok(Command::Run(c)) = parse(&["--samples", "20_000"]) else {
+            panic!()
+        };
+        assert_eq!(c.samples, 20_000);
+        assert!(matches!(parse(&["--help"]), Ok(Command::Help)));
+        assert!(parse(&["--out"]).is_err());
+        assert!(parse(&["--bogus"]).is_err());
+        assert!(parse(&["--samples", "ten"]).is_err());
+    }
+}

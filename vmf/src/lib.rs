@@ -55,7 +55,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 #![cfg_attr(docsrs, feature(doc_cfg))]
 
-#[cfg(feature = "std")]
+#[cfg(any(feature = "std", test))]
 extern crate std;
 
 pub use glam;
