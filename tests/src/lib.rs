@@ -1,1 +1,47 @@
-//! placeholder
+//! # mcg-tests: the shared statistics harness of mcg
+//!
+//! The statistical suites of every mcg crate live in this package's `tests/` folder and share
+//! the small harness in this library, so that each suite states a hypothesis, a sample size, a
+//! threshold and a seed, and nothing else.
+//!
+//! | item | what it tests | typical use |
+//! |---|---|---|
+//! | [`ks_test`], [`assert_ks`], [`KsResult`] | one-sample Kolmogorov-Smirnov against an analytic CDF | 1-D marginals of samplers (cos θ, φ) |
+//! | [`chi_square_test`], [`assert_chi_square`], [`ChiSquareResult`] | chi-square goodness of fit over bins, small bins merged | samplers against their pdf on a binned sphere |
+//! | [`SphereBins`] | equal-area bins on S², bin probabilities of a pdf by quadrature | the bins of the chi-square test |
+//! | [`RunningStats`], [`z_test`], [`assert_z_test`] | z-test of a sample mean (Welford mean and variance) | estimators against analytic integrals |
+//! | [`GaussLegendre`], [`integrate_sphere`], [`graded_theta_breaks`] | f64 reference quadrature on an interval and on S² | normalisation and product integrals |
+//! | [`vmf_pdf`], [`vmf_one_minus_cos_cdf`], [`one_minus_cos`], [`vmf_mean_cosine`], … | f64 reference formulas of the vMF lobe | every suite that tests vMF code |
+//! | [`seeded_rng`], [`uniform_vec2`], [`uniform_sphere_direction`] | deterministic random numbers | every suite, one fixed seed per test |
+//!
+//! ## Conventions
+//! - Every test uses a fixed seed, so a suite either passes or fails, every time.
+//! - Significance levels are stated by the caller; the vMF suites use α = 0.001 (or 5σ for
+//!   z-tests). Thresholds come from the test's own statistics and are never tuned to pass.
+//! - Reference computations are in f64; the code under test is evaluated at f32 inputs, its
+//!   f32 outputs accumulated in f64.
+//! - Failures panic with a message that carries the label, the statistic, the threshold and n.
+#![deny(missing_docs)]
+#![forbid(unsafe_code)]
+
+mod chi_square;
+mod ks;
+mod quadrature;
+mod rng;
+mod sphere_bins;
+mod vmf_reference;
+mod z_test;
+
+pub use chi_square::{
+    ChiSquareResult, MIN_EXPECTED_COUNT, assert_chi_square, chi_square_test, merge_bins,
+};
+pub use ks::{KsResult, assert_ks, kolmogorov_critical_value, kolmogorov_survival, ks_test};
+pub use quadrature::{GaussLegendre, graded_theta_breaks, integrate_sphere, orthonormal_basis};
+pub use rng::{Pcg64Mcg, seeded_rng, uniform_sphere_direction, uniform_vec2};
+pub use sphere_bins::SphereBins;
+pub use vmf_reference::{
+    one_minus_cos, vmf_cos_theta_cdf, vmf_cos_theta_variance, vmf_mean_cosine,
+    vmf_mean_cosine_derivative, vmf_normalization, vmf_one_minus_cos_cdf,
+    vmf_one_minus_mean_cosine, vmf_pdf,
+};
+pub use z_test::{RunningStats, ZTestResult, assert_z_test, z_test};
