@@ -45,3 +45,8 @@ pub use vmf_reference::{
     vmf_one_minus_mean_cosine, vmf_pdf,
 };
 pub use z_test::{RunningStats, ZTestResult, assert_z_test, z_test};
+
+/// The workspace README's usage example, compiled and run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../../README.md")]
+pub struct ReadmeDoctests;

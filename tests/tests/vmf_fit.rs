@@ -3,8 +3,8 @@
 //! f, must give back μ and κ.
 //!
 //! Setting: x at the origin, μ = normalize(0.3, −0.5, 0.8), n = 20 000 samples per fit,
-//! κ ∈ {1, 3, 10, 30, 100, 300}, every fit with its own fixed seed. κ = 1000 is in
-//! [`kappa_1000_running_mean`], ignored for now: the f32 running mean of r̄ drifts there (see
+//! κ ∈ {1, 3, 10, 30, 100, 300}, every fit with its own fixed seed; κ = 1000 is in
+//! [`kappa_1000_running_mean`], which also guards against the f32 drift of a stored r̄ (see
 //! that test). The statistics use `FitParams::RUNNING_MEAN` (α = 1/N: the plain weighted
 //! mean) unless stated, and the lobe is read back without a prior (`MapPrior::NONE`).
 //!
@@ -309,19 +309,14 @@ fn projected_update_matches_resultant() {
 /// H₀: the four settings above also hold at κ = 1000 (n = 20 000, same thresholds, seeds
 /// 0xF6_0000, 0xF7_0000, 0xF8_0000, 0xF9_0000).
 ///
-/// Ignored because it fails with the current mcg-vmf: `SufficientStats::update` keeps r̄ in f32
+/// Also a regression test of the f32 precision of r̄. An earlier `SufficientStats` kept r̄ in f32
 /// next to 1, where its spacing is 2⁻²⁴ ≈ 6·10⁻⁸, while the per-sample change β(μ·ω − r̄) of a
-/// running mean is ~1/(κN), 5·10⁻⁸ at κ = 10³ and N = 2·10⁴. Increments below half an ulp
-/// round away; since μ·ω − r̄ is skewed (many small positive steps, rare large negative ones)
-/// r̄ loses its meaning and, for larger κN, drifts down. Today: 1033.7 (+4.8σ) and 961.8
-/// (−5.4σ) for the first two settings here; 926 instead of 988 (the f64 resultant of the same
-/// samples, seed 0xF1_0006); 510 instead of 1000 at N = 10⁵; 4488 instead of 9884 at κ = 10⁴,
-/// N = 2·10⁴. An f32 replica of the update that tracks e = 1 − r̄ instead
-/// (1 − r̄'² = 2(1−β)²e − (1−β)²e² + 2β(1−β)(e + t − et) with t = |d − μ̂|²/2, then
-/// e' = (1 − r̄'²)/(1 + r̄')) gives 988.5, 999.7 and 9884 on those samples. With the papers'
-/// α_min ≥ 0.01 the steps are ≥ 0.01/κ and the drift does not occur.
+/// running mean is ~1/(κN), 5·10⁻⁸ at κ = 10³ and N = 2·10⁴: increments below half an ulp
+/// rounded away and, since μ·ω − r̄ is skewed, r̄ drifted (1033.7 (+4.8σ) and 961.8 (−5.4σ) in
+/// the first two settings here; 510 instead of 1000 at N = 10⁵). It now stores e = 1 − r̄ and
+/// updates it without cancellation, which passes. With the papers' α_min ≥ 0.01 the steps
+/// are ≥ 0.01/κ and the drift did not occur.
 #[test]
-#[ignore = "mcg-vmf: f32 running mean of r-bar drifts at kappa * N >~ 10^7 (see doc comment)"]
 fn kappa_1000_running_mean() {
     let k = [1000.0];
     let p = &FitParams::RUNNING_MEAN;

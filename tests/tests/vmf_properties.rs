@@ -226,12 +226,11 @@ proptest! {
     }
 }
 
-/// A finite, nonzero mean should be normalised whatever its length. Ignored: `Vmf::new` uses
-/// `try_normalize`, whose squared length overflows f32 above |μ| ≈ 1.8·10¹⁹ (and underflows
-/// below ≈ 3.7·10⁻²³), so `Vmf::new((1e20, 0, 0), 1)` is `Err(MeanZeroLength)` for a mean that
-/// is neither zero nor short. Dividing by the largest |component| first avoids both.
+/// A finite, nonzero mean should be normalised whatever its length. Regression test: an
+/// earlier `Vmf::new` used `try_normalize` directly, whose squared length overflows f32 above
+/// |μ| ≈ 1.8·10¹⁹ (and underflows below ≈ 3.7·10⁻²³), so `Vmf::new((1e20, 0, 0), 1)` was
+/// `Err(MeanZeroLength)`. It now divides by the largest |component| first.
 #[test]
-#[ignore = "mcg-vmf: means longer than ~1.8e19 are rejected as MeanZeroLength"]
 fn long_means_are_normalised() {
     assert!(Vmf::new(Vec3::new(1e15, -2e15, 3e15), 1.0).is_ok());
     let lobe = Vmf::new(Vec3::new(1e20, 0.0, 0.0), 1.0);

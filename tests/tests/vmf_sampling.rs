@@ -282,17 +282,18 @@ fn polar_angle_is_the_exact_inverse_cdf() {
 
 /// As [`polar_angle_is_the_exact_inverse_cdf`] for κ ∈ {2, 3, 5, 8, 8.9, 10}.
 ///
-/// Ignored because it fails with the current mcg-vmf: `cos_theta_minus_one` forms
-/// 1 + ξ·expm1(−2κ) in f32, which cancels when ξ → 1 and e^{−2κ} is small but not negligible
-/// (κ ≈ 1.5–12): for κ = 8.9 and u.y = 1 − 2⁻²⁴ it returns θ = 2.62430 instead of 2.56558
-/// (0.059 rad), for κ = 5 θ is 3.4·10⁻³ rad off, and random uniforms reach 1.9·10⁻⁴ rad
-/// (7 times the tolerance). Writing it as (1 − ξ) + ξe^{−2κ} for ξ ≥ 0.5 (1 − ξ is exact
-/// there, both terms are positive) brings all of these below 3·10⁻⁵ rad in an f32 replica.
-/// The effect is confined to the last ~10⁻⁴ of u.y and invisible to the KS tests.
+/// Regression test: an earlier `cos_theta_minus_one` formed 1 + ξ·expm1(−2κ) in f32, which
+/// cancels when ξ → 1 and e^{−2κ} is small but not negligible (κ ≈ 1.5–17): for κ = 8.9 and
+/// u.y = 1 − 2⁻²⁴ it returned θ = 2.62430 instead of 2.56558 (0.059 rad), for κ = 5 θ was
+/// 3.4·10⁻³ rad off, and random uniforms reached 1.9·10⁻⁴ rad (7 times the tolerance). The tail
+/// now uses (1 − ξ) + ξe^{−2κ}. The effect is confined to the last ~10⁻⁴ of u.y and invisible
+/// to the KS tests.
 #[test]
-#[ignore = "mcg-vmf: 1 + xi * expm1(-2 kappa) cancels in f32 for xi near 1, kappa ~ 1.5..12"]
 fn inverse_cdf_moderate_kappa_tail() {
-    let report = check_inverse_cdf(&[2.0, 3.0, 5.0, 8.0, 8.9, 10.0], 0x5D_0001);
+    let report = check_inverse_cdf(
+        &[2.0, 3.0, 5.0, 8.0, 8.9, 10.0, 12.0, 16.0, 17.5],
+        0x5D_0001,
+    );
     assert!(
         report.is_empty(),
         "polar angle differs from the inverse CDF:{report}"

@@ -98,12 +98,23 @@ pub fn kappa_from_mean_cosine(r: f32) -> f32 {
     if !(r > 0.0) {
         return 0.0;
     }
-    if r >= 1.0 {
+    // 1 − r is exact in f32 for r ≥ 0.5 (Sterbenz), where the precision matters.
+    kappa_from_one_minus_mean_cosine(1.0 - r)
+}
+
+/// Banerjee's κ from the complement e = 1 − r of the mean cosine:
+/// κ = r(3 − r²) / (e(2 − e)), which keeps full relative precision as r → 1 (κ ≈ 1/e).
+/// Clamped to [0, [`KAPPA_MAX`]]; e ≥ 1 and NaN give 0, e ≤ 0 gives [`KAPPA_MAX`].
+#[inline]
+pub(crate) fn kappa_from_one_minus_mean_cosine(e: f32) -> f32 {
+    if !(e < 1.0) {
+        return 0.0;
+    }
+    if !(e > 0.0) {
         return KAPPA_MAX;
     }
-    // (1 − r)(1 + r) keeps the relative precision of 1 − r (exact in f32 for r ≥ 0.5).
-    let kappa = r * (3.0 - r * r) / ((1.0 - r) * (1.0 + r));
-    kappa.min(KAPPA_MAX)
+    let r = 1.0 - e;
+    (r * (3.0 - r * r) / (e * (2.0 - e))).min(KAPPA_MAX)
 }
 
 /// Concentration κ with A₃(κ) = `r` exactly (to f32 precision): the inverse of

@@ -4,7 +4,8 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use crate::{Vmf, kappa_from_mean_cosine};
+use crate::mean_cosine::kappa_from_one_minus_mean_cosine;
+use crate::{Vmf, math};
 
 /// How the mean cosine r̄ absorbs a new sample direction.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -141,7 +142,12 @@ impl Default for MapPrior {
 /// "Sufficient statistics"). Scores, acceptance, time and velocity belong to the chain
 /// (mcg-markov-guide), not here.
 ///
-/// `#[repr(C)]`, 24 bytes: `mean_target`, `weight_sum`, `mean_cosine`, `sample_count`.
+/// r̄ is stored as its complement `one_minus_mean_cosine` = 1 − r̄: concentrated lobes have
+/// r̄ ≈ 1 − 1/κ, where f32 spacing (6·10⁻⁸) is coarser than one running-mean step (≈ 1/(κN)),
+/// so a stored r̄ would round the updates away and drift (a κ = 1000 fit over 2·10⁴ samples
+/// came out at 926). The complement keeps full relative precision there.
+///
+/// `#[repr(C)]`, 24 bytes: `mean_target`, `weight_sum`, `one_minus_mean_cosine`, `sample_count`.
 ///
 /// # Example
 /// ```
@@ -160,27 +166,36 @@ impl Default for MapPrior {
 /// assert!(map.kappa() > 20.0 && map.kappa() < 100.0);
 /// ```
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct SufficientStats {
     /// ȳ, the weighted mean target point (world space).
     pub mean_target: Vec3,
     /// w̄, the weight sum: a (moving) average of the sample weights f. 0 means empty.
     pub weight_sum: f32,
-    /// r̄, the weighted mean cosine of the sample directions, in [−1, 1] (in [0, 1] with
-    /// [`MeanCosineUpdate::Resultant`]).
-    pub mean_cosine: f32,
+    /// 1 − r̄, the complement of the weighted mean cosine of the sample directions, in [0, 2]
+    /// (in [0, 1] with [`MeanCosineUpdate::Resultant`]). See [`SufficientStats::mean_cosine`].
+    pub one_minus_mean_cosine: f32,
     /// N, the number of samples absorbed so far, capped at [`FitParams::max_count`].
     pub sample_count: u32,
 }
 
 const _: () = assert!(core::mem::size_of::<SufficientStats>() == 24);
 
+impl Default for SufficientStats {
+    /// [`SufficientStats::EMPTY`].
+    fn default() -> Self {
+        Self::EMPTY
+    }
+}
+
 impl SufficientStats {
-    /// Empty statistics (all zero): no lobe can be reconstructed.
+    /// Empty statistics (all zero, so zeroed GPU memory is empty too): no lobe can be
+    /// reconstructed. r̄ of empty statistics is meaningless; the first weighted sample
+    /// overwrites it.
     pub const EMPTY: Self = Self {
         mean_target: Vec3::ZERO,
         weight_sum: 0.0,
-        mean_cosine: 0.0,
+        one_minus_mean_cosine: 0.0,
         sample_count: 0,
     };
 
@@ -197,13 +212,19 @@ impl SufficientStats {
     /// With N ← min(N + 1, N_max), α = max(1/N, α_min) and w̄' = mix(w̄, f, α):
     ///
     /// ```text
-    /// ȳ' = mix(w̄ ȳ, f y, α) / w̄'                 = ȳ + β (y − ȳ)
+    /// ȳ' = mix(w̄ ȳ, f y, α) / w̄'                 = (1 − β) ȳ + β y
     /// r̄' = |mix(w̄ r̄ μ, f d, α)| / w̄'             = |(1 − β) r̄ μ + β d|      (Resultant)
     /// r̄' = mix(w̄ r̄, f (d·μ), α) / w̄'             = (1 − β) r̄ + β (d·μ)      (Projected)
     /// ```
     ///
     /// where β = α f / w̄' ∈ [0, 1], μ is the current mean direction from `x` (or `d` when the
-    /// statistics are empty) and d = (y − x)/|y − x|. The β forms cannot overflow.
+    /// statistics are empty) and d = (y − x)/|y − x|. The β forms cannot overflow. r̄ is
+    /// updated in complement form, e = 1 − r̄ and t = 1 − d·μ = |d − μ|²/2, so nothing cancels:
+    ///
+    /// ```text
+    /// 1 − r̄'² = (1 − β)² e (2 − e) + 2β(1 − β)(e + t − e t),   e' = (1 − r̄'²) / (1 + r̄')   (Resultant)
+    /// e' = (1 − β) e + β t                                                              (Projected)
+    /// ```
     ///
     /// A zero weight still counts (N grows, w̄ shrinks, ȳ and r̄ stay), as in the papers.
     /// A sample with a negative, NaN or infinite weight, or a non-finite point, is ignored
@@ -219,7 +240,9 @@ impl SufficientStats {
         let alpha = (1.0 / count as f32)
             .max(params.alpha_min.clamp(0.0, 1.0))
             .min(1.0);
-        let weight_sum = self.weight_sum + alpha * (weight - self.weight_sum);
+        // mix(w̄, f, α), bounded by the larger of the two so rounding cannot overflow.
+        let weight_sum =
+            ((1.0 - alpha) * self.weight_sum + alpha * weight).min(self.weight_sum.max(weight));
         self.sample_count = count;
         if !(weight_sum > 0.0) {
             // Nothing has weight: keep ȳ and r̄ (the papers' 0/0).
@@ -233,18 +256,36 @@ impl SufficientStats {
         } else {
             direction
         };
-        self.mean_cosine = match params.mean_cosine_update {
-            MeanCosineUpdate::Resultant => (mean_direction * ((1.0 - beta) * self.mean_cosine)
-                + direction * beta)
-                .length()
-                .min(1.0),
-            MeanCosineUpdate::Projected => ((1.0 - beta) * self.mean_cosine
-                + beta * direction.dot(mean_direction))
-            .clamp(-1.0, 1.0),
+        let e = self.one_minus_mean_cosine;
+        self.one_minus_mean_cosine = if direction == Vec3::ZERO {
+            // d = 0: r̄' = (1 − β) r̄ (Resultant) or (1 − β) r̄ + β·0 (Projected).
+            beta + (1.0 - beta) * e
+        } else {
+            let t = 0.5 * (direction - mean_direction).length_squared();
+            match params.mean_cosine_update {
+                MeanCosineUpdate::Resultant => {
+                    let e = e.clamp(0.0, 1.0);
+                    let keep = 1.0 - beta;
+                    let d = (keep * keep * e * (2.0 - e) + 2.0 * beta * keep * (e + t - e * t))
+                        .clamp(0.0, 1.0);
+                    d / (1.0 + math::sqrt(1.0 - d))
+                }
+                MeanCosineUpdate::Projected => ((1.0 - beta) * e + beta * t).clamp(0.0, 2.0),
+            }
         };
-        self.mean_target += (y - self.mean_target) * beta;
+        let mean_target = self.mean_target * (1.0 - beta) + y * beta;
+        if mean_target.is_finite() {
+            self.mean_target = mean_target;
+        }
         self.weight_sum = weight_sum;
         true
+    }
+
+    /// The weighted mean cosine r̄ = 1 − [`one_minus_mean_cosine`](Self::one_minus_mean_cosine).
+    #[inline]
+    #[must_use]
+    pub fn mean_cosine(&self) -> f32 {
+        1.0 - self.one_minus_mean_cosine
     }
 
     /// Mean direction μ = (ȳ − x)/|ȳ − x| from shading point `x` (MCMM Alg. 2 line 5), or
@@ -272,27 +313,36 @@ impl SufficientStats {
     #[inline]
     #[must_use]
     pub fn posterior_mean_cosine(&self, prior: MapPrior) -> f32 {
+        1.0 - self.posterior_one_minus_mean_cosine(prior)
+    }
+
+    /// 1 − r of [`SufficientStats::posterior_mean_cosine`], computed without cancellation:
+    /// (N² (1 − r̄) + N_p (1 − r_p)) / (N² + N_p).
+    #[inline]
+    fn posterior_one_minus_mean_cosine(&self, prior: MapPrior) -> f32 {
         let n = self.sample_count as f32;
         let n_eff = match prior.decay {
             PriorDecay::SquaredCount => n * n,
             PriorDecay::Count => n,
         };
         let prior_weight = prior.weight.max(0.0);
-        let r_sample = self.mean_cosine.clamp(0.0, 1.0);
+        let prior_complement = 1.0 - prior.mean_cosine;
         if prior_weight == f32::INFINITY {
-            return prior.mean_cosine;
+            return prior_complement;
         }
         let total = n_eff + prior_weight;
         if !(total > 0.0) {
-            return 0.0;
+            return 1.0;
         }
-        (n_eff * r_sample + prior_weight * prior.mean_cosine) / total
+        let sample_complement = self.one_minus_mean_cosine.clamp(0.0, 1.0);
+        (n_eff * sample_complement + prior_weight * prior_complement) / total
     }
 
     /// Reconstructs the lobe at shading point `x` (MCMM Alg. 2 lines 5-7, MCPG Alg. 2 lines 6-8):
     /// μ from [`SufficientStats::mean_direction`], r from
     /// [`SufficientStats::posterior_mean_cosine`], κ by Banerjee's approximation
-    /// ([`kappa_from_mean_cosine`], clamped to [`KAPPA_MAX`](crate::KAPPA_MAX)).
+    /// ([`kappa_from_mean_cosine`](crate::kappa_from_mean_cosine), evaluated from 1 − r so that
+    /// narrow lobes keep their precision; clamped to [`KAPPA_MAX`](crate::KAPPA_MAX)).
     ///
     /// Returns `None` for empty statistics (w̄ = 0 or N = 0) and when ȳ coincides with `x`.
     #[inline]
@@ -302,7 +352,7 @@ impl SufficientStats {
             return None;
         }
         let mu = self.mean_direction(x)?;
-        let kappa = kappa_from_mean_cosine(self.posterior_mean_cosine(prior));
+        let kappa = kappa_from_one_minus_mean_cosine(self.posterior_one_minus_mean_cosine(prior));
         Some(Vmf::from_unit_mean(mu, kappa))
     }
 }
@@ -318,10 +368,10 @@ mod tests {
         assert_eq!(s.sample_count, 1);
         assert_eq!(s.weight_sum, 2.0);
         assert_eq!(s.mean_target, Vec3::new(0.0, 0.0, 3.0));
-        assert_eq!(s.mean_cosine, 1.0);
+        assert_eq!(s.mean_cosine(), 1.0);
         let lobe = s.to_vmf(Vec3::ZERO, MapPrior::uninformed(1.0)).unwrap();
         // r = (1·1 + 1·0)/(1 + 1) = 0.5.
-        assert!((lobe.kappa() - kappa_from_mean_cosine(0.5)).abs() < 1e-6);
+        assert!((lobe.kappa() - crate::kappa_from_mean_cosine(0.5)).abs() < 1e-6);
         assert_eq!(lobe.mu(), Vec3::Z);
     }
 
@@ -358,7 +408,11 @@ mod tests {
             w = w_new;
             assert!((s.weight_sum - w).abs() < 1e-5);
             assert!((s.mean_target - yb).length() < 1e-5);
-            assert!((s.mean_cosine - r).abs() < 1e-5, "{} vs {r}", s.mean_cosine);
+            assert!(
+                (s.mean_cosine() - r).abs() < 1e-5,
+                "{} vs {r}",
+                s.mean_cosine()
+            );
         }
     }
 
@@ -389,7 +443,9 @@ mod tests {
         for f in [f32::MAX, 1.0, f32::MAX / 2.0] {
             s.update(Vec3::ZERO, Vec3::new(1e30, 0.0, 0.0), f, &FitParams::MCPG);
             assert!(
-                s.mean_target.is_finite() && s.weight_sum.is_finite() && s.mean_cosine.is_finite()
+                s.mean_target.is_finite()
+                    && s.weight_sum.is_finite()
+                    && s.mean_cosine().is_finite()
             );
         }
     }
@@ -399,7 +455,7 @@ mod tests {
         let s = SufficientStats {
             mean_target: Vec3::Z,
             weight_sum: 1.0,
-            mean_cosine: 0.8,
+            one_minus_mean_cosine: 0.2,
             sample_count: 2,
         };
         let sq = s.posterior_mean_cosine(MapPrior {

@@ -58,7 +58,8 @@ const _: () = assert!(core::mem::size_of::<Vmf>() == 16);
 impl Vmf {
     /// Creates a lobe with mean direction `mu` and concentration `kappa`.
     ///
-    /// `mu` need not be unit length; it is normalised. Errors: [`VmfError::MeanNotFinite`],
+    /// `mu` need not be unit length; any finite non-zero vector is normalised, however long or
+    /// short. Errors: [`VmfError::MeanNotFinite`],
     /// [`VmfError::MeanZeroLength`], [`VmfError::KappaNotFinite`], [`VmfError::KappaNegative`].
     /// κ = 0 is allowed and is the uniform distribution.
     pub fn new(mu: Vec3, kappa: f32) -> Result<Self, VmfError> {
@@ -71,7 +72,15 @@ impl Vmf {
         if kappa < 0.0 {
             return Err(VmfError::KappaNegative);
         }
-        let mu = mu.try_normalize().ok_or(VmfError::MeanZeroLength)?;
+        // Scale by the largest component first so that squaring the length can neither
+        // overflow (|μ| > 1.8·10¹⁹) nor underflow (|μ| < 3.7·10⁻²³).
+        let largest = mu.abs().max_element();
+        if largest == 0.0 {
+            return Err(VmfError::MeanZeroLength);
+        }
+        let mu = (mu / largest)
+            .try_normalize()
+            .ok_or(VmfError::MeanZeroLength)?;
         Ok(Self { mu, kappa })
     }
 
@@ -195,30 +204,57 @@ pub(crate) fn normalization(kappa: f32) -> f32 {
     g * UNIFORM_SPHERE_PDF
 }
 
-/// Inverse CDF of `cos θ − 1` for concentration κ: `ln_1p(ξ expm1(−2κ)) / κ`, in [−2, 0].
+/// Above this κ, e^{−2κ} < 2⁻⁴⁹: next to 1 − ξ ≥ 2⁻²⁴ it is below half an ulp, so the
+/// inverse CDF drops it even in the far tail ξ → 1.
+const KAPPA_SAMPLE_SATURATED: f32 = 17.0;
+
+/// Inverse CDF of `cos θ − 1` for concentration κ, in [−2, 0]:
 ///
-/// `ln_1p` is inlined as Goldberg's `ln(u) · x / (u − 1)` with u = fl(1 + x), folding the
-/// division by κ into the same division; `expm1(−2κ)` is exactly −1 above [`KAPPA_SATURATED`],
-/// so the common guiding lobes pay one `ln` and no `exp`.
+/// ```text
+/// r = ln(1 + ξ (e^{−2κ} − 1)) / κ
+/// ```
+///
+/// The argument u = 1 + x, x = ξ expm1(−2κ), is formed in whichever way keeps its precision:
+/// - near the peak (u ≥ ½), `ln_1p(x)` as Goldberg's `ln(u) · x / (u − 1)` with u = fl(1 + x),
+///   folding the division by κ into the same division;
+/// - in the tail (u < ½, only when ξ > ½), u = (1 − ξ) + ξ e^{−2κ}, where 1 − ξ is exact, so
+///   that 1 + x does not cancel as ξ → 1;
+/// - above [`KAPPA_SAMPLE_SATURATED`], e^{−2κ} vanishes and u = 1 − ξ: one `ln`, no `exp`.
 #[inline(always)]
 pub(crate) fn cos_theta_minus_one(kappa: f32, xi: f32) -> f32 {
     let r = if kappa < KAPPA_TINY {
         -2.0 * xi
+    } else if kappa > KAPPA_SAMPLE_SATURATED {
+        ln_1p_over(-xi, kappa)
     } else {
-        let scale = if kappa > KAPPA_SATURATED {
-            -1.0
+        let decay = math::exp(-2.0 * kappa);
+        // expm1(−2κ): `decay − 1` cannot cancel once 2κ > ½ (see `math::exp_m1`).
+        let scale = if kappa > 0.25 {
+            decay - 1.0
         } else {
             math::exp_m1(-2.0 * kappa)
         };
         let x = xi * scale;
-        let u = 1.0 + x;
-        if u == 1.0 {
-            x / kappa
+        if x < -0.5 {
+            math::ln((1.0 - xi) + xi * decay) / kappa
         } else {
-            math::ln(u) * (x / ((u - 1.0) * kappa))
+            ln_1p_over(x, kappa)
         }
     };
     r.clamp(-2.0, 0.0)
+}
+
+/// ln(1 + x) / κ by Goldberg's `ln(u) · x / ((u − 1) κ)` with u = fl(1 + x): a few ulps for
+/// all x > −1 (Goldberg 1991, *What every computer scientist should know about floating-point
+/// arithmetic*, Theorem 4).
+#[inline(always)]
+fn ln_1p_over(x: f32, kappa: f32) -> f32 {
+    let u = 1.0 + x;
+    if u == 1.0 {
+        x / kappa
+    } else {
+        math::ln(u) * (x / ((u - 1.0) * kappa))
+    }
 }
 
 #[cfg(test)]
