@@ -13,7 +13,10 @@
 use core::f32::consts::{PI, TAU};
 use std::hint::black_box;
 
-use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use core::iter::Sum;
+
+use criterion::measurement::WallTime;
+use criterion::{BenchmarkGroup, Criterion, Throughput, criterion_group, criterion_main};
 use mcg_vmf::glam::{Vec2, Vec3};
 use mcg_vmf::{Vmf, VmfMixture};
 use rand::{RngExt, SeedableRng};
@@ -26,6 +29,16 @@ struct Inputs {
     uniforms: Vec<Vec2>,
     directions: Vec<Vec3>,
     lobes: Vec<Vmf>,
+}
+
+impl Inputs {
+    fn lobe_uniform_pairs(&self) -> Vec<(Vmf, Vec2)> {
+        self.lobes
+            .iter()
+            .copied()
+            .zip(self.uniforms.iter().copied())
+            .collect()
+    }
 }
 
 fn inputs() -> Inputs {
@@ -86,103 +99,71 @@ fn textbook_sample(lobe: &Vmf, u: Vec2) -> Vec3 {
     t * (c * sin_theta) + b * (s * sin_theta) + n * cos_theta
 }
 
+/// Registers `name` in `group`: one iteration maps `f` over the whole batch `inputs` and sums
+/// the results, so nothing is optimised away.
+fn bench_batch<I: Copy, O: Sum<O>>(
+    group: &mut BenchmarkGroup<'_, WallTime>,
+    name: &str,
+    inputs: &[I],
+    f: impl Fn(I) -> O,
+) {
+    group.bench_function(name, |b| {
+        b.iter(|| black_box(inputs).iter().map(|&i| f(i)).sum::<O>())
+    });
+}
+
+fn group<'a>(c: &'a mut Criterion, name: &str) -> BenchmarkGroup<'a, WallTime> {
+    let mut g = c.benchmark_group(name);
+    g.throughput(Throughput::Elements(BATCH as u64));
+    g
+}
+
 fn bench_sample(c: &mut Criterion) {
     let inp = inputs();
-    let mut g = c.benchmark_group("sample");
-    g.throughput(Throughput::Elements(BATCH as u64));
-    g.bench_function("uniform_sphere_baseline", |b| {
-        b.iter(|| {
-            let mut acc = Vec3::ZERO;
-            for &u in black_box(&inp.uniforms) {
-                acc += uniform_sphere(u);
-            }
-            acc
-        })
-    });
-    g.bench_function("textbook", |b| {
-        b.iter(|| {
-            let mut acc = Vec3::ZERO;
-            for (lobe, &u) in black_box(&inp.lobes).iter().zip(black_box(&inp.uniforms)) {
-                acc += textbook_sample(lobe, u);
-            }
-            acc
-        })
-    });
-    g.bench_function("vmf", |b| {
-        b.iter(|| {
-            let mut acc = Vec3::ZERO;
-            for (lobe, &u) in black_box(&inp.lobes).iter().zip(black_box(&inp.uniforms)) {
-                acc += lobe.sample(u);
-            }
-            acc
-        })
-    });
+    let pairs = inp.lobe_uniform_pairs();
+    let mut g = group(c, "sample");
+    bench_batch(
+        &mut g,
+        "uniform_sphere_baseline",
+        &inp.uniforms,
+        uniform_sphere,
+    );
+    bench_batch(&mut g, "textbook", &pairs, |(l, u)| textbook_sample(&l, u));
+    bench_batch(&mut g, "vmf", &pairs, |(l, u)| l.sample(u));
     g.finish();
 }
 
 fn bench_pdf(c: &mut Criterion) {
     let inp = inputs();
-    let mut g = c.benchmark_group("pdf");
-    g.throughput(Throughput::Elements(BATCH as u64));
-    g.bench_function("textbook_baseline", |b| {
-        b.iter(|| {
-            let mut acc = 0.0;
-            for (lobe, &w) in black_box(&inp.lobes).iter().zip(black_box(&inp.directions)) {
-                acc += textbook_pdf(lobe, w);
-            }
-            acc
-        })
+    let pairs: Vec<(Vmf, Vec3)> = inp
+        .lobes
+        .iter()
+        .copied()
+        .zip(inp.directions.iter().copied())
+        .collect();
+    let mut g = group(c, "pdf");
+    bench_batch(&mut g, "textbook_baseline", &pairs, |(l, w)| {
+        textbook_pdf(&l, w)
     });
-    g.bench_function("vmf", |b| {
-        b.iter(|| {
-            let mut acc = 0.0;
-            for (lobe, &w) in black_box(&inp.lobes).iter().zip(black_box(&inp.directions)) {
-                acc += lobe.pdf(w);
-            }
-            acc
-        })
-    });
+    bench_batch(&mut g, "vmf", &pairs, |(l, w)| l.pdf(w));
     g.finish();
 }
 
+/// `sample_with_pdf` results are folded as `w · pdf` so that both outputs are used.
 fn bench_sample_with_pdf(c: &mut Criterion) {
     let inp = inputs();
-    let mut g = c.benchmark_group("sample_with_pdf");
-    g.throughput(Throughput::Elements(BATCH as u64));
-    g.bench_function("uniform_sphere_baseline", |b| {
-        b.iter(|| {
-            let mut acc = Vec3::ZERO;
-            let mut pdf = 0.0;
-            for &u in black_box(&inp.uniforms) {
-                acc += uniform_sphere(u);
-                pdf += 0.25 / PI;
-            }
-            (acc, pdf)
-        })
+    let pairs = inp.lobe_uniform_pairs();
+    let mut g = group(c, "sample_with_pdf");
+    bench_batch(&mut g, "uniform_sphere_baseline", &inp.uniforms, |u| {
+        uniform_sphere(u) * (0.25 / PI)
     });
-    g.bench_function("textbook", |b| {
-        b.iter(|| {
-            let mut acc = Vec3::ZERO;
-            let mut pdf = 0.0;
-            for (lobe, &u) in black_box(&inp.lobes).iter().zip(black_box(&inp.uniforms)) {
-                let w = textbook_sample(lobe, u);
-                acc += w;
-                pdf += textbook_pdf(lobe, w);
-            }
-            (acc, pdf)
-        })
+    bench_batch(&mut g, "textbook", &pairs, |(l, u)| {
+        let w = textbook_sample(&l, u);
+        w * textbook_pdf(&l, w)
     });
-    g.bench_function("vmf", |b| {
-        b.iter(|| {
-            let mut acc = Vec3::ZERO;
-            let mut pdf = 0.0;
-            for (lobe, &u) in black_box(&inp.lobes).iter().zip(black_box(&inp.uniforms)) {
-                let (w, p) = lobe.sample_with_pdf(u);
-                acc += w;
-                pdf += p;
-            }
-            (acc, pdf)
-        })
+    bench_batch(&mut g, "vmf", &pairs, |(l, u)| {
+        let (w, p) = l.sample_with_pdf(u);
+        w * p
     });
     g.finish();
 }
@@ -229,52 +210,24 @@ fn mixtures<const K: usize>(inp: &Inputs) -> (VmfMixture<K>, TextbookMixture<K>)
 fn bench_mixture_k<const K: usize>(c: &mut Criterion) {
     let inp = inputs();
     let (ours, theirs) = mixtures::<K>(&inp);
-    let mut g = c.benchmark_group(format!("mixture_pdf/{K}"));
-    g.throughput(Throughput::Elements(BATCH as u64));
-    g.bench_function("textbook_baseline", |b| {
-        b.iter(|| {
-            black_box(&inp.directions)
-                .iter()
-                .map(|&w| theirs.pdf(w))
-                .sum::<f32>()
-        })
+    let mut g = group(c, &format!("mixture_pdf/{K}"));
+    bench_batch(&mut g, "textbook_baseline", &inp.directions, |w| {
+        theirs.pdf(w)
     });
-    g.bench_function("vmf_mixture", |b| {
-        b.iter(|| {
-            black_box(&inp.directions)
-                .iter()
-                .map(|&w| ours.pdf(w))
-                .sum::<f32>()
-        })
-    });
+    bench_batch(&mut g, "vmf_mixture", &inp.directions, |w| ours.pdf(w));
     g.finish();
 
-    let mut g = c.benchmark_group(format!("mixture_sample/{K}"));
-    g.throughput(Throughput::Elements(BATCH as u64));
-    g.bench_function("uniform_sphere_baseline", |b| {
-        b.iter(|| {
-            black_box(&inp.uniforms)
-                .iter()
-                .map(|&u| uniform_sphere(u))
-                .sum::<Vec3>()
-        })
+    let mut g = group(c, &format!("mixture_sample/{K}"));
+    bench_batch(
+        &mut g,
+        "uniform_sphere_baseline",
+        &inp.uniforms,
+        uniform_sphere,
+    );
+    bench_batch(&mut g, "textbook_baseline", &inp.uniforms, |u| {
+        theirs.sample(u)
     });
-    g.bench_function("textbook_baseline", |b| {
-        b.iter(|| {
-            black_box(&inp.uniforms)
-                .iter()
-                .map(|&u| theirs.sample(u))
-                .sum::<Vec3>()
-        })
-    });
-    g.bench_function("vmf_mixture", |b| {
-        b.iter(|| {
-            black_box(&inp.uniforms)
-                .iter()
-                .map(|&u| ours.sample(u))
-                .sum::<Vec3>()
-        })
-    });
+    bench_batch(&mut g, "vmf_mixture", &inp.uniforms, |u| ours.sample(u));
     g.finish();
 }
 
