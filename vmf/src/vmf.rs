@@ -235,10 +235,16 @@ pub(crate) fn cos_theta_minus_one(kappa: f32, xi: f32) -> f32 {
             math::exp_m1(-2.0 * kappa)
         };
         let x = xi * scale;
-        if x < -0.5 {
-            math::ln((1.0 - xi) + xi * decay) / kappa
+        // Selects rather than branches: whether ξ falls in the tail is a coin flip.
+        let near = 1.0 + x;
+        let tail = x < -0.5;
+        let u = if tail { (1.0 - xi) + xi * decay } else { near };
+        let numerator = if tail { 1.0 } else { x };
+        let denominator = if tail { kappa } else { (near - 1.0) * kappa };
+        if u == 1.0 {
+            x / kappa
         } else {
-            ln_1p_over(x, kappa)
+            math::ln(u) * (numerator / denominator)
         }
     };
     r.clamp(-2.0, 0.0)
