@@ -215,17 +215,19 @@ const KAPPA_SAMPLE_SATURATED: f32 = 17.0;
 /// ```
 ///
 /// The argument u = 1 + x, x = ξ expm1(−2κ), is formed in whichever way keeps its precision:
-/// - near the peak (u ≥ ½), `ln_1p(x)` as Goldberg's `ln(u) · x / (u − 1)` with u = fl(1 + x),
-///   folding the division by κ into the same division;
+/// - near the peak (u ≥ ½), `ln_1p(x)` as Goldberg's `ln(u) · x / (u − 1)` with u = fl(1 + x)
+///   (Goldberg 1991, *What every computer scientist should know about floating-point
+///   arithmetic*, Theorem 4), folding the division by κ into the same division;
 /// - in the tail (u < ½, only when ξ > ½), u = (1 − ξ) + ξ e^{−2κ}, where 1 − ξ is exact, so
 ///   that 1 + x does not cancel as ξ → 1;
-/// - above [`KAPPA_SAMPLE_SATURATED`], e^{−2κ} vanishes and u = 1 − ξ: one `ln`, no `exp`.
+/// - above [`KAPPA_SAMPLE_SATURATED`], e^{−2κ} vanishes: expm1(−2κ) = −1 and no `exp` is needed.
 #[inline(always)]
 pub(crate) fn cos_theta_minus_one(kappa: f32, xi: f32) -> f32 {
-    let r = if kappa < KAPPA_TINY {
-        -2.0 * xi
-    } else if kappa > KAPPA_SAMPLE_SATURATED {
-        ln_1p_over(-xi, kappa)
+    if kappa < KAPPA_TINY {
+        return (-2.0 * xi).clamp(-2.0, 0.0);
+    }
+    let (decay, scale) = if kappa > KAPPA_SAMPLE_SATURATED {
+        (0.0, -1.0)
     } else {
         let decay = math::exp(-2.0 * kappa);
         // expm1(−2κ): `decay − 1` cannot cancel once 2κ > ½ (see `math::exp_m1`).
@@ -234,33 +236,21 @@ pub(crate) fn cos_theta_minus_one(kappa: f32, xi: f32) -> f32 {
         } else {
             math::exp_m1(-2.0 * kappa)
         };
-        let x = xi * scale;
-        // Selects rather than branches: whether ξ falls in the tail is a coin flip.
-        let near = 1.0 + x;
-        let tail = x < -0.5;
-        let u = if tail { (1.0 - xi) + xi * decay } else { near };
-        let numerator = if tail { 1.0 } else { x };
-        let denominator = if tail { kappa } else { (near - 1.0) * kappa };
-        if u == 1.0 {
-            x / kappa
-        } else {
-            math::ln(u) * (numerator / denominator)
-        }
+        (decay, scale)
     };
-    r.clamp(-2.0, 0.0)
-}
-
-/// ln(1 + x) / κ by Goldberg's `ln(u) · x / ((u − 1) κ)` with u = fl(1 + x): a few ulps for
-/// all x > −1 (Goldberg 1991, *What every computer scientist should know about floating-point
-/// arithmetic*, Theorem 4).
-#[inline(always)]
-fn ln_1p_over(x: f32, kappa: f32) -> f32 {
-    let u = 1.0 + x;
-    if u == 1.0 {
+    let x = xi * scale;
+    // Selects rather than branches: whether ξ falls in the tail is a coin flip.
+    let near = 1.0 + x;
+    let tail = x < -0.5;
+    let u = if tail { (1.0 - xi) + xi * decay } else { near };
+    let numerator = if tail { 1.0 } else { x };
+    let denominator = if tail { kappa } else { (near - 1.0) * kappa };
+    let r = if u == 1.0 {
         x / kappa
     } else {
-        math::ln(u) * (x / ((u - 1.0) * kappa))
-    }
+        math::ln(u) * (numerator / denominator)
+    };
+    r.clamp(-2.0, 0.0)
 }
 
 #[cfg(test)]
