@@ -38,7 +38,7 @@ pub use chi_square::{
 pub use ks::{KsResult, assert_ks, kolmogorov_critical_value, kolmogorov_survival, ks_test};
 pub use quadrature::{GaussLegendre, graded_theta_breaks, integrate_sphere, orthonormal_basis};
 pub use rng::{Pcg64Mcg, seeded_rng, uniform_sphere_direction, uniform_vec2};
-pub use sphere_bins::SphereBins;
+pub use sphere_bins::{SphereBins, assert_sphere_chi_square};
 pub use vmf_reference::{
     one_minus_cos, vmf_cos_theta_cdf, vmf_cos_theta_variance, vmf_mean_cosine,
     vmf_mean_cosine_derivative, vmf_normalization, vmf_one_minus_cos_cdf,

@@ -4,7 +4,7 @@ use std::f64::consts::TAU;
 
 use glam::DVec3;
 
-use crate::GaussLegendre;
+use crate::{ChiSquareResult, GaussLegendre, assert_chi_square};
 
 /// Points per dimension of the Gauss-Legendre rule on each sub-cell of a bin.
 const QUADRATURE_ORDER: usize = 8;
@@ -155,6 +155,37 @@ impl SphereBins {
             })
             .collect()
     }
+}
+
+/// Chi-square test of sampled `directions` against the density `pdf` on `bins`: expected
+/// counts n · ∫_bin pdf from [`SphereBins::probabilities`] with `subdivisions`, observed counts
+/// from [`SphereBins::histogram`], then [`assert_chi_square`] at significance `alpha`.
+///
+/// Also asserts that the bin probabilities sum to 1 within 10⁻⁵, so a density that does not
+/// integrate to one (or a quadrature too coarse for it) fails here rather than in the test.
+#[track_caller]
+pub fn assert_sphere_chi_square<F, I>(
+    label: &str,
+    bins: &SphereBins,
+    subdivisions: usize,
+    pdf: F,
+    directions: I,
+    alpha: f64,
+) -> ChiSquareResult
+where
+    F: FnMut(DVec3) -> f64,
+    I: IntoIterator<Item = DVec3>,
+{
+    let probabilities = bins.probabilities(subdivisions, pdf);
+    let total: f64 = probabilities.iter().sum();
+    assert!(
+        (total - 1.0).abs() < 1e-5,
+        "{label}: bin probabilities sum to {total}"
+    );
+    let observed = bins.histogram(directions);
+    let n: u64 = observed.iter().sum();
+    let expected: Vec<f64> = probabilities.iter().map(|p| p * n as f64).collect();
+    assert_chi_square(label, &observed, &expected, alpha)
 }
 
 #[cfg(test)]

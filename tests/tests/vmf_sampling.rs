@@ -10,7 +10,7 @@ use std::f64::consts::TAU;
 
 use glam::Vec3;
 use mcg_tests::{
-    RunningStats, SphereBins, assert_chi_square, assert_ks, assert_z_test, one_minus_cos,
+    RunningStats, SphereBins, assert_ks, assert_sphere_chi_square, assert_z_test, one_minus_cos,
     seeded_rng, uniform_vec2, vmf_one_minus_cos_cdf, vmf_one_minus_mean_cosine,
 };
 use mcg_vmf::{Frame, Vmf};
@@ -146,19 +146,12 @@ marginal_suite! {
 fn check_sphere_chi_square(kappa: f32, seed: u64) {
     const N_SPHERE: usize = 1_000_000;
     let lobe = lobe(kappa);
-    let bins = SphereBins::new(32, 64);
-    let probabilities = bins.probabilities(3, |w| f64::from(lobe.pdf(w.as_vec3())));
-    let total: f64 = probabilities.iter().sum();
-    assert!(
-        (total - 1.0).abs() < 1e-5,
-        "kappa {kappa}: bin probabilities sum to {total}"
-    );
-    let observed = bins.histogram(draw(&lobe, seed, N_SPHERE).iter().map(|w| w.as_dvec3()));
-    let expected: Vec<f64> = probabilities.iter().map(|p| p * N_SPHERE as f64).collect();
-    assert_chi_square(
+    assert_sphere_chi_square(
         &format!("sphere bins, kappa = {kappa}"),
-        &observed,
-        &expected,
+        &SphereBins::new(32, 64),
+        3,
+        |w| f64::from(lobe.pdf(w.as_vec3())),
+        draw(&lobe, seed, N_SPHERE).iter().map(|w| w.as_dvec3()),
         ALPHA,
     );
 }
