@@ -1,0 +1,55 @@
+//! Errors returned by the validating constructors of this crate.
+
+use core::fmt;
+
+/// Why [`RandomWalk::new`](crate::RandomWalk::new) or
+/// [`FrameSchedule::new`](crate::FrameSchedule::new) rejected its parameters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum WalkError {
+    /// A step size σ is NaN or infinite.
+    StepNotFinite,
+    /// A step size σ is zero or negative.
+    StepNotPositive,
+    /// The walk has no dimensions (`D = 0`).
+    NoDimensions,
+    /// The burn-in K is not smaller than the number of steps per frame M.
+    BurnInTooLong,
+}
+
+impl fmt::Display for WalkError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            WalkError::StepNotFinite => "random-walk step size is not finite",
+            WalkError::StepNotPositive => "random-walk step size is not positive",
+            WalkError::NoDimensions => "random walk has no dimensions",
+            WalkError::BurnInTooLong => "burn-in is not shorter than the steps per frame",
+        })
+    }
+}
+
+impl core::error::Error for WalkError {}
+
+/// Why a guide's parameter set (e.g. [`McmmParams`](crate::mcmm::McmmParams)) failed validation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum ParamsError {
+    /// A probability (hemisphere, BSDF or adaptive-grid probability) is NaN or outside [0, 1].
+    ProbabilityOutOfRange,
+    /// A length, weight or threshold is NaN, infinite or negative.
+    NotFiniteNonNegative,
+    /// A candidate count is zero.
+    NoCandidates,
+}
+
+impl fmt::Display for ParamsError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            ParamsError::ProbabilityOutOfRange => "probability is not in [0, 1]",
+            ParamsError::NotFiniteNonNegative => "parameter is not finite and non-negative",
+            ParamsError::NoCandidates => "candidate count is zero",
+        })
+    }
+}
+
+impl core::error::Error for ParamsError {}

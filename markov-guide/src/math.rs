@@ -1,0 +1,39 @@
+//! Float functions that `core` lacks, taken from `std` or from `libm`.
+
+#[cfg(not(any(feature = "std", feature = "libm")))]
+compile_error!("mcg-markov-guide needs the `std` feature (default) or the `libm` feature");
+
+#[cfg(feature = "std")]
+mod imp {
+    #[inline(always)]
+    pub fn ln(x: f32) -> f32 {
+        x.ln()
+    }
+    #[inline(always)]
+    pub fn sqrt(x: f32) -> f32 {
+        x.sqrt()
+    }
+    #[inline(always)]
+    pub fn sin_cos(x: f32) -> (f32, f32) {
+        x.sin_cos()
+    }
+}
+
+#[cfg(all(not(feature = "std"), feature = "libm"))]
+mod imp {
+    #[inline(always)]
+    pub fn ln(x: f32) -> f32 {
+        libm::logf(x)
+    }
+    #[inline(always)]
+    pub fn sqrt(x: f32) -> f32 {
+        libm::sqrtf(x)
+    }
+    #[inline(always)]
+    pub fn sin_cos(x: f32) -> (f32, f32) {
+        libm::sincosf(x)
+    }
+}
+
+#[cfg(any(feature = "std", feature = "libm"))]
+pub(crate) use imp::*;

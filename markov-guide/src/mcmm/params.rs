@@ -1,0 +1,82 @@
+//! The constants of MCMM, with the paper's defaults.
+
+use mcg_vmf::{FitParams, MapPrior};
+
+use crate::error::ParamsError;
+
+/// Every constant of MCMM (Dittebrandt et al. 2023), paper defaults in [`McmmParams::PAPER`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct McmmParams {
+    /// Probability of a hemisphere (cosine or BSDF) sample although the state holds a valid
+    /// lobe (Alg. 2 line 2: 0.2; vkdt uses 0.125). This is the defensive technique of appendix A.
+    pub hemisphere_probability: f32,
+    /// The maximum-likelihood update (Alg. 3 lines 11-16): N_max = 1024, α_min = 0.1, and the
+    /// resultant-length mean cosine of lines 15-16.
+    pub fit: FitParams,
+    /// The MAP prior of the mean cosine (Alg. 2 line 6; sec. 5 "Uninformed vs. informed
+    /// priors"): r_p = 0 with N_p = 0.2 virtual samples, decaying with N².
+    pub prior: MapPrior,
+    /// Neighbour states offered to the reservoir of Alg. 1 per iteration (vkdt: 5).
+    pub neighbour_candidates: u32,
+    /// Half width in pixels of the B-spline window the neighbours are drawn from (sec. 4.1:
+    /// a 91 × 91 window at 1920 × 1080, so 45).
+    pub window_half_width: f32,
+}
+
+impl McmmParams {
+    /// The paper's constants.
+    pub const PAPER: Self = Self {
+        hemisphere_probability: 0.2,
+        fit: FitParams::MCMM,
+        prior: MapPrior::uninformed(0.2),
+        neighbour_candidates: 5,
+        window_half_width: 45.0,
+    };
+
+    /// Checks that probabilities lie in [0, 1], lengths are finite and non-negative and that at
+    /// least one neighbour candidate is drawn.
+    ///
+    /// # Errors
+    /// The first [`ParamsError`] found.
+    pub fn validate(&self) -> Result<(), ParamsError> {
+        if !(0.0..=1.0).contains(&self.hemisphere_probability) {
+            return Err(ParamsError::ProbabilityOutOfRange);
+        }
+        if !(self.window_half_width >= 0.0 && self.window_half_width.is_finite())
+            || !(self.prior.weight >= 0.0)
+            || !(self.fit.alpha_min >= 0.0 && self.fit.alpha_min <= 1.0)
+        {
+            return Err(ParamsError::NotFiniteNonNegative);
+        }
+        if self.neighbour_candidates == 0 {
+            return Err(ParamsError::NoCandidates);
+        }
+        Ok(())
+    }
+}
+
+impl Default for McmmParams {
+    /// [`McmmParams::PAPER`].
+    fn default() -> Self {
+        Self::PAPER
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paper_defaults_validate_and_bad_values_do_not() {
+        assert_eq!(McmmParams::PAPER.validate(), Ok(()));
+        let mut p = McmmParams::PAPER;
+        p.hemisphere_probability = f32::NAN;
+        assert_eq!(p.validate(), Err(ParamsError::ProbabilityOutOfRange));
+        let mut p = McmmParams::PAPER;
+        p.window_half_width = -1.0;
+        assert_eq!(p.validate(), Err(ParamsError::NotFiniteNonNegative));
+        let mut p = McmmParams::PAPER;
+        p.neighbour_candidates = 0;
+        assert_eq!(p.validate(), Err(ParamsError::NoCandidates));
+    }
+}

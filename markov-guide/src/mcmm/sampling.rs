@@ -1,0 +1,107 @@
+//! Choice of the sampling technique and the per-chain pdf (MCMM Alg. 2 and appendix A).
+
+use mcg_vmf::Vmf;
+use mcg_vmf::glam::Vec3;
+
+use super::{McmmParams, PixelState};
+
+/// The technique Alg. 2 picked for one sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Technique {
+    /// An independent hemisphere sample: cosine or BSDF sampling, chosen by the renderer
+    /// (Alg. 2 line 3). Resets the lobe when it is accepted (Alg. 3 line 6).
+    Hemisphere,
+    /// The state's lobe, reconstructed with the prior at the shading point (Alg. 2 lines 5-8).
+    Lobe(Vmf),
+}
+
+/// MCMM Alg. 2 lines 1-9: a hemisphere sample when the state is invalid or with probability
+/// `params.hemisphere_probability` (`u` < p_h), otherwise the state's lobe at shading point `x`.
+///
+/// A state whose lobe cannot be reconstructed at `x` (ȳ = x) falls back to the hemisphere too.
+/// The renderer then samples ω from the technique ([`Vmf::sample`] or its own cosine/BSDF
+/// sampler) with fresh uniforms.
+#[inline]
+#[must_use]
+pub fn choose_technique(state: &PixelState, x: Vec3, u: f32, params: &McmmParams) -> Technique {
+    if u < params.hemisphere_probability {
+        return Technique::Hemisphere;
+    }
+    match state.lobe(x, params.prior) {
+        Some(lobe) => Technique::Lobe(lobe),
+        None => Technique::Hemisphere,
+    }
+}
+
+/// The density p(ω | S) with which chain state `state` samples ω at shading point `x`:
+/// the defensive mixture p_h·p_hemi(ω) + (1 − p_h)·V(ω | μ, κ) for a state with a lobe, and
+/// p_hemi(ω) for one without (the two branches of [`choose_technique`]).
+///
+/// `hemisphere_pdf` is the renderer's cosine or BSDF pdf at ω. These are the technique
+/// densities p(ω | t_j) of the SMIS estimators (MCMM eq. 8, 9); because every technique keeps
+/// the hemisphere branch, their sum is positive wherever the integrand is, which is what
+/// appendix A needs for unbiasedness.
+#[inline]
+#[must_use]
+pub fn technique_pdf(
+    state: &PixelState,
+    x: Vec3,
+    w: Vec3,
+    hemisphere_pdf: f32,
+    params: &McmmParams,
+) -> f32 {
+    match state.lobe(x, params.prior) {
+        Some(lobe) => {
+            let p = params.hemisphere_probability;
+            p * hemisphere_pdf + (1.0 - p) * lobe.pdf(w)
+        }
+        None => hemisphere_pdf,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mcg_vmf::{FitParams, SufficientStats};
+
+    fn lit_state() -> PixelState {
+        let mut stats = SufficientStats::EMPTY;
+        stats.update(Vec3::ZERO, Vec3::new(0.0, 0.0, 2.0), 3.0, &FitParams::MCMM);
+        PixelState { stats, score: 3.0 }
+    }
+
+    #[test]
+    fn invalid_states_use_the_hemisphere() {
+        let p = McmmParams::PAPER;
+        assert_eq!(
+            choose_technique(&PixelState::EMPTY, Vec3::ZERO, 0.9, &p),
+            Technique::Hemisphere
+        );
+        assert_eq!(
+            technique_pdf(&PixelState::EMPTY, Vec3::ZERO, Vec3::Z, 0.3, &p),
+            0.3
+        );
+        // ȳ = x: no lobe.
+        let s = lit_state();
+        assert_eq!(
+            choose_technique(&s, Vec3::new(0.0, 0.0, 2.0), 0.9, &p),
+            Technique::Hemisphere
+        );
+    }
+
+    #[test]
+    fn valid_states_mix_defensively() {
+        let p = McmmParams::PAPER;
+        let s = lit_state();
+        assert_eq!(
+            choose_technique(&s, Vec3::ZERO, 0.1, &p),
+            Technique::Hemisphere
+        );
+        let Technique::Lobe(lobe) = choose_technique(&s, Vec3::ZERO, 0.5, &p) else {
+            panic!("expected a lobe");
+        };
+        assert_eq!(lobe.mu(), Vec3::Z);
+        let pdf = technique_pdf(&s, Vec3::ZERO, Vec3::Z, 0.3, &p);
+        assert!((pdf - (0.2 * 0.3 + 0.8 * lobe.pdf(Vec3::Z))).abs() < 1e-4 * pdf);
+    }
+}
