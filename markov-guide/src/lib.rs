@@ -44,6 +44,7 @@ mod error;
 mod hemisphere;
 mod math;
 pub mod mcmm;
+pub mod mcpg;
 mod metropolis;
 mod reservoir;
 #[cfg(feature = "std")]

@@ -1,0 +1,104 @@
+//! The constants of MCPG, with the paper's defaults.
+
+use mcg_vmf::FitParams;
+
+use crate::error::ParamsError;
+
+/// Every constant of MCPG (Alber et al. 2025), defaults in [`McpgParams::PAPER`] (the paper's
+/// values where it gives them, the authors' engine's otherwise; ../ANCHORS "MCPG in practice").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct McpgParams {
+    /// N_mc, the candidates loaded per vertex in Alg. 1 (5).
+    pub candidates: u32,
+    /// Probability that a candidate is loaded from the adaptive grid rather than the static one
+    /// (sec. 4, step 1: p_adaptive = 0.7).
+    pub adaptive_probability: f32,
+    /// p_bsdf, the probability of a BSDF (or cosine, or phase-function) sample although a
+    /// valid state was resampled (Alg. 2 line 2). The paper calls it "low"; the authors' engine
+    /// uses 0.1-0.15; 0.1 here.
+    pub bsdf_probability: f32,
+    /// The MLE update of Alg. 3: N_max 1024, α_min 0.01, r̄ as the mean projected cosine (l. 9).
+    pub fit: FitParams,
+    /// Prior weight N_p = `prior_scale` / |ȳ − x|² with r_p = 0 (sec. 4, step 2: scale 1) ...
+    pub prior_scale: f32,
+    /// ... and never below this (the authors' engine: 10⁻⁴), so a far target keeps a prior.
+    pub prior_min_weight: f32,
+    /// Static-grid candidates whose lobe direction μ makes cos(μ, n) ≤ this with the surface
+    /// normal are rejected (sec. 4, step 1; the paper gives no value, ours is 0: the lobe must
+    /// point above the surface).
+    pub static_normal_threshold: f32,
+    /// Discard heuristic (sec. 5): a rejected lobe sample whose estimate f_mc is at most this
+    /// fraction of w̄ zeroes the state (the paper says "significantly smaller"; its era's code
+    /// used 0.5, the authors' newest 10⁻³).
+    pub discard_ratio: f32,
+}
+
+impl McpgParams {
+    /// The paper's constants.
+    pub const PAPER: Self = Self {
+        candidates: 5,
+        adaptive_probability: 0.7,
+        bsdf_probability: 0.1,
+        fit: FitParams::MCPG,
+        prior_scale: 1.0,
+        prior_min_weight: 1.0e-4,
+        static_normal_threshold: 0.0,
+        discard_ratio: 0.5,
+    };
+
+    /// Checks probabilities, weights and counts.
+    ///
+    /// # Errors
+    /// The first [`ParamsError`] found. N_max must fit the state's 16-bit count.
+    pub fn validate(&self) -> Result<(), ParamsError> {
+        for p in [self.adaptive_probability, self.bsdf_probability] {
+            if !(0.0..=1.0).contains(&p) {
+                return Err(ParamsError::ProbabilityOutOfRange);
+            }
+        }
+        for v in [self.prior_scale, self.prior_min_weight, self.discard_ratio] {
+            if !(v >= 0.0 && v.is_finite()) {
+                return Err(ParamsError::NotFiniteNonNegative);
+            }
+        }
+        if !(self.static_normal_threshold.abs() <= 1.0)
+            || !(0.0..=1.0).contains(&self.fit.alpha_min)
+            || self.fit.max_count > u16::MAX as u32
+        {
+            return Err(ParamsError::NotFiniteNonNegative);
+        }
+        if self.candidates == 0 || self.fit.max_count == 0 {
+            return Err(ParamsError::NoCandidates);
+        }
+        Ok(())
+    }
+}
+
+impl Default for McpgParams {
+    /// [`McpgParams::PAPER`].
+    fn default() -> Self {
+        Self::PAPER
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paper_defaults_validate_and_bad_values_do_not() {
+        assert_eq!(McpgParams::PAPER.validate(), Ok(()));
+        let mut p = McpgParams::PAPER;
+        p.adaptive_probability = 1.5;
+        assert_eq!(p.validate(), Err(ParamsError::ProbabilityOutOfRange));
+        let mut p = McpgParams::PAPER;
+        p.prior_scale = f32::NAN;
+        assert_eq!(p.validate(), Err(ParamsError::NotFiniteNonNegative));
+        let mut p = McpgParams::PAPER;
+        p.fit.max_count = 70_000;
+        assert_eq!(p.validate(), Err(ParamsError::NotFiniteNonNegative));
+        let mut p = McpgParams::PAPER;
+        p.candidates = 0;
+        assert_eq!(p.validate(), Err(ParamsError::NoCandidates));
+    }
+}
