@@ -16,6 +16,7 @@
 //! | [`cosine_hemisphere`] | the defensive cosine technique | MCMM Alg. 2, MCPG Alg. 2 |
 //! | [`RandomWalk`], [`MetropolisChain`], [`FrameSchedule`] | Metropolis random walk on ℝᴰ with burn-in per frame | ADGI Alg. 1, 5, sec. 4.8-4.9 |
 //! | [`toy_scene::ToyScene`] | lights on a plane with closed-form irradiance, for tests and examples | — |
+//! | `toy_renderer` (feature `toy`) | MCMM's full frame loop on the toy scene: TSMIS, SSMIS, unshuffled, cosine baseline | MCMM sec. 4.1-4.2 |
 //!
 //! ## Conventions
 //! - Directions are unit [`glam::Vec3`] in world space; densities are per steradian.
@@ -28,6 +29,7 @@
 //! - `std` (default): float functions from the standard library, the frame buffers and the
 //!   toy scene.
 //! - `libm`: float functions from `libm` for `#![no_std]` builds.
+//! - `toy`: the reference renderer loops of `toy_renderer` (with `std` and `rand`).
 #![no_std]
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
@@ -47,6 +49,8 @@ pub mod mcmm;
 pub mod mcpg;
 mod metropolis;
 mod reservoir;
+#[cfg(feature = "toy")]
+pub mod toy_renderer;
 #[cfg(feature = "std")]
 pub mod toy_scene;
 

@@ -19,7 +19,7 @@ mod update;
 
 pub use params::McmmParams;
 pub use resampling::{bspline_offset, collaborative_discovery, resample_neighbour};
-pub use sampling::{Technique, choose_technique, technique_pdf};
+pub use sampling::{CosineChainTechnique, SampleChoice, choose_technique, technique_pdf};
 pub use state::PixelState;
 #[cfg(feature = "std")]
 pub use state::PixelStateBuffers;

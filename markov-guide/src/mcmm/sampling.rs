@@ -1,13 +1,16 @@
 //! Choice of the sampling technique and the per-chain pdf (MCMM Alg. 2 and appendix A).
 
+use mcg_smis::Technique;
 use mcg_vmf::Vmf;
-use mcg_vmf::glam::Vec3;
+use mcg_vmf::glam::{Vec2, Vec3};
+
+use crate::{cosine_hemisphere, cosine_hemisphere_pdf};
 
 use super::{McmmParams, PixelState};
 
 /// The technique Alg. 2 picked for one sample.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Technique {
+pub enum SampleChoice {
     /// An independent hemisphere sample: cosine or BSDF sampling, chosen by the renderer
     /// (Alg. 2 line 3). Resets the lobe when it is accepted (Alg. 3 line 6).
     Hemisphere,
@@ -23,13 +26,13 @@ pub enum Technique {
 /// sampler) with fresh uniforms.
 #[inline]
 #[must_use]
-pub fn choose_technique(state: &PixelState, x: Vec3, u: f32, params: &McmmParams) -> Technique {
+pub fn choose_technique(state: &PixelState, x: Vec3, u: f32, params: &McmmParams) -> SampleChoice {
     if u < params.hemisphere_probability {
-        return Technique::Hemisphere;
+        return SampleChoice::Hemisphere;
     }
     match state.lobe(x, params.prior) {
-        Some(lobe) => Technique::Lobe(lobe),
-        None => Technique::Hemisphere,
+        Some(lobe) => SampleChoice::Lobe(lobe),
+        None => SampleChoice::Hemisphere,
     }
 }
 
@@ -59,6 +62,71 @@ pub fn technique_pdf(
     }
 }
 
+/// One chain's technique with cosine hemisphere sampling as the defensive branch: the
+/// [`mcg_smis::Technique`] that MCMM's SMIS estimators (eq. 8, 9) sum over.
+///
+/// Its density is [`technique_pdf`] with p_hemi(ω) = max(0, n·ω)/π; its uniform is
+/// `(u_select, u)`, `u_select` choosing the branch as [`choose_technique`] does. Build it from
+/// the state the sample is drawn from, before [`update`](super::update) changes that state.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CosineChainTechnique {
+    lobe: Option<Vmf>,
+    normal: Vec3,
+    hemisphere_probability: f32,
+}
+
+impl CosineChainTechnique {
+    /// The technique of chain state `state` at shading point `x` with unit normal `normal`.
+    #[inline]
+    #[must_use]
+    pub fn new(state: &PixelState, x: Vec3, normal: Vec3, params: &McmmParams) -> Self {
+        Self {
+            lobe: state.lobe(x, params.prior),
+            normal,
+            hemisphere_probability: params.hemisphere_probability,
+        }
+    }
+
+    /// The lobe, `None` when the technique is the hemisphere alone.
+    #[inline]
+    #[must_use]
+    pub const fn lobe(&self) -> Option<Vmf> {
+        self.lobe
+    }
+
+    /// Samples ω and reports whether the hemisphere branch was taken.
+    #[inline]
+    #[must_use]
+    pub fn sample_with_branch(&self, u_select: f32, u: Vec2) -> (Vec3, bool) {
+        match self.lobe {
+            Some(lobe) if !(u_select < self.hemisphere_probability) => (lobe.sample(u), false),
+            _ => (cosine_hemisphere(self.normal, u).0, true),
+        }
+    }
+}
+
+impl Technique for CosineChainTechnique {
+    type Sample = Vec3;
+    type Uniform = (f32, Vec2);
+
+    #[inline]
+    fn pdf(&self, w: &Vec3) -> f32 {
+        let hemisphere = cosine_hemisphere_pdf(self.normal, *w);
+        match self.lobe {
+            Some(lobe) => {
+                let p = self.hemisphere_probability;
+                p * hemisphere + (1.0 - p) * lobe.pdf(*w)
+            }
+            None => hemisphere,
+        }
+    }
+
+    #[inline]
+    fn sample(&self, (u_select, u): (f32, Vec2)) -> Vec3 {
+        self.sample_with_branch(u_select, u).0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -75,7 +143,7 @@ mod tests {
         let p = McmmParams::PAPER;
         assert_eq!(
             choose_technique(&PixelState::EMPTY, Vec3::ZERO, 0.9, &p),
-            Technique::Hemisphere
+            SampleChoice::Hemisphere
         );
         assert_eq!(
             technique_pdf(&PixelState::EMPTY, Vec3::ZERO, Vec3::Z, 0.3, &p),
@@ -85,7 +153,7 @@ mod tests {
         let s = lit_state();
         assert_eq!(
             choose_technique(&s, Vec3::new(0.0, 0.0, 2.0), 0.9, &p),
-            Technique::Hemisphere
+            SampleChoice::Hemisphere
         );
     }
 
@@ -95,13 +163,20 @@ mod tests {
         let s = lit_state();
         assert_eq!(
             choose_technique(&s, Vec3::ZERO, 0.1, &p),
-            Technique::Hemisphere
+            SampleChoice::Hemisphere
         );
-        let Technique::Lobe(lobe) = choose_technique(&s, Vec3::ZERO, 0.5, &p) else {
+        let SampleChoice::Lobe(lobe) = choose_technique(&s, Vec3::ZERO, 0.5, &p) else {
             panic!("expected a lobe");
         };
         assert_eq!(lobe.mu(), Vec3::Z);
         let pdf = technique_pdf(&s, Vec3::ZERO, Vec3::Z, 0.3, &p);
         assert!((pdf - (0.2 * 0.3 + 0.8 * lobe.pdf(Vec3::Z))).abs() < 1e-4 * pdf);
+        // The smis technique agrees with technique_pdf for the cosine hemisphere.
+        let t = CosineChainTechnique::new(&s, Vec3::ZERO, Vec3::Z, &p);
+        let w = Vec3::new(0.2, 0.1, 0.9).normalize();
+        let want = technique_pdf(&s, Vec3::ZERO, w, cosine_hemisphere_pdf(Vec3::Z, w), &p);
+        assert!((t.pdf(&w) - want).abs() < 1e-6 * want);
+        assert!(!t.sample_with_branch(0.5, Vec2::new(0.3, 0.3)).1);
+        assert!(t.sample_with_branch(0.1, Vec2::new(0.3, 0.3)).1);
     }
 }

@@ -23,6 +23,6 @@ mod update;
 
 pub use params::McpgParams;
 pub use resampling::{CandidateSet, GridKind, distance_prior, prepare_candidate};
-pub use sampling::{Technique, choose_technique};
+pub use sampling::{SampleChoice, choose_technique};
 pub use state::GridState;
 pub use update::{Observation, should_discard, update};

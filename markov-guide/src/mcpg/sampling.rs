@@ -7,7 +7,7 @@ use super::{CandidateSet, GridState, McpgParams, distance_prior};
 
 /// The technique MCPG Alg. 2 picked for one sample.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Technique {
+pub enum SampleChoice {
     /// BSDF (or cosine, or phase-function) sampling by the renderer (Alg. 2 line 3); the state
     /// carried into Alg. 3 is then the empty state (line 4).
     Bsdf,
@@ -26,16 +26,16 @@ pub fn choose_technique(
     x: Vec3,
     u: f32,
     params: &McpgParams,
-) -> (Technique, GridState) {
+) -> (SampleChoice, GridState) {
     let Some(state) = selected else {
-        return (Technique::Bsdf, GridState::EMPTY);
+        return (SampleChoice::Bsdf, GridState::EMPTY);
     };
     if u < params.bsdf_probability {
-        return (Technique::Bsdf, GridState::EMPTY);
+        return (SampleChoice::Bsdf, GridState::EMPTY);
     }
     match state.lobe(x, distance_prior(state, x, params)) {
-        Some(lobe) => (Technique::Lobe(lobe), *state),
-        None => (Technique::Bsdf, GridState::EMPTY),
+        Some(lobe) => (SampleChoice::Lobe(lobe), *state),
+        None => (SampleChoice::Bsdf, GridState::EMPTY),
     }
 }
 
@@ -90,7 +90,7 @@ mod tests {
     fn empty_sets_fall_back_to_the_bsdf() {
         let p = McpgParams::PAPER;
         let (t, s) = choose_technique(None, Vec3::ZERO, 0.9, &p);
-        assert_eq!((t, s), (Technique::Bsdf, GridState::EMPTY));
+        assert_eq!((t, s), (SampleChoice::Bsdf, GridState::EMPTY));
         let set = CandidateSet::<5>::new();
         assert_eq!(set.pdf(Vec3::ZERO, Vec3::Z, 0.3, &p), 0.3);
     }
@@ -116,11 +116,11 @@ mod tests {
         let got = set.pdf(Vec3::ZERO, w, 0.2, &p);
         assert!((got - want).abs() < 1e-5 * want, "{got} vs {want}");
         let (t, s) = choose_technique(set.selected(), Vec3::ZERO, 0.5, &p);
-        assert!(matches!(t, Technique::Lobe(_)));
+        assert!(matches!(t, SampleChoice::Lobe(_)));
         assert_eq!(s, *set.selected().unwrap());
         assert_eq!(
             choose_technique(set.selected(), Vec3::ZERO, 0.05, &p).0,
-            Technique::Bsdf
+            SampleChoice::Bsdf
         );
     }
 }

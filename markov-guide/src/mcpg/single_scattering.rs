@@ -2,7 +2,7 @@
 //!
 //! Three changes, none to the state: the BSDF is replaced by the volume's phase function (pass
 //! its density as `bsdf_pdf` to [`CandidateSet::pdf`](super::CandidateSet::pdf) and sample it
-//! for [`Technique::Bsdf`](super::Technique::Bsdf)); the adaptive grid's key folds in the
+//! for [`SampleChoice::Bsdf`](super::SampleChoice::Bsdf)); the adaptive grid's key folds in the
 //! reverse camera direction instead of the surface normal, jittered by a cosine lobe
 //! ([`jittered_view_direction`]) so that neighbouring view directions share states; and the
 //! static grid has no normal threshold (pass `normal = None` to
