@@ -89,6 +89,16 @@ impl ToyScene {
         }
     }
 
+    /// One large light, radius 1.5 at height 3.5 above the origin (about 25° across), radiance
+    /// 10: the broad emitter of a Cornell box, where a lobe follows its own samples most.
+    #[must_use]
+    pub fn large_light() -> Self {
+        Self {
+            lights: std::vec![SphereLight::fixed(Vec3::new(0.0, 0.0, 3.5), 1.5, 10.0)],
+            occluders: Vec::new(),
+        }
+    }
+
     /// Eight lights of radius 0.15 on a ring of radius 3 at heights 1.5 to 3.25, radiances
     /// 20 to 90, so that they differ in direction, distance and power.
     #[must_use]

@@ -17,7 +17,7 @@ mod sampling;
 mod state;
 mod update;
 
-pub use params::McmmParams;
+pub use params::{McmmParams, McmmPrior};
 pub use resampling::{bspline_offset, collaborative_discovery, resample_neighbour};
 pub use sampling::{CosineChainTechnique, SampleChoice, choose_technique, technique_pdf};
 pub use state::PixelState;

@@ -1,6 +1,6 @@
 //! The constants of MCMM, with the paper's defaults.
 
-use mcg_vmf::{FitParams, MapPrior};
+use mcg_vmf::{FitParams, MapPrior, PriorDecay};
 
 use crate::error::ParamsError;
 
@@ -14,8 +14,8 @@ pub struct McmmParams {
     /// resultant-length mean cosine of lines 15-16.
     pub fit: FitParams,
     /// The MAP prior of the mean cosine (Alg. 2 line 6; sec. 5 "Uninformed vs. informed
-    /// priors"): r_p = 0 with N_p = 0.2 virtual samples, decaying with N².
-    pub prior: MapPrior,
+    /// priors"): by default uninformed, r_p = 0 with N_p = 0.2 virtual samples, decaying with N².
+    pub prior: McmmPrior,
     /// Neighbour states offered to the reservoir of Alg. 1 per iteration (vkdt: 5).
     pub neighbour_candidates: u32,
     /// Half width in pixels of the B-spline window the neighbours are drawn from (sec. 4.1:
@@ -28,7 +28,7 @@ impl McmmParams {
     pub const PAPER: Self = Self {
         hemisphere_probability: 0.2,
         fit: FitParams::MCMM,
-        prior: MapPrior::uninformed(0.2),
+        prior: McmmPrior::Fixed(MapPrior::uninformed(0.2)),
         neighbour_candidates: 5,
         window_half_width: 45.0,
     };
@@ -43,7 +43,7 @@ impl McmmParams {
             return Err(ParamsError::ProbabilityOutOfRange);
         }
         if !(self.window_half_width >= 0.0 && self.window_half_width.is_finite())
-            || !(self.prior.weight >= 0.0)
+            || !self.prior.is_valid()
             || !(self.fit.alpha_min >= 0.0 && self.fit.alpha_min <= 1.0)
         {
             return Err(ParamsError::NotFiniteNonNegative);
@@ -52,6 +52,62 @@ impl McmmParams {
             return Err(ParamsError::NoCandidates);
         }
         Ok(())
+    }
+}
+
+/// The prior of MCMM's lobe fit (MCMM sec. 5, "Uninformed vs. informed priors").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum McmmPrior {
+    /// The same prior for every lobe; the paper's Falcor scenes use the uninformed r_p = 0.
+    Fixed(MapPrior),
+    /// An informed prior from a known emitter size (the paper's Quake scenes, where every light
+    /// is about one unit across): r_p is the mean cosine of directions spread uniformly over the
+    /// cone a sphere of `radius` subtends at the lobe's target distance d,
+    /// 1 − r_p = (1 − cos θ)/2 with sin θ = radius/d (r_p = 0 when d ≤ radius), with `weight`
+    /// virtual samples decaying with N². Lobes start as wide as the light, however few samples
+    /// they hold.
+    LightSize {
+        /// Emitter radius, in scene units.
+        radius: f32,
+        /// N_p, the prior's weight in virtual samples.
+        weight: f32,
+    },
+}
+
+impl McmmPrior {
+    /// The MAP prior for a lobe whose mean target is `distance` away from the shading point.
+    #[inline]
+    #[must_use]
+    pub fn at_distance(&self, distance: f32) -> MapPrior {
+        match *self {
+            McmmPrior::Fixed(prior) => prior,
+            McmmPrior::LightSize { radius, weight } => {
+                let sin = if distance > radius {
+                    radius / distance
+                } else {
+                    1.0
+                };
+                // 1 − cos θ = sin²θ/(1 + cos θ), without cancellation for small θ.
+                let cos = crate::math::sqrt((1.0 - sin * sin).max(0.0));
+                let one_minus_cos = sin * sin / (1.0 + cos);
+                MapPrior {
+                    mean_cosine: 1.0 - 0.5 * one_minus_cos,
+                    weight,
+                    decay: PriorDecay::SquaredCount,
+                }
+            }
+        }
+    }
+
+    fn is_valid(&self) -> bool {
+        match *self {
+            McmmPrior::Fixed(prior) => {
+                prior.weight >= 0.0 && (-1.0..=1.0).contains(&prior.mean_cosine)
+            }
+            McmmPrior::LightSize { radius, weight } => {
+                radius >= 0.0 && radius.is_finite() && weight >= 0.0 && weight.is_finite()
+            }
+        }
     }
 }
 

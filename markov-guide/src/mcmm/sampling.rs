@@ -30,7 +30,7 @@ pub fn choose_technique(state: &PixelState, x: Vec3, u: f32, params: &McmmParams
     if u < params.hemisphere_probability {
         return SampleChoice::Hemisphere;
     }
-    match state.lobe(x, params.prior) {
+    match state.lobe_with(x, &params.prior) {
         Some(lobe) => SampleChoice::Lobe(lobe),
         None => SampleChoice::Hemisphere,
     }
@@ -53,7 +53,7 @@ pub fn technique_pdf(
     hemisphere_pdf: f32,
     params: &McmmParams,
 ) -> f32 {
-    match state.lobe(x, params.prior) {
+    match state.lobe_with(x, &params.prior) {
         Some(lobe) => {
             let p = params.hemisphere_probability;
             p * hemisphere_pdf + (1.0 - p) * lobe.pdf(w)
@@ -81,7 +81,7 @@ impl CosineChainTechnique {
     #[must_use]
     pub fn new(state: &PixelState, x: Vec3, normal: Vec3, params: &McmmParams) -> Self {
         Self {
-            lobe: state.lobe(x, params.prior),
+            lobe: state.lobe_with(x, &params.prior),
             normal,
             hemisphere_probability: params.hemisphere_probability,
         }

@@ -47,8 +47,8 @@ impl PixelState {
         if self.is_valid() { self.score } else { 0.0 }
     }
 
-    /// The lobe at shading point `x` (Alg. 2 lines 5-8), `None` for an invalid state or when ȳ
-    /// coincides with `x`.
+    /// The lobe at shading point `x` (Alg. 2 lines 5-8) with the fixed prior `prior`, `None`
+    /// for an invalid state or when ȳ coincides with `x`.
     #[inline]
     #[must_use]
     pub fn lobe(&self, x: Vec3, prior: MapPrior) -> Option<Vmf> {
@@ -56,6 +56,14 @@ impl PixelState {
             return None;
         }
         self.stats.to_vmf(x, prior)
+    }
+
+    /// The lobe at shading point `x` with MCMM's prior policy ([`McmmPrior`](super::McmmPrior)),
+    /// which may depend on the distance |ȳ − x|.
+    #[inline]
+    #[must_use]
+    pub fn lobe_with(&self, x: Vec3, prior: &super::McmmPrior) -> Option<Vmf> {
+        self.lobe(x, prior.at_distance(self.stats.target_distance(x)))
     }
 }
 

@@ -250,7 +250,11 @@ impl McmmToyRenderer {
             // Alg. 2, tracing, Alg. 3.
             for index in 0..n {
                 let x = self.shading_point(index);
-                let state = if guided { step_states[index] } else { PixelState::EMPTY };
+                let state = if guided {
+                    step_states[index]
+                } else {
+                    PixelState::EMPTY
+                };
                 let technique = CosineChainTechnique::new(&state, x, TOY_NORMAL, &params);
                 let u_select: f32 = rng.random();
                 let u = Vec2::new(rng.random(), rng.random());
