@@ -65,6 +65,9 @@ pub struct ToyHit {
     pub radiance: f32,
     /// Index of the light that was hit.
     pub light: Option<usize>,
+    /// Velocity of the object that was hit (a moving light's), zero otherwise: the hit point
+    /// was at `point − velocity·dt` a time dt earlier.
+    pub velocity: Vec3,
 }
 
 /// The toy scene at one moment: lights and occluders above the plane z = 0.
@@ -154,6 +157,7 @@ impl ToyScene {
             point: x + MISS_DISTANCE * w,
             radiance: 0.0,
             light: None,
+            velocity: Vec3::ZERO,
         };
         let mut t_max = MISS_DISTANCE;
         for (i, light) in self.lights.iter().enumerate() {
@@ -165,6 +169,7 @@ impl ToyScene {
                     point: x + t * w,
                     radiance: light.radiance,
                     light: Some(i),
+                    velocity: light.velocity,
                 };
             }
         }
@@ -177,6 +182,7 @@ impl ToyScene {
                     point: x + t * w,
                     radiance: 0.0,
                     light: None,
+                    velocity: Vec3::ZERO,
                 };
             }
         }

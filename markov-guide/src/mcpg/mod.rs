@@ -14,6 +14,8 @@
 //! 4. [`update`] (eq. 8, Alg. 3) and store the returned state at a freshly chosen level and
 //!    corner; or, for a rejected lobe sample, [`should_discard`] and zero the slot it came from.
 
+#[cfg(feature = "std")]
+mod grid;
 mod params;
 mod resampling;
 mod sampling;
@@ -21,7 +23,9 @@ pub mod single_scattering;
 mod state;
 mod update;
 
-pub use params::McpgParams;
+#[cfg(feature = "std")]
+pub use grid::{GridEnsemble, GridSlot, GridUniforms};
+pub use params::{DiscardRule, McpgParams};
 pub use resampling::{CandidateSet, GridKind, distance_prior, prepare_candidate};
 pub use sampling::{SampleChoice, choose_technique};
 pub use state::GridState;

@@ -4,8 +4,9 @@ use mcg_vmf::FitParams;
 
 use crate::error::ParamsError;
 
-/// Every constant of MCPG (Alber et al. 2025), defaults in [`McpgParams::PAPER`] (the paper's
-/// values where it gives them, the authors' engine's otherwise; ../ANCHORS "MCPG in practice").
+/// Every constant of MCPG (Alber et al. 2025), defaults in [`McpgParams::PAPER`]: the paper's
+/// values where it gives them, the authors' engine's otherwise (merian-quake), and the engine's
+/// discard rule, which our tracking tests need ([`DiscardRule`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct McpgParams {
     /// N_mc, the candidates loaded per vertex in Alg. 1 (5).
@@ -27,10 +28,27 @@ pub struct McpgParams {
     /// normal are rejected (sec. 4, step 1; the paper gives no value, ours is 0: the lobe must
     /// point above the surface).
     pub static_normal_threshold: f32,
-    /// Discard heuristic (sec. 5): a rejected lobe sample whose estimate f_mc is at most this
-    /// fraction of w̄ zeroes the state (the paper says "significantly smaller"; its era's code
-    /// used 0.5, the authors' newest 10⁻³).
-    pub discard_ratio: f32,
+    /// The discard heuristic's thresholds (sec. 5).
+    pub discard: DiscardRule,
+}
+
+/// When a rejected lobe sample discards the state it came from (MCPG sec. 5, "Discarding Light
+/// Sources"). Both forms also require T ≠ now (the state was not updated at this time).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DiscardRule {
+    /// The paper's text: f_mc ≤ `ratio`·w̄ ("significantly smaller"; the code of the paper's era
+    /// used 0.5) and μᵀω > r, r the MAP mean cosine of Alg. 2 line 7. On small lights this
+    /// discards live states whenever a sample from the inner half of a lobe misses.
+    Paper {
+        /// The estimate ratio below which the light counts as gone.
+        ratio: f32,
+    },
+    /// The authors' engine (merian-quake): f_mc ≤ `ratio`·w̄ (10⁻³) and ω·μ ≥ 0.9 + 0.1·r̄: only a
+    /// sample very close to the lobe's axis can discard it.
+    Engine {
+        /// The estimate ratio below which the light counts as gone.
+        ratio: f32,
+    },
 }
 
 impl McpgParams {
@@ -43,7 +61,7 @@ impl McpgParams {
         prior_scale: 1.0,
         prior_min_weight: 1.0e-4,
         static_normal_threshold: 0.0,
-        discard_ratio: 0.5,
+        discard: DiscardRule::Engine { ratio: 1.0e-3 },
     };
 
     /// Checks probabilities, weights and counts.
@@ -56,7 +74,8 @@ impl McpgParams {
                 return Err(ParamsError::ProbabilityOutOfRange);
             }
         }
-        for v in [self.prior_scale, self.prior_min_weight, self.discard_ratio] {
+        let (DiscardRule::Paper { ratio } | DiscardRule::Engine { ratio }) = self.discard;
+        for v in [self.prior_scale, self.prior_min_weight, ratio] {
             if !(v >= 0.0 && v.is_finite()) {
                 return Err(ParamsError::NotFiniteNonNegative);
             }

@@ -2,7 +2,7 @@
 
 use mcg_vmf::glam::Vec3;
 
-use super::{GridState, McpgParams, distance_prior};
+use super::{DiscardRule, GridState, McpgParams, distance_prior};
 
 /// What the renderer observed for one guided sample, the inputs of MCPG Alg. 3.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -72,9 +72,10 @@ pub fn update(
 /// `true` when the state's light seems gone, so the caller should zero w̄ of the slot the state
 /// was read from ([`GridState::weight_sum`] = 0).
 ///
-/// All three must hold: the new estimate is small, f_mc ≤ `discard_ratio`·w̄; the state was not
-/// updated at this time (T ≠ now); and ω points at the state's target, μᵀω > r with r the MAP
-/// mean cosine of Alg. 2 line 7 (the light would have been hit were it still there).
+/// All three must hold: the new estimate is small, f_mc ≤ ratio·w̄; the state was not updated
+/// at this time (T ≠ now); and ω points at the state's target (the light would have been hit
+/// were it still there): μᵀω > r with r the MAP mean cosine of Alg. 2 line 7
+/// ([`DiscardRule::Paper`]), or ω·μ ≥ 0.9 + 0.1·r̄ ([`DiscardRule::Engine`]).
 #[inline]
 #[must_use]
 pub fn should_discard(
@@ -89,16 +90,23 @@ pub fn should_discard(
         return false;
     }
     let estimate = if estimate >= 0.0 { estimate } else { 0.0 };
-    if !(estimate <= params.discard_ratio * state.weight_sum) {
+    let (DiscardRule::Paper { ratio } | DiscardRule::Engine { ratio }) = params.discard;
+    if !(estimate <= ratio * state.weight_sum) {
         return false;
     }
     let Some(mu) = (state.mean_target - x).try_normalize() else {
         return false;
     };
-    let r = state
-        .stats()
-        .posterior_mean_cosine(distance_prior(state, x, params));
-    mu.dot(w) > r
+    let threshold = match params.discard {
+        DiscardRule::Paper { .. } => state
+            .stats()
+            .posterior_mean_cosine(distance_prior(state, x, params)),
+        DiscardRule::Engine { .. } => 0.9 + 0.1 * state.stats().mean_cosine(),
+    };
+    match params.discard {
+        DiscardRule::Paper { .. } => mu.dot(w) > threshold,
+        DiscardRule::Engine { .. } => mu.dot(w) >= threshold,
+    }
 }
 
 #[cfg(test)]

@@ -6,5 +6,7 @@
 //! reads top to bottom as the frame a renderer would execute.
 
 mod mcmm_loop;
+mod mcpg_loop;
 
 pub use mcmm_loop::{Decorrelation, McmmToyConfig, McmmToyRenderer, Sampling};
+pub use mcpg_loop::{MAX_CANDIDATES, McpgFrame, McpgToyConfig, McpgToyRenderer};
