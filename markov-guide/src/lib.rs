@@ -40,6 +40,8 @@
 extern crate std;
 
 pub use glam;
+pub use mcg_hashgrid;
+pub use mcg_smis;
 pub use mcg_vmf;
 
 mod error;
