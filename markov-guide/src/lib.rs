@@ -12,11 +12,17 @@
 //! | [`mcmm::collaborative_discovery`], [`mcmm::bspline_offset`] | weighted resampling of neighbour states | MCMM Alg. 1 |
 //! | [`mcmm::choose_technique`], [`mcmm::technique_pdf`] | defensive hemisphere / lobe choice and its pdf | MCMM Alg. 2, App. A |
 //! | [`mcmm::update`] | acceptance min(1, f/S_c.f), reset, MLE update | MCMM Alg. 3 |
+//! | [`mcmm::CosineChainTechnique`], [`mcmm::McmmPrior`] | a chain as an `mcg_smis::Technique`; uninformed or light-size prior | MCMM eq. 8-9, sec. 5 |
+//! | [`mcpg::GridState`] | world-space chain state (w̄, N, ȳ, r̄, T, v) in 32 bytes | MCPG Table 1 |
+//! | [`mcpg::prepare_candidate`], [`mcpg::CandidateSet`], [`mcpg::GridEnsemble`] | candidates from the adaptive and static grids, velocity prediction, collision and normal rejection, reservoir choice | MCPG Alg. 1, eq. 10 |
+//! | [`mcpg::choose_technique`], [`mcpg::CandidateSet::pdf`] | BSDF or lobe with the distance prior; the estimator's pdf over all accessed states | MCPG Alg. 2, eq. 6-7 |
+//! | [`mcpg::update`], [`mcpg::should_discard`] | acceptance against the mean candidate score, MLE update, velocity; discard heuristic | MCPG eq. 8-9, Alg. 3, sec. 5 |
+//! | [`mcpg::single_scattering`] | phase function and jittered view direction instead of BSDF and normal | MCPG sec. 4 |
 //! | [`Reservoir`] | one-pass weighted reservoir sampling | Chao 1982; MCMM Alg. 1, MCPG Alg. 1 |
 //! | [`cosine_hemisphere`] | the defensive cosine technique | MCMM Alg. 2, MCPG Alg. 2 |
 //! | [`RandomWalk`], [`MetropolisChain`], [`FrameSchedule`] | Metropolis random walk on ℝᴰ with burn-in per frame | ADGI Alg. 1, 5, sec. 4.8-4.9 |
 //! | [`toy_scene::ToyScene`] | lights on a plane with closed-form irradiance, for tests and examples | — |
-//! | `toy_renderer` (feature `toy`) | MCMM's full frame loop on the toy scene: TSMIS, SSMIS, unshuffled, cosine baseline | MCMM sec. 4.1-4.2 |
+//! | `toy_renderer` (feature `toy`) | the full renderer loops of MCMM (TSMIS, SSMIS, unshuffled) and MCPG on the toy scene, with cosine baselines | MCMM sec. 4; MCPG sec. 4-5 |
 //!
 //! ## Conventions
 //! - Directions are unit [`glam::Vec3`] in world space; densities are per steradian.
@@ -30,6 +36,24 @@
 //!   toy scene.
 //! - `libm`: float functions from `libm` for `#![no_std]` builds.
 //! - `toy`: the reference renderer loops of `toy_renderer` (with `std` and `rand`).
+//!
+//! ## Example
+//! ```
+//! use mcg_markov_guide::glam::Vec3;
+//! use mcg_markov_guide::mcmm::{McmmParams, PixelState, SampleChoice, choose_technique, update};
+//!
+//! // One MCMM iteration at shading point x: choose a technique, let the renderer sample and
+//! // trace (here: a light straight above was hit with score f = 2), then update the chain.
+//! let params = McmmParams::PAPER;
+//! let x = Vec3::ZERO;
+//! let (mut state, mut current) = (PixelState::EMPTY, PixelState::EMPTY);
+//! assert_eq!(choose_technique(&state, x, 0.5, &params), SampleChoice::Hemisphere);
+//! let accepted = update(&mut state, &mut current, x, Vec3::new(0.0, 0.0, 3.0), 2.0, true, 0.7, &params);
+//! assert!(accepted && current.is_valid());
+//! // The next sample comes from a lobe pointing at the light.
+//! let SampleChoice::Lobe(lobe) = choose_technique(&state, x, 0.5, &params) else { unreachable!() };
+//! assert!(lobe.mu().z > 0.999);
+//! ```
 #![no_std]
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
@@ -63,3 +87,8 @@ pub use metropolis::{
     standard_normal_from_uniform,
 };
 pub use reservoir::Reservoir;
+
+/// The crate README's example, compiled and run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

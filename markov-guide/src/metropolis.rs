@@ -52,7 +52,7 @@ pub fn standard_normal_from_uniform(u: f32) -> f32 {
         p = 5.739_507_7e-3 + p * w;
         p = -7.622_461_3e-3 + p * w;
         p = 9.438_870_5e-3 + p * w;
-        p = 1.001_674_1 + p * w;
+        p = 1.001_674 + p * w;
         2.832_976_8 + p * w
     };
     core::f32::consts::SQRT_2 * p * x
@@ -171,7 +171,7 @@ impl<const D: usize> RandomWalk<D> {
         F: FnMut(&[f32; D]) -> f32,
     {
         let proposal = self.propose(&chain.x, &u.proposal);
-        let h = sanitize(target(&proposal));
+        let h = crate::math::finite_non_negative_or_zero(target(&proposal));
         // Accept when ε < h'/h, written without the division: ε·h < h' (and h' > 0, so a zero
         // target never moves the chain). With h = 0 every h' > 0 is accepted.
         let accepted = h > 0.0 && u.accept * chain.target < h;
@@ -205,7 +205,7 @@ impl<const D: usize> RandomWalk<D> {
         U: FnMut() -> StepUniforms<D>,
         E: FnMut(&[f32; D]),
     {
-        chain.target = sanitize(target(&chain.x));
+        chain.target = crate::math::finite_non_negative_or_zero(target(&chain.x));
         for i in 0..schedule.iterations {
             self.step(chain, &mut target, &uniforms());
             if i >= schedule.burn_in {
@@ -302,16 +302,6 @@ impl Default for FrameSchedule {
     /// [`FrameSchedule::DEFAULT`].
     fn default() -> Self {
         Self::DEFAULT
-    }
-}
-
-/// NaN, infinite and negative targets count as 0.
-#[inline(always)]
-fn sanitize(h: f32) -> f32 {
-    if h >= 0.0 && h < f32::INFINITY {
-        h
-    } else {
-        0.0
     }
 }
 

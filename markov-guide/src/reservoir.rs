@@ -45,11 +45,7 @@ impl<T> Reservoir<T> {
     /// `u · Σw < weight` (MCPG Alg. 1 lines 8-11). Returns whether it was taken.
     #[inline]
     pub fn offer(&mut self, candidate: T, weight: f32, u: f32) -> bool {
-        let weight = if weight >= 0.0 && weight < f32::INFINITY {
-            weight
-        } else {
-            0.0
-        };
+        let weight = crate::math::finite_non_negative_or_zero(weight);
         self.weight_sum += weight;
         // Overflow of the sum to +∞ keeps the held item; weight 0 is never taken.
         let take = weight > 0.0 && u * self.weight_sum < weight;

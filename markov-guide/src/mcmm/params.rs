@@ -42,9 +42,9 @@ impl McmmParams {
         if !(0.0..=1.0).contains(&self.hemisphere_probability) {
             return Err(ParamsError::ProbabilityOutOfRange);
         }
-        if !(self.window_half_width >= 0.0 && self.window_half_width.is_finite())
-            || !self.prior.is_valid()
-            || !(self.fit.alpha_min >= 0.0 && self.fit.alpha_min <= 1.0)
+        let finite_width = self.window_half_width >= 0.0 && self.window_half_width.is_finite();
+        let alpha_in_range = (0.0..=1.0).contains(&self.fit.alpha_min);
+        if !(finite_width && alpha_in_range && self.prior.is_valid())
         {
             return Err(ParamsError::NotFiniteNonNegative);
         }

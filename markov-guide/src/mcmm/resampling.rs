@@ -9,7 +9,7 @@ use super::PixelState;
 ///
 /// Per axis the offset is `half_width/3 · (Σ₆ uᵢ − 3)`: the sum of six uniforms follows the
 /// Irwin-Hall distribution of order 6, which is the degree-5 cardinal B-spline (Shirley et al.
-/// 2005, [SSA05] in the paper). `u[0..6]` drive x, `u[6..12]` drive y. The paper's text says "the
+/// 2005, cited as SSA05 in the paper). `u[0..6]` drive x, `u[6..12]` drive y. The paper's text says "the
 /// sum of four random numbers", which is a degree-3 spline; its degree-5 statement and the
 /// authors' vkdt code (`15·(Σ₆ u − 3)`, ±45 px) agree on six, which is what we use.
 #[inline]

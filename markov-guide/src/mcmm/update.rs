@@ -37,11 +37,7 @@ pub fn update(
     u: f32,
     params: &McmmParams,
 ) -> bool {
-    let f = if f >= 0.0 && f < f32::INFINITY {
-        f
-    } else {
-        0.0
-    };
+    let f = crate::math::finite_non_negative_or_zero(f);
     // u < f/S_c.f, written as u·S_c.f < f so that S_c.f = 0 accepts any f > 0.
     let accepted = f > 0.0 && (!current.is_valid() || u * current.score < f);
     if accepted {

@@ -46,15 +46,11 @@ pub fn update(
     params: &McpgParams,
 ) -> Option<GridState> {
     let f = observation.estimate;
-    if !(f >= 0.0 && f < f32::INFINITY) {
+    if !(0.0..f32::INFINITY).contains(&f) {
         return None;
     }
     // u < f/(sum/N) ⇔ u·(sum/N) < f; an empty neighbourhood (mean 0) accepts any f > 0.
-    let mean_weight = if mean_weight >= 0.0 && mean_weight < f32::INFINITY {
-        mean_weight
-    } else {
-        0.0
-    };
+    let mean_weight = crate::math::finite_non_negative_or_zero(mean_weight);
     if !(f > 0.0 && u * mean_weight < f) {
         return None;
     }

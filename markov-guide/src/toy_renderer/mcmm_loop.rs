@@ -248,10 +248,10 @@ impl McmmToyRenderer {
             // The states this step's techniques come from (SSMIS rebuilds them at every pixel).
             let step_states: Vec<PixelState> = self.chains.iter().map(|c| c.tentative).collect();
             // Alg. 2, tracing, Alg. 3.
-            for index in 0..n {
+            for (index, &step_state) in step_states.iter().enumerate() {
                 let x = self.shading_point(index);
                 let state = if guided {
-                    step_states[index]
+                    step_state
                 } else {
                     PixelState::EMPTY
                 };
@@ -286,7 +286,7 @@ impl McmmToyRenderer {
                 Sampling::Guided(Decorrelation::Ssmis) => {
                     // Eq. 9 at each pixel over all of its tile's states at this step, each
                     // reconstructed at the pixel's own shading point.
-                    for index in 0..n {
+                    for (index, estimate) in estimates.iter_mut().enumerate() {
                         let x = self.shading_point(index);
                         let tile = index / size * size;
                         set.clear();
@@ -296,16 +296,16 @@ impl McmmToyRenderer {
                                 .map(|s| CosineChainTechnique::new(s, x, TOY_NORMAL, &params)),
                         );
                         let slot = index * steps + step;
-                        estimates[index] +=
+                        *estimate +=
                             smis_one_sample(&set, &samples[slot], values[slot]) / steps as f32;
                     }
                 }
                 Sampling::Cosine => {
-                    for index in 0..n {
+                    for (index, estimate) in estimates.iter_mut().enumerate() {
                         let slot = index * steps + step;
                         let pdf = techniques[slot].pdf(&samples[slot]);
                         if pdf > 0.0 {
-                            estimates[index] += values[slot] / pdf / steps as f32;
+                            *estimate += values[slot] / pdf / steps as f32;
                         }
                     }
                 }
