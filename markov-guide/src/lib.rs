@@ -15,7 +15,7 @@
 //! | [`mcmm::CosineChainTechnique`], [`mcmm::McmmPrior`] | a chain as an `mcg_smis::Technique`; uninformed or light-size prior | MCMM eq. 8-9, sec. 5 |
 //! | [`mcpg::GridState`] | world-space chain state (w̄, N, ȳ, r̄, T, v) in 32 bytes | MCPG Table 1 |
 //! | [`mcpg::prepare_candidate`], [`mcpg::CandidateSet`], [`mcpg::GridEnsemble`] | candidates from the adaptive and static grids, velocity prediction, collision and normal rejection, reservoir choice | MCPG Alg. 1, eq. 10 |
-//! | [`mcpg::choose_technique`], [`mcpg::CandidateSet::pdf`] | BSDF or lobe with the distance prior; the estimator's pdf over all accessed states | MCPG Alg. 2, eq. 6-7 |
+//! | [`mcpg::choose_technique`], [`mcpg::CandidateSet::pdf`], [`mcpg::CosineVertexTechnique`] | BSDF or lobe with the distance prior; the estimator's pdf over all accessed states, as an `mcg_smis::Technique` for the path form | MCPG Alg. 2, eq. 6-7 |
 //! | [`mcpg::update`], [`mcpg::should_discard`] | acceptance against the mean candidate score, MLE update, velocity; discard heuristic | MCPG eq. 8-9, Alg. 3, sec. 5 |
 //! | [`mcpg::single_scattering`] | phase function and jittered view direction instead of BSDF and normal | MCPG sec. 4 |
 //! | [`Reservoir`] | one-pass weighted reservoir sampling | Chao 1982; MCMM Alg. 1, MCPG Alg. 1 |

@@ -27,6 +27,6 @@ mod update;
 pub use grid::{GridEnsemble, GridSlot, GridUniforms};
 pub use params::{DiscardRule, McpgParams};
 pub use resampling::{CandidateSet, GridKind, distance_prior, prepare_candidate};
-pub use sampling::{SampleChoice, choose_technique};
+pub use sampling::{CosineVertexTechnique, SampleChoice, choose_technique};
 pub use state::GridState;
 pub use update::{Observation, should_discard, update};

@@ -1,7 +1,10 @@
 //! Technique choice and the estimator's pdf over the accessed states (MCPG Alg. 2, eq. 6-7).
 
+use mcg_smis::Technique;
 use mcg_vmf::Vmf;
-use mcg_vmf::glam::Vec3;
+use mcg_vmf::glam::{Vec2, Vec3};
+
+use crate::{cosine_hemisphere, cosine_hemisphere_pdf};
 
 use super::{CandidateSet, GridState, McpgParams, distance_prior};
 
@@ -78,6 +81,62 @@ impl<const N: usize> CandidateSet<N> {
         }
         let p = params.bsdf_probability;
         p * bsdf_pdf + (1.0 - p) * lobes
+    }
+}
+
+/// The sampling technique of one path vertex with a Lambertian (cosine) BSDF: the vertex's
+/// accessed states with Alg. 2's choice, as an [`mcg_smis::Technique`] whose density is
+/// [`CandidateSet::pdf`]. A path's estimate is then MCPG eq. 6, `mcg_smis::path_estimate` over
+/// one such technique per vertex (the product of the vertices' densities, in linear time).
+///
+/// The uniform is `(u_choice, u_direction)`: `u_choice` is Alg. 2's ξ against p_bsdf.
+#[derive(Clone, Copy, Debug)]
+pub struct CosineVertexTechnique<'a, const N: usize> {
+    set: &'a CandidateSet<N>,
+    x: Vec3,
+    normal: Vec3,
+    params: &'a McpgParams,
+}
+
+impl<'a, const N: usize> CosineVertexTechnique<'a, N> {
+    /// The technique of the vertex at `x` with unit normal `normal` and accessed states `set`.
+    #[inline]
+    #[must_use]
+    pub const fn new(
+        set: &'a CandidateSet<N>,
+        x: Vec3,
+        normal: Vec3,
+        params: &'a McpgParams,
+    ) -> Self {
+        Self {
+            set,
+            x,
+            normal,
+            params,
+        }
+    }
+}
+
+impl<const N: usize> Technique for CosineVertexTechnique<'_, N> {
+    type Sample = Vec3;
+    type Uniform = (f32, Vec2);
+
+    #[inline]
+    fn pdf(&self, w: &Vec3) -> f32 {
+        self.set.pdf(
+            self.x,
+            *w,
+            cosine_hemisphere_pdf(self.normal, *w),
+            self.params,
+        )
+    }
+
+    #[inline]
+    fn sample(&self, (u_choice, u): (f32, Vec2)) -> Vec3 {
+        match choose_technique(self.set.selected(), self.x, u_choice, self.params).0 {
+            SampleChoice::Lobe(lobe) => lobe.sample(u),
+            SampleChoice::Bsdf => cosine_hemisphere(self.normal, u).0,
+        }
     }
 }
 

@@ -5,12 +5,14 @@ use std::vec::Vec;
 use glam::{Vec2, Vec3};
 use rand::{Rng, RngExt};
 
+use mcg_smis::path_estimate;
+
+use crate::cosine_hemisphere;
 use crate::mcpg::{
-    CandidateSet, GridEnsemble, GridSlot, GridUniforms, McpgParams, Observation, SampleChoice,
-    choose_technique, prepare_candidate, should_discard, update,
+    CandidateSet, CosineVertexTechnique, GridEnsemble, GridSlot, GridUniforms, McpgParams,
+    Observation, SampleChoice, choose_technique, prepare_candidate, should_discard, update,
 };
 use crate::toy_scene::{TOY_NORMAL, ToyScene};
-use crate::{cosine_hemisphere, cosine_hemisphere_pdf};
 
 /// The most candidates a vertex loads ([`McpgParams::candidates`] is clamped to this).
 pub const MAX_CANDIDATES: usize = 8;
@@ -238,9 +240,9 @@ impl McpgToyRenderer {
                     };
                 let hit = scene.trace(x, w);
                 let value = hit.radiance * TOY_NORMAL.dot(w).max(0.0);
-                // Eq. 6-7: the estimator over the accessed states.
-                let pdf = set.pdf(x, w, cosine_hemisphere_pdf(TOY_NORMAL, w), &params);
-                let estimate = if pdf > 0.0 { value / pdf } else { 0.0 };
+                // Eq. 6-7: the estimator over the accessed states (a one-vertex path).
+                let technique = CosineVertexTechnique::new(&set, x, TOY_NORMAL, &params);
+                let estimate = path_estimate(value, &[&[technique]], &[w]);
                 frame.estimates[index] += estimate / spp as f32;
                 // Alg. 3: transition, or discard.
                 let observation = Observation {
