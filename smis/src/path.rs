@@ -71,7 +71,11 @@ pub fn path_mixture_pdf<T: Technique>(vertex_sets: &[&[T]], vertices: &[T::Sampl
 /// one technique per vertex); 0 where the density is 0 or overflows.
 #[inline]
 #[must_use]
-pub fn path_estimate<T: Technique>(value: f32, vertex_sets: &[&[T]], vertices: &[T::Sample]) -> f32 {
+pub fn path_estimate<T: Technique>(
+    value: f32,
+    vertex_sets: &[&[T]],
+    vertices: &[T::Sample],
+) -> f32 {
     ratio(value, path_mixture_pdf(vertex_sets, vertices))
 }
 

@@ -47,11 +47,7 @@ use crate::technique::{Technique, mixture_pdf, pdf_sum, ratio};
 #[inline]
 #[must_use]
 pub fn smis<T: Technique>(techniques: &[T], samples: &[T::Sample], values: &[f32]) -> f32 {
-    assert_eq!(
-        techniques.len(),
-        samples.len(),
-        "one sample per technique"
-    );
+    assert_eq!(techniques.len(), samples.len(), "one sample per technique");
     assert_eq!(samples.len(), values.len(), "one value per sample");
     samples
         .iter()

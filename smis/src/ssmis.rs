@@ -105,7 +105,11 @@ impl XorPermutation {
     /// If `tile.len()` is not the tile size.
     #[inline]
     pub fn apply<X>(&self, tile: &mut [X]) {
-        assert_eq!(tile.len(), self.size as usize, "tile length is the tile size");
+        assert_eq!(
+            tile.len(),
+            self.size as usize,
+            "tile length is the tile size"
+        );
         for lane in 0..self.size {
             let other = lane ^ self.mask;
             if other > lane {
@@ -147,10 +151,7 @@ mod tests {
         for size in 1..=MAX_TILE_SIZE {
             let closed = (0..size).all(|mask| (0..size).all(|l| xor_source_lane(l, mask) < size));
             assert_eq!(closed, size.is_power_of_two(), "size {size}");
-            assert_eq!(
-                XorPermutation::new(size, 0).is_ok(),
-                size.is_power_of_two()
-            );
+            assert_eq!(XorPermutation::new(size, 0).is_ok(), size.is_power_of_two());
         }
     }
 

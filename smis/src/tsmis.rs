@@ -101,7 +101,11 @@ impl CyclicShift {
     /// If `tile.len()` is not the tile size.
     #[inline]
     pub fn apply<X>(&self, tile: &mut [X]) {
-        assert_eq!(tile.len(), self.size as usize, "tile length is the tile size");
+        assert_eq!(
+            tile.len(),
+            self.size as usize,
+            "tile length is the tile size"
+        );
         tile.rotate_right(self.shift as usize);
     }
 }

@@ -41,10 +41,11 @@ pub use ks::{KsResult, assert_ks, kolmogorov_critical_value, kolmogorov_survival
 pub use quadrature::{GaussLegendre, graded_theta_breaks, integrate_sphere, orthonormal_basis};
 pub use rng::{Pcg64Mcg, seeded_rng, uniform_sphere_direction, uniform_vec2};
 pub use smis_reference::{
-    AdaptiveTile, ChainState, Decorrelation, FIG1_BUDGET, FIG1_INTEGRAL, FIG1_TECHNIQUES, LineIntegrand,
-    LineTechnique, MarginalBoxcar, SphereIntegrand, SphereTechnique, TILE, TSMIS_STEPS,
-    draw_line_boxcar, draw_line_lobe, draw_sphere_cap, draw_sphere_lobe, fig1_estimate,
-    fig1_integrand, lane_integral, lane_integrand, line_integrands, sphere_integrands, uniform2,
+    AdaptiveTile, ChainState, Decorrelation, FIG1_BUDGET, FIG1_INTEGRAL, FIG1_TECHNIQUES,
+    LineIntegrand, LineTechnique, MarginalBoxcar, SphereIntegrand, SphereTechnique, TILE,
+    TSMIS_STEPS, draw_line_boxcar, draw_line_lobe, draw_sphere_cap, draw_sphere_lobe,
+    fig1_estimate, fig1_integrand, lane_integral, lane_integrand, line_integrands,
+    sphere_integrands, uniform2,
 };
 pub use sphere_bins::{SphereBins, assert_sphere_chi_square};
 pub use vmf_reference::{

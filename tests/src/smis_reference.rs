@@ -36,6 +36,13 @@ pub enum LineTechnique {
         /// Weight of the uniform density mixed in (a defensive part inside the technique).
         eps: f32,
     },
+    /// Triangular density on [a, a + w) ⊂ [0, 1), peak 2/w at a + w/2: compact support.
+    Tent {
+        /// Left end.
+        a: f32,
+        /// Width.
+        w: f32,
+    },
     /// Uniform on [a, a + w) ⊂ [0, 1): compact support.
     Boxcar {
         /// Left end.
@@ -67,6 +74,14 @@ impl Technique for LineTechnique {
                 let z = Self::laplace_mass(c, s);
                 eps + (1.0 - eps) * (-(x - c).abs() / s).exp() / z
             }
+            LineTechnique::Tent { a, w } => {
+                let y = (x - a) / w;
+                if (0.0..1.0).contains(&y) {
+                    2.0 / w * (1.0 - (2.0 * y - 1.0).abs())
+                } else {
+                    0.0
+                }
+            }
             LineTechnique::Boxcar { a, w } => {
                 if x >= a && x < a + w {
                     1.0 / w
@@ -94,6 +109,14 @@ impl Technique for LineTechnique {
                         c - s * (1.0 - (mass - left) / s).max(f32::MIN_POSITIVE).ln()
                     }
                 }
+            }
+            LineTechnique::Tent { a, w } => {
+                let y = if u < 0.5 {
+                    (0.5 * u).sqrt()
+                } else {
+                    1.0 - (0.5 * (1.0 - u)).sqrt()
+                };
+                a + w * y
             }
             LineTechnique::Boxcar { a, w } => a + u * w,
         };
@@ -273,7 +296,13 @@ pub fn line_integrands() -> Vec<LineIntegrand> {
         },
         LineIntegrand {
             name: "spike 100 on [0.71, 0.72)",
-            f: |x| if (0.71..0.72).contains(&x) { 100.0 } else { 0.0 },
+            f: |x| {
+                if (0.71..0.72).contains(&x) {
+                    100.0
+                } else {
+                    0.0
+                }
+            },
             integral: 1.0,
             features: &[0.715],
         },
@@ -599,11 +628,7 @@ impl AdaptiveTile {
                     }
                 }
                 for lane in 0..TILE {
-                    out[lane] += f64::from(smis(
-                        &techniques[lane],
-                        &samples[lane],
-                        &values[lane],
-                    ));
+                    out[lane] += f64::from(smis(&techniques[lane], &samples[lane], &values[lane]));
                 }
                 TSMIS_STEPS
             }
@@ -613,7 +638,8 @@ impl AdaptiveTile {
                         .expect("valid tile")
                         .apply(&mut self.states);
                 }
-                let set: [LineTechnique; TILE] = std::array::from_fn(|l| self.states[l].technique());
+                let set: [LineTechnique; TILE] =
+                    std::array::from_fn(|l| self.states[l].technique());
                 for lane in 0..TILE {
                     let x = set[lane].sample(rng.random());
                     let f = lane_integrand(lane, f64::from(x)) as f32;
@@ -630,9 +656,10 @@ impl AdaptiveTile {
 // MMIS Fig. 1 (bottom): four marginal techniques with 1-D technique spaces
 // ---------------------------------------------------------------------------------------------
 
-/// A marginal technique of the MMIS canonical experiment: t ~ U(0, 1), then
-/// x | t ~ U[lo + t·span, lo + t·span + width). Its x-marginal is a trapezoid, known in closed
-/// form ([`MarginalBoxcar::marginal_pdf`]), which is what the classical MIS reference evaluates.
+/// A marginal technique of the MMIS canonical experiment: t ~ U(0, 1), then x | t is a tent
+/// (triangular density) on [lo + t·span, lo + t·span + width). Its x-marginal,
+/// (T(x − lo) − T(x − lo − span))/span with T the tent's CDF, is known in closed form
+/// ([`MarginalBoxcar::marginal_pdf`]); the classical MIS reference evaluates it.
 /// `span = 0` with `lo = 0`, `width = 1` is the defensive technique (uniform x for every t).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MarginalBoxcar {
@@ -648,13 +675,29 @@ impl MarginalBoxcar {
     /// The conditional technique p(x | t).
     #[must_use]
     pub fn conditional(&self, t: f64) -> LineTechnique {
-        LineTechnique::Boxcar {
+        if self.span == 0.0 {
+            return LineTechnique::Boxcar {
+                a: self.lo as f32,
+                w: self.width as f32,
+            };
+        }
+        LineTechnique::Tent {
             a: (self.lo + t * self.span) as f32,
             w: self.width as f32,
         }
     }
 
-    /// The marginal p(x) = ∫₀¹ p(x | t) dt = |{t : lo + t·span ≤ x < lo + t·span + w}| / w.
+    /// CDF of the tent on [0, w).
+    fn tent_cdf(&self, y: f64) -> f64 {
+        let v = (y / self.width).clamp(0.0, 1.0);
+        if v < 0.5 {
+            2.0 * v * v
+        } else {
+            1.0 - 2.0 * (1.0 - v) * (1.0 - v)
+        }
+    }
+
+    /// The marginal p(x) = ∫₀¹ p(x | t) dt = (T(x − lo) − T(x − lo − span)) / span.
     #[must_use]
     pub fn marginal_pdf(&self, x: f64) -> f64 {
         if self.span == 0.0 {
@@ -664,9 +707,7 @@ impl MarginalBoxcar {
                 0.0
             };
         }
-        let t_max = ((x - self.lo) / self.span).min(1.0);
-        let t_min = ((x - self.lo - self.width) / self.span).max(0.0);
-        (t_max - t_min).max(0.0) / self.width
+        (self.tent_cdf(x - self.lo) - self.tent_cdf(x - self.lo - self.span)) / self.span
     }
 }
 
@@ -810,7 +851,11 @@ mod tests {
                     rule.integrate(a, b, g.f)
                 })
                 .sum();
-            assert!((q - g.integral).abs() < 1e-6 * g.integral.max(1.0), "{}", g.name);
+            assert!(
+                (q - g.integral).abs() < 1e-6 * g.integral.max(1.0),
+                "{}",
+                g.name
+            );
         }
         for lane in 0..TILE {
             let q: f64 = (0..2000)
@@ -845,7 +890,11 @@ mod tests {
             breaks.sort_by(f64::total_cmp);
             breaks.dedup();
             let q = crate::integrate_sphere(dir(g.features[0]), &breaks, 512, g.f);
-            assert!((q - g.integral).abs() < 1e-4 * g.integral, "{}: {q}", g.name);
+            assert!(
+                (q - g.integral).abs() < 1e-4 * g.integral,
+                "{}: {q}",
+                g.name
+            );
         }
     }
 }

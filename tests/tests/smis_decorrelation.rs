@@ -62,7 +62,13 @@ fn shuffled_tsmis_and_ssmis_are_unbiased() {
     ] {
         let stats = run(scheme, seed);
         let r = assert_z_test(scheme.label(), &stats, expected(), 5.0);
-        eprintln!("{}: mean {:.6} expected {:.6} z {:+.2}", scheme.label(), r.mean, r.expected, r.z);
+        eprintln!(
+            "{}: mean {:.6} expected {:.6} z {:+.2}",
+            scheme.label(),
+            r.mean,
+            r.expected,
+            r.z
+        );
         // The test can see a bias of 2 % of the integral.
         assert!(r.standard_error < 0.004 * expected(), "{r:?}");
     }
@@ -76,7 +82,17 @@ fn unshuffled_estimators_are_biased() {
     ] {
         let stats = run(scheme, seed);
         let r = z_test(&stats, expected());
-        eprintln!("{}: mean {:.6} expected {:.6} z {:+.2}", scheme.label(), r.mean, r.expected, r.z);
-        assert!(r.z.abs() > 5.0, "{}: no detectable bias, {r:?}", scheme.label());
+        eprintln!(
+            "{}: mean {:.6} expected {:.6} z {:+.2}",
+            scheme.label(),
+            r.mean,
+            r.expected,
+            r.z
+        );
+        assert!(
+            r.z.abs() > 5.0,
+            "{}: no detectable bias, {r:?}",
+            scheme.label()
+        );
     }
 }

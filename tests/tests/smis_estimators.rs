@@ -70,8 +70,16 @@ fn pure_line_lobe(rng: &mut Pcg64Mcg, features: &[f64]) -> LineTechnique {
 fn mis_balance_on_line() {
     let techniques = [
         LineTechnique::Uniform,
-        LineTechnique::Laplace { c: 0.25, s: 0.1, eps: 0.0 },
-        LineTechnique::Laplace { c: 0.7, s: 0.05, eps: 0.0 },
+        LineTechnique::Laplace {
+            c: 0.25,
+            s: 0.1,
+            eps: 0.0,
+        },
+        LineTechnique::Laplace {
+            c: 0.7,
+            s: 0.05,
+            eps: 0.0,
+        },
     ];
     let counts = [1_u32, 2, 2];
     for_line(0x5317_0100, "mis_balance", |g, rng| {
@@ -233,7 +241,8 @@ fn smis_one_sample_on_sphere() {
 #[test]
 fn mmis_on_sphere() {
     for_sphere(0x5317_0a00, "mmis", |g, rng| {
-        let lobes: [SphereTechnique; 2] = std::array::from_fn(|_| draw_sphere_lobe(rng, g.features));
+        let lobes: [SphereTechnique; 2] =
+            std::array::from_fn(|_| draw_sphere_lobe(rng, g.features));
         let caps: [SphereTechnique; 2] = std::array::from_fn(|_| draw_sphere_cap(rng));
         let spaces: [&[SphereTechnique]; 2] = [&lobes, &caps];
         let classical = [SphereTechnique::Uniform];
@@ -269,8 +278,11 @@ fn path_on_sphere() {
         let (_, x1) = sample_uniform_mixture(&v1, rng.random(), uniform2(rng));
         // The next vertex's lobes point near the previous vertex's direction.
         let near = |w: Vec3, rng: &mut Pcg64Mcg| SphereTechnique::Lobe {
-            vmf: Vmf::new(Vmf::new(w, 5.0).unwrap().sample(uniform2(rng)), 1.0 + 4.0 * rng.random::<f32>())
-                .unwrap(),
+            vmf: Vmf::new(
+                Vmf::new(w, 5.0).unwrap().sample(uniform2(rng)),
+                1.0 + 4.0 * rng.random::<f32>(),
+            )
+            .unwrap(),
             eps: 0.5,
         };
         let v2: [SphereTechnique; 2] = std::array::from_fn(|_| near(x1, rng));
