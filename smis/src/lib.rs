@@ -41,8 +41,8 @@
 //!   techniques, so the relative rounding error stays below n·2⁻²⁴; accumulate many estimates
 //!   in f64 yourself). A sample whose denominator is not > 0 (outside every technique's support,
 //!   or NaN), or whose quotient f/denominator overflows f32 (a subnormal density deep in a
-//!   lobe's tail), contributes 0, so no estimator returns NaN or ∞ — one such sample would
-//!   otherwise poison a whole accumulated pixel.
+//!   lobe's tail), contributes 0, and an estimate whose sum overflows is 0, so no estimator
+//!   returns NaN or ∞ — one such sample would otherwise poison a whole accumulated pixel.
 //! - Slices that must match in length are checked with `assert_eq!` (a programming error, not
 //!   bad data). Constructors validate and return `Result<_, SmisError>`.
 //!
@@ -131,7 +131,10 @@ mod properties {
     use crate::*;
 
     fn boxcar() -> impl Strategy<Value = Boxcar> {
-        (0.0_f32..0.9, prop_oneof![0.05_f32..1.0, 1e-3_f32..1e-2, 1e10_f32..1e12])
+        (
+            0.0_f32..0.9,
+            prop_oneof![0.05_f32..1.0, 1e-3_f32..1e-2, 1e10_f32..1e12],
+        )
             .prop_map(|(a, w)| Boxcar { a, w })
     }
 
@@ -163,6 +166,14 @@ mod properties {
             prop_assert!(smis(&set, &xs, &fs).is_finite());
             let mix = Defensive::new(Boxcar { a: 0.0, w: 1.0 }, p, &set).unwrap();
             prop_assert!(mix.estimate(&x, f).is_finite());
+            let counts = std::vec![2_u32; set.len()];
+            let xs2 = std::vec![x; 2 * set.len()];
+            let fs2 = std::vec![f; 2 * set.len()];
+            prop_assert!(mis_balance(&set, &counts, &xs2, &fs2).is_finite());
+            let spaces = [set.as_slice()];
+            prop_assert!(Mmis::new(&spaces).estimate(&xs, &fs).is_finite());
+            let sets = [set.as_slice(), set.as_slice()];
+            prop_assert!(path_estimate(f, &sets, &[x, x]).is_finite());
         }
     }
 }

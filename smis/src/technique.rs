@@ -141,6 +141,13 @@ pub(crate) fn ratio(value: f32, denominator: f32) -> f32 {
     }
 }
 
+/// `sum` if finite, else 0: an estimate whose sum of (finite) terms overflows f32 is as
+/// unrepresentable as one overflowing term, and is dropped the same way (see [`ratio`]).
+#[inline(always)]
+pub(crate) fn finite_or_zero(sum: f32) -> f32 {
+    if sum.is_finite() { sum } else { 0.0 }
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
@@ -211,5 +218,7 @@ pub(crate) mod tests {
         assert_eq!(ratio(1e30, 1e-20), 0.0);
         assert_eq!(ratio(f32::NAN, 1.0), 0.0);
         assert_eq!(ratio(f32::INFINITY, 1.0), 0.0);
+        assert_eq!(finite_or_zero(f32::MAX + f32::MAX), 0.0);
+        assert_eq!(finite_or_zero(2.5), 2.5);
     }
 }
