@@ -1,6 +1,6 @@
 //! Classical multi-sample MIS with the balance heuristic: the estimator SMIS and MMIS approximate.
 
-use crate::technique::{Technique, ratio};
+use crate::technique::{Technique, finite_or_zero, ratio};
 
 /// The balance-heuristic denominator Σₖ nₖ pₖ(x) of techniques pₖ drawn nₖ times each
 /// (MMIS eq. 3-4, Veach and Guibas 1995). Accumulated in f32.
@@ -65,11 +65,13 @@ pub fn mis_balance<T: Technique>(
     values: &[f32],
 ) -> f32 {
     assert_eq!(samples.len(), values.len(), "one value per sample");
-    samples
-        .iter()
-        .zip(values)
-        .map(|(x, &f)| ratio(f, balance_denominator(techniques, counts, x)))
-        .sum()
+    finite_or_zero(
+        samples
+            .iter()
+            .zip(values)
+            .map(|(x, &f)| ratio(f, balance_denominator(techniques, counts, x)))
+            .sum(),
+    )
 }
 
 #[cfg(test)]

@@ -2,7 +2,7 @@
 //! sec. 3.1).
 
 use crate::SmisError;
-use crate::technique::{Technique, pdf_sum, ratio};
+use crate::technique::{Technique, finite_or_zero, pdf_sum, ratio};
 
 /// A marginal MIS estimator (West et al. 2022, eq. 6) over T technique spaces with nᵢ
 /// technique-sample pairs each, plus classical techniques drawn a fixed number of times:
@@ -135,7 +135,7 @@ where
     }
 
     /// The estimate Σ_s f(x_s) / D(x_s) (MMIS eq. 6) over all [`sample_count`](Self::sample_count)
-    /// samples, in any order, with `values[s] = f(samples[s])`. Samples with D = 0 contribute 0.
+    /// samples, in any order, with `values[s] = f(samples[s])`. Samples with D = 0 (or an overflowing quotient) contribute 0.
     ///
     /// # Panics
     /// If `samples` and `values` differ in length or the length is not `sample_count()`.
@@ -148,11 +148,13 @@ where
             self.sample_count(),
             "one sample per pair and n_c per classical technique"
         );
-        samples
-            .iter()
-            .zip(values)
-            .map(|(x, &f)| ratio(f, self.denominator(x)))
-            .sum()
+        finite_or_zero(
+            samples
+                .iter()
+                .zip(values)
+                .map(|(x, &f)| ratio(f, self.denominator(x)))
+                .sum(),
+        )
     }
 }
 

@@ -1,7 +1,7 @@
 //! Stochastic MIS: the n-sample estimator (MCMM eq. 8) and the one-sample estimator with
 //! uniform (stratified) technique selection (MCMM eq. 9).
 
-use crate::technique::{Technique, mixture_pdf, pdf_sum, ratio};
+use crate::technique::{Technique, finite_or_zero, mixture_pdf, pdf_sum, ratio};
 
 /// n-sample stochastic MIS (West et al. 2020 eq. 12; MCMM eq. 8; MCPG eq. 7 per sample):
 ///
@@ -23,7 +23,7 @@ use crate::technique::{Technique, mixture_pdf, pdf_sum, ratio};
 ///
 /// The tⱼ need not be independent of each other (appendix A, eq. 10-13).
 ///
-/// Sums are accumulated in f32; samples with a zero denominator contribute 0.
+/// Sums are accumulated in f32; samples with a zero denominator (or an overflowing quotient) contribute 0.
 ///
 /// # Panics
 /// If the three slices differ in length.
@@ -49,11 +49,13 @@ use crate::technique::{Technique, mixture_pdf, pdf_sum, ratio};
 pub fn smis<T: Technique>(techniques: &[T], samples: &[T::Sample], values: &[f32]) -> f32 {
     assert_eq!(techniques.len(), samples.len(), "one sample per technique");
     assert_eq!(samples.len(), values.len(), "one value per sample");
-    samples
-        .iter()
-        .zip(values)
-        .map(|(x, &f)| ratio(f, pdf_sum(techniques, x)))
-        .sum()
+    finite_or_zero(
+        samples
+            .iter()
+            .zip(values)
+            .map(|(x, &f)| ratio(f, pdf_sum(techniques, x)))
+            .sum(),
+    )
 }
 
 /// One-sample stochastic MIS over n techniques with uniform selection (MCMM eq. 9):

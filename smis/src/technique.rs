@@ -122,19 +122,30 @@ pub fn sample_uniform_mixture<T: Technique>(
     (j, techniques[j].sample(u))
 }
 
-/// `value / denominator`, or 0 when the denominator is not > 0 (zero, negative or NaN).
+/// `value / denominator`, or 0 when the denominator is not > 0 (zero, negative or NaN) or the
+/// quotient is not finite.
 ///
 /// A sample can only be drawn where its own technique's density is positive, and that density
 /// is part of every denominator in this crate, so a zero denominator means the sample lies
 /// outside every technique's support (or its density underflowed in f32): it contributes 0
-/// instead of ±∞ or NaN.
+/// instead of ±∞ or NaN. The same holds for a quotient that overflows f32 (a subnormal density
+/// far in a lobe's tail, or a NaN value): one such sample would turn an accumulated pixel into
+/// ∞ or NaN, so it contributes 0 — a bias only where f32 cannot represent the estimate at all.
 #[inline(always)]
 pub(crate) fn ratio(value: f32, denominator: f32) -> f32 {
-    if denominator > 0.0 {
-        value / denominator
+    let r = value / denominator;
+    if denominator > 0.0 && r.is_finite() {
+        r
     } else {
         0.0
     }
+}
+
+/// `sum` if finite, else 0: an estimate whose sum of (finite) terms overflows f32 is as
+/// unrepresentable as one overflowing term, and is dropped the same way (see [`ratio`]).
+#[inline(always)]
+pub(crate) fn finite_or_zero(sum: f32) -> f32 {
+    if sum.is_finite() { sum } else { 0.0 }
 }
 
 #[cfg(test)]
@@ -202,5 +213,12 @@ pub(crate) mod tests {
         assert_eq!(ratio(1.0, f32::NAN), 0.0);
         assert_eq!(ratio(1.0, -2.0), 0.0);
         assert_eq!(ratio(3.0, 2.0), 1.5);
+        // Overflowing quotients and NaN values contribute 0 too.
+        assert_eq!(ratio(1.0, 1e-40), 0.0);
+        assert_eq!(ratio(1e30, 1e-20), 0.0);
+        assert_eq!(ratio(f32::NAN, 1.0), 0.0);
+        assert_eq!(ratio(f32::INFINITY, 1.0), 0.0);
+        assert_eq!(finite_or_zero(f32::MAX + f32::MAX), 0.0);
+        assert_eq!(finite_or_zero(2.5), 2.5);
     }
 }
