@@ -4,7 +4,10 @@
 //! its density as `bsdf_pdf` to [`CandidateSet::pdf`](super::CandidateSet::pdf) and sample it
 //! for [`SampleChoice::Bsdf`](super::SampleChoice::Bsdf)); the adaptive grid's key folds in the
 //! reverse camera direction instead of the surface normal, jittered by a cosine lobe
-//! ([`jittered_view_direction`]) so that neighbouring view directions share states; and the
+//! ([`jittered_view_direction`]) so that neighbouring view directions share states — pass it
+//! where a surface vertex passes its normal (the `normal` of
+//! [`GridEnsemble::load`](super::GridEnsemble::load) and `store`, whose key class is
+//! `mcg_hashgrid::normal_class` of it); and the
 //! static grid has no normal threshold (pass `normal = None` to
 //! [`prepare_candidate`](super::prepare_candidate)).
 
