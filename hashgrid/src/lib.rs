@@ -11,7 +11,7 @@
 //! | item | what it is | paper |
 //! |---|---|---|
 //! | [`CellKey`], [`normal_class`] | vertex key `[x, y, z, level·class·extra]`, cube-map class of the normal | MCPG sec. 4 "Hash Grid" |
-//! | [`BucketHash`], [`hash_xor_primes`], [`hash_mix`] | bucket hash: xor of primes (Instant-NGP) or Murmur3 mixing | MCPG sec. 4, `hash(x) = ⊕ πᵢxᵢ mod B` |
+//! | [`BucketHash`], [`hash_xor_primes`], [`hash_mix`], [`hash_mix_coherent`] | bucket hash: xor of primes (Instant-NGP), Murmur3 mixing, or mixing that keeps runs of 4 along x together | MCPG sec. 4, `hash(x) = ⊕ πᵢxᵢ mod B` |
 //! | [`checksum`] | separate full 32-bit hash stored in the slot, 0 = empty | MCPG sec. 4, Table 1 "hash" |
 //! | [`AdaptiveGrid`], [`LevelParams`], [`geometric_jitter`] | level from camera distance, jitter to coarser levels | MCPG sec. 4, Step 1 |
 //! | [`StaticGrid`] | fixed cell width, no normal | MCPG sec. 4 "static grid" |
@@ -95,7 +95,9 @@ pub use capacity::{SlotIndexer, next_prime};
 #[cfg(feature = "alloc")]
 pub use concurrent::ConcurrentTable;
 pub use error::{GridError, TableError};
-pub use hash::{BucketHash, checksum, fmix32, hash_mix, hash_xor_primes, murmur3_words};
+pub use hash::{
+    BucketHash, checksum, fmix32, hash_mix, hash_mix_coherent, hash_xor_primes, murmur3_words,
+};
 pub use key::{CellKey, normal_class};
 pub use level::{
     AdaptiveGrid, LevelParams, StaticGrid, geometric_jitter, geometric_jitter_probability,

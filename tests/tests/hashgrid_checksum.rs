@@ -25,7 +25,11 @@ fn keys() -> Vec<CellKey> {
             for x in 0..128 {
                 let level = ((x ^ y ^ z) & 7) as u8;
                 let class = ((x + 2 * y + 3 * z) % 6) as u8;
-                keys.push(CellKey::new(IVec3::new(x - 64, y - 64, z * 3), level, class));
+                keys.push(CellKey::new(
+                    IVec3::new(x - 64, y - 64, z * 3),
+                    level,
+                    class,
+                ));
             }
         }
     }
@@ -65,7 +69,10 @@ fn checksum_collisions_match_the_birthday_expectation() {
         pairs / (n * (n - 1.0) / 2.0),
         2f64.powi(-32)
     );
-    assert!(z.abs() < 5.0, "collision count {pairs} vs {lambda:.1}: z = {z:.2}");
+    assert!(
+        z.abs() < 5.0,
+        "collision count {pairs} vs {lambda:.1}: z = {z:.2}"
+    );
 }
 
 /// The same method on MCPG's 16-bit truncation of the checksum (its 36-byte state keeps
@@ -75,12 +82,20 @@ fn checksum_collisions_match_the_birthday_expectation() {
 fn sixteen_bit_checksum_collides_at_one_in_65536() {
     let keys = keys();
     let n = 4096.0;
-    let mut words: Vec<u32> = keys.iter().step_by(512).take(4096).map(|k| checksum(k) & 0xFFFF).collect();
+    let mut words: Vec<u32> = keys
+        .iter()
+        .step_by(512)
+        .take(4096)
+        .map(|k| checksum(k) & 0xFFFF)
+        .collect();
     let pairs = equal_pairs(&mut words) as f64;
     let lambda = n * (n - 1.0) / 2.0 * 2f64.powi(-16);
     let z = (pairs - lambda) / lambda.sqrt();
     println!("16-bit: equal pairs = {pairs}, expected {lambda:.1}, z = {z:.2}");
-    assert!(z.abs() < 5.0, "16-bit collision count {pairs} vs {lambda:.1}: z = {z:.2}");
+    assert!(
+        z.abs() < 5.0,
+        "16-bit collision count {pairs} vs {lambda:.1}: z = {z:.2}"
+    );
 }
 
 #[test]

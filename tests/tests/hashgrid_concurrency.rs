@@ -30,8 +30,15 @@ fn same_key_from_many_threads_ends_in_one_slot() {
             handles.into_iter().map(|h| h.join().unwrap()).collect()
         });
         let slot = results[0].slot().unwrap();
-        assert!(results.iter().all(|r| r.slot() == Some(slot)), "round {round}: {results:?}");
-        assert_eq!(results.iter().filter(|r| r.is_inserted()).count(), 1, "round {round}");
+        assert!(
+            results.iter().all(|r| r.slot() == Some(slot)),
+            "round {round}: {results:?}"
+        );
+        assert_eq!(
+            results.iter().filter(|r| r.is_inserted()).count(),
+            1,
+            "round {round}"
+        );
         assert_eq!(table.count_occupied(), 1);
     }
 }
@@ -88,21 +95,34 @@ fn many_keys_from_many_threads_end_in_one_slot_each() {
 #[test]
 fn a_full_table_answers_full() {
     let table = ConcurrentTable::new(64, 64, BucketHash::Mix).unwrap();
-    let keys: Vec<CellKey> = (0..1000).map(|i| CellKey::new(IVec3::new(i, 0, 0), 0, 0)).collect();
+    let keys: Vec<CellKey> = (0..1000)
+        .map(|i| CellKey::new(IVec3::new(i, 0, 0), 0, 0))
+        .collect();
     let outcomes: Vec<Vec<Insert>> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..THREADS)
             .map(|t| {
                 let (keys, table) = (&keys, &table);
-                s.spawn(move || keys[t * 250..(t + 1) * 250].iter().map(|k| table.insert_or_get(k)).collect())
+                s.spawn(move || {
+                    keys[t * 250..(t + 1) * 250]
+                        .iter()
+                        .map(|k| table.insert_or_get(k))
+                        .collect()
+                })
             })
             .collect();
         handles.into_iter().map(|h| h.join().unwrap()).collect()
     });
     let all: Vec<Insert> = outcomes.into_iter().flatten().collect();
     assert_eq!(all.iter().filter(|r| r.is_inserted()).count(), 64);
-    assert_eq!(all.iter().filter(|r| **r == Insert::Full).count(), 1000 - 64);
+    assert_eq!(
+        all.iter().filter(|r| **r == Insert::Full).count(),
+        1000 - 64
+    );
     assert_eq!(table.count_occupied(), 64);
-    assert_eq!(table.insert_or_get(&CellKey::new(IVec3::splat(-9), 0, 0)), Insert::Full);
+    assert_eq!(
+        table.insert_or_get(&CellKey::new(IVec3::splat(-9), 0, 0)),
+        Insert::Full
+    );
 }
 
 /// Keys whose home slot is the last slot wrap to slot 0, 1, … in both tables, and are found
