@@ -14,7 +14,7 @@
 //! table directly (≈ probes · 2⁻³² ≈ 2·10⁻⁹ per lookup, far below anything a test can count).
 
 use glam::IVec3;
-use mcg_hashgrid::{CellKey, checksum};
+use mcg_hashgrid::{CellKey, checksum, hash_mix};
 
 /// 2²¹ distinct structured keys: a 128³ block of vertices (2²¹) spread over 8 levels and
 /// 6 normal classes by coordinate parity, so the stream is planes, lines and levels at once.
@@ -73,6 +73,28 @@ fn checksum_collisions_match_the_birthday_expectation() {
         z.abs() < 5.0,
         "collision count {pairs} vs {lambda:.1}: z = {z:.2}"
     );
+}
+
+/// The checksum and the bucket hash are independent: among the ≈ 512 pairs of distinct keys
+/// with equal checksums (n = 2²¹, as above), none also has an equal 32-bit `Mix` bucket hash
+/// (expected 512 · 2⁻³² ≈ 10⁻⁷). A checksum derived from the bucket hash (e.g. a bijection of
+/// it, or Murmur3 with seed-independent collisions on these keys) would put every such pair in
+/// the same probe window, so that each checksum collision became a false match.
+#[test]
+fn checksum_collisions_do_not_share_buckets() {
+    let keys = keys();
+    let mut pairs: Vec<(u32, u32)> = keys.iter().map(|k| (checksum(k), hash_mix(k))).collect();
+    pairs.sort_unstable();
+    let (mut colliding, mut same_bucket) = (0, 0);
+    for w in pairs.windows(2) {
+        if w[0].0 == w[1].0 {
+            colliding += 1;
+            same_bucket += u32::from(w[0].1 == w[1].1);
+        }
+    }
+    println!("{colliding} checksum collisions, {same_bucket} of them with equal bucket hashes");
+    assert!(colliding > 400, "{colliding}");
+    assert_eq!(same_bucket, 0);
 }
 
 /// The same method on MCPG's 16-bit truncation of the checksum (its 36-byte state keeps

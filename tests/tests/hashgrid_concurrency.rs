@@ -118,7 +118,7 @@ fn lockstep_inserts_of_the_same_keys_agree() {
                             let mut spins = 0_u32;
                             while arrived.load(Ordering::Acquire) < (i as usize + 1) * T {
                                 spins += 1;
-                                if spins % 256 == 0 {
+                                if spins.is_multiple_of(256) {
                                     std::thread::yield_now();
                                 } else {
                                     std::hint::spin_loop();
@@ -141,7 +141,10 @@ fn lockstep_inserts_of_the_same_keys_agree() {
         }
         full += usize::from(slot.is_none());
     }
-    assert_eq!(inconsistent, 0, "{inconsistent} keys inserted twice or in different slots");
+    assert_eq!(
+        inconsistent, 0,
+        "{inconsistent} keys inserted twice or in different slots"
+    );
     assert_eq!(table.count_occupied() as usize, N as usize - full);
     assert!(full < 10, "{full} keys did not fit at load 0.25");
 }
