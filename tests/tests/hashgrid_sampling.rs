@@ -62,7 +62,11 @@ fn check_corners(label: &str, f: Vec3, counts: &[u64; 8], n: usize) {
         .map(|(&c, &wi)| (c, wi * n as f64))
         .unzip();
     if obs.len() > 1 {
-        assert_chi_square(label, &obs, &exp, ALPHA);
+        let r = assert_chi_square(label, &obs, &exp, ALPHA);
+        println!(
+            "{label}: X² = {:.2}, df = {}, p = {:.3}",
+            r.statistic, r.degrees_of_freedom, r.p_value
+        );
     } else {
         assert_eq!(obs[0], n as u64);
     }
@@ -178,5 +182,9 @@ fn level_jitter_is_geometric() {
     let expected: Vec<f64> = (0..25)
         .map(|k| geometric_jitter_probability(k) * N as f64)
         .collect();
-    assert_chi_square("level jitter", &counts, &expected, ALPHA);
+    let r = assert_chi_square("level jitter", &counts, &expected, ALPHA);
+    println!(
+        "level jitter: X² = {:.2}, df = {}, p = {:.3}",
+        r.statistic, r.degrees_of_freedom, r.p_value
+    );
 }
