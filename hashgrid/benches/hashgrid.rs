@@ -3,7 +3,12 @@
 //! - `lookup`: `HashTable::get` on a realistic key stream against
 //!   `std::collections::HashMap<u64, State>::get` (the key packed into a `u64`), both holding
 //!   the same keys. Variants: bucket hash `mix`, `mix_coherent` and `xor` (xor of primes), each
-//!   with a prime capacity (modulo) or a power-of-two capacity (mask).
+//!   with a prime capacity (modulo) or a power-of-two capacity (mask), and `mix_pow2_dense`:
+//!   half the slots (2¹⁸, load ≈ 0.55), about the memory of the `HashMap` (≈ 10.5 MB: 2¹⁸
+//!   buckets of 40 bytes). Lookups are memory-bound, so the footprint decides.
+//! - `lookup_small`: the same with the first 8192 keys in 32 768 slots (1.2 MB, cache-resident),
+//!   queried by the keys of the lookup frame that are among them: the regime where hashing,
+//!   not memory, dominates.
 //! - `insert`: the same stream inserted into an emptied table / map (emptying is not timed).
 //! - `concurrent_insert`: `ConcurrentTable::insert_or_get` of the stream by 1 and by 2 threads
 //!   (each thread a contiguous half), table emptied (untimed) before each iteration.
@@ -178,6 +183,56 @@ fn bench_lookup(c: &mut Criterion) {
             });
         }
     }
+    // Same memory as the HashMap (≈ 9.4 MB vs its ≈ 10.5 MB): 2¹⁸ slots, load ≈ 0.55.
+    let dense = table(inp.pow2 / 2, BucketHash::Mix, &inp.fill);
+    g.bench_function("table_mix_pow2_dense", |b| {
+        b.iter(|| {
+            black_box(&inp.queries)
+                .iter()
+                .map(|k| dense.get(k).map_or(0.0, |s| s[0]))
+                .sum::<f32>()
+        })
+    });
+    g.finish();
+}
+
+fn bench_lookup_small(c: &mut Criterion) {
+    let inp = inputs();
+    let fill = &inp.fill[..8192];
+    let set: std::collections::HashSet<CellKey> = fill.iter().copied().collect();
+    let queries: Vec<CellKey> = inp
+        .queries
+        .iter()
+        .copied()
+        .filter(|k| set.contains(k))
+        .collect();
+    let map: HashMap<u64, State> = fill.iter().map(|k| (pack(k), [1.0; 8])).collect();
+    let packed: Vec<u64> = queries.iter().map(pack).collect();
+    let mut g = c.benchmark_group("lookup_small");
+    g.throughput(Throughput::Elements(queries.len() as u64));
+    g.bench_function("hashmap_u64_baseline", |b| {
+        b.iter(|| {
+            black_box(&packed)
+                .iter()
+                .map(|k| map.get(k).map_or(0.0, |s| s[0]))
+                .sum::<f32>()
+        })
+    });
+    for (name, hash) in [
+        ("mix", BucketHash::Mix),
+        ("mix_coherent", BucketHash::MixCoherent),
+        ("xor", BucketHash::XorPrimes),
+    ] {
+        let t = table(32_768, hash, fill);
+        g.bench_function(format!("table_{name}_pow2"), |b| {
+            b.iter(|| {
+                black_box(&queries)
+                    .iter()
+                    .map(|k| t.get(k).map_or(0.0, |s| s[0]))
+                    .sum::<f32>()
+            })
+        });
+    }
     g.finish();
 }
 
@@ -263,5 +318,11 @@ fn bench_concurrent(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench_lookup, bench_insert, bench_concurrent);
+criterion_group!(
+    benches,
+    bench_lookup,
+    bench_lookup_small,
+    bench_insert,
+    bench_concurrent
+);
 criterion_main!(benches);
