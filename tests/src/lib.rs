@@ -13,6 +13,7 @@
 //! | [`GaussLegendre`], [`integrate_sphere`], [`graded_theta_breaks`] | f64 reference quadrature on an interval and on S² | normalisation and product integrals |
 //! | [`vmf_pdf`], [`vmf_one_minus_cos_cdf`], [`one_minus_cos`], [`vmf_mean_cosine`], … | f64 reference formulas of the vMF lobe | every suite that tests vMF code |
 //! | [`LineTechnique`], [`SphereTechnique`], [`line_integrands`], [`sphere_integrands`], [`AdaptiveTile`], [`fig1_estimate`], … | techniques, integrands with closed-form integrals, MCMM Fig. 16 and MMIS Fig. 1 in miniature | the `smis_*` suites |
+//! | [`plane_keys`], [`line_keys`], [`sphere_shell_keys`], [`floor_view_keys`], [`occupancy`] | structured grid-key streams and bucket counts | hash-grid occupancy and checksum suites |
 //! | [`seeded_rng`], [`uniform_vec2`], [`uniform_sphere_direction`] | deterministic random numbers | every suite, one fixed seed per test |
 //!
 //! ## Conventions
@@ -26,6 +27,7 @@
 #![forbid(unsafe_code)]
 
 mod chi_square;
+mod hashgrid_reference;
 mod ks;
 mod quadrature;
 mod rng;
@@ -36,6 +38,9 @@ mod z_test;
 
 pub use chi_square::{
     ChiSquareResult, MIN_EXPECTED_COUNT, assert_chi_square, chi_square_test, merge_bins,
+};
+pub use hashgrid_reference::{
+    floor_view_keys, line_keys, occupancy, plane_keys, sphere_shell_keys,
 };
 pub use ks::{KsResult, assert_ks, kolmogorov_critical_value, kolmogorov_survival, ks_test};
 pub use quadrature::{GaussLegendre, graded_theta_breaks, integrate_sphere, orthonormal_basis};

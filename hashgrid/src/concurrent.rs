@@ -1,0 +1,313 @@
+//! The lock-free table: many threads insert and look up through `&self`.
+
+use alloc::boxed::Box;
+use alloc::vec::Vec;
+use core::sync::atomic::{AtomicU32, Ordering};
+
+use crate::capacity::SlotIndexer;
+use crate::constants::{EMPTY, TOMBSTONE};
+use crate::error::TableError;
+use crate::hash::{BucketHash, checksum};
+use crate::key::CellKey;
+use crate::probe::{self, Insert, Slots};
+use crate::table::{trim_tombstones, validate};
+
+struct AtomicSlots<'a>(&'a [AtomicU32]);
+
+impl Slots for AtomicSlots<'_> {
+    #[inline(always)]
+    fn load(&mut self, slot: u32) -> u32 {
+        self.0[slot as usize].load(Ordering::Acquire)
+    }
+    #[inline(always)]
+    fn claim(&mut self, slot: u32, current: u32, checksum: u32) -> Result<(), u32> {
+        self.0[slot as usize]
+            .compare_exchange(current, checksum, Ordering::AcqRel, Ordering::Acquire)
+            .map(|_| ())
+    }
+}
+
+/// The slot index of a hash grid that many threads fill at once: checksums are
+/// [`AtomicU32`]s and a key is inserted by compare-and-swap on its checksum word, exactly as
+/// the GPU does with `atomicCompareExchangeWeak` (MCPG sec. 4; Bevy Solari).
+///
+/// The table owns only the checksum words (and optional ages); the *values* are yours, in any
+/// array you index by the returned slot — typically per-slot atomics that threads accumulate
+/// into, or the state array of the GPU buffer. That is what a renderer needs: the slot is
+/// known after one CAS, values are written with whatever atomics or ownership rule the
+/// renderer already uses, and nothing here locks.
+///
+/// - [`insert_or_get`](Self::insert_or_get) (`&self`): the same key inserted from several
+///   threads at once ends in exactly one slot; the thread that gets [`Insert::Inserted`] is
+///   the one that initialises the value.
+/// - [`find`](Self::find) (`&self`): lock-free lookup.
+/// - Eviction ([`evict_older_than`](Self::evict_older_than)) and the plain `&[u32]` view for
+///   upload ([`checksums`](Self::checksums)) take `&mut self`: no insert can run meanwhile.
+///
+/// Probing is the same bounded linear probing with wrap-around as [`HashTable`](crate::HashTable),
+/// with [`Insert::Full`] at the probe limit.
+///
+/// # Example
+/// ```
+/// use std::sync::atomic::{AtomicU32, Ordering};
+/// use mcg_hashgrid::{BucketHash, CellKey, ConcurrentTable, glam::IVec3};
+///
+/// let table = ConcurrentTable::new(1024, 8, BucketHash::Mix)?;
+/// let hits: Vec<AtomicU32> = (0..1024).map(|_| AtomicU32::new(0)).collect();
+/// std::thread::scope(|s| {
+///     for _ in 0..4 {
+///         s.spawn(|| {
+///             for i in 0..100 {
+///                 let key = CellKey::new(IVec3::new(i % 10, 0, 0), 0, 4);
+///                 if let Some(slot) = table.insert_or_get(&key).slot() {
+///                     hits[slot as usize].fetch_add(1, Ordering::Relaxed);
+///                 }
+///             }
+///         });
+///     }
+/// });
+/// let slot = table.find(&CellKey::new(IVec3::new(3, 0, 0), 0, 4)).unwrap();
+/// assert_eq!(hits[slot as usize].load(Ordering::Relaxed), 40);
+/// # Ok::<(), mcg_hashgrid::TableError>(())
+/// ```
+#[derive(Debug)]
+pub struct ConcurrentTable {
+    indexer: SlotIndexer,
+    hash: BucketHash,
+    max_probes: u32,
+    checksums: Box<[AtomicU32]>,
+    ages: Box<[AtomicU32]>,
+    frame: u32,
+}
+
+impl ConcurrentTable {
+    /// An empty table of `capacity` slots probing at most `max_probes` slots per key
+    /// (see [`HashTable::new`](crate::HashTable::new) for the rules).
+    pub fn new(capacity: u32, max_probes: u32, hash: BucketHash) -> Result<Self, TableError> {
+        let indexer = validate(capacity, max_probes)?;
+        Ok(Self {
+            indexer,
+            hash,
+            max_probes,
+            checksums: (0..capacity).map(|_| AtomicU32::new(EMPTY)).collect(),
+            ages: Box::new([]),
+            frame: 0,
+        })
+    }
+
+    /// The same table with an age array (all slots at the current frame).
+    #[must_use]
+    pub fn with_age_tracking(mut self) -> Self {
+        self.ages = (0..self.capacity())
+            .map(|_| AtomicU32::new(self.frame))
+            .collect();
+        self
+    }
+
+    /// The number of slots.
+    #[inline]
+    #[must_use]
+    pub fn capacity(&self) -> u32 {
+        self.indexer.capacity()
+    }
+
+    /// The probe limit.
+    #[inline]
+    #[must_use]
+    pub fn max_probes(&self) -> u32 {
+        self.max_probes
+    }
+
+    /// The bucket hash.
+    #[inline]
+    #[must_use]
+    pub fn bucket_hash(&self) -> BucketHash {
+        self.hash
+    }
+
+    /// The home slot of `key`, where probing starts.
+    #[inline]
+    #[must_use]
+    pub fn home_slot(&self, key: &CellKey) -> u32 {
+        self.indexer.index(self.hash.hash(key))
+    }
+
+    /// The slot holding `key`, if any; touches its age.
+    #[inline]
+    #[must_use]
+    pub fn find(&self, key: &CellKey) -> Option<u32> {
+        let slot = probe::find(
+            &mut AtomicSlots(&self.checksums),
+            &self.indexer,
+            self.max_probes,
+            self.home_slot(key),
+            checksum(key),
+        )?;
+        self.touch(slot);
+        Some(slot)
+    }
+
+    /// Finds `key` or claims a slot for it by compare-and-swap; touches its age. Safe to call
+    /// from many threads at once. [`Insert::Full`] when the probe limit is reached.
+    #[inline]
+    pub fn insert_or_get(&self, key: &CellKey) -> Insert {
+        let r = probe::insert_or_get(
+            &mut AtomicSlots(&self.checksums),
+            &self.indexer,
+            self.max_probes,
+            self.home_slot(key),
+            checksum(key),
+        );
+        if let Some(slot) = r.slot() {
+            self.touch(slot);
+        }
+        r
+    }
+
+    /// Marks `slot` as used in the current frame (a relaxed store; no-op without ages).
+    #[inline]
+    pub fn touch(&self, slot: u32) {
+        if let Some(age) = self.ages.get(slot as usize) {
+            age.store(self.frame, Ordering::Relaxed);
+        }
+    }
+
+    /// Number of slots holding a key (counts the whole array).
+    #[must_use]
+    pub fn count_occupied(&self) -> u32 {
+        self.checksums
+            .iter()
+            .filter(|w| w.load(Ordering::Relaxed) > TOMBSTONE)
+            .count() as u32
+    }
+
+    /// The current frame of the age counter.
+    #[must_use]
+    pub fn frame(&self) -> u32 {
+        self.frame
+    }
+
+    /// Moves the age counter to the next frame (wrapping).
+    pub fn advance_frame(&mut self) {
+        self.frame = self.frame.wrapping_add(1);
+    }
+
+    /// Evicts every key not inserted or found in the last `max_age` frames and calls
+    /// `on_evict(slot)` for each (to reset your value), returning how many. Needs ages.
+    pub fn evict_older_than(&mut self, max_age: u32, mut on_evict: impl FnMut(u32)) -> u32 {
+        if self.ages.is_empty() {
+            return 0;
+        }
+        let frame = self.frame;
+        let mut evicted = 0;
+        for (slot, (word, age)) in self
+            .checksums
+            .iter_mut()
+            .zip(self.ages.iter_mut())
+            .enumerate()
+        {
+            let w = word.get_mut();
+            if *w > TOMBSTONE && frame.wrapping_sub(*age.get_mut()) > max_age {
+                *w = TOMBSTONE;
+                evicted += 1;
+                on_evict(slot as u32);
+            }
+        }
+        let mut words: Vec<u32> = self.checksums.iter_mut().map(|w| *w.get_mut()).collect();
+        trim_tombstones(&mut words);
+        for (a, w) in self.checksums.iter_mut().zip(words) {
+            *a.get_mut() = w;
+        }
+        evicted
+    }
+
+    /// Empties every slot.
+    pub fn clear(&mut self) {
+        for w in self.checksums.iter_mut() {
+            *w.get_mut() = EMPTY;
+        }
+    }
+
+    /// The checksum words as plain `u32`s, to upload to the GPU without a copy.
+    ///
+    /// Takes `&mut self`, so no thread can be inserting while the view lives.
+    #[allow(unsafe_code)]
+    #[must_use]
+    pub fn checksums(&mut self) -> &[u32] {
+        let len = self.checksums.len();
+        let ptr = self.checksums.as_ptr().cast::<u32>();
+        // SAFETY: `AtomicU32` "has the same size and bit validity as the underlying integer
+        // type, u32" and an alignment of 4 (std docs), at least that of `u32`, so the pointer
+        // is valid and aligned for `len` `u32`s. The `&mut self` borrow that the returned slice
+        // keeps alive excludes every other access to the atomics, so reading them non-atomically
+        // cannot race.
+        unsafe { core::slice::from_raw_parts(ptr, len) }
+    }
+
+    /// The age words (empty without age tracking), copied.
+    #[must_use]
+    pub fn ages(&self) -> Vec<u32> {
+        self.ages
+            .iter()
+            .map(|a| a.load(Ordering::Relaxed))
+            .collect()
+    }
+
+    /// The checksum words, consuming the table (no `unsafe` involved).
+    #[must_use]
+    pub fn into_checksums(self) -> Vec<u32> {
+        self.checksums
+            .into_vec()
+            .into_iter()
+            .map(AtomicU32::into_inner)
+            .collect()
+    }
+}
+
+#[cfg(all(test, feature = "std"))]
+mod tests {
+    use glam::IVec3;
+
+    use super::*;
+
+    #[test]
+    fn same_key_from_many_threads_ends_in_one_slot() {
+        for round in 0..20 {
+            let table = ConcurrentTable::new(64, 8, BucketHash::Mix).unwrap();
+            let key = CellKey::new(IVec3::new(round, 1, 2), 0, 0);
+            let results: Vec<Insert> = std::thread::scope(|s| {
+                let handles: Vec<_> = (0..4)
+                    .map(|_| s.spawn(|| table.insert_or_get(&key)))
+                    .collect();
+                handles.into_iter().map(|h| h.join().unwrap()).collect()
+            });
+            let slots: Vec<u32> = results.iter().map(|r| r.slot().unwrap()).collect();
+            assert!(slots.iter().all(|&s| s == slots[0]), "{results:?}");
+            assert_eq!(results.iter().filter(|r| r.is_inserted()).count(), 1);
+            assert_eq!(table.count_occupied(), 1);
+        }
+    }
+
+    #[test]
+    fn upload_view_and_eviction() {
+        let mut t = ConcurrentTable::new(32, 4, BucketHash::Mix)
+            .unwrap()
+            .with_age_tracking();
+        let a = CellKey::new(IVec3::ONE, 2, 3);
+        let b = CellKey::new(IVec3::NEG_ONE, 2, 3);
+        let sa = t.insert_or_get(&a).slot().unwrap();
+        t.advance_frame();
+        let sb = t.insert_or_get(&b).slot().unwrap();
+        assert_eq!(t.checksums()[sa as usize], checksum(&a));
+        assert_eq!(t.checksums().iter().filter(|&&w| w > TOMBSTONE).count(), 2);
+        let mut evicted = Vec::new();
+        assert_eq!(t.evict_older_than(0, |s| evicted.push(s)), 1);
+        assert_eq!(evicted, [sa]);
+        assert_eq!(t.find(&a), None);
+        assert_eq!(t.find(&b), Some(sb));
+        assert_eq!(t.ages().len(), 32);
+        t.clear();
+        assert_eq!(t.count_occupied(), 0);
+        assert_eq!(t.into_checksums(), [EMPTY; 32]);
+    }
+}

@@ -1,0 +1,128 @@
+//! Bounded linear probing, written once for the plain and the concurrent table (and mirrored
+//! by the WGSL twin in the GPU backend).
+
+use crate::capacity::SlotIndexer;
+use crate::constants::{EMPTY, TOMBSTONE};
+
+/// What [`insert_or_get`](crate::HashTable::insert_or_get) did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Insert {
+    /// The key was already in the table, in this slot.
+    Found(u32),
+    /// The key was not in the table and now owns this slot (its value is fresh).
+    Inserted(u32),
+    /// The key is not in the table and none of the `max_probes` slots from its home slot was
+    /// free: the table is full there. Nothing was changed.
+    Full,
+}
+
+impl Insert {
+    /// The slot of the key, or `None` when the table was full.
+    #[inline]
+    #[must_use]
+    pub const fn slot(self) -> Option<u32> {
+        match self {
+            Insert::Found(s) | Insert::Inserted(s) => Some(s),
+            Insert::Full => None,
+        }
+    }
+
+    /// `true` for [`Insert::Inserted`].
+    #[inline]
+    #[must_use]
+    pub const fn is_inserted(self) -> bool {
+        matches!(self, Insert::Inserted(_))
+    }
+}
+
+/// Access to the checksum words of a table.
+pub(crate) trait Slots {
+    /// The checksum word of `slot`.
+    fn load(&mut self, slot: u32) -> u32;
+    /// Replaces `current` (EMPTY or TOMBSTONE) by `checksum` in `slot`; on failure returns the
+    /// word found there instead.
+    fn claim(&mut self, slot: u32, current: u32, checksum: u32) -> Result<(), u32>;
+}
+
+/// Looks for `checksum` in at most `max_probes` slots from `home` (wrapping), stopping at the
+/// first empty slot; tombstones are walked past.
+#[inline]
+pub(crate) fn find<S: Slots>(
+    slots: &mut S,
+    indexer: &SlotIndexer,
+    max_probes: u32,
+    home: u32,
+    checksum: u32,
+) -> Option<u32> {
+    let mut slot = home;
+    for _ in 0..max_probes {
+        let v = slots.load(slot);
+        if v == checksum {
+            return Some(slot);
+        }
+        if v == EMPTY {
+            return None;
+        }
+        slot = indexer.next(slot);
+    }
+    None
+}
+
+/// Insert-or-get with bounded linear probing, safe under concurrent inserts.
+///
+/// 1. Walk from `home` until the checksum, an empty slot or the probe limit; remember the
+///    first free slot (empty or tombstone). Found → done.
+/// 2. From the first free slot on, try to claim a free slot by compare-and-swap; a failed CAS
+///    re-reads the slot: if another thread put this checksum there, it is found; if it put
+///    another one, move to the next slot.
+///
+/// Every thread inserting the same key tries the same first free slot, and slots only go from
+/// free to taken while inserts run (evictions need exclusive access), so the key ends in
+/// exactly one slot. Never loops more than `max_probes` slots (plus one retry per lost CAS).
+#[inline]
+pub(crate) fn insert_or_get<S: Slots>(
+    slots: &mut S,
+    indexer: &SlotIndexer,
+    max_probes: u32,
+    home: u32,
+    checksum: u32,
+) -> Insert {
+    let mut slot = home;
+    let mut first_free = None;
+    for i in 0..max_probes {
+        let v = slots.load(slot);
+        if v == checksum {
+            return Insert::Found(slot);
+        }
+        if v == EMPTY || v == TOMBSTONE {
+            if first_free.is_none() {
+                first_free = Some((i, slot));
+            }
+            if v == EMPTY {
+                break;
+            }
+        }
+        slot = indexer.next(slot);
+    }
+    let Some((mut i, mut slot)) = first_free else {
+        return Insert::Full;
+    };
+    while i < max_probes {
+        let mut v = slots.load(slot);
+        loop {
+            if v == checksum {
+                return Insert::Found(slot);
+            }
+            if v != EMPTY && v != TOMBSTONE {
+                break;
+            }
+            match slots.claim(slot, v, checksum) {
+                Ok(()) => return Insert::Inserted(slot),
+                Err(actual) => v = actual,
+            }
+        }
+        i += 1;
+        slot = indexer.next(slot);
+    }
+    Insert::Full
+}

@@ -1,0 +1,504 @@
+//! A fixed-capacity hash table of `Pod` values keyed by [`CellKey`], laid out for the GPU.
+
+use alloc::vec;
+use alloc::vec::Vec;
+
+use bytemuck::Pod;
+
+use crate::capacity::SlotIndexer;
+use crate::constants::{EMPTY, TOMBSTONE};
+use crate::error::TableError;
+use crate::hash::{BucketHash, checksum};
+use crate::key::CellKey;
+use crate::probe::{self, Insert, Slots};
+
+/// Checks the parameters shared by both tables.
+pub(crate) fn validate(capacity: u32, max_probes: u32) -> Result<SlotIndexer, TableError> {
+    let indexer = SlotIndexer::new(capacity).ok_or(TableError::CapacityZero)?;
+    if max_probes == 0 {
+        return Err(TableError::MaxProbesZero);
+    }
+    if max_probes > capacity {
+        return Err(TableError::MaxProbesAboveCapacity);
+    }
+    Ok(indexer)
+}
+
+/// Clears tombstones that are followed (in probe order) by an empty slot: no key can sit
+/// behind them, so lookups and inserts may stop there. Returns how many were cleared.
+pub(crate) fn trim_tombstones(words: &mut [u32]) -> u32 {
+    let n = words.len();
+    let Some(empty) = words.iter().position(|&w| w == EMPTY) else {
+        return 0;
+    };
+    let mut cleared = 0;
+    let mut next_is_empty = true;
+    for step in 1..n {
+        let i = (empty + n - step) % n;
+        if words[i] == TOMBSTONE && next_is_empty {
+            words[i] = EMPTY;
+            cleared += 1;
+        } else {
+            next_is_empty = words[i] == EMPTY;
+        }
+    }
+    cleared
+}
+
+/// A fixed-capacity hash table from [`CellKey`] to a `Pod` value `T`: MCPG's hash-grid buffer
+/// (sec. 4, "Hash Grid", Table 1) on the CPU.
+///
+/// Two arrays of `capacity` entries, side by side:
+///
+/// - `checksums: [u32]`: [`checksum`] of the key in the slot, [`EMPTY`] (0) or
+///   [`TOMBSTONE`] (1);
+/// - `values: [T]`: the state of the slot (zeroed when the slot is taken).
+///
+/// Both upload to the GPU as they are ([`checksums`](Self::checksums),
+/// [`values`](Self::values); `bytemuck::cast_slice` gives the bytes), and the GPU twin finds
+/// the same slots: the home slot is `hash(key) mod capacity` ([`SlotIndexer`]), then bounded
+/// linear probing over at most `max_probes` slots that wraps from the last slot to slot 0.
+/// A key that finds no free slot within the limit gets [`Insert::Full`], never an endless loop.
+///
+/// A lookup compares checksums only, so two keys that share a home region *and* a checksum
+/// are confused (probability ≈ 2⁻³² per pair, measured by the `hashgrid_checksum` suite).
+///
+/// **Ages (optional).** With [`with_age_tracking`](Self::with_age_tracking) a third array
+/// stores for each slot the frame it was last inserted or touched in; [`advance_frame`] and
+/// [`evict_older_than`] then free stale cells (as tombstones, which probes walk past and
+/// inserts reuse; tombstones that end a probe run are cleared).
+///
+/// [`advance_frame`]: Self::advance_frame
+/// [`evict_older_than`]: Self::evict_older_than
+#[derive(Clone, Debug)]
+pub struct HashTable<T> {
+    indexer: SlotIndexer,
+    hash: BucketHash,
+    max_probes: u32,
+    checksums: Vec<u32>,
+    values: Vec<T>,
+    ages: Vec<u32>,
+    frame: u32,
+    occupied: u32,
+    tombstones: u32,
+}
+
+impl<T: Pod> HashTable<T> {
+    /// An empty table of `capacity` slots (any size ≥ 1; a power of two makes the slot index
+    /// a mask, anything else a modulo, see [`SlotIndexer`]) that probes at most `max_probes`
+    /// slots per key (1 ≤ `max_probes` ≤ `capacity`) and finds home slots with `hash`.
+    pub fn new(capacity: u32, max_probes: u32, hash: BucketHash) -> Result<Self, TableError> {
+        let indexer = validate(capacity, max_probes)?;
+        Ok(Self {
+            indexer,
+            hash,
+            max_probes,
+            checksums: vec![EMPTY; capacity as usize],
+            values: vec![T::zeroed(); capacity as usize],
+            ages: Vec::new(),
+            frame: 0,
+            occupied: 0,
+            tombstones: 0,
+        })
+    }
+
+    /// The same table with an age array (all slots at frame 0), enabling
+    /// [`evict_older_than`](Self::evict_older_than).
+    #[must_use]
+    pub fn with_age_tracking(mut self) -> Self {
+        self.ages = vec![self.frame; self.checksums.len()];
+        self
+    }
+
+    /// The number of slots.
+    #[inline]
+    #[must_use]
+    pub fn capacity(&self) -> u32 {
+        self.indexer.capacity()
+    }
+
+    /// The probe limit.
+    #[inline]
+    #[must_use]
+    pub fn max_probes(&self) -> u32 {
+        self.max_probes
+    }
+
+    /// The bucket hash.
+    #[inline]
+    #[must_use]
+    pub fn bucket_hash(&self) -> BucketHash {
+        self.hash
+    }
+
+    /// Number of slots holding a key.
+    #[inline]
+    #[must_use]
+    pub fn len(&self) -> u32 {
+        self.occupied
+    }
+
+    /// `true` when no slot holds a key.
+    #[inline]
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.occupied == 0
+    }
+
+    /// Number of tombstones (evicted or removed slots not yet reused or cleared).
+    #[inline]
+    #[must_use]
+    pub fn tombstones(&self) -> u32 {
+        self.tombstones
+    }
+
+    /// `len / capacity`.
+    #[must_use]
+    pub fn load_factor(&self) -> f64 {
+        f64::from(self.occupied) / f64::from(self.capacity())
+    }
+
+    /// The home slot of `key`: `hash(key) mod capacity`, where probing starts. The probe
+    /// length of a key found in slot `s` is `(s − home) mod capacity + 1`.
+    #[inline]
+    #[must_use]
+    pub fn home_slot(&self, key: &CellKey) -> u32 {
+        self.indexer.index(self.hash.hash(key))
+    }
+
+    /// The slot holding `key`, if any.
+    #[inline]
+    #[must_use]
+    pub fn find(&self, key: &CellKey) -> Option<u32> {
+        let home = self.home_slot(key);
+        let c = checksum(key);
+        let mut slot = home;
+        for _ in 0..self.max_probes {
+            let v = self.checksums[slot as usize];
+            if v == c {
+                return Some(slot);
+            }
+            if v == EMPTY {
+                return None;
+            }
+            slot = self.indexer.next(slot);
+        }
+        None
+    }
+
+    /// The value of `key`, if the table holds it.
+    #[inline]
+    #[must_use]
+    pub fn get(&self, key: &CellKey) -> Option<&T> {
+        self.find(key).map(|s| &self.values[s as usize])
+    }
+
+    /// The value of `key` for writing, if the table holds it; touches its age.
+    #[inline]
+    pub fn get_mut(&mut self, key: &CellKey) -> Option<&mut T> {
+        let slot = self.find(key)?;
+        self.touch(slot);
+        Some(&mut self.values[slot as usize])
+    }
+
+    /// Finds `key` or gives it a slot (with a zeroed value); touches its age. Returns
+    /// [`Insert::Full`] and changes nothing when the `max_probes` slots from its home slot are
+    /// all taken by other keys.
+    #[inline]
+    pub fn insert_or_get(&mut self, key: &CellKey) -> Insert {
+        let home = self.home_slot(key);
+        let c = checksum(key);
+        // Remember whether the claimed slot was a tombstone for the counters.
+        let outcome = {
+            let mut slots = TrackingSlots {
+                words: &mut self.checksums,
+                claimed_tombstone: false,
+            };
+            let r = probe::insert_or_get(&mut slots, &self.indexer, self.max_probes, home, c);
+            (r, slots.claimed_tombstone)
+        };
+        match outcome {
+            (Insert::Inserted(slot), was_tombstone) => {
+                self.values[slot as usize] = T::zeroed();
+                self.occupied += 1;
+                if was_tombstone {
+                    self.tombstones -= 1;
+                }
+                self.touch(slot);
+                Insert::Inserted(slot)
+            }
+            (Insert::Found(slot), _) => {
+                self.touch(slot);
+                Insert::Found(slot)
+            }
+            (Insert::Full, _) => Insert::Full,
+        }
+    }
+
+    /// [`insert_or_get`](Self::insert_or_get) returning the value for writing and whether it
+    /// is fresh; `None` when the table is full there.
+    #[inline]
+    pub fn entry(&mut self, key: &CellKey) -> Option<(&mut T, bool)> {
+        let r = self.insert_or_get(key);
+        let slot = r.slot()?;
+        Some((&mut self.values[slot as usize], r.is_inserted()))
+    }
+
+    /// Removes `key` (its slot becomes a tombstone); returns whether it was there.
+    pub fn remove(&mut self, key: &CellKey) -> bool {
+        match self.find(key) {
+            Some(slot) => {
+                self.checksums[slot as usize] = TOMBSTONE;
+                self.occupied -= 1;
+                self.tombstones += 1;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Empties every slot (values are zeroed when slots are taken again).
+    pub fn clear(&mut self) {
+        self.checksums.fill(EMPTY);
+        self.occupied = 0;
+        self.tombstones = 0;
+    }
+
+    /// The current frame of the age counter.
+    #[inline]
+    #[must_use]
+    pub fn frame(&self) -> u32 {
+        self.frame
+    }
+
+    /// Moves the age counter to the next frame (wrapping).
+    pub fn advance_frame(&mut self) {
+        self.frame = self.frame.wrapping_add(1);
+    }
+
+    /// Marks `slot` as used in the current frame (no-op without age tracking).
+    #[inline]
+    pub fn touch(&mut self, slot: u32) {
+        if let Some(age) = self.ages.get_mut(slot as usize) {
+            *age = self.frame;
+        }
+    }
+
+    /// Evicts every key not inserted or touched in the last `max_age` frames
+    /// (`frame − age > max_age`, wrapping) and returns how many. Without age tracking nothing
+    /// is evicted.
+    pub fn evict_older_than(&mut self, max_age: u32) -> u32 {
+        if self.ages.is_empty() {
+            return 0;
+        }
+        let mut evicted = 0;
+        for (word, &age) in self.checksums.iter_mut().zip(&self.ages) {
+            if *word > TOMBSTONE && self.frame.wrapping_sub(age) > max_age {
+                *word = TOMBSTONE;
+                evicted += 1;
+            }
+        }
+        self.occupied -= evicted;
+        self.tombstones += evicted;
+        self.tombstones -= trim_tombstones(&mut self.checksums);
+        evicted
+    }
+
+    /// The checksum array (upload it as is: `bytemuck::cast_slice::<u32, u8>`).
+    #[inline]
+    #[must_use]
+    pub fn checksums(&self) -> &[u32] {
+        &self.checksums
+    }
+
+    /// The value array (upload it as is).
+    #[inline]
+    #[must_use]
+    pub fn values(&self) -> &[T] {
+        &self.values
+    }
+
+    /// The value array for writing (e.g. after reading back the GPU's copy). Writing a value
+    /// does not change which keys the table holds.
+    #[inline]
+    #[must_use]
+    pub fn values_mut(&mut self) -> &mut [T] {
+        &mut self.values
+    }
+
+    /// The age array (empty without age tracking).
+    #[inline]
+    #[must_use]
+    pub fn ages(&self) -> &[u32] {
+        &self.ages
+    }
+
+    /// The occupied slots and their values.
+    pub fn iter(&self) -> impl Iterator<Item = (u32, &T)> {
+        self.checksums
+            .iter()
+            .zip(&self.values)
+            .enumerate()
+            .filter(|(_, (w, _))| **w > TOMBSTONE)
+            .map(|(i, (_, v))| (i as u32, v))
+    }
+}
+
+/// Plain slots that remember whether the claimed slot was a tombstone.
+struct TrackingSlots<'a> {
+    words: &'a mut [u32],
+    claimed_tombstone: bool,
+}
+
+impl Slots for TrackingSlots<'_> {
+    #[inline(always)]
+    fn load(&mut self, slot: u32) -> u32 {
+        self.words[slot as usize]
+    }
+    #[inline(always)]
+    fn claim(&mut self, slot: u32, current: u32, checksum: u32) -> Result<(), u32> {
+        self.claimed_tombstone = current == TOMBSTONE;
+        self.words[slot as usize] = checksum;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::IVec3;
+
+    use super::*;
+
+    fn key(i: i32) -> CellKey {
+        CellKey::new(IVec3::new(i, 2 * i, -i), 3, 1)
+    }
+
+    /// A key whose home slot in `table` is `home` (searched).
+    fn key_at_home<T: Pod>(table: &HashTable<T>, home: u32, skip: usize) -> CellKey {
+        (0..)
+            .map(key)
+            .filter(|k| table.home_slot(k) == home)
+            .nth(skip)
+            .unwrap()
+    }
+
+    #[test]
+    fn constructor_validates() {
+        assert_eq!(
+            HashTable::<u32>::new(0, 1, BucketHash::Mix).unwrap_err(),
+            TableError::CapacityZero
+        );
+        assert_eq!(
+            HashTable::<u32>::new(8, 0, BucketHash::Mix).unwrap_err(),
+            TableError::MaxProbesZero
+        );
+        assert_eq!(
+            HashTable::<u32>::new(8, 9, BucketHash::Mix).unwrap_err(),
+            TableError::MaxProbesAboveCapacity
+        );
+    }
+
+    #[test]
+    fn insert_get_remove() {
+        let mut t = HashTable::<[f32; 2]>::new(211, 8, BucketHash::Mix).unwrap();
+        for i in 0..50 {
+            let (v, fresh) = t.entry(&key(i)).unwrap();
+            assert!(fresh);
+            *v = [i as f32, 1.0];
+        }
+        assert_eq!(t.len(), 50);
+        for i in 0..50 {
+            assert_eq!(t.get(&key(i)), Some(&[i as f32, 1.0]));
+            assert!(matches!(t.insert_or_get(&key(i)), Insert::Found(_)));
+        }
+        assert_eq!(t.get(&key(1000)), None);
+        assert!(t.remove(&key(7)));
+        assert!(!t.remove(&key(7)));
+        assert_eq!(t.get(&key(7)), None);
+        assert_eq!((t.len(), t.tombstones()), (49, 1));
+        for i in (0..50).filter(|&i| i != 7) {
+            assert!(t.get(&key(i)).is_some(), "key {i} lost behind a tombstone");
+        }
+        let (v, fresh) = t.entry(&key(7)).unwrap();
+        assert!(fresh && *v == [0.0, 0.0]);
+        assert_eq!(t.iter().count(), 50);
+        t.clear();
+        assert!(t.is_empty() && t.get(&key(3)).is_none());
+    }
+
+    #[test]
+    fn full_and_wrap_around() {
+        let mut t = HashTable::<u32>::new(16, 4, BucketHash::Mix).unwrap();
+        // Five keys with home slot 15: the first takes 15, the next wrap to 0, 1, 2; the fifth
+        // finds its four probes taken.
+        let keys: Vec<CellKey> = (0..5).map(|s| key_at_home(&t, 15, s)).collect();
+        let slots: Vec<Insert> = keys.iter().map(|k| t.insert_or_get(k)).collect();
+        assert_eq!(
+            slots,
+            [
+                Insert::Inserted(15),
+                Insert::Inserted(0),
+                Insert::Inserted(1),
+                Insert::Inserted(2),
+                Insert::Full
+            ]
+        );
+        assert_eq!(t.find(&keys[3]), Some(2));
+        assert_eq!(t.find(&keys[4]), None);
+        assert_eq!(t.len(), 4);
+        // A table whose every slot is taken answers Full for a new key and Found for old ones.
+        let mut t = HashTable::<u32>::new(3, 3, BucketHash::XorPrimes).unwrap();
+        let mut inserted = Vec::new();
+        let mut i = 0;
+        while t.len() < 3 {
+            if t.insert_or_get(&key(i)).is_inserted() {
+                inserted.push(key(i));
+            }
+            i += 1;
+        }
+        assert_eq!(t.insert_or_get(&key(i + 1)), Insert::Full);
+        for k in &inserted {
+            assert!(matches!(t.insert_or_get(k), Insert::Found(_)));
+        }
+    }
+
+    #[test]
+    fn ages_evict_stale_cells() {
+        let mut t = HashTable::<u32>::new(64, 8, BucketHash::Mix)
+            .unwrap()
+            .with_age_tracking();
+        for i in 0..20 {
+            t.insert_or_get(&key(i));
+        }
+        t.advance_frame();
+        t.advance_frame();
+        for i in 0..5 {
+            assert!(t.get_mut(&key(i)).is_some());
+        }
+        assert_eq!(t.evict_older_than(1), 15);
+        assert_eq!(t.len(), 5);
+        for i in 0..5 {
+            assert!(t.get(&key(i)).is_some());
+        }
+        for i in 5..20 {
+            assert!(t.get(&key(i)).is_none());
+        }
+        // Without age tracking nothing is evicted.
+        let mut plain = HashTable::<u32>::new(8, 8, BucketHash::Mix).unwrap();
+        plain.insert_or_get(&key(1));
+        plain.advance_frame();
+        assert_eq!(plain.evict_older_than(0), 0);
+    }
+
+    #[test]
+    fn trailing_tombstones_are_trimmed() {
+        let mut w = [5, TOMBSTONE, TOMBSTONE, EMPTY, TOMBSTONE, 9, TOMBSTONE];
+        // Slot 6 wraps to slot 0 (occupied): kept. Slots 1, 2 precede the empty slot 3: cleared.
+        assert_eq!(trim_tombstones(&mut w), 2);
+        assert_eq!(w, [5, EMPTY, EMPTY, EMPTY, TOMBSTONE, 9, TOMBSTONE]);
+        let mut w = [TOMBSTONE, 4, TOMBSTONE];
+        assert_eq!(trim_tombstones(&mut w), 0);
+        let mut w = [TOMBSTONE, EMPTY, TOMBSTONE];
+        assert_eq!(trim_tombstones(&mut w), 2);
+    }
+}
