@@ -114,8 +114,28 @@ mod tests {
 
     #[test]
     fn index_is_exactly_modulo() {
-        let hashes = [0_u32, 1, 2, 12345, 0x7FFF_FFFF, 0x8000_0000, u32::MAX - 1, u32::MAX];
-        for cap in [1_u32, 2, 3, 7, 1000, 1024, 800_009, 1 << 20, 32_777_259, u32::MAX] {
+        let hashes = [
+            0_u32,
+            1,
+            2,
+            12345,
+            0x7FFF_FFFF,
+            0x8000_0000,
+            u32::MAX - 1,
+            u32::MAX,
+        ];
+        for cap in [
+            1_u32,
+            2,
+            3,
+            7,
+            1000,
+            1024,
+            800_009,
+            1 << 20,
+            32_777_259,
+            u32::MAX,
+        ] {
             let ix = SlotIndexer::new(cap).unwrap();
             assert_eq!(ix.is_mask(), cap.is_power_of_two());
             for &h in &hashes {

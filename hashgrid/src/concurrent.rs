@@ -200,7 +200,12 @@ impl ConcurrentTable {
         }
         let frame = self.frame;
         let mut evicted = 0;
-        for (slot, (word, age)) in self.checksums.iter_mut().zip(self.ages.iter_mut()).enumerate() {
+        for (slot, (word, age)) in self
+            .checksums
+            .iter_mut()
+            .zip(self.ages.iter_mut())
+            .enumerate()
+        {
             let w = word.get_mut();
             if *w > TOMBSTONE && frame.wrapping_sub(*age.get_mut()) > max_age {
                 *w = TOMBSTONE;
@@ -242,7 +247,10 @@ impl ConcurrentTable {
     /// The age words (empty without age tracking), copied.
     #[must_use]
     pub fn ages(&self) -> Vec<u32> {
-        self.ages.iter().map(|a| a.load(Ordering::Relaxed)).collect()
+        self.ages
+            .iter()
+            .map(|a| a.load(Ordering::Relaxed))
+            .collect()
     }
 
     /// The checksum words, consuming the table (no `unsafe` involved).

@@ -22,7 +22,9 @@ pub enum GridError {
 impl fmt::Display for GridError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
-            GridError::TanHalfAngleNotPositive => "tan of the half angle is not a positive finite number",
+            GridError::TanHalfAngleNotPositive => {
+                "tan of the half angle is not a positive finite number"
+            }
             GridError::WidthNotPositive => "cell width is not a positive finite number",
             GridError::PowerNotAboveOne => "level width ratio is not a finite number above 1",
             GridError::StepsZero => "levels per width ratio is zero",

@@ -8,8 +8,8 @@
 //! so the level and the normal class are part of both.
 
 use crate::constants::{
-    BUCKET_SEED, CHECKSUM_SEED, FIRST_CHECKSUM, FMIX_M1, FMIX_M2, MURMUR_C1, MURMUR_C2, MURMUR_N,
-    PRIME_META, PRIME_X, PRIME_Y, PRIME_Z,
+    BUCKET_SEED, CHECKSUM_SEED, COHERENT_RUN_BITS, FIRST_CHECKSUM, FMIX_M1, FMIX_M2, MURMUR_C1,
+    MURMUR_C2, MURMUR_N, PRIME_META, PRIME_X, PRIME_Y, PRIME_Z,
 };
 use crate::key::CellKey;
 
@@ -25,11 +25,22 @@ pub enum BucketHash {
     /// uniform bucket occupancy on structured keys. The default.
     #[default]
     Mix,
+    /// Murmur3 of the key with `x` divided by 4, xor'ed with the low 2 bits of `x`
+    /// ([`hash_mix_coherent`]): runs of 4 vertices along x land in 4 neighbouring slots (one
+    /// cache line of checksums), as π₁ = 1 does for Instant-NGP, while the runs themselves
+    /// are spread like [`BucketHash::Mix`]. Faster on coherent query streams, but runs of
+    /// four occupied slots make linear-probing clusters grow faster: the demo measures ≈ 1 %
+    /// failed inserts at load 0.25 and 12 % at 0.5 with 8 probes (`Mix`: 0.03 % and 2.5 %).
+    MixCoherent,
 }
 
 impl BucketHash {
-    /// Both variants, for sweeps.
-    pub const ALL: [BucketHash; 2] = [BucketHash::XorPrimes, BucketHash::Mix];
+    /// Every variant, for sweeps.
+    pub const ALL: [BucketHash; 3] = [
+        BucketHash::XorPrimes,
+        BucketHash::Mix,
+        BucketHash::MixCoherent,
+    ];
 
     /// The bucket hash of `key`.
     #[inline]
@@ -38,15 +49,17 @@ impl BucketHash {
         match self {
             BucketHash::XorPrimes => hash_xor_primes(key),
             BucketHash::Mix => hash_mix(key),
+            BucketHash::MixCoherent => hash_mix_coherent(key),
         }
     }
 
-    /// A short lowercase name (`"xor-primes"`, `"mix"`).
+    /// A short lowercase name (`"xor-primes"`, `"mix"`, `"mix-coherent"`).
     #[must_use]
     pub const fn name(self) -> &'static str {
         match self {
             BucketHash::XorPrimes => "xor-primes",
             BucketHash::Mix => "mix",
+            BucketHash::MixCoherent => "mix-coherent",
         }
     }
 }
@@ -95,7 +108,10 @@ pub const fn murmur3_words(words: [u32; 4], seed: u32) -> u32 {
             .wrapping_mul(MURMUR_C1)
             .rotate_left(15)
             .wrapping_mul(MURMUR_C2);
-        h = (h ^ k).rotate_left(13).wrapping_mul(5).wrapping_add(MURMUR_N);
+        h = (h ^ k)
+            .rotate_left(13)
+            .wrapping_mul(5)
+            .wrapping_add(MURMUR_N);
         i += 1;
     }
     fmix32(h ^ 16)
@@ -106,6 +122,22 @@ pub const fn murmur3_words(words: [u32; 4], seed: u32) -> u32 {
 #[must_use]
 pub const fn hash_mix(key: &CellKey) -> u32 {
     murmur3_words(key.words(), BUCKET_SEED)
+}
+
+/// The coherent mixing bucket hash: [`murmur3_words`] of `[x >> 2, y, z, meta]` with
+/// [`BUCKET_SEED`], xor'ed with `x & 3` ([`COHERENT_RUN_BITS`] = 2).
+///
+/// The four vertices `4k..4k+3` along x share the murmur value `m` and get `m ⊕ 0..3`: four
+/// slots in one aligned group of four with a power-of-two capacity, or within a window of four
+/// consecutive slots with a modulo. A renderer's neighbouring pixels touch neighbouring
+/// vertices, so their lookups share cache lines. `x >> 2` is an arithmetic shift (floor
+/// division), so runs are aligned for negative x too.
+#[inline]
+#[must_use]
+pub const fn hash_mix_coherent(key: &CellKey) -> u32 {
+    let [x, y, z, meta] = key.words();
+    let run = ((x as i32) >> COHERENT_RUN_BITS) as u32;
+    murmur3_words([run, y, z, meta], BUCKET_SEED) ^ (x & ((1 << COHERENT_RUN_BITS) - 1))
 }
 
 /// The checksum stored in a slot: [`murmur3_words`] of `[x, y, z, meta]` with
@@ -120,7 +152,11 @@ pub const fn hash_mix(key: &CellKey) -> u32 {
 #[must_use]
 pub const fn checksum(key: &CellKey) -> u32 {
     let h = murmur3_words(key.words(), CHECKSUM_SEED);
-    if h < FIRST_CHECKSUM { h | FIRST_CHECKSUM } else { h }
+    if h < FIRST_CHECKSUM {
+        h | FIRST_CHECKSUM
+    } else {
+        h
+    }
 }
 
 #[cfg(test)]
@@ -136,7 +172,10 @@ mod tests {
         let tail = blocks.remainder();
         for b in blocks {
             let mut k = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-            k = k.wrapping_mul(0xcc9e_2d51).rotate_left(15).wrapping_mul(0x1b87_3593);
+            k = k
+                .wrapping_mul(0xcc9e_2d51)
+                .rotate_left(15)
+                .wrapping_mul(0x1b87_3593);
             h ^= k;
             h = h.rotate_left(13).wrapping_mul(5).wrapping_add(0xe654_6b64);
         }
@@ -145,7 +184,10 @@ mod tests {
             k ^= u32::from(byte) << (8 * i);
         }
         if !tail.is_empty() {
-            h ^= k.wrapping_mul(0xcc9e_2d51).rotate_left(15).wrapping_mul(0x1b87_3593);
+            h ^= k
+                .wrapping_mul(0xcc9e_2d51)
+                .rotate_left(15)
+                .wrapping_mul(0x1b87_3593);
         }
         h ^= data.len() as u32;
         fmix32(h)
@@ -173,7 +215,10 @@ mod tests {
                 chunk.copy_from_slice(&w.to_le_bytes());
             }
             for seed in [0, BUCKET_SEED, CHECKSUM_SEED] {
-                assert_eq!(murmur3_words(key.words(), seed), murmur3_reference(&bytes, seed));
+                assert_eq!(
+                    murmur3_words(key.words(), seed),
+                    murmur3_reference(&bytes, seed)
+                );
             }
         }
     }
@@ -188,6 +233,7 @@ mod tests {
         ] {
             assert_ne!(hash_xor_primes(&a), hash_xor_primes(&b));
             assert_ne!(hash_mix(&a), hash_mix(&b));
+            assert_ne!(hash_mix_coherent(&a), hash_mix_coherent(&b));
             assert_ne!(checksum(&a), checksum(&b));
         }
     }
@@ -197,7 +243,11 @@ mod tests {
         // Search keys whose raw checksum hash is 0 or 1 would take 2³¹ tries; check the remap
         // rule directly instead, and a run of keys.
         for h in [0_u32, 1, 2, 3, u32::MAX] {
-            let mapped = if h < FIRST_CHECKSUM { h | FIRST_CHECKSUM } else { h };
+            let mapped = if h < FIRST_CHECKSUM {
+                h | FIRST_CHECKSUM
+            } else {
+                h
+            };
             assert!(mapped >= FIRST_CHECKSUM);
         }
         for i in -500..500 {
@@ -218,6 +268,15 @@ mod tests {
         assert_eq!(fmix32(0), 0);
         assert_eq!(fmix32(1), 0x514e_28b7);
         let pinned = [hash_xor_primes(&key), hash_mix(&key), checksum(&key)];
+        let run: [u32; 5] = [-5, -4, -1, 0, 3].map(|x| {
+            hash_mix_coherent(&CellKey {
+                cell: IVec3::new(x, -2, 3),
+                ..key
+            })
+        });
+        // −4..−1 is one run, 0..3 another: members differ in the low two bits only.
+        assert_eq!((run[1] ^ run[2], run[3] ^ run[4]), (3, 3));
+        assert_ne!(run[0] ^ 3, run[1]);
         assert_eq!(pinned, [0xced1_1e4b, 0x66d3_6f99, 0x8403_c0ec]);
     }
 }

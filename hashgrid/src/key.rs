@@ -160,7 +160,11 @@ mod tests {
 
     #[test]
     fn value_stability() {
-        let key = CellKey::new(IVec3::new(1, -2, 3), 7, normal_class(Vec3::new(0.1, -0.9, 0.3)));
+        let key = CellKey::new(
+            IVec3::new(1, -2, 3),
+            7,
+            normal_class(Vec3::new(0.1, -0.9, 0.3)),
+        );
         assert_eq!(key.words(), [1, 0xFFFF_FFFE, 3, 0x0000_0307]);
     }
 }

@@ -265,10 +265,19 @@ mod tests {
             f(&mut p);
             AdaptiveGrid::new(p).unwrap_err()
         };
-        assert_eq!(bad(|p| p.tan_half_angle = f32::NAN), GridError::TanHalfAngleNotPositive);
-        assert_eq!(bad(|p| p.tan_half_angle = 0.0), GridError::TanHalfAngleNotPositive);
+        assert_eq!(
+            bad(|p| p.tan_half_angle = f32::NAN),
+            GridError::TanHalfAngleNotPositive
+        );
+        assert_eq!(
+            bad(|p| p.tan_half_angle = 0.0),
+            GridError::TanHalfAngleNotPositive
+        );
         assert_eq!(bad(|p| p.min_width = -1.0), GridError::WidthNotPositive);
-        assert_eq!(bad(|p| p.min_width = f32::INFINITY), GridError::WidthNotPositive);
+        assert_eq!(
+            bad(|p| p.min_width = f32::INFINITY),
+            GridError::WidthNotPositive
+        );
         assert_eq!(bad(|p| p.power = 1.0), GridError::PowerNotAboveOne);
         assert_eq!(bad(|p| p.power = f32::NAN), GridError::PowerNotAboveOne);
         assert_eq!(bad(|p| p.steps = 0), GridError::StepsZero);
@@ -291,7 +300,10 @@ mod tests {
         for d in [2.0_f32, 3.82, 10.0, 100.0, 1e4] {
             let l = g.target_level(d);
             let ratio = g.width(l) / g.target_width(d);
-            assert!((0.84..1.19).contains(&ratio), "d = {d}: level {l}, ratio {ratio}");
+            assert!(
+                (0.84..1.19).contains(&ratio),
+                "d = {d}: level {l}, ratio {ratio}"
+            );
         }
         assert_eq!(g.width(0), 0.01);
         assert!((g.width(4) / 0.04 - 1.0).abs() < 1e-6);
@@ -323,7 +335,13 @@ mod tests {
     fn vertex_keys_carry_level_and_class() {
         let g = AdaptiveGrid::mcpg();
         let p = Vec3::new(1.3, -2.2, 5.0);
-        let key = g.vertex_key(p, Vec3::new(0.0, 0.0, -1.0), Vec3::new(1.3, -2.2, 15.0), 0.2, 0.5);
+        let key = g.vertex_key(
+            p,
+            Vec3::new(0.0, 0.0, -1.0),
+            Vec3::new(1.3, -2.2, 15.0),
+            0.2,
+            0.5,
+        );
         assert_eq!(key.level as u32, g.target_level(10.0));
         assert_eq!(key.class, 5);
         let w = g.width(key.level as u32);
@@ -340,7 +358,10 @@ mod tests {
         assert_eq!(levels, [0, 6, 11, 17, 25]);
         let widths = [1, 5, 17].map(|l| g.width(l));
         // 0.01 · √2^l (std and libm `exp` may differ in the last bit).
-        for (w, want) in widths.iter().zip([0.014_142_136_f32, 0.056_568_542, 3.620_387_3]) {
+        for (w, want) in widths
+            .iter()
+            .zip([0.014_142_136_f32, 0.056_568_54, 3.620_387_3])
+        {
             assert!((w / want - 1.0).abs() < 4.0 * f32::EPSILON, "{w} vs {want}");
         }
     }

@@ -44,7 +44,11 @@ pub(crate) fn floor_i32(x: f32) -> i32 {
 /// `u` moved into [0, 1): NaN and negatives give 0, values ≥ 1 give the largest f32 below 1.
 #[inline(always)]
 pub(crate) fn sanitize_uniform(u: f32) -> f32 {
-    if u >= 0.0 { u.min(ONE_MINUS_EPSILON) } else { 0.0 }
+    if u >= 0.0 {
+        u.min(ONE_MINUS_EPSILON)
+    } else {
+        0.0
+    }
 }
 
 #[cfg(test)]

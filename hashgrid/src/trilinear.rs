@@ -108,11 +108,19 @@ pub fn stochastic_corner(f: Vec3, u: f32) -> usize {
 #[must_use]
 pub fn jittered_vertex(q: Vec3, u: Vec3) -> IVec3 {
     let (base, f) = cell_and_fraction(q);
-    let u = Vec3::new(sanitize_uniform(u.x), sanitize_uniform(u.y), sanitize_uniform(u.z));
+    let u = Vec3::new(
+        sanitize_uniform(u.x),
+        sanitize_uniform(u.y),
+        sanitize_uniform(u.z),
+    );
     // Compare with 1 − f instead of adding u to q: the result is then exact even where q + u
     // would round (large |q|).
     let up = u.cmpge(Vec3::ONE - f);
-    base + IVec3::new(i32::from(up.test(0)), i32::from(up.test(1)), i32::from(up.test(2)))
+    base + IVec3::new(
+        i32::from(up.test(0)),
+        i32::from(up.test(1)),
+        i32::from(up.test(2)),
+    )
 }
 
 #[cfg(test)]
@@ -128,8 +136,14 @@ mod tests {
         assert!((w[7] - 0.2 * 0.7 * 0.5).abs() < 1e-7);
         // At a vertex the choice is that vertex, whatever u.
         for u in [0.0, 0.3, 0.999_999_9] {
-            assert_eq!(stochastic_trilinear(Vec3::new(2.0, -3.0, 0.0), u), IVec3::new(2, -3, 0));
-            assert_eq!(jittered_vertex(Vec3::new(2.0, -3.0, 0.0), Vec3::splat(u)), IVec3::new(2, -3, 0));
+            assert_eq!(
+                stochastic_trilinear(Vec3::new(2.0, -3.0, 0.0), u),
+                IVec3::new(2, -3, 0)
+            );
+            assert_eq!(
+                jittered_vertex(Vec3::new(2.0, -3.0, 0.0), Vec3::splat(u)),
+                IVec3::new(2, -3, 0)
+            );
         }
     }
 
@@ -149,7 +163,12 @@ mod tests {
 
     #[test]
     fn zero_weight_corners_are_never_chosen() {
-        for f in [Vec3::ZERO, Vec3::ONE, Vec3::new(0.0, 1.0, 0.0), Vec3::new(1.0, 0.5, 0.0)] {
+        for f in [
+            Vec3::ZERO,
+            Vec3::ONE,
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(1.0, 0.5, 0.0),
+        ] {
             let w = trilinear_weights(f);
             for i in 0..1000 {
                 let u = i as f32 / 1000.0;
@@ -162,13 +181,21 @@ mod tests {
 
     #[test]
     fn degenerate_positions_do_not_panic() {
-        for q in [Vec3::NAN, Vec3::INFINITY, Vec3::splat(-1e12), Vec3::new(-1e-10, 3e9, 0.5)] {
+        for q in [
+            Vec3::NAN,
+            Vec3::INFINITY,
+            Vec3::splat(-1e12),
+            Vec3::new(-1e-10, 3e9, 0.5),
+        ] {
             let _ = stochastic_trilinear(q, 0.5);
             let _ = jittered_vertex(q, Vec3::splat(0.5));
         }
         assert_eq!(stochastic_trilinear(Vec3::NAN, 0.5), IVec3::ZERO);
         // −10⁻¹⁰ + 1 rounds to 1: the point is at vertex 0.
-        assert_eq!(stochastic_trilinear(Vec3::new(-1e-10, 0.0, 0.0), 0.3), IVec3::ZERO);
+        assert_eq!(
+            stochastic_trilinear(Vec3::new(-1e-10, 0.0, 0.0), 0.3),
+            IVec3::ZERO
+        );
     }
 
     #[test]
@@ -185,6 +212,9 @@ mod tests {
                 IVec3::new(11, -4, 1)
             ]
         );
-        assert_eq!(jittered_vertex(q, Vec3::new(0.8, 0.1, 0.6)), IVec3::new(11, -5, 1));
+        assert_eq!(
+            jittered_vertex(q, Vec3::new(0.8, 0.1, 0.6)),
+            IVec3::new(11, -5, 1)
+        );
     }
 }

@@ -10,9 +10,11 @@ use mcg_hashgrid::{
 use proptest::prelude::*;
 
 fn any_key() -> impl Strategy<Value = CellKey> {
-    (any::<[i32; 3]>(), any::<u8>(), any::<u8>(), any::<u16>()).prop_map(|(c, level, class, extra)| {
-        CellKey::new(IVec3::from_array(c), level, class).with_extra(extra)
-    })
+    (any::<[i32; 3]>(), any::<u8>(), any::<u8>(), any::<u16>()).prop_map(
+        |(c, level, class, extra)| {
+            CellKey::new(IVec3::from_array(c), level, class).with_extra(extra)
+        },
+    )
 }
 
 /// Small keys, as a scene produces them (many share coordinates).

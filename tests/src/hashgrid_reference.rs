@@ -43,7 +43,11 @@ pub fn sphere_shell_keys(radius: f32, center: IVec3, level: u8) -> Vec<CellKey> 
             for x in -r..=r {
                 let p = Vec3::new(x as f32, y as f32, z as f32);
                 if (p.length() - radius).abs() <= 0.5 {
-                    keys.push(CellKey::new(center + IVec3::new(x, y, z), level, normal_class(p)));
+                    keys.push(CellKey::new(
+                        center + IVec3::new(x, y, z),
+                        level,
+                        normal_class(p),
+                    ));
                 }
             }
         }
@@ -55,7 +59,12 @@ pub fn sphere_shell_keys(radius: f32, center: IVec3, level: u8) -> Vec<CellKey> 
 /// y = 0 produces for a `resolution²` grid of floor points in [−extent, extent]², with MCPG's
 /// adaptive grid (levels from distance, no jitter, lower-corner vertex): a multi-level stream.
 #[must_use]
-pub fn floor_view_keys(grid: &AdaptiveGrid, camera: Vec3, extent: f32, resolution: u32) -> Vec<CellKey> {
+pub fn floor_view_keys(
+    grid: &AdaptiveGrid,
+    camera: Vec3,
+    extent: f32,
+    resolution: u32,
+) -> Vec<CellKey> {
     let mut seen = HashSet::new();
     let mut keys = Vec::new();
     for j in 0..resolution {

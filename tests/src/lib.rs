@@ -12,8 +12,8 @@
 //! | [`RunningStats`], [`z_test`], [`assert_z_test`] | z-test of a sample mean (Welford mean and variance) | estimators against analytic integrals |
 //! | [`GaussLegendre`], [`integrate_sphere`], [`graded_theta_breaks`] | f64 reference quadrature on an interval and on S² | normalisation and product integrals |
 //! | [`vmf_pdf`], [`vmf_one_minus_cos_cdf`], [`one_minus_cos`], [`vmf_mean_cosine`], … | f64 reference formulas of the vMF lobe | every suite that tests vMF code |
-//! | [`plane_keys`], [`line_keys`], [`sphere_shell_keys`], [`floor_view_keys`], [`occupancy`] | structured grid-key streams and bucket counts | hash-grid occupancy and checksum suites |
 //! | [`LineTechnique`], [`SphereTechnique`], [`line_integrands`], [`sphere_integrands`], [`AdaptiveTile`], [`fig1_estimate`], … | techniques, integrands with closed-form integrals, MCMM Fig. 16 and MMIS Fig. 1 in miniature | the `smis_*` suites |
+//! | [`plane_keys`], [`line_keys`], [`sphere_shell_keys`], [`floor_view_keys`], [`occupancy`] | structured grid-key streams and bucket counts | hash-grid occupancy and checksum suites |
 //! | [`seeded_rng`], [`uniform_vec2`], [`uniform_sphere_direction`] | deterministic random numbers | every suite, one fixed seed per test |
 //!
 //! ## Conventions

@@ -14,7 +14,7 @@
 //! table directly (≈ probes · 2⁻³² ≈ 2·10⁻⁹ per lookup, far below anything a test can count).
 
 use glam::IVec3;
-use mcg_hashgrid::{CellKey, checksum};
+use mcg_hashgrid::{CellKey, checksum, hash_mix};
 
 /// 2²¹ distinct structured keys: a 128³ block of vertices (2²¹) spread over 8 levels and
 /// 6 normal classes by coordinate parity, so the stream is planes, lines and levels at once.
@@ -25,7 +25,11 @@ fn keys() -> Vec<CellKey> {
             for x in 0..128 {
                 let level = ((x ^ y ^ z) & 7) as u8;
                 let class = ((x + 2 * y + 3 * z) % 6) as u8;
-                keys.push(CellKey::new(IVec3::new(x - 64, y - 64, z * 3), level, class));
+                keys.push(CellKey::new(
+                    IVec3::new(x - 64, y - 64, z * 3),
+                    level,
+                    class,
+                ));
             }
         }
     }
@@ -65,7 +69,32 @@ fn checksum_collisions_match_the_birthday_expectation() {
         pairs / (n * (n - 1.0) / 2.0),
         2f64.powi(-32)
     );
-    assert!(z.abs() < 5.0, "collision count {pairs} vs {lambda:.1}: z = {z:.2}");
+    assert!(
+        z.abs() < 5.0,
+        "collision count {pairs} vs {lambda:.1}: z = {z:.2}"
+    );
+}
+
+/// The checksum and the bucket hash are independent: among the ≈ 512 pairs of distinct keys
+/// with equal checksums (n = 2²¹, as above), none also has an equal 32-bit `Mix` bucket hash
+/// (expected 512 · 2⁻³² ≈ 10⁻⁷). A checksum derived from the bucket hash (e.g. a bijection of
+/// it, or Murmur3 with seed-independent collisions on these keys) would put every such pair in
+/// the same probe window, so that each checksum collision became a false match.
+#[test]
+fn checksum_collisions_do_not_share_buckets() {
+    let keys = keys();
+    let mut pairs: Vec<(u32, u32)> = keys.iter().map(|k| (checksum(k), hash_mix(k))).collect();
+    pairs.sort_unstable();
+    let (mut colliding, mut same_bucket) = (0, 0);
+    for w in pairs.windows(2) {
+        if w[0].0 == w[1].0 {
+            colliding += 1;
+            same_bucket += u32::from(w[0].1 == w[1].1);
+        }
+    }
+    println!("{colliding} checksum collisions, {same_bucket} of them with equal bucket hashes");
+    assert!(colliding > 400, "{colliding}");
+    assert_eq!(same_bucket, 0);
 }
 
 /// The same method on MCPG's 16-bit truncation of the checksum (its 36-byte state keeps
@@ -75,12 +104,20 @@ fn checksum_collisions_match_the_birthday_expectation() {
 fn sixteen_bit_checksum_collides_at_one_in_65536() {
     let keys = keys();
     let n = 4096.0;
-    let mut words: Vec<u32> = keys.iter().step_by(512).take(4096).map(|k| checksum(k) & 0xFFFF).collect();
+    let mut words: Vec<u32> = keys
+        .iter()
+        .step_by(512)
+        .take(4096)
+        .map(|k| checksum(k) & 0xFFFF)
+        .collect();
     let pairs = equal_pairs(&mut words) as f64;
     let lambda = n * (n - 1.0) / 2.0 * 2f64.powi(-16);
     let z = (pairs - lambda) / lambda.sqrt();
     println!("16-bit: equal pairs = {pairs}, expected {lambda:.1}, z = {z:.2}");
-    assert!(z.abs() < 5.0, "16-bit collision count {pairs} vs {lambda:.1}: z = {z:.2}");
+    assert!(
+        z.abs() < 5.0,
+        "16-bit collision count {pairs} vs {lambda:.1}: z = {z:.2}"
+    );
 }
 
 #[test]

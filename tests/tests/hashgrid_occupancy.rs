@@ -25,12 +25,27 @@ fn streams() -> Vec<(&'static str, Vec<CellKey>)> {
     vec![
         ("plane", plane_keys(300, -150, 7)),
         ("far plane", plane_keys(300, 100_000, -3)),
-        ("line x", line_keys(90_000, IVec3::new(-45_000, 3, 5), IVec3::X)),
-        ("line y", line_keys(90_000, IVec3::new(3, -45_000, 5), IVec3::Y)),
-        ("line z", line_keys(90_000, IVec3::new(3, 5, -45_000), IVec3::Z)),
+        (
+            "line x",
+            line_keys(90_000, IVec3::new(-45_000, 3, 5), IVec3::X),
+        ),
+        (
+            "line y",
+            line_keys(90_000, IVec3::new(3, -45_000, 5), IVec3::Y),
+        ),
+        (
+            "line z",
+            line_keys(90_000, IVec3::new(3, 5, -45_000), IVec3::Z),
+        ),
         ("diagonal", line_keys(90_000, IVec3::ZERO, IVec3::ONE)),
-        ("sphere", sphere_shell_keys(85.0, IVec3::new(10, -20, 30), 3)),
-        ("floor view", floor_view_keys(&AdaptiveGrid::mcpg(), Vec3::new(0.0, 1.7, 0.0), 40.0, 1200)),
+        (
+            "sphere",
+            sphere_shell_keys(85.0, IVec3::new(10, -20, 30), 3),
+        ),
+        (
+            "floor view",
+            floor_view_keys(&AdaptiveGrid::mcpg(), Vec3::new(0.0, 1.7, 0.0), 40.0, 1200),
+        ),
     ]
 }
 
@@ -40,25 +55,33 @@ fn test_stream(keys: &[CellKey], bins: u32, hash: BucketHash) -> ChiSquareResult
     chi_square_test(&counts, &expected)
 }
 
-/// The mixing hash passes on every stream and capacity (16 tests at α = 0.001).
+/// The mixing hashes (`Mix` and `MixCoherent`) pass on every stream and capacity
+/// (2 × 16 tests at α = 0.001).
 #[test]
-fn mix_hash_is_uniform_on_structured_streams() {
+fn mix_hashes_are_uniform_on_structured_streams() {
     let mut failures = Vec::new();
-    for (name, keys) in streams() {
-        for bins in CAPACITIES {
-            let r = test_stream(&keys, bins, BucketHash::Mix);
-            println!(
-                "mix {name:10} n = {:6} B = {bins}: X²/df = {:.3}, p = {:.3e}",
-                keys.len(),
-                r.statistic / r.degrees_of_freedom as f64,
-                r.p_value
-            );
-            if r.rejects(ALPHA) {
-                failures.push(format!("{name} B = {bins}: p = {:.3e}", r.p_value));
+    for hash in [BucketHash::Mix, BucketHash::MixCoherent] {
+        for (name, keys) in streams() {
+            for bins in CAPACITIES {
+                let r = test_stream(&keys, bins, hash);
+                println!(
+                    "{:12} {name:10} n = {:6} B = {bins}: X²/df = {:.3}, p = {:.3e}",
+                    hash.name(),
+                    keys.len(),
+                    r.statistic / r.degrees_of_freedom as f64,
+                    r.p_value
+                );
+                if r.rejects(ALPHA) {
+                    failures.push(format!(
+                        "{} {name} B = {bins}: p = {:.3e}",
+                        hash.name(),
+                        r.p_value
+                    ));
+                }
             }
         }
     }
-    assert!(failures.is_empty(), "mix hash rejected: {failures:?}");
+    assert!(failures.is_empty(), "mixing hash rejected: {failures:?}");
 }
 
 /// Documented expected failures of the xor-of-primes hash (MCPG, Instant-NGP):
@@ -83,7 +106,10 @@ fn xor_primes_hash_fails_where_documented() {
             r.statistic / r.degrees_of_freedom as f64,
             r.p_value
         );
-        assert!(r.rejects(ALPHA), "xor-primes passed on the floor view with B = {bins}: {r:?}");
+        assert!(
+            r.rejects(ALPHA),
+            "xor-primes passed on the floor view with B = {bins}: {r:?}"
+        );
     }
     let line = &streams.iter().find(|(n, _)| *n == "line x").unwrap().1;
     let r = test_stream(line, 4096, BucketHash::XorPrimes);

@@ -1,7 +1,7 @@
 //! Random decisions of the hash grid: stochastic trilinear corner frequencies, the
 //! jittered-cell alternative, the level's monotonicity in distance and its geometric jitter.
 
-use glam::{Vec3, Vec2};
+use glam::{Vec2, Vec3};
 use mcg_hashgrid::{
     AdaptiveGrid, LevelParams, cell_and_fraction, geometric_jitter, geometric_jitter_probability,
     jittered_vertex, stochastic_trilinear, trilinear_weights,
@@ -23,16 +23,31 @@ const POSITIONS: [[f32; 3]; 5] = [
 
 fn corner_index(q: Vec3, v: glam::IVec3) -> usize {
     let d = v - q.floor().as_ivec3();
-    assert!(d.cmpge(glam::IVec3::ZERO).all() && d.cmple(glam::IVec3::ONE).all(), "{v} not a corner of {q}");
+    assert!(
+        d.cmpge(glam::IVec3::ZERO).all() && d.cmple(glam::IVec3::ONE).all(),
+        "{v} not a corner of {q}"
+    );
     (d.x + 2 * d.y + 4 * d.z) as usize
 }
 
 /// Expected counts from the trilinear weights (f64); corners of zero weight must get no sample.
 fn check_corners(label: &str, f: Vec3, counts: &[u64; 8], n: usize) {
     let w: [f64; 8] = std::array::from_fn(|i| {
-        let x = if i & 1 != 0 { f.x as f64 } else { 1.0 - f.x as f64 };
-        let y = if i & 2 != 0 { f.y as f64 } else { 1.0 - f.y as f64 };
-        let z = if i & 4 != 0 { f.z as f64 } else { 1.0 - f.z as f64 };
+        let x = if i & 1 != 0 {
+            f.x as f64
+        } else {
+            1.0 - f.x as f64
+        };
+        let y = if i & 2 != 0 {
+            f.y as f64
+        } else {
+            1.0 - f.y as f64
+        };
+        let z = if i & 4 != 0 {
+            f.z as f64
+        } else {
+            1.0 - f.z as f64
+        };
         x * y * z
     });
     for (i, (&c, &wi)) in counts.iter().zip(&w).enumerate() {
@@ -47,7 +62,11 @@ fn check_corners(label: &str, f: Vec3, counts: &[u64; 8], n: usize) {
         .map(|(&c, &wi)| (c, wi * n as f64))
         .unzip();
     if obs.len() > 1 {
-        assert_chi_square(label, &obs, &exp, ALPHA);
+        let r = assert_chi_square(label, &obs, &exp, ALPHA);
+        println!(
+            "{label}: X² = {:.2}, df = {}, p = {:.3}",
+            r.statistic, r.degrees_of_freedom, r.p_value
+        );
     } else {
         assert_eq!(obs[0], n as u64);
     }
@@ -101,8 +120,17 @@ fn jittered_vertex_matches_the_weights() {
 fn level_is_monotone_in_distance() {
     let sets = [
         LevelParams::MCPG,
-        LevelParams { power: 3f32.sqrt(), steps: 1, ..LevelParams::MCPG },
-        LevelParams { tan_half_angle: 0.002, steps: 6, max_level: 40, ..LevelParams::MCPG },
+        LevelParams {
+            power: 3f32.sqrt(),
+            steps: 1,
+            ..LevelParams::MCPG
+        },
+        LevelParams {
+            tan_half_angle: 0.002,
+            steps: 6,
+            max_level: 40,
+            ..LevelParams::MCPG
+        },
     ];
     for p in sets {
         let g = AdaptiveGrid::new(p).unwrap();
@@ -111,7 +139,10 @@ fn level_is_monotone_in_distance() {
             let d = 1e-3 * 10f32.powf(9.0 * i as f32 / 200_000.0);
             let l = g.target_level(d);
             assert!(l >= last, "{p:?}: level {l} at d = {d} below {last}");
-            assert!(l <= last + 1, "{p:?}: level jumps from {last} to {l} at d = {d}");
+            assert!(
+                l <= last + 1,
+                "{p:?}: level jumps from {last} to {l} at d = {d}"
+            );
             assert!(g.level(d, 0.9) >= l);
             last = l;
         }
@@ -148,6 +179,12 @@ fn level_jitter_is_geometric() {
         let d = 10f32.powf(4.0 * u.x);
         counts[(g.level(d, u.y) - g.target_level(d)) as usize] += 1;
     }
-    let expected: Vec<f64> = (0..25).map(|k| geometric_jitter_probability(k) * N as f64).collect();
-    assert_chi_square("level jitter", &counts, &expected, ALPHA);
+    let expected: Vec<f64> = (0..25)
+        .map(|k| geometric_jitter_probability(k) * N as f64)
+        .collect();
+    let r = assert_chi_square("level jitter", &counts, &expected, ALPHA);
+    println!(
+        "level jitter: X² = {:.2}, df = {}, p = {:.3}",
+        r.statistic, r.degrees_of_freedom, r.p_value
+    );
 }
