@@ -11,7 +11,9 @@ use crate::quantize::Rounding;
 /// - `encode` accepts any `Vec3`: negative channels and NaN encode as 0, values beyond the
 ///   format's range (and +∞) saturate to its largest finite value;
 /// - `decode` accepts any `u32` and returns finite, non-negative channels;
-/// - `decode(encode(decode(w))) == decode(w)` for every word the codec produces.
+/// - `decode(encode(decode(w))) == decode(w)` for every word the codec produces (for
+///   [`LogLuv32`](crate::LogLuv32) in XYZ, and in RGB for colours inside the sRGB gamut: its
+///   decoder clamps out-of-gamut chromaticities to RGB ≥ 0).
 ///
 /// # Example
 /// ```
@@ -67,11 +69,11 @@ impl LogRgb {
 }
 
 impl ColorCodec for LogRgb {
-    #[inline]
+    #[inline(always)]
     fn encode(&self, rgb: Vec3) -> u32 {
         self.layout.encode(rgb, 0, self.rounding).0
     }
-    #[inline]
+    #[inline(always)]
     fn decode(&self, word: u32) -> Vec3 {
         self.layout.decode(IrradianceWord(word))
     }

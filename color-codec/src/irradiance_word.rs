@@ -6,7 +6,7 @@ use glam::Vec3;
 
 use crate::bits::BitField;
 use crate::error::CodecError;
-use crate::log_codec::{LogCodec, LogField, MAX_FIELD_BITS};
+use crate::log_codec::{LogCodec, LogField, LogLanes, MAX_FIELD_BITS};
 use crate::quantize::Rounding;
 
 /// Bit layout of an irradiance word: R, G, B fields of the log codec (eq. 21) and a count field.
@@ -40,6 +40,7 @@ use crate::quantize::Rounding;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IrradianceLayout {
     fields: [LogField; 3],
+    lanes: LogLanes,
     places: [BitField; 3],
     count: BitField,
 }
@@ -94,12 +95,14 @@ impl IrradianceLayout {
         if r_bits + g_bits + b_bits + count_bits != 32 {
             return Err(CodecError::WidthsDoNotSumTo32);
         }
+        let fields = [
+            codec.field(r_bits),
+            codec.field(g_bits),
+            codec.field(b_bits),
+        ];
         Ok(Self {
-            fields: [
-                codec.field(r_bits),
-                codec.field(g_bits),
-                codec.field(b_bits),
-            ],
+            fields,
+            lanes: LogLanes::new([fields[0], fields[1], fields[2], fields[2]]),
             places: [
                 BitField::new(0, r_bits),
                 BitField::new(r_bits, g_bits),
@@ -158,27 +161,29 @@ impl IrradianceLayout {
     /// Bad input: negative and NaN channels encode to 0, channels above (e⁵ − 1)/15 (and +∞)
     /// saturate. With [`Rounding::Stochastic`] each channel uses the caller's uniform rotated by
     /// a golden-ratio step, so one uniform serves the word.
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn encode(&self, rgb: Vec3, count: u32, rounding: Rounding) -> IrradianceWord {
-        let c = rgb.to_array();
-        let mut word = self.count.put(count.min(self.max_count()));
-        for i in 0..3 {
-            let code = self.fields[i].encode(c[i], rounding.for_channel(i as u32));
-            word |= self.places[i].put(code);
-        }
-        IrradianceWord(word)
+        let codes = self.lanes.encode([rgb.x, rgb.y, rgb.z, 0.0], rounding);
+        IrradianceWord(
+            self.count.put(count.min(self.max_count()))
+                | self.places[0].put(codes[0])
+                | self.places[1].put(codes[1])
+                | self.places[2].put(codes[2]),
+        )
     }
 
     /// Unpacks the colour; every word decodes to finite, non-negative channels.
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn decode(&self, word: IrradianceWord) -> Vec3 {
-        Vec3::new(
-            self.fields[0].decode(self.places[0].get(word.0)),
-            self.fields[1].decode(self.places[1].get(word.0)),
-            self.fields[2].decode(self.places[2].get(word.0)),
-        )
+        let [r, g, b, _] = self.lanes.decode([
+            self.places[0].get(word.0),
+            self.places[1].get(word.0),
+            self.places[2].get(word.0),
+            0,
+        ]);
+        Vec3::new(r, g, b)
     }
 
     /// The channel codes `[R, G, B]` of a word.

@@ -132,6 +132,11 @@ impl LogCodec {
             encode_scale: m / self.beta,
             decode_scale: self.beta / (m * core::f32::consts::LN_2),
             inv_gamma: 1.0 / self.gamma,
+            // How far (in codes) the fast `ln` estimate can be from the boundary that the fast
+            // `exp2` decode defines: a few f32 ulps of the log relative to the code scale M
+            // (≈ 2·10⁻⁷·M each way), with margin. Inside the band, rounding down decides
+            // exactly against `decode`.
+            down_tolerance: 8e-6 * m + 1.0 / 4096.0,
         }
     }
 }
@@ -169,6 +174,7 @@ pub struct LogField {
     encode_scale: f32,
     decode_scale: f32,
     inv_gamma: f32,
+    down_tolerance: f32,
 }
 
 impl LogField {
@@ -195,7 +201,7 @@ impl LogField {
 
     /// v in code units, `min(ln(γv + 1)·M/β, M)`; negative and NaN → 0, +∞ → M.
     #[inline(always)]
-    fn code_units(&self, v: f32) -> f32 {
+    pub(crate) fn code_units(&self, v: f32) -> f32 {
         fast_ln_ge1(self.codec.gamma * v + 1.0) * self.encode_scale
     }
 
@@ -206,13 +212,25 @@ impl LogField {
     #[inline(always)]
     #[must_use]
     pub fn encode(&self, v: f32, rounding: Rounding) -> u32 {
-        let v = if v >= 0.0 { v } else { 0.0 };
+        // `max` maps NaN to 0.
+        let v = v.max(0.0);
         let x = self.code_units(v);
         match rounding {
             Rounding::Down => {
+                let x = x.min(self.max_code_f);
+                let q = x as i32;
+                let frac = x - q as f32;
+                if frac > self.down_tolerance && frac < 1.0 - self.down_tolerance {
+                    return q as u32;
+                }
+                // Near a code boundary the estimate could be off by one: decide exactly.
                 let q0 = quantize(x - 0.125, self.max_code, Rounding::Down);
                 let next = (q0 + 1).min(self.max_code);
-                if self.decode(next) <= v { next } else { q0 }
+                if self.decode_unmasked(next) <= v {
+                    next
+                } else {
+                    q0
+                }
             }
             _ => quantize(x, self.max_code, rounding),
         }
@@ -223,7 +241,13 @@ impl LogField {
     #[inline(always)]
     #[must_use]
     pub fn decode(&self, code: u32) -> f32 {
-        let q = (code & self.max_code) as f32;
+        self.decode_unmasked(code & self.max_code)
+    }
+
+    /// [`decode`](Self::decode) for a code known to be ≤ M.
+    #[inline(always)]
+    pub(crate) fn decode_unmasked(&self, code: u32) -> f32 {
+        let q = code as i32 as f32;
         ((fast_exp2(q * self.decode_scale) - 1.0) * self.inv_gamma).max(0.0)
     }
 
@@ -251,6 +275,106 @@ impl LogField {
             Rounding::Stochastic(_) => fast_exp2(step) - 1.0,
         };
         (rel + 4e-6) * (clamped + self.inv_gamma) + (v - top).max(0.0)
+    }
+}
+
+/// Four [`LogField`]s side by side as plain per-lane arrays, so that encoding or decoding all
+/// channels of a word compiles to straight-line 4-wide SIMD (lane `i` gives the same result
+/// as `fields[i].encode` / `decode`, the stochastic uniform rotated per lane like
+/// [`Rounding`]'s channels). Unused lanes repeat a field and are fed 0.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct LogLanes {
+    gamma: [f32; 4],
+    inv_gamma: [f32; 4],
+    encode_scale: [f32; 4],
+    decode_scale: [f32; 4],
+    max_code: [i32; 4],
+    down_tolerance: [f32; 4],
+}
+
+impl LogLanes {
+    pub(crate) const fn new(f: [LogField; 4]) -> Self {
+        let mut lanes = LogLanes {
+            gamma: [0.0; 4],
+            inv_gamma: [0.0; 4],
+            encode_scale: [0.0; 4],
+            decode_scale: [0.0; 4],
+            max_code: [0; 4],
+            down_tolerance: [0.0; 4],
+        };
+        let mut i = 0;
+        while i < 4 {
+            lanes.gamma[i] = f[i].codec.gamma;
+            lanes.inv_gamma[i] = f[i].inv_gamma;
+            lanes.encode_scale[i] = f[i].encode_scale;
+            lanes.decode_scale[i] = f[i].decode_scale;
+            lanes.max_code[i] = f[i].max_code as i32;
+            lanes.down_tolerance[i] = f[i].down_tolerance;
+            i += 1;
+        }
+        lanes
+    }
+
+    #[inline(always)]
+    pub(crate) fn decode(&self, code: [u32; 4]) -> [f32; 4] {
+        let mut out = [0.0_f32; 4];
+        for i in 0..4 {
+            let q = (code[i] as i32).min(self.max_code[i]) as f32;
+            out[i] = ((fast_exp2(q * self.decode_scale[i]) - 1.0) * self.inv_gamma[i]).max(0.0);
+        }
+        out
+    }
+
+    #[inline(always)]
+    pub(crate) fn encode(&self, v: [f32; 4], rounding: Rounding) -> [u32; 4] {
+        let mut vv = [0.0_f32; 4];
+        let mut x = [0.0_f32; 4];
+        for i in 0..4 {
+            vv[i] = v[i].max(0.0);
+            x[i] = (fast_ln_ge1(self.gamma[i] * vv[i] + 1.0) * self.encode_scale[i])
+                .min(self.max_code[i] as f32);
+        }
+        let mut out = [0_u32; 4];
+        match rounding {
+            Rounding::Down => {
+                // As in `LogField::encode`: ⌊x⌋ unless some lane is within its tolerance of a
+                // code boundary; then all lanes decide exactly against the decoded next code.
+                let mut ambiguous = false;
+                for i in 0..4 {
+                    let q = x[i] as i32;
+                    let frac = x[i] - q as f32;
+                    ambiguous |=
+                        !(frac > self.down_tolerance[i] && frac < 1.0 - self.down_tolerance[i]);
+                    out[i] = q as u32;
+                }
+                if ambiguous {
+                    for i in 0..4 {
+                        let q0 = (x[i] - 0.125).max(0.0) as i32;
+                        let next = (q0 + 1).min(self.max_code[i]);
+                        let at_next = ((fast_exp2(next as f32 * self.decode_scale[i]) - 1.0)
+                            * self.inv_gamma[i])
+                            .max(0.0);
+                        out[i] = (q0 + (at_next <= vv[i]) as i32) as u32;
+                    }
+                }
+            }
+            _ => {
+                let mut threshold = [0.0_f32; 4];
+                for (i, t) in threshold.iter_mut().enumerate() {
+                    *t = match rounding.for_channel(i as u32) {
+                        Rounding::Stochastic(u) => u.max(0.0),
+                        // frac ≥ ½ ⟺ frac > the float below ½.
+                        _ => 0.499_999_97,
+                    };
+                }
+                for i in 0..4 {
+                    let q = x[i] as i32;
+                    let frac = x[i] - q as f32;
+                    out[i] = (q + (frac > threshold[i]) as i32) as u32;
+                }
+            }
+        }
+        out
     }
 }
 

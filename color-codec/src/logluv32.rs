@@ -199,7 +199,7 @@ mod tests {
 
     #[test]
     fn idempotent_and_bad_input() {
-        for w in [0x4000_5a_b0u32, 0x1234_6070, 0x7fff_4f4f, 0x0001_5050] {
+        for w in [0x4000_5ab0_u32, 0x1234_6070, 0x7fff_4f4f, 0x0001_5050] {
             let c = LogLuv32::unpack_xyz(w);
             assert_eq!(LogLuv32::pack_xyz(c), w, "{w:#x}");
         }

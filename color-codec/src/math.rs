@@ -33,25 +33,36 @@ pub(crate) use imp::*;
 /// (ties to even) in the default rounding mode, without a float → int conversion.
 pub(crate) const ROUND_SHIFT: f32 = 12_582_912.0;
 
-/// Natural logarithm of `x ≥ 1` (including +∞, which gives 128·ln 2 ≈ 88.7), branch-free.
+/// Natural logarithm of `x ≥ 1` (including +∞, which gives 128·ln 2 ≈ 88.7), branch-free and
+/// division-free.
 ///
-/// Splits `x = 2ᵉ·m` with m ∈ [√½, √2) from the bits, then
-/// `ln m = 2 atanh s = 2(s + s³/3 + s⁵/5 + s⁷/7 + s⁹/9)` with `s = (m − 1)/(m + 1)`,
-/// |s| ≤ 0.1716; the first omitted term is below 3·10⁻¹⁰ relative, so the error is f32 rounding
-/// (a few ulps, tested against f64). Inputs below 1 other than subnormals also work; NaN,
-/// zero and negative inputs give garbage (callers clamp first).
+/// Splits `x = 2ᵉ·m` with m ∈ [√½, √2) from the bits (musl's reduction), then
+/// `ln m = t − t²/2 + t³·P(t)`, t = m − 1, with the degree-8 minimax polynomial P of Cephes'
+/// `logf` (S. Moshier); the error is a few f32 ulps (tested against f64). Normal inputs below 1
+/// also work; NaN, zero, subnormal and negative inputs give garbage (callers clamp first).
 #[inline(always)]
 pub(crate) fn fast_ln_ge1(x: f32) -> f32 {
-    const SQRT_2_BITS: u32 = 0x3fb5_04f3;
+    const SQRT_HALF_BITS: u32 = 0x3f35_04f3;
     let bits = x.to_bits();
-    // Re-bias so that the mantissa lands in [√½, √2): subtract the bits of √½ first.
-    let shifted = bits.wrapping_sub(SQRT_2_BITS - 0x0080_0000);
+    let shifted = bits.wrapping_sub(SQRT_HALF_BITS);
     let e = (shifted as i32 >> 23) as f32;
     let m = f32::from_bits(bits.wrapping_sub(shifted & 0xff80_0000));
-    let s = (m - 1.0) / (m + 1.0);
-    let s2 = s * s;
-    let series = 1.0 + s2 * (1.0 / 3.0 + s2 * (0.2 + s2 * (1.0 / 7.0 + s2 * (1.0 / 9.0))));
-    e * core::f32::consts::LN_2 + 2.0 * s * series
+    let t = m - 1.0;
+    let t2 = t * t;
+    let p = 7.037_683_6e-2;
+    let p = p * t - 1.151_461e-1;
+    let p = p * t + 1.167_699_9e-1;
+    let p = p * t - 1.242_014_1e-1;
+    let p = p * t + 1.424_932_3e-1;
+    let p = p * t - 1.666_805_8e-1;
+    let p = p * t + 2.000_071_5e-1;
+    let p = p * t - 2.499_999_4e-1;
+    let p = p * t + 0.333_333_3;
+    // ln 2 split in a part exact in f32 times e (|e| ≤ 128) and a small remainder.
+    const LN2_HI: f32 = 0.693_359_4;
+    const LN2_LO: f32 = -2.121_944_4e-4;
+    let y = t * t2 * p + e * LN2_LO - 0.5 * t2;
+    t + y + e * LN2_HI
 }
 
 /// 2ˣ for x ∈ [−126, 127], branch-free: `2^round(x)` from the bits times a degree-6 polynomial

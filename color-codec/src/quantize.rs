@@ -59,19 +59,18 @@ impl Rounding {
 #[inline(always)]
 #[must_use]
 pub fn quantize(x: f32, max_code: u32, rounding: Rounding) -> u32 {
-    // `as u32` truncates toward zero and saturates (NaN and negatives → 0, +∞ → u32::MAX).
-    let q = x as u32;
-    if q >= max_code {
-        return max_code;
-    }
-    // Exact in f32: x ≥ 0 and q = ⌊x⌋ share the exponent range (no rounding in x − ⌊x⌋).
+    // Branch-free so that loops over texels vectorise: `max` maps NaN to 0, the clamp keeps
+    // the value in i32 range (codes are < 2²⁴), truncation is then ⌊x⌋, and the difference is
+    // exact in f32.
+    let x = x.max(0.0).min(max_code as f32);
+    let q = x as i32;
     let frac = x - q as f32;
     let up = match rounding {
         Rounding::Down => false,
         Rounding::Nearest => frac >= 0.5,
         Rounding::Stochastic(u) => frac > u.max(0.0),
     };
-    q + up as u32
+    (q + up as i32) as u32
 }
 
 /// Quantises `x ∈ [0, 1]` to a `bits`-bit UNORM code, `quantize(x · (2^bits − 1))`.
