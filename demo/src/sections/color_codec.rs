@@ -292,9 +292,12 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
         .figure(
             profile_file,
             "Relative luminance error (r.m.s. over hue) against intensity on the saturated hue \
-             slice. The log codec's error is flat above 1/γ ≈ 0.07 and falls below it, where the \
-             curve turns linear: it moves bit error from the dark end, frequent in indirect \
-             light, to the bright end (the paper's \"-N\" encodings).",
+             slice. Above 1/γ ≈ 0.07 the log codecs keep a roughly constant relative error \
+             (about β/M); below it eq. 21 turns linear, the absolute step becomes constant and the \
+             relative error rises — but far less than with the same bits stored linearly, which \
+             is the point of the log (the paper's \"-N\" encodings move bit error from the dark \
+             end, frequent in indirect light, to the bright end). The float formats keep a \
+             constant relative error over the whole range; gamma-5 UNORM clips above 1.",
         );
 
     // Grid search.
