@@ -4,6 +4,7 @@
 //! its PNG files into the output folder ([`Context::figure_path`]) and returns the text, figures
 //! and tables as a [`Section`]. [`ALL`] lists them in page order; [`crate::run`] calls each once.
 
+pub mod color_codec;
 pub mod hashgrid;
 pub mod markov_guide;
 pub mod smis;
@@ -21,7 +22,13 @@ use crate::{Config, Result};
 pub type BuildFn = fn(&Context<'_>) -> Result<Section>;
 
 /// Every section of the report, in page order. Append new sections here.
-pub const ALL: &[BuildFn] = &[vmf::build, smis::build, hashgrid::build, markov_guide::build];
+pub const ALL: &[BuildFn] = &[
+    vmf::build,
+    color_codec::build,
+    smis::build,
+    hashgrid::build,
+    markov_guide::build,
+];
 
 /// What a section builder gets: the run's settings and where to put files.
 #[derive(Clone, Copy, Debug)]

@@ -1,0 +1,139 @@
+//! Every constant the GPU side needs (bit layouts, β, γ, N_max), defined once, as one table
+//! that the GPU backend emits into WGSL.
+
+use core::fmt;
+
+use crate::heuristics_word::HeuristicsLayout;
+use crate::irradiance_word::IrradianceLayout;
+use crate::log_codec::LogCodec;
+use crate::moving_average::MovingAverage;
+use crate::visibility_word::VisibilityLayout;
+
+/// The value of a [`NamedConstant`]: WGSL `u32` or `f32`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ConstantValue {
+    /// An unsigned integer (`u32` in WGSL, written with the `u` suffix).
+    U32(u32),
+    /// A float (`f32` in WGSL).
+    F32(f32),
+}
+
+/// One entry of [`CONSTANTS`]: an upper-case name and its value.
+///
+/// `Display` writes the WGSL declaration, e.g. `const IRRADIANCE_R_BITS: u32 = 9u;`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NamedConstant {
+    /// The WGSL identifier (upper snake case).
+    pub name: &'static str,
+    /// The value.
+    pub value: ConstantValue,
+}
+
+impl fmt::Display for NamedConstant {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.value {
+            ConstantValue::U32(v) => write!(f, "const {}: u32 = {v}u;", self.name),
+            // `{:?}` keeps a decimal point (`5.0`), which WGSL needs for an f32 literal.
+            ConstantValue::F32(v) => write!(f, "const {}: f32 = {v:?};", self.name),
+        }
+    }
+}
+
+const fn u(name: &'static str, v: u32) -> NamedConstant {
+    NamedConstant {
+        name,
+        value: ConstantValue::U32(v),
+    }
+}
+
+const fn f(name: &'static str, v: f32) -> NamedConstant {
+    NamedConstant {
+        name,
+        value: ConstantValue::F32(v),
+    }
+}
+
+const IRR: IrradianceLayout = IrradianceLayout::ADGI;
+const VIS: VisibilityLayout = VisibilityLayout::ADGI;
+const HEU: HeuristicsLayout = HeuristicsLayout::ADGI;
+
+/// The codec constants of ADGI's default layouts, for the WGSL prelude: field widths and bit
+/// offsets of the irradiance (sec. 4.5), visibility (sec. 4.6) and heuristics (sec. 4.3) words,
+/// (β, γ) of each log codec (eq. 21), and N_max of the static and dynamic moving averages
+/// (sec. 4.7, Table 3). Values are read from the typed constants, so the table cannot drift.
+///
+/// # Example
+/// ```
+/// use mcg_color_codec::CONSTANTS;
+/// let prelude: Vec<String> = CONSTANTS.iter().map(|c| c.to_string()).collect();
+/// assert!(prelude.contains(&"const IRRADIANCE_R_BITS: u32 = 9u;".to_string()));
+/// assert!(prelude.contains(&"const IRRADIANCE_BETA: f32 = 5.0;".to_string()));
+/// ```
+pub const CONSTANTS: &[NamedConstant] = &[
+    u("IRRADIANCE_R_BITS", IRR.widths()[0]),
+    u("IRRADIANCE_G_BITS", IRR.widths()[1]),
+    u("IRRADIANCE_B_BITS", IRR.widths()[2]),
+    u("IRRADIANCE_COUNT_BITS", IRR.widths()[3]),
+    u("IRRADIANCE_R_SHIFT", IRR.shifts()[0]),
+    u("IRRADIANCE_G_SHIFT", IRR.shifts()[1]),
+    u("IRRADIANCE_B_SHIFT", IRR.shifts()[2]),
+    u("IRRADIANCE_COUNT_SHIFT", IRR.shifts()[3]),
+    f("IRRADIANCE_BETA", LogCodec::IRRADIANCE.beta()),
+    f("IRRADIANCE_GAMMA", LogCodec::IRRADIANCE.gamma()),
+    u("VISIBILITY_MEAN_BITS", VIS.widths()[0]),
+    u("VISIBILITY_MEAN_SQ_BITS", VIS.widths()[1]),
+    u("VISIBILITY_COUNT_BITS", VIS.widths()[2]),
+    u("VISIBILITY_MEAN_SHIFT", VIS.shifts()[0]),
+    u("VISIBILITY_MEAN_SQ_SHIFT", VIS.shifts()[1]),
+    u("VISIBILITY_COUNT_SHIFT", VIS.shifts()[2]),
+    f("DISTANCE_BETA", LogCodec::DISTANCE.beta()),
+    f("DISTANCE_GAMMA", LogCodec::DISTANCE.gamma()),
+    f("SQUARED_DISTANCE_BETA", LogCodec::SQUARED_DISTANCE.beta()),
+    f("SQUARED_DISTANCE_GAMMA", LogCodec::SQUARED_DISTANCE.gamma()),
+    u("HEURISTICS_FV_BITS", HEU.widths()[0]),
+    u("HEURISTICS_FS_BITS", HEU.widths()[1]),
+    u("HEURISTICS_FD_BITS", HEU.widths()[2]),
+    u("HEURISTICS_FLAG_BITS", HEU.widths()[3]),
+    u("HEURISTICS_FV_SHIFT", HEU.shifts()[0]),
+    u("HEURISTICS_FS_SHIFT", HEU.shifts()[1]),
+    u("HEURISTICS_FD_SHIFT", HEU.shifts()[2]),
+    u("HEURISTICS_FLAG_SHIFT", HEU.shifts()[3]),
+    u(
+        "MOVING_AVERAGE_STATIC_MAX_COUNT",
+        MovingAverage::STATIC.max_count(),
+    ),
+    u(
+        "MOVING_AVERAGE_DYNAMIC_MAX_COUNT",
+        MovingAverage::DYNAMIC.max_count(),
+    ),
+];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::string::ToString;
+
+    #[test]
+    fn table_is_consistent() {
+        let mut names: std::vec::Vec<&str> = CONSTANTS.iter().map(|c| c.name).collect();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), CONSTANTS.len(), "duplicate names");
+        for c in CONSTANTS {
+            assert!(
+                c.name
+                    .bytes()
+                    .all(|b| b.is_ascii_uppercase() || b.is_ascii_digit() || b == b'_')
+            );
+        }
+        assert_eq!(
+            CONSTANTS[0].to_string(),
+            "const IRRADIANCE_R_BITS: u32 = 9u;"
+        );
+        let beta = CONSTANTS
+            .iter()
+            .find(|c| c.name == "SQUARED_DISTANCE_BETA")
+            .unwrap();
+        assert_eq!(beta.to_string(), "const SQUARED_DISTANCE_BETA: f32 = 8.0;");
+    }
+}

@@ -1,0 +1,323 @@
+//! ADGI's irradiance texel: three log-encoded colour channels and a sample count in 32 bits
+//! (sec. 4.5, Table 3).
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+use crate::bits::BitField;
+use crate::error::CodecError;
+use crate::log_codec::{LogCodec, LogField, LogLanes, MAX_FIELD_BITS};
+use crate::quantize::Rounding;
+
+/// Bit layout of an irradiance word: R, G, B fields of the log codec (eq. 21) and a count field.
+///
+/// # Bit map (bit 0 = least significant)
+/// ```text
+/// ADGI default (R9 G9 B8 + 6-bit count, β = 5, γ = 15):
+///  31      26 25     18 17      9 8       0
+/// [ count:6  | B:8     | G:9     | R:9     ]
+/// general: R at [0, r), G at [r, r+g), B at [r+g, r+g+b), count at [32−c, 32)
+/// ```
+/// Widths are parameters (each colour field 1 ..= 16 bits, count 1 ..= 16 bits, summing to 32),
+/// so e.g. [`IrradianceLayout::EQUAL_10`] gives RTXGI-style equal 10/10/10 channels with a 2-bit
+/// count. The count's largest value 2^c − 1 bounds the moving average's N_max (ADGI uses 63).
+///
+/// # Round-trip error bound
+/// Each channel obeys the [`LogField`] bound for its width: with ADGI's parameters and
+/// [`Rounding::Down`], `0 ≤ v − v̂ < (1 − e^{−5/511})(v + 1/15)` ≈ 0.97 % of (v + 0.067) for R and
+/// G, and `< (1 − e^{−5/255})(v + 1/15)` ≈ 1.94 % of (v + 0.067) for B, for v ≤ 9.83; above, each
+/// channel saturates at (e⁵ − 1)/15 ≈ 9.83.
+///
+/// # Example
+/// ```
+/// use mcg_color_codec::{IrradianceLayout, Rounding, glam::Vec3};
+/// let layout = IrradianceLayout::ADGI;
+/// let word = layout.encode(Vec3::new(0.8, 0.4, 0.1), 5, Rounding::Down);
+/// assert_eq!(layout.count(word), 5);
+/// let rgb = layout.decode(word);
+/// assert!((rgb - Vec3::new(0.8, 0.4, 0.1)).abs().max_element() < 0.02);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IrradianceLayout {
+    fields: [LogField; 3],
+    lanes: LogLanes,
+    places: [BitField; 3],
+    count: BitField,
+}
+
+/// A packed irradiance texel (see [`IrradianceLayout`] for its bit map); plain `u32` on the GPU.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Pod, Zeroable)]
+#[repr(transparent)]
+pub struct IrradianceWord(pub u32);
+
+const _: () = assert!(core::mem::size_of::<IrradianceWord>() == 4);
+
+impl IrradianceLayout {
+    /// ADGI's layout: R9 G9 B8, 6-bit count, log codec (β, γ) = (5, 15) (sec. 4.5, Table 3).
+    pub const ADGI: IrradianceLayout = match IrradianceLayout::new(9, 9, 8, 6, LogCodec::IRRADIANCE)
+    {
+        Ok(layout) => layout,
+        Err(_) => panic!("invalid ADGI irradiance layout"),
+    };
+
+    /// Equal 10/10/10 channels with a 2-bit count (N_max ≤ 3), log codec (5, 15): the split
+    /// RTXGI moved to because unequal channel precision shifted colours.
+    pub const EQUAL_10: IrradianceLayout =
+        match IrradianceLayout::new(10, 10, 10, 2, LogCodec::IRRADIANCE) {
+            Ok(layout) => layout,
+            Err(_) => panic!("invalid 10/10/10 irradiance layout"),
+        };
+
+    /// A layout with the given widths and codec.
+    ///
+    /// # Errors
+    /// [`CodecError::FieldWidthOutOfRange`] if a colour width is not in 1 ..= 16,
+    /// [`CodecError::CountWidthOutOfRange`] if the count width is not in 1 ..= 16,
+    /// [`CodecError::WidthsDoNotSumTo32`] otherwise if the widths do not add up to 32.
+    pub const fn new(
+        r_bits: u32,
+        g_bits: u32,
+        b_bits: u32,
+        count_bits: u32,
+        codec: LogCodec,
+    ) -> Result<Self, CodecError> {
+        let widths = [r_bits, g_bits, b_bits];
+        let mut i = 0;
+        while i < 3 {
+            if widths[i] < 1 || widths[i] > MAX_FIELD_BITS {
+                return Err(CodecError::FieldWidthOutOfRange);
+            }
+            i += 1;
+        }
+        if count_bits < 1 || count_bits > MAX_FIELD_BITS {
+            return Err(CodecError::CountWidthOutOfRange);
+        }
+        if r_bits + g_bits + b_bits + count_bits != 32 {
+            return Err(CodecError::WidthsDoNotSumTo32);
+        }
+        let fields = [
+            codec.field(r_bits),
+            codec.field(g_bits),
+            codec.field(b_bits),
+        ];
+        Ok(Self {
+            fields,
+            lanes: LogLanes::new([fields[0], fields[1], fields[2], fields[2]]),
+            places: [
+                BitField::new(0, r_bits),
+                BitField::new(r_bits, g_bits),
+                BitField::new(r_bits + g_bits, b_bits),
+            ],
+            count: BitField::new(32 - count_bits, count_bits),
+        })
+    }
+
+    /// The log codec of the colour channels.
+    #[inline]
+    #[must_use]
+    pub const fn codec(&self) -> LogCodec {
+        self.fields[0].codec()
+    }
+
+    /// The quantised codec of channel `i` (0 = R, 1 = G, 2 = B; clamped to 2).
+    #[inline]
+    #[must_use]
+    pub const fn channel(&self, i: usize) -> LogField {
+        self.fields[if i > 2 { 2 } else { i }]
+    }
+
+    /// Widths `[R, G, B, count]` in bits.
+    #[must_use]
+    pub const fn widths(&self) -> [u32; 4] {
+        [
+            self.places[0].bits,
+            self.places[1].bits,
+            self.places[2].bits,
+            self.count.bits,
+        ]
+    }
+
+    /// Bit offsets `[R, G, B, count]` of the fields.
+    #[must_use]
+    pub const fn shifts(&self) -> [u32; 4] {
+        [
+            self.places[0].shift,
+            self.places[1].shift,
+            self.places[2].shift,
+            self.count.shift,
+        ]
+    }
+
+    /// The largest storable count, 2^c − 1.
+    #[inline]
+    #[must_use]
+    pub const fn max_count(&self) -> u32 {
+        self.count.max()
+    }
+
+    /// Packs `rgb` (each channel through eq. 21, rounded with `rounding`) and `count`
+    /// (saturated at [`max_count`](Self::max_count)).
+    ///
+    /// Bad input: negative and NaN channels encode to 0, channels above (e⁵ − 1)/15 (and +∞)
+    /// saturate. With [`Rounding::Stochastic`] each channel uses the caller's uniform rotated by
+    /// a golden-ratio step, so one uniform serves the word.
+    #[inline(always)]
+    #[must_use]
+    pub fn encode(&self, rgb: Vec3, count: u32, rounding: Rounding) -> IrradianceWord {
+        let codes = self.lanes.encode([rgb.x, rgb.y, rgb.z, 0.0], rounding);
+        IrradianceWord(
+            self.count.put(count.min(self.max_count()))
+                | self.places[0].put(codes[0])
+                | self.places[1].put(codes[1])
+                | self.places[2].put(codes[2]),
+        )
+    }
+
+    /// Unpacks the colour; every word decodes to finite, non-negative channels.
+    #[inline(always)]
+    #[must_use]
+    pub fn decode(&self, word: IrradianceWord) -> Vec3 {
+        let [r, g, b, _] = self.lanes.decode([
+            self.places[0].get(word.0),
+            self.places[1].get(word.0),
+            self.places[2].get(word.0),
+            0,
+        ]);
+        Vec3::new(r, g, b)
+    }
+
+    /// The channel codes `[R, G, B]` of a word.
+    #[inline]
+    #[must_use]
+    pub fn codes(&self, word: IrradianceWord) -> [u32; 3] {
+        [0, 1, 2].map(|i| self.places[i].get(word.0))
+    }
+
+    /// The sample count N stored in a word.
+    #[inline]
+    #[must_use]
+    pub const fn count(&self, word: IrradianceWord) -> u32 {
+        self.count.get(word.0)
+    }
+
+    /// `word` with its count replaced by `count` (saturated), colour unchanged. ADGI resets N
+    /// to 16 for probes between the inner and outer camera volumes to make them adapt faster
+    /// (sec. 4.8).
+    #[inline]
+    #[must_use]
+    pub const fn with_count(&self, word: IrradianceWord, count: u32) -> IrradianceWord {
+        let c = if count > self.max_count() {
+            self.max_count()
+        } else {
+            count
+        };
+        IrradianceWord(self.count.set(word.0, c))
+    }
+}
+
+impl From<u32> for IrradianceWord {
+    fn from(bits: u32) -> Self {
+        Self(bits)
+    }
+}
+
+impl From<IrradianceWord> for u32 {
+    fn from(word: IrradianceWord) -> Self {
+        word.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn construction() {
+        assert_eq!(IrradianceLayout::ADGI.widths(), [9, 9, 8, 6]);
+        assert_eq!(IrradianceLayout::ADGI.shifts(), [0, 9, 18, 26]);
+        assert_eq!(IrradianceLayout::ADGI.max_count(), 63);
+        assert_eq!(IrradianceLayout::EQUAL_10.max_count(), 3);
+        let c = LogCodec::IRRADIANCE;
+        assert_eq!(
+            IrradianceLayout::new(9, 9, 9, 6, c),
+            Err(CodecError::WidthsDoNotSumTo32)
+        );
+        assert_eq!(
+            IrradianceLayout::new(0, 13, 13, 6, c),
+            Err(CodecError::FieldWidthOutOfRange)
+        );
+        assert_eq!(
+            IrradianceLayout::new(17, 7, 7, 1, c),
+            Err(CodecError::FieldWidthOutOfRange)
+        );
+        assert_eq!(
+            IrradianceLayout::new(11, 11, 10, 0, c),
+            Err(CodecError::CountWidthOutOfRange)
+        );
+        assert!(IrradianceLayout::new(11, 11, 9, 1, c).is_ok());
+    }
+
+    #[test]
+    fn fields_do_not_overlap() {
+        let l = IrradianceLayout::ADGI;
+        let w = l.encode(Vec3::splat(1e9), 63, Rounding::Down);
+        assert_eq!(w.0, u32::MAX);
+        let w = l.encode(Vec3::new(1e9, 0.0, 0.0), 0, Rounding::Down);
+        assert_eq!(w.0, 0x1ff);
+        let w = l.encode(Vec3::ZERO, 1000, Rounding::Down);
+        assert_eq!(w.0, 63 << 26);
+        assert_eq!(l.count(l.with_count(w, 16)), 16);
+        assert_eq!(
+            l.codes(l.with_count(IrradianceWord(0x3ff_ffff), 7)),
+            [511, 511, 255]
+        );
+    }
+
+    #[test]
+    fn bad_input() {
+        let l = IrradianceLayout::ADGI;
+        let w = l.encode(
+            Vec3::new(f32::NAN, -1.0, f32::INFINITY),
+            3,
+            Rounding::Nearest,
+        );
+        assert_eq!(l.codes(w), [0, 0, 255]);
+        assert_eq!(l.count(w), 3);
+        let rgb = l.decode(w);
+        assert!(rgb.is_finite() && rgb.cmpge(Vec3::ZERO).all());
+    }
+
+    #[test]
+    fn every_field_value_decodes_finite_non_negative() {
+        for l in [IrradianceLayout::ADGI, IrradianceLayout::EQUAL_10] {
+            for i in 0..3 {
+                let f = l.channel(i);
+                for q in 0..=f.max_code() {
+                    let word = IrradianceWord(l.places[i].put(q) | l.count.put(u32::MAX));
+                    let rgb = l.decode(word);
+                    assert!(rgb.is_finite() && rgb.cmpge(Vec3::ZERO).all(), "{i} {q}");
+                    assert_eq!(l.codes(word)[i], q);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn value_stability() {
+        let l = IrradianceLayout::ADGI;
+        let words = [
+            l.encode(Vec3::new(0.8, 0.4, 0.1), 5, Rounding::Down).0,
+            l.encode(Vec3::new(0.8, 0.4, 0.1), 5, Rounding::Nearest).0,
+            l.encode(Vec3::new(0.8, 0.4, 0.1), 63, Rounding::Stochastic(0.5))
+                .0,
+            IrradianceLayout::EQUAL_10
+                .encode(Vec3::new(2.0, 0.05, 7.0), 2, Rounding::Down)
+                .0,
+        ];
+        assert_eq!(
+            words,
+            [0x14b9_8d06, 0x14bd_8f06, 0xfcb9_8f06, 0xbba1_cabe],
+            "{words:#x?}"
+        );
+    }
+}
