@@ -54,7 +54,9 @@ fn plane_angle(w: Vec3) -> f64 {
 
 fn bin(angle: f64) -> Option<usize> {
     let t = (angle + PI / 2.0) / PI;
-    (0.0..1.0).contains(&t).then_some((t * BINS as f64) as usize)
+    (0.0..1.0)
+        .contains(&t)
+        .then_some((t * BINS as f64) as usize)
 }
 
 /// The integrand's marginal over the plane angle, as a density over (−π/2, π/2): each light's

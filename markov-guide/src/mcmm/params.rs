@@ -44,8 +44,7 @@ impl McmmParams {
         }
         let finite_width = self.window_half_width >= 0.0 && self.window_half_width.is_finite();
         let alpha_in_range = (0.0..=1.0).contains(&self.fit.alpha_min);
-        if !(finite_width && alpha_in_range && self.prior.is_valid())
-        {
+        if !(finite_width && alpha_in_range && self.prior.is_valid()) {
             return Err(ParamsError::NotFiniteNonNegative);
         }
         if self.neighbour_candidates == 0 {
