@@ -194,8 +194,9 @@ pub fn geometric_jitter(xi: f32) -> u32 {
 #[must_use]
 pub fn geometric_jitter_probability(k: u32) -> f64 {
     match k {
-        0..=23 => 0.5_f64.powi(k as i32 + 1),
-        24 => 0.5_f64.powi(24),
+        // 2^−n exactly, without `powi` (not in `core`, so not in `no_std` builds).
+        0..=23 => 1.0 / (1u64 << (k + 1)) as f64,
+        24 => 1.0 / (1u64 << 24) as f64,
         _ => 0.0,
     }
 }
