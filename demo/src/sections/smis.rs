@@ -1,11 +1,11 @@
 //! Section "Stochastic and marginal MIS": MCMM Fig. 16 and MMIS Fig. 1 in miniature.
 //!
 //! Two experiments on [`mcg_smis`]:
-//! 1. [`convergence`]: a population of adaptive Markov chains (lobes that follow their own
+//! 1. `convergence`: a population of adaptive Markov chains (lobes that follow their own
 //!    samples, one chain per pixel, tiles of 8 pixels) estimated with TSMIS (cyclic shift,
 //!    MCMM eq. 8) and SSMIS (xor permutation, MCMM eq. 9), with and without the shuffle. The
 //!    error of each pixel's running mean is plotted against samples per pixel (MCMM Fig. 16).
-//! 2. [`mmis_variance`]: the canonical MMIS experiment (West et al. 2022 Fig. 1, bottom): four
+//! 2. `mmis_variance`: the canonical MMIS experiment (West et al. 2022 Fig. 1, bottom): four
 //!    marginal techniques with 1-D technique spaces, one defensive, budget N = 64; the variance
 //!    of MMISₙ for n = 1…16 against classical MIS with exact marginals.
 
