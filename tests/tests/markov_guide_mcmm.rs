@@ -9,7 +9,11 @@
 
 use mcg_markov_guide::toy_renderer::{Decorrelation, McmmToyConfig, McmmToyRenderer, Sampling};
 use mcg_markov_guide::toy_scene::ToyScene;
+#[path = "support/toy_errors.rs"]
+mod toy_errors;
+
 use mcg_tests::{RunningStats, assert_z_test, seeded_rng, z_test};
+use toy_errors::relative_error_moments;
 
 /// Frames discarded at the start of each run while the chains discover the lights.
 const WARM_UP: usize = 20;
@@ -26,20 +30,9 @@ fn run(scene: &ToyScene, sampling: Sampling, seed: u64, frames: usize) -> (f64, 
                 .expect("closed form")
         })
         .collect();
-    let (mut sum, mut sum_sq, mut n) = (0.0, 0.0, 0.0);
-    for frame in 0..WARM_UP + frames {
-        let estimates = renderer.render_frame(scene, &mut rng);
-        if frame >= WARM_UP {
-            for (&e, &x) in estimates.iter().zip(&exact) {
-                assert!(e.is_finite() && e >= 0.0, "estimate {e}");
-                let d = e as f64 / x - 1.0;
-                sum += d;
-                sum_sq += d * d;
-                n += 1.0;
-            }
-        }
-    }
-    (sum / n, sum_sq / n)
+    relative_error_moments(&exact, WARM_UP, frames, || {
+        renderer.render_frame(scene, &mut rng)
+    })
 }
 
 /// Per-run mean relative errors of `runs` independent runs.

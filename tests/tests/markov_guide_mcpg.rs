@@ -9,7 +9,11 @@
 
 use mcg_markov_guide::toy_renderer::{McpgToyConfig, McpgToyRenderer};
 use mcg_markov_guide::toy_scene::ToyScene;
+#[path = "support/toy_errors.rs"]
+mod toy_errors;
+
 use mcg_tests::{RunningStats, assert_z_test, seeded_rng};
+use toy_errors::relative_error_moments;
 
 const WARM_UP: usize = 20;
 
@@ -24,20 +28,9 @@ fn run(scene: &ToyScene, config: McpgToyConfig, seed: u64, frames: usize) -> (f6
                 .expect("closed form")
         })
         .collect();
-    let (mut sum, mut sum_sq, mut n) = (0.0, 0.0, 0.0);
-    for frame in 0..WARM_UP + frames {
-        let result = renderer.render_frame(scene, &mut rng);
-        if frame >= WARM_UP {
-            for (&e, &x) in result.estimates.iter().zip(&exact) {
-                assert!(e.is_finite() && e >= 0.0, "estimate {e}");
-                let d = e as f64 / x - 1.0;
-                sum += d;
-                sum_sq += d * d;
-                n += 1.0;
-            }
-        }
-    }
-    (sum / n, sum_sq / n)
+    relative_error_moments(&exact, WARM_UP, frames, || {
+        renderer.render_frame(scene, &mut rng).estimates
+    })
 }
 
 /// H₀: MCPG's estimator f(ω)/p(ω | S) is unbiased (every accessed state is loaded before ω is

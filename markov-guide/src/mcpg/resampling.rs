@@ -4,6 +4,7 @@ use mcg_vmf::glam::Vec3;
 use mcg_vmf::{MapPrior, PriorDecay};
 
 use super::{GridState, McpgParams};
+use crate::Reservoir;
 
 /// Which grid a candidate was loaded from (MCPG sec. 4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -80,8 +81,8 @@ pub fn prepare_candidate(
 pub struct CandidateSet<const N: usize> {
     states: [GridState; N],
     len: usize,
-    selected: Option<usize>,
-    weight_sum: f32,
+    /// Chao's reservoir over the offered indices, weighted by w̄.
+    reservoir: Reservoir<usize>,
 }
 
 impl<const N: usize> Default for CandidateSet<N> {
@@ -98,25 +99,21 @@ impl<const N: usize> CandidateSet<N> {
         Self {
             states: [GridState::EMPTY; N],
             len: 0,
-            selected: None,
-            weight_sum: 0.0,
+            reservoir: Reservoir::new(),
         }
     }
 
     /// Offers a prepared candidate ([`prepare_candidate`]) with one uniform (Alg. 1 lines 8-11):
-    /// sum_mc += w̄; the candidate is chosen when `u · sum_mc < w̄`. Returns `false` (and
-    /// changes nothing) when the set is full.
+    /// sum_mc += w̄; the candidate is chosen when `u · sum_mc < w̄` ([`Reservoir::offer`]).
+    /// Returns `false` (and changes nothing) when the set is full.
     #[inline]
     pub fn offer(&mut self, candidate: GridState, u: f32) -> bool {
         if self.len == N {
             return false;
         }
-        let w = candidate.resampling_weight();
         self.states[self.len] = candidate;
-        self.weight_sum += w;
-        if w > 0.0 && u * self.weight_sum < w {
-            self.selected = Some(self.len);
-        }
+        self.reservoir
+            .offer(self.len, candidate.resampling_weight(), u);
         self.len += 1;
         true
     }
@@ -133,21 +130,21 @@ impl<const N: usize> CandidateSet<N> {
     #[inline]
     #[must_use]
     pub fn selected(&self) -> Option<&GridState> {
-        self.selected.map(|i| &self.states[i])
+        self.selected_index().map(|i| &self.states[i])
     }
 
     /// Index of the chosen state in [`CandidateSet::states`].
     #[inline]
     #[must_use]
-    pub const fn selected_index(&self) -> Option<usize> {
-        self.selected
+    pub fn selected_index(&self) -> Option<usize> {
+        self.reservoir.selected().copied()
     }
 
     /// sum_mc = Σ w̄ over the accessed states.
     #[inline]
     #[must_use]
     pub const fn weight_sum(&self) -> f32 {
-        self.weight_sum
+        self.reservoir.weight_sum()
     }
 
     /// The mean candidate score sum_mc / N_mc of the acceptance test (eq. 8), with N_mc the
@@ -158,7 +155,7 @@ impl<const N: usize> CandidateSet<N> {
         if self.len == 0 {
             0.0
         } else {
-            self.weight_sum / self.len as f32
+            self.weight_sum() / self.len as f32
         }
     }
 }
