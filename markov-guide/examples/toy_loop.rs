@@ -21,21 +21,9 @@ fn main() {
         McmmToyRenderer::new(McmmToyConfig::small(Sampling::Guided(Decorrelation::Tsmis)));
     let mut mcpg = McpgToyRenderer::new(McpgToyConfig::small(true));
     let mut cosine = McmmToyRenderer::new(McmmToyConfig::small(Sampling::Cosine));
-    let exact: Vec<f64> = (0..mcmm.pixel_count())
-        .map(|i| {
-            scene
-                .irradiance(mcmm.shading_point(i))
-                .expect("closed form exists")
-        })
-        .collect();
+    let exact = mcmm.exact_irradiance(&scene).expect("closed form exists");
     // Both renderers lay out the same 8 × 4 shading points (MCMM tile-major, MCPG row-major).
-    let exact_rows: Vec<f64> = (0..mcpg.pixel_count())
-        .map(|i| {
-            scene
-                .irradiance(mcpg.shading_point(i))
-                .expect("closed form exists")
-        })
-        .collect();
+    let exact_rows = mcpg.exact_irradiance(&scene).expect("closed form exists");
     println!("relative RMS error of each frame (4 samples per pixel)");
     println!("frames     MCMM (TSMIS)    MCPG    cosine sampling");
     let (mut sums, mut count) = ([0.0f64; 3], 0);

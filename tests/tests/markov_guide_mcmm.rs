@@ -23,13 +23,7 @@ const WARM_UP: usize = 20;
 fn run(scene: &ToyScene, sampling: Sampling, seed: u64, frames: usize) -> (f64, f64) {
     let mut rng = seeded_rng(seed);
     let mut renderer = McmmToyRenderer::new(McmmToyConfig::small(sampling));
-    let exact: Vec<f64> = (0..renderer.pixel_count())
-        .map(|i| {
-            scene
-                .irradiance(renderer.shading_point(i))
-                .expect("closed form")
-        })
-        .collect();
+    let exact = renderer.exact_irradiance(scene).expect("closed form");
     relative_error_moments(&exact, WARM_UP, frames, || {
         renderer.render_frame(scene, &mut rng)
     })

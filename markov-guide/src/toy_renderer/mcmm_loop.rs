@@ -182,6 +182,16 @@ impl McmmToyRenderer {
         self.buffers.previous_states()
     }
 
+    /// The closed-form irradiance of `scene` at every pixel's shading point, in the order of
+    /// the estimates [`render_frame`](Self::render_frame) returns; `None` when a pixel has no
+    /// closed form ([`ToyScene::irradiance`]).
+    #[must_use]
+    pub fn exact_irradiance(&self, scene: &ToyScene) -> Option<Vec<f64>> {
+        (0..self.pixel_count())
+            .map(|i| scene.irradiance(self.shading_point(i)))
+            .collect()
+    }
+
     /// Renders one frame of `scene` and returns, per pixel (tile-major index), the frame's
     /// estimate of the irradiance E(x) = ∫ L(x, ω) max(0, n·ω) dω from `steps` samples.
     ///

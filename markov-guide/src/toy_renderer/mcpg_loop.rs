@@ -166,6 +166,16 @@ impl McpgToyRenderer {
         }
     }
 
+    /// The closed-form irradiance of `scene` at every pixel's shading point, in the order of
+    /// the estimates [`render_frame`](Self::render_frame) returns; `None` when a pixel has no
+    /// closed form ([`ToyScene::irradiance`]).
+    #[must_use]
+    pub fn exact_irradiance(&self, scene: &ToyScene) -> Option<Vec<f64>> {
+        (0..self.pixel_count())
+            .map(|i| scene.irradiance(self.shading_point(i)))
+            .collect()
+    }
+
     /// Renders frame T (its index, starting at 0; one time unit per frame) of `scene`.
     ///
     /// Per sample at shading point x: load N_mc candidates from the grids (Alg. 1, with
