@@ -12,7 +12,7 @@
 //! | [`RunningStats`], [`z_test`], [`assert_z_test`] | z-test of a sample mean (Welford mean and variance) | estimators against analytic integrals |
 //! | [`GaussLegendre`], [`integrate_sphere`], [`graded_theta_breaks`] | f64 reference quadrature on an interval and on S² | normalisation and product integrals |
 //! | [`vmf_pdf`], [`vmf_one_minus_cos_cdf`], [`one_minus_cos`], [`vmf_mean_cosine`], … | f64 reference formulas of the vMF lobe | every suite that tests vMF code |
-//! | [`LineTechnique`], [`SphereTechnique`], [`line_integrands`], [`sphere_integrands`], [`AdaptiveTile`], [`fig1_estimate`], … | techniques, integrands with closed-form integrals, MCMM Fig. 16 and MMIS Fig. 1 in miniature | the `smis_*` suites |
+//! | [`LineTechnique`], [`SphereTechnique`], [`line_integrands`], [`sphere_integrands`], [`AdaptiveTile`], [`convergence_run`], [`fig1_estimate`], [`variance_with_error`], … | techniques, integrands with closed-form integrals, MCMM Fig. 16 and MMIS Fig. 1 in miniature | the `smis_*` suites and the demo's smis section |
 //! | [`plane_keys`], [`line_keys`], [`sphere_shell_keys`], [`floor_view_keys`], [`occupancy`] | structured grid-key streams and bucket counts | hash-grid occupancy and checksum suites |
 //! | [`seeded_rng`], [`uniform_vec2`], [`uniform_sphere_direction`] | deterministic random numbers | every suite, one fixed seed per test |
 //!
@@ -46,11 +46,12 @@ pub use ks::{KsResult, assert_ks, kolmogorov_critical_value, kolmogorov_survival
 pub use quadrature::{GaussLegendre, graded_theta_breaks, integrate_sphere, orthonormal_basis};
 pub use rng::{Pcg64Mcg, seeded_rng, uniform_sphere_direction, uniform_vec2};
 pub use smis_reference::{
-    AdaptiveTile, ChainState, Decorrelation, FIG1_BUDGET, FIG1_INTEGRAL, FIG1_TECHNIQUES,
-    LineIntegrand, LineTechnique, MarginalBoxcar, SphereIntegrand, SphereTechnique, TILE,
-    TSMIS_STEPS, draw_line_boxcar, draw_line_lobe, draw_sphere_cap, draw_sphere_lobe,
-    fig1_estimate, fig1_integrand, lane_integral, lane_integrand, line_integrands,
-    sphere_integrands, uniform2,
+    AdaptiveTile, CHAIN_DEFENSIVE, CHAIN_SCALE, ChainState, Convergence, Decorrelation,
+    FIG1_BUDGET, FIG1_INTEGRAL, FIG1_NS, FIG1_TECHNIQUES, LineIntegrand, LineTechnique,
+    MarginalBoxcar, SphereIntegrand, SphereTechnique, TILE, TSMIS_STEPS, convergence_run,
+    draw_line_boxcar, draw_line_lobe, draw_sphere_cap, draw_sphere_lobe, fig1_estimate,
+    fig1_estimates, fig1_integrand, lane_integral, lane_integrand, line_integrands,
+    sphere_integrands, uniform2, variance_with_error,
 };
 pub use sphere_bins::{SphereBins, assert_sphere_chi_square};
 pub use vmf_reference::{

@@ -8,7 +8,13 @@
 //!   smooth, peaky, multi-modal and discontinuous, with the locations of their features (where a
 //!   "guided" technique distribution puts some of its lobes).
 //! - [`AdaptiveTile`]: MCMM Fig. 16 in miniature, a tile of Markov chains whose lobes follow
-//!   their own samples, estimated with TSMIS or SSMIS with or without the decorrelating shuffle.
+//!   their own samples, estimated with TSMIS or SSMIS with or without the decorrelating shuffle;
+//!   [`convergence_run`] follows the error of a population of tiles over growing sample counts.
+//! - [`fig1_estimate`]: MMIS Fig. 1 (bottom), MMISₙ against classical MIS at a fixed budget,
+//!   with [`variance_with_error`] for the variance of repeated estimates.
+//!
+//! The demo's section "Stochastic and marginal MIS" (`mcg-demo`) shows these same experiments;
+//! the `smis_decorrelation` and `smis_mmis_fig1` suites pin their behaviour.
 
 use std::f64::consts::PI;
 
@@ -511,6 +517,25 @@ impl Decorrelation {
             Decorrelation::SsmisUnshuffled => "SSMIS, no permutation",
         }
     }
+
+    /// Whether the scheme permutes the states between lanes (the two unbiased schemes).
+    #[must_use]
+    pub fn is_shuffled(self) -> bool {
+        matches!(
+            self,
+            Decorrelation::TsmisShuffled | Decorrelation::SsmisShuffled
+        )
+    }
+
+    /// How many (lobe, sample) pairs one estimate divides by: [`TSMIS_STEPS`] for TSMIS (the
+    /// lane's history), [`TILE`] for SSMIS (all lobes of the tile); the n of "n-TSMIS".
+    #[must_use]
+    pub fn estimator_size(self) -> usize {
+        match self {
+            Decorrelation::TsmisShuffled | Decorrelation::TsmisUnshuffled => TSMIS_STEPS,
+            Decorrelation::SsmisShuffled | Decorrelation::SsmisUnshuffled => TILE,
+        }
+    }
 }
 
 /// Lanes per tile of [`AdaptiveTile`].
@@ -652,6 +677,99 @@ impl AdaptiveTile {
     }
 }
 
+/// How the per-pixel running means of a population of [`AdaptiveTile`]s converge (MCMM
+/// Fig. 16 in miniature): the result of [`convergence_run`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Convergence {
+    /// The scheme that made the estimates.
+    pub scheme: Decorrelation,
+    /// `(samples per pixel, relative RMSE)` at every checkpoint: the root mean square over all
+    /// pixels of (running mean − exact)/exact, after [`TSMIS_STEPS`]·2ᵏ samples per pixel.
+    pub points: Vec<(f64, f64)>,
+    /// Mean over all pixels of (running mean − exact)/exact at the end of the run.
+    pub bias: f64,
+    /// Standard error of [`Convergence::bias`]: the spread of the tiles' lane-averaged relative
+    /// errors / √tiles (the tiles are independent; the lanes of one tile are not).
+    pub bias_error: f64,
+}
+
+impl Convergence {
+    /// Least-squares slope of ln(RMSE) against ln(samples per pixel) over the last `k`
+    /// checkpoints (NaN with fewer than two): −1/2 for an unbiased Monte Carlo estimate, 0 for
+    /// an error that has stalled at a bias.
+    #[must_use]
+    pub fn tail_slope(&self, k: usize) -> f64 {
+        let tail = &self.points[self.points.len().saturating_sub(k)..];
+        let n = tail.len() as f64;
+        if tail.len() < 2 {
+            return f64::NAN;
+        }
+        let (xs, ys): (Vec<f64>, Vec<f64>) = tail.iter().map(|&(x, y)| (x.ln(), y.ln())).unzip();
+        let mx = xs.iter().sum::<f64>() / n;
+        let my = ys.iter().sum::<f64>() / n;
+        let sxy: f64 = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum();
+        let sxx: f64 = xs.iter().map(|x| (x - mx).powi(2)).sum();
+        sxy / sxx
+    }
+
+    /// The relative RMSE at the last checkpoint (NaN if there is none).
+    #[must_use]
+    pub fn final_rmse(&self) -> f64 {
+        self.points.last().map_or(f64::NAN, |p| p.1)
+    }
+}
+
+/// Runs `tiles` independent [`AdaptiveTile`]s (started with [`AdaptiveTile::new`], one after
+/// the other) frame by frame with `scheme` until every pixel has at least `max_spp` samples,
+/// and records the error of each pixel's running mean of its frame estimates at
+/// [`TSMIS_STEPS`], 2·[`TSMIS_STEPS`], 4·[`TSMIS_STEPS`], … samples per pixel
+/// ([`Convergence`]). Every frame runs all tiles in order, so the random stream, and hence the
+/// result, is fixed by `rng`'s state. Needs `tiles ≥ 2` for the bias's standard error.
+pub fn convergence_run<R: Rng + ?Sized>(
+    scheme: Decorrelation,
+    tiles: usize,
+    max_spp: usize,
+    rng: &mut R,
+) -> Convergence {
+    let mut population: Vec<AdaptiveTile> = (0..tiles).map(|_| AdaptiveTile::new(rng)).collect();
+    let exact: [f64; TILE] = std::array::from_fn(lane_integral);
+    let mut sums = vec![[0.0_f64; TILE]; tiles];
+    let (mut spp, mut frames) = (0, 0);
+    let mut next_checkpoint = TSMIS_STEPS;
+    let mut points = Vec::new();
+    let relative = |sums: &[f64; TILE], frames: usize, lane: usize| {
+        sums[lane] / frames as f64 / exact[lane] - 1.0
+    };
+    while spp < max_spp {
+        let mut taken = 0;
+        for (tile, sum) in population.iter_mut().zip(&mut sums) {
+            taken = tile.frame(scheme, rng, sum);
+        }
+        frames += 1;
+        spp += taken;
+        if spp >= next_checkpoint {
+            let squares: f64 = sums
+                .iter()
+                .flat_map(|s| (0..TILE).map(move |lane| relative(s, frames, lane).powi(2)))
+                .sum();
+            points.push((spp as f64, (squares / (tiles * TILE) as f64).sqrt()));
+            next_checkpoint *= 2;
+        }
+    }
+    let per_tile: Vec<f64> = sums
+        .iter()
+        .map(|s| (0..TILE).map(|lane| relative(s, frames, lane)).sum::<f64>() / TILE as f64)
+        .collect();
+    let bias = per_tile.iter().sum::<f64>() / tiles as f64;
+    let var = per_tile.iter().map(|b| (b - bias).powi(2)).sum::<f64>() / (tiles - 1) as f64;
+    Convergence {
+        scheme,
+        points,
+        bias,
+        bias_error: (var / tiles as f64).sqrt(),
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // MMIS Fig. 1 (bottom): four marginal techniques with 1-D technique spaces
 // ---------------------------------------------------------------------------------------------
@@ -750,6 +868,9 @@ pub const FIG1_INTEGRAL: f64 = 0.05 + 0.2 + 0.2 + 0.3;
 /// Total sample budget of one estimate (the paper's N = 64).
 pub const FIG1_BUDGET: usize = 64;
 
+/// The n of the MMISₙ estimators compared in the experiment (MMIS Fig. 1 shows n = 1…16).
+pub const FIG1_NS: [usize; 5] = [1, 2, 4, 8, 16];
+
 /// One estimate of the experiment with total budget [`FIG1_BUDGET`]: `n = None` is the
 /// classical MIS reference (N/T samples per technique, exact marginals, balance heuristic);
 /// `Some(n)` is MMISₙ: n technique-sample pairs per technique, averaged over N/(nT)
@@ -797,6 +918,29 @@ pub fn fig1_estimate<R: Rng + ?Sized>(n: Option<usize>, rng: &mut R) -> f64 {
     }
 }
 
+/// `realizations` independent estimates [`fig1_estimate`]`(n, rng)`, in order.
+pub fn fig1_estimates<R: Rng + ?Sized>(
+    n: Option<usize>,
+    realizations: usize,
+    rng: &mut R,
+) -> Vec<f64> {
+    (0..realizations).map(|_| fig1_estimate(n, rng)).collect()
+}
+
+/// The unbiased sample variance s² of `values` (R of them, R ≥ 4) and its standard error
+/// √((m₄ − s⁴(R − 3)/(R − 1))/R), m₄ the fourth central moment: the error bar of a variance
+/// measured from R independent estimates, as in MMIS Fig. 1.
+#[must_use]
+pub fn variance_with_error(values: &[f64]) -> (f64, f64) {
+    let r = values.len() as f64;
+    let mean = values.iter().sum::<f64>() / r;
+    let m2 = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / r;
+    let m4 = values.iter().map(|v| (v - mean).powi(4)).sum::<f64>() / r;
+    let s2 = m2 * r / (r - 1.0);
+    let se = ((m4 - s2 * s2 * (r - 3.0) / (r - 1.0)) / r).max(0.0).sqrt();
+    (s2, se)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -839,6 +983,42 @@ mod tests {
                 .sum();
             assert!((below - cdf).abs() < 5.0 * (cdf * (1.0 - cdf) / n as f64).sqrt() + 1e-3);
         }
+    }
+
+    #[test]
+    fn convergence_run_checkpoints_and_slope() {
+        let mut rng = seeded_rng(0x5315_0002);
+        let run = convergence_run(Decorrelation::SsmisShuffled, 4, 64, &mut rng);
+        let spp: Vec<f64> = run.points.iter().map(|p| p.0).collect();
+        assert_eq!(spp, [4.0, 8.0, 16.0, 32.0, 64.0]);
+        assert!(run.points.iter().all(|p| p.1.is_finite() && p.1 > 0.0));
+        assert!(run.bias.is_finite() && run.bias_error > 0.0);
+        assert_eq!(run.final_rmse(), run.points[4].1);
+        // TSMIS takes TSMIS_STEPS samples per frame: the same checkpoints, fewer frames.
+        let tsmis = convergence_run(Decorrelation::TsmisShuffled, 4, 64, &mut rng);
+        assert_eq!(tsmis.points.len(), 5);
+        // The slope of an exact power law y = 3 x^-0.5 over its last 3 points.
+        let law = Convergence {
+            points: (0..6)
+                .map(|k| (f64::from(1 << k), 3.0 / f64::from(1 << k).sqrt()))
+                .collect(),
+            ..run
+        };
+        assert!((law.tail_slope(3) + 0.5).abs() < 1e-12);
+        assert!(law.tail_slope(1).is_nan());
+        assert_eq!(Decorrelation::TsmisUnshuffled.estimator_size(), TSMIS_STEPS);
+        assert_eq!(Decorrelation::SsmisShuffled.estimator_size(), TILE);
+        let shuffled: Vec<bool> = Decorrelation::ALL.iter().map(|d| d.is_shuffled()).collect();
+        assert_eq!(shuffled, [true, true, false, false]);
+    }
+
+    #[test]
+    fn variance_with_error_of_known_values() {
+        // 1, 2, 3, 4: mean 2.5, m2 = 1.25, s² = 5/3, m4 = 2.5625.
+        let (s2, se) = variance_with_error(&[1.0, 2.0, 3.0, 4.0]);
+        assert!((s2 - 5.0 / 3.0).abs() < 1e-12);
+        let expected = ((2.5625 - s2 * s2 * (1.0 / 3.0)) / 4.0_f64).sqrt();
+        assert!((se - expected).abs() < 1e-12);
     }
 
     #[test]

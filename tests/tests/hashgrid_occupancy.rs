@@ -98,24 +98,6 @@ fn mix_hashes_are_uniform_on_structured_streams() {
 #[test]
 fn xor_primes_hash_fails_where_documented() {
     let streams = streams();
-    let floor = &streams.iter().find(|(n, _)| *n == "floor view").unwrap().1;
-    for bins in CAPACITIES {
-        let r = test_stream(floor, bins, BucketHash::XorPrimes);
-        println!(
-            "xor floor view B = {bins}: X²/df = {:.3}, p = {:.3e}",
-            r.statistic / r.degrees_of_freedom as f64,
-            r.p_value
-        );
-        assert!(
-            r.rejects(ALPHA),
-            "xor-primes passed on the floor view with B = {bins}: {r:?}"
-        );
-    }
-    let line = &streams.iter().find(|(n, _)| *n == "line x").unwrap().1;
-    let r = test_stream(line, 4096, BucketHash::XorPrimes);
-    let per_df = r.statistic / r.degrees_of_freedom as f64;
-    println!("xor line x B = 4096: X²/df = {per_df:.4}");
-    assert!(per_df < 0.01, "{r:?}");
     for (name, keys) in &streams {
         for bins in CAPACITIES {
             let r = test_stream(keys, bins, BucketHash::XorPrimes);
@@ -124,6 +106,17 @@ fn xor_primes_hash_fails_where_documented() {
                 r.statistic / r.degrees_of_freedom as f64,
                 r.p_value
             );
+            if *name == "floor view" {
+                assert!(
+                    r.rejects(ALPHA),
+                    "xor-primes passed on the floor view with B = {bins}: {r:?}"
+                );
+            }
         }
     }
+    let line = &streams.iter().find(|(n, _)| *n == "line x").unwrap().1;
+    let r = test_stream(line, 4096, BucketHash::XorPrimes);
+    let per_df = r.statistic / r.degrees_of_freedom as f64;
+    println!("xor line x B = 4096: X²/df = {per_df:.4}");
+    assert!(per_df < 0.01, "{r:?}");
 }

@@ -1,7 +1,7 @@
 //! Random decisions of the hash grid: stochastic trilinear corner frequencies, the
 //! jittered-cell alternative, the level's monotonicity in distance and its geometric jitter.
 
-use glam::{Vec2, Vec3};
+use glam::{IVec3, Vec2, Vec3};
 use mcg_hashgrid::{
     AdaptiveGrid, LevelParams, cell_and_fraction, geometric_jitter, geometric_jitter_probability,
     jittered_vertex, stochastic_trilinear, trilinear_weights,
@@ -72,6 +72,21 @@ fn check_corners(label: &str, f: Vec3, counts: &[u64; 8], n: usize) {
     }
 }
 
+/// Draws 10⁶ corners with `pick(q)` at each of [`POSITIONS`] in the cell at (−3, 7, 1000)
+/// and checks their counts against the trilinear weights ([`check_corners`]).
+fn check_sampler(name: &str, mut pick: impl FnMut(Vec3) -> IVec3) {
+    const N: usize = 1_000_000;
+    for f in POSITIONS {
+        let q = Vec3::new(-3.0, 7.0, 1000.0) + Vec3::from_array(f);
+        let (_, frac) = cell_and_fraction(q);
+        let mut counts = [0_u64; 8];
+        for _ in 0..N {
+            counts[corner_index(q, pick(q))] += 1;
+        }
+        check_corners(&format!("{name} at {q}"), frac, &counts, N);
+    }
+}
+
 /// H₀: `stochastic_trilinear(q, u)` returns corner c with probability W(c) (trilinear weight).
 /// Chi-square over the corners of positive weight, n = 10⁶ uniforms per position, 5 positions
 /// (incl. faces with zero-weight corners, which must never be picked), α = 0.001, seed
@@ -80,18 +95,14 @@ fn check_corners(label: &str, f: Vec3, counts: &[u64; 8], n: usize) {
 /// changes the counts by ~10⁵.
 #[test]
 fn stochastic_trilinear_matches_the_weights() {
-    const N: usize = 1_000_000;
     let mut rng = seeded_rng(0x4847_0001);
+    check_sampler("stochastic trilinear", |q| {
+        stochastic_trilinear(q, rng.random::<f32>())
+    });
     for f in POSITIONS {
-        let q = Vec3::new(-3.0, 7.0, 1000.0) + Vec3::from_array(f);
-        let (_, frac) = cell_and_fraction(q);
-        let mut counts = [0_u64; 8];
-        for _ in 0..N {
-            counts[corner_index(q, stochastic_trilinear(q, rng.random::<f32>()))] += 1;
-        }
+        let (_, frac) = cell_and_fraction(Vec3::new(-3.0, 7.0, 1000.0) + Vec3::from_array(f));
         let w = trilinear_weights(frac);
         assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-6);
-        check_corners(&format!("stochastic trilinear at {q}"), frac, &counts, N);
     }
 }
 
@@ -99,18 +110,10 @@ fn stochastic_trilinear_matches_the_weights() {
 /// seed 0x4847_0002.
 #[test]
 fn jittered_vertex_matches_the_weights() {
-    const N: usize = 1_000_000;
     let mut rng = seeded_rng(0x4847_0002);
-    for f in POSITIONS {
-        let q = Vec3::new(-3.0, 7.0, 1000.0) + Vec3::from_array(f);
-        let (_, frac) = cell_and_fraction(q);
-        let mut counts = [0_u64; 8];
-        for _ in 0..N {
-            let u = Vec3::new(rng.random(), rng.random(), rng.random());
-            counts[corner_index(q, jittered_vertex(q, u))] += 1;
-        }
-        check_corners(&format!("jittered vertex at {q}"), frac, &counts, N);
-    }
+    check_sampler("jittered vertex", |q| {
+        jittered_vertex(q, Vec3::new(rng.random(), rng.random(), rng.random()))
+    });
 }
 
 /// The target level is non-decreasing in distance over 200 000 log-spaced distances from 10⁻³

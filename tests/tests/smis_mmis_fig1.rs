@@ -18,29 +18,17 @@
 //! conditional techniques, which here weights better than the wide marginals. The paper's
 //! plot shows the approach from above only; that part is reproduced.
 //! The standard error of a sample variance s² is √((m₄ − s⁴(R − 3)/(R − 1))/R) (m₄ the fourth
-//! central moment).
+//! central moment; [`mcg_tests::variance_with_error`]).
 
-use mcg_tests::{FIG1_INTEGRAL, RunningStats, assert_z_test, fig1_estimate, seeded_rng};
+use mcg_tests::{
+    FIG1_INTEGRAL, FIG1_NS as NS, RunningStats, assert_z_test, fig1_estimates, seeded_rng,
+    variance_with_error,
+};
 
 const REALIZATIONS: usize = 20_000;
-const NS: [usize; 5] = [1, 2, 4, 8, 16];
-
-/// Sample variance and its standard error.
-fn variance_with_error(values: &[f64]) -> (f64, f64) {
-    let r = values.len() as f64;
-    let mean = values.iter().sum::<f64>() / r;
-    let m2 = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / r;
-    let m4 = values.iter().map(|v| (v - mean).powi(4)).sum::<f64>() / r;
-    let s2 = m2 * r / (r - 1.0);
-    let se = ((m4 - s2 * s2 * (r - 3.0) / (r - 1.0)) / r).max(0.0).sqrt();
-    (s2, se)
-}
 
 fn run(n: Option<usize>, seed: u64) -> (f64, f64) {
-    let mut rng = seeded_rng(seed);
-    let values: Vec<f64> = (0..REALIZATIONS)
-        .map(|_| fig1_estimate(n, &mut rng))
-        .collect();
+    let values = fig1_estimates(n, REALIZATIONS, &mut seeded_rng(seed));
     let stats: RunningStats = values.iter().copied().collect();
     let label = match n {
         None => "MIS reference".to_owned(),

@@ -212,35 +212,34 @@ fn load_sweeps(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
     let reference = load_sweep(&random_keys, Capacity::Prime(prime), BucketHash::Mix)?;
 
     let label = |h: BucketHash, c: Capacity| format!("{}, {}", h.name(), c.name());
+    let probes = |points: &[LoadPoint]| -> Vec<(f64, f64)> {
+        points.iter().map(|p| (p.load, p.mean_probe)).collect()
+    };
+    let rates = |points: &[LoadPoint]| -> Vec<(f64, f64)> {
+        points
+            .iter()
+            .map(|p| (p.load, p.failed_rate.max(RATE_FLOOR)))
+            .collect()
+    };
     let mut probe_series = Vec::new();
     let mut rate_series = Vec::new();
     for (i, (hash, cap, points)) in results.iter().enumerate() {
         probe_series.push(Series::line(
             &label(*hash, *cap),
             PALETTE[i],
-            points.iter().map(|p| (p.load, p.mean_probe)).collect(),
+            probes(points),
         ));
-        rate_series.push(Series::line(
-            &label(*hash, *cap),
-            PALETTE[i],
-            points
-                .iter()
-                .map(|p| (p.load, p.failed_rate.max(RATE_FLOOR)))
-                .collect(),
-        ));
+        rate_series.push(Series::line(&label(*hash, *cap), PALETTE[i], rates(points)));
     }
     probe_series.push(Series::dots(
         "random keys (ideal hashing), same limit",
         REFERENCE_COLOR,
-        reference.iter().map(|p| (p.load, p.mean_probe)).collect(),
+        probes(&reference),
     ));
     rate_series.push(Series::dots(
         "random keys (ideal hashing)",
         REFERENCE_COLOR,
-        reference
-            .iter()
-            .map(|p| (p.load, p.failed_rate.max(RATE_FLOOR)))
-            .collect(),
+        rates(&reference),
     ));
     probe_series.push(Series::dots(
         "Knuth ½(1 + 1/(1 − α)), no limit",
@@ -298,28 +297,25 @@ fn load_sweeps(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
         "Probe length and failed inserts at three load factors",
         ["hash", "capacity", "α", "mean probe", "failed inserts"],
     );
-    for (hash, cap, points) in &results {
+    let rows = results
+        .iter()
+        .map(|(hash, cap, points)| (hash.name(), cap.name(), points))
+        .chain([(
+            "mix, random keys",
+            Capacity::Prime(prime).name(),
+            &reference,
+        )]);
+    for (hash, cap, points) in rows {
         for target in [0.5, 0.75, 0.9] {
             if let Some(p) = points.iter().find(|p| p.load >= target) {
                 table.push_row([
-                    hash.name().to_owned(),
-                    cap.name().to_owned(),
+                    hash.to_owned(),
+                    cap.to_owned(),
                     format!("{:.2}", p.load),
                     format!("{:.3}", p.mean_probe),
                     format!("{:.2e}", p.failed_rate),
                 ]);
             }
-        }
-    }
-    for target in [0.5, 0.75, 0.9] {
-        if let Some(p) = reference.iter().find(|p| p.load >= target) {
-            table.push_row([
-                "mix, random keys".to_owned(),
-                "prime (mod)".to_owned(),
-                format!("{:.2}", p.load),
-                format!("{:.3}", p.mean_probe),
-                format!("{:.2e}", p.failed_rate),
-            ]);
         }
     }
     section.table(table);
