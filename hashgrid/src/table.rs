@@ -186,11 +186,16 @@ impl<T: Pod> HashTable<T> {
 
     /// [`find`](Self::find) for a batch of keys: `out[i] = find(&keys[i])`.
     ///
-    /// The same slots as `find`, faster on large tables: keys are hashed
-    /// [`BATCH`](Self::BATCH) at a time in a loop of pure arithmetic, then probed, so the
-    /// probes' cache misses (independent loads with few instructions between them) overlap
-    /// in the CPU's out-of-order window instead of waiting behind the next key's hashing. A
-    /// renderer's wavefront of hit points (or a GPU-style pass over a tile) has such batches.
+    /// The same slots as `find`, faster on large tables. Per batch of [`BATCH`](Self::BATCH)
+    /// keys: (1) hash all keys (pure arithmetic); (2) read the home slot's checksum word of
+    /// every key (independent loads with no branch on their values, so their cache misses
+    /// overlap); (3) decide each key from its home word, walking on only for keys whose home
+    /// slot holds another key (≈ α/2 of them at load α). A per-key `find` mispredicts its
+    /// probe loop on those keys, and each misprediction discards the loads the CPU had
+    /// started for the following keys; here they have already been issued. Measured on a
+    /// 19 MB table: ≈ 9 ns per key against ≈ 12 ns for `find` (`examples/speed.rs`); batches
+    /// of 8, 16 and 64 differ little. A renderer's wavefront of hit points (or a GPU-style
+    /// pass over a tile) has such batches.
     ///
     /// # Panics
     /// When `keys` and `out` differ in length.
@@ -201,20 +206,32 @@ impl<T: Pod> HashTable<T> {
             "find_many: keys and out differ in length"
         );
         let mut homes = [(0_u32, 0_u32); FIND_BATCH];
+        let mut first = [0_u32; FIND_BATCH];
         for (keys, out) in keys.chunks(Self::BATCH).zip(out.chunks_mut(Self::BATCH)) {
             for (hc, key) in homes.iter_mut().zip(keys) {
                 let (h, c) = self.hash.hash_and_checksum(key);
                 *hc = (self.indexer.index(h), c);
             }
-            for (o, &(home, c)) in out.iter_mut().zip(&homes) {
-                *o = probe::find(
-                    &self.checksums,
-                    |&w| w,
-                    &self.indexer,
-                    self.max_probes,
-                    home,
-                    c,
-                );
+            // The home words of the whole batch first: independent loads, no branch on their
+            // values, so their cache misses overlap.
+            for (f, &(home, _)) in first.iter_mut().zip(&homes) {
+                *f = self.checksums.get(home as usize).copied().unwrap_or(EMPTY);
+            }
+            for ((o, &(home, c)), &f) in out.iter_mut().zip(&homes).zip(&first) {
+                *o = if f == c {
+                    Some(home)
+                } else if f == EMPTY {
+                    None
+                } else {
+                    probe::find(
+                        &self.checksums,
+                        |&w| w,
+                        &self.indexer,
+                        self.max_probes,
+                        home,
+                        c,
+                    )
+                };
             }
         }
     }
