@@ -72,12 +72,13 @@
 //!   Probe windows that do not wrap are taken as one sub-slice (one bounds check, no `unsafe`);
 //!   comparing four checksums at once into bit masks measured slower. A power-of-two capacity
 //!   (mask) and a prime one (exact fast modulo) differ by ≲ 15 %.
-//!   [`ConcurrentTable`] inserts from 2 threads (each a contiguous half of the stream) measured
-//!   ×1.0–1.5 the 1-thread rate on that VM, varying with the neighbours' load; the same split
-//!   of pure hashing scaled ×1.6–1.8 and of read-only `get`s ×1.35 in the same runs, so the
-//!   shared memory system, not the compare-and-swap, set the ceiling there
-//!   (`examples/speed.rs`, section `concurrent`, alternates 1- and 2-thread runs). Measure on
-//!   a machine with cores to spare before relying on either number.
+//!   [`ConcurrentTable`] inserts from 2 threads (each a contiguous half of the stream): each
+//!   thread's own busy time is ≈ 0.52–0.55 of the 1-thread time (×1.8–1.96 "with a core per
+//!   thread", 143 233 distinct keys, 2¹⁹ or 2²¹ slots), but the wall-clock speed-up on the
+//!   shared 2-core VM was ×1.0–1.5: timestamps show the second thread mostly starting when the
+//!   first ends (the other core busy with neighbours' processes). `examples/speed.rs`,
+//!   section `concurrent`, prints both, alternating 1- and 2-thread runs; measure on a machine
+//!   with a free core before relying on the wall-clock figure.
 //! - **Concurrency.** [`ConcurrentTable`] claims slots by compare-and-swap on the checksum
 //!   word and owns no values; the thread that gets [`Insert::Inserted`] initialises the value in
 //!   the caller's own array (typically atomics). Evictions and the plain `&[u32]` upload view
