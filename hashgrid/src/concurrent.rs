@@ -7,7 +7,7 @@ use core::sync::atomic::{AtomicU32, Ordering};
 use crate::capacity::SlotIndexer;
 use crate::constants::{EMPTY, TOMBSTONE};
 use crate::error::TableError;
-use crate::hash::{BucketHash, checksum};
+use crate::hash::BucketHash;
 use crate::key::CellKey;
 use crate::probe::{self, Insert, Slots};
 use crate::table::{trim_tombstones, validate};
@@ -136,12 +136,14 @@ impl ConcurrentTable {
     #[inline]
     #[must_use]
     pub fn find(&self, key: &CellKey) -> Option<u32> {
+        let (h, c) = self.hash.hash_and_checksum(key);
         let slot = probe::find(
-            &mut AtomicSlots(&self.checksums),
+            &self.checksums,
+            |w| w.load(Ordering::Acquire),
             &self.indexer,
             self.max_probes,
-            self.home_slot(key),
-            checksum(key),
+            self.indexer.index(h),
+            c,
         )?;
         self.touch(slot);
         Some(slot)
@@ -151,12 +153,13 @@ impl ConcurrentTable {
     /// from many threads at once. [`Insert::Full`] when the probe limit is reached.
     #[inline]
     pub fn insert_or_get(&self, key: &CellKey) -> Insert {
+        let (h, c) = self.hash.hash_and_checksum(key);
         let r = probe::insert_or_get(
             &mut AtomicSlots(&self.checksums),
             &self.indexer,
             self.max_probes,
-            self.home_slot(key),
-            checksum(key),
+            self.indexer.index(h),
+            c,
         );
         if let Some(slot) = r.slot() {
             self.touch(slot);
@@ -269,6 +272,7 @@ mod tests {
     use glam::IVec3;
 
     use super::*;
+    use crate::hash::checksum;
 
     #[test]
     fn same_key_from_many_threads_ends_in_one_slot() {

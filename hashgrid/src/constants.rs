@@ -20,21 +20,19 @@ pub const PRIME_Z: u32 = 805_459_861;
 /// hash; the MCPG adaptive grid folds `((level << 16) | cube) · 723850877` the same way.
 pub const PRIME_META: u32 = 723_850_877;
 
-/// Murmur3 (Appleby, `MurmurHash3_x86_32`) block multiplier c₁.
-pub const MURMUR_C1: u32 = 0xcc9e_2d51;
-/// Murmur3 block multiplier c₂.
-pub const MURMUR_C2: u32 = 0x1b87_3593;
-/// Murmur3 per-block additive constant (`h = h·5 + n`).
-pub const MURMUR_N: u32 = 0xe654_6b64;
-/// First multiplier of Murmur3's 32-bit finaliser `fmix32`.
-pub const FMIX_M1: u32 = 0x85eb_ca6b;
-/// Second multiplier of Murmur3's 32-bit finaliser `fmix32`.
-pub const FMIX_M2: u32 = 0xc2b2_ae35;
-/// Seed of the mixing bucket hash ([`BucketHash::Mix`](crate::BucketHash::Mix)): "mcg\x01".
-pub const BUCKET_SEED: u32 = 0x6d63_6701;
-/// Seed of the checksum ([`checksum`](crate::checksum)): "mcg\x02". A different seed than the
-/// bucket hash, so that two keys sharing a bucket share a checksum with probability 2⁻³² only.
-pub const CHECKSUM_SEED: u32 = 0x6d63_6702;
+/// Multiplier of the LCG step of [`pcg4d`](crate::pcg4d) (Jarzynski and Olano 2020; the
+/// Numerical Recipes LCG multiplier).
+pub const PCG_MUL: u32 = 1_664_525;
+/// Increment of the LCG step of [`pcg4d`](crate::pcg4d).
+pub const PCG_INC: u32 = 1_013_904_223;
+/// Which word of [`pcg4d`](crate::pcg4d)`([x, y, z, meta])` is the mixing bucket hash
+/// ([`hash_mix`](crate::hash_mix)): 3, the last word of the second round.
+pub const MIX_WORD: usize = 3;
+/// Which word of [`pcg4d`](crate::pcg4d)`([x, y, z, meta])` is the checksum
+/// ([`checksum`](crate::checksum)): 2. A different word of the same permutation than
+/// [`MIX_WORD`], so one permutation gives both, and two keys sharing a bucket share a
+/// checksum with probability ≈ 2⁻³² only.
+pub const CHECKSUM_WORD: usize = 2;
 
 /// log₂ of the run length of [`BucketHash::MixCoherent`](crate::BucketHash::MixCoherent):
 /// runs of 2² = 4 vertices consecutive in x hash to 4 neighbouring slots.
@@ -52,7 +50,7 @@ pub const FIRST_CHECKSUM: u32 = 2;
 
 /// Default probe limit of the tables: a key is looked for in at most this many consecutive
 /// slots (wrapping at the end). Bevy Solari probes 3. With 8 and the mixing hash, the demo's
-/// section `hashgrid` measures failed inserts of ≈ 3·10⁻⁴ at load factor 0.25 and ≈ 2.5 % at
+/// section `hashgrid` measures failed inserts of ≲ 6·10⁻⁴ at load factor 0.25 and ≈ 3 % at
 /// 0.5 on a renderer's key stream — the same as random keys (ideal hashing), because linear
 /// probing clusters. Size tables for α ≲ 0.25 or raise the limit.
 pub const DEFAULT_MAX_PROBES: u32 = 8;
@@ -101,13 +99,10 @@ pub const U32_CONSTANTS: &[(&str, u32)] = &[
     ("HASHGRID_PRIME_Y", PRIME_Y),
     ("HASHGRID_PRIME_Z", PRIME_Z),
     ("HASHGRID_PRIME_META", PRIME_META),
-    ("HASHGRID_MURMUR_C1", MURMUR_C1),
-    ("HASHGRID_MURMUR_C2", MURMUR_C2),
-    ("HASHGRID_MURMUR_N", MURMUR_N),
-    ("HASHGRID_FMIX_M1", FMIX_M1),
-    ("HASHGRID_FMIX_M2", FMIX_M2),
-    ("HASHGRID_BUCKET_SEED", BUCKET_SEED),
-    ("HASHGRID_CHECKSUM_SEED", CHECKSUM_SEED),
+    ("HASHGRID_PCG_MUL", PCG_MUL),
+    ("HASHGRID_PCG_INC", PCG_INC),
+    ("HASHGRID_MIX_WORD", MIX_WORD as u32),
+    ("HASHGRID_CHECKSUM_WORD", CHECKSUM_WORD as u32),
     ("HASHGRID_COHERENT_RUN_BITS", COHERENT_RUN_BITS),
     ("HASHGRID_EMPTY", EMPTY),
     ("HASHGRID_TOMBSTONE", TOMBSTONE),
@@ -147,9 +142,9 @@ mod tests {
             }
         }
         assert_eq!(u32_named("HASHGRID_PRIME_Y"), 2_654_435_761);
-        assert_eq!(u32_named("HASHGRID_CHECKSUM_SEED"), CHECKSUM_SEED);
+        assert_eq!(u32_named("HASHGRID_PCG_INC"), PCG_INC);
         assert_eq!(u32_named("HASHGRID_MAX_LEVEL"), 255);
-        assert_ne!(BUCKET_SEED, CHECKSUM_SEED);
+        const { assert!(MIX_WORD != CHECKSUM_WORD && MIX_WORD < 4 && CHECKSUM_WORD < 4) };
         assert_eq!(LEVEL_BITS + CLASS_BITS + EXTRA_BITS, 32);
         assert_eq!(CLASS_SHIFT, LEVEL_SHIFT + LEVEL_BITS);
         assert_eq!(EXTRA_SHIFT, CLASS_SHIFT + CLASS_BITS);

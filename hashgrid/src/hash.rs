@@ -6,10 +6,14 @@
 //! "we store the grid position, hashed with a separate hash function, to detect collisions",
 //! after Binder et al. 2018). All functions hash the four words `[x, y, z, meta]` of the key,
 //! so the level and the normal class are part of both.
+//!
+//! The mixing hash and the checksum are two words of one [`pcg4d`] permutation (Jarzynski and
+//! Olano 2020), so a table lookup mixes the key once for both. Everything is wrapping `u32`
+//! arithmetic, which WGSL has, so the GPU twin reproduces every value bit for bit.
 
 use crate::constants::{
-    BUCKET_SEED, CHECKSUM_SEED, COHERENT_RUN_BITS, FIRST_CHECKSUM, FMIX_M1, FMIX_M2, MURMUR_C1,
-    MURMUR_C2, MURMUR_N, PRIME_META, PRIME_X, PRIME_Y, PRIME_Z,
+    CHECKSUM_WORD, COHERENT_RUN_BITS, FIRST_CHECKSUM, MIX_WORD, PCG_INC, PCG_MUL, PRIME_META,
+    PRIME_X, PRIME_Y, PRIME_Z,
 };
 use crate::key::CellKey;
 
@@ -21,16 +25,20 @@ pub enum BucketHash {
     /// (MCPG sec. 4, "Hash Grid"; Müller et al. 2022, eq. 4). Three multiplies, but poor low
     /// bits on structured keys: [`hash_xor_primes`].
     XorPrimes,
-    /// Murmur3 over the four words ([`hash_mix`]): every output bit depends on every input bit;
-    /// uniform bucket occupancy on structured keys. The default.
+    /// Word [`MIX_WORD`](crate::constants::MIX_WORD) of [`pcg4d`] of the four words
+    /// ([`hash_mix`]): every output bit depends on every input bit; uniform bucket occupancy
+    /// on structured keys. The checksum is another word of the same permutation, so a lookup
+    /// mixes once. The default.
     #[default]
     Mix,
-    /// Murmur3 of the key with `x` divided by 4, xor'ed with the low 2 bits of `x`
+    /// [`pcg4d`] of the key with `x` divided by 4, xor'ed with the low 2 bits of `x`
     /// ([`hash_mix_coherent`]): runs of 4 vertices along x land in 4 neighbouring slots (one
     /// cache line of checksums), as π₁ = 1 does for Instant-NGP, while the runs themselves
-    /// are spread like [`BucketHash::Mix`]. Faster on coherent query streams, but runs of
-    /// four occupied slots make linear-probing clusters grow faster: the demo measures ≈ 1 %
-    /// failed inserts at load 0.25 and 12 % at 0.5 with 8 probes (`Mix`: 0.03 % and 2.5 %).
+    /// are spread like [`BucketHash::Mix`]. Runs of four occupied slots make linear-probing
+    /// clusters grow faster (the demo measures the failed inserts), and the checksum needs a
+    /// second permutation (of the full key), so lookups cost more; on the bench's renderer
+    /// streams (stochastic trilinear corners of neighbouring pixels) the locality did not pay
+    /// for that.
     MixCoherent,
 }
 
@@ -50,6 +58,18 @@ impl BucketHash {
             BucketHash::XorPrimes => hash_xor_primes(key),
             BucketHash::Mix => hash_mix(key),
             BucketHash::MixCoherent => hash_mix_coherent(key),
+        }
+    }
+
+    /// `(self.hash(key), checksum(key))`, with one [`pcg4d`] for [`BucketHash::Mix`]
+    /// ([`mix_and_checksum`]): what the tables compute per lookup.
+    #[inline]
+    #[must_use]
+    pub fn hash_and_checksum(self, key: &CellKey) -> (u32, u32) {
+        match self {
+            BucketHash::XorPrimes => (hash_xor_primes(key), checksum(key)),
+            BucketHash::Mix => mix_and_checksum(key),
+            BucketHash::MixCoherent => (hash_mix_coherent(key), checksum(key)),
         }
     }
 
@@ -82,76 +102,93 @@ pub const fn hash_xor_primes(key: &CellKey) -> u32 {
         ^ meta.wrapping_mul(PRIME_META)
 }
 
-/// Murmur3's 32-bit finaliser (Appleby): an invertible map in which every output bit depends
-/// on every input bit.
+/// `pcg4d` (Jarzynski and Olano 2020, "Hash Functions for GPU Rendering", JCGT 9(3), sec. 4
+/// and listing "pcg4d"): a permutation of four `u32` words built from a PCG-style LCG step
+/// `vᵢ ← vᵢ·1664525 + 1013904223`, two rounds of multiply–add between the words
+/// (`x += y·w; y += z·x; z += x·y; w += y·z`, in that order) with a xorshift `vᵢ ^= vᵢ >> 16`
+/// between them.
+///
+/// Every step is invertible (odd multipliers; each round updates one word from the others),
+/// so distinct keys give distinct 128-bit outputs. The paper's tests rate it among the best
+/// GPU hashes of multi-dimensional input at its cost (12 multiplies, no loops), which is what
+/// grid keys are.
 #[inline]
 #[must_use]
-pub const fn fmix32(mut h: u32) -> u32 {
-    h ^= h >> 16;
-    h = h.wrapping_mul(FMIX_M1);
-    h ^= h >> 13;
-    h = h.wrapping_mul(FMIX_M2);
-    h ^= h >> 16;
-    h
+pub const fn pcg4d(words: [u32; 4]) -> [u32; 4] {
+    let [mut x, mut y, mut z, mut w] = words;
+    x = x.wrapping_mul(PCG_MUL).wrapping_add(PCG_INC);
+    y = y.wrapping_mul(PCG_MUL).wrapping_add(PCG_INC);
+    z = z.wrapping_mul(PCG_MUL).wrapping_add(PCG_INC);
+    w = w.wrapping_mul(PCG_MUL).wrapping_add(PCG_INC);
+    x = x.wrapping_add(y.wrapping_mul(w));
+    y = y.wrapping_add(z.wrapping_mul(x));
+    z = z.wrapping_add(x.wrapping_mul(y));
+    w = w.wrapping_add(y.wrapping_mul(z));
+    x ^= x >> 16;
+    y ^= y >> 16;
+    z ^= z >> 16;
+    w ^= w >> 16;
+    x = x.wrapping_add(y.wrapping_mul(w));
+    y = y.wrapping_add(z.wrapping_mul(x));
+    z = z.wrapping_add(x.wrapping_mul(y));
+    w = w.wrapping_add(y.wrapping_mul(z));
+    [x, y, z, w]
 }
 
-/// `MurmurHash3_x86_32` (Appleby) of four little-endian 32-bit words with `seed`: four block
-/// rounds `k = rotl(w·c₁, 15)·c₂; h = rotl(h ⊕ k, 13)·5 + n`, then `h ⊕= 16` (the byte length)
-/// and [`fmix32`]. Identical to the reference implementation on the 16 bytes of the words.
-#[inline]
-#[must_use]
-pub const fn murmur3_words(words: [u32; 4], seed: u32) -> u32 {
-    let mut h = seed;
-    let mut i = 0;
-    while i < 4 {
-        let k = words[i]
-            .wrapping_mul(MURMUR_C1)
-            .rotate_left(15)
-            .wrapping_mul(MURMUR_C2);
-        h = (h ^ k)
-            .rotate_left(13)
-            .wrapping_mul(5)
-            .wrapping_add(MURMUR_N);
-        i += 1;
-    }
-    fmix32(h ^ 16)
-}
-
-/// The mixing bucket hash: [`murmur3_words`] of `[x, y, z, meta]` with [`BUCKET_SEED`].
+/// The mixing bucket hash: word [`MIX_WORD`] (= 3, `w`) of [`pcg4d`]`([x, y, z, meta])`.
+///
+/// The last word of the second round: it depends on all four words after the xorshift, so
+/// even its low bits (all a power-of-two mask reads) are uniform on structured keys; the
+/// `hashgrid_occupancy` suite checks it (word 1, `y`, fails it on a line along z).
 #[inline]
 #[must_use]
 pub const fn hash_mix(key: &CellKey) -> u32 {
-    murmur3_words(key.words(), BUCKET_SEED)
+    pcg4d(key.words())[MIX_WORD]
 }
 
-/// The coherent mixing bucket hash: [`murmur3_words`] of `[x >> 2, y, z, meta]` with
-/// [`BUCKET_SEED`], xor'ed with `x & 3` ([`COHERENT_RUN_BITS`] = 2).
+/// `(hash_mix(key), checksum(key))` from one [`pcg4d`]: words [`MIX_WORD`] and
+/// [`CHECKSUM_WORD`] of the same permutation.
+#[inline]
+#[must_use]
+pub const fn mix_and_checksum(key: &CellKey) -> (u32, u32) {
+    let v = pcg4d(key.words());
+    (v[MIX_WORD], reserve(v[CHECKSUM_WORD]))
+}
+
+/// The coherent mixing bucket hash: [`hash_mix`] of `[x >> 2, y, z, meta]`, xor'ed with
+/// `x & 3` ([`COHERENT_RUN_BITS`] = 2).
 ///
-/// The four vertices `4k..4k+3` along x share the murmur value `m` and get `m ⊕ 0..3`: four
+/// The four vertices `4k..4k+3` along x share the mixed value `m` and get `m ⊕ 0..3`: four
 /// slots in one aligned group of four with a power-of-two capacity, or within a window of four
-/// consecutive slots with a modulo. A renderer's neighbouring pixels touch neighbouring
-/// vertices, so their lookups share cache lines. `x >> 2` is an arithmetic shift (floor
-/// division), so runs are aligned for negative x too.
+/// consecutive slots with a modulo. `x >> 2` is an arithmetic shift (floor division), so runs
+/// are aligned for negative x too.
 #[inline]
 #[must_use]
 pub const fn hash_mix_coherent(key: &CellKey) -> u32 {
     let [x, y, z, meta] = key.words();
     let run = ((x as i32) >> COHERENT_RUN_BITS) as u32;
-    murmur3_words([run, y, z, meta], BUCKET_SEED) ^ (x & ((1 << COHERENT_RUN_BITS) - 1))
+    pcg4d([run, y, z, meta])[MIX_WORD] ^ (x & ((1 << COHERENT_RUN_BITS) - 1))
 }
 
-/// The checksum stored in a slot: [`murmur3_words`] of `[x, y, z, meta]` with
-/// [`CHECKSUM_SEED`], never [`EMPTY`](crate::constants::EMPTY) (0) or
-/// [`TOMBSTONE`](crate::constants::TOMBSTONE) (1): a raw value below
-/// [`FIRST_CHECKSUM`] is or'ed with 2.
+/// The checksum stored in a slot: word [`CHECKSUM_WORD`] (= 2, `z`) of
+/// [`pcg4d`]`([x, y, z, meta])`, never [`EMPTY`](crate::constants::EMPTY) (0) or
+/// [`TOMBSTONE`](crate::constants::TOMBSTONE) (1): a raw value below [`FIRST_CHECKSUM`] is
+/// or'ed with 2.
 ///
 /// Two distinct keys share a checksum with probability ≈ 2⁻³² (exactly 2⁻³² · (1 + 2⁻³¹) for
 /// an ideal hash, because of the remap). Unlike MCPG's 16-bit checksum (≈ 1/65 536 false
-/// matches) all 32 bits are kept; the `hashgrid_checksum` suite measures the rate.
+/// matches) all 32 bits are kept; the `hashgrid_checksum` suite measures the rate, and that
+/// keys sharing a checksum do not also share the [`hash_mix`] word (the two words are 64 bits
+/// of one 128-bit permutation, not a function of each other).
 #[inline]
 #[must_use]
 pub const fn checksum(key: &CellKey) -> u32 {
-    let h = murmur3_words(key.words(), CHECKSUM_SEED);
+    reserve(pcg4d(key.words())[CHECKSUM_WORD])
+}
+
+/// Moves raw values 0 and 1 (the reserved words) to 2 and 3.
+#[inline]
+const fn reserve(h: u32) -> u32 {
     if h < FIRST_CHECKSUM {
         h | FIRST_CHECKSUM
     } else {
@@ -165,59 +202,48 @@ mod tests {
 
     use super::*;
 
-    /// Byte-wise reference `MurmurHash3_x86_32`, written from Appleby's description.
-    fn murmur3_reference(data: &[u8], seed: u32) -> u32 {
-        let mut h = seed;
-        let blocks = data.chunks_exact(4);
-        let tail = blocks.remainder();
-        for b in blocks {
-            let mut k = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-            k = k
-                .wrapping_mul(0xcc9e_2d51)
-                .rotate_left(15)
-                .wrapping_mul(0x1b87_3593);
-            h ^= k;
-            h = h.rotate_left(13).wrapping_mul(5).wrapping_add(0xe654_6b64);
+    /// pcg4d as printed in Jarzynski and Olano (2020), on `[u32; 4]` with the constants
+    /// written out, as the reference for [`pcg4d`].
+    fn pcg4d_reference(mut v: [u32; 4]) -> [u32; 4] {
+        for c in &mut v {
+            *c = c.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
         }
-        let mut k = 0_u32;
-        for (i, &byte) in tail.iter().enumerate() {
-            k ^= u32::from(byte) << (8 * i);
+        let round = |v: &mut [u32; 4]| {
+            v[0] = v[0].wrapping_add(v[1].wrapping_mul(v[3]));
+            v[1] = v[1].wrapping_add(v[2].wrapping_mul(v[0]));
+            v[2] = v[2].wrapping_add(v[0].wrapping_mul(v[1]));
+            v[3] = v[3].wrapping_add(v[1].wrapping_mul(v[2]));
+        };
+        round(&mut v);
+        for c in &mut v {
+            *c ^= *c >> 16;
         }
-        if !tail.is_empty() {
-            h ^= k
-                .wrapping_mul(0xcc9e_2d51)
-                .rotate_left(15)
-                .wrapping_mul(0x1b87_3593);
-        }
-        h ^= data.len() as u32;
-        fmix32(h)
+        round(&mut v);
+        v
     }
 
     #[test]
-    fn reference_murmur3_matches_published_vectors() {
-        assert_eq!(murmur3_reference(b"", 0), 0);
-        assert_eq!(murmur3_reference(b"", 1), 0x514e_28b7);
-        assert_eq!(murmur3_reference(b"Hello, world!", 1234), 0xfaf6_cdb3);
-        assert_eq!(
-            murmur3_reference(b"The quick brown fox jumps over the lazy dog", 0x9747_b28c),
-            0x2fa8_26cd
-        );
-    }
-
-    #[test]
-    fn murmur3_words_is_murmur3_of_the_bytes() {
-        for key in [
-            CellKey::new(IVec3::new(1, 2, 3), 4, 5),
-            CellKey::new(IVec3::new(-1, i32::MAX, i32::MIN), 255, 0).with_extra(77),
-        ] {
-            let mut bytes = [0_u8; 16];
-            for (chunk, w) in bytes.chunks_exact_mut(4).zip(key.words()) {
-                chunk.copy_from_slice(&w.to_le_bytes());
+    fn pcg4d_matches_the_reference_and_is_a_permutation_locally() {
+        let mut seen = std::collections::HashSet::new();
+        for x in -8..8 {
+            for meta in 0..64 {
+                let w = [x as u32, 5, 0xFFFF_FFF0, meta];
+                let v = pcg4d(w);
+                assert_eq!(v, pcg4d_reference(w));
+                assert!(seen.insert(v));
             }
-            for seed in [0, BUCKET_SEED, CHECKSUM_SEED] {
+        }
+    }
+
+    #[test]
+    fn one_pass_equals_the_separate_functions() {
+        for i in -300..300 {
+            let key = CellKey::new(IVec3::new(i, 3 * i, -7), (i & 15) as u8, (i & 7) as u8);
+            assert_eq!(mix_and_checksum(&key), (hash_mix(&key), checksum(&key)));
+            for hash in BucketHash::ALL {
                 assert_eq!(
-                    murmur3_words(key.words(), seed),
-                    murmur3_reference(&bytes, seed)
+                    hash.hash_and_checksum(&key),
+                    (hash.hash(&key), checksum(&key))
                 );
             }
         }
@@ -240,16 +266,13 @@ mod tests {
 
     #[test]
     fn checksum_is_never_reserved() {
-        // Search keys whose raw checksum hash is 0 or 1 would take 2³¹ tries; check the remap
+        // Search keys whose raw checksum word is 0 or 1 would take 2³¹ tries; check the remap
         // rule directly instead, and a run of keys.
         for h in [0_u32, 1, 2, 3, u32::MAX] {
-            let mapped = if h < FIRST_CHECKSUM {
-                h | FIRST_CHECKSUM
-            } else {
-                h
-            };
-            assert!(mapped >= FIRST_CHECKSUM);
+            assert!(reserve(h) >= FIRST_CHECKSUM);
+            assert_eq!(reserve(h) == h, h >= FIRST_CHECKSUM);
         }
+        assert_eq!((reserve(0), reserve(1)), (2, 3));
         for i in -500..500 {
             let key = CellKey::new(IVec3::new(i, i * 7, -i), 0, 0);
             assert!(checksum(&key) >= FIRST_CHECKSUM);
@@ -265,8 +288,6 @@ mod tests {
                 ^ 3_u32.wrapping_mul(805_459_861)
                 ^ 0x0000_0307_u32.wrapping_mul(723_850_877)
         );
-        assert_eq!(fmix32(0), 0);
-        assert_eq!(fmix32(1), 0x514e_28b7);
         let pinned = [hash_xor_primes(&key), hash_mix(&key), checksum(&key)];
         let run: [u32; 5] = [-5, -4, -1, 0, 3].map(|x| {
             hash_mix_coherent(&CellKey {
@@ -277,6 +298,9 @@ mod tests {
         // −4..−1 is one run, 0..3 another: members differ in the low two bits only.
         assert_eq!((run[1] ^ run[2], run[3] ^ run[4]), (3, 3));
         assert_ne!(run[0] ^ 3, run[1]);
-        assert_eq!(pinned, [0xced1_1e4b, 0x66d3_6f99, 0x8403_c0ec]);
+        // pcg4d([1, 0xFFFFFFFE, 3, 0x307]) = [0x090f2888, 0x16f386d9, 0x0140a1c4, 0x9a869f9e],
+        // also from an independent Python transcription of the paper's listing.
+        assert_eq!(pcg4d(key.words())[1], 0x16f3_86d9);
+        assert_eq!(pinned, [0xced1_1e4b, 0x9a86_9f9e, 0x0140_a1c4]);
     }
 }

@@ -8,9 +8,12 @@ use bytemuck::Pod;
 use crate::capacity::SlotIndexer;
 use crate::constants::{EMPTY, TOMBSTONE};
 use crate::error::TableError;
-use crate::hash::{BucketHash, checksum};
+use crate::hash::BucketHash;
 use crate::key::CellKey;
 use crate::probe::{self, Insert, Slots};
+
+/// Keys hashed per step of [`HashTable::find_many`].
+const FIND_BATCH: usize = 16;
 
 /// Checks the parameters shared by both tables.
 pub(crate) fn validate(capacity: u32, max_probes: u32) -> Result<SlotIndexer, TableError> {
@@ -50,7 +53,7 @@ pub(crate) fn trim_tombstones(words: &mut [u32]) -> u32 {
 ///
 /// Two arrays of `capacity` entries, side by side:
 ///
-/// - `checksums: [u32]`: [`checksum`] of the key in the slot, [`EMPTY`] (0) or
+/// - `checksums: [u32]`: [`checksum`](crate::checksum) of the key in the slot, [`EMPTY`] (0) or
 ///   [`TOMBSTONE`] (1);
 /// - `values: [T]`: the state of the slot (zeroed when the slot is taken).
 ///
@@ -170,21 +173,71 @@ impl<T: Pod> HashTable<T> {
     #[inline]
     #[must_use]
     pub fn find(&self, key: &CellKey) -> Option<u32> {
-        let home = self.home_slot(key);
-        let c = checksum(key);
-        let mut slot = home;
-        for _ in 0..self.max_probes {
-            let v = self.checksums[slot as usize];
-            if v == c {
-                return Some(slot);
-            }
-            if v == EMPTY {
-                return None;
-            }
-            slot = self.indexer.next(slot);
-        }
-        None
+        let (h, c) = self.hash.hash_and_checksum(key);
+        probe::find(
+            &self.checksums,
+            |&w| w,
+            &self.indexer,
+            self.max_probes,
+            self.indexer.index(h),
+            c,
+        )
     }
+
+    /// [`find`](Self::find) for a batch of keys: `out[i] = find(&keys[i])`.
+    ///
+    /// The same slots as `find`, faster on large tables. Per batch of [`BATCH`](Self::BATCH)
+    /// keys: (1) hash all keys (pure arithmetic); (2) read the home slot's checksum word of
+    /// every key (independent loads with no branch on their values, so their cache misses
+    /// overlap); (3) decide each key from its home word, walking on only for keys whose home
+    /// slot holds another key (≈ α/2 of them at load α). A per-key `find` mispredicts its
+    /// probe loop on those keys, and each misprediction discards the loads the CPU had
+    /// started for the following keys; here they have already been issued. Measured on a
+    /// 19 MB table: ≈ 9 ns per key against ≈ 12 ns for `find` (`examples/speed.rs`); batches
+    /// of 8, 16 and 64 differ little. A renderer's wavefront of hit points (or a GPU-style
+    /// pass over a tile) has such batches.
+    ///
+    /// # Panics
+    /// When `keys` and `out` differ in length.
+    pub fn find_many(&self, keys: &[CellKey], out: &mut [Option<u32>]) {
+        assert_eq!(
+            keys.len(),
+            out.len(),
+            "find_many: keys and out differ in length"
+        );
+        let mut homes = [(0_u32, 0_u32); FIND_BATCH];
+        let mut first = [0_u32; FIND_BATCH];
+        for (keys, out) in keys.chunks(Self::BATCH).zip(out.chunks_mut(Self::BATCH)) {
+            for (hc, key) in homes.iter_mut().zip(keys) {
+                let (h, c) = self.hash.hash_and_checksum(key);
+                *hc = (self.indexer.index(h), c);
+            }
+            // The home words of the whole batch first: independent loads, no branch on their
+            // values, so their cache misses overlap.
+            for (f, &(home, _)) in first.iter_mut().zip(&homes) {
+                *f = self.checksums.get(home as usize).copied().unwrap_or(EMPTY);
+            }
+            for ((o, &(home, c)), &f) in out.iter_mut().zip(&homes).zip(&first) {
+                *o = if f == c {
+                    Some(home)
+                } else if f == EMPTY {
+                    None
+                } else {
+                    probe::find(
+                        &self.checksums,
+                        |&w| w,
+                        &self.indexer,
+                        self.max_probes,
+                        home,
+                        c,
+                    )
+                };
+            }
+        }
+    }
+
+    /// Keys hashed per step of [`find_many`](Self::find_many).
+    pub const BATCH: usize = FIND_BATCH;
 
     /// The value of `key`, if the table holds it.
     #[inline]
@@ -206,8 +259,8 @@ impl<T: Pod> HashTable<T> {
     /// all taken by other keys.
     #[inline]
     pub fn insert_or_get(&mut self, key: &CellKey) -> Insert {
-        let home = self.home_slot(key);
-        let c = checksum(key);
+        let (h, c) = self.hash.hash_and_checksum(key);
+        let home = self.indexer.index(h);
         // Remember whether the claimed slot was a tombstone for the counters.
         let outcome = {
             let mut slots = TrackingSlots {
@@ -424,6 +477,31 @@ mod tests {
         assert_eq!(t.iter().count(), 50);
         t.clear();
         assert!(t.is_empty() && t.get(&key(3)).is_none());
+    }
+
+    #[test]
+    fn find_many_equals_find() {
+        for hash in BucketHash::ALL {
+            let mut t = HashTable::<u32>::new(97, 8, hash).unwrap();
+            for i in 0..40 {
+                t.insert_or_get(&key(i));
+            }
+            // 0..40 are (mostly) in, 40..75 not; 75 keys = 4 full batches and a partial one,
+            // and a capacity of 97 puts some windows across the wrap-around.
+            let keys: Vec<CellKey> = (0..75).map(key).collect();
+            let mut out = vec![Some(u32::MAX); keys.len()];
+            t.find_many(&keys, &mut out);
+            let want: Vec<Option<u32>> = keys.iter().map(|k| t.find(k)).collect();
+            assert_eq!(out, want, "{hash:?}");
+            assert!(want[..40].iter().filter(|s| s.is_some()).count() > 30);
+        }
+    }
+
+    #[test]
+    #[should_panic(expected = "differ in length")]
+    fn find_many_checks_lengths() {
+        let t = HashTable::<u32>::new(16, 4, BucketHash::Mix).unwrap();
+        t.find_many(&[key(1)], &mut []);
     }
 
     #[test]

@@ -1,0 +1,138 @@
+//! The renderer key streams shared by the criterion bench (`benches/hashgrid.rs`) and the
+//! min-of-runs probe (`examples/speed.rs`).
+//!
+//! A camera 1.7 units above the floor of a 40 × 40 × 10 room renders `WIDTH × WIDTH` pixels and
+//! turns by 0.11 rad per frame; each pixel's hit gives MCPG's adaptive-grid key (level from
+//! distance with the geometric jitter, so several levels at once; stochastic trilinear corner;
+//! normal class) from seeded uniforms. The tables hold the distinct keys of [`FILL_FRAMES`]
+//! frames; the lookups are the keys of one of those frames again, in the order a renderer
+//! visits its pixels:
+//!
+//! - `scanline`: row by row (a CPU tracer's loop over the image);
+//! - `tiles`: 8 × 8 pixel tiles, row-major inside a tile (a GPU compute dispatch's
+//!   workgroups, or a CPU tracer's buckets);
+//! - `random`: the same keys shuffled (no coherence at all: the honest worst case).
+
+#![allow(dead_code)]
+
+use mcg_hashgrid::glam::{Vec2, Vec3};
+use mcg_hashgrid::{AdaptiveGrid, CellKey, next_prime};
+use rand::{RngExt, SeedableRng};
+use rand_pcg::Pcg64Mcg;
+
+/// Image width and height in pixels.
+pub const WIDTH: u32 = 256;
+/// Frames whose keys fill the tables.
+pub const FILL_FRAMES: usize = 8;
+/// Tile edge of the `tiles` order.
+pub const TILE: u32 = 8;
+
+/// Hit point and normal of the ray from `camera` along `dir` inside the box room
+/// [−20, 20] × [0, 10] × [−20, 20].
+fn hit_room(camera: Vec3, dir: Vec3) -> (Vec3, Vec3) {
+    let lo = Vec3::new(-20.0, 0.0, -20.0);
+    let hi = Vec3::new(20.0, 10.0, 20.0);
+    let inv = dir.recip();
+    let t_exit = ((lo - camera) * inv).max((hi - camera) * inv);
+    let t = t_exit.min_element();
+    let axis = if t == t_exit.x {
+        0
+    } else if t == t_exit.y {
+        1
+    } else {
+        2
+    };
+    let mut n = Vec3::ZERO;
+    n[axis] = -dir[axis].signum();
+    (camera + dir * t, n)
+}
+
+/// One frame's keys, indexed by pixel `j * WIDTH + i` (scanline order).
+fn frame_keys(grid: &AdaptiveGrid, frame: usize, rng: &mut Pcg64Mcg) -> Vec<CellKey> {
+    let camera = Vec3::new(0.0, 1.7, 0.0);
+    let (sin, cos) = (frame as f32 * 0.11).sin_cos();
+    let mut keys = Vec::with_capacity((WIDTH * WIDTH) as usize);
+    for j in 0..WIDTH {
+        for i in 0..WIDTH {
+            let s = Vec2::new(i as f32 + 0.5, j as f32 + 0.5) / WIDTH as f32 * 2.0 - 1.0;
+            // 90° field of view looking along −z, slightly down.
+            let d = Vec3::new(s.x, -s.y - 0.3, -1.0);
+            let dir = Vec3::new(cos * d.x - sin * d.z, d.y, sin * d.x + cos * d.z).normalize();
+            let (p, n) = hit_room(camera, dir);
+            keys.push(grid.vertex_key(p, n, camera, rng.random(), rng.random()));
+        }
+    }
+    keys
+}
+
+/// The key packed into a u64 for the `HashMap` baseline: 18 bits per coordinate, 6 bits of
+/// level, 3 of class (what a user would write).
+pub fn pack(k: &CellKey) -> u64 {
+    let c = |v: i32| (v as u64) & 0x3_FFFF;
+    c(k.cell.x)
+        | c(k.cell.y) << 18
+        | c(k.cell.z) << 36
+        | u64::from(k.level & 0x3F) << 54
+        | u64::from(k.class & 7) << 60
+}
+
+/// The keys and query orders of the benches.
+pub struct Inputs {
+    /// Distinct keys of the fill frames, in first-seen order.
+    pub fill: Vec<CellKey>,
+    /// Every pixel's key of all fill frames, frame after frame in scanline order (repeats
+    /// included: what a renderer inserts per frame).
+    pub pixels: Vec<CellKey>,
+    /// One frame's keys in scanline order.
+    pub scanline: Vec<CellKey>,
+    /// The same keys in 8 × 8 tiles.
+    pub tiles: Vec<CellKey>,
+    /// The same keys shuffled.
+    pub random: Vec<CellKey>,
+    /// Next prime ≥ `pow2`.
+    pub prime: u32,
+    /// Smallest power of two ≥ 3 · `fill.len()`.
+    pub pow2: u32,
+}
+
+/// Builds the streams (deterministic).
+pub fn inputs() -> Inputs {
+    let grid = AdaptiveGrid::mcpg();
+    let mut rng = Pcg64Mcg::seed_from_u64(0x4847);
+    let frames: Vec<Vec<CellKey>> = (0..FILL_FRAMES)
+        .map(|f| frame_keys(&grid, f, &mut rng))
+        .collect();
+    let mut seen = std::collections::HashSet::new();
+    let mut fill = Vec::new();
+    for f in &frames {
+        fill.extend(f.iter().copied().filter(|k| seen.insert(*k)));
+    }
+    let scanline = frames[FILL_FRAMES / 2].clone();
+    let pixels = frames.concat();
+    let mut tiles = Vec::with_capacity(scanline.len());
+    for tj in (0..WIDTH).step_by(TILE as usize) {
+        for ti in (0..WIDTH).step_by(TILE as usize) {
+            for j in tj..tj + TILE {
+                for i in ti..ti + TILE {
+                    tiles.push(scanline[(j * WIDTH + i) as usize]);
+                }
+            }
+        }
+    }
+    let mut random = scanline.clone();
+    for i in (1..random.len()).rev() {
+        let j = rng.random_range(0..=i);
+        random.swap(i, j);
+    }
+    let n = fill.len() as u32;
+    let pow2 = (3 * n).next_power_of_two();
+    Inputs {
+        fill,
+        pixels,
+        scanline,
+        tiles,
+        random,
+        prime: next_prime(pow2).unwrap(),
+        pow2,
+    }
+}
