@@ -10,13 +10,14 @@
 //! | [`PRELUDE`] | generated `const` declarations of every shared constant ([`crate::prelude`]) |
 //! | [`COMMON`] | `mcg_invocation_index`, the flat index of a [`GpuContext::dispatch`](crate::GpuContext::dispatch) |
 //! | [`VMF`] | `Vmf`, `SufficientStats`, `vmf_pdf`, `vmf_sample`, `vmf_sample_with_pdf`, `vmf_from_sufficient_stats`, `vmf_product`, mean cosine ↔ κ |
-//! | [`HASHGRID`] | `CellKey`, hashes, checksum, slot index, stochastic trilinear vertex, level choice, `hashgrid_find`, `hashgrid_insert_or_get` |
+//! | [`HASHGRID`] | `CellKey`, hashes, checksum, slot index, stochastic trilinear vertex, level choice |
+//! | [`HASHGRID_TABLE`] | `hashgrid_find`, `hashgrid_insert_or_get` on `hashgrid_checksums` |
 //! | [`COLOR_CODEC`] | R11G11B10, RGB9E5 pack and unpack |
 //!
 //! Names are prefixed by module (`vmf_`, `hashgrid_`, `codec_`; constants `VMF_`, `HASHGRID_`,
 //! `CODEC_`/layout names of mcg-color-codec, `MCG_`), so modules compose without clashes.
 //! WGSL resolves module-scope names in any order, so a module may come before or after the
-//! code that uses it. The table functions of [`HASHGRID`] read a storage array the includer
+//! code that uses it. The table functions of [`HASHGRID_TABLE`] read a storage array the includer
 //! declares as `hashgrid_checksums: array<atomic<u32>>` (see the module's header).
 
 /// The generated constant prelude, `src/wgsl/generated/prelude.wgsl` (see [`crate::prelude`]).
@@ -27,6 +28,10 @@ pub const COMMON: &str = include_str!("wgsl/common.wgsl");
 pub const VMF: &str = include_str!("wgsl/vmf.wgsl");
 /// The mcg-hashgrid twin, `src/wgsl/hashgrid.wgsl`.
 pub const HASHGRID: &str = include_str!("wgsl/hashgrid.wgsl");
+/// The mcg-hashgrid table twin, `src/wgsl/hashgrid_table.wgsl`: `hashgrid_find` and
+/// `hashgrid_insert_or_get` on a `hashgrid_checksums: array<atomic<u32>>` the includer
+/// declares. Needs [`PRELUDE`] and [`HASHGRID`].
+pub const HASHGRID_TABLE: &str = include_str!("wgsl/hashgrid_table.wgsl");
 /// The mcg-color-codec twin, `src/wgsl/color_codec.wgsl`.
 pub const COLOR_CODEC: &str = include_str!("wgsl/color_codec.wgsl");
 
@@ -36,8 +41,7 @@ pub const VMF_MODULE: &str = concat!(
     include_str!("wgsl/common.wgsl"),
     include_str!("wgsl/vmf.wgsl"),
 );
-/// [`PRELUDE`] + [`COMMON`] + [`HASHGRID`]; declare `hashgrid_checksums` to use the table
-/// functions.
+/// [`PRELUDE`] + [`COMMON`] + [`HASHGRID`] (without the table functions).
 pub const HASHGRID_MODULE: &str = concat!(
     include_str!("wgsl/generated/prelude.wgsl"),
     include_str!("wgsl/common.wgsl"),
@@ -81,6 +85,7 @@ pub mod kernels {
         include_str!("wgsl/generated/prelude.wgsl"),
         include_str!("wgsl/common.wgsl"),
         include_str!("wgsl/hashgrid.wgsl"),
+        include_str!("wgsl/hashgrid_table.wgsl"),
         include_str!("wgsl/kernels/hashgrid_table.wgsl"),
     );
     /// Entry point `codec_pack_unpack`: bindings `values`, `words`, `decoded`.

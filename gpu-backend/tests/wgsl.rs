@@ -52,7 +52,16 @@ fn library_modules_validate_alone_and_together() {
     parse_and_validate("color_codec", shaders::COLOR_CODEC_MODULE);
     parse_and_validate(
         "hashgrid",
-        &format!("{}{}", shaders::HASHGRID_MODULE, CHECKSUM_DECLARATION),
+        shaders::HASHGRID_MODULE,
+    );
+    parse_and_validate(
+        "hashgrid_table",
+        &format!(
+            "{}{}{}",
+            shaders::HASHGRID_MODULE,
+            shaders::HASHGRID_TABLE,
+            CHECKSUM_DECLARATION
+        ),
     );
     // All modules in one shader: no name clashes.
     let all = [
@@ -60,6 +69,7 @@ fn library_modules_validate_alone_and_together() {
         shaders::COMMON,
         shaders::VMF,
         shaders::HASHGRID,
+        shaders::HASHGRID_TABLE,
         shaders::COLOR_CODEC,
         CHECKSUM_DECLARATION,
     ]
@@ -133,6 +143,7 @@ fn wgsl_structs_match_the_rust_pod_types() {
         shaders::COMMON,
         shaders::VMF,
         shaders::HASHGRID,
+        shaders::HASHGRID_TABLE,
         shaders::COLOR_CODEC,
         CHECKSUM_DECLARATION,
     ]
@@ -171,7 +182,7 @@ fn wgsl_structs_match_the_rust_pod_types() {
         &m,
         "CellKey",
         size_of::<CellKey>(),
-        &[("cell", offset_of!(CellKey, cell)), ("meta", 12)],
+        &[("cell", offset_of!(CellKey, cell)), ("meta_word", 12)],
     );
 
     check(

@@ -1,22 +1,14 @@
 // mcg-hashgrid twin: cell keys, bucket hashes and checksums, slot indexing, stochastic
-// trilinear vertex choice, adaptive level choice, and the lock-free table's insert-or-get and
-// lookup on a checksum array. Needs the prelude. Mirrors mcg-hashgrid's `key.rs`, `hash.rs`,
-// `capacity.rs`, `probe.rs`, `trilinear.rs` and `level.rs` (MCPG sec. 4 "Hash Grid").
+// trilinear vertex choice and adaptive level choice. Needs the prelude. Mirrors mcg-hashgrid's
+// `key.rs`, `hash.rs`, `capacity.rs`, `trilinear.rs` and `level.rs` (MCPG sec. 4 "Hash Grid").
 //
-// The table functions (`hashgrid_find`, `hashgrid_insert_or_get`) work on a checksum array the
-// including shader declares under this name, e.g.
-//
-//     @group(0) @binding(1) var<storage, read_write> hashgrid_checksums: array<atomic<u32>>;
-//
-// (WGSL without the `unrestricted_pointer_parameters` extension cannot pass a storage array
-// to a function). Upload `HashTable::checksums()` / `ConcurrentTable::checksums()` into it as
-// is; the values array stays the caller's, indexed by the slot these functions return.
+// The table functions (`hashgrid_find`, `hashgrid_insert_or_get`) are in `hashgrid_table.wgsl`.
 
 // 16 bytes, the layout of `mcg_hashgrid::CellKey`: the vertex and the meta word
 // (level | class << 8 | extra << 16, the little-endian bytes of the CPU's u8, u8, u16).
 struct CellKey {
     cell: vec3<i32>,
-    meta: u32,
+    meta_word: u32,
 }
 
 // A table's shape, `HashgridTableParams` on the host: the slot indexer (modulo `capacity`,
@@ -49,13 +41,13 @@ struct HashgridInsert {
 }
 
 // `CellKey::new(cell, level, class)` with extra = 0.
-fn hashgrid_cell_key(cell: vec3<i32>, level: u32, class: u32) -> CellKey {
-    return CellKey(cell, ((class & 0xffu) << HASHGRID_CLASS_SHIFT) | ((level & 0xffu) << HASHGRID_LEVEL_SHIFT));
+fn hashgrid_cell_key(cell: vec3<i32>, level: u32, normal_class: u32) -> CellKey {
+    return CellKey(cell, ((normal_class & 0xffu) << HASHGRID_CLASS_SHIFT) | ((level & 0xffu) << HASHGRID_LEVEL_SHIFT));
 }
 
 // The four words [x, y, z, meta] every hash reads.
 fn hashgrid_key_words(key: CellKey) -> vec4<u32> {
-    return vec4<u32>(bitcast<vec3<u32>>(key.cell), key.meta);
+    return vec4<u32>(bitcast<vec3<u32>>(key.cell), key.meta_word);
 }
 
 // `normal_class`: 2·axis + (component < 0) of the dominant axis of n.
@@ -232,66 +224,3 @@ fn hashgrid_vertex_key(levels: HashgridLevels, position: vec3<f32>, normal: vec3
     return hashgrid_cell_key(vertex, level, hashgrid_normal_class(normal));
 }
 
-// `find`: the slot holding `checksum` within `max_probes` slots from `home` (wrapping),
-// stopping at the first empty slot; HASHGRID_NO_SLOT when absent.
-fn hashgrid_find(table: HashgridTable, home: u32, checksum: u32) -> u32 {
-    var slot = home;
-    for (var i = 0u; i < table.max_probes; i += 1u) {
-        let v = atomicLoad(&hashgrid_checksums[slot]);
-        if v == checksum {
-            return slot;
-        }
-        if v == HASHGRID_EMPTY {
-            return HASHGRID_NO_SLOT;
-        }
-        slot = hashgrid_next_slot(table, slot);
-    }
-    return HASHGRID_NO_SLOT;
-}
-
-// `insert_or_get`: the slot of `checksum` if present, else claims the first empty or
-// tombstone slot with a compare-and-swap (which may fail spuriously and is retried; a slot
-// taken by another key moves on), else HASHGRID_FULL after `max_probes` slots.
-fn hashgrid_insert_or_get(table: HashgridTable, home: u32, checksum: u32) -> HashgridInsert {
-    var slot = home;
-    var first_free = table.max_probes;
-    var first_free_slot = 0u;
-    for (var i = 0u; i < table.max_probes; i += 1u) {
-        let v = atomicLoad(&hashgrid_checksums[slot]);
-        if v == checksum {
-            return HashgridInsert(slot, HASHGRID_FOUND);
-        }
-        if v == HASHGRID_EMPTY || v == HASHGRID_TOMBSTONE {
-            if first_free == table.max_probes {
-                first_free = i;
-                first_free_slot = slot;
-            }
-            if v == HASHGRID_EMPTY {
-                break;
-            }
-        }
-        slot = hashgrid_next_slot(table, slot);
-    }
-    if first_free == table.max_probes {
-        return HashgridInsert(HASHGRID_NO_SLOT, HASHGRID_FULL);
-    }
-    slot = first_free_slot;
-    for (var i = first_free; i < table.max_probes; i += 1u) {
-        var v = atomicLoad(&hashgrid_checksums[slot]);
-        loop {
-            if v == checksum {
-                return HashgridInsert(slot, HASHGRID_FOUND);
-            }
-            if v != HASHGRID_EMPTY && v != HASHGRID_TOMBSTONE {
-                break;
-            }
-            let r = atomicCompareExchangeWeak(&hashgrid_checksums[slot], v, checksum);
-            if r.exchanged {
-                return HashgridInsert(slot, HASHGRID_INSERTED);
-            }
-            v = r.old_value;
-        }
-        slot = hashgrid_next_slot(table, slot);
-    }
-    return HashgridInsert(HASHGRID_NO_SLOT, HASHGRID_FULL);
-}
