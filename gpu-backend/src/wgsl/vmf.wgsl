@@ -51,16 +51,19 @@ fn vmf_exp_m1(x: f32) -> f32 {
 
 // (sin 2πt, cos 2πt) by quadrant reduction and minimax polynomials (`math::sin_cos_turns`);
 // the same arithmetic as the CPU, so it does not depend on the GPU's sin/cos precision.
+// Exact for |4t| < 2²², where the CPU's rounding trick is exact too.
 fn vmf_sin_cos_turns(t: f32) -> vec2<f32> {
-    let rounding_shift = 12582912.0;
     let quarter_turns = 4.0 * t;
-    let shifted = quarter_turns + rounding_shift;
-    let quadrant = shifted - rounding_shift;
+    // The CPU rounds with (4t + 1.5·2²³) − 1.5·2²³, ties to even, and reads the quadrant's
+    // low bits off the sum's mantissa. A shader compiler may fold (a + c) − c to a (WGSL
+    // has no `precise`), so the twin uses round(), also ties to even, and the integer's low
+    // bits, which are the same two bits.
+    let quadrant = round(quarter_turns);
+    let q = bitcast<u32>(i32(quadrant));
     let x = (quarter_turns - quadrant) * MCG_FRAC_PI_2;
     let x2 = x * x;
     let s = x + x * x2 * (-1.6666655e-1 + x2 * (8.332161e-3 + x2 * -1.9515296e-4));
     let c = 1.0 - 0.5 * x2 + x2 * x2 * (4.1666646e-2 + x2 * (-1.3887316e-3 + x2 * 2.4433157e-5));
-    let q = bitcast<u32>(shifted);
     let swap = 0u - (q & 1u);
     let sin_bits = bitcast<u32>(s);
     let cos_bits = bitcast<u32>(c);

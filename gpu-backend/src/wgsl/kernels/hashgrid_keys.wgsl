@@ -25,7 +25,12 @@ fn hashgrid_hashes(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_wo
         hashes[i] = vec4<u32>(hashgrid_hash_xor_primes(k), hashgrid_hash_mix(k), hashgrid_hash_mix_coherent(k), hashgrid_checksum(k));
     }
     if i < arrayLength(&vertex_keys) {
+        // The parts of `hashgrid_vertex_key` one at a time, so each can be compared: the
+        // stochastic trilinear vertex of `position` read as grid coordinates, the level for
+        // the camera distance, the normal class.
         let q = vertex_queries[i];
-        vertex_keys[i] = hashgrid_vertex_key(levels, q.position, q.normal, q.camera, q.xi_level, q.u_corner);
+        let level = hashgrid_level(levels, distance(q.camera, q.position), q.xi_level);
+        let vertex = hashgrid_stochastic_trilinear(q.position, q.u_corner);
+        vertex_keys[i] = hashgrid_cell_key(vertex, level, hashgrid_normal_class(q.normal));
     }
 }
