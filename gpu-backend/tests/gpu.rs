@@ -437,8 +437,8 @@ fn serial_table_operations_match_the_cpu_outcome_by_outcome() {
 /// racing on the same slots) into a 65 536-slot table, and into a 40 009-slot (prime) one:
 /// the GPU table ends with exactly the CPU's key set (as checksums), each key in one slot, one
 /// `Inserted` per distinct key, and every outcome's slot holds its key's checksum. Broken
-/// once on purpose (the WGSL claim used a plain store instead of the compare-and-swap): the
-/// racing inserts duplicated keys and the test failed.
+/// once on purpose (the WGSL claim used a plain store instead of the compare-and-swap):
+/// racing invocations both reported `Inserted` for one key and the test failed.
 #[test]
 fn concurrent_inserts_end_with_the_cpu_key_set() {
     let Some(ctx) = gpu_or_skip("concurrent_inserts_end_with_the_cpu_key_set") else {
@@ -496,8 +496,6 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
     let mut rng = Pcg64::seed_from_u64(13);
     let mut values: Vec<[f32; 4]> = (0..50_000)
         .map(|_| {
-            let c = || 0.0;
-            let _ = c;
             let mut v = [0.0_f32; 4];
             for x in v.iter_mut().take(3) {
                 *x = (rng.random_range(-30.0_f32..17.0)).exp2();
