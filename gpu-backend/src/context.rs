@@ -10,7 +10,10 @@ use crate::{GpuBuffer, GpuError, WORKGROUP_SIZE};
 
 /// Limits the kernels of this crate rely on, all at or below the WebGPU defaults
 /// (`wgpu::Limits::default()`), checked against the adapter in [`GpuContext::new`].
-const NEEDED_LIMITS: [(&str, fn(&wgpu::Limits) -> u64, u64); 4] = [
+/// A limit's name, how to read it, and the least value the kernels need.
+type NeededLimit = (&'static str, fn(&wgpu::Limits) -> u64, u64);
+
+const NEEDED_LIMITS: [NeededLimit; 4] = [
     (
         "max_storage_buffers_per_shader_stage",
         |l| u64::from(l.max_storage_buffers_per_shader_stage),
@@ -84,7 +87,8 @@ impl GpuContext {
     /// kernels (below WebGPU's defaults), [`GpuError::RequestDevice`] when the adapter
     /// refuses the device.
     pub fn new() -> Result<Self, GpuError> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
         let options = wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::from_env()
                 .unwrap_or(wgpu::PowerPreference::HighPerformance),
@@ -118,11 +122,12 @@ impl GpuContext {
             required_limits: limits,
             ..Default::default()
         };
-        let (device, queue) = pollster::block_on(adapter.request_device(&descriptor)).map_err(
-            |e| GpuError::RequestDevice {
-                reason: e.to_string(),
-            },
-        )?;
+        let (device, queue) =
+            pollster::block_on(adapter.request_device(&descriptor)).map_err(|e| {
+                GpuError::RequestDevice {
+                    reason: e.to_string(),
+                }
+            })?;
         Ok(Self {
             adapter,
             device,
@@ -135,7 +140,10 @@ impl GpuContext {
     /// on every call when there is no adapter.
     pub fn shared() -> Result<&'static GpuContext, GpuError> {
         static SHARED: OnceLock<Result<GpuContext, GpuError>> = OnceLock::new();
-        SHARED.get_or_init(GpuContext::new).as_ref().map_err(Clone::clone)
+        SHARED
+            .get_or_init(GpuContext::new)
+            .as_ref()
+            .map_err(Clone::clone)
     }
 
     /// Name, backend and device type of the adapter in use (e.g. "llvmpipe", Vulkan, Cpu).
@@ -167,7 +175,11 @@ impl GpuContext {
     ///
     /// Validation errors (naga's or the driver's) come back as [`GpuError::Shader`] instead
     /// of wgpu's default panic.
-    pub fn compute_kernel(&self, source: &str, entry_point: &str) -> Result<ComputeKernel, GpuError> {
+    pub fn compute_kernel(
+        &self,
+        source: &str,
+        entry_point: &str,
+    ) -> Result<ComputeKernel, GpuError> {
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let module = self
             .device

@@ -59,7 +59,9 @@ impl fmt::Display for GpuError {
                 "no wgpu adapter found ({reason}); without a GPU install a software Vulkan \
                  driver, e.g. `apt-get install mesa-vulkan-drivers libvulkan1` (lavapipe)"
             ),
-            GpuError::RequestDevice { reason } => write!(f, "the adapter refused a device: {reason}"),
+            GpuError::RequestDevice { reason } => {
+                write!(f, "the adapter refused a device: {reason}")
+            }
             GpuError::LimitTooLow {
                 limit,
                 required,
@@ -76,7 +78,9 @@ impl fmt::Display for GpuError {
                 f,
                 "dispatch of {requested} invocations exceeds the maximum of {maximum}"
             ),
-            GpuError::Map { reason } => write!(f, "mapping a buffer for read-back failed: {reason}"),
+            GpuError::Map { reason } => {
+                write!(f, "mapping a buffer for read-back failed: {reason}")
+            }
         }
     }
 }

@@ -160,8 +160,17 @@ impl<T: Pod> GpuHashTable<T> {
     /// Inserts (or finds) every key with one invocation per key, all racing on the checksum
     /// array (`hashgrid_insert_or_get`). New slots' values are not touched (they keep
     /// whatever the slot held; the CPU table zeroes them).
-    pub fn insert_or_get(&self, ctx: &GpuContext, keys: &[CellKey]) -> Result<Vec<Insert>, GpuError> {
-        Ok(Self::outcomes(self.run(ctx, &self.insert, keys, keys.len() as u32)?))
+    pub fn insert_or_get(
+        &self,
+        ctx: &GpuContext,
+        keys: &[CellKey],
+    ) -> Result<Vec<Insert>, GpuError> {
+        Ok(Self::outcomes(self.run(
+            ctx,
+            &self.insert,
+            keys,
+            keys.len() as u32,
+        )?))
     }
 
     /// Inserts the keys one after another in one invocation: the outcomes are those of the
@@ -171,7 +180,12 @@ impl<T: Pod> GpuHashTable<T> {
         ctx: &GpuContext,
         keys: &[CellKey],
     ) -> Result<Vec<Insert>, GpuError> {
-        Ok(Self::outcomes(self.run(ctx, &self.insert_serial, keys, 1)?))
+        Ok(Self::outcomes(self.run(
+            ctx,
+            &self.insert_serial,
+            keys,
+            1,
+        )?))
     }
 
     /// Looks every key up (`hashgrid_find`): its slot, or `None`.

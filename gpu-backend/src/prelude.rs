@@ -10,7 +10,9 @@
 
 use core::fmt::Write;
 
-use mcg_color_codec::{B10_MAX, LogCodec, MAX_FIELD_BITS, R11_MAX, RGB9E5_MAX, RTXGI_IRRADIANCE_GAMMA};
+use mcg_color_codec::{
+    B10_MAX, LogCodec, MAX_FIELD_BITS, R11_MAX, RGB9E5_MAX, RTXGI_IRRADIANCE_GAMMA,
+};
 
 use crate::WORKGROUP_SIZE;
 
@@ -61,8 +63,16 @@ pub fn generate() -> String {
 
     out.push_str("\n// mcg-vmf\n");
     push_f32(&mut out, "VMF_KAPPA_MAX", mcg_vmf::KAPPA_MAX);
-    push_f32(&mut out, "VMF_UNIFORM_SPHERE_PDF", mcg_vmf::UNIFORM_SPHERE_PDF);
-    push_f32(&mut out, "VMF_CLAMPED_COSINE_KAPPA", mcg_vmf::CLAMPED_COSINE_KAPPA);
+    push_f32(
+        &mut out,
+        "VMF_UNIFORM_SPHERE_PDF",
+        mcg_vmf::UNIFORM_SPHERE_PDF,
+    );
+    push_f32(
+        &mut out,
+        "VMF_CLAMPED_COSINE_KAPPA",
+        mcg_vmf::CLAMPED_COSINE_KAPPA,
+    );
     out.push_str("// private in mcg-vmf, mirrored in mcg-gpu-backend/src/prelude.rs\n");
     for &(name, v) in VMF_MIRRORED {
         push_f32(&mut out, name, v);
@@ -76,7 +86,11 @@ pub fn generate() -> String {
         push_f32(&mut out, name, v);
     }
     // 1 − ε/2, the largest f32 below 1 (mcg-hashgrid clamps uniforms to it).
-    push_f32(&mut out, "HASHGRID_ONE_MINUS_EPSILON", 1.0 - f32::EPSILON / 2.0);
+    push_f32(
+        &mut out,
+        "HASHGRID_ONE_MINUS_EPSILON",
+        1.0 - f32::EPSILON / 2.0,
+    );
 
     out.push_str("\n// mcg-color-codec\n");
     for c in mcg_color_codec::CONSTANTS {
@@ -85,7 +99,11 @@ pub fn generate() -> String {
     push_f32(&mut out, "CODEC_R11_MAX", R11_MAX);
     push_f32(&mut out, "CODEC_B10_MAX", B10_MAX);
     push_f32(&mut out, "CODEC_RGB9E5_MAX", RGB9E5_MAX);
-    push_f32(&mut out, "CODEC_RTXGI_IRRADIANCE_GAMMA", RTXGI_IRRADIANCE_GAMMA);
+    push_f32(
+        &mut out,
+        "CODEC_RTXGI_IRRADIANCE_GAMMA",
+        RTXGI_IRRADIANCE_GAMMA,
+    );
     push_f32(&mut out, "CODEC_LOG_BETA_MAX", LogCodec::BETA_MAX);
     push_u32(&mut out, "CODEC_MAX_FIELD_BITS", MAX_FIELD_BITS);
     out
@@ -99,14 +117,13 @@ mod tests {
     fn floats_round_trip_through_their_text() {
         let text = generate();
         for line in text.lines().filter(|l| l.contains(": f32 = ")) {
-            let literal = line
-                .split(" = ")
-                .nth(1)
-                .unwrap()
-                .trim_end_matches(';');
+            let literal = line.split(" = ").nth(1).unwrap().trim_end_matches(';');
             let v: f32 = literal.parse().unwrap();
             let back: f64 = literal.parse().unwrap();
-            assert_eq!(back as f32, v, "{line}: f64 parse then f32 rounding differs");
+            assert_eq!(
+                back as f32, v,
+                "{line}: f64 parse then f32 rounding differs"
+            );
         }
         assert!(text.contains("const HASHGRID_PRIME_Y: u32 = 2654435761u;"));
         assert!(text.contains("const VMF_KAPPA_MAX: f32 = 1000000.0;"));

@@ -104,7 +104,11 @@ pub mod kernels {
         (
             "hashgrid_table",
             HASHGRID_TABLE,
-            &["hashgrid_insert", "hashgrid_insert_serial", "hashgrid_lookup"],
+            &[
+                "hashgrid_insert",
+                "hashgrid_insert_serial",
+                "hashgrid_lookup",
+            ],
         ),
         ("color_codec", COLOR_CODEC, &["codec_pack_unpack"]),
     ];

@@ -14,8 +14,8 @@ use mcg_gpu_backend::types::{
 };
 use mcg_gpu_backend::{GpuBuffer, GpuContext, shaders};
 use mcg_hashgrid::{
-    AdaptiveGrid, BucketHash, CellKey, ConcurrentTable, HashTable, Insert, checksum,
-    hash_mix, hash_mix_coherent, hash_xor_primes, normal_class, stochastic_trilinear,
+    AdaptiveGrid, BucketHash, CellKey, ConcurrentTable, HashTable, Insert, checksum, hash_mix,
+    hash_mix_coherent, hash_xor_primes, normal_class, stochastic_trilinear,
 };
 use mcg_vmf::{FitParams, MapPrior, PriorDecay, SufficientStats, Vmf};
 use rand::{Rng, RngExt, SeedableRng};
@@ -109,8 +109,8 @@ fn random_unit(rng: &mut impl Rng) -> Vec3 {
 /// series/closed forms at 0.25 and 0.5, C(κ) saturating at 9, sampling saturating at 17) and
 /// across [0, 10⁶].
 const KAPPAS: [f32; 22] = [
-    0.0, 1e-9, 0.99e-7, 1.01e-7, 1e-4, 0.01, 0.2, 0.2499, 0.2501, 0.4999, 0.5001, 1.0, 3.0,
-    8.999, 9.001, 16.99, 17.01, 50.0, 300.0, 1e4, 2e5, 1e6,
+    0.0, 1e-9, 0.99e-7, 1.01e-7, 1e-4, 0.01, 0.2, 0.2499, 0.2501, 0.4999, 0.5001, 1.0, 3.0, 8.999,
+    9.001, 16.99, 17.01, 50.0, 300.0, 1e4, 2e5, 1e6,
 ];
 
 /// vMF pdf and `sample_with_pdf` on 22 × 512 lobes, queries and uniform pairs (fixed seed),
@@ -178,11 +178,10 @@ fn vmf_pdf_and_samples_match_the_cpu() {
             g.direction
         );
         worst_dir = worst_dir.max(err_dir / tol_dir);
-        let tol_p = (tolerance::normalization(kappa)
-            + tolerance::exp_of_product(kappa * r)
-            + kappa * dr)
-            * f64::from(p)
-            + flush;
+        let tol_p =
+            (tolerance::normalization(kappa) + tolerance::exp_of_product(kappa * r) + kappa * dr)
+                * f64::from(p)
+                + flush;
         let err_p = (f64::from(g.pdf) - f64::from(p)).abs();
         assert!(
             err_p <= tol_p,
@@ -217,9 +216,17 @@ fn vmf_reconstruction_and_products_match_the_cpu() {
     for i in 0..2000 {
         let x = Vec3::new(rng.random(), rng.random(), rng.random());
         let mut s = SufficientStats::EMPTY;
-        let light = Vec3::new(rng.random_range(-5.0..5.0), 4.0, rng.random_range(-5.0..5.0));
+        let light = Vec3::new(
+            rng.random_range(-5.0..5.0),
+            4.0,
+            rng.random_range(-5.0..5.0),
+        );
         let spread = [0.01_f32, 0.3, 3.0][i % 3];
-        let params = if i % 2 == 0 { FitParams::MCMM } else { FitParams::MCPG };
+        let params = if i % 2 == 0 {
+            FitParams::MCMM
+        } else {
+            FitParams::MCPG
+        };
         for _ in 0..(i % 40) {
             let y = light + random_unit(&mut rng) * spread * rng.random::<f32>();
             s.update(x, y, rng.random_range(0.0..2.0), &params);
@@ -230,20 +237,31 @@ fn vmf_reconstruction_and_products_match_the_cpu() {
         let prior = MapPrior {
             mean_cosine: [0.0, 0.3][i % 2],
             weight: [0.0, 0.2, 1.0, f32::INFINITY][i % 4],
-            decay: if i % 5 == 0 { PriorDecay::Count } else { PriorDecay::SquaredCount },
+            decay: if i % 5 == 0 {
+                PriorDecay::Count
+            } else {
+                PriorDecay::SquaredCount
+            },
         };
         let other = Vmf::new(random_unit(&mut rng), KAPPAS[i % KAPPAS.len()]).unwrap();
         let kappa = KAPPAS[(i / 3) % KAPPAS.len()];
         stats.push(s);
         queries.push(VmfStatsQuery::new(x, prior, other, kappa));
     }
-    let results = VmfKernels::new(ctx).unwrap().stats(ctx, &stats, &queries).unwrap();
+    let results = VmfKernels::new(ctx)
+        .unwrap()
+        .stats(ctx, &stats, &queries)
+        .unwrap();
     let mut lobes = 0;
     for (i, (s, q)) in stats.iter().zip(&queries).enumerate() {
         let prior = MapPrior {
             mean_cosine: q.prior_mean_cosine,
             weight: q.prior_weight,
-            decay: if q.prior_decay == 1 { PriorDecay::Count } else { PriorDecay::SquaredCount },
+            decay: if q.prior_decay == 1 {
+                PriorDecay::Count
+            } else {
+                PriorDecay::SquaredCount
+            },
         };
         let g = results[i];
         match s.to_vmf(q.shading_point, prior) {
@@ -251,7 +269,11 @@ fn vmf_reconstruction_and_products_match_the_cpu() {
             Some(lobe) => {
                 lobes += 1;
                 let mu = Vec3::from_slice(&g.reconstructed[..3]);
-                assert!((mu - lobe.mu()).length() <= 64.0 * f32::EPSILON, "{i}: μ {mu} vs {}", lobe.mu());
+                assert!(
+                    (mu - lobe.mu()).length() <= 64.0 * f32::EPSILON,
+                    "{i}: μ {mu} vs {}",
+                    lobe.mu()
+                );
                 let k = f64::from(lobe.kappa());
                 assert!(
                     (f64::from(g.reconstructed[3]) - k).abs() <= 64.0 * EPS * k,
@@ -261,9 +283,16 @@ fn vmf_reconstruction_and_products_match_the_cpu() {
                 // Product with `other`, from the CPU's lobe.
                 let (p, scale) = lobe.product(&q.other);
                 let pk = f64::from(p.kappa());
-                assert!((f64::from(g.product[3]) - pk).abs() <= 64.0 * EPS * pk.max(1.0), "{i}: product κ");
+                assert!(
+                    (f64::from(g.product[3]) - pk).abs() <= 64.0 * EPS * pk.max(1.0),
+                    "{i}: product κ"
+                );
                 let pmu = Vec3::from_slice(&g.product[..3]);
-                assert!((pmu - p.mu()).length() <= 1e-4, "{i}: product μ {pmu} vs {}", p.mu());
+                assert!(
+                    (pmu - p.mu()).length() <= 1e-4,
+                    "{i}: product μ {pmu} vs {}",
+                    p.mu()
+                );
                 let exponent = pk - k - f64::from(q.other.kappa());
                 let tol = tolerance::normalization(k)
                     + tolerance::normalization(f64::from(q.other.kappa()))
@@ -273,7 +302,11 @@ fn vmf_reconstruction_and_products_match_the_cpu() {
                     + 64.0 * EPS * (k + pk)
                     + 8.0 * EPS;
                 let err = (f64::from(g.product_scale) - f64::from(scale)).abs();
-                assert!(err <= tol * f64::from(scale) + 1e-30, "{i}: scale {} vs {scale}", g.product_scale);
+                assert!(
+                    err <= tol * f64::from(scale) + 1e-30,
+                    "{i}: scale {} vs {scale}",
+                    g.product_scale
+                );
             }
         }
         let kappa = q.kappa;
@@ -285,7 +318,11 @@ fn vmf_reconstruction_and_products_match_the_cpu() {
             // 2/expm1(2κ): relative error of expm1(2κ) = e^{2κ} − 1 from exp's 3 + 4κ ULP.
             2.0 / (2.0 * kd).exp_m1() * (1.6 * (4.0 + 4.0 * kd) * EPS) + 8.0 * EPS
         };
-        assert!((f64::from(g.mean_cosine) - f64::from(a)).abs() <= tol, "A₃({kappa}): {} vs {a}", g.mean_cosine);
+        assert!(
+            (f64::from(g.mean_cosine) - f64::from(a)).abs() <= tol,
+            "A₃({kappa}): {} vs {a}",
+            g.mean_cosine
+        );
         // Banerjee's κ of the GPU's own A₃ (arithmetic only) matches the CPU's of the same r.
         let kb = mcg_vmf::kappa_from_mean_cosine(g.mean_cosine);
         assert!(
@@ -341,7 +378,9 @@ fn hashes_checksums_and_vertices_match_the_cpu() {
             _pad: 0.0,
         })
         .collect();
-    let kernel = ctx.compute_kernel(shaders::kernels::HASHGRID_KEYS, "hashgrid_hashes").unwrap();
+    let kernel = ctx
+        .compute_kernel(shaders::kernels::HASHGRID_KEYS, "hashgrid_hashes")
+        .unwrap();
     let keys_buffer = ctx.storage_buffer("keys", &keys);
     let hashes: GpuBuffer<[u32; 4]> = ctx.zeroed_buffer("hashes", keys.len());
     let levels_buffer = ctx.uniform_buffer("levels", &levels);
@@ -361,13 +400,22 @@ fn hashes_checksums_and_vertices_match_the_cpu() {
     .unwrap();
     let hashes = ctx.read_back(&hashes).unwrap();
     for (k, h) in keys.iter().zip(&hashes) {
-        let cpu = [hash_xor_primes(k), hash_mix(k), hash_mix_coherent(k), checksum(k)];
+        let cpu = [
+            hash_xor_primes(k),
+            hash_mix(k),
+            hash_mix_coherent(k),
+            checksum(k),
+        ];
         assert_eq!(*h, cpu, "key {k:?}");
     }
     let vertex_keys = ctx.read_back(&vertex_keys).unwrap();
     let mut level_checked = 0;
     for (q, g) in queries.iter().zip(&vertex_keys) {
-        assert_eq!(g.cell, stochastic_trilinear(q.position, q.u_corner), "{q:?}");
+        assert_eq!(
+            g.cell,
+            stochastic_trilinear(q.position, q.u_corner),
+            "{q:?}"
+        );
         assert_eq!(g.class, normal_class(q.normal), "{q:?}");
         let d = q.camera.distance(q.position);
         let w = grid.target_width(d).max(grid.params().min_width);
@@ -415,11 +463,18 @@ fn serial_table_operations_match_the_cpu_outcome_by_outcome() {
             }
         }
         let gpu = GpuHashTable::upload(ctx, &cpu).unwrap();
-        assert_eq!(gpu.params(), HashgridTableParams::new(capacity, probes, hash).unwrap());
+        assert_eq!(
+            gpu.params(),
+            HashgridTableParams::new(capacity, probes, hash).unwrap()
+        );
         // Lookups on the uploaded table.
         let found = gpu.find(ctx, &keys).unwrap();
         for (k, f) in keys.iter().zip(&found) {
-            assert_eq!(*f, cpu.find(k), "find {k:?} in ({capacity}, {probes}, {hash:?})");
+            assert_eq!(
+                *f,
+                cpu.find(k),
+                "find {k:?} in ({capacity}, {probes}, {hash:?})"
+            );
         }
         let outcomes = gpu.insert_or_get_serial(ctx, &keys).unwrap();
         let mut full = 0;
@@ -466,7 +521,11 @@ fn concurrent_inserts_end_with_the_cpu_key_set() {
         for k in &keys {
             assert!(cpu.insert_or_get(k).slot().is_some());
         }
-        let mut cpu_set: Vec<u32> = cpu.into_checksums().into_iter().filter(|&w| w > 1).collect();
+        let mut cpu_set: Vec<u32> = cpu
+            .into_checksums()
+            .into_iter()
+            .filter(|&w| w > 1)
+            .collect();
         let mut gpu_set: Vec<u32> = words.iter().copied().filter(|&w| w > 1).collect();
         cpu_set.sort_unstable();
         gpu_set.sort_unstable();
@@ -503,18 +562,38 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
             v
         })
         .collect();
-    let specials = [0.0, -0.0, -1.0, 1.0, 65024.0, 65025.0, 1e9, f32::INFINITY, f32::NEG_INFINITY, 6.1035156e-5, 1.0 + 1.0 / 128.0, 1.0 + 3.0 / 128.0, 1e-40];
+    let specials = [
+        0.0,
+        -0.0,
+        -1.0,
+        1.0,
+        65024.0,
+        65025.0,
+        1e9,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        6.1035156e-5,
+        1.0 + 1.0 / 128.0,
+        1.0 + 3.0 / 128.0,
+        1e-40,
+    ];
     for &a in &specials {
         for &b in &specials {
             values.push([a, b, 1.5, 0.0]);
         }
     }
-    let kernel = ctx.compute_kernel(shaders::kernels::COLOR_CODEC, "codec_pack_unpack").unwrap();
+    let kernel = ctx
+        .compute_kernel(shaders::kernels::COLOR_CODEC, "codec_pack_unpack")
+        .unwrap();
     let values_buffer = ctx.storage_buffer("values", &values);
     let words: GpuBuffer<[u32; 4]> = ctx.zeroed_buffer("words", values.len());
     let decoded: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("decoded", 2 * values.len());
-    ctx.dispatch(&kernel, &[values_buffer.raw(), words.raw(), decoded.raw()], values.len() as u32)
-        .unwrap();
+    ctx.dispatch(
+        &kernel,
+        &[values_buffer.raw(), words.raw(), decoded.raw()],
+        values.len() as u32,
+    )
+    .unwrap();
     let words = ctx.read_back(&words).unwrap();
     let decoded = ctx.read_back(&decoded).unwrap();
     for (i, v) in values.iter().enumerate() {
@@ -525,8 +604,16 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
         assert_eq!(words[i][1], e5, "RGB9E5 of {rgb}");
         let a = R11G11B10::unpack(r11);
         let b = Rgb9E5::unpack(e5);
-        assert_eq!(decoded[2 * i][..3], a.to_array(), "R11G11B10 unpack of {r11:#x}");
-        assert_eq!(decoded[2 * i + 1][..3], b.to_array(), "RGB9E5 unpack of {e5:#x}");
+        assert_eq!(
+            decoded[2 * i][..3],
+            a.to_array(),
+            "R11G11B10 unpack of {r11:#x}"
+        );
+        assert_eq!(
+            decoded[2 * i + 1][..3],
+            b.to_array(),
+            "RGB9E5 unpack of {e5:#x}"
+        );
     }
 }
 
@@ -537,7 +624,10 @@ fn context_is_headless_and_featureless() {
         return;
     };
     let info = ctx.adapter_info();
-    println!("adapter: {} ({:?}, {:?})", info.name, info.backend, info.device_type);
+    println!(
+        "adapter: {} ({:?}, {:?})",
+        info.name, info.backend, info.device_type
+    );
     assert_eq!(ctx.device().features(), wgpu_features_empty());
     let _: &GpuContext = ctx;
 }

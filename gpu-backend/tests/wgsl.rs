@@ -47,13 +47,13 @@ const CHECKSUM_DECLARATION: &str =
 
 #[test]
 fn library_modules_validate_alone_and_together() {
-    parse_and_validate("prelude", &format!("{}{}", shaders::PRELUDE, shaders::COMMON));
+    parse_and_validate(
+        "prelude",
+        &format!("{}{}", shaders::PRELUDE, shaders::COMMON),
+    );
     parse_and_validate("vmf", shaders::VMF_MODULE);
     parse_and_validate("color_codec", shaders::COLOR_CODEC_MODULE);
-    parse_and_validate(
-        "hashgrid",
-        shaders::HASHGRID_MODULE,
-    );
+    parse_and_validate("hashgrid", shaders::HASHGRID_MODULE);
     parse_and_validate(
         "hashgrid_table",
         &format!(
@@ -90,7 +90,10 @@ fn kernel_modules_validate_with_their_entry_points() {
             assert_eq!(ep.stage, naga::ShaderStage::Compute);
             let size = ep.workgroup_size;
             assert_eq!(size, [mcg_gpu_backend::WORKGROUP_SIZE, 1, 1], "{name}::{e}");
-            assert!(size.iter().product::<u32>() <= 256, "WebGPU's default limit");
+            assert!(
+                size.iter().product::<u32>() <= 256,
+                "WebGPU's default limit"
+            );
         }
     }
 }
@@ -162,8 +165,14 @@ fn wgsl_structs_match_the_rust_pod_types() {
         size_of::<SufficientStats>(),
         &[
             ("mean_target_x", offset_of!(SufficientStats, mean_target)),
-            ("mean_target_y", offset_of!(SufficientStats, mean_target) + 4),
-            ("mean_target_z", offset_of!(SufficientStats, mean_target) + 8),
+            (
+                "mean_target_y",
+                offset_of!(SufficientStats, mean_target) + 4,
+            ),
+            (
+                "mean_target_z",
+                offset_of!(SufficientStats, mean_target) + 8,
+            ),
             ("weight_sum", offset_of!(SufficientStats, weight_sum)),
             (
                 "one_minus_mean_cosine",
@@ -205,11 +214,26 @@ fn wgsl_structs_match_the_rust_pod_types() {
         "HashgridLevels",
         size_of::<types::HashgridLevelParams>(),
         &[
-            ("tan_half_angle", offset_of!(types::HashgridLevelParams, tan_half_angle)),
-            ("min_width", offset_of!(types::HashgridLevelParams, min_width)),
-            ("levels_per_ln", offset_of!(types::HashgridLevelParams, levels_per_ln)),
-            ("ln_per_level", offset_of!(types::HashgridLevelParams, ln_per_level)),
-            ("max_level", offset_of!(types::HashgridLevelParams, max_level)),
+            (
+                "tan_half_angle",
+                offset_of!(types::HashgridLevelParams, tan_half_angle),
+            ),
+            (
+                "min_width",
+                offset_of!(types::HashgridLevelParams, min_width),
+            ),
+            (
+                "levels_per_ln",
+                offset_of!(types::HashgridLevelParams, levels_per_ln),
+            ),
+            (
+                "ln_per_level",
+                offset_of!(types::HashgridLevelParams, ln_per_level),
+            ),
+            (
+                "max_level",
+                offset_of!(types::HashgridLevelParams, max_level),
+            ),
             ("_pad0", 20),
             ("_pad1", 24),
             ("_pad2", 28),
