@@ -11,7 +11,8 @@
 use core::fmt::Write;
 
 use mcg_color_codec::{
-    B10_MAX, LogCodec, MAX_FIELD_BITS, R11_MAX, RGB9E5_MAX, RTXGI_IRRADIANCE_GAMMA,
+    B10_MAX, IrradianceLayout, LogCodec, LogField, MAX_FIELD_BITS, R11_MAX, RGB9E5_MAX,
+    RTXGI_IRRADIANCE_GAMMA, VisibilityLayout,
 };
 
 use crate::WORKGROUP_SIZE;
@@ -106,7 +107,43 @@ pub fn generate() -> String {
     );
     push_f32(&mut out, "CODEC_LOG_BETA_MAX", LogCodec::BETA_MAX);
     push_u32(&mut out, "CODEC_MAX_FIELD_BITS", MAX_FIELD_BITS);
+    out.push_str("// log-coded fields of the ADGI layouts (`CodecLogField` in color_codec.wgsl)\n");
+    for (name, field) in [
+        ("CODEC_IRRADIANCE_R", IrradianceLayout::ADGI.channel(0)),
+        ("CODEC_IRRADIANCE_G", IrradianceLayout::ADGI.channel(1)),
+        ("CODEC_IRRADIANCE_B", IrradianceLayout::ADGI.channel(2)),
+        ("CODEC_VISIBILITY_MEAN", VisibilityLayout::ADGI.channel(0)),
+        (
+            "CODEC_VISIBILITY_MEAN_SQ",
+            VisibilityLayout::ADGI.channel(1),
+        ),
+    ] {
+        push_log_field(&mut out, name, &field);
+    }
     out
+}
+
+/// The derived constants of one log-coded field, as `LogCodec::field` computes them (its
+/// fields are private; the formulas are mirrored here and pinned by the bit-exact GPU
+/// parity tests of the encoded words).
+fn push_log_field(out: &mut String, name: &str, field: &LogField) {
+    let codec = field.codec();
+    let m = field.max_code() as f32;
+    let (beta, gamma) = (codec.beta(), codec.gamma());
+    push_f32(out, &format!("{name}_GAMMA"), gamma);
+    push_f32(out, &format!("{name}_INV_GAMMA"), 1.0 / gamma);
+    push_f32(out, &format!("{name}_ENCODE_SCALE"), m / beta);
+    push_f32(
+        out,
+        &format!("{name}_DECODE_SCALE"),
+        beta / (m * core::f32::consts::LN_2),
+    );
+    push_u32(out, &format!("{name}_MAX_CODE"), field.max_code());
+    push_f32(
+        out,
+        &format!("{name}_DOWN_TOLERANCE"),
+        2.0 * m * (6.4e-7 + 9.4e-7 / beta) + 1.0 / 4096.0,
+    );
 }
 
 #[cfg(test)]

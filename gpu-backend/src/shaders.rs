@@ -12,7 +12,8 @@
 //! | [`VMF`] | `Vmf`, `SufficientStats`, `vmf_pdf`, `vmf_sample`, `vmf_sample_with_pdf`, `vmf_from_sufficient_stats`, `vmf_product`, mean cosine ↔ κ |
 //! | [`HASHGRID`] | `CellKey`, hashes, checksum, slot index, stochastic trilinear vertex, level choice |
 //! | [`HASHGRID_TABLE`] | `hashgrid_find`, `hashgrid_insert_or_get` on `hashgrid_checksums` |
-//! | [`COLOR_CODEC`] | R11G11B10, RGB9E5 pack and unpack |
+//! | [`COLOR_CODEC`] | R11G11B10, RGB9E5, gamma-5 R10G10B10A2, the log codec (ADGI eq. 21) with round-down / nearest / stochastic rounding, the 9/9/8 + 6 irradiance word, the moving-average update |
+//! | [`COLOR_CODEC_TEXELS`] | `codec_irradiance_update_atomic`: the update as a compare-and-swap loop on `codec_texels` |
 //!
 //! Names are prefixed by module (`vmf_`, `hashgrid_`, `codec_`; constants `VMF_`, `HASHGRID_`,
 //! `CODEC_`/layout names of mcg-color-codec, `MCG_`), so modules compose without clashes.
@@ -34,6 +35,12 @@ pub const HASHGRID: &str = include_str!("wgsl/hashgrid.wgsl");
 pub const HASHGRID_TABLE: &str = include_str!("wgsl/hashgrid_table.wgsl");
 /// The mcg-color-codec twin, `src/wgsl/color_codec.wgsl`.
 pub const COLOR_CODEC: &str = include_str!("wgsl/color_codec.wgsl");
+
+/// The mcg-color-codec texel twin, `src/wgsl/color_codec_texels.wgsl`:
+/// `codec_irradiance_update_atomic`, the moving-average update as a compare-and-swap loop on a
+/// `codec_texels: array<atomic<u32>>` the includer declares. Needs [`PRELUDE`] and
+/// [`COLOR_CODEC`].
+pub const COLOR_CODEC_TEXELS: &str = include_str!("wgsl/color_codec_texels.wgsl");
 
 /// [`PRELUDE`] + [`COMMON`] + [`VMF`]: a complete module to append your own code to.
 pub const VMF_MODULE: &str = concat!(
@@ -96,6 +103,15 @@ pub mod kernels {
         include_str!("wgsl/kernels/color_codec.wgsl"),
     );
 
+    /// Entry point `codec_texel_updates`: bindings `codec_texels`, `updates`, `params`.
+    pub const COLOR_CODEC_TEXELS: &str = concat!(
+        include_str!("wgsl/generated/prelude.wgsl"),
+        include_str!("wgsl/common.wgsl"),
+        include_str!("wgsl/color_codec.wgsl"),
+        include_str!("wgsl/color_codec_texels.wgsl"),
+        include_str!("wgsl/kernels/color_codec_texels.wgsl"),
+    );
+
     /// Every kernel module with its entry points, for validation loops.
     pub const ALL: &[(&str, &str, &[&str])] = &[
         ("vmf", VMF, &["vmf_pdf_and_sample"]),
@@ -111,5 +127,10 @@ pub mod kernels {
             ],
         ),
         ("color_codec", COLOR_CODEC, &["codec_pack_unpack"]),
+        (
+            "color_codec_texels",
+            COLOR_CODEC_TEXELS,
+            &["codec_texel_updates"],
+        ),
     ];
 }

@@ -542,16 +542,19 @@ fn concurrent_inserts_end_with_the_cpu_key_set() {
     }
 }
 
-/// R11G11B10 and RGB9E5 words bit for bit, and their decoded values exactly, on 50 000
-/// colours over 2⁻³⁰..2¹⁷ (log-uniform), negatives, zeros, overflow, infinities and the
-/// rounding ties of both formats. Broken once on purpose (round-half-up instead of
-/// half-even in the WGSL ufloat): failed.
+/// R11G11B10, RGB9E5, gamma-5 R10G10B10A2 and the ADGI irradiance word (log codec with
+/// round-down, nearest and stochastic rounding; count field) bit for bit, and their decoded
+/// values exactly, on 50 000 colours over 2⁻³⁰..2¹⁷ (log-uniform), negatives, zeros,
+/// overflow, infinities and the rounding ties of the float formats. Broken once on purpose
+/// (round-half-up instead of half-even in the WGSL ufloat): failed.
 #[test]
 fn packed_colour_words_match_the_cpu_bit_for_bit() {
     let Some(ctx) = gpu_or_skip("packed_colour_words_match_the_cpu_bit_for_bit") else {
         return;
     };
-    use mcg_color_codec::{R11G11B10, Rgb9E5};
+    use mcg_color_codec::{
+        ColorCodec, Gamma5R10G10B10A2, IrradianceLayout, R11G11B10, Rgb9E5, Rounding,
+    };
     let mut rng = Pcg64::seed_from_u64(13);
     let mut values: Vec<[f32; 4]> = (0..50_000)
         .map(|_| {
@@ -559,6 +562,7 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
             for x in v.iter_mut().take(3) {
                 *x = (rng.random_range(-30.0_f32..17.0)).exp2();
             }
+            v[3] = rng.random();
             v
         })
         .collect();
@@ -579,15 +583,15 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
     ];
     for &a in &specials {
         for &b in &specials {
-            values.push([a, b, 1.5, 0.0]);
+            values.push([a, b, 1.5, 0.5]);
         }
     }
     let kernel = ctx
         .compute_kernel(shaders::kernels::COLOR_CODEC, "codec_pack_unpack")
         .unwrap();
     let values_buffer = ctx.storage_buffer("values", &values);
-    let words: GpuBuffer<[u32; 4]> = ctx.zeroed_buffer("words", values.len());
-    let decoded: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("decoded", 2 * values.len());
+    let words: GpuBuffer<[u32; 4]> = ctx.zeroed_buffer("words", 2 * values.len());
+    let decoded: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("decoded", 5 * values.len());
     ctx.dispatch(
         &kernel,
         &[values_buffer.raw(), words.raw(), decoded.raw()],
@@ -596,24 +600,150 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
     .unwrap();
     let words = ctx.read_back(&words).unwrap();
     let decoded = ctx.read_back(&decoded).unwrap();
+    let irr = IrradianceLayout::ADGI;
     for (i, v) in values.iter().enumerate() {
         let rgb = Vec3::new(v[0], v[1], v[2]);
-        let r11 = R11G11B10::pack(rgb);
-        let e5 = Rgb9E5::pack(rgb);
-        assert_eq!(words[i][0], r11, "R11G11B10 of {rgb}");
-        assert_eq!(words[i][1], e5, "RGB9E5 of {rgb}");
-        let a = R11G11B10::unpack(r11);
-        let b = Rgb9E5::unpack(e5);
+        let count = i as u32 % 64;
+        let cpu = [
+            R11G11B10::pack(rgb),
+            Rgb9E5::pack(rgb),
+            Gamma5R10G10B10A2.encode(rgb),
+            irr.encode(rgb, count, Rounding::Down).0,
+        ];
         assert_eq!(
-            decoded[2 * i][..3],
-            a.to_array(),
-            "R11G11B10 unpack of {r11:#x}"
+            words[2 * i],
+            cpu,
+            "R11G11B10, RGB9E5, gamma-5, irradiance (down) of {rgb}"
         );
+        let nearest = irr.encode(rgb, count, Rounding::Nearest).0;
+        let stochastic = irr.encode(rgb, count, Rounding::Stochastic(v[3])).0;
         assert_eq!(
-            decoded[2 * i + 1][..3],
-            b.to_array(),
-            "RGB9E5 unpack of {e5:#x}"
+            words[2 * i + 1][..2],
+            [nearest, stochastic],
+            "irradiance of {rgb}, u = {}",
+            v[3]
         );
+        let cpu_decoded = [
+            R11G11B10::unpack(cpu[0]),
+            Rgb9E5::unpack(cpu[1]),
+            Gamma5R10G10B10A2.decode(cpu[2]),
+            irr.decode(cpu[3].into()),
+            irr.decode(nearest.into()),
+        ];
+        for (k, d) in cpu_decoded.iter().enumerate() {
+            assert_eq!(decoded[5 * i + k][..3], d.to_array(), "decode {k} of {rgb}");
+        }
+    }
+}
+
+/// 65 536 invocations fold samples into 64 shared irradiance texels (1 024 updates per
+/// texel, racing) with the compare-and-swap loop. Hypothesis: the result is one that some
+/// serial order of the updates gives. With one sample value per texel every order gives the
+/// same word, so each texel must equal the CPU's word after 1 024 serial updates, and its
+/// count N_max (63) or, for texels given fewer updates than N_max, exactly their number.
+/// With distinct samples per update the count must still be exact and the value lie within
+/// the samples' range (± one quantum). Broken once on purpose (an `atomicStore` of the
+/// update instead of the compare-and-swap): lost updates gave counts below the number of
+/// updates and the test failed.
+#[test]
+fn concurrent_texel_updates_match_a_serial_order() {
+    let Some(ctx) = gpu_or_skip("concurrent_texel_updates_match_a_serial_order") else {
+        return;
+    };
+    use mcg_color_codec::{IrradianceLayout, IrradianceWord, MovingAverage, Rounding};
+    #[repr(C)]
+    #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+    struct Update {
+        sample: Vec3,
+        texel: u32,
+    }
+    #[repr(C)]
+    #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+    struct Params {
+        max_count: u32,
+        rounding_mode: u32,
+        rounding_u: f32,
+        _pad: u32,
+    }
+    let layout = IrradianceLayout::ADGI;
+    let average = MovingAverage::STATIC;
+    let kernel = ctx
+        .compute_kernel(shaders::kernels::COLOR_CODEC_TEXELS, "codec_texel_updates")
+        .unwrap();
+    let params = ctx.uniform_buffer(
+        "params",
+        &Params {
+            max_count: average.max_count(),
+            rounding_mode: 1,
+            rounding_u: 0.0,
+            _pad: 0,
+        },
+    );
+    let mut rng = Pcg64::seed_from_u64(17);
+    let texels = 64_u32;
+    let per_texel: Vec<Vec3> = (0..texels)
+        .map(|_| {
+            Vec3::new(
+                rng.random_range(0.0..20.0),
+                rng.random_range(0.0..2.0),
+                rng.random_range(0.0..0.1),
+            )
+        })
+        .collect();
+    // Equal samples per texel; texels 60..64 get only 5..40 updates (below N_max).
+    let mut updates = Vec::new();
+    for k in 0..65_536_u32 {
+        let t = k % texels;
+        if t >= 60 && k / texels >= 5 + 10 * (t - 60) {
+            continue;
+        }
+        updates.push(Update {
+            sample: per_texel[t as usize],
+            texel: t,
+        });
+    }
+    let words = ctx.zeroed_buffer::<u32>("texels", texels as usize);
+    let updates_buffer = ctx.storage_buffer("updates", &updates);
+    ctx.dispatch(
+        &kernel,
+        &[words.raw(), updates_buffer.raw(), params.raw()],
+        updates.len() as u32,
+    )
+    .unwrap();
+    let gpu = ctx.read_back(&words).unwrap();
+    for t in 0..texels as usize {
+        let n = updates.iter().filter(|u| u.texel as usize == t).count();
+        let mut cpu = 0_u32;
+        for _ in 0..n {
+            cpu = average.update(&layout, cpu, per_texel[t], Rounding::Nearest);
+        }
+        assert_eq!(
+            layout.count(IrradianceWord(gpu[t])),
+            (n as u32).min(average.max_count()),
+            "texel {t}"
+        );
+        assert_eq!(gpu[t], cpu, "texel {t} after {n} equal updates");
+    }
+    // Distinct samples: exact counts, values within the samples' range.
+    let updates: Vec<Update> = (0..65_536_u32)
+        .map(|k| Update {
+            sample: Vec3::splat(rng.random_range(1.0..2.0)),
+            texel: k % texels,
+        })
+        .collect();
+    let words = ctx.zeroed_buffer::<u32>("texels", texels as usize);
+    let updates_buffer = ctx.storage_buffer("updates", &updates);
+    ctx.dispatch(
+        &kernel,
+        &[words.raw(), updates_buffer.raw(), params.raw()],
+        updates.len() as u32,
+    )
+    .unwrap();
+    for w in ctx.read_back(&words).unwrap() {
+        let w = IrradianceWord(w);
+        assert_eq!(layout.count(w), average.max_count());
+        let v = layout.decode(w);
+        assert!(v.min_element() >= 0.97 && v.max_element() <= 2.03, "{v}");
     }
 }
 

@@ -45,6 +45,9 @@ fn parse_and_validate(name: &str, source: &str) -> naga::Module {
 const CHECKSUM_DECLARATION: &str =
     "@group(0) @binding(0) var<storage, read_write> hashgrid_checksums: array<atomic<u32>>;\n";
 
+const TEXEL_DECLARATION: &str =
+    "@group(0) @binding(1) var<storage, read_write> codec_texels: array<atomic<u32>>;\n";
+
 #[test]
 fn library_modules_validate_alone_and_together() {
     parse_and_validate(
@@ -53,6 +56,15 @@ fn library_modules_validate_alone_and_together() {
     );
     parse_and_validate("vmf", shaders::VMF_MODULE);
     parse_and_validate("color_codec", shaders::COLOR_CODEC_MODULE);
+    parse_and_validate(
+        "color_codec_texels",
+        &format!(
+            "{}{}{}",
+            shaders::COLOR_CODEC_MODULE,
+            shaders::COLOR_CODEC_TEXELS,
+            TEXEL_DECLARATION
+        ),
+    );
     parse_and_validate("hashgrid", shaders::HASHGRID_MODULE);
     parse_and_validate(
         "hashgrid_table",
@@ -71,7 +83,9 @@ fn library_modules_validate_alone_and_together() {
         shaders::HASHGRID,
         shaders::HASHGRID_TABLE,
         shaders::COLOR_CODEC,
+        shaders::COLOR_CODEC_TEXELS,
         CHECKSUM_DECLARATION,
+        TEXEL_DECLARATION,
     ]
     .concat();
     parse_and_validate("all", &all);
@@ -148,7 +162,9 @@ fn wgsl_structs_match_the_rust_pod_types() {
         shaders::HASHGRID,
         shaders::HASHGRID_TABLE,
         shaders::COLOR_CODEC,
+        shaders::COLOR_CODEC_TEXELS,
         CHECKSUM_DECLARATION,
+        TEXEL_DECLARATION,
     ]
     .concat();
     let m = parse_and_validate("all", &all);

@@ -88,3 +88,206 @@ fn codec_rgb9e5_unpack(word: u32) -> vec3<f32> {
     let scale = codec_pow2(i32(word >> 27u) - 24);
     return vec3<f32>(f32(word & 0x1ffu), f32((word >> 9u) & 0x1ffu), f32((word >> 18u) & 0x1ffu)) * scale;
 }
+
+// ---------------------------------------------------------------------------------------
+// Gamma-5 R10G10B10A2 (the RTXGI / DDGI irradiance format): c = v^{1/5} in 10 bits per
+// channel, alpha bits set.
+
+// `Gamma5R10G10B10A2::encode_channel`: v in [0, 1] (clamped), c = 2^{log2(v)/5} by the
+// codec's own ln and exp2, rounded to nearest (ties to even) in 10 bits.
+fn codec_gamma5_encode_channel(v_in: f32) -> u32 {
+    let v = select(0.0, min(v_in, 1.0), v_in > 7.9e-31);
+    let c0 = codec_fast_exp2(codec_fast_ln_ge1(max(v, 7.9e-31)) * (MCG_LOG2_E / CODEC_RTXGI_IRRADIANCE_GAMMA));
+    let c = select(0.0, min(c0, 1.0), v > 0.0);
+    return min(u32(round(c * 1023.0)), 1023u);
+}
+
+// `Gamma5R10G10B10A2::decode_channel`: c⁵ of the 10-bit code.
+fn codec_gamma5_decode_channel(code: u32) -> f32 {
+    let c = f32(code & 0x3ffu) * (1.0 / 1023.0);
+    let c2 = c * c;
+    return c2 * c2 * c;
+}
+
+// `Gamma5R10G10B10A2::encode`.
+fn codec_gamma5_pack(rgb: vec3<f32>) -> u32 {
+    return codec_gamma5_encode_channel(rgb.x) | (codec_gamma5_encode_channel(rgb.y) << 10u) | (codec_gamma5_encode_channel(rgb.z) << 20u) | (3u << 30u);
+}
+
+// `Gamma5R10G10B10A2::decode`.
+fn codec_gamma5_unpack(word: u32) -> vec3<f32> {
+    return vec3<f32>(codec_gamma5_decode_channel(word), codec_gamma5_decode_channel(word >> 10u), codec_gamma5_decode_channel(word >> 20u));
+}
+
+// ---------------------------------------------------------------------------------------
+// Log codec (ADGI eq. 21 and App. B): u = ln(1 + γv)/β, quantised to the field's codes.
+
+// One log-coded field: the codec's γ and the field's derived scales, emitted per layout
+// channel in the prelude (CODEC_<LAYOUT>_<CHANNEL>_*), so the divisions are the CPU's.
+struct CodecLogField {
+    gamma: f32,
+    inv_gamma: f32,
+    encode_scale: f32,
+    decode_scale: f32,
+    max_code: u32,
+    down_tolerance: f32,
+}
+
+// How a value is rounded to a code (`mcg_color_codec::Rounding`): CODEC_ROUND_* and, for
+// stochastic rounding, the caller's uniform in [0, 1).
+struct CodecRounding {
+    mode: u32,
+    u: f32,
+}
+
+const CODEC_ROUND_DOWN: u32 = 0u;
+const CODEC_ROUND_NEAREST: u32 = 1u;
+const CODEC_ROUND_STOCHASTIC: u32 = 2u;
+
+// `Rounding::for_channel`: channel k > 0 of a stochastic rounding uses the uniform shifted
+// by k times the golden ratio's fraction, wrapped to [0, 1).
+fn codec_rounding_for_channel(rounding: CodecRounding, k: u32) -> CodecRounding {
+    if rounding.mode != CODEC_ROUND_STOCHASTIC || k == 0u {
+        return rounding;
+    }
+    let v = rounding.u + f32(k) * 0.618034;
+    return CodecRounding(rounding.mode, v - f32(u32(v)));
+}
+
+// ln x for x ≥ 1 (`math::fast_ln_ge1`): musl's reduction x = 2ᵉ m, m ∈ [√½, √2), and
+// Cephes' logf polynomial by Estrin's scheme, in the CPU's order.
+fn codec_fast_ln_ge1(x: f32) -> f32 {
+    let bits = bitcast<u32>(x);
+    let shifted = bits - 0x3f3504f3u;
+    let e = f32(bitcast<i32>(shifted) >> 23u);
+    let m = bitcast<f32>(bits - (shifted & 0xff800000u));
+    let t = m - 1.0;
+    let t2 = t * t;
+    let t4 = t2 * t2;
+    let p01 = 0.3333333 + -2.4999994e-1 * t;
+    let p23 = 2.0000715e-1 + -1.6668058e-1 * t;
+    let p45 = 1.4249323e-1 + -1.2420141e-1 * t;
+    let p67 = 1.1676999e-1 + -1.151461e-1 * t;
+    let p03 = p01 + p23 * t2;
+    let p47 = p45 + p67 * t2;
+    let p = p03 + p47 * t4 + 7.0376836e-2 * (t4 * t4);
+    let y = t * t2 * p + e * -2.1219444e-4 - 0.5 * t2;
+    return t + y + e * 0.6933594;
+}
+
+// 2^x (`math::fast_exp2`): x = i + f with i = round(x) (ties to even, like the CPU's
+// 1.5·2²³ trick, which a shader compiler could fold away), Cephes' exp2f polynomial.
+fn codec_fast_exp2(x: f32) -> f32 {
+    let i = round(x);
+    let f = x - i;
+    let f2 = f * f;
+    let inner = 9.618437e-3 + 1.3398874e-3 * f + 1.5353362e-4 * f2;
+    let mid = 2.4022648e-1 + 5.5503325e-2 * f + f2 * inner;
+    let p = 1.0 + 6.931472e-1 * f + f2 * mid;
+    return p * bitcast<f32>(u32(i32(i) + 127) << 23u);
+}
+
+// `LogField::decode`: (2^{q·β/(m ln 2)} − 1)/γ, ≥ 0.
+fn codec_log_decode(field: CodecLogField, code: u32) -> f32 {
+    let q = f32(min(code, field.max_code));
+    return max((codec_fast_exp2(q * field.decode_scale) - 1.0) * field.inv_gamma, 0.0);
+}
+
+// `LogField::encode`: the code of v ≥ 0 (negatives and NaN as 0) with `rounding`. Round
+// down is exact: where x = ln(1 + γv)·m/β lies within the polynomial's error of an integer,
+// the code is settled by decoding the candidate, as on the CPU.
+fn codec_log_encode(field: CodecLogField, v_in: f32, rounding: CodecRounding) -> u32 {
+    let v = max(v_in, 0.0);
+    let max_code = f32(field.max_code);
+    let x = min(codec_fast_ln_ge1(field.gamma * v + 1.0) * field.encode_scale, max_code + 0.5);
+    let r = round(x);
+    let d = x - r;
+    var code: f32;
+    switch rounding.mode {
+        case 0u: {
+            if abs(d) <= field.down_tolerance {
+                let q0 = floor(max(x - 0.5, 0.0));
+                let next = min(q0 + 1.0, max_code);
+                code = q0 + select(0.0, 1.0, codec_log_decode(field, u32(next)) <= v);
+            } else {
+                code = r - select(0.0, 1.0, d < 0.0);
+            }
+        }
+        case 1u: {
+            code = r + select(0.0, 1.0, d >= 0.5);
+        }
+        default: {
+            let threshold = select(0.0, rounding.u, rounding.u >= 0.0);
+            let q = floor(x);
+            code = q + select(0.0, 1.0, x - q > threshold);
+        }
+    }
+    return u32(min(code, max_code));
+}
+
+// The ADGI irradiance word (sec. 4.3): R, G, B log codes of 9, 9, 8 bits and a 6-bit count.
+fn codec_irradiance_field(channel: u32) -> CodecLogField {
+    switch channel {
+        case 0u: {
+            return CodecLogField(CODEC_IRRADIANCE_R_GAMMA, CODEC_IRRADIANCE_R_INV_GAMMA, CODEC_IRRADIANCE_R_ENCODE_SCALE, CODEC_IRRADIANCE_R_DECODE_SCALE, CODEC_IRRADIANCE_R_MAX_CODE, CODEC_IRRADIANCE_R_DOWN_TOLERANCE);
+        }
+        case 1u: {
+            return CodecLogField(CODEC_IRRADIANCE_G_GAMMA, CODEC_IRRADIANCE_G_INV_GAMMA, CODEC_IRRADIANCE_G_ENCODE_SCALE, CODEC_IRRADIANCE_G_DECODE_SCALE, CODEC_IRRADIANCE_G_MAX_CODE, CODEC_IRRADIANCE_G_DOWN_TOLERANCE);
+        }
+        default: {
+            return CodecLogField(CODEC_IRRADIANCE_B_GAMMA, CODEC_IRRADIANCE_B_INV_GAMMA, CODEC_IRRADIANCE_B_ENCODE_SCALE, CODEC_IRRADIANCE_B_DECODE_SCALE, CODEC_IRRADIANCE_B_MAX_CODE, CODEC_IRRADIANCE_B_DOWN_TOLERANCE);
+        }
+    }
+}
+
+fn codec_bit_mask(bits: u32) -> u32 {
+    return select((1u << bits) - 1u, 0xffffffffu, bits >= 32u);
+}
+
+fn codec_irradiance_max_count() -> u32 {
+    return codec_bit_mask(IRRADIANCE_COUNT_BITS);
+}
+
+// `IrradianceLayout::ADGI.encode(rgb, count, rounding)`.
+fn codec_irradiance_encode(rgb: vec3<f32>, count: u32, rounding: CodecRounding) -> u32 {
+    let r = codec_log_encode(codec_irradiance_field(0u), rgb.x, codec_rounding_for_channel(rounding, 0u));
+    let g = codec_log_encode(codec_irradiance_field(1u), rgb.y, codec_rounding_for_channel(rounding, 1u));
+    let b = codec_log_encode(codec_irradiance_field(2u), rgb.z, codec_rounding_for_channel(rounding, 2u));
+    return ((min(count, codec_irradiance_max_count()) & codec_bit_mask(IRRADIANCE_COUNT_BITS)) << IRRADIANCE_COUNT_SHIFT)
+        | ((r & codec_bit_mask(IRRADIANCE_R_BITS)) << IRRADIANCE_R_SHIFT)
+        | ((g & codec_bit_mask(IRRADIANCE_G_BITS)) << IRRADIANCE_G_SHIFT)
+        | ((b & codec_bit_mask(IRRADIANCE_B_BITS)) << IRRADIANCE_B_SHIFT);
+}
+
+// `IrradianceLayout::ADGI.decode(word)`.
+fn codec_irradiance_decode(word: u32) -> vec3<f32> {
+    return vec3<f32>(
+        codec_log_decode(codec_irradiance_field(0u), (word >> IRRADIANCE_R_SHIFT) & codec_bit_mask(IRRADIANCE_R_BITS)),
+        codec_log_decode(codec_irradiance_field(1u), (word >> IRRADIANCE_G_SHIFT) & codec_bit_mask(IRRADIANCE_G_BITS)),
+        codec_log_decode(codec_irradiance_field(2u), (word >> IRRADIANCE_B_SHIFT) & codec_bit_mask(IRRADIANCE_B_BITS)),
+    );
+}
+
+// `IrradianceLayout::ADGI.count(word)`.
+fn codec_irradiance_count(word: u32) -> u32 {
+    return (word >> IRRADIANCE_COUNT_SHIFT) & codec_bit_mask(IRRADIANCE_COUNT_BITS);
+}
+
+// `MovingAverage::update` on an irradiance word (ADGI sec. 4.7): N ← min(N + 1, N_max),
+// value ← old + (x − old)/N (x itself when N was 0), negatives clamped to 0; a NaN sample
+// leaves the word unchanged (where the GPU reports NaN at all).
+fn codec_irradiance_update(word: u32, sample: vec3<f32>, max_count: u32, rounding: CodecRounding) -> u32 {
+    if any(sample != sample) {
+        return word;
+    }
+    let x = max(sample, vec3<f32>(0.0));
+    let cap = min(max_count, codec_irradiance_max_count());
+    let n = codec_irradiance_count(word);
+    let next = min(n + 1u, cap);
+    var value = x;
+    if n != 0u {
+        let old = codec_irradiance_decode(word);
+        value = old + (x - old) * (1.0 / f32(next));
+    }
+    return codec_irradiance_encode(value, next, rounding);
+}
