@@ -102,7 +102,12 @@ impl IrradianceLayout {
         ];
         Ok(Self {
             fields,
-            lanes: LogLanes::new([fields[0], fields[1], fields[2], fields[2]]),
+            lanes: LogLanes::new(
+                [fields[0], fields[1], fields[2], fields[2]],
+                [0, 1, 2, 2],
+                [0, r_bits, r_bits + g_bits, 0],
+                [true, true, true, false],
+            ),
             places: [
                 BitField::new(0, r_bits),
                 BitField::new(r_bits, g_bits),
@@ -164,12 +169,13 @@ impl IrradianceLayout {
     #[inline(always)]
     #[must_use]
     pub fn encode(&self, rgb: Vec3, count: u32, rounding: Rounding) -> IrradianceWord {
-        let codes = self.lanes.encode([rgb.x, rgb.y, rgb.z, 0.0], rounding);
+        // Lane 3 repeats B (it has no field and is left out of the word): a constant there
+        // would sit on a code boundary and send every word down round-down's slow path.
         IrradianceWord(
             self.count.put(count.min(self.max_count()))
-                | self.places[0].put(codes[0])
-                | self.places[1].put(codes[1])
-                | self.places[2].put(codes[2]),
+                | self
+                    .lanes
+                    .encode_word3([rgb.x, rgb.y, rgb.z, rgb.z], rounding),
         )
     }
 
@@ -177,12 +183,7 @@ impl IrradianceLayout {
     #[inline(always)]
     #[must_use]
     pub fn decode(&self, word: IrradianceWord) -> Vec3 {
-        let [r, g, b, _] = self.lanes.decode([
-            self.places[0].get(word.0),
-            self.places[1].get(word.0),
-            self.places[2].get(word.0),
-            0,
-        ]);
+        let [r, g, b, _] = self.lanes.decode_word(word.0);
         Vec3::new(r, g, b)
     }
 
@@ -319,5 +320,72 @@ mod tests {
             [0x14b9_8d06, 0x14bd_8f06, 0xfcb9_8f06, 0xbba1_cabe],
             "{words:#x?}"
         );
+    }
+
+    /// The four-lane word encoder and decoder give exactly what the channels' [`LogField`]s
+    /// give one at a time (stochastic uniforms rotated per channel).
+    #[test]
+    fn word_lanes_match_the_fields() {
+        for l in [
+            IrradianceLayout::ADGI,
+            IrradianceLayout::EQUAL_10,
+            IrradianceLayout::new(16, 8, 7, 1, LogCodec::SQUARED_DISTANCE).unwrap(),
+            IrradianceLayout::new(11, 11, 9, 1, LogCodec::new(0.5, 0.01).unwrap()).unwrap(),
+        ] {
+            let mut x = 1e-6_f32;
+            let mut k = 0_u32;
+            while x < 40.0 {
+                let rgb = Vec3::new(x, x * 0.37 + 1e-3, 9.9 - (x * 0.21).min(9.9));
+                for rounding in [
+                    Rounding::Down,
+                    Rounding::Nearest,
+                    Rounding::Stochastic((k % 97) as f32 / 97.0),
+                ] {
+                    let w = l.encode(rgb, k, rounding);
+                    let want: [u32; 3] = core::array::from_fn(|i| {
+                        l.channel(i).encode(rgb[i], rounding.for_channel(i as u32))
+                    });
+                    assert_eq!(l.codes(w), want, "{rgb} {rounding:?}");
+                    assert_eq!(l.count(w), k.min(l.max_count()));
+                    let dec = l.decode(w);
+                    for i in 0..3 {
+                        assert_eq!(dec[i].to_bits(), l.channel(i).decode(want[i]).to_bits());
+                    }
+                }
+                x *= 1.003;
+                k += 1;
+            }
+        }
+    }
+
+    /// A digest of many encodings and decodings, pinned: the same in the `std` and the `libm`
+    /// build (`scripts/test` runs this crate's unit tests in both) and on every target, as the
+    /// hot path uses neither `std` nor `libm` floats and no FMA.
+    #[test]
+    fn encodings_digest_is_pinned() {
+        let l = IrradianceLayout::ADGI;
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        let mut eat = |x: u32| {
+            h ^= x as u64;
+            h = h.wrapping_mul(0x0000_0100_0000_01b3);
+        };
+        let mut x = 1e-6_f32;
+        let mut k = 0_u32;
+        while x < 12.0 {
+            let rgb = Vec3::new(x, 1.7 * x % 10.0, 0.123 / x);
+            for rounding in [
+                Rounding::Down,
+                Rounding::Nearest,
+                Rounding::Stochastic(0.61),
+            ] {
+                let w = l.encode(rgb, k, rounding);
+                eat(w.0);
+                let d = l.decode(w);
+                eat(d.x.to_bits() ^ d.y.to_bits().rotate_left(11) ^ d.z.to_bits().rotate_left(22));
+            }
+            x *= 1.000_9;
+            k += 1;
+        }
+        assert_eq!(h, 0xbe41_c6b6_dbed_8127, "{h:#x}");
     }
 }

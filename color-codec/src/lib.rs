@@ -28,8 +28,10 @@
 //! - No hidden randomness: stochastic rounding takes the caller's uniform in [0, 1).
 //! - Each layout documents its bit map and a derived round-trip error bound; the tests check
 //!   them on dense log-spaced sweeps.
-//! - f32 throughout; the log codec's `ln`/`exp` are branch-free polynomials on the float bits, so
-//!   results do not depend on the `std`/`libm` choice. Words are `#[repr(transparent)]` `u32`
+//! - f32 throughout; the log codec's `ln`/`exp` are branch-free polynomials on the float bits,
+//!   evaluated for the three channels at once as one 4-lane `glam::Vec4` with plain IEEE
+//!   operations in a fixed order (no FMA, no platform `libm`), so results do not depend on the
+//!   `std`/`libm` choice or the target, and a WGSL port can reproduce them bit for bit. Words are `#[repr(transparent)]` `u32`
 //!   and [`bytemuck::Pod`].
 //!
 //! ## Features
@@ -82,6 +84,7 @@ mod moving_average;
 mod quantize;
 mod r11g11b10;
 mod rgb9e5;
+mod simd4;
 mod visibility_word;
 
 pub use codec::{ColorCodec, LogRgb};

@@ -31,7 +31,8 @@ impl Rounding {
     #[must_use]
     pub(crate) fn for_channel(self, k: u32) -> Rounding {
         match self {
-            Rounding::Stochastic(u) => {
+            // Channel 0 keeps the caller's uniform as is (so a `u` ≥ 1 never rounds up there).
+            Rounding::Stochastic(u) if k > 0 => {
                 let v = u + k as f32 * 0.618_034;
                 // v < 3 here; subtracting the truncated part keeps it in [0, 1).
                 Rounding::Stochastic(v - (v as u32) as f32)
