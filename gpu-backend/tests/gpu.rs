@@ -636,12 +636,12 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
     }
 }
 
-/// 65 536 invocations fold samples into 64 shared irradiance texels (1 024 updates per
-/// texel, racing) with the compare-and-swap loop. Hypothesis: the result is one that some
-/// serial order of the updates gives. With one sample value per texel every order gives the
-/// same word, so each texel must equal the CPU's word after 1 024 serial updates, and its
-/// count N_max (63) or, for texels given fewer updates than N_max, exactly their number.
-/// With distinct samples per update the count must still be exact and the value lie within
+/// ≈ 65 000 invocations fold samples into 1 056 shared irradiance texels with the
+/// compare-and-swap loop, a texel's updates in consecutive invocations (racing). Hypothesis:
+/// the result is one that some serial order of the updates gives. With one sample value per
+/// texel every order gives the same word, so each texel must equal the CPU's word after the
+/// same number of serial updates, and its count exactly that number (1..=62, below N_max)
+/// or N_max = 63. Then 65 536 distinct samples into 64 texels: counts N_max, values within
 /// the samples' range (± one quantum). Broken once on purpose (an `atomicStore` of the
 /// update instead of the compare-and-swap): lost updates gave counts below the number of
 /// updates and the test failed.
@@ -680,7 +680,13 @@ fn concurrent_texel_updates_match_a_serial_order() {
         },
     );
     let mut rng = Pcg64::seed_from_u64(17);
-    let texels = 64_u32;
+    // 1 024 texels with 1..=62 updates each (below N_max = 63, so every lost update shows in
+    // the count) and 32 texels with 1 024 updates each; a texel's updates are consecutive
+    // invocations, so they race within and across workgroups.
+    let counts: Vec<u32> = (0..1056_u32)
+        .map(|t| if t < 1024 { 1 + t % 62 } else { 1024 })
+        .collect();
+    let texels = counts.len() as u32;
     let per_texel: Vec<Vec3> = (0..texels)
         .map(|_| {
             Vec3::new(
@@ -690,17 +696,14 @@ fn concurrent_texel_updates_match_a_serial_order() {
             )
         })
         .collect();
-    // Equal samples per texel; texels 60..64 get only 5..40 updates (below N_max).
     let mut updates = Vec::new();
-    for k in 0..65_536_u32 {
-        let t = k % texels;
-        if t >= 60 && k / texels >= 5 + 10 * (t - 60) {
-            continue;
+    for (t, &n) in counts.iter().enumerate() {
+        for _ in 0..n {
+            updates.push(Update {
+                sample: per_texel[t],
+                texel: t as u32,
+            });
         }
-        updates.push(Update {
-            sample: per_texel[t as usize],
-            texel: t,
-        });
     }
     let words = ctx.zeroed_buffer::<u32>("texels", texels as usize);
     let updates_buffer = ctx.storage_buffer("updates", &updates);
@@ -712,14 +715,14 @@ fn concurrent_texel_updates_match_a_serial_order() {
     .unwrap();
     let gpu = ctx.read_back(&words).unwrap();
     for t in 0..texels as usize {
-        let n = updates.iter().filter(|u| u.texel as usize == t).count();
+        let n = counts[t];
         let mut cpu = 0_u32;
         for _ in 0..n {
             cpu = average.update(&layout, cpu, per_texel[t], Rounding::Nearest);
         }
         assert_eq!(
             layout.count(IrradianceWord(gpu[t])),
-            (n as u32).min(average.max_count()),
+            n.min(average.max_count()),
             "texel {t}"
         );
         assert_eq!(gpu[t], cpu, "texel {t} after {n} equal updates");
@@ -728,10 +731,10 @@ fn concurrent_texel_updates_match_a_serial_order() {
     let updates: Vec<Update> = (0..65_536_u32)
         .map(|k| Update {
             sample: Vec3::splat(rng.random_range(1.0..2.0)),
-            texel: k % texels,
+            texel: k % 64,
         })
         .collect();
-    let words = ctx.zeroed_buffer::<u32>("texels", texels as usize);
+    let words = ctx.zeroed_buffer::<u32>("texels", 64);
     let updates_buffer = ctx.storage_buffer("updates", &updates);
     ctx.dispatch(
         &kernel,
