@@ -135,6 +135,11 @@ fn push_log_field(out: &mut String, name: &str, field: &LogField) {
     push_f32(out, &format!("{name}_ENCODE_SCALE"), m / beta);
     push_f32(
         out,
+        &format!("{name}_EXPONENT_SCALE"),
+        m / beta * core::f32::consts::LN_2,
+    );
+    push_f32(
+        out,
         &format!("{name}_DECODE_SCALE"),
         beta / (m * core::f32::consts::LN_2),
     );

@@ -554,6 +554,7 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
     };
     use mcg_color_codec::{
         ColorCodec, Gamma5R10G10B10A2, IrradianceLayout, R11G11B10, Rgb9E5, Rounding,
+        VisibilityLayout,
     };
     let mut rng = Pcg64::seed_from_u64(13);
     let mut values: Vec<[f32; 4]> = (0..50_000)
@@ -591,7 +592,7 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
         .unwrap();
     let values_buffer = ctx.storage_buffer("values", &values);
     let words: GpuBuffer<[u32; 4]> = ctx.zeroed_buffer("words", 2 * values.len());
-    let decoded: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("decoded", 5 * values.len());
+    let decoded: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("decoded", 6 * values.len());
     ctx.dispatch(
         &kernel,
         &[values_buffer.raw(), words.raw(), decoded.raw()],
@@ -617,6 +618,21 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
         );
         let nearest = irr.encode(rgb, count, Rounding::Nearest).0;
         let stochastic = irr.encode(rgb, count, Rounding::Stochastic(v[3])).0;
+        let vis = VisibilityLayout::ADGI;
+        let moments = Vec2::new(v[0], v[1]);
+        let vis_nearest = vis.encode(moments, count, Rounding::Nearest);
+        let vis_stochastic = vis.encode(moments, count, Rounding::Stochastic(v[3]));
+        assert_eq!(
+            words[2 * i + 1][2..],
+            [vis_nearest.0, vis_stochastic.0],
+            "visibility of {moments}, u = {}",
+            v[3]
+        );
+        assert_eq!(
+            decoded[6 * i + 5][..2],
+            vis.decode(vis_nearest).to_array(),
+            "visibility decode of {moments}"
+        );
         assert_eq!(
             words[2 * i + 1][..2],
             [nearest, stochastic],
@@ -631,7 +647,7 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
             irr.decode(nearest.into()),
         ];
         for (k, d) in cpu_decoded.iter().enumerate() {
-            assert_eq!(decoded[5 * i + k][..3], d.to_array(), "decode {k} of {rgb}");
+            assert_eq!(decoded[6 * i + k][..3], d.to_array(), "decode {k} of {rgb}");
         }
     }
 }

@@ -6,6 +6,19 @@
 // `moving_average.rs`; every operation is exact or correctly rounded f32 arithmetic in the
 // same order as on the CPU, so the words are bit-identical.
 
+// `x` itself, for every finite x and +∞. Wrapping a product in it keeps it rounded on its
+// own: WGSL has no `precise`, and compilers (lavapipe's among them) fuse `a * b + c` into an
+// FMA, which rounds once where the CPU rounds twice. Results that must match the CPU bit for
+// bit wrap every product that feeds a sum.
+fn codec_rounded(x: f32) -> f32 {
+    return max(x, -MCG_F32_MAX);
+}
+
+// `codec_rounded` per component.
+fn codec_rounded3(x: vec3<f32>) -> vec3<f32> {
+    return max(x, vec3<f32>(-MCG_F32_MAX));
+}
+
 // `f32_to_ufloat`: the unsigned small float with 5 exponent bits and `n` mantissa bits
 // (n = 6 for R11, 5 for B10), rounded to nearest even, negatives and NaN to 0, overflow to
 // the largest finite code.
@@ -128,6 +141,7 @@ struct CodecLogField {
     gamma: f32,
     inv_gamma: f32,
     encode_scale: f32,
+    exponent_scale: f32,
     decode_scale: f32,
     max_code: u32,
     down_tolerance: f32,
@@ -150,7 +164,7 @@ fn codec_rounding_for_channel(rounding: CodecRounding, k: u32) -> CodecRounding 
     if rounding.mode != CODEC_ROUND_STOCHASTIC || k == 0u {
         return rounding;
     }
-    let v = rounding.u + f32(k) * 0.618034;
+    let v = rounding.u + codec_rounded(f32(k) * 0.618034);
     return CodecRounding(rounding.mode, v - f32(u32(v)));
 }
 
@@ -164,15 +178,36 @@ fn codec_fast_ln_ge1(x: f32) -> f32 {
     let t = m - 1.0;
     let t2 = t * t;
     let t4 = t2 * t2;
-    let p01 = 0.3333333 + -2.4999994e-1 * t;
-    let p23 = 2.0000715e-1 + -1.6668058e-1 * t;
-    let p45 = 1.4249323e-1 + -1.2420141e-1 * t;
-    let p67 = 1.1676999e-1 + -1.151461e-1 * t;
-    let p03 = p01 + p23 * t2;
-    let p47 = p45 + p67 * t2;
-    let p = p03 + p47 * t4 + 7.0376836e-2 * (t4 * t4);
-    let y = t * t2 * p + e * -2.1219444e-4 - 0.5 * t2;
-    return t + y + e * 0.6933594;
+    let p01 = 0.3333333 + codec_rounded(-2.4999994e-1 * t);
+    let p23 = 2.0000715e-1 + codec_rounded(-1.6668058e-1 * t);
+    let p45 = 1.4249323e-1 + codec_rounded(-1.2420141e-1 * t);
+    let p67 = 1.1676999e-1 + codec_rounded(-1.151461e-1 * t);
+    let p03 = p01 + codec_rounded(p23 * t2);
+    let p47 = p45 + codec_rounded(p67 * t2);
+    let p = p03 + codec_rounded(p47 * t4) + codec_rounded(7.0376836e-2 * (t4 * t4));
+    let y = codec_rounded(t * t2 * p) + codec_rounded(e * -2.1219444e-4) - codec_rounded(0.5 * t2);
+    return t + y + codec_rounded(e * 0.6933594);
+}
+
+
+// ln x for x ≥ 1 in two parts (`math::fast_ln_parts`): (e, ln m) with ln x = e ln 2 + ln m,
+// so the log codec can scale e by a pre-rounded (m/β) ln 2.
+fn codec_fast_ln_parts(x: f32) -> vec2<f32> {
+    let bits = bitcast<u32>(x);
+    let shifted = bits - 0x3f3504f3u;
+    let e = f32(bitcast<i32>(shifted) >> 23u);
+    let m = bitcast<f32>(bits - (shifted & 0xff800000u));
+    let t = m - 1.0;
+    let t2 = t * t;
+    let t4 = t2 * t2;
+    let p01 = 0.3333333 + codec_rounded(-2.4999994e-1 * t);
+    let p23 = 2.0000715e-1 + codec_rounded(-1.6668058e-1 * t);
+    let p45 = 1.4249323e-1 + codec_rounded(-1.2420141e-1 * t);
+    let p67 = 1.1676999e-1 + codec_rounded(-1.151461e-1 * t);
+    let p03 = p01 + codec_rounded(p23 * t2);
+    let p47 = p45 + codec_rounded(p67 * t2);
+    let p = p03 + codec_rounded(p47 * t4) + codec_rounded(7.0376836e-2 * (t4 * t4));
+    return vec2<f32>(e, t + (codec_rounded(t * t2 * p) - codec_rounded(0.5 * t2)));
 }
 
 // 2^x (`math::fast_exp2`): x = i + f with i = round(x) (ties to even, like the CPU's
@@ -181,9 +216,9 @@ fn codec_fast_exp2(x: f32) -> f32 {
     let i = round(x);
     let f = x - i;
     let f2 = f * f;
-    let inner = 9.618437e-3 + 1.3398874e-3 * f + 1.5353362e-4 * f2;
-    let mid = 2.4022648e-1 + 5.5503325e-2 * f + f2 * inner;
-    let p = 1.0 + 6.931472e-1 * f + f2 * mid;
+    let inner = 9.618437e-3 + codec_rounded(1.3398874e-3 * f) + codec_rounded(1.5353362e-4 * f2);
+    let mid = 2.4022648e-1 + codec_rounded(5.5503325e-2 * f) + codec_rounded(f2 * inner);
+    let p = 1.0 + codec_rounded(6.931472e-1 * f) + codec_rounded(f2 * mid);
     return p * bitcast<f32>(u32(i32(i) + 127) << 23u);
 }
 
@@ -199,7 +234,8 @@ fn codec_log_decode(field: CodecLogField, code: u32) -> f32 {
 fn codec_log_encode(field: CodecLogField, v_in: f32, rounding: CodecRounding) -> u32 {
     let v = max(v_in, 0.0);
     let max_code = f32(field.max_code);
-    let x = min(codec_fast_ln_ge1(field.gamma * v + 1.0) * field.encode_scale, max_code + 0.5);
+    let parts = codec_fast_ln_parts(codec_rounded(field.gamma * v) + 1.0);
+    let x = min(codec_rounded(parts.x * field.exponent_scale) + codec_rounded(parts.y * field.encode_scale), max_code + 0.5);
     let r = round(x);
     let d = x - r;
     var code: f32;
@@ -229,13 +265,13 @@ fn codec_log_encode(field: CodecLogField, v_in: f32, rounding: CodecRounding) ->
 fn codec_irradiance_field(channel: u32) -> CodecLogField {
     switch channel {
         case 0u: {
-            return CodecLogField(CODEC_IRRADIANCE_R_GAMMA, CODEC_IRRADIANCE_R_INV_GAMMA, CODEC_IRRADIANCE_R_ENCODE_SCALE, CODEC_IRRADIANCE_R_DECODE_SCALE, CODEC_IRRADIANCE_R_MAX_CODE, CODEC_IRRADIANCE_R_DOWN_TOLERANCE);
+            return CodecLogField(CODEC_IRRADIANCE_R_GAMMA, CODEC_IRRADIANCE_R_INV_GAMMA, CODEC_IRRADIANCE_R_ENCODE_SCALE, CODEC_IRRADIANCE_R_EXPONENT_SCALE, CODEC_IRRADIANCE_R_DECODE_SCALE, CODEC_IRRADIANCE_R_MAX_CODE, CODEC_IRRADIANCE_R_DOWN_TOLERANCE);
         }
         case 1u: {
-            return CodecLogField(CODEC_IRRADIANCE_G_GAMMA, CODEC_IRRADIANCE_G_INV_GAMMA, CODEC_IRRADIANCE_G_ENCODE_SCALE, CODEC_IRRADIANCE_G_DECODE_SCALE, CODEC_IRRADIANCE_G_MAX_CODE, CODEC_IRRADIANCE_G_DOWN_TOLERANCE);
+            return CodecLogField(CODEC_IRRADIANCE_G_GAMMA, CODEC_IRRADIANCE_G_INV_GAMMA, CODEC_IRRADIANCE_G_ENCODE_SCALE, CODEC_IRRADIANCE_G_EXPONENT_SCALE, CODEC_IRRADIANCE_G_DECODE_SCALE, CODEC_IRRADIANCE_G_MAX_CODE, CODEC_IRRADIANCE_G_DOWN_TOLERANCE);
         }
         default: {
-            return CodecLogField(CODEC_IRRADIANCE_B_GAMMA, CODEC_IRRADIANCE_B_INV_GAMMA, CODEC_IRRADIANCE_B_ENCODE_SCALE, CODEC_IRRADIANCE_B_DECODE_SCALE, CODEC_IRRADIANCE_B_MAX_CODE, CODEC_IRRADIANCE_B_DOWN_TOLERANCE);
+            return CodecLogField(CODEC_IRRADIANCE_B_GAMMA, CODEC_IRRADIANCE_B_INV_GAMMA, CODEC_IRRADIANCE_B_ENCODE_SCALE, CODEC_IRRADIANCE_B_EXPONENT_SCALE, CODEC_IRRADIANCE_B_DECODE_SCALE, CODEC_IRRADIANCE_B_MAX_CODE, CODEC_IRRADIANCE_B_DOWN_TOLERANCE);
         }
     }
 }
@@ -273,6 +309,37 @@ fn codec_irradiance_count(word: u32) -> u32 {
     return (word >> IRRADIANCE_COUNT_SHIFT) & codec_bit_mask(IRRADIANCE_COUNT_BITS);
 }
 
+// The ADGI visibility word (sec. 4.6): mean distance and mean squared distance as 13-bit
+// log codes (β 5, γ 15 and β 8, γ 20) and a 6-bit count (Chebyshev visibility moments).
+fn codec_visibility_field(channel: u32) -> CodecLogField {
+    if channel == 0u {
+        return CodecLogField(CODEC_VISIBILITY_MEAN_GAMMA, CODEC_VISIBILITY_MEAN_INV_GAMMA, CODEC_VISIBILITY_MEAN_ENCODE_SCALE, CODEC_VISIBILITY_MEAN_EXPONENT_SCALE, CODEC_VISIBILITY_MEAN_DECODE_SCALE, CODEC_VISIBILITY_MEAN_MAX_CODE, CODEC_VISIBILITY_MEAN_DOWN_TOLERANCE);
+    }
+    return CodecLogField(CODEC_VISIBILITY_MEAN_SQ_GAMMA, CODEC_VISIBILITY_MEAN_SQ_INV_GAMMA, CODEC_VISIBILITY_MEAN_SQ_ENCODE_SCALE, CODEC_VISIBILITY_MEAN_SQ_EXPONENT_SCALE, CODEC_VISIBILITY_MEAN_SQ_DECODE_SCALE, CODEC_VISIBILITY_MEAN_SQ_MAX_CODE, CODEC_VISIBILITY_MEAN_SQ_DOWN_TOLERANCE);
+}
+
+// `VisibilityLayout::ADGI.encode(moments, count, rounding)`: (mean, mean²).
+fn codec_visibility_encode(moments: vec2<f32>, count: u32, rounding: CodecRounding) -> u32 {
+    let a = codec_log_encode(codec_visibility_field(0u), moments.x, rounding);
+    let b = codec_log_encode(codec_visibility_field(1u), moments.y, codec_rounding_for_channel(rounding, 1u));
+    return ((a & codec_bit_mask(VISIBILITY_MEAN_BITS)) << VISIBILITY_MEAN_SHIFT)
+        | ((b & codec_bit_mask(VISIBILITY_MEAN_SQ_BITS)) << VISIBILITY_MEAN_SQ_SHIFT)
+        | ((min(count, codec_bit_mask(VISIBILITY_COUNT_BITS)) & codec_bit_mask(VISIBILITY_COUNT_BITS)) << VISIBILITY_COUNT_SHIFT);
+}
+
+// `VisibilityLayout::ADGI.decode(word)`.
+fn codec_visibility_decode(word: u32) -> vec2<f32> {
+    return vec2<f32>(
+        codec_log_decode(codec_visibility_field(0u), (word >> VISIBILITY_MEAN_SHIFT) & codec_bit_mask(VISIBILITY_MEAN_BITS)),
+        codec_log_decode(codec_visibility_field(1u), (word >> VISIBILITY_MEAN_SQ_SHIFT) & codec_bit_mask(VISIBILITY_MEAN_SQ_BITS)),
+    );
+}
+
+// `VisibilityLayout::ADGI.count(word)`.
+fn codec_visibility_count(word: u32) -> u32 {
+    return (word >> VISIBILITY_COUNT_SHIFT) & codec_bit_mask(VISIBILITY_COUNT_BITS);
+}
+
 // `MovingAverage::update` on an irradiance word (ADGI sec. 4.7): N ← min(N + 1, N_max),
 // value ← old + (x − old)/N (x itself when N was 0), negatives clamped to 0; a NaN sample
 // leaves the word unchanged (where the GPU reports NaN at all).
@@ -287,7 +354,7 @@ fn codec_irradiance_update(word: u32, sample: vec3<f32>, max_count: u32, roundin
     var value = x;
     if n != 0u {
         let old = codec_irradiance_decode(word);
-        value = old + (x - old) * (1.0 / f32(next));
+        value = old + codec_rounded3((x - old) * (1.0 / f32(next)));
     }
     return codec_irradiance_encode(value, next, rounding);
 }

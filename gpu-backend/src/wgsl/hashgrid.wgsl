@@ -4,6 +4,14 @@
 //
 // The table functions (`hashgrid_find`, `hashgrid_insert_or_get`) are in `hashgrid_table.wgsl`.
 
+// `x` itself, for every finite x and +∞. Wrapping a product in it keeps it rounded on its
+// own: WGSL has no `precise`, and compilers (lavapipe's among them) fuse `a * b + c` into an
+// FMA, which rounds once where the CPU rounds twice. Results that must match the CPU bit for
+// bit wrap every product that feeds a sum.
+fn hashgrid_rounded(x: f32) -> f32 {
+    return max(x, -MCG_F32_MAX);
+}
+
 // 16 bytes, the layout of `mcg_hashgrid::CellKey`: the vertex and the meta word
 // (level | class << 8 | extra << 16, the little-endian bytes of the CPU's u8, u8, u16).
 struct CellKey {
@@ -202,7 +210,7 @@ struct HashgridLevels {
 // `AdaptiveGrid::target_level`: round(ln(w/w_min) · steps/ln p), w = max(2 tan(θ/2) d, w_min).
 fn hashgrid_target_level(levels: HashgridLevels, distance: f32) -> u32 {
     let w = max(2.0 * levels.tan_half_angle * distance, levels.min_width);
-    let x = log(w / levels.min_width) * levels.levels_per_ln;
+    let x = hashgrid_rounded(log(w / levels.min_width) * levels.levels_per_ln);
     return min(u32(x + 0.5), levels.max_level);
 }
 

@@ -6,8 +6,8 @@
 // Per element, two entries: (R11G11B10, RGB9E5, gamma-5, irradiance round-down with count
 // i mod 64) and (irradiance nearest, irradiance stochastic(w), 0, 0).
 @group(0) @binding(1) var<storage, read_write> words: array<vec4<u32>>;
-// Per element, five entries: the unpacked R11G11B10, RGB9E5, gamma-5 and irradiance
-// (round-down, nearest) words.
+// Per element, six entries: the unpacked R11G11B10, RGB9E5, gamma-5, irradiance
+// (round-down, nearest) and visibility (nearest; xy) words.
 @group(0) @binding(2) var<storage, read_write> decoded: array<vec4<f32>>;
 
 @compute @workgroup_size(MCG_WORKGROUP_SIZE)
@@ -27,14 +27,15 @@ fn codec_pack_unpack(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_
     let w1 = vec4<u32>(
         codec_irradiance_encode(v, i % 64u, CodecRounding(CODEC_ROUND_NEAREST, 0.0)),
         codec_irradiance_encode(v, i % 64u, CodecRounding(CODEC_ROUND_STOCHASTIC, u)),
-        0u,
-        0u,
+        codec_visibility_encode(v.xy, i % 64u, CodecRounding(CODEC_ROUND_NEAREST, 0.0)),
+        codec_visibility_encode(v.xy, i % 64u, CodecRounding(CODEC_ROUND_STOCHASTIC, u)),
     );
     words[2u * i] = w0;
     words[2u * i + 1u] = w1;
-    decoded[5u * i] = vec4<f32>(codec_r11g11b10_unpack(w0.x), 0.0);
-    decoded[5u * i + 1u] = vec4<f32>(codec_rgb9e5_unpack(w0.y), 0.0);
-    decoded[5u * i + 2u] = vec4<f32>(codec_gamma5_unpack(w0.z), 0.0);
-    decoded[5u * i + 3u] = vec4<f32>(codec_irradiance_decode(w0.w), 0.0);
-    decoded[5u * i + 4u] = vec4<f32>(codec_irradiance_decode(w1.x), 0.0);
+    decoded[6u * i] = vec4<f32>(codec_r11g11b10_unpack(w0.x), 0.0);
+    decoded[6u * i + 1u] = vec4<f32>(codec_rgb9e5_unpack(w0.y), 0.0);
+    decoded[6u * i + 2u] = vec4<f32>(codec_gamma5_unpack(w0.z), 0.0);
+    decoded[6u * i + 3u] = vec4<f32>(codec_irradiance_decode(w0.w), 0.0);
+    decoded[6u * i + 4u] = vec4<f32>(codec_irradiance_decode(w1.x), 0.0);
+    decoded[6u * i + 5u] = vec4<f32>(codec_visibility_decode(w1.z), 0.0, 0.0);
 }
