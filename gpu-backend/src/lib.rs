@@ -10,8 +10,8 @@
 //! |---|---|---|
 //! | [`shaders::PRELUDE`], [`prelude::generate`] | generated `const` declarations of every constant shared with the CPU crates | the crates' `constants` |
 //! | [`shaders::VMF`] | vMF pdf (stable form), sampling from explicit uniforms, mean cosine ↔ κ, reconstruction from sufficient statistics with a MAP prior, product | MCMM eq. 4 and Alg. 2, MCPG Alg. 2, Jakob 2012 |
-//! | [`shaders::HASHGRID`] | cell keys, xor-primes / pcg4d hashes, checksums, slot index, stochastic trilinear vertex, level choice, lock-free insert-or-get and lookup | MCPG sec. 4 "Hash Grid" |
-//! | [`shaders::COLOR_CODEC`] | R11G11B10 and RGB9E5 words | ADGI sec. 4.3 |
+//! | [`shaders::HASHGRID`], [`shaders::HASHGRID_TABLE`] | cell keys, xor-primes / pcg4d hashes, checksums, slot index, stochastic trilinear vertex, level choice; lock-free insert-or-get and lookup with a compare-and-swap loop | MCPG sec. 4 "Hash Grid"; Jarzynski and Olano 2020 |
+//! | [`shaders::COLOR_CODEC`], [`shaders::COLOR_CODEC_TEXELS`] | R11G11B10, RGB9E5, gamma-5 R10G10B10A2, the log codec, the 9/9/8 + 6 irradiance and 13/13 + 6 visibility words, the moving average as a compare-and-swap loop | ADGI eq. 21, sec. 4.3-4.7 |
 //! | [`GpuContext`] | headless instance, adapter, device; pipelines, buffers, dispatch, read-back | — |
 //! | [`kernels`] | typed pipelines: [`VmfKernels`](kernels::VmfKernels), [`GpuHashTable`](kernels::GpuHashTable) | — |
 //! | [`types`] | `Pod` twins of the kernels' WGSL structs | — |
@@ -23,6 +23,10 @@
 //! - No hidden randomness: samplers take uniforms in [0, 1) from the caller, like the CPU.
 //! - Kernels use workgroups of [`WORKGROUP_SIZE`] = 64 invocations and need no feature and
 //!   no limit beyond WebGPU's defaults.
+//! - Bit-exact twins (hashes, codes) wrap every product that feeds a sum in a `max` that
+//!   keeps the shader compiler from fusing it into an FMA (WGSL has no `precise`; lavapipe
+//!   fuses). The vMF twin does not: its `exp`/`log` differ from the CPU's anyway, and its
+//!   parity tests allow for fused operations.
 //!
 //! # Example
 //! Put a vMF lobe's density into your own compute shader:
