@@ -542,8 +542,9 @@ fn concurrent_inserts_end_with_the_cpu_key_set() {
     }
 }
 
-/// R11G11B10, RGB9E5, gamma-5 R10G10B10A2 and the ADGI irradiance word (log codec with
-/// round-down, nearest and stochastic rounding; count field) bit for bit, and their decoded
+/// R11G11B10, RGB9E5, gamma-5 R10G10B10A2, and the ADGI irradiance (log codec with
+/// round-down, nearest and stochastic rounding; count field), visibility and heuristics
+/// words bit for bit, and their decoded
 /// values exactly, on 50 000 colours over 2⁻³⁰..2¹⁷ (log-uniform), negatives, zeros,
 /// overflow, infinities and the rounding ties of the float formats. Broken once on purpose
 /// (round-half-up instead of half-even in the WGSL ufloat): failed.
@@ -553,8 +554,8 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
         return;
     };
     use mcg_color_codec::{
-        ColorCodec, Gamma5R10G10B10A2, IrradianceLayout, R11G11B10, Rgb9E5, Rounding,
-        VisibilityLayout,
+        ColorCodec, Gamma5R10G10B10A2, Heuristics, HeuristicsLayout, IrradianceLayout, R11G11B10,
+        Rgb9E5, Rounding, VisibilityLayout,
     };
     let mut rng = Pcg64::seed_from_u64(13);
     let mut values: Vec<[f32; 4]> = (0..50_000)
@@ -591,8 +592,8 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
         .compute_kernel(shaders::kernels::COLOR_CODEC, "codec_pack_unpack")
         .unwrap();
     let values_buffer = ctx.storage_buffer("values", &values);
-    let words: GpuBuffer<[u32; 4]> = ctx.zeroed_buffer("words", 2 * values.len());
-    let decoded: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("decoded", 6 * values.len());
+    let words: GpuBuffer<[u32; 4]> = ctx.zeroed_buffer("words", 3 * values.len());
+    let decoded: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("decoded", 7 * values.len());
     ctx.dispatch(
         &kernel,
         &[values_buffer.raw(), words.raw(), decoded.raw()],
@@ -612,7 +613,7 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
             irr.encode(rgb, count, Rounding::Down).0,
         ];
         assert_eq!(
-            words[2 * i],
+            words[3 * i],
             cpu,
             "R11G11B10, RGB9E5, gamma-5, irradiance (down) of {rgb}"
         );
@@ -623,21 +624,41 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
         let vis_nearest = vis.encode(moments, count, Rounding::Nearest);
         let vis_stochastic = vis.encode(moments, count, Rounding::Stochastic(v[3]));
         assert_eq!(
-            words[2 * i + 1][2..],
+            words[3 * i + 1][2..],
             [vis_nearest.0, vis_stochastic.0],
             "visibility of {moments}, u = {}",
             v[3]
         );
         assert_eq!(
-            decoded[6 * i + 5][..2],
+            decoded[7 * i + 5][..2],
             vis.decode(vis_nearest).to_array(),
             "visibility decode of {moments}"
         );
         assert_eq!(
-            words[2 * i + 1][..2],
+            words[3 * i + 1][..2],
             [nearest, stochastic],
             "irradiance of {rgb}, u = {}",
             v[3]
+        );
+        let h = Heuristics {
+            f_v: v[0].min(1.0),
+            f_s: v[1].min(1.0),
+            f_d: v[2].min(1.0),
+            flags: count,
+        };
+        let heu = HeuristicsLayout::ADGI;
+        let h_nearest = heu.encode_with(h, Rounding::Nearest);
+        let h_stochastic = heu.encode_with(h, Rounding::Stochastic(v[3]));
+        assert_eq!(
+            words[3 * i + 2][..2],
+            [h_nearest.0, h_stochastic.0],
+            "heuristics of {h:?}"
+        );
+        let hd = heu.decode(h_nearest);
+        assert_eq!(
+            decoded[7 * i + 6],
+            [hd.f_v, hd.f_s, hd.f_d, hd.flags as f32],
+            "heuristics decode of {h:?}"
         );
         let cpu_decoded = [
             R11G11B10::unpack(cpu[0]),
@@ -647,7 +668,7 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
             irr.decode(nearest.into()),
         ];
         for (k, d) in cpu_decoded.iter().enumerate() {
-            assert_eq!(decoded[6 * i + k][..3], d.to_array(), "decode {k} of {rgb}");
+            assert_eq!(decoded[7 * i + k][..3], d.to_array(), "decode {k} of {rgb}");
         }
     }
 }

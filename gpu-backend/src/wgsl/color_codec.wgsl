@@ -340,6 +340,49 @@ fn codec_visibility_count(word: u32) -> u32 {
     return (word >> VISIBILITY_COUNT_SHIFT) & codec_bit_mask(VISIBILITY_COUNT_BITS);
 }
 
+// `quantize(x, max_code, rounding)`: x clamped to [0, max_code] (NaN to 0), truncated, and
+// rounded up by `rounding` (frac ≥ ½ for nearest, frac > u for stochastic).
+fn codec_quantize(x_in: f32, max_code: u32, rounding: CodecRounding) -> u32 {
+    let x = min(max(x_in, 0.0), f32(max_code));
+    let q = i32(x);
+    let frac = x - f32(q);
+    var up = false;
+    if rounding.mode == CODEC_ROUND_NEAREST {
+        up = frac >= 0.5;
+    } else if rounding.mode == CODEC_ROUND_STOCHASTIC {
+        up = frac > max(rounding.u, 0.0);
+    }
+    return u32(q + select(0, 1, up));
+}
+
+// The ADGI heuristics word (sec. 4.6): f_v, f_s, f_d in [0, 1] as 6-, 10- and 10-bit unorm
+// fields and 6 flag bits (`HeuristicsLayout::ADGI.encode_with`).
+fn codec_heuristics_encode(f: vec3<f32>, flags: u32, rounding: CodecRounding) -> u32 {
+    let bits = vec3<u32>(HEURISTICS_FV_BITS, HEURISTICS_FS_BITS, HEURISTICS_FD_BITS);
+    let shifts = vec3<u32>(HEURISTICS_FV_SHIFT, HEURISTICS_FS_SHIFT, HEURISTICS_FD_SHIFT);
+    var word = (flags & codec_bit_mask(HEURISTICS_FLAG_BITS)) << HEURISTICS_FLAG_SHIFT;
+    for (var i = 0u; i < 3u; i += 1u) {
+        let max_code = codec_bit_mask(bits[i]);
+        let code = codec_quantize(f[i] * f32(max_code), max_code, codec_rounding_for_channel(rounding, i));
+        word |= (code & max_code) << shifts[i];
+    }
+    return word;
+}
+
+// `HeuristicsLayout::ADGI.decode`: (f_v, f_s, f_d) as code / max_code, and the flags (w,
+// as a float).
+fn codec_heuristics_decode(word: u32) -> vec4<f32> {
+    let fv = codec_bit_mask(HEURISTICS_FV_BITS);
+    let fs = codec_bit_mask(HEURISTICS_FS_BITS);
+    let fd = codec_bit_mask(HEURISTICS_FD_BITS);
+    return vec4<f32>(
+        f32((word >> HEURISTICS_FV_SHIFT) & fv) / f32(fv),
+        f32((word >> HEURISTICS_FS_SHIFT) & fs) / f32(fs),
+        f32((word >> HEURISTICS_FD_SHIFT) & fd) / f32(fd),
+        f32((word >> HEURISTICS_FLAG_SHIFT) & codec_bit_mask(HEURISTICS_FLAG_BITS)),
+    );
+}
+
 // `MovingAverage::update` on an irradiance word (ADGI sec. 4.7): N ← min(N + 1, N_max),
 // value ← old + (x − old)/N (x itself when N was 0), negatives clamped to 0; a NaN sample
 // leaves the word unchanged (where the GPU reports NaN at all).
