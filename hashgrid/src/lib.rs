@@ -54,22 +54,33 @@
 //!   kept in a `u32` array beside the values: distinct keys share it with probability 2⁻³², and
 //!   because the two words are 64 bits of one 128-bit permutation (not functions of each
 //!   other), two such keys also need to share a probe window to be confused. One pcg4d (12
-//!   multiplies) gives both, where the first version ran Murmur3 twice (two seeds): a lookup
-//!   hashes in ≈ 3 ns instead of ≈ 9 ns (see "Speed" below).
+//!   multiplies) gives both, where the first version ran Murmur3 twice (two seeds): hashing
+//!   a stream of keys takes ≈ 2.9 ns per key instead of ≈ 3.9 ns, and a cache-resident
+//!   [`HashTable::get`] ≈ 7.3 ns instead of ≈ 10 ns (pcg4d's multiplies are independent
+//!   across words, Murmur3's rounds one long chain, so more of the lookup overlaps).
 //! - **Speed.** Measured with `cargo run --release -p mcg-hashgrid --example speed` (minimum of
 //!   many runs, on a shared 2-core AMD EPYC VM) and the criterion bench, against
 //!   `std::collections::HashMap<u64, [f32; 8]>` (SipHash-1-3) holding the same keys: per-key
 //!   [`HashTable::get`] ≈ 1.6× faster on a 19 MB table (≈ 12 ns vs ≈ 20 ns per lookup, in
 //!   scanline, 8 × 8-tile or random order alike), ≈ 1.9× on a cache-resident one (≈ 7 ns vs
-//!   ≈ 14 ns), and [`HashTable::find_many`] (a batch of keys hashed before it is probed) ≈ 2×
-//!   on the large table. Lookups cost the hash (≈ 3 ns) plus two dependent memory reads (the
-//!   checksum word, then the value); the reads alone, with the slots known, take ≈ 2.5 ns per
-//!   key, so the hash and the latency between hashing and reading are what is left, and a
-//!   `HashMap` pays the same memory reads (its control bytes, then its bucket). The 3× target
-//!   of the issue would need the table's whole lookup below the `HashMap`'s SipHash alone.
+//!   ≈ 14 ns), and [`HashTable::find_many`] (a batch of keys hashed, then their home slots
+//!   read, before any is decided) ≈ 2–2.4× on the large table (≈ 9 ns). Lookups cost the
+//!   hash (≈ 3 ns) plus two dependent memory reads (the checksum word, then the value); the
+//!   reads alone, with the slots known, take ≈ 2.5 ns per key, so the hash and the latency
+//!   between hashing and reading are what is left, and a `HashMap` pays the same memory reads
+//!   (its control bytes, then its bucket). The issue's 3× would need ≈ 6.7 ns per lookup on
+//!   the large table: less than the `HashMap`'s SipHash alone (≈ 8 ns) and less than this
+//!   table's lookup when everything is in cache (≈ 7 ns).
 //!   Probe windows that do not wrap are taken as one sub-slice (one bounds check, no `unsafe`);
 //!   comparing four checksums at once into bit masks measured slower. A power-of-two capacity
 //!   (mask) and a prime one (exact fast modulo) differ by ≲ 15 %.
+//!   [`ConcurrentTable`] inserts from 2 threads (each a contiguous half of the stream): each
+//!   thread's own busy time is ≈ 0.52–0.55 of the 1-thread time (×1.8–1.96 "with a core per
+//!   thread", 143 233 distinct keys, 2¹⁹ or 2²¹ slots), but the wall-clock speed-up on the
+//!   shared 2-core VM was ×1.0–1.5: timestamps show the second thread mostly starting when the
+//!   first ends (the other core busy with neighbours' processes). `examples/speed.rs`,
+//!   section `concurrent`, prints both, alternating 1- and 2-thread runs; measure on a machine
+//!   with a free core before relying on the wall-clock figure.
 //! - **Concurrency.** [`ConcurrentTable`] claims slots by compare-and-swap on the checksum
 //!   word and owns no values; the thread that gets [`Insert::Inserted`] initialises the value in
 //!   the caller's own array (typically atomics). Evictions and the plain `&[u32]` upload view
