@@ -177,7 +177,7 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
     section.paragraph(
         "The full parity suite (`cargo test -p mcg-gpu-backend --test gpu`) adds sampling, \
          reconstruction from sufficient statistics, products, all bucket hashes, table outcomes \
-         one by one including the full table, every packed colour word and the concurrent \
+         one by one including the full table, the packed colour words (all but LogLuv32) and the concurrent \
          moving average of shared texels.",
     );
     Ok(section)
