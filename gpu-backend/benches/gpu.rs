@@ -88,7 +88,7 @@ struct Params {
     max_count: u32,
     rounding_mode: u32,
     rounding_u: f32,
-    _pad: u32,
+    word_layout: u32,
 }
 
 fn texel_update(c: &mut Criterion, ctx: &GpuContext) {
@@ -110,7 +110,7 @@ fn texel_update(c: &mut Criterion, ctx: &GpuContext) {
             max_count: 63,
             rounding_mode: 1,
             rounding_u: 0.0,
-            _pad: 0,
+            word_layout: 0,
         },
     );
     let naive = ctx.compute_kernel(NAIVE_STORE, "naive_store").unwrap();

@@ -13,7 +13,7 @@
 //! | [`HASHGRID`] | `CellKey`, hashes, checksum, slot index, stochastic trilinear vertex, level choice |
 //! | [`HASHGRID_TABLE`] | `hashgrid_find`, `hashgrid_insert_or_get` on `hashgrid_checksums` |
 //! | [`COLOR_CODEC`] | R11G11B10, RGB9E5, gamma-5 R10G10B10A2, the log codec (ADGI eq. 21) with round-down / nearest / stochastic rounding, the 9/9/8 + 6 irradiance, 13/13 + 6 visibility and 6/10/10 + 6 heuristics words, the moving-average update |
-//! | [`COLOR_CODEC_TEXELS`] | `codec_irradiance_update_atomic`: the update as a compare-and-swap loop on `codec_texels` |
+//! | [`COLOR_CODEC_TEXELS`] | `codec_irradiance_update_atomic`, `codec_visibility_update_atomic`: the update as a compare-and-swap loop on `codec_texels` |
 //!
 //! Names are prefixed by module (`vmf_`, `hashgrid_`, `codec_`; constants `VMF_`, `HASHGRID_`,
 //! `CODEC_`/layout names of mcg-color-codec, `MCG_`), so modules compose without clashes.
@@ -37,7 +37,8 @@ pub const HASHGRID_TABLE: &str = include_str!("wgsl/hashgrid_table.wgsl");
 pub const COLOR_CODEC: &str = include_str!("wgsl/color_codec.wgsl");
 
 /// The mcg-color-codec texel twin, `src/wgsl/color_codec_texels.wgsl`:
-/// `codec_irradiance_update_atomic`, the moving-average update as a compare-and-swap loop on a
+/// `codec_irradiance_update_atomic` and `codec_visibility_update_atomic`, the moving-average
+/// update as a compare-and-swap loop on a
 /// `codec_texels: array<atomic<u32>>` the includer declares. Needs [`PRELUDE`] and
 /// [`COLOR_CODEC`].
 pub const COLOR_CODEC_TEXELS: &str = include_str!("wgsl/color_codec_texels.wgsl");

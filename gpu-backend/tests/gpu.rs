@@ -678,7 +678,8 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
 /// the result is one that some serial order of the updates gives. With one sample value per
 /// texel every order gives the same word, so each texel must equal the CPU's word after the
 /// same number of serial updates, and its count exactly that number (1..=62, below N_max)
-/// or N_max = 63. Then 65 536 distinct samples into 64 texels: counts N_max, values within
+/// or N_max = 63; the same for visibility words (N_max = 10). Then 65 536 distinct samples
+/// into 64 irradiance texels: counts N_max, values within
 /// the samples' range (± one quantum). Broken once on purpose (an `atomicStore` of the
 /// update instead of the compare-and-swap): lost updates gave counts below the number of
 /// updates and the test failed.
@@ -700,7 +701,7 @@ fn concurrent_texel_updates_match_a_serial_order() {
         max_count: u32,
         rounding_mode: u32,
         rounding_u: f32,
-        _pad: u32,
+        word_layout: u32,
     }
     let layout = IrradianceLayout::ADGI;
     let average = MovingAverage::STATIC;
@@ -713,7 +714,7 @@ fn concurrent_texel_updates_match_a_serial_order() {
             max_count: average.max_count(),
             rounding_mode: 1,
             rounding_u: 0.0,
-            _pad: 0,
+            word_layout: 0,
         },
     );
     let mut rng = Pcg64::seed_from_u64(17);
@@ -763,6 +764,41 @@ fn concurrent_texel_updates_match_a_serial_order() {
             "texel {t}"
         );
         assert_eq!(gpu[t], cpu, "texel {t} after {n} equal updates");
+    }
+    // The same for visibility words (moments = the sample's xy), N_max = 10 (dynamic).
+    use mcg_color_codec::{VisibilityLayout, VisibilityWord};
+    let vis = VisibilityLayout::ADGI;
+    let dynamic = MovingAverage::DYNAMIC;
+    let vis_params = ctx.uniform_buffer(
+        "params",
+        &Params {
+            max_count: dynamic.max_count(),
+            rounding_mode: 1,
+            rounding_u: 0.0,
+            word_layout: 1,
+        },
+    );
+    let words = ctx.zeroed_buffer::<u32>("texels", texels as usize);
+    ctx.dispatch(
+        &kernel,
+        &[words.raw(), updates_buffer.raw(), vis_params.raw()],
+        updates.len() as u32,
+    )
+    .unwrap();
+    let gpu = ctx.read_back(&words).unwrap();
+    for t in 0..texels as usize {
+        let n = counts[t];
+        let m = Vec2::new(per_texel[t].x, per_texel[t].y);
+        let mut cpu = 0_u32;
+        for _ in 0..n {
+            cpu = dynamic.update(&vis, cpu, m, Rounding::Nearest);
+        }
+        assert_eq!(
+            vis.count(VisibilityWord(gpu[t])),
+            n.min(dynamic.max_count()),
+            "visibility texel {t}"
+        );
+        assert_eq!(gpu[t], cpu, "visibility texel {t} after {n} equal updates");
     }
     // Distinct samples: exact counts, values within the samples' range.
     let updates: Vec<Update> = (0..65_536_u32)

@@ -401,3 +401,22 @@ fn codec_irradiance_update(word: u32, sample: vec3<f32>, max_count: u32, roundin
     }
     return codec_irradiance_encode(value, next, rounding);
 }
+
+// `MovingAverage::update` on a visibility word: the same running mean of the moments
+// (mean, mean²) as `codec_irradiance_update`.
+fn codec_visibility_update(word: u32, sample: vec2<f32>, max_count: u32, rounding: CodecRounding) -> u32 {
+    if any(sample != sample) {
+        return word;
+    }
+    let x = max(sample, vec2<f32>(0.0));
+    let cap = min(max_count, codec_bit_mask(VISIBILITY_COUNT_BITS));
+    let n = codec_visibility_count(word);
+    let next = min(n + 1u, cap);
+    var value = x;
+    if n != 0u {
+        let old = codec_visibility_decode(word);
+        let step = (x - old) * (1.0 / f32(next));
+        value = old + vec2<f32>(codec_rounded(step.x), codec_rounded(step.y));
+    }
+    return codec_visibility_encode(value, next, rounding);
+}

@@ -11,7 +11,8 @@ struct TexelParams {
     max_count: u32,
     rounding_mode: u32,
     rounding_u: f32,
-    _pad: u32,
+    // 0: irradiance words, 1: visibility words (the sample's xy).
+    word_layout: u32,
 }
 
 @group(0) @binding(0) var<storage, read_write> codec_texels: array<atomic<u32>>;
@@ -25,5 +26,10 @@ fn codec_texel_updates(@builtin(global_invocation_id) id: vec3<u32>, @builtin(nu
         return;
     }
     let up = updates[i];
-    codec_irradiance_update_atomic(up.texel, up.sample, params.max_count, CodecRounding(params.rounding_mode, params.rounding_u));
+    let rounding = CodecRounding(params.rounding_mode, params.rounding_u);
+    if params.word_layout == 0u {
+        codec_irradiance_update_atomic(up.texel, up.sample, params.max_count, rounding);
+    } else {
+        codec_visibility_update_atomic(up.texel, up.sample.xy, params.max_count, rounding);
+    }
 }
