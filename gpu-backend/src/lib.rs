@@ -1,7 +1,7 @@
 //! WGSL twins of the mcg primitives on [wgpu], in parity with the CPU crates.
 //!
 //! Renderer authors on wgpu get the primitives of [`mcg_vmf`], [`mcg_hashgrid`] and
-//! [`mcg_color_codec`] as WGSL they can drop into their own compute pipelines, with tests
+//! [`mcg_color_codec`] (and the state of [`mcg_markov_guide`]) as WGSL they can drop into their own compute pipelines, with tests
 //! that hold the GPU to the CPU crates' answers: bit for bit for hashes, checksums, table
 //! outcomes and packed words; within a stated tolerance for the vMF lobes, where WGSL's
 //! `exp` and `log` are less exact than the CPU's.
@@ -12,14 +12,16 @@
 //! | [`shaders::VMF`] | vMF pdf (stable form), sampling from explicit uniforms, mean cosine ↔ κ, reconstruction from sufficient statistics with a MAP prior, product | MCMM eq. 4 and Alg. 2, MCPG Alg. 2, Jakob 2012 |
 //! | [`shaders::HASHGRID`], [`shaders::HASHGRID_TABLE`] | cell keys, xor-primes / pcg4d hashes, checksums, slot index, stochastic trilinear vertex, level choice; lock-free insert-or-get and lookup with a compare-and-swap loop | MCPG sec. 4 "Hash Grid"; Jarzynski and Olano 2020 |
 //! | [`shaders::COLOR_CODEC`], [`shaders::COLOR_CODEC_TEXELS`] | R11G11B10, RGB9E5, gamma-5 R10G10B10A2, the log codec, the 9/9/8 + 6 irradiance, 13/13 + 6 visibility and 6/10/10 + 6 heuristics words, the moving average as a compare-and-swap loop | ADGI eq. 21, sec. 4.3-4.7 |
+//! | [`shaders::MARKOV_GUIDE`] | the MCPG `GridState` (32 B): f16 velocity, count, sufficient statistics | MCPG Table 1 |
 //! | [`GpuContext`] | headless instance, adapter, device; pipelines, buffers, dispatch, read-back | — |
 //! | [`kernels`] | typed pipelines: [`VmfKernels`](kernels::VmfKernels), [`GpuHashTable`](kernels::GpuHashTable) | — |
 //! | [`types`] | `Pod` twins of the kernels' WGSL structs | — |
 //!
 //! # Conventions
 //! - Every WGSL struct that crosses the bus has the byte layout of its Rust twin
-//!   (`mcg_vmf::Vmf` 16 B, `mcg_vmf::SufficientStats` 24 B, `mcg_hashgrid::CellKey` 16 B and
-//!   the types in [`types`]); a naga test checks sizes and offsets.
+//!   (`mcg_vmf::Vmf` 16 B, `mcg_vmf::SufficientStats` 24 B, `mcg_hashgrid::CellKey` 16 B,
+//!   `mcg_markov_guide::mcpg::GridState` 32 B and the types in [`types`]); a naga test checks
+//!   sizes and offsets.
 //! - No hidden randomness: samplers take uniforms in [0, 1) from the caller, like the CPU.
 //! - Kernels use workgroups of [`WORKGROUP_SIZE`] = 64 invocations and need no feature and
 //!   no limit beyond WebGPU's defaults.
@@ -54,6 +56,7 @@
 
 pub use mcg_color_codec;
 pub use mcg_hashgrid;
+pub use mcg_markov_guide;
 pub use mcg_vmf;
 pub use wgpu;
 

@@ -13,6 +13,7 @@
 //! | [`HASHGRID`] | `CellKey`, hashes, checksum, slot index, stochastic trilinear vertex, level choice |
 //! | [`HASHGRID_TABLE`] | `hashgrid_find`, `hashgrid_insert_or_get` on `hashgrid_checksums` |
 //! | [`COLOR_CODEC`] | R11G11B10, RGB9E5, gamma-5 R10G10B10A2, the log codec (ADGI eq. 21) with round-down / nearest / stochastic rounding, the 9/9/8 + 6 irradiance, 13/13 + 6 visibility and 6/10/10 + 6 heuristics words, the moving-average update |
+//! | [`MARKOV_GUIDE`] | the MCPG `GridState`: velocity (three f16), count, sufficient statistics |
 //! | [`COLOR_CODEC_TEXELS`] | `codec_irradiance_update_atomic`, `codec_visibility_update_atomic`: the update as a compare-and-swap loop on `codec_texels` |
 //!
 //! Names are prefixed by module (`vmf_`, `hashgrid_`, `codec_`; constants `VMF_`, `HASHGRID_`,
@@ -42,6 +43,10 @@ pub const COLOR_CODEC: &str = include_str!("wgsl/color_codec.wgsl");
 /// `codec_texels: array<atomic<u32>>` the includer declares. Needs [`PRELUDE`] and
 /// [`COLOR_CODEC`].
 pub const COLOR_CODEC_TEXELS: &str = include_str!("wgsl/color_codec_texels.wgsl");
+
+/// The mcg-markov-guide twin, `src/wgsl/markov_guide.wgsl`: the MCPG `GridState` (32 bytes)
+/// with its velocity, count and sufficient statistics. Needs [`PRELUDE`] and [`VMF`].
+pub const MARKOV_GUIDE: &str = include_str!("wgsl/markov_guide.wgsl");
 
 /// [`PRELUDE`] + [`COMMON`] + [`VMF`]: a complete module to append your own code to.
 pub const VMF_MODULE: &str = concat!(
@@ -113,6 +118,15 @@ pub mod kernels {
         include_str!("wgsl/kernels/color_codec_texels.wgsl"),
     );
 
+    /// Entry point `markov_grid_states`: bindings `states`, `velocities`, `stats`.
+    pub const MARKOV_GUIDE: &str = concat!(
+        include_str!("wgsl/generated/prelude.wgsl"),
+        include_str!("wgsl/common.wgsl"),
+        include_str!("wgsl/vmf.wgsl"),
+        include_str!("wgsl/markov_guide.wgsl"),
+        include_str!("wgsl/kernels/markov_guide.wgsl"),
+    );
+
     /// Every kernel module with its entry points, for validation loops.
     pub const ALL: &[(&str, &str, &[&str])] = &[
         ("vmf", VMF, &["vmf_pdf_and_sample"]),
@@ -128,6 +142,7 @@ pub mod kernels {
             ],
         ),
         ("color_codec", COLOR_CODEC, &["codec_pack_unpack"]),
+        ("markov_guide", MARKOV_GUIDE, &["markov_grid_states"]),
         (
             "color_codec_texels",
             COLOR_CODEC_TEXELS,

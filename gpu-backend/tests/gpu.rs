@@ -823,6 +823,61 @@ fn concurrent_texel_updates_match_a_serial_order() {
     }
 }
 
+/// MCPG grid states built on the CPU and uploaded as they are: the GPU reads the same
+/// velocity (three f16, exactly), sample count and sufficient statistics, bit for bit, on
+/// 4 096 states incl. saturated and zero velocities. Broken once on purpose (velocity z read
+/// from the high half of the last word): failed.
+#[test]
+fn grid_states_read_the_same_on_the_gpu() {
+    let Some(ctx) = gpu_or_skip("grid_states_read_the_same_on_the_gpu") else {
+        return;
+    };
+    use mcg_markov_guide::mcpg::GridState;
+    let mut rng = Pcg64::seed_from_u64(19);
+    let states: Vec<GridState> = (0..4096)
+        .map(|i| {
+            let mut s = SufficientStats::EMPTY;
+            for _ in 0..(i % 50) {
+                s.update(
+                    Vec3::ZERO,
+                    random_unit(&mut rng) * 3.0 + Vec3::Z * 5.0,
+                    rng.random(),
+                    &FitParams::MCPG,
+                );
+            }
+            let v = match i % 4 {
+                0 => Vec3::ZERO,
+                1 => Vec3::splat(1e9),
+                _ => random_unit(&mut rng) * rng.random_range(0.0..100.0),
+            };
+            GridState::from_stats(&s, rng.random(), v)
+        })
+        .collect();
+    let kernel = ctx
+        .compute_kernel(shaders::kernels::MARKOV_GUIDE, "markov_grid_states")
+        .unwrap();
+    let states_buffer = ctx.storage_buffer("states", &states);
+    let velocities: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("velocities", states.len());
+    let stats: GpuBuffer<SufficientStats> = ctx.zeroed_buffer("stats", states.len());
+    ctx.dispatch(
+        &kernel,
+        &[states_buffer.raw(), velocities.raw(), stats.raw()],
+        states.len() as u32,
+    )
+    .unwrap();
+    let velocities = ctx.read_back(&velocities).unwrap();
+    let stats = ctx.read_back(&stats).unwrap();
+    for (i, s) in states.iter().enumerate() {
+        let v = s.velocity();
+        assert_eq!(
+            velocities[i],
+            [v.x, v.y, v.z, s.sample_count() as f32],
+            "state {i}"
+        );
+        assert_eq!(stats[i], s.stats(), "state {i}");
+    }
+}
+
 /// The context reports its adapter; `GpuContext::new` asks for no features.
 #[test]
 fn context_is_headless_and_featureless() {

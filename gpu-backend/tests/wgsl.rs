@@ -84,6 +84,7 @@ fn library_modules_validate_alone_and_together() {
         shaders::HASHGRID_TABLE,
         shaders::COLOR_CODEC,
         shaders::COLOR_CODEC_TEXELS,
+        shaders::MARKOV_GUIDE,
         CHECKSUM_DECLARATION,
         TEXEL_DECLARATION,
     ]
@@ -163,6 +164,7 @@ fn wgsl_structs_match_the_rust_pod_types() {
         shaders::HASHGRID_TABLE,
         shaders::COLOR_CODEC,
         shaders::COLOR_CODEC_TEXELS,
+        shaders::MARKOV_GUIDE,
         CHECKSUM_DECLARATION,
         TEXEL_DECLARATION,
     ]
@@ -210,6 +212,39 @@ fn wgsl_structs_match_the_rust_pod_types() {
         &[("cell", offset_of!(CellKey, cell)), ("meta_word", 12)],
     );
 
+    // GridState: the velocity's three u16 and the u16 count are two u32 words in WGSL.
+    {
+        use mcg_markov_guide::mcpg::GridState;
+        let mut g = GridState::EMPTY;
+        g.mean_target = glam::Vec3::new(1.0, 2.0, 3.0);
+        g.weight_sum = 4.0;
+        g.one_minus_mean_cosine = 5.0;
+        g.time = 6.0;
+        g.set_velocity(glam::Vec3::new(1.0, -2.0, 0.5));
+        let w: [u32; 8] = bytemuck::cast(g);
+        let f = |x: f32| x.to_bits();
+        assert_eq!(&w[..6], &[f(1.0), f(2.0), f(3.0), f(4.0), f(5.0), f(6.0)]);
+        assert_eq!(w[6], 0x3c00 | (0xc000 << 16), "velocity x, y as f16 bits");
+        assert_eq!(w[7], 0x3800, "velocity z as f16 bits, count 0");
+        check(
+            &m,
+            "GridState",
+            size_of::<GridState>(),
+            &[
+                ("mean_target_x", offset_of!(GridState, mean_target)),
+                ("mean_target_y", offset_of!(GridState, mean_target) + 4),
+                ("mean_target_z", offset_of!(GridState, mean_target) + 8),
+                ("weight_sum", offset_of!(GridState, weight_sum)),
+                (
+                    "one_minus_mean_cosine",
+                    offset_of!(GridState, one_minus_mean_cosine),
+                ),
+                ("time", offset_of!(GridState, time)),
+                ("velocity_xy", 24),
+                ("velocity_z_count", 28),
+            ],
+        );
+    }
     check(
         &m,
         "HashgridTable",
