@@ -1,10 +1,11 @@
 //! WGSL twins of the mcg primitives on [wgpu], in parity with the CPU crates.
 //!
 //! Renderer authors on wgpu get the primitives of [`mcg_vmf`], [`mcg_hashgrid`] and
-//! [`mcg_color_codec`] (and the state of [`mcg_markov_guide`]) as WGSL they can drop into their own compute pipelines, with tests
-//! that hold the GPU to the CPU crates' answers: bit for bit for hashes, checksums, table
-//! outcomes and packed words; within a stated tolerance for the vMF lobes, where WGSL's
-//! `exp` and `log` are less exact than the CPU's.
+//! [`mcg_color_codec`] (and the MCPG grid state of [`mcg_markov_guide`]) as WGSL they can
+//! drop into their own compute pipelines, with tests that hold the GPU to the CPU crates'
+//! answers: bit for bit for hashes, checksums, table outcomes and packed words; within a
+//! stated tolerance for the vMF lobes, where WGSL's `exp` and `log` are less exact than the
+//! CPU's.
 //!
 //! | item | what it is | source |
 //! |---|---|---|
