@@ -9,7 +9,7 @@
 //! |---|---|
 //! | [`PRELUDE`] | generated `const` declarations of every shared constant ([`crate::prelude`]) |
 //! | [`COMMON`] | `mcg_invocation_index`, the flat index of a [`GpuContext::dispatch`](crate::GpuContext::dispatch) |
-//! | [`VMF`] | `Vmf`, `SufficientStats`, `vmf_pdf`, `vmf_sample`, `vmf_sample_with_pdf`, `vmf_from_sufficient_stats`, `vmf_product`, mean cosine ↔ κ |
+//! | [`VMF`] | `Vmf`, `SufficientStats`, `vmf_pdf`, `vmf_sample`, `vmf_sample_with_pdf`, `vmf_stats_update`, `vmf_from_sufficient_stats`, `vmf_product`, mean cosine ↔ κ |
 //! | [`HASHGRID`] | `CellKey`, hashes, checksum, slot index, stochastic trilinear vertex, level choice |
 //! | [`HASHGRID_TABLE`] | `hashgrid_find`, `hashgrid_insert_or_get` on `hashgrid_checksums` |
 //! | [`COLOR_CODEC`] | R11G11B10, RGB9E5, gamma-5 R10G10B10A2, the log codec (ADGI eq. 21) with round-down / nearest / stochastic rounding, the 9/9/8 + 6 irradiance, 13/13 + 6 visibility and 6/10/10 + 6 heuristics words, the moving-average update |
@@ -84,6 +84,13 @@ pub mod kernels {
         include_str!("wgsl/vmf.wgsl"),
         include_str!("wgsl/kernels/vmf_stats.wgsl"),
     );
+    /// Entry point `vmf_update`: bindings `stats`, `updates`, `fit`.
+    pub const VMF_UPDATE: &str = concat!(
+        include_str!("wgsl/generated/prelude.wgsl"),
+        include_str!("wgsl/common.wgsl"),
+        include_str!("wgsl/vmf.wgsl"),
+        include_str!("wgsl/kernels/vmf_update.wgsl"),
+    );
     /// Entry point `hashgrid_hashes`: bindings `keys`, `hashes`, `levels`, `vertex_queries`,
     /// `vertex_keys`.
     pub const HASHGRID_KEYS: &str = concat!(
@@ -131,6 +138,7 @@ pub mod kernels {
     pub const ALL: &[(&str, &str, &[&str])] = &[
         ("vmf", VMF, &["vmf_pdf_and_sample"]),
         ("vmf_stats", VMF_STATS, &["vmf_stats"]),
+        ("vmf_update", VMF_UPDATE, &["vmf_update"]),
         ("hashgrid_keys", HASHGRID_KEYS, &["hashgrid_hashes"]),
         (
             "hashgrid_table",

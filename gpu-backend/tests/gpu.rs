@@ -334,6 +334,136 @@ fn vmf_reconstruction_and_products_match_the_cpu() {
     assert!(lobes > 1500, "{lobes} lobes");
 }
 
+/// One `SufficientStats::update` (MCMM Alg. 3, MCPG Alg. 3) from 4 096 states (fits of
+/// 0..40 samples, both mean-cosine updates, incl. rejected negative and infinite weights and
+/// y = x): N exact; w̄ within 8 ε relative (three roundings of positive terms and the 2.5-ULP
+/// division 1/N); ȳ within 16 ε (|ȳ| + |y|); 1 − r̄ within 32 ε (√(2t) + e + t) + 400 ε²,
+/// where t = 1 − d·μ: the normalisations of d and μ (sqrt and division, ≤ 5 ULP each)
+/// perturb |d − μ| by ≤ 16 ε, and the remaining products and the final division add a few ε
+/// of e and t. Broken once on purpose (β = α instead of αf/w̄'): failed.
+#[test]
+fn vmf_stats_update_matches_the_cpu() {
+    let Some(ctx) = gpu_or_skip("vmf_stats_update_matches_the_cpu") else {
+        return;
+    };
+    #[repr(C)]
+    #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+    struct Update {
+        x: Vec3,
+        weight: f32,
+        y: Vec3,
+        _pad: f32,
+    }
+    #[repr(C)]
+    #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+    struct Fit {
+        max_count: u32,
+        alpha_min: f32,
+        mean_cosine_update: u32,
+        _pad: u32,
+    }
+    let kernel = ctx
+        .compute_kernel(shaders::kernels::VMF_UPDATE, "vmf_update")
+        .unwrap();
+    for params in [FitParams::MCMM, FitParams::MCPG] {
+        let mut rng = Pcg64::seed_from_u64(23);
+        let mut stats = Vec::new();
+        let mut updates = Vec::new();
+        for i in 0..4096 {
+            let x = Vec3::new(rng.random(), rng.random(), rng.random());
+            let light = Vec3::new(
+                rng.random_range(-5.0..5.0),
+                6.0,
+                rng.random_range(-5.0..5.0),
+            );
+            let spread = [0.001_f32, 0.1, 2.0][i % 3];
+            let mut s = SufficientStats::EMPTY;
+            for _ in 0..(i % 40) {
+                s.update(
+                    x,
+                    light + random_unit(&mut rng) * spread,
+                    rng.random_range(0.0..2.0),
+                    &params,
+                );
+            }
+            let y = match i % 50 {
+                0 => x,
+                _ => light + random_unit(&mut rng) * spread,
+            };
+            let weight = match i % 97 {
+                0 => -1.0,
+                1 => f32::INFINITY,
+                2 => 0.0,
+                _ => rng.random_range(0.0..2.0),
+            };
+            stats.push(s);
+            updates.push(Update {
+                x,
+                weight,
+                y,
+                _pad: 0.0,
+            });
+        }
+        let fit = ctx.uniform_buffer(
+            "fit",
+            &Fit {
+                max_count: params.max_count,
+                alpha_min: params.alpha_min,
+                mean_cosine_update: match params.mean_cosine_update {
+                    mcg_vmf::MeanCosineUpdate::Resultant => 0,
+                    mcg_vmf::MeanCosineUpdate::Projected => 1,
+                },
+                _pad: 0,
+            },
+        );
+        let stats_buffer = ctx.storage_buffer("stats", &stats);
+        let updates_buffer = ctx.storage_buffer("updates", &updates);
+        ctx.dispatch(
+            &kernel,
+            &[stats_buffer.raw(), updates_buffer.raw(), fit.raw()],
+            stats.len() as u32,
+        )
+        .unwrap();
+        let gpu = ctx.read_back(&stats_buffer).unwrap();
+        for i in 0..stats.len() {
+            let before = stats[i];
+            let u = updates[i];
+            let mut cpu = before;
+            cpu.update(u.x, u.y, u.weight, &params);
+            let g = gpu[i];
+            assert_eq!(g.sample_count, cpu.sample_count, "{i}");
+            let w = f64::from(cpu.weight_sum);
+            assert!(
+                (f64::from(g.weight_sum) - w).abs() <= 8.0 * EPS * w,
+                "{i}: w̄ {} vs {w}",
+                g.weight_sum
+            );
+            let scale = f64::from(before.mean_target.length() + u.y.length());
+            assert!(
+                f64::from((g.mean_target - cpu.mean_target).length()) <= 16.0 * EPS * scale,
+                "{i}: ȳ {} vs {}",
+                g.mean_target,
+                cpu.mean_target
+            );
+            let d = (u.y - u.x).normalize_or_zero();
+            let mu = if before.weight_sum > 0.0 {
+                (before.mean_target - u.x).try_normalize().unwrap_or(d)
+            } else {
+                d
+            };
+            let t = 0.5 * f64::from((d - mu).length_squared());
+            let e = f64::from(before.one_minus_mean_cosine);
+            let tol = 32.0 * EPS * ((2.0 * t).sqrt() + e + t) + 400.0 * EPS * EPS;
+            let c = f64::from(cpu.one_minus_mean_cosine);
+            assert!(
+                (f64::from(g.one_minus_mean_cosine) - c).abs() <= tol,
+                "{i}: 1 − r̄ {} vs {c} (tolerance {tol})",
+                g.one_minus_mean_cosine
+            );
+        }
+    }
+}
+
 fn random_key(rng: &mut impl Rng) -> CellKey {
     let cell = IVec3::new(
         rng.random_range(-40..40),

@@ -252,3 +252,73 @@ fn vmf_product(a: Vmf, b: Vmf, out: ptr<function, Vmf>) -> f32 {
     *out = Vmf(unit, kappa);
     return scale;
 }
+
+// `mcg_vmf::FitParams`: N_max, α_min and the mean-cosine update (VMF_MEAN_COSINE_*).
+struct VmfFitParams {
+    max_count: u32,
+    alpha_min: f32,
+    mean_cosine_update: u32,
+}
+
+const VMF_MEAN_COSINE_RESULTANT: u32 = 0u;
+const VMF_MEAN_COSINE_PROJECTED: u32 = 1u;
+
+fn vmf_is_finite3(v: vec3<f32>) -> bool {
+    return all(abs(v) <= vec3<f32>(MCG_F32_MAX));
+}
+
+// `SufficientStats::update` (MCMM Alg. 3 lines 11-17, MCPG Alg. 3 lines 4-9): absorbs target
+// point `y` seen from `x` with weight `weight`; N ← min(N + 1, N_max), α = max(1/N, α_min),
+// w̄' = mix(w̄, f, α), β = αf/w̄', ȳ' = (1 − β)ȳ + βy, and 1 − r̄ in the CPU's
+// cancellation-free complement forms. Returns false (and leaves `stats` alone) for a
+// negative or non-finite weight or point.
+fn vmf_stats_update(stats: ptr<function, SufficientStats>, x: vec3<f32>, y: vec3<f32>, weight: f32, params: VmfFitParams) -> bool {
+    if !(weight >= 0.0 && weight <= MCG_F32_MAX && vmf_is_finite3(x) && vmf_is_finite3(y)) {
+        return false;
+    }
+    let s = *stats;
+    let max_count = max(params.max_count, 1u);
+    let count = min(select(s.sample_count + 1u, s.sample_count, s.sample_count == 0xffffffffu), max_count);
+    let alpha = min(max(1.0 / f32(count), clamp(params.alpha_min, 0.0, 1.0)), 1.0);
+    let weight_sum = min((1.0 - alpha) * s.weight_sum + alpha * weight, max(s.weight_sum, weight));
+    (*stats).sample_count = count;
+    if !(weight_sum > 0.0) {
+        (*stats).weight_sum = 0.0;
+        return true;
+    }
+    let beta = min(alpha * weight / weight_sum, 1.0);
+    var direction = vec3<f32>(0.0);
+    if !vmf_try_normalize(y - x, &direction) {
+        direction = vec3<f32>(0.0);
+    }
+    let mean_target = vec3<f32>(s.mean_target_x, s.mean_target_y, s.mean_target_z);
+    var mean_direction = direction;
+    if s.weight_sum > 0.0 {
+        if !vmf_try_normalize(mean_target - x, &mean_direction) {
+            mean_direction = direction;
+        }
+    }
+    let e = s.one_minus_mean_cosine;
+    if all(direction == vec3<f32>(0.0)) {
+        (*stats).one_minus_mean_cosine = beta + (1.0 - beta) * e;
+    } else {
+        let dd = direction - mean_direction;
+        let t = 0.5 * (dd.x * dd.x + dd.y * dd.y + dd.z * dd.z);
+        if params.mean_cosine_update == VMF_MEAN_COSINE_PROJECTED {
+            (*stats).one_minus_mean_cosine = clamp((1.0 - beta) * e + beta * t, 0.0, 2.0);
+        } else {
+            let ec = clamp(e, 0.0, 1.0);
+            let keep = 1.0 - beta;
+            let d = clamp(keep * keep * ec * (2.0 - ec) + 2.0 * beta * keep * (ec + t - ec * t), 0.0, 1.0);
+            (*stats).one_minus_mean_cosine = d / (1.0 + sqrt(1.0 - d));
+        }
+    }
+    let new_target = mean_target * (1.0 - beta) + y * beta;
+    if vmf_is_finite3(new_target) {
+        (*stats).mean_target_x = new_target.x;
+        (*stats).mean_target_y = new_target.y;
+        (*stats).mean_target_z = new_target.z;
+    }
+    (*stats).weight_sum = weight_sum;
+    return true;
+}
