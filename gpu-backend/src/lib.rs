@@ -10,7 +10,7 @@
 //! | item | what it is | source |
 //! |---|---|---|
 //! | [`shaders::PRELUDE`], [`prelude::generate`] | generated `const` declarations of every constant shared with the CPU crates | the crates' `constants` |
-//! | [`shaders::VMF`] | vMF pdf (stable form), sampling from explicit uniforms, mean cosine ↔ κ, reconstruction from sufficient statistics with a MAP prior, product | MCMM eq. 4 and Alg. 2, MCPG Alg. 2, Jakob 2012 |
+//! | [`shaders::VMF`] | vMF pdf (stable form), sampling from explicit uniforms, mean cosine ↔ κ, the sufficient-statistics update and the reconstruction with a MAP prior, product | MCMM eq. 4, Alg. 2-3; MCPG Alg. 2-3; Jakob 2012 |
 //! | [`shaders::HASHGRID`], [`shaders::HASHGRID_TABLE`] | cell keys, xor-primes / pcg4d hashes, checksums, slot index, stochastic trilinear vertex, level choice; lock-free insert-or-get and lookup with a compare-and-swap loop | MCPG sec. 4 "Hash Grid"; Jarzynski and Olano 2020 |
 //! | [`shaders::COLOR_CODEC`], [`shaders::COLOR_CODEC_TEXELS`] | R11G11B10, RGB9E5, gamma-5 R10G10B10A2, the log codec, the 9/9/8 + 6 irradiance, 13/13 + 6 visibility and 6/10/10 + 6 heuristics words, the moving average as a compare-and-swap loop | ADGI eq. 21, sec. 4.3-4.7 |
 //! | [`shaders::MARKOV_GUIDE`] | the MCPG `GridState` (32 B): f16 velocity, count, sufficient statistics | MCPG Table 1 |
