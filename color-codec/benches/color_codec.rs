@@ -3,7 +3,11 @@
 //!
 //! - `encode`, `decode`, `round_trip`: every codec of the crate against a plain f32 copy (the
 //!   floor: 12 bytes moved) and R11G11B10 (the format a renderer author would otherwise pick).
-//!   Target: the log codec's encode + decode within 2× of R11G11B10's.
+//!   Target: the log codec's encode + decode within 2× of R11G11B10's. These call `encode` /
+//!   `decode` once per colour.
+//! - `batch_encode`, `batch_decode`: the slice API (`encode_slice` / `decode_slice`) over the
+//!   same 1024 colours: R11G11B10's default per-colour loop against the log codec's batch form
+//!   (four colours per vector), with the f32 copy.
 //! - `moving_average`: the atomic CAS update (`MovingAverage::update_atomic`) with 1 and 2
 //!   threads against the same update as a plain, unsynchronised read-modify-write and a plain
 //!   store of the encoded sample.
@@ -130,6 +134,66 @@ fn bench_codecs(c: &mut Criterion) {
     g.finish();
 }
 
+/// The slice API (`ColorCodec::encode_slice` / `decode_slice`): R11G11B10's is the default
+/// per-colour loop (which the compiler vectorises across colours), the log codec's the batch
+/// form (four colours per 4-lane vector, lane = colour).
+fn bench_batch(c: &mut Criterion) {
+    let input = colours();
+    macro_rules! each_batch_codec {
+        ($g:expr, $body:ident) => {
+            $body!($g, "r11g11b10_baseline", R11G11B10);
+            $body!($g, "log_r9g9b8_down", LogRgb::ADGI);
+            $body!($g, "log_r9g9b8_nearest", LogRgb::ADGI_NEAREST);
+        };
+    }
+    let mut out = vec![Vec3::ZERO; BATCH];
+    let mut words = vec![0u32; BATCH];
+
+    let mut g = group(c, "batch_encode");
+    g.bench_function("f32_copy_baseline", |b| {
+        b.iter(|| {
+            out.copy_from_slice(black_box(&input));
+            black_box(&out);
+        })
+    });
+    macro_rules! enc {
+        ($g:expr, $name:expr, $codec:expr) => {
+            $g.bench_function($name, |b| {
+                let codec = $codec;
+                b.iter(|| {
+                    codec.encode_slice(black_box(&input), &mut words);
+                    black_box(&words);
+                })
+            });
+        };
+    }
+    each_batch_codec!(g, enc);
+    g.finish();
+
+    let mut g = group(c, "batch_decode");
+    g.bench_function("f32_copy_baseline", |b| {
+        b.iter(|| {
+            out.copy_from_slice(black_box(&input));
+            black_box(&out);
+        })
+    });
+    macro_rules! dec {
+        ($g:expr, $name:expr, $codec:expr) => {
+            $g.bench_function($name, |b| {
+                let codec = $codec;
+                let mut encoded = vec![0u32; BATCH];
+                codec.encode_slice(&input, &mut encoded);
+                b.iter(|| {
+                    codec.decode_slice(black_box(&encoded), &mut out);
+                    black_box(&out);
+                })
+            });
+        };
+    }
+    each_batch_codec!(g, dec);
+    g.finish();
+}
+
 fn bench_moving_average(c: &mut Criterion) {
     let input = colours();
     let layout = IrradianceLayout::ADGI;
@@ -196,5 +260,5 @@ fn bench_moving_average(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench_codecs, bench_moving_average);
+criterion_group!(benches, bench_codecs, bench_batch, bench_moving_average);
 criterion_main!(benches);

@@ -3,7 +3,10 @@
 //! bench (`benches/color_codec.rs`, hue/saturation uniform, intensity log-uniform in
 //! [10⁻³, 8]), each timed 50 times in a row, keeping the fastest of 20 such runs, the codecs
 //! interleaved 15 times. Prints ns per batch and the ratio
-//! `log (encode + decode) / R11G11B10 (encode + decode)`, and the fused `decode(encode(c))`.
+//! `log (encode + decode) / R11G11B10 (encode + decode)`, and the fused `decode(encode(c))`,
+//! once per colour (`encode` / `decode`) and once in the slice form (`encode_slice` /
+//! `decode_slice`: R11G11B10's default loop, the log codec's 4-colours-per-vector batch; the
+//! "round trip" there is `encode_slice` then `decode_slice`).
 //!
 //! `cargo run --release -p mcg-color-codec --example min_timing`
 
@@ -71,14 +74,40 @@ fn time_codec<C: ColorCodec>(codec: &C, input: &[Vec3]) -> [f64; 3] {
     [encode, decode, round_trip]
 }
 
+/// (encode_slice, decode_slice, both in a row) in ns per batch: the slice API (the default
+/// per-colour loop for R11G11B10, the 4-colours-per-vector batch form for the log codec).
+fn time_codec_batch<C: ColorCodec>(codec: &C, input: &[Vec3]) -> [f64; 3] {
+    let mut words = vec![0u32; BATCH];
+    let mut out = vec![Vec3::ZERO; BATCH];
+    let encode = fastest(|| {
+        codec.encode_slice(black_box(input), &mut words);
+        black_box(&words);
+    });
+    let mut encoded = vec![0u32; BATCH];
+    codec.encode_slice(input, &mut encoded);
+    let decode = fastest(|| {
+        codec.decode_slice(black_box(&encoded), &mut out);
+        black_box(&out);
+    });
+    let round_trip = fastest(|| {
+        codec.encode_slice(black_box(input), &mut words);
+        codec.decode_slice(&words, &mut out);
+        black_box(&out);
+    });
+    [encode, decode, round_trip]
+}
+
 fn main() {
     let input = colours();
-    let codecs: [&dyn Fn() -> [f64; 3]; 3] = [
+    let codecs: [&dyn Fn() -> [f64; 3]; 6] = [
         &|| time_codec(&R11G11B10, &input),
         &|| time_codec(&LogRgb::ADGI, &input),
         &|| time_codec(&LogRgb::ADGI_NEAREST, &input),
+        &|| time_codec_batch(&R11G11B10, &input),
+        &|| time_codec_batch(&LogRgb::ADGI, &input),
+        &|| time_codec_batch(&LogRgb::ADGI_NEAREST, &input),
     ];
-    let mut best = [[f64::MAX; 3]; 3];
+    let mut best = [[f64::MAX; 3]; 6];
     for _ in 0..15 {
         for (b, time) in best.iter_mut().zip(codecs) {
             let t = time();
@@ -88,18 +117,24 @@ fn main() {
         }
     }
     let names = ["r11g11b10", "log_r9g9b8_down", "log_r9g9b8_nearest"];
-    for (name, b) in names.iter().zip(best) {
-        println!(
-            "{name:<20} encode {:>7.0} ns  decode {:>7.0} ns  round trip {:>7.0} ns",
-            b[0], b[1], b[2]
-        );
-    }
-    let base = best[0][0] + best[0][1];
-    for (name, b) in names.iter().zip(best).skip(1) {
-        println!(
-            "{name}: (encode + decode) ratio {:.2}, round-trip ratio {:.2}",
-            (b[0] + b[1]) / base,
-            b[2] / best[0][2]
-        );
+    for (form, best) in [
+        ("per colour (encode / decode)", &best[..3]),
+        ("batch (encode_slice / decode_slice)", &best[3..]),
+    ] {
+        println!("{form}:");
+        for (name, b) in names.iter().zip(best) {
+            println!(
+                "  {name:<20} encode {:>7.0} ns  decode {:>7.0} ns  round trip {:>7.0} ns",
+                b[0], b[1], b[2]
+            );
+        }
+        let base = best[0][0] + best[0][1];
+        for (name, b) in names.iter().zip(best).skip(1) {
+            println!(
+                "  {name}: (encode + decode) ratio {:.2}, round-trip ratio {:.2}",
+                (b[0] + b[1]) / base,
+                b[2] / best[0][2]
+            );
+        }
     }
 }

@@ -14,7 +14,7 @@
 //! | [`VisibilityLayout`], [`VisibilityWord`] | 13-bit d̄ + 13-bit d̄² + 6-bit count | ADGI sec. 4.6, Table 3 |
 //! | [`HeuristicsLayout`], [`HeuristicsWord`], [`Heuristics`] | f_v, f_s, f_d as 6-10-10 bits + 6 flags | ADGI sec. 4.3, eq. 11, 19, 20 |
 //! | [`MovingAverage`], [`CountedLayout`] | 1/N average up to N_max, then hysteresis (N_max − 1)/N_max; `word → word` and an `AtomicU32` CAS loop | ADGI sec. 4.7, Alg. 3 |
-//! | [`ColorCodec`], [`LogRgb`] | one trait over every colour codec | — |
+//! | [`ColorCodec`], [`LogRgb`] | one trait over every colour codec (per colour and slices; batch form for the log codec) | — |
 //! | [`R11G11B10`], [`Rgb9E5`], [`LogLuv32`], [`Gamma5R10G10B10A2`] | Vulkan/D3D packed float, shared exponent, Ward's LogLuv, RTXGI's gamma-5 UNORM | specs cited per type |
 //! | [`CONSTANTS`] | layouts, β, γ, N_max as one table for the WGSL prelude | — |
 //!

@@ -405,6 +405,16 @@ impl LogLanes {
             .to_array()
     }
 
+    /// [`decode_word`](Self::decode_word) with a different word per lane: lane i decodes its
+    /// field from `words[i]` (the batch form, where every lane holds the same field of four
+    /// colours). Lane by lane the same operations, so the same bits.
+    #[inline(always)]
+    pub(crate) fn decode_words(&self, words: [u32; 4]) -> [f32; 4] {
+        let masked = I4::new(words.map(|w| w as i32)).and_lanes(I4::new(self.field_mask));
+        self.decode_scaled(masked.to_f32().mul(F4::new(self.word_decode_scale)))
+            .to_array()
+    }
+
     /// Encodes per lane (see [`LogField`]'s docs for the rounding rules and bounds).
     #[inline(always)]
     pub(crate) fn encode(&self, v: [f32; 4], rounding: Rounding) -> [u32; 4] {

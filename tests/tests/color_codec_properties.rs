@@ -82,4 +82,37 @@ proptest! {
             }
         }
     }
+
+    /// The slice API equals the per-colour one, bit for bit: `encode_slice` / `decode_slice`
+    /// (the log codec's 4-colours-per-vector batch form, the other codecs' default loop) against
+    /// `encode` / `decode` on arbitrary slices of 0-13 colours (every tail length), and
+    /// `IrradianceLayout::encode_slice` with a count and a stochastic uniform.
+    #[test]
+    fn slices_equal_per_colour(
+        rgb in proptest::collection::vec((any_f32(), any_f32(), any_f32()), 0..14),
+        u in 0.0f32..1.0,
+        count in 0u32..80,
+    ) {
+        let colours: Vec<Vec3> = rgb.iter().map(|&(r, g, b)| Vec3::new(r, g, b)).collect();
+        let n = colours.len();
+        for codec in codecs() {
+            let mut words = vec![0u32; n];
+            codec.encode_slice(&colours, &mut words);
+            let want: Vec<u32> = colours.iter().map(|&c| codec.encode(c)).collect();
+            prop_assert_eq!(&words, &want, "{}", codec.name());
+            let mut dec = vec![Vec3::NAN; n];
+            codec.decode_slice(&words, &mut dec);
+            for (d, &w) in dec.iter().zip(&words) {
+                prop_assert_eq!(d.to_array().map(f32::to_bits), codec.decode(w).to_array().map(f32::to_bits));
+            }
+        }
+        for l in [IrradianceLayout::ADGI, IrradianceLayout::EQUAL_10] {
+            for rounding in [Rounding::Down, Rounding::Nearest, Rounding::Stochastic(u)] {
+                let mut words = vec![IrradianceWord(0); n];
+                l.encode_slice(&colours, count, rounding, &mut words);
+                let want: Vec<IrradianceWord> = colours.iter().map(|&c| l.encode(c, count, rounding)).collect();
+                prop_assert_eq!(&words, &want, "{:?}", rounding);
+            }
+        }
+    }
 }
