@@ -5,6 +5,7 @@
 //! and tables as a [`Section`]. [`ALL`] lists them in page order; [`crate::run`] calls each once.
 
 pub mod color_codec;
+pub mod gpu_backend;
 pub mod hashgrid;
 pub mod markov_guide;
 pub mod smis;
@@ -28,6 +29,7 @@ pub const ALL: &[BuildFn] = &[
     smis::build,
     hashgrid::build,
     markov_guide::build,
+    gpu_backend::build,
 ];
 
 /// What a section builder gets: the run's settings and where to put files.

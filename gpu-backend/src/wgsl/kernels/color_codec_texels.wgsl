@@ -1,0 +1,35 @@
+// Concurrent moving-average updates of shared irradiance texels, used by the parity tests.
+// Composed after the prelude, `common.wgsl`, `color_codec.wgsl` and
+// `color_codec_texels.wgsl`. One invocation per update.
+
+struct TexelUpdate {
+    sample: vec3<f32>,
+    texel: u32,
+}
+
+struct TexelParams {
+    max_count: u32,
+    rounding_mode: u32,
+    rounding_u: f32,
+    // 0: irradiance words, 1: visibility words (the sample's xy).
+    word_layout: u32,
+}
+
+@group(0) @binding(0) var<storage, read_write> codec_texels: array<atomic<u32>>;
+@group(0) @binding(1) var<storage, read> updates: array<TexelUpdate>;
+@group(0) @binding(2) var<uniform> params: TexelParams;
+
+@compute @workgroup_size(MCG_WORKGROUP_SIZE)
+fn codec_texel_updates(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&updates) {
+        return;
+    }
+    let up = updates[i];
+    let rounding = CodecRounding(params.rounding_mode, params.rounding_u);
+    if params.word_layout == 0u {
+        codec_irradiance_update_atomic(up.texel, up.sample, params.max_count, rounding);
+    } else {
+        codec_visibility_update_atomic(up.texel, up.sample.xy, params.max_count, rounding);
+    }
+}
