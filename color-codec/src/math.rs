@@ -77,6 +77,16 @@ const EXP2_P: [f32; 7] = [
 /// ulps (tested against f64). Normal inputs below 1 also work; NaN, zero, subnormal and negative inputs give garbage (callers clamp first).
 #[inline(always)]
 pub(crate) fn fast_ln_ge1(x: f32) -> f32 {
+    let (e, t, t2, p) = ln_reduce(x);
+    let y = t * t2 * p + e * LN2_LO - 0.5 * t2;
+    t + y + e * LN2_HI
+}
+
+/// The reduction and polynomial shared by [`fast_ln_ge1`] and `fast_ln_parts`: `x = 2ᵉ·m` with
+/// m ∈ [√½, √2), t = m − 1, and the Cephes polynomial p(t), evaluated by Estrin's scheme (the
+/// same polynomial as Horner's, a third of the dependency depth). Returns `(e, t, t², p)`.
+#[inline(always)]
+fn ln_reduce(x: f32) -> (f32, f32, f32, f32) {
     const SQRT_HALF_BITS: u32 = 0x3f35_04f3;
     let bits = x.to_bits();
     let shifted = bits.wrapping_sub(SQRT_HALF_BITS);
@@ -86,16 +96,13 @@ pub(crate) fn fast_ln_ge1(x: f32) -> f32 {
     let t2 = t * t;
     let t4 = t2 * t2;
     let [c0, c1, c2, c3, c4, c5, c6, c7, c8] = LN_P;
-    // Estrin's scheme: the same polynomial as Horner's, a third of the dependency depth.
     let p01 = c0 + c1 * t;
     let p23 = c2 + c3 * t;
     let p45 = c4 + c5 * t;
     let p67 = c6 + c7 * t;
     let p03 = p01 + p23 * t2;
     let p47 = p45 + p67 * t2;
-    let p = p03 + p47 * t4 + c8 * (t4 * t4);
-    let y = t * t2 * p + e * LN2_LO - 0.5 * t2;
-    t + y + e * LN2_HI
+    (e, t, t2, p03 + p47 * t4 + c8 * (t4 * t4))
 }
 
 /// `(e, ln m)` with `x = 2ᵉ·m`, m ∈ [√½, √2): the two parts of [`fast_ln_ge1`] before they are
@@ -105,22 +112,7 @@ pub(crate) fn fast_ln_ge1(x: f32) -> f32 {
 /// [`fast_ln_parts_x4`]; this scalar form is its reference (tests, and what a GPU port mirrors).
 #[cfg(test)]
 pub(crate) fn fast_ln_parts(x: f32) -> (f32, f32) {
-    const SQRT_HALF_BITS: u32 = 0x3f35_04f3;
-    let bits = x.to_bits();
-    let shifted = bits.wrapping_sub(SQRT_HALF_BITS);
-    let e = (shifted as i32 >> 23) as f32;
-    let m = f32::from_bits(bits.wrapping_sub(shifted & 0xff80_0000));
-    let t = m - 1.0;
-    let t2 = t * t;
-    let t4 = t2 * t2;
-    let [c0, c1, c2, c3, c4, c5, c6, c7, c8] = LN_P;
-    let p01 = c0 + c1 * t;
-    let p23 = c2 + c3 * t;
-    let p45 = c4 + c5 * t;
-    let p67 = c6 + c7 * t;
-    let p03 = p01 + p23 * t2;
-    let p47 = p45 + p67 * t2;
-    let p = p03 + p47 * t4 + c8 * (t4 * t4);
+    let (e, t, t2, p) = ln_reduce(x);
     (e, t + (t * t2 * p - 0.5 * t2))
 }
 
