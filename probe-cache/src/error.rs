@@ -1,0 +1,29 @@
+//! Errors returned by the validating constructors of this crate.
+
+use core::fmt;
+
+/// Why a constructor of this crate rejected its parameters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum ProbeError {
+    /// The grid origin has a NaN or infinite component.
+    OriginNotFinite,
+    /// A probe spacing component is NaN, infinite, or not positive.
+    SpacingNotPositive,
+    /// A probe count along an axis is zero, or the total probe count overflows `u32`.
+    CountsOutOfRange,
+}
+
+impl fmt::Display for ProbeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            ProbeError::OriginNotFinite => "probe grid origin is not finite",
+            ProbeError::SpacingNotPositive => "probe spacing is not a positive finite vector",
+            ProbeError::CountsOutOfRange => {
+                "probe counts must be at least 1 per axis and at most 2^32 - 1 in total"
+            }
+        })
+    }
+}
+
+impl core::error::Error for ProbeError {}

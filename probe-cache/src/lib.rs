@@ -1,0 +1,46 @@
+//! # mcg-probe-cache: DDGI probe grids with ADGI's atomic texels and adaptive updates
+//!
+//! *Adaptive Dynamic Global Illumination* (ADGI) keeps DDGI's grid of irradiance probes but
+//! stores each texel in one 32-bit word updated by compare-and-swap, and spends its ray budget
+//! where a guiding function says it matters, placed by Metropolis chains. This crate gives
+//! renderer authors that grid — usable as plain DDGI storage — and ADGI's adaptive sampling.
+//!
+//! | item | what it is | paper |
+//! |---|---|---|
+//! | [`ProbeGrid`], [`ProbeCell`] | probe lattice: origin, spacing, counts; trilinear cell lookup | DDGI; ADGI sec. 3.1 |
+//!
+//! ## Conventions
+//! - Positions and directions are [`glam::Vec3`] (f32); colours are linear RGB.
+//! - No hidden randomness: every random decision takes the caller's uniforms in [0, 1).
+//! - Texel storage is plain `u32` words (the packed layouts of `mcg-color-codec`), so a grid's
+//!   memory uploads to the GPU as it is.
+//!
+//! ## Example
+//! ```
+//! use mcg_probe_cache::{ProbeGrid, glam::{UVec3, Vec3}};
+//!
+//! let grid = ProbeGrid::new(Vec3::ZERO, Vec3::splat(1.0), UVec3::new(4, 4, 4))?;
+//! let cell = grid.cell(Vec3::new(1.25, 2.5, 0.75));
+//! let weights: f32 = (0..8).map(|c| grid.corner(cell, c).1).sum();
+//! assert!((weights - 1.0).abs() < 1e-6);
+//! # Ok::<(), mcg_probe_cache::ProbeError>(())
+//! ```
+#![deny(missing_docs)]
+#![forbid(unsafe_code)]
+// `!(x > 0.0)` is how this crate rejects NaN together with the out-of-range values.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
+
+pub use glam;
+pub use mcg_color_codec;
+
+mod error;
+mod grid;
+
+pub use error::ProbeError;
+pub use grid::{ProbeCell, ProbeGrid};
+
+/// The README's example, compiled and run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
