@@ -8,6 +8,7 @@ use crate::irradiance_word::IrradianceLayout;
 use crate::log_codec::LogCodec;
 use crate::moving_average::MovingAverage;
 use crate::visibility_word::VisibilityLayout;
+use crate::{gamma5_r10g10b10a2, math, quantize};
 
 /// The value of a [`NamedConstant`]: WGSL `u32` or `f32`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -60,7 +61,9 @@ const HEU: HeuristicsLayout = HeuristicsLayout::ADGI;
 /// The codec constants of ADGI's default layouts, for the WGSL prelude: field widths and bit
 /// offsets of the irradiance (sec. 4.5), visibility (sec. 4.6) and heuristics (sec. 4.3) words,
 /// (β, γ) of each log codec (eq. 21), and N_max of the static and dynamic moving averages
-/// (sec. 4.7, Table 3). Values are read from the typed constants, so the table cannot drift.
+/// (sec. 4.7, Table 3); the coefficients and reduction constants of the fast `ln`/`exp2`
+/// polynomials (Cephes), the per-channel step of stochastic rounding and gamma-5's code range.
+/// Values are read from the typed constants, so the table cannot drift.
 ///
 /// # Example
 /// ```
@@ -106,6 +109,31 @@ pub const CONSTANTS: &[NamedConstant] = &[
         "MOVING_AVERAGE_DYNAMIC_MAX_COUNT",
         MovingAverage::DYNAMIC.max_count(),
     ),
+    // The fast `ln` / `exp2` of the log codec and gamma-5 (`math.rs`): a GPU twin evaluates
+    // the same polynomials in the same order to get the same codes.
+    u("FAST_LN_SQRT_HALF_BITS", math::SQRT_HALF_BITS),
+    f("FAST_LN_LN2_HI", math::LN2_HI),
+    f("FAST_LN_LN2_LO", math::LN2_LO),
+    f("FAST_LN_P0", math::LN_P[0]),
+    f("FAST_LN_P1", math::LN_P[1]),
+    f("FAST_LN_P2", math::LN_P[2]),
+    f("FAST_LN_P3", math::LN_P[3]),
+    f("FAST_LN_P4", math::LN_P[4]),
+    f("FAST_LN_P5", math::LN_P[5]),
+    f("FAST_LN_P6", math::LN_P[6]),
+    f("FAST_LN_P7", math::LN_P[7]),
+    f("FAST_LN_P8", math::LN_P[8]),
+    f("FAST_EXP2_P1", math::EXP2_P[1]),
+    f("FAST_EXP2_P2", math::EXP2_P[2]),
+    f("FAST_EXP2_P3", math::EXP2_P[3]),
+    f("FAST_EXP2_P4", math::EXP2_P[4]),
+    f("FAST_EXP2_P5", math::EXP2_P[5]),
+    f("FAST_EXP2_P6", math::EXP2_P[6]),
+    // `Rounding::Stochastic` per channel: u + k·STEP mod 1.
+    f("STOCHASTIC_CHANNEL_STEP", quantize::CHANNEL_STEP),
+    // Gamma-5 R10G10B10A2.
+    u("GAMMA5_MAX_CODE", gamma5_r10g10b10a2::GAMMA5_MAX_CODE),
+    f("GAMMA5_MIN_INPUT", gamma5_r10g10b10a2::GAMMA5_MIN_INPUT),
 ];
 
 #[cfg(test)]

@@ -32,6 +32,13 @@ pub struct Gamma5R10G10B10A2;
 /// RTXGI's irradiance encoding gamma.
 pub const RTXGI_IRRADIANCE_GAMMA: f32 = 5.0;
 
+/// The largest 10-bit channel code of [`Gamma5R10G10B10A2`] (its channel mask).
+pub(crate) const GAMMA5_MAX_CODE: u32 = 1023;
+
+/// Inputs at or below this (≈ 2⁻¹⁰⁰) encode to 0: their code would be 0 anyway, and it keeps 0,
+/// subnormals and NaN away from the logarithm.
+pub(crate) const GAMMA5_MIN_INPUT: f32 = 7.9e-31;
+
 impl Gamma5R10G10B10A2 {
     /// `round(clamp(v, 0, 1)^{1/5} · 1023)`, ties to even; NaN and negatives → 0.
     #[inline(always)]
@@ -39,18 +46,25 @@ impl Gamma5R10G10B10A2 {
     pub fn encode_channel(v: f32) -> u32 {
         // Below 2⁻¹⁰⁰ the code is 0 anyway ((2⁻¹⁰⁰)^{1/5}·1023 ≈ 10⁻³); this also keeps 0,
         // subnormals and NaN away from the logarithm.
-        let v = if v > 7.9e-31 { v.min(1.0) } else { 0.0 };
-        let c = fast_exp2(fast_ln_ge1(v.max(7.9e-31)) * (core::f32::consts::LOG2_E / 5.0));
+        let v = if v > GAMMA5_MIN_INPUT {
+            v.min(1.0)
+        } else {
+            0.0
+        };
+        let c = fast_exp2(
+            fast_ln_ge1(v.max(GAMMA5_MIN_INPUT))
+                * (core::f32::consts::LOG2_E / RTXGI_IRRADIANCE_GAMMA),
+        );
         let c = if v > 0.0 { c.min(1.0) } else { 0.0 };
         // Adding 2²³·1.5 rounds to the nearest integer, ties to even; the low bits hold it.
-        ((c * 1023.0 + ROUND_SHIFT).to_bits() & 0x7ff).min(1023)
+        ((c * GAMMA5_MAX_CODE as f32 + ROUND_SHIFT).to_bits() & 0x7ff).min(GAMMA5_MAX_CODE)
     }
 
     /// `(q/1023)⁵` by multiplication (exact to f32 rounding).
     #[inline(always)]
     #[must_use]
     pub fn decode_channel(code: u32) -> f32 {
-        let c = (code & 0x3ff) as f32 * (1.0 / 1023.0);
+        let c = (code & GAMMA5_MAX_CODE) as f32 * (1.0 / GAMMA5_MAX_CODE as f32);
         let c2 = c * c;
         c2 * c2 * c
     }

@@ -223,6 +223,43 @@ impl LogField {
         self.max_code
     }
 
+    /// M/β, the encoder's scale of ln m (derived constants for GPU twins, which must use the
+    /// same rounded values as the CPU).
+    #[inline]
+    #[must_use]
+    pub const fn encode_scale(&self) -> f32 {
+        self.encode_scale
+    }
+
+    /// (M/β)·ln 2, the encoder's scale of the exponent e of x = 2ᵉ m.
+    #[inline]
+    #[must_use]
+    pub const fn exponent_scale(&self) -> f32 {
+        self.exponent_scale
+    }
+
+    /// β/(M ln 2), the decoder's scale of the code before `exp2`.
+    #[inline]
+    #[must_use]
+    pub const fn decode_scale(&self) -> f32 {
+        self.decode_scale
+    }
+
+    /// 1/γ.
+    #[inline]
+    #[must_use]
+    pub const fn inv_gamma(&self) -> f32 {
+        self.inv_gamma
+    }
+
+    /// τ, the band (in codes) around a boundary inside which rounding down decides against
+    /// [`decode`](Self::decode) (see "Rounding down exactly" above).
+    #[inline]
+    #[must_use]
+    pub const fn down_tolerance(&self) -> f32 {
+        self.down_tolerance
+    }
+
     /// Encodes `v` to a code in 0 ..= M with `rounding` (see the type docs for the error bound).
     ///
     /// Negative inputs and NaN encode to 0; values above [`LogCodec::max_value`] (and +∞)

@@ -36,11 +36,14 @@ use crate::simd4::F4;
 pub(crate) const ROUND_SHIFT: f32 = 12_582_912.0;
 
 /// ln 2 split in a part exact in f32 times e (|e| ≤ 128) and a small remainder.
-const LN2_HI: f32 = 0.693_359_4;
-const LN2_LO: f32 = -2.121_944_4e-4;
+pub(crate) const LN2_HI: f32 = 0.693_359_4;
+pub(crate) const LN2_LO: f32 = -2.121_944_4e-4;
+
+/// Bits of √½ (rounded to f32): `fast_ln_ge1`'s reduction puts the mantissa in [√½, √2).
+pub(crate) const SQRT_HALF_BITS: u32 = 0x3f35_04f3;
 
 /// Cephes' `logf` polynomial P(t) = Σ cᵢ tⁱ, i = 0 ..= 8.
-const LN_P: [f32; 9] = [
+pub(crate) const LN_P: [f32; 9] = [
     0.333_333_3,
     -2.499_999_4e-1,
     2.000_071_5e-1,
@@ -57,7 +60,7 @@ const LN_P: [f32; 9] = [
 const POW2_OFFSET: u32 = 127_u32.wrapping_sub(ROUND_SHIFT.to_bits()) << 23;
 
 /// Cephes' `exp2f` polynomial 2^f ≈ 1 + Σ cᵢ fⁱ, i = 1 ..= 6 (index 0 unused).
-const EXP2_P: [f32; 7] = [
+pub(crate) const EXP2_P: [f32; 7] = [
     1.0,
     6.931_472e-1,
     2.402_264_8e-1,
@@ -87,7 +90,6 @@ pub(crate) fn fast_ln_ge1(x: f32) -> f32 {
 /// same polynomial as Horner's, a third of the dependency depth). Returns `(e, t, t², p)`.
 #[inline(always)]
 fn ln_reduce(x: f32) -> (f32, f32, f32, f32) {
-    const SQRT_HALF_BITS: u32 = 0x3f35_04f3;
     let bits = x.to_bits();
     let shifted = bits.wrapping_sub(SQRT_HALF_BITS);
     let e = (shifted as i32 >> 23) as f32;
@@ -139,7 +141,7 @@ pub(crate) fn fast_exp2(x: f32) -> f32 {
 pub(crate) fn fast_ln_parts_x4(x: F4) -> (F4, F4) {
     let c = F4::splat;
     let bits = x.to_bits();
-    let shifted = bits.sub(0x3f35_04f3);
+    let shifted = bits.sub(SQRT_HALF_BITS as i32);
     let e = shifted.shr23().to_f32();
     let m = bits
         .sub_lanes(shifted.and(0xff80_0000_u32 as i32))

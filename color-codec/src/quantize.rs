@@ -23,6 +23,10 @@ pub enum Rounding {
     Stochastic(f32),
 }
 
+/// The step of the golden-ratio Weyl sequence that rotates a stochastic rounding's uniform
+/// per channel: (√5 − 1)/2 ≈ 0.618034.
+pub(crate) const CHANNEL_STEP: f32 = 0.618_034;
+
 impl Rounding {
     /// The same mode with the uniform of [`Rounding::Stochastic`] rotated by `k` steps of the
     /// golden-ratio Weyl sequence, `u + k·0.618… mod 1`, so the channels of one word round with
@@ -33,7 +37,7 @@ impl Rounding {
         match self {
             // Channel 0 keeps the caller's uniform as is (so a `u` ≥ 1 never rounds up there).
             Rounding::Stochastic(u) if k > 0 => {
-                let v = u + k as f32 * 0.618_034;
+                let v = u + k as f32 * CHANNEL_STEP;
                 // v < 3 here; subtracting the truncated part keeps it in [0, 1).
                 Rounding::Stochastic(v - (v as u32) as f32)
             }

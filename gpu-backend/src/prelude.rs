@@ -17,21 +17,6 @@ use mcg_color_codec::{
 
 use crate::WORKGROUP_SIZE;
 
-/// Constants of `mcg-vmf` that the crate keeps private but whose WGSL twin must switch at the
-/// same points. They are mirrored here (the one place they are typed outside `mcg-vmf`) and
-/// pinned by the GPU parity tests, which evaluate lobes on both sides of each switch point.
-/// Making them public in `mcg-vmf` would remove this table.
-const VMF_MIRRORED: &[(&str, f32)] = &[
-    // `vmf.rs`: below it, sampling uses cos θ − 1 = −2ξ.
-    ("VMF_KAPPA_TINY", 1.0e-7),
-    // `vmf.rs`: above it, C(κ) = κ/(2π).
-    ("VMF_KAPPA_SATURATED", 9.0),
-    // `vmf.rs`: above it, the inverse CDF drops e^{−2κ}.
-    ("VMF_KAPPA_SAMPLE_SATURATED", 17.0),
-    // `mean_cosine.rs`: below it, A₃(κ) by its Taylor series.
-    ("VMF_SERIES_LIMIT", 0.5),
-];
-
 fn push_u32(out: &mut String, name: &str, v: u32) {
     writeln!(out, "const {name}: u32 = {v}u;").expect("writing to a String");
 }
@@ -63,20 +48,11 @@ pub fn generate() -> String {
     push_f32(&mut out, "MCG_LOG2_E", core::f32::consts::LOG2_E);
 
     out.push_str("\n// mcg-vmf\n");
-    push_f32(&mut out, "VMF_KAPPA_MAX", mcg_vmf::KAPPA_MAX);
-    push_f32(
-        &mut out,
-        "VMF_UNIFORM_SPHERE_PDF",
-        mcg_vmf::UNIFORM_SPHERE_PDF,
-    );
-    push_f32(
-        &mut out,
-        "VMF_CLAMPED_COSINE_KAPPA",
-        mcg_vmf::CLAMPED_COSINE_KAPPA,
-    );
-    out.push_str("// private in mcg-vmf, mirrored in mcg-gpu-backend/src/prelude.rs\n");
-    for &(name, v) in VMF_MIRRORED {
+    for &(name, v) in mcg_vmf::constants::F32_CONSTANTS {
         push_f32(&mut out, name, v);
+    }
+    for &(name, v) in mcg_vmf::constants::U32_CONSTANTS {
+        push_u32(&mut out, name, v);
     }
 
     out.push_str("\n// mcg-hashgrid\n");
@@ -123,31 +99,23 @@ pub fn generate() -> String {
     out
 }
 
-/// The derived constants of one log-coded field, as `LogCodec::field` computes them (its
-/// fields are private; the formulas are mirrored here and pinned by the bit-exact GPU
-/// parity tests of the encoded words).
+/// The derived constants of one log-coded field, read from `LogField`'s accessors (the
+/// values the CPU encoder multiplies by, rounded once in Rust).
 fn push_log_field(out: &mut String, name: &str, field: &LogField) {
-    let codec = field.codec();
-    let m = field.max_code() as f32;
-    let (beta, gamma) = (codec.beta(), codec.gamma());
-    push_f32(out, &format!("{name}_GAMMA"), gamma);
-    push_f32(out, &format!("{name}_INV_GAMMA"), 1.0 / gamma);
-    push_f32(out, &format!("{name}_ENCODE_SCALE"), m / beta);
+    push_f32(out, &format!("{name}_GAMMA"), field.codec().gamma());
+    push_f32(out, &format!("{name}_INV_GAMMA"), field.inv_gamma());
+    push_f32(out, &format!("{name}_ENCODE_SCALE"), field.encode_scale());
     push_f32(
         out,
         &format!("{name}_EXPONENT_SCALE"),
-        m / beta * core::f32::consts::LN_2,
+        field.exponent_scale(),
     );
-    push_f32(
-        out,
-        &format!("{name}_DECODE_SCALE"),
-        beta / (m * core::f32::consts::LN_2),
-    );
+    push_f32(out, &format!("{name}_DECODE_SCALE"), field.decode_scale());
     push_u32(out, &format!("{name}_MAX_CODE"), field.max_code());
     push_f32(
         out,
         &format!("{name}_DOWN_TOLERANCE"),
-        2.0 * m * (6.4e-7 + 9.4e-7 / beta) + 1.0 / 4096.0,
+        field.down_tolerance(),
     );
 }
 

@@ -352,3 +352,238 @@ fn wgsl_structs_match_the_rust_pod_types() {
         ],
     );
 }
+
+/// A numeric literal in WGSL source: its value, whether it was written as a float, the text.
+#[derive(Debug)]
+struct Literal {
+    value: f64,
+    is_float: bool,
+    text: String,
+    line: usize,
+}
+
+/// The numeric literals of `source` outside `//` comments (their sign is a separate token in
+/// WGSL, so values are magnitudes). Identifiers such as `vec3` or `FAST_LN_P0` are skipped.
+fn wgsl_literals(source: &str) -> Vec<Literal> {
+    let mut out = Vec::new();
+    for (line_no, line) in source.lines().enumerate() {
+        let code = line.split("//").next().unwrap_or("");
+        let b = code.as_bytes();
+        let mut i = 0;
+        while i < b.len() {
+            let c = b[i];
+            let starts_ident = c.is_ascii_alphabetic() || c == b'_';
+            if starts_ident {
+                while i < b.len() && (b[i].is_ascii_alphanumeric() || b[i] == b'_') {
+                    i += 1;
+                }
+                continue;
+            }
+            if !c.is_ascii_digit() {
+                i += 1;
+                continue;
+            }
+            let start = i;
+            let (value, is_float) = if code[i..].starts_with("0x") || code[i..].starts_with("0X") {
+                i += 2;
+                let digits = i;
+                while i < b.len() && b[i].is_ascii_hexdigit() {
+                    i += 1;
+                }
+                let v = u64::from_str_radix(&code[digits..i], 16).unwrap();
+                (v as f64, false)
+            } else {
+                while i < b.len() && b[i].is_ascii_digit() {
+                    i += 1;
+                }
+                let mut is_float = false;
+                if i < b.len() && b[i] == b'.' {
+                    is_float = true;
+                    i += 1;
+                    while i < b.len() && b[i].is_ascii_digit() {
+                        i += 1;
+                    }
+                }
+                if i < b.len() && (b[i] == b'e' || b[i] == b'E') {
+                    is_float = true;
+                    i += 1;
+                    if i < b.len() && (b[i] == b'+' || b[i] == b'-') {
+                        i += 1;
+                    }
+                    while i < b.len() && b[i].is_ascii_digit() {
+                        i += 1;
+                    }
+                }
+                let v: f64 = code[start..i].parse().unwrap();
+                (v, is_float)
+            };
+            let mut end = i;
+            if i < b.len() && matches!(b[i], b'u' | b'i' | b'f' | b'h') {
+                end += 1;
+                i += 1;
+            }
+            out.push(Literal {
+                value,
+                is_float: is_float || b[end - 1] == b'f',
+                text: code[start..end].to_owned(),
+                line: line_no + 1,
+            });
+        }
+    }
+    out
+}
+
+/// Every value the generated prelude declares (so every value of the CPU crates' constant
+/// tables, and the values derived from them), with its name and whether it is an f32.
+fn prelude_values() -> Vec<(String, f64, bool)> {
+    shaders::PRELUDE
+        .lines()
+        .filter_map(|l| l.strip_prefix("const "))
+        .map(|l| {
+            let (name, rest) = l.split_once(": ").unwrap();
+            let (ty, literal) = rest.split_once(" = ").unwrap();
+            let literal = literal.trim_end_matches(';').trim_end_matches('u');
+            (
+                name.to_owned(),
+                literal.parse::<f64>().unwrap().abs(),
+                ty == "f32",
+            )
+        })
+        .collect()
+}
+
+/// The table constants that `literal` would be a hand-typed copy of.
+///
+/// False positives are the design problem: WGSL code is full of small integers (bit widths,
+/// shifts, the IEEE-754 fields 23 and 127, loop bounds, `2u * axis`) and of 0.5, 1 and 2 as
+/// plain arithmetic, and some table constants share those values (`HASHGRID_CHECKSUM_WORD` = 2,
+/// `IRRADIANCE_R_BITS` = 9). So an integer literal counts only above 256, and a float literal
+/// counts unless it is 0, ½, 1, 2 or 4 (`4.0 * t`, quarter turns). Table constants with those
+/// values (e.g. `VMF_SERIES_LIMIT` = 0.5, `HASHGRID_LEVEL_SHIFT` = 0) are beyond this check
+/// and kept honest by review: the prelude names them.
+fn duplicates_of<'a>(literal: &Literal, table: &'a [(String, f64, bool)]) -> Vec<&'a str> {
+    let v = literal.value;
+    let trivial = if literal.is_float {
+        [0.0, 0.5, 1.0, 2.0, 4.0].contains(&v)
+    } else {
+        v <= 256.0
+    };
+    if trivial {
+        return Vec::new();
+    }
+    table
+        .iter()
+        .filter(|(_, t, t_is_f32)| {
+            // An f32 literal equals a table f32 when both round to the same f32.
+            let same = if literal.is_float || *t_is_f32 {
+                v as f32 == *t as f32
+            } else {
+                v == *t
+            };
+            // Integers typed as floats (1023.0) count only above 256 too.
+            same && (*t_is_f32 || *t > 256.0)
+        })
+        .map(|(n, _, _)| n.as_str())
+        .collect()
+}
+
+/// Literals reviewed as not copies: fixed layouts of hardware formats whose values coincide
+/// with a table constant of another meaning. (file, literal, why.)
+const NOT_COPIES: &[(&str, &str, &str)] = &[
+    (
+        "color_codec.wgsl",
+        "511u",
+        "RGB9E5's 9-bit mantissa (VK_FORMAT_E5B9G9R9_UFLOAT_PACK32), not the irradiance field",
+    ),
+    (
+        "color_codec.wgsl",
+        "0x1ffu",
+        "RGB9E5's 9-bit mantissa mask, not the irradiance field",
+    ),
+    (
+        "markov_guide.wgsl",
+        "0x3ffu",
+        "IEEE-754 binary16's 10-bit mantissa mask, not gamma-5's code range",
+    ),
+];
+
+fn hand_written_wgsl() -> Vec<(PathBuf, String)> {
+    fn walk(dir: &std::path::Path, out: &mut Vec<(PathBuf, String)>) {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                if path.file_name().is_some_and(|n| n != "generated") {
+                    walk(&path, out);
+                }
+            } else if path.extension().is_some_and(|e| e == "wgsl") {
+                let text = std::fs::read_to_string(&path).unwrap();
+                out.push((path, text));
+            }
+        }
+    }
+    let mut out = Vec::new();
+    walk(
+        &PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src/wgsl"),
+        &mut out,
+    );
+    out.sort();
+    out
+}
+
+/// No value of the CPU crates' constant tables (as the generated prelude declares them) is
+/// typed again in a hand-written WGSL file (`src/wgsl/**`, not `generated/`): polynomial
+/// coefficients, switch points, primes, masks and scales must come from the prelude by name.
+/// See [`duplicates_of`] for what counts as a copy and [`NOT_COPIES`] for the reviewed
+/// coincidences. The check itself is checked: re-typing
+/// the golden-ratio step, a fast-`ln` coefficient, √½'s bits, a hash prime, a κ switch point
+/// or gamma-5's 1023 is caught.
+#[test]
+fn no_table_constant_is_typed_again_in_wgsl() {
+    let table = prelude_values();
+    assert!(table.len() > 100, "{} prelude constants", table.len());
+    let planted = "let a = u + f32(k) * 0.618034; let b = -2.4999994e-1 * t;\n\
+                   let c = bits - 0x3f3504f3u; let d = w.y * 2654435761u;\n\
+                   if kappa > 17.0 { return c * 1023.0; } // 805459861u in a comment is fine\n\
+                   let fine = vec3<f32>(2.0 * x, 0.5, 127u + 23u) + P0 + x2;";
+    let caught: Vec<String> = wgsl_literals(planted)
+        .iter()
+        .filter(|l| !duplicates_of(l, &table).is_empty())
+        .map(|l| l.text.clone())
+        .collect();
+    assert_eq!(
+        caught,
+        [
+            "0.618034",
+            "2.4999994e-1",
+            "0x3f3504f3u",
+            "2654435761u",
+            "17.0",
+            "1023.0"
+        ]
+    );
+    let mut found = Vec::new();
+    let files = hand_written_wgsl();
+    assert!(files.len() >= 14, "{} WGSL files", files.len());
+    for (path, text) in &files {
+        for literal in wgsl_literals(text) {
+            let names = duplicates_of(&literal, &table);
+            let file = path.file_name().unwrap().to_string_lossy();
+            let reviewed = NOT_COPIES
+                .iter()
+                .any(|(f, text, _)| *f == file && *text == literal.text);
+            if !names.is_empty() && !reviewed {
+                found.push(format!(
+                    "{file}:{}: `{}` is {}",
+                    literal.line,
+                    literal.text,
+                    names.join(" / ")
+                ));
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "table constants typed again in WGSL (use the prelude's names):\n{}",
+        found.join("\n")
+    );
+}

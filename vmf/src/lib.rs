@@ -13,6 +13,7 @@
 //! | [`Vmf::product`], [`Vmf::convolve`], [`Vmf::clamped_cosine`] | closed-form product with its scale, approximate convolution, cosine lobe | — |
 //! | [`VmfMixture`] | K-lobe mixture, one uniform reused for the component choice | MCMM eq. 5 |
 //! | [`Frame`] | branchless orthonormal frame | Duff et al. 2017 |
+//! | [`constants`] | switch points, series and polynomial coefficients, as typed constants and as tables for the GPU backend's WGSL prelude | — |
 //!
 //! ## Conventions
 //! - Directions are unit [`glam::Vec3`] in world space; angles in radians; densities are per
@@ -60,6 +61,7 @@ extern crate std;
 
 pub use glam;
 
+pub mod constants;
 mod error;
 mod frame;
 mod math;

@@ -52,7 +52,7 @@ pub(crate) use imp::*;
 #[cfg(any(feature = "std", feature = "libm"))]
 #[inline(always)]
 pub(crate) fn exp_m1(x: f32) -> f32 {
-    if !(x.abs() <= 0.5) {
+    if !(x.abs() <= crate::constants::EXP_M1_KAHAN_LIMIT) {
         return exp(x) - 1.0;
     }
     let u = exp(x);
@@ -80,9 +80,10 @@ pub(crate) fn sin_cos_turns(t: f32) -> (f32, f32) {
     let x2 = x * x;
     // Minimax polynomials on [−π/4, π/4] (coefficients of Cephes' sinf/cosf, S. Moshier):
     // absolute error below 6·10⁻⁸ for both.
-    let sin = x + x * x2 * (-1.666_665_5e-1 + x2 * (8.332_161e-3 + x2 * -1.951_529_6e-4));
-    let cos =
-        1.0 - 0.5 * x2 + x2 * x2 * (4.166_664_6e-2 + x2 * (-1.388_731_6e-3 + x2 * 2.443_315_7e-5));
+    let [s0, s1, s2] = crate::constants::SIN_POLY;
+    let [c0, c1, c2] = crate::constants::COS_POLY;
+    let sin = x + x * x2 * (s0 + x2 * (s1 + x2 * s2));
+    let cos = 1.0 - 0.5 * x2 + x2 * x2 * (c0 + x2 * (c1 + x2 * c2));
     // Rotate by the quadrant q without branches (a uniform t makes q unpredictable):
     // q = 0: (s, c), 1: (c, −s), 2: (−s, −c), 3: (−c, s). Odd q swaps the pair, bit 1 of q
     // negates the sine slot, bit 1 of q + 1 the cosine slot.

@@ -6,6 +6,10 @@
 //! Distributions*, JMLR 6, eq. 4.1 with p = 3). It is the quantity the guiding papers estimate
 //! from samples (MCMM Table 1 r̄, MCPG Table 1 r̄) and then invert to get κ.
 
+use crate::constants::{
+    MEAN_COSINE_DERIVATIVE_SERIES, MEAN_COSINE_SERIES, NEWTON_COMPLEMENT_FROM,
+    NEWTON_MAX_ITERATIONS, NEWTON_RELATIVE_STEP, SERIES_LIMIT,
+};
 use crate::math;
 
 /// Largest concentration returned by [`kappa_from_mean_cosine`] and
@@ -15,9 +19,6 @@ use crate::math;
 /// validated in f32 (a lobe of angular radius ≈ 1 mrad). A mean cosine of 1 − 10⁻⁶ already maps
 /// to it. Renderers that want wider lobes clamp further, e.g. Open PGL uses 32 000.
 pub const KAPPA_MAX: f32 = 1.0e6;
-
-/// Below this κ, A₃ is evaluated from its Taylor series (the closed form cancels).
-const SERIES_LIMIT: f32 = 0.5;
 
 /// Mean cosine A₃(κ) = coth κ − 1/κ of a vMF lobe with concentration `kappa`.
 ///
@@ -42,10 +43,8 @@ pub fn mean_cosine_from_kappa(kappa: f32) -> f32 {
     if kappa < SERIES_LIMIT {
         let k2 = kappa * kappa;
         // Horner form of the odd series of coth κ − 1/κ.
-        kappa
-            * (1.0 / 3.0
-                + k2 * (-1.0 / 45.0
-                    + k2 * (2.0 / 945.0 + k2 * (-1.0 / 4725.0 + k2 * (2.0 / 93555.0)))))
+        let [a0, a1, a2, a3, a4] = MEAN_COSINE_SERIES;
+        kappa * (a0 + k2 * (a1 + k2 * (a2 + k2 * (a3 + k2 * a4))))
     } else {
         (1.0 + 2.0 / math::exp_m1(2.0 * kappa) - 1.0 / kappa).min(1.0)
     }
@@ -56,7 +55,8 @@ pub fn mean_cosine_from_kappa(kappa: f32) -> f32 {
 fn mean_cosine_derivative(kappa: f32) -> f32 {
     if kappa < SERIES_LIMIT {
         let k2 = kappa * kappa;
-        1.0 / 3.0 + k2 * (-1.0 / 15.0 + k2 * (2.0 / 189.0 + k2 * (-1.0 / 675.0)))
+        let [d0, d1, d2, d3] = MEAN_COSINE_DERIVATIVE_SERIES;
+        d0 + k2 * (d1 + k2 * (d2 + k2 * d3))
     } else {
         // 1/sinh²κ = 4 e^{−2κ} / (1 − e^{−2κ})², which underflows to 0 instead of overflowing.
         let e = math::exp(-2.0 * kappa);
@@ -147,9 +147,9 @@ pub fn kappa_from_mean_cosine_exact(r: f32) -> f32 {
         return KAPPA_MAX;
     }
     let mut kappa = kappa_from_mean_cosine(r);
-    for _ in 0..16 {
+    for _ in 0..NEWTON_MAX_ITERATIONS {
         // h(κ) = A₃(κ) − r, written as ε − (1 − A₃(κ)) near r = 1.
-        let residual = if r < 0.5 {
+        let residual = if r < NEWTON_COMPLEMENT_FROM {
             mean_cosine_from_kappa(kappa) - r
         } else {
             epsilon - one_minus_mean_cosine(kappa)
@@ -164,7 +164,7 @@ pub fn kappa_from_mean_cosine_exact(r: f32) -> f32 {
         if !(next > 0.0) {
             next = 0.5 * kappa;
         }
-        let converged = (next - kappa).abs() <= 1e-7 * kappa;
+        let converged = (next - kappa).abs() <= NEWTON_RELATIVE_STEP * kappa;
         kappa = next.min(KAPPA_MAX);
         if converged {
             break;

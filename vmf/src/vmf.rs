@@ -5,14 +5,11 @@ use core::f32::consts::FRAC_1_PI;
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 
+use crate::constants::{KAPPA_DIRECT_EXPM1, KAPPA_SAMPLE_SATURATED, KAPPA_SATURATED, KAPPA_TINY};
 use crate::{Frame, VmfError, math};
 
 /// 1/(4π), the density of the uniform distribution on S².
 pub const UNIFORM_SPHERE_PDF: f32 = 0.25 * FRAC_1_PI;
-
-/// Below this κ, sampling uses the κ → 0 limit `cos θ − 1 = −2ξ` (its error is O(κ) relative,
-/// under f32 resolution here).
-const KAPPA_TINY: f32 = 1.0e-7;
 
 /// A von Mises-Fisher lobe on S²: mean direction μ (unit length) and concentration κ ≥ 0.
 ///
@@ -188,10 +185,6 @@ impl Default for Vmf {
     }
 }
 
-/// Above this κ, e^{−2κ} < 2⁻²⁵ vanishes next to 1 in f32: 1 − e^{−2κ} rounds to exactly 1,
-/// so C(κ) = κ/(2π) and expm1(−2κ) = −1 exactly.
-const KAPPA_SATURATED: f32 = 9.0;
-
 /// C(κ) = g(−2κ)/(4π) with g(x) = x/expm1(x), g(0) = 1; κ/(2π) once e^{−2κ} vanishes, which
 /// also keeps `2κ` from overflowing for κ near `f32::MAX`.
 #[inline(always)]
@@ -203,10 +196,6 @@ pub(crate) fn normalization(kappa: f32) -> f32 {
     let g = if x == 0.0 { 1.0 } else { x / math::exp_m1(x) };
     g * UNIFORM_SPHERE_PDF
 }
-
-/// Above this κ, e^{−2κ} < 2⁻⁴⁹: next to 1 − ξ ≥ 2⁻²⁴ it is below half an ulp, so the
-/// inverse CDF drops it even in the far tail ξ → 1.
-const KAPPA_SAMPLE_SATURATED: f32 = 17.0;
 
 /// Inverse CDF of `cos θ − 1` for concentration κ, in [−2, 0]:
 ///
@@ -231,7 +220,7 @@ pub(crate) fn cos_theta_minus_one(kappa: f32, xi: f32) -> f32 {
     } else {
         let decay = math::exp(-2.0 * kappa);
         // expm1(−2κ): `decay − 1` cannot cancel once 2κ > ½ (see `math::exp_m1`).
-        let scale = if kappa > 0.25 {
+        let scale = if kappa > KAPPA_DIRECT_EXPM1 {
             decay - 1.0
         } else {
             math::exp_m1(-2.0 * kappa)

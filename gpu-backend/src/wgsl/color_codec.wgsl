@@ -109,15 +109,15 @@ fn codec_rgb9e5_unpack(word: u32) -> vec3<f32> {
 // `Gamma5R10G10B10A2::encode_channel`: v in [0, 1] (clamped), c = 2^{log2(v)/5} by the
 // codec's own ln and exp2, rounded to nearest (ties to even) in 10 bits.
 fn codec_gamma5_encode_channel(v_in: f32) -> u32 {
-    let v = select(0.0, min(v_in, 1.0), v_in > 7.9e-31);
-    let c0 = codec_fast_exp2(codec_fast_ln_ge1(max(v, 7.9e-31)) * (MCG_LOG2_E / CODEC_RTXGI_IRRADIANCE_GAMMA));
+    let v = select(0.0, min(v_in, 1.0), v_in > GAMMA5_MIN_INPUT);
+    let c0 = codec_fast_exp2(codec_fast_ln_ge1(max(v, GAMMA5_MIN_INPUT)) * (MCG_LOG2_E / CODEC_RTXGI_IRRADIANCE_GAMMA));
     let c = select(0.0, min(c0, 1.0), v > 0.0);
-    return min(u32(round(c * 1023.0)), 1023u);
+    return min(u32(round(c * f32(GAMMA5_MAX_CODE))), GAMMA5_MAX_CODE);
 }
 
 // `Gamma5R10G10B10A2::decode_channel`: c⁵ of the 10-bit code.
 fn codec_gamma5_decode_channel(code: u32) -> f32 {
-    let c = f32(code & 0x3ffu) * (1.0 / 1023.0);
+    let c = f32(code & GAMMA5_MAX_CODE) * (1.0 / f32(GAMMA5_MAX_CODE));
     let c2 = c * c;
     return c2 * c2 * c;
 }
@@ -164,50 +164,47 @@ fn codec_rounding_for_channel(rounding: CodecRounding, k: u32) -> CodecRounding 
     if rounding.mode != CODEC_ROUND_STOCHASTIC || k == 0u {
         return rounding;
     }
-    let v = rounding.u + codec_rounded(f32(k) * 0.618034);
+    let v = rounding.u + codec_rounded(f32(k) * STOCHASTIC_CHANNEL_STEP);
     return CodecRounding(rounding.mode, v - f32(u32(v)));
 }
 
-// ln x for x ≥ 1 (`math::fast_ln_ge1`): musl's reduction x = 2ᵉ m, m ∈ [√½, √2), and
-// Cephes' logf polynomial by Estrin's scheme, in the CPU's order.
-fn codec_fast_ln_ge1(x: f32) -> f32 {
+// The reduction and polynomial shared by the two `ln`s (`math::ln_reduce`): x = 2ᵉ m with
+// m ∈ [√½, √2) from the bits (musl), t = m − 1 and Cephes' logf polynomial p(t) by Estrin's
+// scheme, in the CPU's order. Returns (e, t, t², p).
+fn codec_ln_reduce(x: f32) -> vec4<f32> {
     let bits = bitcast<u32>(x);
-    let shifted = bits - 0x3f3504f3u;
+    let shifted = bits - FAST_LN_SQRT_HALF_BITS;
     let e = f32(bitcast<i32>(shifted) >> 23u);
     let m = bitcast<f32>(bits - (shifted & 0xff800000u));
     let t = m - 1.0;
     let t2 = t * t;
     let t4 = t2 * t2;
-    let p01 = 0.3333333 + codec_rounded(-2.4999994e-1 * t);
-    let p23 = 2.0000715e-1 + codec_rounded(-1.6668058e-1 * t);
-    let p45 = 1.4249323e-1 + codec_rounded(-1.2420141e-1 * t);
-    let p67 = 1.1676999e-1 + codec_rounded(-1.151461e-1 * t);
+    let p01 = FAST_LN_P0 + codec_rounded(FAST_LN_P1 * t);
+    let p23 = FAST_LN_P2 + codec_rounded(FAST_LN_P3 * t);
+    let p45 = FAST_LN_P4 + codec_rounded(FAST_LN_P5 * t);
+    let p67 = FAST_LN_P6 + codec_rounded(FAST_LN_P7 * t);
     let p03 = p01 + codec_rounded(p23 * t2);
     let p47 = p45 + codec_rounded(p67 * t2);
-    let p = p03 + codec_rounded(p47 * t4) + codec_rounded(7.0376836e-2 * (t4 * t4));
-    let y = codec_rounded(t * t2 * p) + codec_rounded(e * -2.1219444e-4) - codec_rounded(0.5 * t2);
-    return t + y + codec_rounded(e * 0.6933594);
+    return vec4<f32>(e, t, t2, p03 + codec_rounded(p47 * t4) + codec_rounded(FAST_LN_P8 * (t4 * t4)));
 }
 
+// ln x for x ≥ 1 (`math::fast_ln_ge1`): ln 2 split into FAST_LN_LN2_HI + FAST_LN_LN2_LO.
+fn codec_fast_ln_ge1(x: f32) -> f32 {
+    let r = codec_ln_reduce(x);
+    let e = r.x;
+    let t = r.y;
+    let t2 = r.z;
+    let y = codec_rounded(t * t2 * r.w) + codec_rounded(e * FAST_LN_LN2_LO) - codec_rounded(0.5 * t2);
+    return t + y + codec_rounded(e * FAST_LN_LN2_HI);
+}
 
 // ln x for x ≥ 1 in two parts (`math::fast_ln_parts`): (e, ln m) with ln x = e ln 2 + ln m,
 // so the log codec can scale e by a pre-rounded (m/β) ln 2.
 fn codec_fast_ln_parts(x: f32) -> vec2<f32> {
-    let bits = bitcast<u32>(x);
-    let shifted = bits - 0x3f3504f3u;
-    let e = f32(bitcast<i32>(shifted) >> 23u);
-    let m = bitcast<f32>(bits - (shifted & 0xff800000u));
-    let t = m - 1.0;
-    let t2 = t * t;
-    let t4 = t2 * t2;
-    let p01 = 0.3333333 + codec_rounded(-2.4999994e-1 * t);
-    let p23 = 2.0000715e-1 + codec_rounded(-1.6668058e-1 * t);
-    let p45 = 1.4249323e-1 + codec_rounded(-1.2420141e-1 * t);
-    let p67 = 1.1676999e-1 + codec_rounded(-1.151461e-1 * t);
-    let p03 = p01 + codec_rounded(p23 * t2);
-    let p47 = p45 + codec_rounded(p67 * t2);
-    let p = p03 + codec_rounded(p47 * t4) + codec_rounded(7.0376836e-2 * (t4 * t4));
-    return vec2<f32>(e, t + (codec_rounded(t * t2 * p) - codec_rounded(0.5 * t2)));
+    let r = codec_ln_reduce(x);
+    let t = r.y;
+    let t2 = r.z;
+    return vec2<f32>(r.x, t + (codec_rounded(t * t2 * r.w) - codec_rounded(0.5 * t2)));
 }
 
 // 2^x (`math::fast_exp2`): x = i + f with i = round(x) (ties to even, like the CPU's
@@ -216,9 +213,9 @@ fn codec_fast_exp2(x: f32) -> f32 {
     let i = round(x);
     let f = x - i;
     let f2 = f * f;
-    let inner = 9.618437e-3 + codec_rounded(1.3398874e-3 * f) + codec_rounded(1.5353362e-4 * f2);
-    let mid = 2.4022648e-1 + codec_rounded(5.5503325e-2 * f) + codec_rounded(f2 * inner);
-    let p = 1.0 + codec_rounded(6.931472e-1 * f) + codec_rounded(f2 * mid);
+    let inner = FAST_EXP2_P4 + codec_rounded(FAST_EXP2_P5 * f) + codec_rounded(FAST_EXP2_P6 * f2);
+    let mid = FAST_EXP2_P2 + codec_rounded(FAST_EXP2_P3 * f) + codec_rounded(f2 * inner);
+    let p = 1.0 + codec_rounded(FAST_EXP2_P1 * f) + codec_rounded(f2 * mid);
     return p * bitcast<f32>(u32(i32(i) + 127) << 23u);
 }
 

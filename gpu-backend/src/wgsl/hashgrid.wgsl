@@ -48,9 +48,14 @@ struct HashgridInsert {
     outcome: u32,
 }
 
+// The low `bits` bits set (bits < 32).
+fn hashgrid_field_mask(bits: u32) -> u32 {
+    return (1u << bits) - 1u;
+}
+
 // `CellKey::new(cell, level, class)` with extra = 0.
 fn hashgrid_cell_key(cell: vec3<i32>, level: u32, normal_class: u32) -> CellKey {
-    return CellKey(cell, ((normal_class & 0xffu) << HASHGRID_CLASS_SHIFT) | ((level & 0xffu) << HASHGRID_LEVEL_SHIFT));
+    return CellKey(cell, ((normal_class & hashgrid_field_mask(HASHGRID_CLASS_BITS)) << HASHGRID_CLASS_SHIFT) | ((level & hashgrid_field_mask(HASHGRID_LEVEL_BITS)) << HASHGRID_LEVEL_SHIFT));
 }
 
 // The four words [x, y, z, meta] every hash reads.

@@ -39,7 +39,7 @@ struct VmfSample {
 
 // expm1 from exp and log (`math::exp_m1`): Kahan's (u − 1)·x/ln u for |x| ≤ ½.
 fn vmf_exp_m1(x: f32) -> f32 {
-    if !(abs(x) <= 0.5) {
+    if !(abs(x) <= VMF_EXP_M1_KAHAN_LIMIT) {
         return exp(x) - 1.0;
     }
     let u = exp(x);
@@ -62,8 +62,8 @@ fn vmf_sin_cos_turns(t: f32) -> vec2<f32> {
     let q = bitcast<u32>(i32(quadrant));
     let x = (quarter_turns - quadrant) * MCG_FRAC_PI_2;
     let x2 = x * x;
-    let s = x + x * x2 * (-1.6666655e-1 + x2 * (8.332161e-3 + x2 * -1.9515296e-4));
-    let c = 1.0 - 0.5 * x2 + x2 * x2 * (4.1666646e-2 + x2 * (-1.3887316e-3 + x2 * 2.4433157e-5));
+    let s = x + x * x2 * (VMF_SIN_POLY_0 + x2 * (VMF_SIN_POLY_1 + x2 * VMF_SIN_POLY_2));
+    let c = 1.0 - 0.5 * x2 + x2 * x2 * (VMF_COS_POLY_0 + x2 * (VMF_COS_POLY_1 + x2 * VMF_COS_POLY_2));
     let swap = 0u - (q & 1u);
     let sin_bits = bitcast<u32>(s);
     let cos_bits = bitcast<u32>(c);
@@ -116,7 +116,7 @@ fn vmf_cos_theta_minus_one(kappa: f32, xi: f32) -> f32 {
     var scale = -1.0;
     if !(kappa > VMF_KAPPA_SAMPLE_SATURATED) {
         decay = exp(-2.0 * kappa);
-        if kappa > 0.25 {
+        if kappa > VMF_KAPPA_DIRECT_EXPM1 {
             scale = decay - 1.0;
         } else {
             scale = vmf_exp_m1(-2.0 * kappa);
@@ -163,7 +163,7 @@ fn vmf_mean_cosine_from_kappa(kappa: f32) -> f32 {
     }
     if kappa < VMF_SERIES_LIMIT {
         let k2 = kappa * kappa;
-        return kappa * (1.0 / 3.0 + k2 * (-1.0 / 45.0 + k2 * (2.0 / 945.0 + k2 * (-1.0 / 4725.0 + k2 * (2.0 / 93555.0)))));
+        return kappa * (VMF_MEAN_COSINE_SERIES_0 + k2 * (VMF_MEAN_COSINE_SERIES_1 + k2 * (VMF_MEAN_COSINE_SERIES_2 + k2 * (VMF_MEAN_COSINE_SERIES_3 + k2 * VMF_MEAN_COSINE_SERIES_4))));
     }
     return min(1.0 + 2.0 / vmf_exp_m1(2.0 * kappa) - 1.0 / kappa, 1.0);
 }
