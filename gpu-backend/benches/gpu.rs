@@ -14,7 +14,7 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::{Vec2, Vec3};
-use mcg_gpu_backend::types::{VmfQuery, VmfSample};
+use mcg_gpu_backend::types::{TexelParams, TexelUpdate, VmfQuery, VmfSample};
 use mcg_gpu_backend::{GpuBuffer, GpuContext, shaders};
 use mcg_vmf::Vmf;
 
@@ -75,26 +75,10 @@ fn stable(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups)
 }
 "#;
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Update {
-    sample: Vec3,
-    texel: u32,
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Params {
-    max_count: u32,
-    rounding_mode: u32,
-    rounding_u: f32,
-    word_layout: u32,
-}
-
 fn texel_update(c: &mut Criterion, ctx: &GpuContext) {
     let n = 65_536_u32;
-    let updates: Vec<Update> = (0..n)
-        .map(|k| Update {
+    let updates: Vec<TexelUpdate> = (0..n)
+        .map(|k| TexelUpdate {
             sample: Vec3::new((k % 97) as f32 * 0.1, (k % 13) as f32, 0.5),
             texel: (k.wrapping_mul(2_654_435_761) >> 22) % 1024,
         })
@@ -106,7 +90,7 @@ fn texel_update(c: &mut Criterion, ctx: &GpuContext) {
     let words: GpuBuffer<u32> = ctx.zeroed_buffer("words", 1024);
     let params = ctx.uniform_buffer(
         "params",
-        &Params {
+        &TexelParams {
             max_count: 63,
             rounding_mode: 1,
             rounding_u: 0.0,

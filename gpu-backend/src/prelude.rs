@@ -42,6 +42,8 @@ pub fn generate() -> String {
     push_u32(&mut out, "MCG_WORKGROUP_SIZE", WORKGROUP_SIZE);
     push_f32(&mut out, "MCG_F32_MAX", f32::MAX);
     push_f32(&mut out, "MCG_F32_EPSILON", f32::EPSILON);
+    // 1 − ε/2, the largest f32 below 1 (the CPU crates clamp rescaled uniforms to it).
+    push_f32(&mut out, "MCG_ONE_MINUS_EPSILON", 1.0 - f32::EPSILON / 2.0);
     push_f32(&mut out, "MCG_FRAC_1_PI", core::f32::consts::FRAC_1_PI);
     push_f32(&mut out, "MCG_FRAC_PI_2", core::f32::consts::FRAC_PI_2);
     push_f32(&mut out, "MCG_LN_2", core::f32::consts::LN_2);

@@ -9,11 +9,13 @@
 //! |---|---|
 //! | [`PRELUDE`] | generated `const` declarations of every shared constant ([`crate::prelude`]) |
 //! | [`COMMON`] | `mcg_invocation_index`, the flat index of a [`GpuContext::dispatch`](crate::GpuContext::dispatch) |
-//! | [`VMF`] | `Vmf`, `SufficientStats`, `vmf_pdf`, `vmf_sample`, `vmf_sample_with_pdf`, `vmf_stats_update`, `vmf_from_sufficient_stats`, `vmf_product`, mean cosine ↔ κ |
-//! | [`HASHGRID`] | `CellKey`, hashes, checksum, slot index, stochastic trilinear vertex, level choice |
+//! | [`VMF`] | `Vmf`, `SufficientStats`, `vmf_pdf`, `vmf_sample`, `vmf_sample_with_pdf`, `vmf_stats_update`, `vmf_from_sufficient_stats`, `vmf_product`, `vmf_convolve`, mean cosine ↔ κ (Banerjee and exact) |
+//! | [`HASHGRID`] | `CellKey`, hashes, checksum, slot index, stochastic trilinear and jittered vertices, level choice, adaptive and static-grid keys |
 //! | [`HASHGRID_TABLE`] | `hashgrid_find`, `hashgrid_insert_or_get` on `hashgrid_checksums` |
+//! | [`HASHGRID_AGES`] | the age counter: `hashgrid_touch`, eviction of stale cells in two passes |
+//! | [`VMF_MIXTURE`] | `VmfMixture` (K from the includer), pdf, component choice reusing one uniform, sampling |
 //! | [`COLOR_CODEC`] | R11G11B10, RGB9E5, gamma-5 R10G10B10A2, the log codec (ADGI eq. 21) with round-down / nearest / stochastic rounding, the 9/9/8 + 6 irradiance, 13/13 + 6 visibility and 6/10/10 + 6 heuristics words, the moving-average update |
-//! | [`MARKOV_GUIDE`] | the MCPG `GridState`: velocity (three f16), count, sufficient statistics |
+//! | [`MARKOV_GUIDE`] | the MCPG `GridState`: velocity (three f16), count, sufficient statistics; the MCMM `PixelState`: validity, resampling score, lobe |
 //! | [`COLOR_CODEC_TEXELS`] | `codec_irradiance_update_atomic`, `codec_visibility_update_atomic`: the update as a compare-and-swap loop on `codec_texels` |
 //!
 //! Names are prefixed by module (`vmf_`, `hashgrid_`, `codec_`; constants `VMF_`, `HASHGRID_`,
@@ -34,6 +36,16 @@ pub const HASHGRID: &str = include_str!("wgsl/hashgrid.wgsl");
 /// `hashgrid_insert_or_get` on a `hashgrid_checksums: array<atomic<u32>>` the includer
 /// declares. Needs [`PRELUDE`] and [`HASHGRID`].
 pub const HASHGRID_TABLE: &str = include_str!("wgsl/hashgrid_table.wgsl");
+/// The mcg-hashgrid age-counter twin, `src/wgsl/hashgrid_ages.wgsl`: `hashgrid_touch`,
+/// `hashgrid_evict_slot`, `hashgrid_trim_slot` on the includer's `hashgrid_checksums` and
+/// `hashgrid_ages: array<atomic<u32>>`. Needs [`PRELUDE`], [`HASHGRID`] and
+/// [`HASHGRID_TABLE`].
+pub const HASHGRID_AGES: &str = include_str!("wgsl/hashgrid_ages.wgsl");
+/// The `VmfMixture<K>` twin, `src/wgsl/vmf_mixture.wgsl`: `VmfMixture`, `vmf_mixture_pdf`,
+/// `vmf_mixture_select`, `vmf_mixture_sample`, `vmf_mixture_sample_with_pdf`, with K from the
+/// includer's `const VMF_MIXTURE_K: u32`. Needs [`PRELUDE`] and [`VMF`]; upload mixtures with
+/// [`pack_mixtures`](crate::types::pack_mixtures).
+pub const VMF_MIXTURE: &str = include_str!("wgsl/vmf_mixture.wgsl");
 /// The mcg-color-codec twin, `src/wgsl/color_codec.wgsl`.
 pub const COLOR_CODEC: &str = include_str!("wgsl/color_codec.wgsl");
 
@@ -134,6 +146,49 @@ pub mod kernels {
         include_str!("wgsl/kernels/markov_guide.wgsl"),
     );
 
+    /// Entry point `vmf_mixture_eval` (K = 4): bindings `mixtures`, `queries`, `pdfs`,
+    /// `samples`, `choices`.
+    pub const VMF_MIXTURE: &str = concat!(
+        include_str!("wgsl/generated/prelude.wgsl"),
+        include_str!("wgsl/common.wgsl"),
+        include_str!("wgsl/vmf.wgsl"),
+        include_str!("wgsl/vmf_mixture.wgsl"),
+        include_str!("wgsl/kernels/vmf_mixture.wgsl"),
+    );
+    /// Entry point `vmf_convolve_lobes`: bindings `lobes`, `params`, `convolved`, `kappas`.
+    pub const VMF_CONVOLVE: &str = concat!(
+        include_str!("wgsl/generated/prelude.wgsl"),
+        include_str!("wgsl/common.wgsl"),
+        include_str!("wgsl/vmf.wgsl"),
+        include_str!("wgsl/kernels/vmf_convolve.wgsl"),
+    );
+    /// Entry point `hashgrid_vertices`: bindings `queries`, `static_keys`, `jittered`.
+    pub const HASHGRID_VERTICES: &str = concat!(
+        include_str!("wgsl/generated/prelude.wgsl"),
+        include_str!("wgsl/common.wgsl"),
+        include_str!("wgsl/hashgrid.wgsl"),
+        include_str!("wgsl/kernels/hashgrid_vertices.wgsl"),
+    );
+    /// Entry points `hashgrid_insert_touch`, `hashgrid_insert_touch_serial` (bindings `table`,
+    /// `hashgrid_checksums`, `hashgrid_ages`, `age_params`, `counter`, `keys`),
+    /// `hashgrid_evict` (the first five) and `hashgrid_trim` (the first two).
+    pub const HASHGRID_AGES: &str = concat!(
+        include_str!("wgsl/generated/prelude.wgsl"),
+        include_str!("wgsl/common.wgsl"),
+        include_str!("wgsl/hashgrid.wgsl"),
+        include_str!("wgsl/hashgrid_table.wgsl"),
+        include_str!("wgsl/hashgrid_ages.wgsl"),
+        include_str!("wgsl/kernels/hashgrid_ages.wgsl"),
+    );
+    /// Entry point `markov_pixel_states`: bindings `pixel_states`, `query`, `results`, `lobes`.
+    pub const MARKOV_PIXEL: &str = concat!(
+        include_str!("wgsl/generated/prelude.wgsl"),
+        include_str!("wgsl/common.wgsl"),
+        include_str!("wgsl/vmf.wgsl"),
+        include_str!("wgsl/markov_guide.wgsl"),
+        include_str!("wgsl/kernels/markov_pixel.wgsl"),
+    );
+
     /// Every kernel module with its entry points, for validation loops.
     pub const ALL: &[(&str, &str, &[&str])] = &[
         ("vmf", VMF, &["vmf_pdf_and_sample"]),
@@ -156,5 +211,23 @@ pub mod kernels {
             COLOR_CODEC_TEXELS,
             &["codec_texel_updates"],
         ),
+        ("vmf_mixture", VMF_MIXTURE, &["vmf_mixture_eval"]),
+        ("vmf_convolve", VMF_CONVOLVE, &["vmf_convolve_lobes"]),
+        (
+            "hashgrid_vertices",
+            HASHGRID_VERTICES,
+            &["hashgrid_vertices"],
+        ),
+        (
+            "hashgrid_ages",
+            HASHGRID_AGES,
+            &[
+                "hashgrid_insert_touch",
+                "hashgrid_insert_touch_serial",
+                "hashgrid_evict",
+                "hashgrid_trim",
+            ],
+        ),
+        ("markov_pixel", MARKOV_PIXEL, &["markov_pixel_states"]),
     ];
 }

@@ -5,7 +5,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 use mcg_hashgrid::{AdaptiveGrid, BucketHash, SlotIndexer};
-use mcg_vmf::{MapPrior, PriorDecay, Vmf};
+use mcg_vmf::{MapPrior, PriorDecay, Vmf, VmfMixture};
 
 /// Input of the `vmf_pdf_and_sample` kernel: a direction to evaluate the pdf at and two
 /// uniforms to sample with. WGSL `VmfQuery` (32 bytes).
@@ -203,3 +203,102 @@ pub struct HashgridVertexQuery {
     pub _pad: f32,
 }
 const _: () = assert!(size_of::<HashgridVertexQuery>() == 48);
+
+/// Size in `f32`s of one WGSL `VmfMixture` with `k` lobes (`shaders::VMF_MIXTURE`): 4k floats
+/// of lobes (μ, κ), k weights, padded to WGSL's 16-byte struct alignment.
+#[must_use]
+pub const fn mixture_stride_floats(k: usize) -> usize {
+    (5 * k).next_multiple_of(4)
+}
+
+/// The mixtures in the memory layout of `array<VmfMixture>` with `VMF_MIXTURE_K = K`: per
+/// mixture the K lobes, then the K normalised weights, then zero padding to
+/// [`mixture_stride_floats`]`(K)` floats. Upload with `GpuContext::storage_buffer`.
+///
+/// (`VmfMixture<K>` itself has no guaranteed layout, and a `Pod` impl generic over K would
+/// need `unsafe`; this copy is what crosses the bus.)
+#[must_use]
+pub fn pack_mixtures<const K: usize>(mixtures: &[VmfMixture<K>]) -> Vec<f32> {
+    let stride = mixture_stride_floats(K);
+    let mut out = vec![0.0; stride * mixtures.len()];
+    for (m, chunk) in mixtures.iter().zip(out.chunks_exact_mut(stride)) {
+        for (i, lobe) in m.lobes().iter().enumerate() {
+            chunk[4 * i..4 * i + 3].copy_from_slice(&lobe.mu().to_array());
+            chunk[4 * i + 3] = lobe.kappa();
+        }
+        chunk[4 * K..5 * K].copy_from_slice(m.weights());
+    }
+    out
+}
+
+/// One sample for the `vmf_update` kernel: target point y seen from shading point x with
+/// weight f. WGSL `VmfUpdate` (32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct VmfUpdate {
+    /// Shading point x.
+    pub x: Vec3,
+    /// Weight f of the sample.
+    pub weight: f32,
+    /// Target point y.
+    pub y: Vec3,
+    /// Padding to 16-byte alignment.
+    pub _pad: f32,
+}
+const _: () = assert!(size_of::<VmfUpdate>() == 32);
+
+/// `mcg_vmf::FitParams` for WGSL (`VmfFitParams`, bound as a uniform, 16 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct VmfFitParamsGpu {
+    /// N_max.
+    pub max_count: u32,
+    /// α_min.
+    pub alpha_min: f32,
+    /// 0 for `MeanCosineUpdate::Resultant`, 1 for `Projected`.
+    pub mean_cosine_update: u32,
+    /// Padding to the uniform address space's 16-byte alignment.
+    pub _pad: u32,
+}
+const _: () = assert!(size_of::<VmfFitParamsGpu>() == 16);
+
+impl From<&mcg_vmf::FitParams> for VmfFitParamsGpu {
+    fn from(p: &mcg_vmf::FitParams) -> Self {
+        Self {
+            max_count: p.max_count,
+            alpha_min: p.alpha_min,
+            mean_cosine_update: match p.mean_cosine_update {
+                mcg_vmf::MeanCosineUpdate::Resultant => 0,
+                mcg_vmf::MeanCosineUpdate::Projected => 1,
+            },
+            _pad: 0,
+        }
+    }
+}
+
+/// One moving-average update of a packed texel for the `codec_texel_updates` kernel: WGSL
+/// `TexelUpdate` (16 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TexelUpdate {
+    /// The sample (irradiance RGB, or the visibility moments in xy).
+    pub sample: Vec3,
+    /// Index of the texel word it folds into.
+    pub texel: u32,
+}
+const _: () = assert!(size_of::<TexelUpdate>() == 16);
+
+/// Parameters of the `codec_texel_updates` kernel: WGSL `TexelParams` (uniform, 16 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TexelParams {
+    /// N_max of the moving average.
+    pub max_count: u32,
+    /// 0 round down, 1 nearest, 2 stochastic (`CODEC_ROUND_*`).
+    pub rounding_mode: u32,
+    /// The uniform of stochastic rounding.
+    pub rounding_u: f32,
+    /// 0 irradiance words, 1 visibility words.
+    pub word_layout: u32,
+}
+const _: () = assert!(size_of::<TexelParams>() == 16);

@@ -4,13 +4,14 @@
 //!
 //! Hashes, checksums, table outcomes and packed words must match bit for bit. The vMF lobes
 //! go through `exp` and `log`, which WGSL only bounds loosely, so they are compared within
-//! tolerances derived from WGSL's precision rules (see [`tolerance`]).
+//! tolerances derived from WGSL's precision rules (see `common::tolerance`).
 
 use glam::{IVec3, Vec2, Vec3};
 use mcg_gpu_backend::kernels::{GpuHashTable, VmfKernels};
 use mcg_gpu_backend::testing::gpu_or_skip;
 use mcg_gpu_backend::types::{
-    HashgridLevelParams, HashgridTableParams, HashgridVertexQuery, VmfQuery, VmfStatsQuery,
+    HashgridLevelParams, HashgridTableParams, HashgridVertexQuery, TexelParams, TexelUpdate,
+    VmfFitParamsGpu, VmfQuery, VmfStatsQuery, VmfUpdate,
 };
 use mcg_gpu_backend::{GpuBuffer, GpuContext, shaders};
 use mcg_hashgrid::{
@@ -18,100 +19,11 @@ use mcg_hashgrid::{
     hash_mix_coherent, hash_xor_primes, normal_class, stochastic_trilinear,
 };
 use mcg_vmf::{FitParams, MapPrior, PriorDecay, SufficientStats, Vmf};
-use rand::{Rng, RngExt, SeedableRng};
+use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 
-const EPS: f64 = f32::EPSILON as f64;
-
-/// Tolerances of the vMF comparisons, from WGSL's accuracy table (WGSL spec, "Floating Point
-/// Accuracy"): `exp(x)` within 3 + 2|x| ULP, `log(x)` within 2⁻²¹ absolute on [0.5, 2] and
-/// 3 ULP elsewhere, division 2.5 ULP, `sqrt` 2.5 ULP (as 1/inverseSqrt); +, −, × correctly
-/// rounded, but a compiler may fuse a multiply and an add (one rounding less), so every
-/// argument computed from a few products may differ by a few ε relative. The CPU's own
-/// `exp`/`ln` (≤ 1 ULP) are folded into the same terms.
-mod tolerance {
-    use super::EPS;
-
-    /// Relative error bound of C(κ) = g(−2κ)/(4π) on the GPU (`vmf_normalization`).
-    pub fn normalization(kappa: f64) -> f64 {
-        if kappa > 9.0 {
-            return 4.0 * EPS;
-        }
-        let x = 2.0 * kappa;
-        if x > 0.5 {
-            // expm1 = exp(−x) − 1 with |exp(−x) − 1| ≥ 0.39: the exp error of u = e^{−x}
-            // relative to |u − 1| grows by u/|u − 1| ≤ 1.6; then the division.
-            1.6 * (4.0 + 2.0 * x) * EPS + 5.0 * EPS
-        } else if x == 0.0 {
-            0.0
-        } else {
-            // Kahan's form: g = ln(u)/(u − 1), u = e^{−x}, u − 1 exact (Sterbenz); log's
-            // absolute error 2⁻²¹ on [0.5, 2] relative to |ln u| ≈ x.
-            2f64.powi(-21) / (-x).exp_m1().abs() + 8.0 * EPS
-        }
-    }
-
-    /// Relative error bound of `exp(y)` whose argument y carries a relative error of a few
-    /// ε (it is a product of three factors on both sides).
-    pub fn exp_of_product(y: f64) -> f64 {
-        (4.0 + 2.0 * y.abs()) * EPS + 4.0 * EPS * y.abs()
-    }
-
-    /// Relative error bound of the pdf C(κ) e^{−κ|ω − μ|²/2}.
-    pub fn pdf(kappa: f64, exponent: f64) -> f64 {
-        normalization(kappa) + exp_of_product(exponent) + 2.0 * EPS
-    }
-
-    /// Absolute error bound of r = cos θ − 1 from `vmf_cos_theta_minus_one`.
-    pub fn cos_theta_minus_one(kappa: f64, xi: f64, r: f64) -> f64 {
-        if kappa < 1e-7 {
-            return 2.0 * EPS;
-        }
-        // Error of the scale expm1(−2κ) relative to itself (it sets x = ξ·scale).
-        let scale = if kappa > 17.0 {
-            0.0
-        } else if kappa > 0.25 {
-            1.6 * (4.0 + 4.0 * kappa) * EPS
-        } else {
-            2f64.powi(-21) / (-2.0 * kappa).exp_m1().abs() + 8.0 * EPS
-        };
-        // ln u: 2⁻²¹ absolute on [0.5, 2], 3 ULP elsewhere (|ln u| ≤ 2κ + 17 where u < ½);
-        // the decay e^{−2κ} inside u adds (3 + 4κ) ULP of decay/u ≤ 1 in the tail.
-        let u_ln = (2.0 * kappa).min(17.0 + 2.0 * kappa);
-        let ln_abs = 2f64.powi(-21) + 4.0 * EPS * u_ln + (4.0 + 4.0 * kappa.min(17.0)) * EPS;
-        // r = ln(u) · (x/((u − 1)κ)) or ln(u)/κ: the factor is ≤ 2/κ.
-        let _ = xi;
-        ln_abs * 2.0 / kappa + r.abs() * (scale + 8.0 * EPS)
-    }
-
-    /// Distance bound between the GPU's and the CPU's unit sample for an error `dr` in r:
-    /// cos θ moves by dr, sin θ = √(−r(2 + r)) by at most √(2|dr| + dr²), plus the frame's
-    /// and sqrt's rounding.
-    pub fn direction(dr: f64) -> f64 {
-        dr + (2.0 * dr + dr * dr).sqrt() + 32.0 * EPS
-    }
-}
-
-fn random_unit(rng: &mut impl Rng) -> Vec3 {
-    loop {
-        let v = Vec3::new(
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-        );
-        if v.length_squared() > 1e-4 && v.length_squared() <= 1.0 {
-            return v.normalize();
-        }
-    }
-}
-
-/// Concentrations on both sides of every switch point of the CPU code (κ_tiny = 10⁻⁷, the
-/// series/closed forms at 0.25 and 0.5, C(κ) saturating at 9, sampling saturating at 17) and
-/// across [0, 10⁶].
-const KAPPAS: [f32; 22] = [
-    0.0, 1e-9, 0.99e-7, 1.01e-7, 1e-4, 0.01, 0.2, 0.2499, 0.2501, 0.4999, 0.5001, 1.0, 3.0, 8.999,
-    9.001, 16.99, 17.01, 50.0, 300.0, 1e4, 2e5, 1e6,
-];
+mod common;
+use common::{EPS, KAPPAS, gpu_and_rng, random_key, random_unit, tolerance};
 
 /// vMF pdf and `sample_with_pdf` on 22 × 512 lobes, queries and uniform pairs (fixed seed),
 /// incl. uniforms 0 and 1 − ε: every GPU value within the [`tolerance`] of the CPU's.
@@ -119,10 +31,9 @@ const KAPPAS: [f32; 22] = [
 /// WGSL pdf used `exp(-lobe.kappa * distance_squared)`, dropping the ½): failed.
 #[test]
 fn vmf_pdf_and_samples_match_the_cpu() {
-    let Some(ctx) = gpu_or_skip("vmf_pdf_and_samples_match_the_cpu") else {
+    let Some((ctx, mut rng)) = gpu_and_rng("vmf_pdf_and_samples_match_the_cpu", 7) else {
         return;
     };
-    let mut rng = Pcg64::seed_from_u64(7);
     let mut lobes = Vec::new();
     let mut queries = Vec::new();
     for &kappa in &KAPPAS {
@@ -207,10 +118,10 @@ fn vmf_pdf_and_samples_match_the_cpu() {
 /// failed.
 #[test]
 fn vmf_reconstruction_and_products_match_the_cpu() {
-    let Some(ctx) = gpu_or_skip("vmf_reconstruction_and_products_match_the_cpu") else {
+    let Some((ctx, mut rng)) = gpu_and_rng("vmf_reconstruction_and_products_match_the_cpu", 11)
+    else {
         return;
     };
-    let mut rng = Pcg64::seed_from_u64(11);
     let mut stats = Vec::new();
     let mut queries = Vec::new();
     for i in 0..2000 {
@@ -312,12 +223,7 @@ fn vmf_reconstruction_and_products_match_the_cpu() {
         let kappa = q.kappa;
         let a = mcg_vmf::mean_cosine_from_kappa(kappa);
         let kd = f64::from(kappa);
-        let tol = if kd < 0.5 {
-            8.0 * EPS
-        } else {
-            // 2/expm1(2κ): relative error of expm1(2κ) = e^{2κ} − 1 from exp's 3 + 4κ ULP.
-            2.0 / (2.0 * kd).exp_m1() * (1.6 * (4.0 + 4.0 * kd) * EPS) + 8.0 * EPS
-        };
+        let tol = tolerance::mean_cosine(kd);
         assert!(
             (f64::from(g.mean_cosine) - f64::from(a)).abs() <= tol,
             "A₃({kappa}): {} vs {a}",
@@ -346,22 +252,6 @@ fn vmf_stats_update_matches_the_cpu() {
     let Some(ctx) = gpu_or_skip("vmf_stats_update_matches_the_cpu") else {
         return;
     };
-    #[repr(C)]
-    #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-    struct Update {
-        x: Vec3,
-        weight: f32,
-        y: Vec3,
-        _pad: f32,
-    }
-    #[repr(C)]
-    #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-    struct Fit {
-        max_count: u32,
-        alpha_min: f32,
-        mean_cosine_update: u32,
-        _pad: u32,
-    }
     let kernel = ctx
         .compute_kernel(shaders::kernels::VMF_UPDATE, "vmf_update")
         .unwrap();
@@ -397,25 +287,14 @@ fn vmf_stats_update_matches_the_cpu() {
                 _ => rng.random_range(0.0..2.0),
             };
             stats.push(s);
-            updates.push(Update {
+            updates.push(VmfUpdate {
                 x,
                 weight,
                 y,
                 _pad: 0.0,
             });
         }
-        let fit = ctx.uniform_buffer(
-            "fit",
-            &Fit {
-                max_count: params.max_count,
-                alpha_min: params.alpha_min,
-                mean_cosine_update: match params.mean_cosine_update {
-                    mcg_vmf::MeanCosineUpdate::Resultant => 0,
-                    mcg_vmf::MeanCosineUpdate::Projected => 1,
-                },
-                _pad: 0,
-            },
-        );
+        let fit = ctx.uniform_buffer("fit", &VmfFitParamsGpu::from(&params));
         let stats_buffer = ctx.storage_buffer("stats", &stats);
         let updates_buffer = ctx.storage_buffer("updates", &updates);
         ctx.dispatch(
@@ -464,30 +343,15 @@ fn vmf_stats_update_matches_the_cpu() {
     }
 }
 
-fn random_key(rng: &mut impl Rng) -> CellKey {
-    let cell = IVec3::new(
-        rng.random_range(-40..40),
-        rng.random_range(-40..40),
-        rng.random_range(-40..40),
-    );
-    let key = CellKey::new(cell, rng.random_range(0..12), rng.random_range(0..7));
-    if rng.random_bool(0.1) {
-        key.with_extra(rng.random())
-    } else {
-        key
-    }
-}
-
 /// Every bucket hash and the checksum, bit for bit, on 20 000 keys incl. extreme coordinates;
 /// the stochastic trilinear vertex and normal class bit for bit; the adaptive level equal
 /// wherever the CPU's level is not within 10⁻³ of a rounding boundary (the GPU's `log` may
 /// differ there). Broken once on purpose (the WGSL pcg4d without its xorshift): failed.
 #[test]
 fn hashes_checksums_and_vertices_match_the_cpu() {
-    let Some(ctx) = gpu_or_skip("hashes_checksums_and_vertices_match_the_cpu") else {
+    let Some((ctx, mut rng)) = gpu_and_rng("hashes_checksums_and_vertices_match_the_cpu", 5) else {
         return;
     };
-    let mut rng = Pcg64::seed_from_u64(5);
     let mut keys: Vec<CellKey> = (0..20_000).map(|_| random_key(&mut rng)).collect();
     for c in [i32::MIN, -1, 0, 1, i32::MAX] {
         keys.push(CellKey::new(IVec3::new(c, -c, c / 3), 255, 255).with_extra(u16::MAX));
@@ -575,10 +439,12 @@ fn table_params_cases() -> Vec<(u32, u32, BucketHash)> {
 /// slots): failed.
 #[test]
 fn serial_table_operations_match_the_cpu_outcome_by_outcome() {
-    let Some(ctx) = gpu_or_skip("serial_table_operations_match_the_cpu_outcome_by_outcome") else {
+    let Some((ctx, mut rng)) = gpu_and_rng(
+        "serial_table_operations_match_the_cpu_outcome_by_outcome",
+        3,
+    ) else {
         return;
     };
-    let mut rng = Pcg64::seed_from_u64(3);
     for (capacity, probes, hash) in table_params_cases() {
         let keys: Vec<CellKey> = (0..100).map(|_| random_key(&mut rng)).collect();
         let keys: Vec<CellKey> = keys.iter().chain(&keys[..20]).copied().collect();
@@ -626,10 +492,9 @@ fn serial_table_operations_match_the_cpu_outcome_by_outcome() {
 /// racing invocations both reported `Inserted` for one key and the test failed.
 #[test]
 fn concurrent_inserts_end_with_the_cpu_key_set() {
-    let Some(ctx) = gpu_or_skip("concurrent_inserts_end_with_the_cpu_key_set") else {
+    let Some((ctx, mut rng)) = gpu_and_rng("concurrent_inserts_end_with_the_cpu_key_set", 9) else {
         return;
     };
-    let mut rng = Pcg64::seed_from_u64(9);
     let distinct: Vec<CellKey> = {
         let mut set = std::collections::HashSet::new();
         while set.len() < 20_000 {
@@ -819,20 +684,6 @@ fn concurrent_texel_updates_match_a_serial_order() {
         return;
     };
     use mcg_color_codec::{IrradianceLayout, IrradianceWord, MovingAverage, Rounding};
-    #[repr(C)]
-    #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-    struct Update {
-        sample: Vec3,
-        texel: u32,
-    }
-    #[repr(C)]
-    #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-    struct Params {
-        max_count: u32,
-        rounding_mode: u32,
-        rounding_u: f32,
-        word_layout: u32,
-    }
     let layout = IrradianceLayout::ADGI;
     let average = MovingAverage::STATIC;
     let kernel = ctx
@@ -840,7 +691,7 @@ fn concurrent_texel_updates_match_a_serial_order() {
         .unwrap();
     let params = ctx.uniform_buffer(
         "params",
-        &Params {
+        &TexelParams {
             max_count: average.max_count(),
             rounding_mode: 1,
             rounding_u: 0.0,
@@ -867,7 +718,7 @@ fn concurrent_texel_updates_match_a_serial_order() {
     let mut updates = Vec::new();
     for (t, &n) in counts.iter().enumerate() {
         for _ in 0..n {
-            updates.push(Update {
+            updates.push(TexelUpdate {
                 sample: per_texel[t],
                 texel: t as u32,
             });
@@ -901,7 +752,7 @@ fn concurrent_texel_updates_match_a_serial_order() {
     let dynamic = MovingAverage::DYNAMIC;
     let vis_params = ctx.uniform_buffer(
         "params",
-        &Params {
+        &TexelParams {
             max_count: dynamic.max_count(),
             rounding_mode: 1,
             rounding_u: 0.0,
@@ -931,8 +782,8 @@ fn concurrent_texel_updates_match_a_serial_order() {
         assert_eq!(gpu[t], cpu, "visibility texel {t} after {n} equal updates");
     }
     // Distinct samples: exact counts, values within the samples' range.
-    let updates: Vec<Update> = (0..65_536_u32)
-        .map(|k| Update {
+    let updates: Vec<TexelUpdate> = (0..65_536_u32)
+        .map(|k| TexelUpdate {
             sample: Vec3::splat(rng.random_range(1.0..2.0)),
             texel: k % 64,
         })

@@ -5,6 +5,9 @@
 use std::path::PathBuf;
 
 use mcg_gpu_backend::{prelude, shaders, types};
+
+mod common;
+use common::{AgeParams, JitterQuery, PixelQuery};
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 
 fn prelude_path() -> PathBuf {
@@ -45,6 +48,9 @@ fn parse_and_validate(name: &str, source: &str) -> naga::Module {
 const CHECKSUM_DECLARATION: &str =
     "@group(0) @binding(0) var<storage, read_write> hashgrid_checksums: array<atomic<u32>>;\n";
 
+const AGES_DECLARATION: &str =
+    "@group(0) @binding(2) var<storage, read_write> hashgrid_ages: array<atomic<u32>>;\n";
+
 const TEXEL_DECLARATION: &str =
     "@group(0) @binding(1) var<storage, read_write> codec_texels: array<atomic<u32>>;\n";
 
@@ -75,21 +81,27 @@ fn library_modules_validate_alone_and_together() {
             CHECKSUM_DECLARATION
         ),
     );
+    parse_and_validate(
+        "hashgrid_ages",
+        &format!(
+            "{}{}{}{}{}",
+            shaders::HASHGRID_MODULE,
+            shaders::HASHGRID_TABLE,
+            shaders::HASHGRID_AGES,
+            CHECKSUM_DECLARATION,
+            AGES_DECLARATION
+        ),
+    );
+    parse_and_validate(
+        "vmf_mixture",
+        &format!(
+            "{}{}const VMF_MIXTURE_K: u32 = 3u;\n",
+            shaders::VMF_MODULE,
+            shaders::VMF_MIXTURE
+        ),
+    );
     // All modules in one shader: no name clashes.
-    let all = [
-        shaders::PRELUDE,
-        shaders::COMMON,
-        shaders::VMF,
-        shaders::HASHGRID,
-        shaders::HASHGRID_TABLE,
-        shaders::COLOR_CODEC,
-        shaders::COLOR_CODEC_TEXELS,
-        shaders::MARKOV_GUIDE,
-        CHECKSUM_DECLARATION,
-        TEXEL_DECLARATION,
-    ]
-    .concat();
-    parse_and_validate("all", &all);
+    parse_and_validate("all", &all_library_modules());
 }
 
 #[test]
@@ -137,17 +149,55 @@ fn wgsl_layout(module: &naga::Module, name: &str) -> (u32, Vec<(String, u32)>) {
     )
 }
 
+/// Checks the WGSL struct `name` against a Rust type: the same size (= array stride) and, for
+/// every listed `(member, offset)`, the WGSL member of that name at that offset. WGSL members
+/// not listed must be padding (`_pad…`).
 fn check(module: &naga::Module, name: &str, size: usize, offsets: &[(&str, usize)]) {
     let (wgsl_size, members) = wgsl_layout(module, name);
     assert_eq!(wgsl_size as usize, size, "{name}: WGSL size vs Rust size");
-    assert_eq!(members.len(), offsets.len(), "{name}: member count");
-    for ((wgsl_name, wgsl_offset), (rust_name, rust_offset)) in members.iter().zip(offsets) {
-        assert_eq!(wgsl_name, rust_name, "{name}: member order");
-        assert_eq!(
-            *wgsl_offset as usize, *rust_offset,
-            "{name}.{wgsl_name}: WGSL offset vs Rust offset"
+    for (member, offset) in &members {
+        match offsets.iter().find(|(n, _)| n == member) {
+            Some((_, rust)) => assert_eq!(
+                *offset as usize, *rust,
+                "{name}.{member}: WGSL offset vs Rust offset"
+            ),
+            None => assert!(member.starts_with("_pad"), "{name}.{member} not checked"),
+        }
+    }
+    for (rust_name, _) in offsets {
+        assert!(
+            members.iter().any(|(m, _)| m == rust_name),
+            "{name} has no member {rust_name}"
         );
     }
+}
+
+/// `(field, offset_of!(T, field))` for fields named like the WGSL members.
+macro_rules! fields {
+    ($t:ty: $($f:ident),* $(,)?) => {
+        &[$((stringify!($f), core::mem::offset_of!($t, $f))),*]
+    };
+}
+
+/// Every library module and the storage arrays they expect from the includer.
+fn all_library_modules() -> String {
+    [
+        shaders::PRELUDE,
+        shaders::COMMON,
+        shaders::VMF,
+        shaders::VMF_MIXTURE,
+        shaders::HASHGRID,
+        shaders::HASHGRID_TABLE,
+        shaders::HASHGRID_AGES,
+        shaders::COLOR_CODEC,
+        shaders::COLOR_CODEC_TEXELS,
+        shaders::MARKOV_GUIDE,
+        CHECKSUM_DECLARATION,
+        AGES_DECLARATION,
+        TEXEL_DECLARATION,
+        "const VMF_MIXTURE_K: u32 = 4u;\n",
+    ]
+    .concat()
 }
 
 #[test]
@@ -156,20 +206,7 @@ fn wgsl_structs_match_the_rust_pod_types() {
     use mcg_hashgrid::CellKey;
     use mcg_vmf::{SufficientStats, Vmf};
 
-    let all = [
-        shaders::PRELUDE,
-        shaders::COMMON,
-        shaders::VMF,
-        shaders::HASHGRID,
-        shaders::HASHGRID_TABLE,
-        shaders::COLOR_CODEC,
-        shaders::COLOR_CODEC_TEXELS,
-        shaders::MARKOV_GUIDE,
-        CHECKSUM_DECLARATION,
-        TEXEL_DECLARATION,
-    ]
-    .concat();
-    let m = parse_and_validate("all", &all);
+    let m = parse_and_validate("all", &all_library_modules());
 
     // Vmf's fields are private: read their offsets from the bytes of a known lobe.
     let lobe = Vmf::new(glam::Vec3::new(0.0, 0.6, 0.8), 7.0).unwrap();
@@ -177,27 +214,28 @@ fn wgsl_structs_match_the_rust_pod_types() {
     assert_eq!(words, [0.0, 0.6, 0.8, 7.0], "Vmf is mu then kappa");
     check(&m, "Vmf", size_of::<Vmf>(), &[("mu", 0), ("kappa", 12)]);
 
+    let stats_fields = |base: usize| {
+        let t = base + offset_of!(SufficientStats, mean_target);
+        [
+            ("mean_target_x", t),
+            ("mean_target_y", t + 4),
+            ("mean_target_z", t + 8),
+            ("weight_sum", base + offset_of!(SufficientStats, weight_sum)),
+            (
+                "one_minus_mean_cosine",
+                base + offset_of!(SufficientStats, one_minus_mean_cosine),
+            ),
+            (
+                "sample_count",
+                base + offset_of!(SufficientStats, sample_count),
+            ),
+        ]
+    };
     check(
         &m,
         "SufficientStats",
         size_of::<SufficientStats>(),
-        &[
-            ("mean_target_x", offset_of!(SufficientStats, mean_target)),
-            (
-                "mean_target_y",
-                offset_of!(SufficientStats, mean_target) + 4,
-            ),
-            (
-                "mean_target_z",
-                offset_of!(SufficientStats, mean_target) + 8,
-            ),
-            ("weight_sum", offset_of!(SufficientStats, weight_sum)),
-            (
-                "one_minus_mean_cosine",
-                offset_of!(SufficientStats, one_minus_mean_cosine),
-            ),
-            ("sample_count", offset_of!(SufficientStats, sample_count)),
-        ],
+        &stats_fields(0),
     );
 
     // CellKey's meta word is the little-endian u32 of level, class, extra.
@@ -226,130 +264,150 @@ fn wgsl_structs_match_the_rust_pod_types() {
         assert_eq!(&w[..6], &[f(1.0), f(2.0), f(3.0), f(4.0), f(5.0), f(6.0)]);
         assert_eq!(w[6], 0x3c00 | (0xc000 << 16), "velocity x, y as f16 bits");
         assert_eq!(w[7], 0x3800, "velocity z as f16 bits, count 0");
+        let t = offset_of!(GridState, mean_target);
+        let mut fields = vec![
+            ("mean_target_x", t),
+            ("mean_target_y", t + 4),
+            ("mean_target_z", t + 8),
+            ("velocity_xy", 24),
+            ("velocity_z_count", 28),
+        ];
+        fields.extend_from_slice(fields!(GridState: weight_sum, one_minus_mean_cosine, time));
+        check(&m, "GridState", size_of::<GridState>(), &fields);
+    }
+    // PixelState: the statistics nested, then the score.
+    {
+        use mcg_markov_guide::mcmm::PixelState;
         check(
             &m,
-            "GridState",
-            size_of::<GridState>(),
-            &[
-                ("mean_target_x", offset_of!(GridState, mean_target)),
-                ("mean_target_y", offset_of!(GridState, mean_target) + 4),
-                ("mean_target_z", offset_of!(GridState, mean_target) + 8),
-                ("weight_sum", offset_of!(GridState, weight_sum)),
-                (
-                    "one_minus_mean_cosine",
-                    offset_of!(GridState, one_minus_mean_cosine),
-                ),
-                ("time", offset_of!(GridState, time)),
-                ("velocity_xy", 24),
-                ("velocity_z_count", 28),
-            ],
+            "PixelState",
+            size_of::<PixelState>(),
+            fields!(PixelState: stats, score),
         );
     }
+    // VmfMixture for K = 1..=5 against `pack_mixtures`' stride and order.
+    for k in 1..=5_usize {
+        let module = parse_and_validate(
+            "mixture",
+            &all_library_modules().replace(
+                "const VMF_MIXTURE_K: u32 = 4u;",
+                &format!("const VMF_MIXTURE_K: u32 = {k}u;"),
+            ),
+        );
+        check(
+            &module,
+            "VmfMixture",
+            4 * types::mixture_stride_floats(k),
+            &[("lobes", 0), ("weights", 16 * k)],
+        );
+    }
+    use types::{
+        HashgridLevelParams as L, HashgridTableParams as T, TexelParams, TexelUpdate,
+        VmfFitParamsGpu, VmfSample, VmfUpdate,
+    };
     check(
         &m,
         "HashgridTable",
-        size_of::<types::HashgridTableParams>(),
-        &[
-            ("capacity", 0),
-            ("mask", 4),
-            ("is_mask", 8),
-            ("max_probes", 12),
-            ("bucket_hash", 16),
-            ("_pad0", 20),
-            ("_pad1", 24),
-            ("_pad2", 28),
-        ],
+        size_of::<T>(),
+        fields!(T: capacity, mask, is_mask, max_probes, bucket_hash),
     );
     check(
         &m,
         "HashgridLevels",
-        size_of::<types::HashgridLevelParams>(),
-        &[
-            (
-                "tan_half_angle",
-                offset_of!(types::HashgridLevelParams, tan_half_angle),
-            ),
-            (
-                "min_width",
-                offset_of!(types::HashgridLevelParams, min_width),
-            ),
-            (
-                "levels_per_ln",
-                offset_of!(types::HashgridLevelParams, levels_per_ln),
-            ),
-            (
-                "ln_per_level",
-                offset_of!(types::HashgridLevelParams, ln_per_level),
-            ),
-            (
-                "max_level",
-                offset_of!(types::HashgridLevelParams, max_level),
-            ),
-            ("_pad0", 20),
-            ("_pad1", 24),
-            ("_pad2", 28),
-        ],
+        size_of::<L>(),
+        fields!(L: tan_half_angle, min_width, levels_per_ln, ln_per_level, max_level),
     );
     check(
         &m,
         "VmfSample",
-        size_of::<types::VmfSample>(),
-        &[
-            ("direction", offset_of!(types::VmfSample, direction)),
-            ("pdf", offset_of!(types::VmfSample, pdf)),
-        ],
+        size_of::<VmfSample>(),
+        fields!(VmfSample: direction, pdf),
+    );
+    check(
+        &m,
+        "VmfFitParams",
+        size_of::<VmfFitParamsGpu>(),
+        fields!(VmfFitParamsGpu: max_count, alpha_min, mean_cosine_update),
     );
 
-    let vmf_kernels = parse_and_validate("vmf kernels", shaders::kernels::VMF);
+    // Kernel-only structs.
+    let kernel = |name| {
+        let (_, source, _) = shaders::kernels::ALL
+            .iter()
+            .find(|(n, _, _)| *n == name)
+            .unwrap();
+        parse_and_validate(name, source)
+    };
+    use types::{
+        HashgridVertexQuery as V, VmfQuery as Q, VmfStatsQuery as SQ, VmfStatsResult as SR,
+    };
     check(
-        &vmf_kernels,
+        &kernel("vmf"),
         "VmfQuery",
-        size_of::<types::VmfQuery>(),
-        &[
-            ("direction", offset_of!(types::VmfQuery, direction)),
-            ("uniforms", offset_of!(types::VmfQuery, uniforms)),
-        ],
+        size_of::<Q>(),
+        fields!(Q: direction, uniforms),
     );
-    let stats_kernels = parse_and_validate("vmf stats kernels", shaders::kernels::VMF_STATS);
-    use types::{VmfStatsQuery as Q, VmfStatsResult as R};
+    check(
+        &kernel("vmf_mixture"),
+        "VmfQuery",
+        size_of::<Q>(),
+        fields!(Q: direction, uniforms),
+    );
+    let stats_kernels = kernel("vmf_stats");
     check(
         &stats_kernels,
         "VmfStatsQuery",
-        size_of::<Q>(),
-        &[
-            ("shading_point", offset_of!(Q, shading_point)),
-            ("kappa", offset_of!(Q, kappa)),
-            ("other", offset_of!(Q, other)),
-            ("prior_mean_cosine", offset_of!(Q, prior_mean_cosine)),
-            ("prior_weight", offset_of!(Q, prior_weight)),
-            ("prior_decay", offset_of!(Q, prior_decay)),
-        ],
+        size_of::<SQ>(),
+        fields!(SQ: shading_point, kappa, other, prior_mean_cosine, prior_weight, prior_decay),
     );
     check(
         &stats_kernels,
         "VmfStatsResult",
-        size_of::<R>(),
-        &[
-            ("reconstructed", offset_of!(R, reconstructed)),
-            ("product", offset_of!(R, product)),
-            ("product_scale", offset_of!(R, product_scale)),
-            ("mean_cosine", offset_of!(R, mean_cosine)),
-            ("kappa_back", offset_of!(R, kappa_back)),
-        ],
+        size_of::<SR>(),
+        fields!(SR: reconstructed, product, product_scale, mean_cosine, kappa_back),
     );
-    let key_kernels = parse_and_validate("hashgrid key kernels", shaders::kernels::HASHGRID_KEYS);
-    use types::HashgridVertexQuery as V;
     check(
-        &key_kernels,
+        &kernel("vmf_update"),
+        "VmfUpdate",
+        size_of::<VmfUpdate>(),
+        fields!(VmfUpdate: x, weight, y),
+    );
+    check(
+        &kernel("hashgrid_keys"),
         "HashgridVertexQuery",
         size_of::<V>(),
-        &[
-            ("position", offset_of!(V, position)),
-            ("xi_level", offset_of!(V, xi_level)),
-            ("normal", offset_of!(V, normal)),
-            ("u_corner", offset_of!(V, u_corner)),
-            ("camera", offset_of!(V, camera)),
-        ],
+        fields!(V: position, xi_level, normal, u_corner, camera),
+    );
+    let texels = kernel("color_codec_texels");
+    check(
+        &texels,
+        "TexelUpdate",
+        size_of::<TexelUpdate>(),
+        fields!(TexelUpdate: sample, texel),
+    );
+    check(
+        &texels,
+        "TexelParams",
+        size_of::<TexelParams>(),
+        fields!(TexelParams: max_count, rounding_mode, rounding_u, word_layout),
+    );
+    check(
+        &kernel("hashgrid_vertices"),
+        "HashgridJitterQuery",
+        size_of::<JitterQuery>(),
+        fields!(JitterQuery: position, u_corner, u_jitter, width),
+    );
+    check(
+        &kernel("hashgrid_ages"),
+        "HashgridAgeParams",
+        size_of::<AgeParams>(),
+        fields!(AgeParams: frame, max_age),
+    );
+    check(
+        &kernel("markov_pixel"),
+        "PixelQuery",
+        size_of::<PixelQuery>(),
+        fields!(PixelQuery: x, prior_mean_cosine, prior_weight, prior_decay),
     );
 }
 

@@ -237,3 +237,23 @@ fn hashgrid_vertex_key(levels: HashgridLevels, position: vec3<f32>, normal: vec3
     return hashgrid_cell_key(vertex, level, hashgrid_normal_class(normal));
 }
 
+
+// `CellKey::unclassed(cell)`: level 0 and class HASHGRID_CLASS_NONE (the static grid's keys).
+fn hashgrid_cell_key_unclassed(cell: vec3<i32>) -> CellKey {
+    return hashgrid_cell_key(cell, 0u, HASHGRID_CLASS_NONE);
+}
+
+// `StaticGrid::vertex_key`: the stochastic trilinear vertex of position / width (MCPG sec. 4,
+// the static grid: one cell width everywhere, no level and no normal in the key).
+fn hashgrid_static_vertex_key(width: f32, position: vec3<f32>, u_corner: f32) -> CellKey {
+    return hashgrid_cell_key_unclassed(hashgrid_stochastic_trilinear(position / width, u_corner));
+}
+
+// `jittered_vertex`: ⌊q + u⌋ for three uniforms, as ⌊q⌋ + [u ≥ 1 − f] per axis (exact where
+// q + u would round): the upper vertex with probability f, independently per axis.
+fn hashgrid_jittered_vertex(q: vec3<f32>, u_in: vec3<f32>) -> vec3<i32> {
+    let base = vec3<i32>(hashgrid_floor_i32(q.x), hashgrid_floor_i32(q.y), hashgrid_floor_i32(q.z));
+    let f = min(max(q - vec3<f32>(base), vec3<f32>(0.0)), vec3<f32>(1.0));
+    let u = vec3<f32>(hashgrid_sanitize_uniform(u_in.x), hashgrid_sanitize_uniform(u_in.y), hashgrid_sanitize_uniform(u_in.z));
+    return base + select(vec3<i32>(0), vec3<i32>(1), u >= vec3<f32>(1.0) - f);
+}

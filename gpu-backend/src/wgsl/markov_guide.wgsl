@@ -47,3 +47,34 @@ fn markov_grid_state_sample_count(s: GridState) -> u32 {
 fn markov_grid_state_stats(s: GridState) -> SufficientStats {
     return SufficientStats(s.mean_target_x, s.mean_target_y, s.mean_target_z, s.weight_sum, s.one_minus_mean_cosine, markov_grid_state_sample_count(s));
 }
+
+// 28 bytes, the layout of `mcg_markov_guide::mcmm::PixelState` (MCMM Table 1): the sufficient
+// statistics (ȳ, w̄, 1 − r̄, N) and the score f. All zeros is the empty state.
+struct PixelState {
+    stats: SufficientStats,
+    score: f32,
+}
+
+fn markov_is_finite(x: f32) -> bool {
+    return abs(x) <= MCG_F32_MAX;
+}
+
+// `PixelState::is_valid`: w̄ > 0 and finite, ȳ finite, score finite and ≥ 0 (MCMM sec. 4.1).
+fn markov_pixel_state_is_valid(s: PixelState) -> bool {
+    let t = vec3<f32>(s.stats.mean_target_x, s.stats.mean_target_y, s.stats.mean_target_z);
+    return s.stats.weight_sum > 0.0 && markov_is_finite(s.stats.weight_sum) && vmf_is_finite3(t) && s.score >= 0.0 && markov_is_finite(s.score);
+}
+
+// `PixelState::resampling_score`: score(S) = S.f of MCMM Alg. 1, 0 for an invalid state.
+fn markov_pixel_state_resampling_score(s: PixelState) -> f32 {
+    return select(0.0, s.score, markov_pixel_state_is_valid(s));
+}
+
+// `PixelState::lobe`: the lobe at shading point `x` with a fixed prior (MCMM Alg. 2 lines
+// 5-8); false for an invalid state or when ȳ coincides with `x`.
+fn markov_pixel_state_lobe(s: PixelState, x: vec3<f32>, prior: VmfMapPrior, out: ptr<function, Vmf>) -> bool {
+    if !markov_pixel_state_is_valid(s) {
+        return false;
+    }
+    return vmf_from_sufficient_stats(s.stats, x, prior, out);
+}

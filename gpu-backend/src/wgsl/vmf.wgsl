@@ -253,11 +253,13 @@ fn vmf_product(a: Vmf, b: Vmf, out: ptr<function, Vmf>) -> f32 {
     return scale;
 }
 
-// `mcg_vmf::FitParams`: N_max, α_min and the mean-cosine update (VMF_MEAN_COSINE_*).
+// `mcg_vmf::FitParams`: N_max, α_min and the mean-cosine update (VMF_MEAN_COSINE_*); 16 bytes,
+// `types::VmfFitParamsGpu` on the host.
 struct VmfFitParams {
     max_count: u32,
     alpha_min: f32,
     mean_cosine_update: u32,
+    _pad0: u32,
 }
 
 const VMF_MEAN_COSINE_RESULTANT: u32 = 0u;
@@ -321,4 +323,72 @@ fn vmf_stats_update(stats: ptr<function, SufficientStats>, x: vec3<f32>, y: vec3
     }
     (*stats).weight_sum = weight_sum;
     return true;
+}
+
+// dA₃/dκ = 1/κ² − 1/sinh²κ (`mean_cosine::mean_cosine_derivative`), series below
+// VMF_SERIES_LIMIT; 1/sinh²κ as 4e^{−2κ}/expm1(−2κ)², which underflows instead of overflowing.
+fn vmf_mean_cosine_derivative(kappa: f32) -> f32 {
+    if kappa < VMF_SERIES_LIMIT {
+        let k2 = kappa * kappa;
+        return VMF_MEAN_COSINE_DERIVATIVE_SERIES_0 + k2 * (VMF_MEAN_COSINE_DERIVATIVE_SERIES_1 + k2 * (VMF_MEAN_COSINE_DERIVATIVE_SERIES_2 + k2 * VMF_MEAN_COSINE_DERIVATIVE_SERIES_3));
+    }
+    let e = exp(-2.0 * kappa);
+    let d = vmf_exp_m1(-2.0 * kappa);
+    return 1.0 / (kappa * kappa) - 4.0 * e / (d * d);
+}
+
+// 1 − A₃(κ) without cancellation near 1 (`mean_cosine::one_minus_mean_cosine`).
+fn vmf_one_minus_mean_cosine(kappa: f32) -> f32 {
+    if kappa < VMF_SERIES_LIMIT {
+        return 1.0 - vmf_mean_cosine_from_kappa(kappa);
+    }
+    return 1.0 / kappa - 2.0 / vmf_exp_m1(2.0 * kappa);
+}
+
+// κ with A₃(κ) = r to f32 precision (`kappa_from_mean_cosine_exact`): Newton's method from
+// Banerjee's κ on A₃(κ) = r, or on 1 − A₃(κ) = 1 − r from r = VMF_NEWTON_COMPLEMENT_FROM on;
+// at most VMF_NEWTON_MAX_ITERATIONS steps, stopping at a relative step of
+// VMF_NEWTON_RELATIVE_STEP; clamped to [0, VMF_KAPPA_MAX].
+fn vmf_kappa_from_mean_cosine_exact(r: f32) -> f32 {
+    if !(r > 0.0) {
+        return 0.0;
+    }
+    if r >= 1.0 {
+        return VMF_KAPPA_MAX;
+    }
+    let epsilon = 1.0 - r;
+    if epsilon <= 1.0 / VMF_KAPPA_MAX {
+        return VMF_KAPPA_MAX;
+    }
+    var kappa = vmf_kappa_from_mean_cosine(r);
+    for (var i = 0u; i < VMF_NEWTON_MAX_ITERATIONS; i += 1u) {
+        var residual: f32;
+        if r < VMF_NEWTON_COMPLEMENT_FROM {
+            residual = vmf_mean_cosine_from_kappa(kappa) - r;
+        } else {
+            residual = epsilon - vmf_one_minus_mean_cosine(kappa);
+        }
+        let slope = vmf_mean_cosine_derivative(kappa);
+        if !(slope > 0.0) {
+            break;
+        }
+        var next = kappa - residual / slope;
+        if !(next > 0.0) {
+            next = 0.5 * kappa;
+        }
+        let converged = abs(next - kappa) <= VMF_NEWTON_RELATIVE_STEP * kappa;
+        kappa = min(next, VMF_KAPPA_MAX);
+        if converged {
+            break;
+        }
+    }
+    return kappa;
+}
+
+// Approximate convolution with a rotationally symmetric vMF kernel of concentration
+// `kernel_kappa` (`Vmf::convolve`): mean cosines multiply (Funk-Hecke), μ is kept and
+// κ' = A₃⁻¹(A₃(κ) A₃(κ_kernel)). A negative or NaN kernel κ blurs to uniform.
+fn vmf_convolve(lobe: Vmf, kernel_kappa: f32) -> Vmf {
+    let r = vmf_mean_cosine_from_kappa(lobe.kappa) * vmf_mean_cosine_from_kappa(kernel_kappa);
+    return Vmf(lobe.mu, vmf_kappa_from_mean_cosine_exact(r));
 }
