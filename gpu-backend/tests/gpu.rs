@@ -23,7 +23,7 @@ use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 
 mod common;
-use common::{EPS, KAPPAS, gpu_and_rng, random_key, random_unit, tolerance};
+use common::{EPS, KAPPAS, gpu_and_rng, random_key, random_unit, run, tolerance};
 
 /// vMF pdf and `sample_with_pdf` on 22 × 512 lobes, queries and uniform pairs (fixed seed),
 /// incl. uniforms 0 and 1 − ε: every GPU value within the [`tolerance`] of the CPU's.
@@ -252,9 +252,6 @@ fn vmf_stats_update_matches_the_cpu() {
     let Some(ctx) = gpu_or_skip("vmf_stats_update_matches_the_cpu") else {
         return;
     };
-    let kernel = ctx
-        .compute_kernel(shaders::kernels::VMF_UPDATE, "vmf_update")
-        .unwrap();
     for params in [FitParams::MCMM, FitParams::MCPG] {
         let mut rng = Pcg64::seed_from_u64(23);
         let mut stats = Vec::new();
@@ -297,12 +294,13 @@ fn vmf_stats_update_matches_the_cpu() {
         let fit = ctx.uniform_buffer("fit", &VmfFitParamsGpu::from(&params));
         let stats_buffer = ctx.storage_buffer("stats", &stats);
         let updates_buffer = ctx.storage_buffer("updates", &updates);
-        ctx.dispatch(
-            &kernel,
+        run(
+            ctx,
+            shaders::kernels::VMF_UPDATE,
+            "vmf_update",
             &[stats_buffer.raw(), updates_buffer.raw(), fit.raw()],
-            stats.len() as u32,
-        )
-        .unwrap();
+            stats.len(),
+        );
         let gpu = ctx.read_back(&stats_buffer).unwrap();
         for i in 0..stats.len() {
             let before = stats[i];
@@ -372,16 +370,15 @@ fn hashes_checksums_and_vertices_match_the_cpu() {
             _pad: 0.0,
         })
         .collect();
-    let kernel = ctx
-        .compute_kernel(shaders::kernels::HASHGRID_KEYS, "hashgrid_hashes")
-        .unwrap();
     let keys_buffer = ctx.storage_buffer("keys", &keys);
     let hashes: GpuBuffer<[u32; 4]> = ctx.zeroed_buffer("hashes", keys.len());
     let levels_buffer = ctx.uniform_buffer("levels", &levels);
     let queries_buffer = ctx.storage_buffer("queries", &queries);
     let vertex_keys: GpuBuffer<CellKey> = ctx.zeroed_buffer("vertex keys", queries.len());
-    ctx.dispatch(
-        &kernel,
+    run(
+        ctx,
+        shaders::kernels::HASHGRID_KEYS,
+        "hashgrid_hashes",
         &[
             keys_buffer.raw(),
             hashes.raw(),
@@ -389,9 +386,8 @@ fn hashes_checksums_and_vertices_match_the_cpu() {
             queries_buffer.raw(),
             vertex_keys.raw(),
         ],
-        keys.len() as u32,
-    )
-    .unwrap();
+        keys.len(),
+    );
     let hashes = ctx.read_back(&hashes).unwrap();
     for (k, h) in keys.iter().zip(&hashes) {
         let cpu = [
@@ -583,18 +579,16 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
             values.push([a, b, 1.5, 0.5]);
         }
     }
-    let kernel = ctx
-        .compute_kernel(shaders::kernels::COLOR_CODEC, "codec_pack_unpack")
-        .unwrap();
     let values_buffer = ctx.storage_buffer("values", &values);
     let words: GpuBuffer<[u32; 4]> = ctx.zeroed_buffer("words", 3 * values.len());
     let decoded: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("decoded", 7 * values.len());
-    ctx.dispatch(
-        &kernel,
+    run(
+        ctx,
+        shaders::kernels::COLOR_CODEC,
+        "codec_pack_unpack",
         &[values_buffer.raw(), words.raw(), decoded.raw()],
-        values.len() as u32,
-    )
-    .unwrap();
+        values.len(),
+    );
     let words = ctx.read_back(&words).unwrap();
     let decoded = ctx.read_back(&decoded).unwrap();
     let irr = IrradianceLayout::ADGI;
@@ -724,62 +718,53 @@ fn concurrent_texel_updates_match_a_serial_order() {
             });
         }
     }
-    let words = ctx.zeroed_buffer::<u32>("texels", texels as usize);
     let updates_buffer = ctx.storage_buffer("updates", &updates);
-    ctx.dispatch(
-        &kernel,
-        &[words.raw(), updates_buffer.raw(), params.raw()],
-        updates.len() as u32,
-    )
-    .unwrap();
-    let gpu = ctx.read_back(&words).unwrap();
-    for t in 0..texels as usize {
-        let n = counts[t];
-        let mut cpu = 0_u32;
-        for _ in 0..n {
-            cpu = average.update(&layout, cpu, per_texel[t], Rounding::Nearest);
-        }
-        assert_eq!(
-            layout.count(IrradianceWord(gpu[t])),
-            n.min(average.max_count()),
-            "texel {t}"
-        );
-        assert_eq!(gpu[t], cpu, "texel {t} after {n} equal updates");
-    }
-    // The same for visibility words (moments = the sample's xy), N_max = 10 (dynamic).
+    // Irradiance words (N_max = 63, static) and visibility words (moments = the sample's xy,
+    // N_max = 10, dynamic): the GPU's texels after the racing updates, and the CPU's word and
+    // count after n serial updates.
     use mcg_color_codec::{VisibilityLayout, VisibilityWord};
     let vis = VisibilityLayout::ADGI;
     let dynamic = MovingAverage::DYNAMIC;
-    let vis_params = ctx.uniform_buffer(
-        "params",
-        &TexelParams {
-            max_count: dynamic.max_count(),
-            rounding_mode: 1,
-            rounding_u: 0.0,
-            word_layout: 1,
-        },
-    );
-    let words = ctx.zeroed_buffer::<u32>("texels", texels as usize);
-    ctx.dispatch(
-        &kernel,
-        &[words.raw(), updates_buffer.raw(), vis_params.raw()],
-        updates.len() as u32,
-    )
-    .unwrap();
-    let gpu = ctx.read_back(&words).unwrap();
-    for t in 0..texels as usize {
-        let n = counts[t];
-        let m = Vec2::new(per_texel[t].x, per_texel[t].y);
-        let mut cpu = 0_u32;
-        for _ in 0..n {
-            cpu = dynamic.update(&vis, cpu, m, Rounding::Nearest);
-        }
-        assert_eq!(
-            vis.count(VisibilityWord(gpu[t])),
-            n.min(dynamic.max_count()),
-            "visibility texel {t}"
+    type Serial<'a> = Box<dyn Fn(u32, Vec3) -> (u32, u32) + 'a>;
+    let serial_irradiance: Serial = Box::new(|n, x| {
+        let w = (0..n).fold(0, |w, _| average.update(&layout, w, x, Rounding::Nearest));
+        (w, layout.count(IrradianceWord(w)))
+    });
+    let serial_visibility: Serial = Box::new(|n, x| {
+        let m = Vec2::new(x.x, x.y);
+        let w = (0..n).fold(0, |w, _| dynamic.update(&vis, w, m, Rounding::Nearest));
+        (w, vis.count(VisibilityWord(w)))
+    });
+    for (word_layout, max_count, serial) in [
+        (0, average.max_count(), serial_irradiance),
+        (1, dynamic.max_count(), serial_visibility),
+    ] {
+        let params = ctx.uniform_buffer(
+            "params",
+            &TexelParams {
+                max_count,
+                rounding_mode: 1,
+                rounding_u: 0.0,
+                word_layout,
+            },
         );
-        assert_eq!(gpu[t], cpu, "visibility texel {t} after {n} equal updates");
+        let words = ctx.zeroed_buffer::<u32>("texels", texels as usize);
+        ctx.dispatch(
+            &kernel,
+            &[words.raw(), updates_buffer.raw(), params.raw()],
+            updates.len() as u32,
+        )
+        .unwrap();
+        let gpu = ctx.read_back(&words).unwrap();
+        for t in 0..texels as usize {
+            let n = counts[t];
+            let (cpu, count) = serial(n, per_texel[t]);
+            assert_eq!(count, n.min(max_count), "layout {word_layout}, texel {t}");
+            assert_eq!(
+                gpu[t], cpu,
+                "layout {word_layout}, texel {t} after {n} equal updates"
+            );
+        }
     }
     // Distinct samples: exact counts, values within the samples' range.
     let updates: Vec<TexelUpdate> = (0..65_536_u32)
@@ -834,18 +819,16 @@ fn grid_states_read_the_same_on_the_gpu() {
             GridState::from_stats(&s, rng.random(), v)
         })
         .collect();
-    let kernel = ctx
-        .compute_kernel(shaders::kernels::MARKOV_GUIDE, "markov_grid_states")
-        .unwrap();
     let states_buffer = ctx.storage_buffer("states", &states);
     let velocities: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("velocities", states.len());
     let stats: GpuBuffer<SufficientStats> = ctx.zeroed_buffer("stats", states.len());
-    ctx.dispatch(
-        &kernel,
+    run(
+        ctx,
+        shaders::kernels::MARKOV_GUIDE,
+        "markov_grid_states",
         &[states_buffer.raw(), velocities.raw(), stats.raw()],
-        states.len() as u32,
-    )
-    .unwrap();
+        states.len(),
+    );
     let velocities = ctx.read_back(&velocities).unwrap();
     let stats = ctx.read_back(&stats).unwrap();
     for (i, s) in states.iter().enumerate() {

@@ -14,7 +14,7 @@ use rand::RngExt;
 
 mod common;
 use common::{
-    AgeParams, EPS, JitterQuery, KAPPAS, PixelQuery, gpu_and_rng, random_key, random_unit,
+    AgeParams, EPS, JitterQuery, KAPPAS, PixelQuery, gpu_and_rng, random_key, random_unit, run,
     tolerance,
 };
 
@@ -56,16 +56,15 @@ fn vmf_mixture_matches_the_cpu() {
         };
         queries.push(VmfQuery::new(random_unit(&mut rng), u));
     }
-    let kernel = ctx
-        .compute_kernel(shaders::kernels::VMF_MIXTURE, "vmf_mixture_eval")
-        .unwrap();
     let mixtures_buffer = ctx.storage_buffer("mixtures", &pack_mixtures(&mixtures));
     let queries_buffer = ctx.storage_buffer("queries", &queries);
     let pdfs: GpuBuffer<f32> = ctx.zeroed_buffer("pdfs", n);
     let samples: GpuBuffer<VmfSample> = ctx.zeroed_buffer("samples", n);
     let choices: GpuBuffer<[u32; 2]> = ctx.zeroed_buffer("choices", n);
-    ctx.dispatch(
-        &kernel,
+    run(
+        ctx,
+        shaders::kernels::VMF_MIXTURE,
+        "vmf_mixture_eval",
         &[
             mixtures_buffer.raw(),
             queries_buffer.raw(),
@@ -73,9 +72,8 @@ fn vmf_mixture_matches_the_cpu() {
             samples.raw(),
             choices.raw(),
         ],
-        n as u32,
-    )
-    .unwrap();
+        n,
+    );
     let pdfs = ctx.read_back(&pdfs).unwrap();
     let samples = ctx.read_back(&samples).unwrap();
     let choices = ctx.read_back(&choices).unwrap();
@@ -166,24 +164,22 @@ fn vmf_convolution_matches_the_cpu() {
             [kernel, r]
         })
         .collect();
-    let kernel = ctx
-        .compute_kernel(shaders::kernels::VMF_CONVOLVE, "vmf_convolve_lobes")
-        .unwrap();
     let lobes_buffer = ctx.storage_buffer("lobes", &lobes);
     let params_buffer = ctx.storage_buffer("params", &params);
     let convolved: GpuBuffer<Vmf> = ctx.zeroed_buffer("convolved", n);
     let kappas: GpuBuffer<f32> = ctx.zeroed_buffer("kappas", n);
-    ctx.dispatch(
-        &kernel,
+    run(
+        ctx,
+        shaders::kernels::VMF_CONVOLVE,
+        "vmf_convolve_lobes",
         &[
             lobes_buffer.raw(),
             params_buffer.raw(),
             convolved.raw(),
             kappas.raw(),
         ],
-        n as u32,
-    )
-    .unwrap();
+        n,
+    );
     let convolved = ctx.read_back(&convolved).unwrap();
     let kappas = ctx.read_back(&kappas).unwrap();
     let a = |k: f64| f64::from(mcg_vmf::mean_cosine_from_kappa(k as f32));
@@ -282,18 +278,16 @@ fn static_keys_and_jittered_vertices_match_the_cpu() {
             }
         })
         .collect();
-    let kernel = ctx
-        .compute_kernel(shaders::kernels::HASHGRID_VERTICES, "hashgrid_vertices")
-        .unwrap();
     let queries_buffer = ctx.storage_buffer("queries", &queries);
     let keys: GpuBuffer<CellKey> = ctx.zeroed_buffer("static keys", queries.len());
     let jittered: GpuBuffer<[i32; 4]> = ctx.zeroed_buffer("jittered", queries.len());
-    ctx.dispatch(
-        &kernel,
+    run(
+        ctx,
+        shaders::kernels::HASHGRID_VERTICES,
+        "hashgrid_vertices",
         &[queries_buffer.raw(), keys.raw(), jittered.raw()],
-        queries.len() as u32,
-    )
-    .unwrap();
+        queries.len(),
+    );
     let keys = ctx.read_back(&keys).unwrap();
     let jittered = ctx.read_back(&jittered).unwrap();
     for (i, q) in queries.iter().enumerate() {
@@ -524,18 +518,16 @@ fn pixel_states_read_the_same_on_the_gpu() {
             _pad: [0; 2],
         },
     );
-    let kernel = ctx
-        .compute_kernel(shaders::kernels::MARKOV_PIXEL, "markov_pixel_states")
-        .unwrap();
     let states_buffer = ctx.storage_buffer("states", &states);
     let results: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("results", states.len());
     let lobes: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("lobes", states.len());
-    ctx.dispatch(
-        &kernel,
+    run(
+        ctx,
+        shaders::kernels::MARKOV_PIXEL,
+        "markov_pixel_states",
         &[states_buffer.raw(), query.raw(), results.raw(), lobes.raw()],
-        states.len() as u32,
-    )
-    .unwrap();
+        states.len(),
+    );
     let results = ctx.read_back(&results).unwrap();
     let lobes = ctx.read_back(&lobes).unwrap();
     let mut found = 0;
