@@ -8,7 +8,7 @@ use crate::irradiance_word::IrradianceLayout;
 use crate::log_codec::LogCodec;
 use crate::moving_average::MovingAverage;
 use crate::visibility_word::VisibilityLayout;
-use crate::{gamma5_r10g10b10a2, math, quantize};
+use crate::{gamma5_r10g10b10a2, logluv32, math, quantize};
 
 /// The value of a [`NamedConstant`]: WGSL `u32` or `f32`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -62,7 +62,8 @@ const HEU: HeuristicsLayout = HeuristicsLayout::ADGI;
 /// offsets of the irradiance (sec. 4.5), visibility (sec. 4.6) and heuristics (sec. 4.3) words,
 /// (β, γ) of each log codec (eq. 21), and N_max of the static and dynamic moving averages
 /// (sec. 4.7, Table 3); the coefficients and reduction constants of the fast `ln`/`exp2`
-/// polynomials (Cephes), the per-channel step of stochastic rounding and gamma-5's code range.
+/// polynomials (Cephes), the per-channel step of stochastic rounding, gamma-5's code range and
+/// LogLuv32's bounds, scales and colour matrices.
 /// Values are read from the typed constants, so the table cannot drift.
 ///
 /// # Example
@@ -134,11 +135,75 @@ pub const CONSTANTS: &[NamedConstant] = &[
     // Gamma-5 R10G10B10A2.
     u("GAMMA5_MAX_CODE", gamma5_r10g10b10a2::GAMMA5_MAX_CODE),
     f("GAMMA5_MIN_INPUT", gamma5_r10g10b10a2::GAMMA5_MIN_INPUT),
+    // LogLuv32: Le's range and bounds on Y (as the f32 thresholds an f32 Y compares against),
+    // the chromaticity scale and the neutral point's codes, and the sRGB ↔ XYZ matrices
+    // (column-major, `_0`..`_8`).
+    u("LOGLUV_LE_MAX", logluv32::LE_MAX),
+    f("LOGLUV_Y_MAX", f32_at_or_above(logluv32::Y_MAX)),
+    f("LOGLUV_Y_MIN", f32_at_or_below(logluv32::Y_MIN)),
+    u("LOGLUV_UV_SCALE", logluv32::UV_SCALE as u32),
+    f("LOGLUV_INV_UV_SCALE", logluv32::INV_UV_SCALE),
+    u(
+        "LOGLUV_NEUTRAL_UE",
+        (logluv32::UV_SCALE * logluv32::U_NEUTRAL) as u32,
+    ),
+    u(
+        "LOGLUV_NEUTRAL_VE",
+        (logluv32::UV_SCALE * logluv32::V_NEUTRAL) as u32,
+    ),
+    f("LOGLUV_SRGB_TO_XYZ_0", logluv32::SRGB_TO_XYZ.x_axis.x),
+    f("LOGLUV_SRGB_TO_XYZ_1", logluv32::SRGB_TO_XYZ.x_axis.y),
+    f("LOGLUV_SRGB_TO_XYZ_2", logluv32::SRGB_TO_XYZ.x_axis.z),
+    f("LOGLUV_SRGB_TO_XYZ_3", logluv32::SRGB_TO_XYZ.y_axis.x),
+    f("LOGLUV_SRGB_TO_XYZ_4", logluv32::SRGB_TO_XYZ.y_axis.y),
+    f("LOGLUV_SRGB_TO_XYZ_5", logluv32::SRGB_TO_XYZ.y_axis.z),
+    f("LOGLUV_SRGB_TO_XYZ_6", logluv32::SRGB_TO_XYZ.z_axis.x),
+    f("LOGLUV_SRGB_TO_XYZ_7", logluv32::SRGB_TO_XYZ.z_axis.y),
+    f("LOGLUV_SRGB_TO_XYZ_8", logluv32::SRGB_TO_XYZ.z_axis.z),
+    f("LOGLUV_XYZ_TO_SRGB_0", logluv32::XYZ_TO_SRGB.x_axis.x),
+    f("LOGLUV_XYZ_TO_SRGB_1", logluv32::XYZ_TO_SRGB.x_axis.y),
+    f("LOGLUV_XYZ_TO_SRGB_2", logluv32::XYZ_TO_SRGB.x_axis.z),
+    f("LOGLUV_XYZ_TO_SRGB_3", logluv32::XYZ_TO_SRGB.y_axis.x),
+    f("LOGLUV_XYZ_TO_SRGB_4", logluv32::XYZ_TO_SRGB.y_axis.y),
+    f("LOGLUV_XYZ_TO_SRGB_5", logluv32::XYZ_TO_SRGB.y_axis.z),
+    f("LOGLUV_XYZ_TO_SRGB_6", logluv32::XYZ_TO_SRGB.z_axis.x),
+    f("LOGLUV_XYZ_TO_SRGB_7", logluv32::XYZ_TO_SRGB.z_axis.y),
+    f("LOGLUV_XYZ_TO_SRGB_8", logluv32::XYZ_TO_SRGB.z_axis.z),
 ];
+
+/// The smallest f32 ≥ `x` (positive, finite): for an f32 `y`, `y as f64 >= x` ⟺ `y >= it`.
+const fn f32_at_or_above(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) < x {
+        f32::from_bits(f.to_bits() + 1)
+    } else {
+        f
+    }
+}
+
+/// The largest f32 ≤ `x` (positive, finite): for an f32 `y`, `y as f64 > x` ⟺ `y > it`.
+const fn f32_at_or_below(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) > x {
+        f32::from_bits(f.to_bits() - 1)
+    } else {
+        f
+    }
+}
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn logluv_thresholds_decide_like_the_f64_bounds() {
+        let hi = f32_at_or_above(logluv32::Y_MAX);
+        assert!(f64::from(hi) >= logluv32::Y_MAX);
+        assert!(f64::from(f32::from_bits(hi.to_bits() - 1)) < logluv32::Y_MAX);
+        let lo = f32_at_or_below(logluv32::Y_MIN);
+        assert!(f64::from(lo) <= logluv32::Y_MIN);
+        assert!(f64::from(f32::from_bits(lo.to_bits() + 1)) > logluv32::Y_MIN);
+    }
     use std::string::ToString;
 
     #[test]

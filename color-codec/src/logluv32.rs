@@ -64,9 +64,20 @@ pub const XYZ_TO_SRGB: Mat3 = Mat3::from_cols_array(&[
     1.057_225_2,
 ]);
 
-const U_NEUTRAL: f64 = 0.210_526_316;
-const V_NEUTRAL: f64 = 0.473_684_211;
-const UV_SCALE: f64 = 410.0;
+/// u′ of the neutral point written for black (Le = 0).
+pub(crate) const U_NEUTRAL: f64 = 0.210_526_316;
+/// v′ of the neutral point written for black.
+pub(crate) const V_NEUTRAL: f64 = 0.473_684_211;
+/// Chromaticity steps per unit of u′ and v′.
+pub(crate) const UV_SCALE: f64 = 410.0;
+/// 1/410 in f32, the decoder's step.
+pub(crate) const INV_UV_SCALE: f32 = 1.0 / 410.0;
+/// Largest 15-bit log-luminance code (written for Y at or above [`Y_MAX`]).
+pub(crate) const LE_MAX: u32 = 0x7fff;
+/// Y at or above which Le saturates at [`LE_MAX`] (libtiff's bound).
+pub(crate) const Y_MAX: f64 = 1.837_197_6e19;
+/// Y at or below which Le is 0 (black).
+pub(crate) const Y_MIN: f64 = 5.413_676_9e-20;
 
 #[inline(always)]
 fn log2_f64(x: f64) -> f64 {
@@ -88,9 +99,9 @@ impl LogLuv32 {
             .to_array()
             .map(|v| if v >= 0.0 { f64::from(v) } else { 0.0 });
         let (x, y, z) = (c[0], c[1], c[2]);
-        let le = if y >= 1.837_197_6e19 {
-            0x7fff
-        } else if y > 5.413_676_9e-20 {
+        let le = if y >= Y_MAX {
+            LE_MAX
+        } else if y > Y_MIN {
             (256.0 * (log2_f64(y) + 64.0)) as u32
         } else {
             0
@@ -109,13 +120,13 @@ impl LogLuv32 {
     /// Decodes to CIE XYZ (finite; black for Le = 0 and for words with the sign bit).
     #[must_use]
     pub fn unpack_xyz(word: u32) -> Vec3 {
-        let le = (word >> 16) & 0x7fff;
+        let le = (word >> 16) & LE_MAX;
         if le == 0 || word >> 31 != 0 {
             return Vec3::ZERO;
         }
         let y = exp2((le as f32 + 0.5) * (1.0 / 256.0) - 64.0);
-        let u = (((word >> 8) & 0xff) as f32 + 0.5) * (1.0 / 410.0);
-        let v = ((word & 0xff) as f32 + 0.5) * (1.0 / 410.0);
+        let u = (((word >> 8) & 0xff) as f32 + 0.5) * INV_UV_SCALE;
+        let v = ((word & 0xff) as f32 + 0.5) * INV_UV_SCALE;
         let s = 1.0 / (6.0 * u - 16.0 * v + 12.0);
         let cx = 9.0 * u * s;
         let cy = 4.0 * v * s;

@@ -10,8 +10,9 @@
 
 use core::fmt::Write;
 
+use glam::Vec3;
 use mcg_color_codec::{
-    B10_MAX, IrradianceLayout, LogCodec, LogField, MAX_FIELD_BITS, R11_MAX, RGB9E5_MAX,
+    B10_MAX, IrradianceLayout, LogCodec, LogField, LogLuv32, MAX_FIELD_BITS, R11_MAX, RGB9E5_MAX,
     RTXGI_IRRADIANCE_GAMMA, VisibilityLayout,
 };
 
@@ -24,6 +25,50 @@ fn push_u32(out: &mut String, name: &str, v: u32) {
 fn push_f32(out: &mut String, name: &str, v: f32) {
     assert!(v.is_finite(), "{name} is not finite");
     writeln!(out, "const {name}: f32 = {v:?};").expect("writing to a String");
+}
+
+/// Le of Y = `y` (X = Z = 0) by `LogLuv32::pack_xyz`.
+fn logluv_le(y: f32) -> u32 {
+    LogLuv32::pack_xyz(Vec3::new(0.0, y, 0.0)) >> 16
+}
+
+/// T[k] (see [`logluv_tables`]): Le = 256 (e + 64) + #{k ≥ 1 : m ≥ T[k]} for Y = 2ᵉ m.
+fn logluv_log2_steps() -> [f32; 256] {
+    let base = logluv_le(1.0);
+    let mut steps = [1.0_f32; 256];
+    for (k, step) in steps.iter_mut().enumerate().skip(1) {
+        let (mut lo, mut hi) = (1.0_f32.to_bits(), 2.0_f32.to_bits());
+        // Invariant: le(lo) − base < k ≤ le(hi) − base (hi = 2 gives 256).
+        while hi - lo > 1 {
+            let mid = lo + (hi - lo) / 2;
+            if logluv_le(f32::from_bits(mid)) - base >= k as u32 {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        *step = f32::from_bits(hi);
+    }
+    steps
+}
+
+/// E[f] (see [`logluv_tables`]): the decoder's Y for any Le is E[Le mod 256] · 2^{⌊Le/256⌋ − 64}.
+fn logluv_exp2_steps() -> [f32; 256] {
+    let base = logluv_le(1.0);
+    core::array::from_fn(|f| LogLuv32::unpack_xyz((base + f as u32) << 16).y)
+}
+
+/// LogLuv32's step tables for `shaders::COLOR_CODEC_LOGLUV` (upload them as the storage array
+/// `codec_logluv_tables`): entries 0..256 are the log₂ steps T[k], the smallest f32 m ∈ [1, 2)
+/// that the CPU encoder gives the log₂ fraction ⌊256 log₂ m⌋ ≥ k; entries 256..512 the exp₂
+/// steps E[f], the CPU decoder's Y for Le = 256·64 + f, i.e. 2^{(f + ½)/256}. Both are read
+/// off `LogLuv32::pack_xyz` / `unpack_xyz` themselves (bisection at exponent 0), so they
+/// cannot drift; the parity test checks every exponent and every code.
+#[must_use]
+pub fn logluv_tables() -> [f32; 512] {
+    let log2 = logluv_log2_steps();
+    let exp2 = logluv_exp2_steps();
+    core::array::from_fn(|i| if i < 256 { log2[i] } else { exp2[i - 256] })
 }
 
 /// The text of the WGSL prelude: one `const` declaration per constant, grouped by crate.

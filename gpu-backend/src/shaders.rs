@@ -16,6 +16,7 @@
 //! | [`VMF_MIXTURE`] | `VmfMixture` (K from the includer), pdf, component choice reusing one uniform, sampling |
 //! | [`COLOR_CODEC`] | R11G11B10, RGB9E5, gamma-5 R10G10B10A2, the log codec (ADGI eq. 21) with round-down / nearest / stochastic rounding, the 9/9/8 + 6 irradiance, 13/13 + 6 visibility and 6/10/10 + 6 heuristics words, the moving-average update |
 //! | [`MARKOV_GUIDE`] | the MCPG `GridState`: velocity (three f16), count, sufficient statistics; the MCMM `PixelState`: validity, resampling score, lobe |
+//! | [`COLOR_CODEC_LOGLUV`] | LogLuv32 encode and decode (XYZ and linear sRGB), bit-exact, with the step tables in the includer's `codec_logluv_tables` |
 //! | [`COLOR_CODEC_TEXELS`] | `codec_irradiance_update_atomic`, `codec_visibility_update_atomic`: the update as a compare-and-swap loop on `codec_texels` |
 //!
 //! Names are prefixed by module (`vmf_`, `hashgrid_`, `codec_`; constants `VMF_`, `HASHGRID_`,
@@ -48,6 +49,13 @@ pub const HASHGRID_AGES: &str = include_str!("wgsl/hashgrid_ages.wgsl");
 pub const VMF_MIXTURE: &str = include_str!("wgsl/vmf_mixture.wgsl");
 /// The mcg-color-codec twin, `src/wgsl/color_codec.wgsl`.
 pub const COLOR_CODEC: &str = include_str!("wgsl/color_codec.wgsl");
+
+/// The mcg-color-codec LogLuv32 twin, `src/wgsl/color_codec_logluv.wgsl`:
+/// `codec_logluv32_pack_xyz`, `codec_logluv32_unpack_xyz`, `codec_logluv32_pack`,
+/// `codec_logluv32_unpack`, bit for bit with `LogLuv32`. Needs [`PRELUDE`] and
+/// [`COLOR_CODEC`], and the includer's `codec_logluv_tables: array<f32>` holding
+/// [`prelude::logluv_tables`](crate::prelude::logluv_tables).
+pub const COLOR_CODEC_LOGLUV: &str = include_str!("wgsl/color_codec_logluv.wgsl");
 
 /// The mcg-color-codec texel twin, `src/wgsl/color_codec_texels.wgsl`:
 /// `codec_irradiance_update_atomic` and `codec_visibility_update_atomic`, the moving-average
@@ -128,6 +136,16 @@ pub mod kernels {
         include_str!("wgsl/kernels/color_codec.wgsl"),
     );
 
+    /// Entry point `codec_logluv`: bindings `values`, `packed`, `unpacked`,
+    /// `codec_logluv_tables`.
+    pub const COLOR_CODEC_LOGLUV: &str = concat!(
+        include_str!("wgsl/generated/prelude.wgsl"),
+        include_str!("wgsl/common.wgsl"),
+        include_str!("wgsl/color_codec.wgsl"),
+        include_str!("wgsl/color_codec_logluv.wgsl"),
+        include_str!("wgsl/kernels/color_codec_logluv.wgsl"),
+    );
+
     /// Entry point `codec_texel_updates`: bindings `codec_texels`, `updates`, `params`.
     pub const COLOR_CODEC_TEXELS: &str = concat!(
         include_str!("wgsl/generated/prelude.wgsl"),
@@ -205,6 +223,7 @@ pub mod kernels {
             ],
         ),
         ("color_codec", COLOR_CODEC, &["codec_pack_unpack"]),
+        ("color_codec_logluv", COLOR_CODEC_LOGLUV, &["codec_logluv"]),
         ("markov_guide", MARKOV_GUIDE, &["markov_grid_states"]),
         (
             "color_codec_texels",
