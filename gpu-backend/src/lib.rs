@@ -10,10 +10,10 @@
 //! | item | what it is | source |
 //! |---|---|---|
 //! | [`shaders::PRELUDE`], [`prelude::generate`] | generated `const` declarations of every constant shared with the CPU crates | the crates' `constants` |
-//! | [`shaders::VMF`] | vMF pdf (stable form), sampling from explicit uniforms, mean cosine ↔ κ, the sufficient-statistics update and the reconstruction with a MAP prior, product | MCMM eq. 4, Alg. 2-3; MCPG Alg. 2-3; Jakob 2012 |
-//! | [`shaders::HASHGRID`], [`shaders::HASHGRID_TABLE`] | cell keys, xor-primes / pcg4d hashes, checksums, slot index, stochastic trilinear vertex, level choice; lock-free insert-or-get and lookup with a compare-and-swap loop | MCPG sec. 4 "Hash Grid"; Jarzynski and Olano 2020 |
-//! | [`shaders::COLOR_CODEC`], [`shaders::COLOR_CODEC_TEXELS`] | R11G11B10, RGB9E5, gamma-5 R10G10B10A2, the log codec, the 9/9/8 + 6 irradiance, 13/13 + 6 visibility and 6/10/10 + 6 heuristics words, the moving average as a compare-and-swap loop | ADGI eq. 21, sec. 4.3-4.7 |
-//! | [`shaders::MARKOV_GUIDE`] | the MCPG `GridState` (32 B): f16 velocity, count, sufficient statistics | MCPG Table 1 |
+//! | [`shaders::VMF`], [`shaders::VMF_MIXTURE`] | vMF pdf (stable form), sampling from explicit uniforms, mean cosine ↔ κ (Banerjee and exact), the sufficient-statistics update and the reconstruction with a MAP prior, product, convolution; the K-lobe mixture with one reused uniform | MCMM eq. 4-5, Alg. 2-3; MCPG Alg. 2-3; Jakob 2012 |
+//! | [`shaders::HASHGRID`], [`shaders::HASHGRID_TABLE`], [`shaders::HASHGRID_AGES`] | cell keys (adaptive and static grid), xor-primes / pcg4d hashes, checksums, slot index, stochastic trilinear and jittered vertices, level choice; lock-free insert-or-get and lookup with a compare-and-swap loop; the age counter and eviction of stale cells | MCPG sec. 4 "Hash Grid"; Jarzynski and Olano 2020 |
+//! | [`shaders::COLOR_CODEC`], [`shaders::COLOR_CODEC_LOGLUV`], [`shaders::COLOR_CODEC_TEXELS`] | R11G11B10, RGB9E5, gamma-5 R10G10B10A2, LogLuv32 (Larson 1998), the log codec, the 9/9/8 + 6 irradiance, 13/13 + 6 visibility and 6/10/10 + 6 heuristics words, the moving average as a compare-and-swap loop | ADGI eq. 21, sec. 4.3-4.7 |
+//! | [`shaders::MARKOV_GUIDE`] | the MCPG `GridState` (32 B): f16 velocity, count, sufficient statistics; the MCMM `PixelState` (28 B): validity, resampling score, lobe | MCPG Table 1; MCMM Table 1, Alg. 1-2 |
 //! | [`GpuContext`] | headless instance, adapter, device; pipelines, buffers, dispatch, read-back | — |
 //! | [`kernels`] | typed pipelines: [`VmfKernels`](kernels::VmfKernels), [`GpuHashTable`](kernels::GpuHashTable) | — |
 //! | [`types`] | `Pod` twins of the kernels' WGSL structs | — |
@@ -21,8 +21,8 @@
 //! # Conventions
 //! - Every WGSL struct that crosses the bus has the byte layout of its Rust twin
 //!   (`mcg_vmf::Vmf` 16 B, `mcg_vmf::SufficientStats` 24 B, `mcg_hashgrid::CellKey` 16 B,
-//!   `mcg_markov_guide::mcpg::GridState` 32 B and the types in [`types`]); a naga test checks
-//!   sizes and offsets.
+//!   `mcg_markov_guide::mcpg::GridState` 32 B, `mcg_markov_guide::mcmm::PixelState` 28 B and
+//!   the types in [`types`]); a naga test checks sizes and offsets.
 //! - No hidden randomness: samplers take uniforms in [0, 1) from the caller, like the CPU.
 //! - Kernels use workgroups of [`WORKGROUP_SIZE`] = 64 invocations and need no feature and
 //!   no limit beyond WebGPU's defaults.
