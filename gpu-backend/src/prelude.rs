@@ -32,7 +32,7 @@ fn logluv_le(y: f32) -> u32 {
     LogLuv32::pack_xyz(Vec3::new(0.0, y, 0.0)) >> 16
 }
 
-/// T[k] (see [`logluv_tables`]): Le = 256 (e + 64) + #{k ≥ 1 : m ≥ T[k]} for Y = 2ᵉ m.
+/// `T[k]` (see [`logluv_tables`]): Le = 256 (e + 64) + #{k ≥ 1 : m ≥ T[k]} for Y = 2ᵉ m.
 fn logluv_log2_steps() -> [f32; 256] {
     let base = logluv_le(1.0);
     let mut steps = [1.0_f32; 256];
@@ -52,16 +52,16 @@ fn logluv_log2_steps() -> [f32; 256] {
     steps
 }
 
-/// E[f] (see [`logluv_tables`]): the decoder's Y for any Le is E[Le mod 256] · 2^{⌊Le/256⌋ − 64}.
+/// `E[f]` (see [`logluv_tables`]): the decoder's Y for any Le is E[Le mod 256] · 2^{⌊Le/256⌋ − 64}.
 fn logluv_exp2_steps() -> [f32; 256] {
     let base = logluv_le(1.0);
     core::array::from_fn(|f| LogLuv32::unpack_xyz((base + f as u32) << 16).y)
 }
 
 /// LogLuv32's step tables for `shaders::COLOR_CODEC_LOGLUV` (upload them as the storage array
-/// `codec_logluv_tables`): entries 0..256 are the log₂ steps T[k], the smallest f32 m ∈ [1, 2)
+/// `codec_logluv_tables`): entries 0..256 are the log₂ steps `T[k]`, the smallest f32 m ∈ [1, 2)
 /// that the CPU encoder gives the log₂ fraction ⌊256 log₂ m⌋ ≥ k; entries 256..512 the exp₂
-/// steps E[f], the CPU decoder's Y for Le = 256·64 + f, i.e. 2^{(f + ½)/256}. Both are read
+/// steps `E[f]`, the CPU decoder's Y for Le = 256·64 + f, i.e. 2^{(f + ½)/256}. Both are read
 /// off `LogLuv32::pack_xyz` / `unpack_xyz` themselves (bisection at exponent 0), so they
 /// cannot drift; the parity test checks every exponent and every code.
 #[must_use]

@@ -164,8 +164,8 @@ pub mod kernels {
         include_str!("wgsl/kernels/markov_guide.wgsl"),
     );
 
-    /// Entry point `vmf_mixture_eval` (K = 4): bindings `mixtures`, `queries`, `pdfs`,
-    /// `samples`, `choices`.
+    /// Entry point `vmf_mixture_eval` (K = 4): bindings `mixtures`, `queries`, `samples`,
+    /// `choices`.
     pub const VMF_MIXTURE: &str = concat!(
         include_str!("wgsl/generated/prelude.wgsl"),
         include_str!("wgsl/common.wgsl"),

@@ -120,12 +120,38 @@ fn library_modules_validate_alone_and_together() {
 fn kernel_modules_validate_with_their_entry_points() {
     for (name, source, entry_points) in shaders::kernels::ALL {
         let module = parse_and_validate(name, source);
+        let info = Validator::new(ValidationFlags::all(), Capabilities::empty())
+            .validate(&module)
+            .unwrap();
         for e in *entry_points {
-            let ep = module
+            let (index, ep) = module
                 .entry_points
                 .iter()
-                .find(|ep| ep.name == *e)
+                .enumerate()
+                .find(|(_, ep)| ep.name == *e)
                 .unwrap_or_else(|| panic!("{name}: no entry point {e}"));
+            // Storage buffers it uses: at most the 4 `GpuContext` asks of the adapter (WebGPU
+            // guarantees 8), bound at 0, 1, … (what `GpuContext::dispatch` binds).
+            let uses = info.get_entry_point(index);
+            let mut bindings = Vec::new();
+            let mut storage = 0;
+            for (handle, var) in module.global_variables.iter() {
+                if uses[handle].is_empty() {
+                    continue;
+                }
+                if let Some(b) = &var.binding {
+                    assert_eq!(b.group, 0, "{name}::{e}");
+                    bindings.push(b.binding);
+                }
+                storage += usize::from(matches!(var.space, naga::AddressSpace::Storage { .. }));
+            }
+            bindings.sort_unstable();
+            assert!(storage <= 4, "{name}::{e} uses {storage} storage buffers");
+            assert_eq!(
+                bindings,
+                (0..bindings.len() as u32).collect::<Vec<_>>(),
+                "{name}::{e}: bindings not contiguous from 0"
+            );
             assert_eq!(ep.stage, naga::ShaderStage::Compute);
             let size = ep.workgroup_size;
             assert_eq!(size, [mcg_gpu_backend::WORKGROUP_SIZE, 1, 1], "{name}::{e}");
