@@ -8,7 +8,10 @@ use mcg_hashgrid::{CellKey, HashTable, Insert};
 use mcg_vmf::{SufficientStats, Vmf};
 
 use crate::shaders::kernels as src;
-use crate::types::{HashgridTableParams, VmfQuery, VmfSample, VmfStatsQuery, VmfStatsResult};
+use crate::types::{
+    HashgridAgeParams, HashgridTableParams, TexelParams, TexelUpdate, VmfQuery, VmfSample,
+    VmfStatsQuery, VmfStatsResult,
+};
 use crate::{ComputeKernel, GpuBuffer, GpuContext, GpuError};
 
 /// The vMF kernels: pdf, sampling, reconstruction and products on arrays of lobes.
@@ -88,6 +91,8 @@ pub struct GpuHashTable<T: Pod> {
     insert: ComputeKernel,
     insert_serial: ComputeKernel,
     lookup: ComputeKernel,
+    evict: ComputeKernel,
+    trim: ComputeKernel,
 }
 
 impl<T: Pod> GpuHashTable<T> {
@@ -104,6 +109,8 @@ impl<T: Pod> GpuHashTable<T> {
             insert: ctx.compute_kernel(src::HASHGRID_TABLE, "hashgrid_insert")?,
             insert_serial: ctx.compute_kernel(src::HASHGRID_TABLE, "hashgrid_insert_serial")?,
             lookup: ctx.compute_kernel(src::HASHGRID_TABLE, "hashgrid_lookup")?,
+            evict: ctx.compute_kernel(src::HASHGRID_AGES, "hashgrid_evict")?,
+            trim: ctx.compute_kernel(src::HASHGRID_AGES, "hashgrid_trim")?,
         })
     }
 
@@ -197,8 +204,103 @@ impl<T: Pod> GpuHashTable<T> {
             .collect())
     }
 
+    /// Evicts every key whose age in `ages` (an upload of `HashTable::ages()`, one word per
+    /// slot, kept up to date by your kernels with `hashgrid_touch`) is stale at `frame`
+    /// (frame − age > `max_age`, wrapping), in two passes like `HashTable::evict_older_than`:
+    /// stale slots become tombstones, then tombstones that end a probe run become empty.
+    /// Returns how many keys were evicted. No inserts may run meanwhile.
+    ///
+    /// # Panics
+    /// If `ages` does not have one word per slot.
+    pub fn evict_older_than(
+        &self,
+        ctx: &GpuContext,
+        ages: &GpuBuffer<u32>,
+        frame: u32,
+        max_age: u32,
+    ) -> Result<u32, GpuError> {
+        assert_eq!(ages.len(), self.checksums.len(), "one age per slot");
+        let params = ctx.uniform_buffer("age params", &HashgridAgeParams::new(frame, max_age));
+        let evicted: GpuBuffer<u32> = ctx.zeroed_buffer("evicted", 1);
+        let capacity = self.params.capacity;
+        ctx.dispatch(
+            &self.evict,
+            &[
+                self.params_buffer.raw(),
+                self.checksums.raw(),
+                ages.raw(),
+                params.raw(),
+                evicted.raw(),
+            ],
+            capacity,
+        )?;
+        ctx.dispatch(
+            &self.trim,
+            &[self.params_buffer.raw(), self.checksums.raw()],
+            capacity,
+        )?;
+        Ok(ctx.read_back(&evicted)?[0])
+    }
+
     /// Reads the checksum array back (compare with `HashTable::checksums`).
     pub fn read_checksums(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
         ctx.read_back(&self.checksums)
+    }
+}
+
+/// Packed texel words on the GPU (ADGI irradiance or visibility words, `mcg_color_codec`'s
+/// `IrradianceWord` / `VisibilityWord` arrays uploaded as they are), folded into by the
+/// moving average's compare-and-swap loop (`codec_irradiance_update_atomic`,
+/// `codec_visibility_update_atomic`; ADGI sec. 4.7).
+#[derive(Debug)]
+pub struct GpuTexels {
+    words: GpuBuffer<u32>,
+    update: ComputeKernel,
+}
+
+impl GpuTexels {
+    /// Uploads `words` as they are.
+    pub fn upload(ctx: &GpuContext, words: &[u32]) -> Result<Self, GpuError> {
+        Ok(Self {
+            words: ctx.storage_buffer("texels", words),
+            update: ctx.compute_kernel(src::COLOR_CODEC_TEXELS, "codec_texel_updates")?,
+        })
+    }
+
+    /// The word buffer (`array<atomic<u32>>` in WGSL), to bind in your own pipelines.
+    #[must_use]
+    pub fn words(&self) -> &GpuBuffer<u32> {
+        &self.words
+    }
+
+    /// Folds every update into its texel, one invocation per update, racing on shared texels:
+    /// the result is one that some serial order of `MovingAverage::update` calls gives.
+    ///
+    /// # Panics
+    /// If an update's texel index is out of range.
+    pub fn update(
+        &self,
+        ctx: &GpuContext,
+        updates: &[TexelUpdate],
+        params: &TexelParams,
+    ) -> Result<(), GpuError> {
+        assert!(
+            updates
+                .iter()
+                .all(|u| (u.texel as usize) < self.words.len()),
+            "texel index out of range"
+        );
+        let updates_buffer = ctx.storage_buffer("updates", updates);
+        let params = ctx.uniform_buffer("params", params);
+        ctx.dispatch(
+            &self.update,
+            &[self.words.raw(), updates_buffer.raw(), params.raw()],
+            updates.len() as u32,
+        )
+    }
+
+    /// Reads the words back.
+    pub fn read(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
+        ctx.read_back(&self.words)
     }
 }

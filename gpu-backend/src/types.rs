@@ -302,3 +302,29 @@ pub struct TexelParams {
     pub word_layout: u32,
 }
 const _: () = assert!(size_of::<TexelParams>() == 16);
+
+/// The frame and the eviction age of the age-counter kernels: WGSL `HashgridAgeParams`
+/// (uniform, 16 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct HashgridAgeParams {
+    /// The current frame (`HashTable::frame`).
+    pub frame: u32,
+    /// Slots with frame − age > `max_age` (wrapping) are evicted.
+    pub max_age: u32,
+    /// Padding to the uniform address space's 16-byte alignment.
+    pub _pad: [u32; 2],
+}
+const _: () = assert!(size_of::<HashgridAgeParams>() == 16);
+
+impl HashgridAgeParams {
+    /// The parameters for `frame` and `max_age`.
+    #[must_use]
+    pub fn new(frame: u32, max_age: u32) -> Self {
+        Self {
+            frame,
+            max_age,
+            _pad: [0; 2],
+        }
+    }
+}

@@ -7,7 +7,7 @@
 //! tolerances derived from WGSL's precision rules (see `common::tolerance`).
 
 use glam::{IVec3, Vec2, Vec3};
-use mcg_gpu_backend::kernels::{GpuHashTable, VmfKernels};
+use mcg_gpu_backend::kernels::{GpuHashTable, GpuTexels, VmfKernels};
 use mcg_gpu_backend::testing::gpu_or_skip;
 use mcg_gpu_backend::types::{
     HashgridLevelParams, HashgridTableParams, HashgridVertexQuery, TexelParams, TexelUpdate,
@@ -680,18 +680,6 @@ fn concurrent_texel_updates_match_a_serial_order() {
     use mcg_color_codec::{IrradianceLayout, IrradianceWord, MovingAverage, Rounding};
     let layout = IrradianceLayout::ADGI;
     let average = MovingAverage::STATIC;
-    let kernel = ctx
-        .compute_kernel(shaders::kernels::COLOR_CODEC_TEXELS, "codec_texel_updates")
-        .unwrap();
-    let params = ctx.uniform_buffer(
-        "params",
-        &TexelParams {
-            max_count: average.max_count(),
-            rounding_mode: 1,
-            rounding_u: 0.0,
-            word_layout: 0,
-        },
-    );
     let mut rng = Pcg64::seed_from_u64(17);
     // 1 024 texels with 1..=62 updates each (below N_max = 63, so every lost update shows in
     // the count) and 32 texels with 1 024 updates each; a texel's updates are consecutive
@@ -718,7 +706,6 @@ fn concurrent_texel_updates_match_a_serial_order() {
             });
         }
     }
-    let updates_buffer = ctx.storage_buffer("updates", &updates);
     // Irradiance words (N_max = 63, static) and visibility words (moments = the sample's xy,
     // N_max = 10, dynamic): the GPU's texels after the racing updates, and the CPU's word and
     // count after n serial updates.
@@ -739,23 +726,15 @@ fn concurrent_texel_updates_match_a_serial_order() {
         (0, average.max_count(), serial_irradiance),
         (1, dynamic.max_count(), serial_visibility),
     ] {
-        let params = ctx.uniform_buffer(
-            "params",
-            &TexelParams {
-                max_count,
-                rounding_mode: 1,
-                rounding_u: 0.0,
-                word_layout,
-            },
-        );
-        let words = ctx.zeroed_buffer::<u32>("texels", texels as usize);
-        ctx.dispatch(
-            &kernel,
-            &[words.raw(), updates_buffer.raw(), params.raw()],
-            updates.len() as u32,
-        )
-        .unwrap();
-        let gpu = ctx.read_back(&words).unwrap();
+        let params = TexelParams {
+            max_count,
+            rounding_mode: 1,
+            rounding_u: 0.0,
+            word_layout,
+        };
+        let words = GpuTexels::upload(ctx, &vec![0; texels as usize]).unwrap();
+        words.update(ctx, &updates, &params).unwrap();
+        let gpu = words.read(ctx).unwrap();
         for t in 0..texels as usize {
             let n = counts[t];
             let (cpu, count) = serial(n, per_texel[t]);
@@ -773,15 +752,15 @@ fn concurrent_texel_updates_match_a_serial_order() {
             texel: k % 64,
         })
         .collect();
-    let words = ctx.zeroed_buffer::<u32>("texels", 64);
-    let updates_buffer = ctx.storage_buffer("updates", &updates);
-    ctx.dispatch(
-        &kernel,
-        &[words.raw(), updates_buffer.raw(), params.raw()],
-        updates.len() as u32,
-    )
-    .unwrap();
-    for w in ctx.read_back(&words).unwrap() {
+    let words = GpuTexels::upload(ctx, &[0; 64]).unwrap();
+    let params = TexelParams {
+        max_count: average.max_count(),
+        rounding_mode: 1,
+        rounding_u: 0.0,
+        word_layout: 0,
+    };
+    words.update(ctx, &updates, &params).unwrap();
+    for w in words.read(ctx).unwrap() {
         let w = IrradianceWord(w);
         assert_eq!(layout.count(w), average.max_count());
         let v = layout.decode(w);

@@ -3,8 +3,10 @@
 //! Skips without an adapter (fails with `MCG_REQUIRE_GPU=1`), like `tests/gpu.rs`.
 
 use glam::{IVec3, Vec2, Vec3};
+use mcg_gpu_backend::kernels::GpuHashTable;
 use mcg_gpu_backend::types::{
-    HashgridTableParams, VmfQuery, VmfSample, mixture_stride_floats, pack_mixtures,
+    HashgridAgeParams, HashgridTableParams, VmfQuery, VmfSample, mixture_stride_floats,
+    pack_mixtures,
 };
 use mcg_gpu_backend::{GpuBuffer, prelude, shaders};
 use mcg_hashgrid::{BucketHash, CellKey, HashTable, StaticGrid, jittered_vertex};
@@ -14,8 +16,7 @@ use rand::RngExt;
 
 mod common;
 use common::{
-    AgeParams, EPS, JitterQuery, KAPPAS, PixelQuery, gpu_and_rng, random_key, random_unit, run,
-    tolerance,
+    EPS, JitterQuery, KAPPAS, PixelQuery, gpu_and_rng, random_key, random_unit, run, tolerance,
 };
 
 /// `VmfMixture<4>` pdf, component choice and `sample_with_pdf` on 8 192 mixtures (fixed seed;
@@ -316,21 +317,12 @@ fn age_counter_evicts_the_cpu_cells() {
         ctx.compute_kernel(shaders::kernels::HASHGRID_AGES, entry)
             .unwrap()
     };
-    let (insert_serial, insert, evict, trim) = (
+    let (insert_serial, insert) = (
         kernel("hashgrid_insert_touch_serial"),
         kernel("hashgrid_insert_touch"),
-        kernel("hashgrid_evict"),
-        kernel("hashgrid_trim"),
     );
     let params = |frame: u32, max_age: u32| {
-        ctx.uniform_buffer(
-            "age params",
-            &AgeParams {
-                frame,
-                max_age,
-                _pad: [0; 2],
-            },
-        )
+        ctx.uniform_buffer("age params", &HashgridAgeParams::new(frame, max_age))
     };
     for capacity in [2048_u32, 2039] {
         let hash = BucketHash::Mix;
@@ -387,35 +379,20 @@ fn age_counter_evicts_the_cpu_cells() {
             assert_eq!(ctx.read_back(&ages).unwrap(), after.ages());
             assert_eq!(ctx.read_back(&counter).unwrap()[0] as usize, inserted);
         }
-        // (2) eviction in two passes.
+        // (2) eviction in two passes (`GpuHashTable::evict_older_than`).
         for max_age in [0, 3, 7, 100] {
             let mut after = cpu.clone();
             let evicted = after.evict_older_than(max_age);
-            let checksums = ctx.storage_buffer("checksums", cpu.checksums());
+            let gpu = GpuHashTable::upload(ctx, &cpu).unwrap();
             let ages = ctx.storage_buffer("ages", cpu.ages());
-            let counter = ctx.zeroed_buffer::<u32>("counter", 1);
-            let p = params(cpu.frame(), max_age);
-            ctx.dispatch(
-                &evict,
-                &[
-                    table_buffer.raw(),
-                    checksums.raw(),
-                    ages.raw(),
-                    p.raw(),
-                    counter.raw(),
-                ],
-                capacity,
-            )
-            .unwrap();
-            ctx.dispatch(&trim, &[table_buffer.raw(), checksums.raw()], capacity)
-                .unwrap();
             assert_eq!(
-                ctx.read_back(&counter).unwrap()[0],
+                gpu.evict_older_than(ctx, &ages, cpu.frame(), max_age)
+                    .unwrap(),
                 evicted,
                 "evicted, max_age {max_age}"
             );
             assert_eq!(
-                ctx.read_back(&checksums).unwrap(),
+                gpu.read_checksums(ctx).unwrap(),
                 after.checksums(),
                 "checksums after eviction, capacity {capacity}, max_age {max_age}"
             );

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use mcg_gpu_backend::{prelude, shaders, types};
 
 mod common;
-use common::{AgeParams, JitterQuery, PixelQuery};
+use common::{JitterQuery, PixelQuery};
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 
 fn prelude_path() -> PathBuf {
@@ -440,8 +440,8 @@ fn wgsl_structs_match_the_rust_pod_types() {
     check(
         &kernel("hashgrid_ages"),
         "HashgridAgeParams",
-        size_of::<AgeParams>(),
-        fields!(AgeParams: frame, max_age),
+        size_of::<types::HashgridAgeParams>(),
+        fields!(types::HashgridAgeParams: frame, max_age),
     );
     check(
         &kernel("markov_pixel"),

@@ -154,15 +154,6 @@ pub struct JitterQuery {
     pub width: f32,
 }
 
-/// The frame and the eviction age (WGSL `HashgridAgeParams`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct AgeParams {
-    pub frame: u32,
-    pub max_age: u32,
-    pub _pad: [u32; 2],
-}
-
 /// The shading point and fixed prior of the `markov_pixel_states` kernel (WGSL `PixelQuery`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
