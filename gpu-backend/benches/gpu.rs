@@ -14,6 +14,11 @@
 //!   2²⁰-slot table, so after the first iteration every call finds its key: a renderer's
 //!   steady state) with the mixing and the xor-primes bucket hash, against a naive unhashed
 //!   store (key i writes slot i mod capacity: no hash, no checksum, no probe).
+//! - `hash_find`: 262 144 `hashgrid_find` in a 2²⁰-slot table holding 65 536 keys, against a
+//!   naive unhashed load (key i reads slot i mod capacity).
+//! - `vertex_key`: 262 144 adaptive-grid vertex keys (level from the camera distance with its
+//!   jitter, stochastic trilinear vertex, normal class; MCPG sec. 4) against the naive fixed
+//!   cell ⌊p/w⌋.
 //! - `codec_encode`: 262 144 colours to the ADGI log irradiance word (nearest), LogLuv32 and
 //!   R11G11B10, against storing the colour unencoded as `vec4<f32>`.
 //!
@@ -24,10 +29,10 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::IVec3;
 use glam::{Vec2, Vec3};
-use mcg_gpu_backend::types::HashgridTableParams;
+use mcg_gpu_backend::types::{HashgridLevelParams, HashgridTableParams};
 use mcg_gpu_backend::types::{TexelParams, TexelUpdate, VmfQuery, VmfSample};
 use mcg_gpu_backend::{GpuBuffer, GpuContext, prelude, shaders, wgpu};
-use mcg_hashgrid::{BucketHash, CellKey};
+use mcg_hashgrid::{BucketHash, CellKey, HashTable};
 use mcg_vmf::Vmf;
 
 const NAIVE_STORE: &str = r#"
@@ -325,6 +330,126 @@ fn hash_insert(c: &mut Criterion, ctx: &GpuContext) {
     g.finish();
 }
 
+const HASH_FIND: &str = r#"
+@group(0) @binding(0) var<uniform> table: HashgridTable;
+@group(0) @binding(1) var<storage, read_write> hashgrid_checksums: array<atomic<u32>>;
+@group(0) @binding(2) var<storage, read> keys: array<CellKey>;
+@group(0) @binding(3) var<storage, read_write> slots: array<u32>;
+
+@compute @workgroup_size(64)
+fn find(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&slots) {
+        return;
+    }
+    let key = keys[i];
+    slots[i] = hashgrid_find(table, hashgrid_home_slot(table, key), hashgrid_checksum(key));
+}
+
+// Naive: key i reads slot i mod capacity (no hash, no checksum, no probe).
+@compute @workgroup_size(64)
+fn unhashed_load(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&slots) {
+        return;
+    }
+    slots[i] = atomicLoad(&hashgrid_checksums[i % table.capacity]) ^ bitcast<u32>(keys[i].cell.x);
+}
+"#;
+
+fn hash_find(c: &mut Criterion, ctx: &GpuContext) {
+    let n = 262_144_u32;
+    let capacity = 1 << 20;
+    // A table holding 65 536 keys (load 1/16), looked up 4 times each.
+    let distinct: Vec<CellKey> = (0..65_536)
+        .map(|k: i32| CellKey::new(IVec3::new(k % 64, (k / 64) % 32, k / 2048), 3, 1))
+        .collect();
+    let mut cpu = HashTable::<u32>::new(capacity, 8, BucketHash::Mix).unwrap();
+    for k in &distinct {
+        let _ = cpu.insert_or_get(k);
+    }
+    let keys: Vec<CellKey> = (0..n as usize).map(|i| distinct[i % 65_536]).collect();
+    let keys = ctx.storage_buffer("keys", &keys);
+    let slots: GpuBuffer<u32> = ctx.zeroed_buffer("slots", n as usize);
+    let table = ctx.uniform_buffer(
+        "table",
+        &HashgridTableParams::new(capacity, 8, BucketHash::Mix).unwrap(),
+    );
+    let checksums = ctx.storage_buffer("checksums", cpu.checksums());
+    bench_entries(
+        c,
+        ctx,
+        "hash_find",
+        &[shaders::HASHGRID_MODULE, shaders::HASHGRID_TABLE, HASH_FIND].concat(),
+        &[
+            ("find_mix", "find"),
+            ("baseline_unhashed_load", "unhashed_load"),
+        ],
+        &[table.raw(), checksums.raw(), keys.raw(), slots.raw()],
+        n,
+    );
+}
+
+const VERTEX_KEY: &str = r#"
+@group(0) @binding(0) var<uniform> levels: HashgridLevels;
+@group(0) @binding(1) var<storage, read> positions: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read_write> keys: array<CellKey>;
+
+// Level from the camera distance with its jitter, stochastic trilinear vertex, normal class.
+@compute @workgroup_size(64)
+fn adaptive(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&keys) {
+        return;
+    }
+    let p = positions[i];
+    keys[i] = hashgrid_vertex_key(levels, p.xyz, vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0), fract(p.w * 7.0), p.w);
+}
+
+// Naive: one fixed width, the cell ⌊p/w⌋, no level, no jitter, no class.
+@compute @workgroup_size(64)
+fn fixed_floor(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&keys) {
+        return;
+    }
+    keys[i] = CellKey(vec3<i32>(floor(positions[i].xyz / levels.min_width)), 0u);
+}
+"#;
+
+fn vertex_key(c: &mut Criterion, ctx: &GpuContext) {
+    let n = 262_144_usize;
+    let positions: Vec<[f32; 4]> = (0..n)
+        .map(|i| {
+            let t = i as f32 / n as f32;
+            [
+                t * 50.0 - 25.0,
+                (i % 97) as f32 * 0.3,
+                (i % 13) as f32 + 1.0,
+                (i % 1009) as f32 / 1009.0,
+            ]
+        })
+        .collect();
+    let positions = ctx.storage_buffer("positions", &positions);
+    let keys: GpuBuffer<CellKey> = ctx.zeroed_buffer("keys", n);
+    let levels = ctx.uniform_buffer(
+        "levels",
+        &HashgridLevelParams::from(&mcg_hashgrid::AdaptiveGrid::mcpg()),
+    );
+    bench_entries(
+        c,
+        ctx,
+        "vertex_key",
+        &[shaders::HASHGRID_MODULE, VERTEX_KEY].concat(),
+        &[
+            ("adaptive_vertex_key", "adaptive"),
+            ("baseline_fixed_floor", "fixed_floor"),
+        ],
+        &[levels.raw(), positions.raw(), keys.raw()],
+        n as u32,
+    );
+}
+
 const CODEC_ENCODE: &str = r#"
 @group(0) @binding(0) var<storage, read> values: array<vec4<f32>>;
 @group(0) @binding(1) var<storage, read_write> words: array<u32>;
@@ -425,6 +550,8 @@ fn benches(c: &mut Criterion) {
     vmf_sample(c, &ctx);
     vmf_pdf(c, &ctx);
     hash_insert(c, &ctx);
+    hash_find(c, &ctx);
+    vertex_key(c, &ctx);
     codec_encode(c, &ctx);
 }
 
