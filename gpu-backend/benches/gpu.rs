@@ -253,11 +253,15 @@ fn vmf_pdf(c: &mut Criterion, ctx: &GpuContext) {
     );
 }
 
-const HASH_TABLE: &str = r#"
+/// The bindings of `HASH_TABLE` and `HASH_FIND`.
+const TABLE_BINDINGS: &str = r#"
 @group(0) @binding(0) var<uniform> table: HashgridTable;
 @group(0) @binding(1) var<storage, read_write> hashgrid_checksums: array<atomic<u32>>;
 @group(0) @binding(2) var<storage, read> keys: array<CellKey>;
 @group(0) @binding(3) var<storage, read_write> slots: array<u32>;
+"#;
+
+const HASH_TABLE: &str = r#"
 
 // insert-or-get with the table's bucket hash, the checksum and bounded linear probing.
 @compute @workgroup_size(64)
@@ -301,6 +305,7 @@ fn hash_insert(c: &mut Criterion, ctx: &GpuContext) {
     let source = [
         shaders::HASHGRID_MODULE,
         shaders::HASHGRID_TABLE,
+        TABLE_BINDINGS,
         HASH_TABLE,
     ]
     .concat();
@@ -331,10 +336,6 @@ fn hash_insert(c: &mut Criterion, ctx: &GpuContext) {
 }
 
 const HASH_FIND: &str = r#"
-@group(0) @binding(0) var<uniform> table: HashgridTable;
-@group(0) @binding(1) var<storage, read_write> hashgrid_checksums: array<atomic<u32>>;
-@group(0) @binding(2) var<storage, read> keys: array<CellKey>;
-@group(0) @binding(3) var<storage, read_write> slots: array<u32>;
 
 @compute @workgroup_size(64)
 fn find(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
@@ -380,7 +381,13 @@ fn hash_find(c: &mut Criterion, ctx: &GpuContext) {
         c,
         ctx,
         "hash_find",
-        &[shaders::HASHGRID_MODULE, shaders::HASHGRID_TABLE, HASH_FIND].concat(),
+        &[
+            shaders::HASHGRID_MODULE,
+            shaders::HASHGRID_TABLE,
+            TABLE_BINDINGS,
+            HASH_FIND,
+        ]
+        .concat(),
         &[
             ("find_mix", "find"),
             ("baseline_unhashed_load", "unhashed_load"),
