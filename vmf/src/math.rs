@@ -72,10 +72,9 @@ pub(crate) fn sin_cos_turns(t: f32) -> (f32, f32) {
     // Adding 1.5·2²³ rounds to the nearest integer in the low mantissa bits (valid for
     // |4t| < 2²²); subtracting it again gives that integer as a float, without a float → int
     // conversion (which Rust saturates, at a cost).
-    const ROUNDING_SHIFT: f32 = 12_582_912.0;
     let quarter_turns = 4.0 * t;
-    let shifted = quarter_turns + ROUNDING_SHIFT;
-    let quadrant = shifted - ROUNDING_SHIFT;
+    let shifted = quarter_turns + ROUND_SHIFT;
+    let quadrant = shifted - ROUND_SHIFT;
     let x = (quarter_turns - quadrant) * core::f32::consts::FRAC_PI_2;
     let x2 = x * x;
     // Minimax polynomials on [−π/4, π/4] (coefficients of Cephes' sinf/cosf, S. Moshier):
@@ -95,6 +94,71 @@ pub(crate) fn sin_cos_turns(t: f32) -> (f32, f32) {
         f32::from_bits(first ^ ((q & 2) << 30)),
         f32::from_bits(second ^ ((q.wrapping_add(1) & 2) << 30)),
     )
+}
+
+/// Adding then subtracting 1.5·2²³ rounds an f32 in (−2²², 2²²) to the nearest integer in the
+/// default rounding mode, without a float → int conversion.
+const ROUND_SHIFT: f32 = 12_582_912.0;
+
+/// ln 2 split into a part exact in f32 for small integer multiples and a remainder
+/// (Cody and Waite's range reduction).
+const LN2_HI: f32 = 0.693_359_4;
+const LN2_LO: f32 = -2.121_944_4e-4;
+
+/// Natural logarithm of a positive, normal `x`, branch-free and inlinable (so that loops over
+/// it vectorise), with the polynomial of Cephes' `logf` (S. L. Moshier): x = 2ᵏ m with
+/// m ∈ [√½, √2), t = m − 1, ln x = t − t²/2 + t³ P(t) + k ln 2. Relative error below 2⁻²²
+/// over the normal range; exactly 0 at x = 1. Zero, subnormal, infinite and NaN inputs give
+/// finite garbage or NaN: callers keep x in the normal range.
+#[inline(always)]
+pub(crate) fn ln_fast(x: f32) -> f32 {
+    const SQRT_HALF_BITS: u32 = 0x3f35_04f3;
+    // Shift the exponent so that mantissas in [√½, 1) land in the next binade down.
+    let bits = x.to_bits().wrapping_add(0x3f80_0000 - SQRT_HALF_BITS);
+    let k = ((bits >> 23) as i32 - 127) as f32;
+    let t = f32::from_bits((bits & 0x007f_ffff) + SQRT_HALF_BITS) - 1.0;
+    let z = t * t;
+    let p = 7.037_683_6e-2_f32;
+    let p = p * t - 1.151_461e-1;
+    let p = p * t + 1.167_699_9e-1;
+    let p = p * t - 1.242_014_1e-1;
+    let p = p * t + 1.424_932_3e-1;
+    let p = p * t - 1.666_805_8e-1;
+    let p = p * t + 2.000_071_5e-1;
+    let p = p * t - 2.499_999_4e-1;
+    let p = p * t + 3.333_333e-1;
+    let y = t * z * p + k * LN2_LO - 0.5 * z;
+    t + y + k * LN2_HI
+}
+
+/// `(eˣ, eˣ − 1)` for x in [−87, 0], branch-free and inlinable, with the polynomial of
+/// Cephes' `expf` (S. L. Moshier): x = n ln 2 + r, |r| ≤ ½ ln 2, eʳ = 1 + r + r² P(r),
+/// eˣ = 2ⁿ eʳ. For n = 0 (|x| < ½ ln 2) eˣ − 1 is taken as r + r² P(r) before the 1 is added,
+/// so it keeps full relative precision as x → 0; otherwise |eˣ − 1| ≥ 0.29 and the subtraction
+/// is exact to an ulp. Relative error of both below 2⁻²². Inputs below −87 are clamped.
+#[inline(always)]
+pub(crate) fn exp_expm1_fast(x: f32) -> (f32, f32) {
+    let x = x.max(-87.0);
+    let shifted = x * core::f32::consts::LOG2_E + ROUND_SHIFT;
+    let n = shifted - ROUND_SHIFT;
+    let r = x - n * LN2_HI - n * LN2_LO;
+    let p = 1.987_569_1e-4_f32;
+    let p = p * r + 1.398_2e-3;
+    let p = p * r + 8.333_452e-3;
+    let p = p * r + 4.166_579_6e-2;
+    let p = p * r + 1.666_666_5e-1;
+    let p = p * r + 0.5;
+    let expm1_r = p * (r * r) + r;
+    // n sits in the low mantissa bits of `shifted`; (n + 127) << 23 are the bits of 2ⁿ.
+    let two_n = f32::from_bits(
+        shifted
+            .to_bits()
+            .wrapping_sub(ROUND_SHIFT.to_bits())
+            .wrapping_add(127)
+            << 23,
+    );
+    let e = (expm1_r + 1.0) * two_n;
+    (e, if n == 0.0 { expm1_r } else { e - 1.0 })
 }
 
 #[cfg(test)]

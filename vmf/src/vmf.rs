@@ -12,7 +12,7 @@ pub const UNIFORM_SPHERE_PDF: f32 = 0.25 * FRAC_1_PI;
 
 /// Below this κ, sampling uses the κ → 0 limit `cos θ − 1 = −2ξ` (its error is O(κ) relative,
 /// under f32 resolution here).
-const KAPPA_TINY: f32 = 1.0e-7;
+pub(crate) const KAPPA_TINY: f32 = 1.0e-7;
 
 /// A von Mises-Fisher lobe on S²: mean direction μ (unit length) and concentration κ ≥ 0.
 ///
@@ -169,7 +169,7 @@ impl Vmf {
 
     /// Direction at `cos θ = 1 + r` and azimuth `2π u_phi` around μ.
     #[inline(always)]
-    fn direction_from(&self, r: f32, u_phi: f32) -> Vec3 {
+    pub(crate) fn direction_from(&self, r: f32, u_phi: f32) -> Vec3 {
         let cos_theta = 1.0 + r;
         let sin_theta = math::sqrt((-r * (2.0 + r)).max(0.0));
         let (sin_phi, cos_phi) = math::sin_cos_turns(u_phi);
@@ -206,7 +206,7 @@ pub(crate) fn normalization(kappa: f32) -> f32 {
 
 /// Above this κ, e^{−2κ} < 2⁻⁴⁹: next to 1 − ξ ≥ 2⁻²⁴ it is below half an ulp, so the
 /// inverse CDF drops it even in the far tail ξ → 1.
-const KAPPA_SAMPLE_SATURATED: f32 = 17.0;
+pub(crate) const KAPPA_SAMPLE_SATURATED: f32 = 17.0;
 
 /// Inverse CDF of `cos θ − 1` for concentration κ, in [−2, 0]:
 ///
