@@ -1,4 +1,4 @@
-//! Statistical suite of `Vmf::sample`: the marginals of the polar angle (KS against the closed
+//! Statistical suite of `Vmf::sample` (and of `sample_batch`, whose marginals are tested too): the marginals of the polar angle (KS against the closed
 //! form CDF), the azimuth (KS against the uniform CDF) and the mean cosine (z-test against
 //! A₃(κ)), for κ from 0 to 10⁶; and the joint distribution on the sphere (chi-square against
 //! the f32 pdf integrated over equal-area bins).
@@ -8,12 +8,12 @@
 
 use std::f64::consts::TAU;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use mcg_tests::{
     RunningStats, SphereBins, assert_ks, assert_sphere_chi_square, assert_z_test, one_minus_cos,
     seeded_rng, uniform_vec2, vmf_one_minus_cos_cdf, vmf_one_minus_mean_cosine,
 };
-use mcg_vmf::{Frame, Vmf};
+use mcg_vmf::{Frame, Vmf, sample_batch};
 
 /// Significance level of the KS and chi-square tests.
 const ALPHA: f64 = 0.001;
@@ -25,11 +25,30 @@ fn lobe(kappa: f32) -> Vmf {
     Vmf::new(Vec3::new(0.3, -0.5, 0.8), kappa).unwrap()
 }
 
-fn draw(lobe: &Vmf, seed: u64, n: usize) -> Vec<Vec3> {
+/// Which sampling entry point a test draws through.
+#[derive(Clone, Copy, Debug)]
+enum Sampler {
+    /// `Vmf::sample`, one call per direction.
+    PerCall,
+    /// `sample_batch` over a slice of copies of the lobe.
+    Batch,
+}
+
+fn draw_with(sampler: Sampler, lobe: &Vmf, seed: u64, n: usize) -> Vec<Vec3> {
     let mut rng = seeded_rng(seed);
-    (0..n)
-        .map(|_| lobe.sample(uniform_vec2(&mut rng)))
-        .collect()
+    let uniforms: Vec<Vec2> = (0..n).map(|_| uniform_vec2(&mut rng)).collect();
+    match sampler {
+        Sampler::PerCall => uniforms.iter().map(|&u| lobe.sample(u)).collect(),
+        Sampler::Batch => {
+            let mut out = vec![Vec3::ZERO; n];
+            sample_batch(&vec![*lobe; n], &uniforms, &mut out);
+            out
+        }
+    }
+}
+
+fn draw(lobe: &Vmf, seed: u64, n: usize) -> Vec<Vec3> {
+    draw_with(Sampler::PerCall, lobe, seed, n)
 }
 
 /// KS test of t = 1 − μ·ω against P(T ≤ t) = expm1(−κt)/expm1(−2κ) (the cos θ marginal
@@ -38,16 +57,16 @@ fn draw(lobe: &Vmf, seed: u64, n: usize) -> Vec<Vec3> {
 /// by [`one_minus_cos`], i.e. from the angle between them. The plain `1 − μ·ω` cancels: with
 /// the same samples its KS p-value drops to 0.004 at κ = 10⁴ and to 10⁻²⁶⁰ at κ = 10⁵.
 /// `|ω − μ|²/2` passes as well as the angle does; the angle form also ignores |ω| − 1.
-fn check_cos_theta(kappa: f32, seed: u64) {
+fn check_cos_theta(sampler: Sampler, kappa: f32, seed: u64) {
     let lobe = lobe(kappa);
     let mu = lobe.mu().as_dvec3();
-    let mut t: Vec<f64> = draw(&lobe, seed, N)
+    let mut t: Vec<f64> = draw_with(sampler, &lobe, seed, N)
         .iter()
         .map(|w| one_minus_cos(mu, w.as_dvec3()))
         .collect();
     let k = f64::from(lobe.kappa());
     assert_ks(
-        &format!("1 - cos theta, kappa = {kappa}"),
+        &format!("1 - cos theta, {sampler:?}, kappa = {kappa}"),
         &mut t,
         |t| vmf_one_minus_cos_cdf(k, t),
         ALPHA,
@@ -56,11 +75,11 @@ fn check_cos_theta(kappa: f32, seed: u64) {
 
 /// KS test of the azimuth φ = atan2(ω·b, ω·t) ∈ [0, 2π) in `Frame::from_normal(μ)` (the frame
 /// the sampler uses) against the uniform CDF φ/2π; the projections are taken in f64.
-fn check_azimuth(kappa: f32, seed: u64) {
+fn check_azimuth(sampler: Sampler, kappa: f32, seed: u64) {
     let lobe = lobe(kappa);
     let frame = Frame::from_normal(lobe.mu());
     let (tangent, bitangent) = (frame.tangent.as_dvec3(), frame.bitangent.as_dvec3());
-    let mut phi: Vec<f64> = draw(&lobe, seed, N)
+    let mut phi: Vec<f64> = draw_with(sampler, &lobe, seed, N)
         .iter()
         .map(|w| {
             let w = w.as_dvec3();
@@ -69,7 +88,7 @@ fn check_azimuth(kappa: f32, seed: u64) {
         })
         .collect();
     assert_ks(
-        &format!("azimuth, kappa = {kappa}"),
+        &format!("azimuth, {sampler:?}, kappa = {kappa}"),
         &mut phi,
         |phi| (phi / TAU).clamp(0.0, 1.0),
         ALPHA,
@@ -103,7 +122,16 @@ macro_rules! marginal_suite {
             )]
             #[test]
             fn cos_theta_ks() {
-                super::check_cos_theta($kappa, $seed);
+                super::check_cos_theta(super::Sampler::PerCall, $kappa, $seed);
+            }
+
+            #[doc = concat!(
+                "H₀: 1 − μ·ω of `sample_batch` has CDF expm1(−κt)/expm1(−2κ), κ = ", stringify!($kappa),
+                ". KS, n = 10⁶, α = 0.001 (critical D = 1.95·10⁻³), seed ", stringify!($seed), " + 3."
+            )]
+            #[test]
+            fn batch_cos_theta_ks() {
+                super::check_cos_theta(super::Sampler::Batch, $kappa, $seed + 3);
             }
 
             #[doc = concat!(
@@ -112,7 +140,16 @@ macro_rules! marginal_suite {
             )]
             #[test]
             fn azimuth_ks() {
-                super::check_azimuth($kappa, $seed + 1);
+                super::check_azimuth(super::Sampler::PerCall, $kappa, $seed + 1);
+            }
+
+            #[doc = concat!(
+                "H₀: the azimuth of `sample_batch` around μ is uniform on [0, 2π), κ = ", stringify!($kappa),
+                ". KS, n = 10⁶, α = 0.001 (critical D = 1.95·10⁻³), seed ", stringify!($seed), " + 4."
+            )]
+            #[test]
+            fn batch_azimuth_ks() {
+                super::check_azimuth(super::Sampler::Batch, $kappa, $seed + 4);
             }
 
             #[doc = concat!(

@@ -4,6 +4,8 @@
 //! platform's libm); without it the `libm` crate provides the same functions, so the
 //! crate builds for `no_std` targets such as Rust-to-SPIR-V shader crates.
 
+use crate::constants::{EXP_POLY, LN_POLY, LN2_HI, LN2_LO};
+
 #[cfg(not(any(feature = "std", feature = "libm")))]
 compile_error!("mcg-vmf needs the `std` feature (default) or the `libm` feature");
 
@@ -72,10 +74,9 @@ pub(crate) fn sin_cos_turns(t: f32) -> (f32, f32) {
     // Adding 1.5·2²³ rounds to the nearest integer in the low mantissa bits (valid for
     // |4t| < 2²²); subtracting it again gives that integer as a float, without a float → int
     // conversion (which Rust saturates, at a cost).
-    const ROUNDING_SHIFT: f32 = 12_582_912.0;
     let quarter_turns = 4.0 * t;
-    let shifted = quarter_turns + ROUNDING_SHIFT;
-    let quadrant = shifted - ROUNDING_SHIFT;
+    let shifted = quarter_turns + ROUND_SHIFT;
+    let quadrant = shifted - ROUND_SHIFT;
     let x = (quarter_turns - quadrant) * core::f32::consts::FRAC_PI_2;
     let x2 = x * x;
     // Minimax polynomials on [−π/4, π/4] (coefficients of Cephes' sinf/cosf, S. Moshier):
@@ -96,6 +97,53 @@ pub(crate) fn sin_cos_turns(t: f32) -> (f32, f32) {
         f32::from_bits(first ^ ((q & 2) << 30)),
         f32::from_bits(second ^ ((q.wrapping_add(1) & 2) << 30)),
     )
+}
+
+/// Adding then subtracting 1.5·2²³ rounds an f32 in (−2²², 2²²) to the nearest integer in the
+/// default rounding mode, without a float → int conversion.
+const ROUND_SHIFT: f32 = 12_582_912.0;
+
+/// Natural logarithm of a positive, normal `x`, branch-free and inlinable (so that loops over
+/// it vectorise), with the polynomial of Cephes' `logf` (S. L. Moshier): x = 2ᵏ m with
+/// m ∈ [√½, √2), t = m − 1, ln x = t − t²/2 + t³ P(t) + k ln 2. Relative error below 2⁻²²
+/// over the normal range; exactly 0 at x = 1. Zero, subnormal, infinite and NaN inputs give
+/// finite garbage or NaN: callers keep x in the normal range.
+#[inline(always)]
+pub(crate) fn ln_fast(x: f32) -> f32 {
+    const SQRT_HALF_BITS: u32 = 0x3f35_04f3;
+    // Shift the exponent so that mantissas in [√½, 1) land in the next binade down.
+    let bits = x.to_bits().wrapping_add(0x3f80_0000 - SQRT_HALF_BITS);
+    let k = ((bits >> 23) as i32 - 127) as f32;
+    let t = f32::from_bits((bits & 0x007f_ffff) + SQRT_HALF_BITS) - 1.0;
+    let z = t * t;
+    let p = LN_POLY[1..].iter().fold(LN_POLY[0], |p, &c| p * t + c);
+    let y = t * z * p + k * LN2_LO - 0.5 * z;
+    t + y + k * LN2_HI
+}
+
+/// `(eˣ, eˣ − 1)` for x in [−87, 0], branch-free and inlinable, with the polynomial of
+/// Cephes' `expf` (S. L. Moshier): x = n ln 2 + r, |r| ≤ ½ ln 2, eʳ = 1 + r + r² P(r),
+/// eˣ = 2ⁿ eʳ. For n = 0 (|x| < ½ ln 2) eˣ − 1 is taken as r + r² P(r) before the 1 is added,
+/// so it keeps full relative precision as x → 0; otherwise |eˣ − 1| ≥ 0.29 and the subtraction
+/// is exact to an ulp. Relative error of both below 2⁻²². Inputs below −87 are clamped.
+#[inline(always)]
+pub(crate) fn exp_expm1_fast(x: f32) -> (f32, f32) {
+    let x = x.max(-87.0);
+    let shifted = x * core::f32::consts::LOG2_E + ROUND_SHIFT;
+    let n = shifted - ROUND_SHIFT;
+    let r = x - n * LN2_HI - n * LN2_LO;
+    let p = EXP_POLY[1..].iter().fold(EXP_POLY[0], |p, &c| p * r + c);
+    let expm1_r = p * (r * r) + r;
+    // n sits in the low mantissa bits of `shifted`; (n + 127) << 23 are the bits of 2ⁿ.
+    let two_n = f32::from_bits(
+        shifted
+            .to_bits()
+            .wrapping_sub(ROUND_SHIFT.to_bits())
+            .wrapping_add(127)
+            << 23,
+    );
+    let e = (expm1_r + 1.0) * two_n;
+    (e, if n == 0.0 { expm1_r } else { e - 1.0 })
 }
 
 #[cfg(test)]

@@ -166,7 +166,7 @@ impl Vmf {
 
     /// Direction at `cos θ = 1 + r` and azimuth `2π u_phi` around μ.
     #[inline(always)]
-    fn direction_from(&self, r: f32, u_phi: f32) -> Vec3 {
+    pub(crate) fn direction_from(&self, r: f32, u_phi: f32) -> Vec3 {
         let cos_theta = 1.0 + r;
         let sin_theta = math::sqrt((-r * (2.0 + r)).max(0.0));
         let (sin_phi, cos_phi) = math::sin_cos_turns(u_phi);
