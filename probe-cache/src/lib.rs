@@ -8,6 +8,12 @@
 //! | item | what it is | paper |
 //! |---|---|---|
 //! | [`ProbeGrid`], [`ProbeCell`] | probe lattice: origin, spacing, counts; trilinear cell lookup | DDGI; ADGI sec. 3.1 |
+//! | [`octahedral_encode`], [`octahedral_decode`], [`octahedral_solid_angle`] | RTXGI's octahedral sphere ↔ square map; exact texel solid angle | Cigolle et al. 2014; DDGI; RTXGI |
+//! | [`equal_area_encode`], [`equal_area_decode`], [`equal_area_solid_angle`] | Clarberg's equal-area map (4π/n² per texel) | Clarberg 2008 |
+//! | [`TexelMap`], [`MapKind`] | a probe's texel grid: direction ↔ texel, solid angle, RTXGI 1-texel border, bilinear taps | RTXGI; ADGI sec. 3.1, 4.5-4.6 |
+//! | [`ProbeTexels`], [`TexelConfig`], [`RoundingMode`] | a grid's irradiance and visibility words in `AtomicU32` (GPU layout), moving average N_max 63/10 | ADGI sec. 4.5-4.7, Alg. 3-4, Table 3, App. B |
+//! | [`RaySample`], [`BlendWeights`], [`ProbeTexels::update_sample`], [`ProbeTexels::blend_rays`] | ADGI's per-sample CAS update; DDGI's cosine-weighted blend | ADGI Alg. 2-4; DDGI sec. 4 |
+//! | [`QueryConfig`], [`TexelContent`], [`ProbeTexels::irradiance_at`] | irradiance from 8 probes: trilinear, wrap, Chebyshev, biases, bilinear | DDGI sec. 4-5; RTXGI |
 //!
 //! ## Conventions
 //! - Positions and directions are [`glam::Vec3`] (f32); colours are linear RGB.
@@ -34,11 +40,25 @@
 pub use glam;
 pub use mcg_color_codec;
 
+mod equal_area;
 mod error;
 mod grid;
+mod octahedral;
+mod probe_texels;
+mod query;
+mod texel_map;
+mod update;
 
+pub use equal_area::{equal_area_decode, equal_area_encode, equal_area_solid_angle};
 pub use error::ProbeError;
 pub use grid::{ProbeCell, ProbeGrid};
+pub use octahedral::{
+    octahedral_decode, octahedral_encode, octahedral_solid_angle, octahedron_point,
+};
+pub use probe_texels::{ProbeTexels, RoundingMode, TexelConfig};
+pub use query::{QueryConfig, TexelContent};
+pub use texel_map::{MAX_MAP_SIDE, MapKind, TexelMap};
+pub use update::{BlendWeights, RaySample};
 
 /// The README's example, compiled and run as a doctest.
 #[cfg(doctest)]
