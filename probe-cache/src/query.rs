@@ -7,7 +7,10 @@
 
 use core::f32::consts::PI;
 
+use core::sync::atomic::Ordering;
+
 use glam::{Vec2, Vec3};
+use mcg_color_codec::IrradianceWord;
 
 use crate::ProbeTexels;
 
@@ -97,31 +100,41 @@ impl ProbeTexels {
     /// [`TexelContent::Radiance`]. A zero or NaN `n` reads the +z pole.
     #[must_use]
     pub fn probe_irradiance(&self, probe: usize, n: Vec3, content: TexelContent) -> Vec3 {
+        let taps = self.config().irradiance_map.bilinear(n);
+        self.probe_irradiance_with(probe, n.try_normalize().unwrap_or(Vec3::Z), &taps, content)
+    }
+
+    /// [`Self::probe_irradiance`] with the bilinear taps of the unit normal `n` given (they are
+    /// the same for every probe of a query).
+    #[inline]
+    fn probe_irradiance_with(
+        &self,
+        probe: usize,
+        n: Vec3,
+        taps: &[(usize, f32); 4],
+        content: TexelContent,
+    ) -> Vec3 {
         let layout = &self.config().irradiance_layout;
         let base = self.irradiance_offset(probe, 0);
         let words =
             &self.irradiance_atomics()[base..base + self.config().irradiance_map.texel_count()];
-        let load =
-            |i: usize| layout.decode(words[i].load(core::sync::atomic::Ordering::Relaxed).into());
+        let load = |i: usize| IrradianceWord(words[i].load(Ordering::Relaxed));
         match content {
             TexelContent::Irradiance => {
                 let mut e = Vec3::ZERO;
-                for (i, w) in self.config().irradiance_map.bilinear(n) {
-                    if w > 0.0 {
-                        e += w * load(i);
-                    }
+                for &(i, w) in taps {
+                    e += w * layout.decode(load(i));
                 }
                 PI * e
             }
             TexelContent::Radiance => {
-                let n = n.try_normalize().unwrap_or(Vec3::Z);
                 let mut e = Vec3::ZERO;
                 let mut wsum = 0.0;
                 for &(i, d, omega) in &self.irradiance_tables.interior {
                     let c = n.dot(d);
                     if c > 0.0 {
                         let w = c * omega;
-                        e += w * load(i as usize);
+                        e += w * layout.decode(load(i as usize));
                         wsum += w;
                     }
                 }
@@ -144,7 +157,7 @@ impl ProbeTexels {
         let mut m = Vec2::ZERO;
         for (i, w) in self.config().visibility_map.bilinear(d) {
             if w > 0.0 {
-                let word = words[base + i].load(core::sync::atomic::Ordering::Relaxed);
+                let word = words[base + i].load(Ordering::Relaxed);
                 m += w * layout.decode(word.into());
             }
         }
@@ -185,6 +198,7 @@ impl ProbeTexels {
         let cell = grid.cell(biased);
         let inv_diag = 1.0 / grid.cell_diagonal();
         let lookup_n = n_unit.unwrap_or(Vec3::Z);
+        let taps = self.config().irradiance_map.bilinear(lookup_n);
         let mut sum = Vec3::ZERO;
         let mut wsum = 0.0f32;
         for corner in 0..8u32 {
@@ -224,7 +238,7 @@ impl ProbeTexels {
                 w *= w * w / (config.crush_threshold * config.crush_threshold);
             }
             w *= tri.x * tri.y * tri.z;
-            let e = self.probe_irradiance(probe, lookup_n, config.content);
+            let e = self.probe_irradiance_with(probe, lookup_n, &taps, config.content);
             sum += w * if config.sqrt_blend {
                 e.max(Vec3::ZERO).powf(0.5)
             } else {
