@@ -14,7 +14,9 @@
 //!
 //! Updates hit random texels of a 16 × 16 × 8 grid (2048 probes × 64 texels, like ADGI's
 //! Metropolis samples), [`UPDATES`] per iteration; queries use random points and normals in an
-//! 8 × 8 × 8 grid, [`QUERIES`] per iteration. `main` also prints bytes per probe.
+//! 8 × 8 × 8 grid (`irradiance_query`, texels in cache) and a 48 × 48 × 32 grid
+//! (`irradiance_query_large_grid`, memory-bound), [`QUERIES`] per iteration. `main` also
+//! prints bytes per probe.
 
 use std::hint::black_box;
 use std::sync::Mutex;
@@ -230,7 +232,15 @@ impl F32Probes {
 }
 
 fn bench_queries(c: &mut Criterion) {
-    let grid = ProbeGrid::new(Vec3::ZERO, Vec3::ONE, UVec3::splat(8)).unwrap();
+    query_group(c, "irradiance_query", UVec3::splat(8));
+    query_group(c, "irradiance_query_large_grid", UVec3::new(48, 48, 32));
+}
+
+/// Random queries over a grid of `counts` probes: 8³ (texels in cache: 0.66 MB of words,
+/// 1.6 MB of f32) or 48 × 48 × 32 (94 MB of words, 226 MB of f32: memory-bound, the regime of
+/// ADGI's millions of probes).
+fn query_group(c: &mut Criterion, name: &str, counts: UVec3) {
+    let grid = ProbeGrid::new(Vec3::ZERO, Vec3::ONE, counts).unwrap();
     let t = ProbeTexels::new(grid, TexelConfig::ADGI);
     let mut rng = Pcg64Mcg::seed_from_u64(11);
     for p in 0..grid.probe_count() {
@@ -246,7 +256,8 @@ fn bench_queries(c: &mut Criterion) {
     let baseline = F32Probes::from(&t);
     let inputs: Vec<(Vec3, Vec3, Vec3)> = (0..QUERIES)
         .map(|_| {
-            let x = Vec3::new(rng.random(), rng.random(), rng.random()) * 7.0;
+            let x = Vec3::new(rng.random(), rng.random(), rng.random())
+                * (counts - UVec3::ONE).as_vec3();
             (x, unit(&mut rng), unit(&mut rng))
         })
         .collect();
@@ -259,7 +270,7 @@ fn bench_queries(c: &mut Criterion) {
             "{a} vs {b}"
         );
     }
-    let mut g = c.benchmark_group("irradiance_query");
+    let mut g = c.benchmark_group(name);
     g.throughput(Throughput::Elements(QUERIES as u64));
     g.bench_function("adgi_words", |b| {
         b.iter(|| {
