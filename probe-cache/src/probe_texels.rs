@@ -645,4 +645,27 @@ mod tests {
         }
         assert_eq!(rotate_uniform(0.25, 0), 0.25);
     }
+
+    #[test]
+    fn value_stability() {
+        let t = texels(TexelConfig::ADGI);
+        let a = t.update_irradiance(1, 20, Vec3::new(0.7, 0.2, 1.3), 0.25);
+        let b = t.update_irradiance(1, 20, Vec3::new(0.1, 0.9, 0.4), 0.75);
+        let c = t.update_visibility(1, 30, Vec2::new(0.4, 0.17), 0.5);
+        let down = ProbeTexels::new(
+            *t.grid(),
+            TexelConfig {
+                rounding: RoundingMode::Down,
+                ..TexelConfig::ADGI
+            },
+        );
+        let d = down.update_irradiance(0, 0, Vec3::new(0.7, 0.2, 1.3), 0.25);
+        assert_eq!(
+            [a.1, b.1, c.1, d.1],
+            [0x0669_1afa, 0x0a15_c6c7, 0x04bd_ac74, 0x0669_1af9],
+            "{:#x?}",
+            [a.1, b.1, c.1, d.1]
+        );
+        assert_eq!(b.0, a.1);
+    }
 }

@@ -501,4 +501,51 @@ mod tests {
             assert_eq!(vl.count(t.visibility_word(1, i as usize)), 40);
         }
     }
+
+    #[test]
+    fn value_stability() {
+        let t = ProbeTexels::new(grid(), TexelConfig::ADGI);
+        let rays = [
+            RaySample {
+                direction: Vec3::new(0.1, 0.2, 0.97),
+                radiance: Vec3::new(1.0, 0.5, 0.2),
+                distance: 0.9,
+            },
+            RaySample {
+                direction: Vec3::new(-0.6, 0.7, 0.3),
+                radiance: Vec3::new(0.2, 0.4, 0.8),
+                distance: 2.5,
+            },
+            RaySample {
+                direction: Vec3::new(0.3, -0.9, -0.2),
+                radiance: Vec3::new(3.0, 2.0, 1.0),
+                distance: 0.3,
+            },
+        ];
+        t.blend_rays(0, &rays, &BlendWeights::DDGI, 0.4);
+        t.update_sample(1, &rays[1], 0.6);
+        let im = t.config().irradiance_map;
+        let vm = t.config().visibility_map;
+        let words = [
+            t.irradiance_word(0, im.index(im.texel(Vec3::Z))).0,
+            t.irradiance_word(0, im.index(im.texel(-Vec3::Y))).0,
+            t.visibility_word(0, vm.index(vm.texel(rays[0].direction)))
+                .0,
+            t.irradiance_word(1, im.index(im.texel(rays[1].direction)))
+                .0,
+            t.visibility_word(1, vm.index(vm.texel(rays[1].direction)))
+                .0,
+        ];
+        assert_eq!(
+            words,
+            [
+                0x0575_ad07,
+                0x0636_bf87,
+                0x04ed_adea,
+                0x0609_8e8e,
+                0x05e0_73f8
+            ],
+            "{words:#x?}"
+        );
+    }
 }
