@@ -423,7 +423,23 @@ impl ProbeTexels {
     /// ([`MovingAverage::update_atomic_swap`]).
     #[inline]
     pub fn update_irradiance(&self, probe: usize, texel: usize, value: Vec3, u: f32) -> (u32, u32) {
-        self.config.moving_average.update_atomic_swap(
+        self.update_irradiance_with(probe, texel, value, u, self.config.moving_average)
+    }
+
+    /// [`Self::update_irradiance`] with another N_max for this update — ADGI's dynamic chain
+    /// writes into the same texels with [`MovingAverage::DYNAMIC`] (N_max = 10, Table 3) while
+    /// the static chain uses [`MovingAverage::STATIC`]. A stored count above this N_max is
+    /// brought down to it.
+    #[inline]
+    pub fn update_irradiance_with(
+        &self,
+        probe: usize,
+        texel: usize,
+        value: Vec3,
+        u: f32,
+        average: MovingAverage,
+    ) -> (u32, u32) {
+        average.update_atomic_swap(
             &self.config.irradiance_layout,
             &self.irradiance[self.irradiance_offset(probe, texel)],
             value,
@@ -441,7 +457,21 @@ impl ProbeTexels {
         moments: Vec2,
         u: f32,
     ) -> (u32, u32) {
-        self.config.moving_average.update_atomic_swap(
+        self.update_visibility_with(probe, texel, moments, u, self.config.moving_average)
+    }
+
+    /// [`Self::update_visibility`] with another N_max for this update (see
+    /// [`Self::update_irradiance_with`]).
+    #[inline]
+    pub fn update_visibility_with(
+        &self,
+        probe: usize,
+        texel: usize,
+        moments: Vec2,
+        u: f32,
+        average: MovingAverage,
+    ) -> (u32, u32) {
+        average.update_atomic_swap(
             &self.config.visibility_layout,
             &self.visibility[self.visibility_offset(probe, texel)],
             moments,
@@ -609,6 +639,27 @@ mod tests {
             // Spot check of the rule itself: stored (0, 3) copies stored (1, 4) in the 8 × 8 map.
             assert_eq!(im.source(UVec2::new(0, 3)), UVec2::new(1, 4));
         }
+    }
+
+    #[test]
+    fn dynamic_average_per_update() {
+        let t = texels(TexelConfig::ADGI);
+        for _ in 0..30 {
+            t.update_irradiance(0, 9, Vec3::ONE, 0.5);
+        }
+        let l = IrradianceLayout::ADGI;
+        assert_eq!(l.count(t.irradiance_word(0, 9)), 30);
+        let (_, after) = t.update_irradiance_with(0, 9, Vec3::ZERO, 0.5, MovingAverage::DYNAMIC);
+        assert_eq!(l.count(IrradianceWord(after)), 10);
+        // One dynamic step moves a tenth of the way: 1 → 0.9.
+        assert!(
+            (l.decode(IrradianceWord(after)) - Vec3::splat(0.9))
+                .abs()
+                .max_element()
+                < 0.01
+        );
+        let (_, v) = t.update_visibility_with(0, 5, Vec2::ONE, 0.5, MovingAverage::DYNAMIC);
+        assert_eq!(VisibilityLayout::ADGI.count(VisibilityWord(v)), 1);
     }
 
     #[test]

@@ -3,6 +3,7 @@
 //! threads at once: every texel word changes by compare-and-swap only ([`ProbeTexels`]).
 
 use glam::{Vec2, Vec3};
+use mcg_color_codec::MovingAverage;
 
 use crate::ProbeTexels;
 use crate::probe_texels::rotate_uniform;
@@ -61,13 +62,28 @@ impl ProbeTexels {
     /// [`Self::update_radiance_sample`] and [`Self::update_distance_sample`] separately.
     #[inline]
     pub fn update_sample(&self, probe: usize, sample: &RaySample, u: f32) {
-        self.update_radiance_sample(probe, sample.direction, sample.radiance, u);
-        self.update_distance_sample(
-            probe,
-            sample.direction,
-            sample.distance,
-            rotate_uniform(u, 1),
-        );
+        self.update_sample_with(probe, sample, u, self.config().moving_average);
+    }
+
+    /// [`Self::update_sample`] with another N_max for this sample (ADGI's dynamic chain:
+    /// [`MovingAverage::DYNAMIC`], Table 3), in both the irradiance and the visibility word.
+    #[inline]
+    pub fn update_sample_with(
+        &self,
+        probe: usize,
+        sample: &RaySample,
+        u: f32,
+        average: MovingAverage,
+    ) {
+        let im = &self.config().irradiance_map;
+        let texel = im.index(im.texel(sample.direction));
+        self.update_irradiance_with(probe, texel, sample.radiance, u, average);
+        if let Some(t) = self.normalise_distance(sample.distance) {
+            let vm = &self.config().visibility_map;
+            let texel = vm.index(vm.texel(sample.direction));
+            let moments = Vec2::new(t, t * t);
+            self.update_visibility_with(probe, texel, moments, rotate_uniform(u, 1), average);
+        }
     }
 
     /// The irradiance half of [`Self::update_sample`]: one moving-average step of the
