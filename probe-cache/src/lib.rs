@@ -20,6 +20,11 @@
 //! - No hidden randomness: every random decision takes the caller's uniforms in [0, 1).
 //! - Texel storage is plain `u32` words (the packed layouts of `mcg-color-codec`), so a grid's
 //!   memory uploads to the GPU as it is.
+//! - Texel maps: 8 × 8 / 16 × 16 count stored texels with RTXGI's 1-texel border (6 × 6 /
+//!   14 × 14 cover the sphere); square coordinates in `[−1, 1]²`, +z at the centre.
+//! - Irradiance texels hold `E/π` (DDGI's blend) or radiance (ADGI's per-sample update; see
+//!   [`TexelContent`]); queries return irradiance `E` (π·L for a constant environment L).
+//!   Visibility texels hold distances in cell diagonals ([`ProbeGrid::cell_diagonal`]).
 //!
 //! ## Example
 //! ```
