@@ -147,6 +147,35 @@ impl ProbeTexels {
         }
     }
 
+    /// A copy of this grid whose irradiance texels hold `E(n_t)/π` computed from this grid's
+    /// *radiance* texels ([`TexelContent::Radiance`], e.g. filled by ADGI's per-sample update):
+    /// the cosine convolution of [`Self::probe_irradiance`] evaluated at each interior texel's
+    /// centre direction `n_t`, stored with the texel's count (round to nearest), borders
+    /// refreshed; visibility words copied. The result is read with the cheaper
+    /// [`TexelContent::Irradiance`] query — ADGI's deferred shader reads a prefiltered level
+    /// of its cache the same way (sec. 4.8). Cost: probes × interior² texel operations.
+    #[must_use]
+    pub fn convolved(&self) -> ProbeTexels {
+        let out = ProbeTexels::from_words(
+            *self.grid(),
+            *self.config(),
+            &self.irradiance_words(),
+            &self.visibility_words(),
+        )
+        .expect("same grid and configuration");
+        let layout = self.config().irradiance_layout;
+        for probe in 0..self.grid().probe_count() {
+            for &(i, n, _) in &self.irradiance_tables.interior {
+                let taps = [(0, 0.0); 4];
+                let e = self.probe_irradiance_with(probe, n, &taps, TexelContent::Radiance);
+                let count = layout.count(self.irradiance_word(probe, i as usize));
+                out.set_irradiance(probe, i as usize, e / PI, count);
+            }
+            out.refresh_probe_borders(probe);
+        }
+        out
+    }
+
     /// Bilinear distance moments `(t̄, t̄²)` of probe `probe` in direction `d`, in cell
     /// diagonals.
     #[must_use]
@@ -430,6 +459,23 @@ mod tests {
         assert!(worst_ddgi < 0.14, "{worst_ddgi}");
         assert!(worst_adgi < 0.06, "{worst_adgi}");
         assert!(worst_confused > 0.15, "{worst_confused}");
+        // The convolved copy reads with the bilinear query and agrees with the convolution at
+        // the texel centres (up to one round-to-nearest of the codec).
+        let conv = adgi.convolved();
+        for &(i, n, _) in &adgi.irradiance_tables.interior {
+            let want = adgi.probe_irradiance(0, n, TexelContent::Radiance);
+            let got = conv.probe_irradiance(0, n, TexelContent::Irradiance);
+            assert!(
+                (got - want).abs().max_element() < 0.01 * want.max_element(),
+                "{got} {want}"
+            );
+            let count = conv
+                .config()
+                .irradiance_layout
+                .count(conv.irradiance_word(0, i as usize));
+            assert_eq!(count, 63);
+        }
+        assert_eq!(conv.visibility_words(), adgi.visibility_words());
     }
 
     /// Visibility: a probe behind a wall (short mean distance toward the point) barely counts.
