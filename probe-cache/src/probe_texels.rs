@@ -139,6 +139,11 @@ impl MapTables {
 /// All updates take `&self` and are lock-free compare-and-swap loops, so any number of threads
 /// may update any texels at once with nothing lost.
 ///
+/// Besides the words it keeps small read-only tables: centre directions and solid angles of the
+/// interior texels, the border copy pairs, and the decoded value of every code of every field
+/// (ADGI: 5 KiB for irradiance, 64 KiB for visibility), so a query decodes a texel with a few
+/// loads instead of evaluating the log codec — bit-identical to the layouts' `decode`.
+///
 /// # Example
 /// ```
 /// use mcg_probe_cache::{ProbeGrid, ProbeTexels, TexelConfig, glam::{UVec3, Vec3}};
@@ -159,6 +164,15 @@ pub struct ProbeTexels {
     pub(crate) irradiance_tables: MapTables,
     pub(crate) visibility_tables: MapTables,
     max_distance: f32,
+    /// `decode` of every code of each irradiance channel (R, G, B concatenated; ADGI:
+    /// 512 + 512 + 256 floats, 5 KiB), so the query decodes a word with three loads. Built from
+    /// the layout's own per-field decode, so bit-identical to it.
+    irradiance_decode: Vec<f32>,
+    /// Start of each channel in `irradiance_decode`, and the channels' shifts and masks.
+    irradiance_decode_at: [(u32, u32, u32); 3],
+    /// The same for the visibility fields (ADGI: 2 × 8192 floats, 64 KiB).
+    visibility_decode: Vec<f32>,
+    visibility_decode_at: [(u32, u32, u32); 2],
 }
 
 /// The golden-ratio-like step that spreads one caller uniform over many texels (the plastic
@@ -184,6 +198,30 @@ impl ProbeTexels {
         let visibility = (0..n * config.visibility_map.texel_count())
             .map(|_| AtomicU32::new(0))
             .collect();
+        let layout = config.irradiance_layout;
+        let mut irradiance_decode = Vec::new();
+        let mut irradiance_decode_at = [(0, 0, 0); 3];
+        for (c, at) in irradiance_decode_at.iter_mut().enumerate() {
+            let field = layout.channel(c);
+            *at = (
+                irradiance_decode.len() as u32,
+                layout.shifts()[c],
+                field.max_code(),
+            );
+            irradiance_decode.extend((0..=field.max_code()).map(|q| field.decode(q)));
+        }
+        let vl = config.visibility_layout;
+        let mut visibility_decode = Vec::new();
+        let mut visibility_decode_at = [(0, 0, 0); 2];
+        for (c, at) in visibility_decode_at.iter_mut().enumerate() {
+            let field = vl.channel(c);
+            *at = (
+                visibility_decode.len() as u32,
+                vl.shifts()[c],
+                field.max_code(),
+            );
+            visibility_decode.extend((0..=field.max_code()).map(|q| field.decode(q)));
+        }
         let mean_max = config.visibility_layout.channel(0).codec().max_value();
         let sq_max = config.visibility_layout.channel(1).codec().max_value();
         Self {
@@ -194,6 +232,10 @@ impl ProbeTexels {
             irradiance_tables: MapTables::new(&config.irradiance_map),
             visibility_tables: MapTables::new(&config.visibility_map),
             max_distance: mean_max.min(sq_max.sqrt()),
+            irradiance_decode,
+            irradiance_decode_at,
+            visibility_decode,
+            visibility_decode_at,
         }
     }
 
@@ -350,6 +392,29 @@ impl ProbeTexels {
         self.config
             .irradiance_layout
             .decode(self.irradiance_word(probe, texel))
+    }
+
+    /// [`IrradianceLayout::decode`] of a raw word by table lookup (bit-identical).
+    #[inline(always)]
+    pub(crate) fn decode_irradiance_fast(&self, word: u32) -> Vec3 {
+        let t = &self.irradiance_decode;
+        let [(a, sa, ma), (b, sb, mb), (c, sc, mc)] = self.irradiance_decode_at;
+        Vec3::new(
+            t[(a + ((word >> sa) & ma)) as usize],
+            t[(b + ((word >> sb) & mb)) as usize],
+            t[(c + ((word >> sc) & mc)) as usize],
+        )
+    }
+
+    /// [`VisibilityLayout::decode`] of a raw word by table lookup (bit-identical).
+    #[inline(always)]
+    pub(crate) fn decode_visibility_fast(&self, word: u32) -> Vec2 {
+        let t = &self.visibility_decode;
+        let [(a, sa, ma), (b, sb, mb)] = self.visibility_decode_at;
+        Vec2::new(
+            t[(a + ((word >> sa) & ma)) as usize],
+            t[(b + ((word >> sb) & mb)) as usize],
+        )
     }
 
     /// The decoded moments `(t̄, t̄²)` of a visibility texel, in cell diagonals.
@@ -695,6 +760,40 @@ mod tests {
             }
         }
         assert_eq!(rotate_uniform(0.25, 0), 0.25);
+    }
+
+    /// The table decode is bit-identical to the layout's decode on every code of every channel.
+    #[test]
+    fn table_decode_matches_layout() {
+        let t0 = texels(TexelConfig::ADGI);
+        let vl = VisibilityLayout::ADGI;
+        for q in 0..8192u32 {
+            for shift in [0u32, 13] {
+                let w = (q << shift) | (q.wrapping_mul(2_654_435_761) & !(0x1fff << shift));
+                let a = t0.decode_visibility_fast(w);
+                let b = vl.decode(VisibilityWord(w));
+                assert_eq!(
+                    a.to_array().map(f32::to_bits),
+                    b.to_array().map(f32::to_bits),
+                    "{w:#x}"
+                );
+            }
+        }
+        let t = texels(TexelConfig::ADGI);
+        let l = IrradianceLayout::ADGI;
+        for q in 0..512u32 {
+            for (c, shift) in [(0usize, 0u32), (1, 9), (2, 18)] {
+                let w = ((q & l.channel(c).max_code()) << shift)
+                    | (q.wrapping_mul(2_654_435_761) & !(0x1ff << shift));
+                let a = t.decode_irradiance_fast(w);
+                let b = l.decode(IrradianceWord(w));
+                assert_eq!(
+                    a.to_array().map(f32::to_bits),
+                    b.to_array().map(f32::to_bits),
+                    "{w:#x}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -114,7 +114,6 @@ impl ProbeTexels {
         taps: &[(usize, f32); 4],
         content: TexelContent,
     ) -> Vec3 {
-        let layout = &self.config().irradiance_layout;
         let base = self.irradiance_offset(probe, 0);
         let words =
             &self.irradiance_atomics()[base..base + self.config().irradiance_map.texel_count()];
@@ -123,7 +122,7 @@ impl ProbeTexels {
             TexelContent::Irradiance => {
                 let mut e = Vec3::ZERO;
                 for &(i, w) in taps {
-                    e += w * layout.decode(load(i));
+                    e += w * self.decode_irradiance_fast(load(i).0);
                 }
                 PI * e
             }
@@ -134,7 +133,7 @@ impl ProbeTexels {
                     let c = n.dot(d);
                     if c > 0.0 {
                         let w = c * omega;
-                        e += w * layout.decode(load(i as usize));
+                        e += w * self.decode_irradiance_fast(load(i as usize).0);
                         wsum += w;
                     }
                 }
@@ -180,14 +179,13 @@ impl ProbeTexels {
     /// diagonals.
     #[must_use]
     pub fn probe_moments(&self, probe: usize, d: Vec3) -> Vec2 {
-        let layout = &self.config().visibility_layout;
         let base = self.visibility_offset(probe, 0);
         let words = self.visibility_atomics();
         let mut m = Vec2::ZERO;
         for (i, w) in self.config().visibility_map.bilinear(d) {
             if w > 0.0 {
                 let word = words[base + i].load(Ordering::Relaxed);
-                m += w * layout.decode(word.into());
+                m += w * self.decode_visibility_fast(word);
             }
         }
         m
