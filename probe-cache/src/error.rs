@@ -12,6 +12,11 @@ pub enum ProbeError {
     SpacingNotPositive,
     /// A probe count along an axis is zero, or the total probe count overflows `u32`.
     CountsOutOfRange,
+    /// A texel map's side length leaves no interior texel or exceeds the maximum.
+    MapSizeOutOfRange,
+    /// A word slice handed to [`crate::ProbeTexels::from_words`] (or copied out) does not have
+    /// one word per stored texel of the grid.
+    WordCountMismatch,
 }
 
 impl fmt::Display for ProbeError {
@@ -21,6 +26,12 @@ impl fmt::Display for ProbeError {
             ProbeError::SpacingNotPositive => "probe spacing is not a positive finite vector",
             ProbeError::CountsOutOfRange => {
                 "probe counts must be at least 1 per axis and at most 2^32 - 1 in total"
+            }
+            ProbeError::MapSizeOutOfRange => {
+                "texel map side must leave at least one interior texel and be at most 1024"
+            }
+            ProbeError::WordCountMismatch => {
+                "word slice length does not match the grid's stored texel count"
             }
         })
     }

@@ -8,12 +8,23 @@
 //! | item | what it is | paper |
 //! |---|---|---|
 //! | [`ProbeGrid`], [`ProbeCell`] | probe lattice: origin, spacing, counts; trilinear cell lookup | DDGI; ADGI sec. 3.1 |
+//! | [`octahedral_encode`], [`octahedral_decode`], [`octahedral_solid_angle`] | RTXGI's octahedral sphere ↔ square map; exact texel solid angle | Cigolle et al. 2014; DDGI; RTXGI |
+//! | [`equal_area_encode`], [`equal_area_decode`], [`equal_area_solid_angle`] | Clarberg's equal-area map (4π/n² per texel) | Clarberg 2008 |
+//! | [`TexelMap`], [`MapKind`] | a probe's texel grid: direction ↔ texel, solid angle, RTXGI 1-texel border, bilinear taps | RTXGI; ADGI sec. 3.1, 4.5-4.6 |
+//! | [`ProbeTexels`], [`TexelConfig`], [`RoundingMode`] | a grid's irradiance and visibility words in `AtomicU32` (GPU layout), moving average N_max 63/10 | ADGI sec. 4.5-4.7, Alg. 3-4, Table 3, App. B |
+//! | [`RaySample`], [`BlendWeights`], [`ProbeTexels::update_sample`], [`ProbeTexels::update_sample_at`], [`ProbeTexels::blend_rays`] | ADGI's per-sample CAS update (at a probe or the nearest one); DDGI's cosine-weighted blend | ADGI Alg. 2-4; DDGI sec. 4 |
+//! | [`QueryConfig`], [`TexelContent`], [`ProbeTexels::irradiance_at`], [`ProbeTexels::convolved`] | irradiance from 8 probes: trilinear, wrap, Chebyshev, biases, bilinear; radiance texels → irradiance texels | DDGI sec. 4-5; RTXGI; ADGI sec. 4.8 |
 //!
 //! ## Conventions
 //! - Positions and directions are [`glam::Vec3`] (f32); colours are linear RGB.
 //! - No hidden randomness: every random decision takes the caller's uniforms in [0, 1).
 //! - Texel storage is plain `u32` words (the packed layouts of `mcg-color-codec`), so a grid's
 //!   memory uploads to the GPU as it is.
+//! - Texel maps: 8 × 8 / 16 × 16 count stored texels with RTXGI's 1-texel border (6 × 6 /
+//!   14 × 14 cover the sphere); square coordinates in `[−1, 1]²`, +z at the centre.
+//! - Irradiance texels hold `E/π` (DDGI's blend) or radiance (ADGI's per-sample update; see
+//!   [`TexelContent`]); queries return irradiance `E` (π·L for a constant environment L).
+//!   Visibility texels hold distances in cell diagonals ([`ProbeGrid::cell_diagonal`]).
 //!
 //! ## Example
 //! ```
@@ -34,11 +45,25 @@
 pub use glam;
 pub use mcg_color_codec;
 
+mod equal_area;
 mod error;
 mod grid;
+mod octahedral;
+mod probe_texels;
+mod query;
+mod texel_map;
+mod update;
 
+pub use equal_area::{equal_area_decode, equal_area_encode, equal_area_solid_angle};
 pub use error::ProbeError;
 pub use grid::{ProbeCell, ProbeGrid};
+pub use octahedral::{
+    octahedral_decode, octahedral_encode, octahedral_solid_angle, octahedron_point,
+};
+pub use probe_texels::{ProbeTexels, RoundingMode, TexelConfig};
+pub use query::{QueryConfig, TexelContent};
+pub use texel_map::{MAX_MAP_SIDE, MapKind, TexelMap};
+pub use update::{BlendWeights, RaySample};
 
 /// The README's example, compiled and run as a doctest.
 #[cfg(doctest)]
