@@ -8,6 +8,8 @@
 //! | item | what it is | paper |
 //! |---|---|---|
 //! | [`ProbeGrid`], [`ProbeCell`] | probe lattice: origin, spacing, counts; trilinear cell lookup | DDGI; ADGI sec. 3.1 |
+//! | [`scene`]: [`Scene`], [`DynamicScene`] | CPU test scene: boxes, spheres, a rectangular light, one-bounce probe rays, a door that opens | ADGI sec. 5 (Fig. 1, 8) |
+//! | [`reference`]: [`reference_irradiance`] | reference probe irradiance, many stratified rays per texel direction | ADGI sec. 5, "Reference" |
 //!
 //! ## Conventions
 //! - Positions and directions are [`glam::Vec3`] (f32); colours are linear RGB.
@@ -36,9 +38,13 @@ pub use mcg_color_codec;
 
 mod error;
 mod grid;
+pub mod reference;
+pub mod scene;
 
 pub use error::ProbeError;
 pub use grid::{ProbeCell, ProbeGrid};
+pub use reference::reference_irradiance;
+pub use scene::{DynamicScene, ProbeRay, Scene, SceneEvent};
 
 /// The README's example, compiled and run as a doctest.
 #[cfg(doctest)]
