@@ -183,7 +183,7 @@ mod tests {
     /// count grows (root-mean-square over directions and seeds).
     #[test]
     fn reference_converges() {
-        let scene = DynamicScene::door_opens(0);
+        let scene = DynamicScene::door_opens(0, 1);
         let p = Vec3::new(4.75, 1.125, 2.25); // in the side room, facing the doorway
         let dirs: Vec<Vec3> = [
             Vec3::new(-1.0, 0.0, 0.0),
@@ -218,7 +218,7 @@ mod tests {
 
     #[test]
     fn value_stability() {
-        let scene = DynamicScene::door_opens(0);
+        let scene = DynamicScene::door_opens(0, 1);
         let e = reference_irradiance(&scene.after, Vec3::new(2.25, 1.125, 2.25), &[Vec3::Y], 4, 7);
         assert_eq!(
             e[0].to_array().map(f32::to_bits),

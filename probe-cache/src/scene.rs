@@ -474,16 +474,22 @@ pub enum SceneEvent {
     LightSwitchesOn,
 }
 
-/// A scene that changes once: [`DynamicScene::before`] until `event_frame`, then
-/// [`DynamicScene::after`].
+/// A scene that changes once: [`DynamicScene::before`] until `event_frame`, then a linear
+/// transition over `transition_frames` frames to [`DynamicScene::after`] (the door slides, the
+/// light dims up). `before` and `after` hold the same objects in the same order; only box
+/// bounds, sphere centres and radii, and the light's radiance may differ.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DynamicScene {
     /// The scene for frames `< event_frame`.
     pub before: Scene,
-    /// The scene for frames `≥ event_frame`.
+    /// The scene for frames `≥ event_frame + transition_frames − 1`.
     pub after: Scene,
-    /// The first frame of the changed scene.
+    /// The first frame that differs from `before`.
     pub event_frame: u32,
+    /// Frames the change takes (at least 1: 1 is an instant switch at `event_frame`). A
+    /// gradual change is what ADGI's temporal gradients see (sec. 4.4 compares two frames that
+    /// trace identical rays; a switch between two such frames would go unseen).
+    pub transition_frames: u32,
     /// What changes.
     pub event: SceneEvent,
     /// Where the change happens (the doorway's centre, or the light's); error measurements
@@ -511,19 +517,21 @@ mod room {
 }
 
 impl DynamicScene {
-    /// The two-room scene (see the [module docs](self)) whose door slides open at `event_frame`.
+    /// The two-room scene (see the [module docs](self)) whose door starts sliding open at
+    /// `event_frame` and is fully open `transition_frames − 1` frames later.
     #[must_use]
-    pub fn door_opens(event_frame: u32) -> Self {
-        Self::two_rooms(SceneEvent::DoorOpens, event_frame)
+    pub fn door_opens(event_frame: u32, transition_frames: u32) -> Self {
+        Self::two_rooms(SceneEvent::DoorOpens, event_frame, transition_frames)
     }
 
-    /// The two-room scene with the door open and the light switching on at `event_frame`.
+    /// The two-room scene with the door open and the light dimming up from off at
+    /// `event_frame` over `transition_frames` frames.
     #[must_use]
-    pub fn light_switches_on(event_frame: u32) -> Self {
-        Self::two_rooms(SceneEvent::LightSwitchesOn, event_frame)
+    pub fn light_switches_on(event_frame: u32, transition_frames: u32) -> Self {
+        Self::two_rooms(SceneEvent::LightSwitchesOn, event_frame, transition_frames)
     }
 
-    fn two_rooms(event: SceneEvent, event_frame: u32) -> Self {
+    fn two_rooms(event: SceneEvent, event_frame: u32, transition_frames: u32) -> Self {
         let closed = Aabb::new(
             Vec3::new(room::WALL_X.0, 0.0, room::DOOR_Z.0),
             Vec3::new(room::WALL_X.1, room::DOOR_H, room::DOOR_Z.1),
@@ -559,6 +567,7 @@ impl DynamicScene {
             before,
             after,
             event_frame,
+            transition_frames: transition_frames.max(1),
             event,
             event_center,
             event_region: Aabb::new(
@@ -639,15 +648,58 @@ impl DynamicScene {
         Scene { objects, light }
     }
 
-    /// The scene at frame `frame`.
+    /// How far the change has gone at frame `frame`: 0 before `event_frame`, then
+    /// `(frame − event_frame + 1) / transition_frames`, clamped to 1.
     #[inline]
     #[must_use]
-    pub fn at_frame(&self, frame: u32) -> &Scene {
+    pub fn progress(&self, frame: u32) -> f32 {
         if frame < self.event_frame {
-            &self.before
-        } else {
-            &self.after
+            return 0.0;
         }
+        let k = (frame - self.event_frame + 1) as f32 / self.transition_frames.max(1) as f32;
+        k.min(1.0)
+    }
+
+    /// The scene at frame `frame`: `before` and `after` blended by [`Self::progress`] (box
+    /// bounds, spheres and light radiance interpolated linearly).
+    #[must_use]
+    pub fn at_frame(&self, frame: u32) -> Scene {
+        let s = self.progress(frame);
+        if s <= 0.0 {
+            return self.before.clone();
+        }
+        if s >= 1.0 {
+            return self.after.clone();
+        }
+        let objects = self
+            .before
+            .objects
+            .iter()
+            .zip(&self.after.objects)
+            .map(|(a, b)| {
+                let shape = match (a.shape, b.shape) {
+                    (Shape::Box(x), Shape::Box(y)) => {
+                        Shape::Box(Aabb::new(x.min.lerp(y.min, s), x.max.lerp(y.max, s)))
+                    }
+                    (Shape::Sphere(x), Shape::Sphere(y)) => Shape::Sphere(Sphere {
+                        center: x.center.lerp(y.center, s),
+                        radius: x.radius + s * (y.radius - x.radius),
+                    }),
+                    (_, other) => other,
+                };
+                Object {
+                    shape,
+                    albedo: b.albedo,
+                }
+            })
+            .collect();
+        let mut light = self.after.light;
+        light.radiance = self
+            .before
+            .light
+            .radiance
+            .lerp(self.after.light.radiance, s);
+        Scene { objects, light }
     }
 
     /// Indices of the probes of [`DynamicScene::grid`] near the event: inside
@@ -821,7 +873,7 @@ mod tests {
 
     #[test]
     fn shadow_rays_and_probe_rays() {
-        let scene = DynamicScene::door_opens(10);
+        let scene = DynamicScene::door_opens(10, 4);
         let closed = &scene.before;
         let open = &scene.after;
         // A floor point in the side room behind the doorway is in shadow with the door closed,
@@ -844,16 +896,29 @@ mod tests {
         let r = open.trace_probe_ray(Vec3::new(1.5, 0.3, 1.0), Vec3::X, u);
         assert!(r.backface && r.radiance == Vec3::ZERO);
         assert!(close(r.distance, 0.3, 1e-6));
-        // At the event frame the scene switches.
-        assert_eq!(scene.at_frame(9), &scene.before);
-        assert_eq!(scene.at_frame(10), &scene.after);
+        // The door slides over frames 10..=13.
+        assert_eq!(scene.at_frame(9), scene.before);
+        assert_eq!(scene.at_frame(13), scene.after);
+        assert_eq!(scene.at_frame(99), scene.after);
+        let mid = scene.at_frame(11);
+        let door = |s: &Scene| match s.objects.last().unwrap().shape {
+            Shape::Box(b) => b,
+            Shape::Sphere(_) => unreachable!(),
+        };
+        let (a, b, m) = (door(&scene.before), door(&scene.after), door(&mid));
+        assert!((m.min - a.min.lerp(b.min, 0.5)).length() < 1e-6);
+        let lit = DynamicScene::light_switches_on(0, 2);
+        assert_eq!(
+            lit.at_frame(0).light.radiance,
+            0.5 * lit.after.light.radiance
+        );
     }
 
     #[test]
     fn default_grid_fits_the_rooms() {
         for scene in [
-            DynamicScene::door_opens(0),
-            DynamicScene::light_switches_on(0),
+            DynamicScene::door_opens(0, 1),
+            DynamicScene::light_switches_on(0, 1),
         ] {
             let g = scene.grid;
             for i in 0..g.probe_count() {
@@ -878,7 +943,7 @@ mod tests {
 
     #[test]
     fn value_stability() {
-        let scene = DynamicScene::door_opens(0);
+        let scene = DynamicScene::door_opens(0, 1);
         let r = scene.after.trace_probe_ray(
             Vec3::new(4.75, 0.375, 2.25),
             Vec3::new(-0.6, 0.8, 0.0),
