@@ -8,6 +8,10 @@
 //! | item | what it is | paper |
 //! |---|---|---|
 //! | [`ProbeGrid`], [`ProbeCell`] | probe lattice: origin, spacing, counts; trilinear cell lookup | DDGI; ADGI sec. 3.1 |
+//! | [`heuristics`], [`HeuristicParams`] | f_c, f_v, f_r; f_s, f_d; the 6-10-10 heuristics word | ADGI eq. 10-12, 19-20, sec. 4.3 |
+//! | [`GuidingFunction`], [`GuideParams`], [`Guide`] | h(p, ω) = exp(α ĝ/f)·f per probe octant; static and dynamic forms | ADGI eq. 2, sec. 4.8, 4.9 |
+//! | [`ProxyGrid`] | probes grouped into 3×3×3 virtual proxies, max-pooled octants | ADGI sec. 4.9 |
+//! | [`ProbeChains`], [`ProbeSample`], [`ChainKind`] | static and dynamic Metropolis chains over (position, cos θ, φ) | ADGI Alg. 1, 5, sec. 4.8, 4.9 |
 //!
 //! ## Conventions
 //! - Positions and directions are [`glam::Vec3`] (f32); colours are linear RGB.
@@ -36,9 +40,19 @@ pub use mcg_color_codec;
 
 mod error;
 mod grid;
+pub mod guiding_function;
+pub mod heuristics;
+pub mod probe_chains;
+pub mod proxies;
 
 pub use error::ProbeError;
 pub use grid::{ProbeCell, ProbeGrid};
+pub use guiding_function::{Guide, GuideParams, GuidingFunction, HeuristicField};
+pub use heuristics::HeuristicParams;
+pub use probe_chains::{
+    ChainKind, FrameStats, ProbeChainState, ProbeChains, ProbeSample, ProbeStepUniforms,
+};
+pub use proxies::ProxyGrid;
 
 /// The README's example, compiled and run as a doctest.
 #[cfg(doctest)]
