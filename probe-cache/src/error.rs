@@ -12,6 +12,20 @@ pub enum ProbeError {
     SpacingNotPositive,
     /// A probe count along an axis is zero, or the total probe count overflows `u32`.
     CountsOutOfRange,
+    /// A heuristic parameter (camera threshold k, voxel diagonal s, radiance range β,
+    /// lighting weight μ) is NaN, infinite or out of its range.
+    HeuristicParameterOutOfRange,
+    /// A guiding-function parameter (α, exponent cap) is NaN, infinite or out of its range.
+    GuideParameterOutOfRange,
+    /// A per-probe (or per-proxy) table does not have one entry per cell and octant, or two
+    /// tables that must match differ in length.
+    TableLengthMismatch,
+    /// A proxy block size is zero.
+    ProxyBlockZero,
+    /// A chain set was asked for zero chains.
+    NoChains,
+    /// A chain step size (the probe spacing times its scale) is not finite.
+    StepNotFinite,
 }
 
 impl fmt::Display for ProbeError {
@@ -22,6 +36,14 @@ impl fmt::Display for ProbeError {
             ProbeError::CountsOutOfRange => {
                 "probe counts must be at least 1 per axis and at most 2^32 - 1 in total"
             }
+            ProbeError::HeuristicParameterOutOfRange => "heuristic parameter is out of range",
+            ProbeError::GuideParameterOutOfRange => "guiding function parameter is out of range",
+            ProbeError::TableLengthMismatch => {
+                "table length does not match the cell count times 8 octants"
+            }
+            ProbeError::ProxyBlockZero => "proxy block size is zero",
+            ProbeError::NoChains => "chain count is zero",
+            ProbeError::StepNotFinite => "chain step size is not finite",
         })
     }
 }

@@ -10,6 +10,10 @@
 //! | [`ProbeGrid`], [`ProbeCell`] | probe lattice: origin, spacing, counts; trilinear cell lookup | DDGI; ADGI sec. 3.1 |
 //! | [`scene`]: [`Scene`], [`DynamicScene`] | CPU test scene: boxes, spheres, a rectangular light, one-bounce probe rays, a door that opens | ADGI sec. 5 (Fig. 1, 8) |
 //! | [`reference`]: [`reference_irradiance`] | reference probe irradiance, many stratified rays per texel direction | ADGI sec. 5, "Reference" |
+//! | [`heuristics`], [`HeuristicParams`] | f_c, f_v, f_r; f_s, f_d; the 6-10-10 heuristics word | ADGI eq. 10-12, 19-20, sec. 4.3 |
+//! | [`GuidingFunction`], [`GuideParams`], [`Guide`] | h(p, ω) = exp(α ĝ/f)·f per probe octant; static and dynamic forms | ADGI eq. 2, sec. 4.8, 4.9 |
+//! | [`ProxyGrid`] | probes grouped into 3×3×3 virtual proxies, max-pooled octants | ADGI sec. 4.9 |
+//! | [`ProbeChains`], [`ProbeSample`], [`ChainKind`] | static and dynamic Metropolis chains over (position, cos θ, φ) | ADGI Alg. 1, 5, sec. 4.8, 4.9 |
 //!
 //! ## Conventions
 //! - Positions and directions are [`glam::Vec3`] (f32); colours are linear RGB.
@@ -38,11 +42,21 @@ pub use mcg_color_codec;
 
 mod error;
 mod grid;
+pub mod guiding_function;
+pub mod heuristics;
+pub mod probe_chains;
+pub mod proxies;
 pub mod reference;
 pub mod scene;
 
 pub use error::ProbeError;
 pub use grid::{ProbeCell, ProbeGrid};
+pub use guiding_function::{Guide, GuideParams, GuidingFunction, HeuristicField};
+pub use heuristics::HeuristicParams;
+pub use probe_chains::{
+    ChainKind, FrameStats, ProbeChainState, ProbeChains, ProbeSample, ProbeStepUniforms,
+};
+pub use proxies::ProxyGrid;
 pub use reference::reference_irradiance;
 pub use scene::{DynamicScene, ProbeRay, Scene, SceneEvent};
 
