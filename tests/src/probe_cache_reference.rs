@@ -1,0 +1,726 @@
+//! The end-to-end experiment of mcg-probe-cache: ADGI's adaptive probe updates against DDGI's
+//! uniform rays per probe, at an equal ray budget per frame, on the two-room scene whose door
+//! slides open ([`DynamicScene::door_opens`]).
+//!
+//! One definition for the suite `tests/probe_cache_adgi.rs` and the demo's probe-cache
+//! section. Everything is deterministic: the scene's light samples, the ray directions, the
+//! chains and the rounding all draw from one [`seeded_rng`] per run.
+//!
+//! # The policies (ADGI sec. 5 compares the same two)
+//! - [`Policy::UniformDdgi`] (Q-DDGI of ADGI sec. 5): every probe traces `rays_per_probe`
+//!   rays per frame along a randomly rotated spherical Fibonacci set (DDGI), blended into all
+//!   its texels with DDGI's cosine weights ([`ProbeTexels::blend_rays`]) and hysteresis
+//!   16/17 ≈ 0.94 (Q-DDGI's, ADGI Table 3).
+//! - [`Policy::Adgi`]: per frame, 8 pilot rays per probe (one per octant, the same rays two
+//!   frames in a row, sec. 4.4) measure f_v and f_r (eq. 11, 12); their changes between the
+//!   two frames of a pair, triggered and smoothed (eq. 13-18), give f_d (eq. 20). Dynamic
+//!   Metropolis chains on the 3 × 3 × 3 proxies sample f_d (sec. 4.9): each sample traces one
+//!   ray per irradiance texel of its octant, through the texel centre, for every probe of the
+//!   proxy, with the dynamic N_max = 10 (Table 3). Static chains sample
+//!   h = exp(min(ĝ/f_s, 1)) f_s (sec. 4.8) with the rest of the budget; every sample updates the
+//!   one texel it lands in ([`ProbeTexels::update_sample`], N_max = 63). The pilot rays update
+//!   the caches too, every other frame (sec. 4.4).
+//! - [`Policy::AdgiUnguided`]: ADGI with both guides replaced by a constant — the same
+//!   machinery, budget and update rules, but the samples spread uniformly over (p, ω). It
+//!   isolates what the guide buys.
+//!
+//! # Equal budget
+//! A frame of every policy traces exactly `rays_per_probe × probe count` probe rays (each also
+//! traces one shadow ray at its hit, in the scene, for all policies alike). ADGI spends 8 per
+//! probe on pilots, up to [`DYNAMIC_SHARE`] of the rest on dynamic samples, and the remainder on
+//! static samples, cutting the last sample list at the budget.
+//!
+//! # Error
+//! Each probe's irradiance E(p, n) is read back at the centre direction n of each interior
+//! irradiance texel — π × the texel for DDGI's texels (they hold E/π), and the cosine-weighted
+//! sum Σ_t L_t max(0, n·d_t) Ω_t over the texels for ADGI's (they hold mean radiance per texel)
+//! — and compared with [`reference_irradiance`] for the scene of that frame. The error of a set
+//! of probes is the relative RMS error √(Σ |E − E_ref|² / Σ |E_ref|²) over their texels.
+
+use glam::{Quat, Vec2, Vec3};
+use mcg_probe_cache::heuristics::{OCTANTS, dynamic_heuristic, octant, octant_signs};
+use mcg_probe_cache::mcg_color_codec::MovingAverage;
+use mcg_probe_cache::scene::Scene;
+use mcg_probe_cache::{
+    BlendWeights, DynamicScene, GuideParams, GuidingFunction, HeuristicParams, ProbeChains,
+    ProbeStepUniforms, ProbeTexels, ProxyGrid, RaySample, TexelConfig, reference_irradiance,
+};
+use rand::RngExt;
+
+use crate::{Pcg64Mcg, seeded_rng};
+
+/// Share of the non-pilot budget ADGI may spend on dynamic samples in a frame.
+pub const DYNAMIC_SHARE: f32 = 0.75;
+
+/// Q-DDGI's hysteresis 0.94 (ADGI Table 3) as a counted moving average: N_max = 17 gives
+/// 16/17 ≈ 0.941.
+pub const QDDGI_MAX_COUNT: u32 = 17;
+
+/// The threshold of the frames-to-error numbers: relative RMS error of the probes near the
+/// event. Above both policies' steady-state floors before the event (uniform DDGI ≈ ?, ADGI ≈
+/// ?, measured by the suite) so that each can reach it.
+pub const FRAMES_TO_ERROR_THRESHOLD: f64 = 0.2;
+
+/// The decay per frame of the temporal trigger Tr (ADGI eq. 14, Fig. 6a).
+pub const TRIGGER_DECAY: f32 = 0.8;
+
+/// Settings of one experiment.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExperimentConfig {
+    /// Frames per run.
+    pub frames: u32,
+    /// The first frame of the door's movement.
+    pub event_frame: u32,
+    /// Frames the door takes to open.
+    pub transition_frames: u32,
+    /// DDGI's rays per probe per frame; every policy traces this × the probe count per frame.
+    pub rays_per_probe: u32,
+    /// The reference traces `strata²` rays per texel direction.
+    pub reference_strata: u32,
+    /// Probes within this distance of the doorway (or in the side room) are "near the event".
+    pub near_radius: f32,
+    /// Seed of the runs and of the reference.
+    pub seed: u64,
+}
+
+impl ExperimentConfig {
+    /// The suite's setting: 48 frames, the door opening over frames 16-19, 32 rays per probe
+    /// (ADGI sec. 5 gives Q-DDGI 32), 12² rays per reference texel.
+    pub const TEST: Self = Self {
+        frames: 48,
+        event_frame: 16,
+        transition_frames: 4,
+        rays_per_probe: 32,
+        reference_strata: 12,
+        near_radius: 1.0,
+        seed: 0x8_ad61,
+    };
+}
+
+/// How the rays of a frame are placed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Policy {
+    /// DDGI: the same rays for every probe, cosine-weighted blend, hysteresis 0.94.
+    UniformDdgi,
+    /// ADGI: pilot rays, guided static and dynamic chains, per-sample updates.
+    Adgi,
+    /// ADGI with constant guides (the ablation that isolates the guide).
+    AdgiUnguided,
+}
+
+impl Policy {
+    /// A short label for tables and charts.
+    #[must_use]
+    pub fn label(self) -> &'static str {
+        match self {
+            Policy::UniformDdgi => "uniform DDGI (hysteresis 0.94)",
+            Policy::Adgi => "ADGI (guided chains)",
+            Policy::AdgiUnguided => "ADGI, constant guide",
+        }
+    }
+}
+
+/// The scene, its reference, and the probe sets the error is measured on.
+#[derive(Clone, Debug)]
+pub struct Experiment {
+    /// The settings.
+    pub config: ExperimentConfig,
+    /// The scene.
+    pub scene: DynamicScene,
+    /// The texels of every run (ADGI's: octahedral 8 × 8 with border, R9G9B8).
+    pub texel_config: TexelConfig,
+    /// Interior irradiance texels: (stored index, centre direction, solid angle).
+    pub texels: Vec<(usize, Vec3, f32)>,
+    /// Probes near the event.
+    pub near: Vec<usize>,
+    /// Reference irradiance per distinct scene state: `(progress, E)` with E indexed
+    /// `probe · texels.len() + k`.
+    pub references: Vec<(f32, Vec<Vec3>)>,
+}
+
+/// The per-frame record of one run.
+#[derive(Clone, Debug)]
+pub struct Run {
+    /// The policy.
+    pub policy: Policy,
+    /// Relative RMS error of the probes near the event, per frame.
+    pub error_near: Vec<f64>,
+    /// Relative RMS error of all probes, per frame.
+    pub error_all: Vec<f64>,
+    /// Probe rays traced per frame.
+    pub rays: Vec<u64>,
+    /// Of them, the rays that started at a probe near the event.
+    pub rays_near: Vec<u64>,
+    /// Irradiance estimates (indexed like the references) at the frames asked for.
+    pub snapshots: Vec<(u32, Vec<Vec3>)>,
+}
+
+impl Experiment {
+    /// Builds the scene and its references (one per distinct scene state of the run).
+    #[must_use]
+    pub fn new(config: ExperimentConfig) -> Self {
+        let scene = DynamicScene::door_opens(config.event_frame, config.transition_frames);
+        let texel_config = TexelConfig::ADGI;
+        let map = texel_config.irradiance_map;
+        let texels: Vec<(usize, Vec3, f32)> = (0..map.texel_count())
+            .filter_map(|i| {
+                let t = map.coords(i);
+                (!map.is_border(t)).then(|| (i, map.direction(t), map.solid_angle(t)))
+            })
+            .collect();
+        let dirs: Vec<Vec3> = texels.iter().map(|t| t.1).collect();
+        let near = scene.probes_near_event(config.near_radius);
+        let mut references: Vec<(f32, Vec<Vec3>)> = Vec::new();
+        for frame in 0..config.frames {
+            let s = scene.progress(frame);
+            if references.iter().any(|r| r.0 == s) {
+                continue;
+            }
+            let state = scene.at_frame(frame);
+            let e = (0..scene.grid.probe_count())
+                .flat_map(|p| {
+                    let pos = scene.grid.probe_position(scene.grid.probe_coords(p));
+                    reference_irradiance(&state, pos, &dirs, config.reference_strata, config.seed)
+                })
+                .collect();
+            references.push((s, e));
+        }
+        Self {
+            config,
+            scene,
+            texel_config,
+            texels,
+            near,
+            references,
+        }
+    }
+
+    /// The reference irradiance at frame `frame` (indexed `probe · texels.len() + k`).
+    #[must_use]
+    pub fn reference(&self, frame: u32) -> &[Vec3] {
+        let s = self.scene.progress(frame);
+        &self
+            .references
+            .iter()
+            .find(|r| r.0 == s)
+            .expect("a reference per scene state")
+            .1
+    }
+
+    /// Runs `policy` for all frames and records errors, ray counts and the snapshots at
+    /// `snapshot_frames`.
+    #[must_use]
+    pub fn run(&self, policy: Policy, snapshot_frames: &[u32]) -> Run {
+        let mut rng = seeded_rng(self.config.seed ^ policy as u64 * 0x9e37_79b9);
+        let mut state = match policy {
+            Policy::UniformDdgi => Renderer::ddgi(self),
+            Policy::Adgi | Policy::AdgiUnguided => {
+                Renderer::adgi(self, policy == Policy::Adgi, &mut rng)
+            }
+        };
+        let mut run = Run {
+            policy,
+            error_near: Vec::new(),
+            error_all: Vec::new(),
+            rays: Vec::new(),
+            rays_near: Vec::new(),
+            snapshots: Vec::new(),
+        };
+        let near_mask = {
+            let mut m = vec![false; self.scene.grid.probe_count()];
+            for &p in &self.near {
+                m[p] = true;
+            }
+            m
+        };
+        for frame in 0..self.config.frames {
+            let scene = self.scene.at_frame(frame);
+            let counter = state.frame(self, &scene, frame, &near_mask, &mut rng);
+            run.rays.push(counter.rays);
+            run.rays_near.push(counter.rays_near);
+            let estimate = self.estimate(&state.texels, state.radiance_texels);
+            let reference = self.reference(frame);
+            run.error_near
+                .push(self.relative_rms(&estimate, reference, self.near.iter().copied()));
+            run.error_all.push(self.relative_rms(
+                &estimate,
+                reference,
+                0..self.scene.grid.probe_count(),
+            ));
+            if snapshot_frames.contains(&frame) {
+                run.snapshots.push((frame, estimate));
+            }
+        }
+        run
+    }
+
+    /// Every probe's irradiance at its interior texel directions, from the texels.
+    #[must_use]
+    pub fn estimate(&self, texels: &ProbeTexels, radiance_texels: bool) -> Vec<Vec3> {
+        let n = self.texels.len();
+        let mut out = Vec::with_capacity(self.scene.grid.probe_count() * n);
+        let mut values = vec![Vec3::ZERO; n];
+        for p in 0..self.scene.grid.probe_count() {
+            for (v, &(i, _, _)) in values.iter_mut().zip(&self.texels) {
+                *v = texels.irradiance(p, i);
+            }
+            for (k, &(_, dir, _)) in self.texels.iter().enumerate() {
+                let e = if radiance_texels {
+                    values
+                        .iter()
+                        .zip(&self.texels)
+                        .map(|(&l, &(_, d, omega))| l * (dir.dot(d).max(0.0) * omega))
+                        .sum::<Vec3>()
+                } else {
+                    // The texel at this very direction: its centre, bilinear weight 1.
+                    values[k] * core::f32::consts::PI
+                };
+                out.push(e);
+            }
+        }
+        out
+    }
+
+    /// √(Σ |E − E_ref|² / Σ |E_ref|²) over the texels of `probes`.
+    #[must_use]
+    pub fn relative_rms(
+        &self,
+        estimate: &[Vec3],
+        reference: &[Vec3],
+        probes: impl Iterator<Item = usize>,
+    ) -> f64 {
+        let n = self.texels.len();
+        let (mut num, mut den) = (0.0_f64, 0.0_f64);
+        for p in probes {
+            for k in p * n..(p + 1) * n {
+                num += f64::from((estimate[k] - reference[k]).length_squared());
+                den += f64::from(reference[k].length_squared());
+            }
+        }
+        if den > 0.0 { (num / den).sqrt() } else { 0.0 }
+    }
+}
+
+/// Frames from `from` until the error settles below `threshold`: the smallest k such that
+/// `errors[from + j] < threshold` for every j ≥ k; `None` if the last frame is not below.
+#[must_use]
+pub fn frames_to_error(errors: &[f64], from: u32, threshold: f64) -> Option<u32> {
+    let from = from as usize;
+    if from >= errors.len() || !(errors[errors.len() - 1] < threshold) {
+        return None;
+    }
+    let last_above = errors[from..].iter().rposition(|&e| !(e < threshold));
+    Some(last_above.map_or(0, |i| i as u32 + 1))
+}
+
+/// Mean of `errors[from..to]`.
+#[must_use]
+pub fn mean_error(errors: &[f64], from: u32, to: u32) -> f64 {
+    let s = &errors[from as usize..to as usize];
+    s.iter().sum::<f64>() / s.len() as f64
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+struct RayCounter {
+    rays: u64,
+    rays_near: u64,
+}
+
+/// The state of one policy across frames.
+struct Renderer {
+    texels: ProbeTexels,
+    radiance_texels: bool,
+    adgi: Option<AdgiState>,
+}
+
+struct AdgiState {
+    guided: bool,
+    params: HeuristicParams,
+    static_chains: ProbeChains,
+    dynamic_chains: ProbeChains,
+    /// f_v and f_r per probe octant, from the pilot rays of this frame and the previous one.
+    f_v: Vec<f32>,
+    f_r: Vec<f32>,
+    prev_f_v: Vec<f32>,
+    prev_f_r: Vec<f32>,
+    /// Triggered changes (eq. 14, 17) before and after smoothing (eq. 15, 18).
+    trig_v: Vec<f32>,
+    trig_r: Vec<f32>,
+    smooth_v: Vec<f32>,
+    smooth_r: Vec<f32>,
+    f_s: Vec<f32>,
+    f_d: Vec<f32>,
+    proxy_f_d: Vec<f32>,
+    feedback: Vec<f32>,
+    /// For each octant, the interior irradiance texels whose centre lies in it.
+    octant_texels: Vec<Vec<(usize, Vec3)>>,
+}
+
+fn luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+}
+
+fn step_uniforms(rng: &mut Pcg64Mcg) -> ProbeStepUniforms {
+    ProbeStepUniforms {
+        proposal: core::array::from_fn(|_| rng.random()),
+        accept: rng.random(),
+    }
+}
+
+/// A uniform direction on the sphere from two uniforms.
+fn sphere_direction(u: Vec2) -> Vec3 {
+    let z = 1.0 - 2.0 * u.x;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let (s, c) = (core::f32::consts::TAU * u.y).sin_cos();
+    Vec3::new(r * c, r * s, z)
+}
+
+/// The i-th of n spherical Fibonacci directions (DDGI's ray set before its random rotation).
+fn spherical_fibonacci(i: u32, n: u32) -> Vec3 {
+    const GOLDEN: f32 = 0.618_034;
+    let phi = core::f32::consts::TAU * ((i as f32 * GOLDEN).fract());
+    let z = 1.0 - (2.0 * i as f32 + 1.0) / n as f32;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+impl Renderer {
+    fn ddgi(exp: &Experiment) -> Self {
+        let mut config = exp.texel_config;
+        config.moving_average = MovingAverage::new(QDDGI_MAX_COUNT).expect("N_max > 0");
+        Self {
+            texels: ProbeTexels::new(exp.scene.grid, config),
+            radiance_texels: false,
+            adgi: None,
+        }
+    }
+
+    fn adgi(exp: &Experiment, guided: bool, rng: &mut Pcg64Mcg) -> Self {
+        let grid = exp.scene.grid;
+        let n = grid.probe_count() * OCTANTS;
+        let budget = (exp.config.rays_per_probe as usize) * grid.probe_count();
+        let static_rays = budget.saturating_sub(OCTANTS * grid.probe_count());
+        let schedule = mcg_markov_guide::FrameSchedule::DEFAULT;
+        let per_chain = (schedule.iterations() - schedule.burn_in()) as usize;
+        let mut init = || core::array::from_fn(|_| rng.random::<f32>());
+        let static_chains =
+            ProbeChains::new_static(grid, static_rays.div_ceil(per_chain).max(1), &mut init)
+                .expect("valid chains");
+        let dynamic_chains =
+            ProbeChains::new_dynamic(grid, 16, &mut init).expect("valid chains");
+        let proxies = dynamic_chains.cells().table_len();
+        let map = exp.texel_config.irradiance_map;
+        let mut octant_texels = vec![Vec::new(); OCTANTS];
+        for &(i, d, _) in &exp.texels {
+            octant_texels[octant(d)].push((i, d));
+        }
+        let _ = map;
+        Self {
+            texels: ProbeTexels::new(grid, exp.texel_config),
+            radiance_texels: true,
+            adgi: Some(AdgiState {
+                guided,
+                params: HeuristicParams::new(1.0e6, grid.cell_diagonal())
+                    .expect("valid heuristics"),
+                static_chains,
+                dynamic_chains,
+                f_v: vec![0.0; n],
+                f_r: vec![0.0; n],
+                prev_f_v: vec![0.0; n],
+                prev_f_r: vec![0.0; n],
+                trig_v: vec![0.0; n],
+                trig_r: vec![0.0; n],
+                smooth_v: vec![0.0; n],
+                smooth_r: vec![0.0; n],
+                f_s: vec![0.0; n],
+                f_d: vec![0.0; n],
+                proxy_f_d: vec![0.0; proxies],
+                feedback: vec![0.0; n],
+                octant_texels,
+            }),
+        }
+    }
+
+    fn frame(
+        &mut self,
+        exp: &Experiment,
+        scene: &Scene,
+        frame: u32,
+        near: &[bool],
+        rng: &mut Pcg64Mcg,
+    ) -> RayCounter {
+        match self.adgi.take() {
+            None => self.ddgi_frame(exp, scene, near, rng),
+            Some(mut adgi) => {
+                let c = self.adgi_frame(&mut adgi, exp, scene, frame, near, rng);
+                self.adgi = Some(adgi);
+                c
+            }
+        }
+    }
+
+    fn ddgi_frame(
+        &mut self,
+        exp: &Experiment,
+        scene: &Scene,
+        near: &[bool],
+        rng: &mut Pcg64Mcg,
+    ) -> RayCounter {
+        let grid = exp.scene.grid;
+        let r = exp.config.rays_per_probe;
+        // One random rotation per frame for all probes (DDGI).
+        let rotation = Quat::from_xyzw(
+            rng.random::<f32>() - 0.5,
+            rng.random::<f32>() - 0.5,
+            rng.random::<f32>() - 0.5,
+            rng.random::<f32>() - 0.5,
+        )
+        .normalize();
+        let dirs: Vec<Vec3> = (0..r)
+            .map(|i| rotation * spherical_fibonacci(i, r))
+            .collect();
+        let mut counter = RayCounter::default();
+        let mut rays = Vec::with_capacity(r as usize);
+        for p in 0..grid.probe_count() {
+            let pos = grid.probe_position(grid.probe_coords(p));
+            rays.clear();
+            for &d in &dirs {
+                let hit = scene.trace_probe_ray(pos, d, Vec2::new(rng.random(), rng.random()));
+                rays.push(RaySample {
+                    direction: d,
+                    radiance: hit.radiance,
+                    distance: hit.distance,
+                });
+            }
+            self.texels
+                .blend_rays(p, &rays, &BlendWeights::DDGI, rng.random());
+            counter.rays += u64::from(r);
+            if near[p] {
+                counter.rays_near += u64::from(r);
+            }
+        }
+        counter
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn adgi_frame(
+        &mut self,
+        a: &mut AdgiState,
+        exp: &Experiment,
+        scene: &Scene,
+        frame: u32,
+        near: &[bool],
+        rng: &mut Pcg64Mcg,
+    ) -> RayCounter {
+        let grid = exp.scene.grid;
+        let probes = grid.probe_count();
+        let budget = u64::from(exp.config.rays_per_probe) * probes as u64;
+        let mut counter = RayCounter::default();
+        let seed = exp.config.seed;
+
+        // 1. Pilot rays (sec. 4.4): one per octant, the same set in frames 2k and 2k + 1
+        //    (direction and light-sample uniforms from a hash of the pair index), so the
+        //    difference between the two frames is the scene's change, not noise.
+        core::mem::swap(&mut a.f_v, &mut a.prev_f_v);
+        core::mem::swap(&mut a.f_r, &mut a.prev_f_r);
+        let pair = u64::from(frame / 2);
+        let second_of_pair = frame % 2 == 1;
+        for p in 0..probes {
+            let pos = grid.probe_position(grid.probe_coords(p));
+            for o in 0..OCTANTS {
+                let c = (seed ^ 0x5bd1_e995)
+                    .wrapping_add(pair.wrapping_mul(0x9e37_79b9_7f4a_7c15))
+                    .wrapping_add(((p * OCTANTS + o) as u64) << 3);
+                let h = mcg_probe_cache::reference::hash_uniform;
+                let d = sphere_direction(Vec2::new(h(c), h(c + 1))).abs() * octant_signs(o);
+                let hit = scene.trace_probe_ray(pos, d, Vec2::new(h(c + 2), h(c + 3)));
+                a.f_r[p * OCTANTS + o] = a.params.f_r(luminance(hit.radiance));
+                // The distance along ω is f_v's t for the opposite octant (t = trace(p, −ω)).
+                a.f_v[p * OCTANTS + (o ^ 7)] = a.params.f_v(hit.distance);
+                if !second_of_pair {
+                    self.texels.update_sample(
+                        p,
+                        &RaySample {
+                            direction: d,
+                            radiance: hit.radiance,
+                            distance: hit.distance,
+                        },
+                        rng.random(),
+                    );
+                }
+                counter.rays += 1;
+                if near[p] {
+                    counter.rays_near += 1;
+                }
+            }
+        }
+
+        // 2. Temporal gradients (eq. 13, 16) between the two frames of a pair, the trigger
+        //    (eq. 14, 17: a pulse becomes a signal decaying by TRIGGER_DECAY per frame) and the
+        //    spatial smoothing (eq. 15, 18: max over 5 × 5 × 5 probes and the octant with its
+        //    three neighbours).
+        for k in 0..probes * OCTANTS {
+            let (dv, dr) = if second_of_pair && frame > 0 {
+                (
+                    (a.f_v[k] - a.prev_f_v[k]).abs(),
+                    (a.f_r[k] - a.prev_f_r[k]).abs(),
+                )
+            } else {
+                (0.0, 0.0)
+            };
+            a.trig_v[k] = dv.max(TRIGGER_DECAY * a.trig_v[k]);
+            a.trig_r[k] = dr.max(TRIGGER_DECAY * a.trig_r[k]);
+        }
+        smooth(grid, &a.trig_v, &mut a.smooth_v);
+        smooth(grid, &a.trig_r, &mut a.smooth_r);
+        // f_c = 1: the camera sees the whole grid.
+        for k in 0..probes * OCTANTS {
+            a.f_s[k] = a.f_v[k];
+            a.f_d[k] = dynamic_heuristic(
+                1.0,
+                a.f_s[k],
+                a.smooth_v[k],
+                a.smooth_r[k],
+                a.params.lighting_weight(),
+            );
+        }
+
+        // 3. Dynamic chains on the proxies (sec. 4.9): each sample = one octant of every probe
+        //    in its proxy, one ray per irradiance texel centre of that octant, N_max = 10.
+        let non_pilot = budget.saturating_sub(counter.rays);
+        let dynamic_budget = (non_pilot as f32 * DYNAMIC_SHARE) as u64;
+        let proxies = a.dynamic_chains.cells();
+        proxies
+            .max_pool(&a.f_d, &mut a.proxy_f_d)
+            .expect("table sizes");
+        let any_change = a.proxy_f_d.iter().any(|&v| v > 0.0);
+        let mut dynamic_rays = 0_u64;
+        if any_change || !a.guided {
+            let samples: Vec<_> = if a.guided {
+                let guide =
+                    GuidingFunction::new(proxies, &a.proxy_f_d, None, GuideParams::DYNAMIC)
+                        .expect("table sizes");
+                a.dynamic_chains
+                    .step_frame(&guide, || step_uniforms(rng))
+                    .to_vec()
+            } else {
+                let guide = |_: Vec3, _: Vec3| 1.0_f32;
+                a.dynamic_chains
+                    .step_frame(&guide, || step_uniforms(rng))
+                    .to_vec()
+            };
+            let mut capped = vec![false; probes];
+            'samples: for s in samples {
+                for coords in proxies.probes_of(s.cell as usize) {
+                    let p = grid.probe_index(coords);
+                    let texels = &a.octant_texels[s.octant as usize];
+                    if dynamic_rays + texels.len() as u64 > dynamic_budget {
+                        break 'samples;
+                    }
+                    if !capped[p] {
+                        // The dynamic N_max (Table 3) for this probe from now on.
+                        self.texels
+                            .cap_counts(p, MovingAverage::DYNAMIC.max_count());
+                        capped[p] = true;
+                    }
+                    let pos = grid.probe_position(coords);
+                    for &(_, d) in texels {
+                        let hit =
+                            scene.trace_probe_ray(pos, d, Vec2::new(rng.random(), rng.random()));
+                        self.texels.update_sample(
+                            p,
+                            &RaySample {
+                                direction: d,
+                                radiance: hit.radiance,
+                                distance: hit.distance,
+                            },
+                            rng.random(),
+                        );
+                    }
+                    dynamic_rays += texels.len() as u64;
+                    if near[p] {
+                        counter.rays_near += texels.len() as u64;
+                    }
+                }
+            }
+        }
+        counter.rays += dynamic_rays;
+
+        // 4. Static chains (sec. 4.8): h = exp(min(ĝ/f_s, 1)) f_s, ĝ = the octant's mean cached
+        //    luminance, with the rest of the budget; one texel update per sample.
+        for p in 0..probes {
+            for o in 0..OCTANTS {
+                let texels = &a.octant_texels[o];
+                let sum: f32 = texels
+                    .iter()
+                    .map(|&(i, _)| luminance(self.texels.irradiance(p, i)))
+                    .sum();
+                a.feedback[p * OCTANTS + o] = sum / texels.len().max(1) as f32;
+            }
+        }
+        let static_budget = budget.saturating_sub(counter.rays);
+        let samples: Vec<_> = if a.guided {
+            let guide = GuidingFunction::new(
+                ProxyGrid::probes(grid),
+                &a.f_s,
+                Some(&a.feedback),
+                GuideParams::STATIC,
+            )
+            .expect("table sizes");
+            a.static_chains
+                .step_frame(&guide, || step_uniforms(rng))
+                .to_vec()
+        } else {
+            let guide = |_: Vec3, _: Vec3| 1.0_f32;
+            a.static_chains
+                .step_frame(&guide, || step_uniforms(rng))
+                .to_vec()
+        };
+        for s in samples.iter().take(static_budget as usize) {
+            let p = grid.probe_index(s.probe);
+            let pos = grid.probe_position(s.probe);
+            let hit = scene.trace_probe_ray(pos, s.direction, Vec2::new(rng.random(), rng.random()));
+            self.texels.update_sample(
+                p,
+                &RaySample {
+                    direction: s.direction,
+                    radiance: hit.radiance,
+                    distance: hit.distance,
+                },
+                rng.random(),
+            );
+            counter.rays += 1;
+            if near[p] {
+                counter.rays_near += 1;
+            }
+        }
+        counter
+    }
+}
+
+/// Spatial smoothing of a per-probe-octant table (eq. 15, 18): the max over the 5 × 5 × 5
+/// probes around each probe, of the same octant and its three neighbours (one sign flipped).
+fn smooth(grid: mcg_probe_cache::ProbeGrid, src: &[f32], dst: &mut [f32]) {
+    let counts = grid.counts().as_ivec3();
+    for p in 0..grid.probe_count() {
+        let c = grid.probe_coords(p).as_ivec3();
+        for o in 0..OCTANTS {
+            let mut m = 0.0_f32;
+            for dz in -2..=2 {
+                for dy in -2..=2 {
+                    for dx in -2..=2 {
+                        let q = c + glam::IVec3::new(dx, dy, dz);
+                        if q.cmplt(glam::IVec3::ZERO).any() || q.cmpge(counts).any() {
+                            continue;
+                        }
+                        let qi = grid.probe_index(q.as_uvec3());
+                        for oo in [o, o ^ 1, o ^ 2, o ^ 4] {
+                            m = m.max(src[qi * OCTANTS + oo]);
+                        }
+                    }
+                }
+            }
+            dst[p * OCTANTS + o] = m;
+        }
+    }
+}
