@@ -201,14 +201,31 @@ impl MovingAverage {
         sample: L::Value,
         rounding: Rounding,
     ) -> u32 {
+        self.update_atomic_swap(layout, word, sample, rounding).1
+    }
+
+    /// [`update_atomic`](Self::update_atomic) returning `(before, after)`: the word this call's
+    /// update was applied to and the word it wrote (equal for a no-op update). The pairs of all
+    /// calls on one word chain into the serial order the swaps took effect in — a caller can
+    /// check a concurrent run against it, or compute the change an update made (a temporal
+    /// gradient) without a second read.
+    #[cfg(target_has_atomic = "32")]
+    #[inline]
+    pub fn update_atomic_swap<L: CountedLayout>(
+        &self,
+        layout: &L,
+        word: &AtomicU32,
+        sample: L::Value,
+        rounding: Rounding,
+    ) -> (u32, u32) {
         let mut current = word.load(Ordering::Relaxed);
         loop {
             let new = self.update(layout, current, sample, rounding);
             if new == current {
-                return new;
+                return (current, new);
             }
             match word.compare_exchange_weak(current, new, Ordering::AcqRel, Ordering::Relaxed) {
-                Ok(_) => return new,
+                Ok(_) => return (current, new),
                 Err(actual) => current = actual,
             }
         }
@@ -296,5 +313,25 @@ mod tests {
             assert_eq!(MovingAverage::STATIC.update_atomic(&L, &a, s, r), w);
         }
         assert_eq!(a.into_inner(), w);
+    }
+
+    #[test]
+    fn atomic_swap_reports_before_and_after() {
+        let a = AtomicU32::new(0);
+        let mut w = 0;
+        for i in 0..20 {
+            let s = Vec3::new(0.1 * i as f32, 0.2, 0.3);
+            let (before, after) =
+                MovingAverage::DYNAMIC.update_atomic_swap(&L, &a, s, Rounding::Down);
+            assert_eq!(before, w);
+            w = MovingAverage::DYNAMIC.update(&L, w, s, Rounding::Down);
+            assert_eq!(after, w);
+        }
+        // A no-op (NaN) update reports the unchanged word twice.
+        let nan = Vec3::new(f32::NAN, 0.0, 0.0);
+        assert_eq!(
+            MovingAverage::DYNAMIC.update_atomic_swap(&L, &a, nan, Rounding::Down),
+            (w, w)
+        );
     }
 }

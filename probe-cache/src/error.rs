@@ -26,6 +26,11 @@ pub enum ProbeError {
     NoChains,
     /// A chain step size (the probe spacing times its scale) is not finite.
     StepNotFinite,
+    /// A texel map's side length leaves no interior texel or exceeds the maximum.
+    MapSizeOutOfRange,
+    /// A word slice handed to [`crate::ProbeTexels::from_words`] (or copied out) does not have
+    /// one word per stored texel of the grid.
+    WordCountMismatch,
 }
 
 impl fmt::Display for ProbeError {
@@ -44,6 +49,12 @@ impl fmt::Display for ProbeError {
             ProbeError::ProxyBlockZero => "proxy block size is zero",
             ProbeError::NoChains => "chain count is zero",
             ProbeError::StepNotFinite => "chain step size is not finite",
+            ProbeError::MapSizeOutOfRange => {
+                "texel map side must leave at least one interior texel and be at most 1024"
+            }
+            ProbeError::WordCountMismatch => {
+                "word slice length does not match the grid's stored texel count"
+            }
         })
     }
 }
