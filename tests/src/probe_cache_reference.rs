@@ -37,13 +37,13 @@
 //! — and compared with [`reference_irradiance`] for the scene of that frame. The error of a set
 //! of probes is the relative RMS error √(Σ |E − E_ref|² / Σ |E_ref|²) over their texels.
 
-use glam::{Quat, Vec2, Vec3};
-use mcg_probe_cache::heuristics::{OCTANTS, dynamic_heuristic, octant, octant_signs};
+use glam::{Quat, UVec2, Vec2, Vec3};
+use mcg_probe_cache::heuristics::{self, OCTANTS, octant, octant_signs};
 use mcg_probe_cache::mcg_color_codec::MovingAverage;
 use mcg_probe_cache::scene::Scene;
 use mcg_probe_cache::{
     BlendWeights, DynamicScene, GuideParams, GuidingFunction, HeuristicParams, ProbeChains,
-    ProbeStepUniforms, ProbeTexels, ProxyGrid, RaySample, TexelConfig, reference_irradiance,
+    ProbeStepUniforms, ProbeTexels, ProxyGrid, RaySample, TexelConfig, TexelContent, reference_irradiance,
 };
 use rand::RngExt;
 
@@ -51,6 +51,10 @@ use crate::{Pcg64Mcg, seeded_rng};
 
 /// Share of the non-pilot budget ADGI may spend on dynamic samples in a frame.
 pub const DYNAMIC_SHARE: f32 = 0.75;
+
+/// Dynamic chains (ADGI runs 1024 dynamic chains next to 4096 static ones, sec. 5; here the
+/// static chains are sized to the budget, about 2500).
+pub const DYNAMIC_CHAINS: usize = 64;
 
 /// Q-DDGI's hysteresis 0.94 (ADGI Table 3) as a counted moving average: N_max = 17 gives
 /// 16/17 ≈ 0.941.
@@ -61,8 +65,13 @@ pub const QDDGI_MAX_COUNT: u32 = 17;
 /// ?, measured by the suite) so that each can reach it.
 pub const FRAMES_TO_ERROR_THRESHOLD: f64 = 0.2;
 
+/// Half-width of the spatial smoothing of the temporal gradients, in probes: 1 gives a
+/// 3 × 3 × 3 kernel. ADGI uses 5 × 5 × 5 on grids of 192 × 64 × 192 probes (sec. 4.1.4,
+/// Table 2); on this 20 × 4 × 8 grid that kernel would spread a change over half the grid.
+pub const SMOOTHING_RADIUS: i32 = 1;
+
 /// The decay per frame of the temporal trigger Tr (ADGI eq. 14, Fig. 6a).
-pub const TRIGGER_DECAY: f32 = 0.8;
+pub const TRIGGER_DECAY: f32 = 0.5;
 
 /// Settings of one experiment.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -89,7 +98,7 @@ impl ExperimentConfig {
     pub const TEST: Self = Self {
         frames: 48,
         event_frame: 16,
-        transition_frames: 4,
+        transition_frames: 2,
         rays_per_probe: 32,
         reference_strata: 12,
         near_radius: 1.0,
@@ -136,6 +145,10 @@ pub struct Experiment {
     /// Reference irradiance per distinct scene state: `(progress, E)` with E indexed
     /// `probe · texels.len() + k`.
     pub references: Vec<(f32, Vec<Vec3>)>,
+    /// The converged cache every run starts from (see [`WARM_START_RAYS_PER_TEXEL`]): per probe
+    /// and interior texel, DDGI's cosine-weighted mean radiance E/π and ADGI's mean radiance
+    /// over the texel.
+    pub warm_start: (Vec<Vec3>, Vec<Vec3>),
 }
 
 /// The per-frame record of one run.
@@ -151,6 +164,8 @@ pub struct Run {
     pub rays: Vec<u64>,
     /// Of them, the rays that started at a probe near the event.
     pub rays_near: Vec<u64>,
+    /// Of them, the rays of ADGI's dynamic chains.
+    pub rays_dynamic: Vec<u64>,
     /// Irradiance estimates (indexed like the references) at the frames asked for.
     pub snapshots: Vec<(u32, Vec<Vec3>)>,
 }
@@ -185,6 +200,7 @@ impl Experiment {
                 .collect();
             references.push((s, e));
         }
+        let warm_start = warm_start(&scene, &texel_config, &texels, config.seed);
         Self {
             config,
             scene,
@@ -192,6 +208,7 @@ impl Experiment {
             texels,
             near,
             references,
+            warm_start,
         }
     }
 
@@ -218,12 +235,23 @@ impl Experiment {
                 Renderer::adgi(self, policy == Policy::Adgi, &mut rng)
             }
         };
+        let (values, count) = match policy {
+            Policy::UniformDdgi => (&self.warm_start.0, QDDGI_MAX_COUNT),
+            _ => (&self.warm_start.1, MovingAverage::STATIC.max_count()),
+        };
+        let n = self.texels.len();
+        for p in 0..self.scene.grid.probe_count() {
+            for (k, &(index, _, _)) in self.texels.iter().enumerate() {
+                state.texels.set_irradiance(p, index, values[p * n + k], count);
+            }
+        }
         let mut run = Run {
             policy,
             error_near: Vec::new(),
             error_all: Vec::new(),
             rays: Vec::new(),
             rays_near: Vec::new(),
+            rays_dynamic: Vec::new(),
             snapshots: Vec::new(),
         };
         let near_mask = {
@@ -238,7 +266,8 @@ impl Experiment {
             let counter = state.frame(self, &scene, frame, &near_mask, &mut rng);
             run.rays.push(counter.rays);
             run.rays_near.push(counter.rays_near);
-            let estimate = self.estimate(&state.texels, state.radiance_texels);
+            run.rays_dynamic.push(counter.rays_dynamic);
+            let estimate = self.estimate(&state.texels, state.content);
             let reference = self.reference(frame);
             run.error_near
                 .push(self.relative_rms(&estimate, reference, self.near.iter().copied()));
@@ -254,31 +283,17 @@ impl Experiment {
         run
     }
 
-    /// Every probe's irradiance at its interior texel directions, from the texels.
+    /// Every probe's irradiance at its interior texel directions, from the texels
+    /// ([`ProbeTexels::probe_irradiance`]).
     #[must_use]
-    pub fn estimate(&self, texels: &ProbeTexels, radiance_texels: bool) -> Vec<Vec3> {
-        let n = self.texels.len();
-        let mut out = Vec::with_capacity(self.scene.grid.probe_count() * n);
-        let mut values = vec![Vec3::ZERO; n];
-        for p in 0..self.scene.grid.probe_count() {
-            for (v, &(i, _, _)) in values.iter_mut().zip(&self.texels) {
-                *v = texels.irradiance(p, i);
-            }
-            for (k, &(_, dir, _)) in self.texels.iter().enumerate() {
-                let e = if radiance_texels {
-                    values
-                        .iter()
-                        .zip(&self.texels)
-                        .map(|(&l, &(_, d, omega))| l * (dir.dot(d).max(0.0) * omega))
-                        .sum::<Vec3>()
-                } else {
-                    // The texel at this very direction: its centre, bilinear weight 1.
-                    values[k] * core::f32::consts::PI
-                };
-                out.push(e);
-            }
-        }
-        out
+    pub fn estimate(&self, texels: &ProbeTexels, content: TexelContent) -> Vec<Vec3> {
+        (0..self.scene.grid.probe_count())
+            .flat_map(|p| {
+                self.texels
+                    .iter()
+                    .map(move |&(_, dir, _)| texels.probe_irradiance(p, dir, content))
+            })
+            .collect()
     }
 
     /// √(Σ |E − E_ref|² / Σ |E_ref|²) over the texels of `probes`.
@@ -299,6 +314,63 @@ impl Experiment {
         }
         if den > 0.0 { (num / den).sqrt() } else { 0.0 }
     }
+}
+
+/// Rays per interior texel of the warm start: every run starts from a converged cache of the
+/// scene before the event, built from this many rays per texel of every probe (uniform in the
+/// texel's square), so that the comparison measures the response to the event and each
+/// policy's own steady state, not how fast an empty cache fills (ADGI's per-sample texels, at
+/// under one sample per texel and frame, take about a hundred frames to fill their N_max = 63
+/// window; DDGI's blend fills its 17 in 17 frames). DDGI's texels get the cosine-weighted mean
+/// of all the probe's rays with count 17, ADGI's the mean of the texel's own rays with count
+/// 63. The visibility texels start empty (no error here reads them).
+pub const WARM_START_RAYS_PER_TEXEL: u32 = 32;
+
+fn warm_start(
+    scene: &DynamicScene,
+    config: &TexelConfig,
+    texels: &[(usize, Vec3, f32)],
+    seed: u64,
+) -> (Vec<Vec3>, Vec<Vec3>) {
+    let mut rng = seeded_rng(seed ^ 0x3a27_1d5f);
+    let state = scene.at_frame(0);
+    let map = config.irradiance_map;
+    let grid = scene.grid;
+    let mut ddgi = Vec::with_capacity(grid.probe_count() * texels.len());
+    let mut adgi = Vec::with_capacity(grid.probe_count() * texels.len());
+    let mut rays: Vec<(Vec3, Vec3)> = Vec::new();
+    for p in 0..grid.probe_count() {
+        let pos = grid.probe_position(grid.probe_coords(p));
+        rays.clear();
+        for &(index, _, _) in texels {
+            let t = map.coords(index) - UVec2::ONE;
+            let mut sum = Vec3::ZERO;
+            for _ in 0..WARM_START_RAYS_PER_TEXEL {
+                let uv = (t.as_vec2() + Vec2::new(rng.random(), rng.random()))
+                    * (2.0 / map.interior() as f32)
+                    - Vec2::ONE;
+                let d = map.decode(uv);
+                let l = state
+                    .trace_probe_ray(pos, d, Vec2::new(rng.random(), rng.random()))
+                    .radiance;
+                sum += l;
+                rays.push((d, l));
+            }
+            adgi.push(sum / WARM_START_RAYS_PER_TEXEL as f32);
+        }
+        for &(_, n, _) in texels {
+            let (mut num, mut den) = (Vec3::ZERO, 0.0_f32);
+            for &(d, l) in &rays {
+                // Rays uniform per texel square are not uniform in solid angle: weight each by
+                // its texel's solid angle over the texels' mean.
+                let w = n.dot(d).max(0.0) * map.solid_angle(map.texel(d)) / map.mean_solid_angle();
+                num += w * l;
+                den += w;
+            }
+            ddgi.push(if den > 0.0 { num / den } else { Vec3::ZERO });
+        }
+    }
+    (ddgi, adgi)
 }
 
 /// Frames from `from` until the error settles below `threshold`: the smallest k such that
@@ -324,12 +396,13 @@ pub fn mean_error(errors: &[f64], from: u32, to: u32) -> f64 {
 struct RayCounter {
     rays: u64,
     rays_near: u64,
+    rays_dynamic: u64,
 }
 
 /// The state of one policy across frames.
 struct Renderer {
     texels: ProbeTexels,
-    radiance_texels: bool,
+    content: TexelContent,
     adgi: Option<AdgiState>,
 }
 
@@ -390,7 +463,7 @@ impl Renderer {
         config.moving_average = MovingAverage::new(QDDGI_MAX_COUNT).expect("N_max > 0");
         Self {
             texels: ProbeTexels::new(exp.scene.grid, config),
-            radiance_texels: false,
+            content: TexelContent::Irradiance,
             adgi: None,
         }
     }
@@ -407,7 +480,7 @@ impl Renderer {
             ProbeChains::new_static(grid, static_rays.div_ceil(per_chain).max(1), &mut init)
                 .expect("valid chains");
         let dynamic_chains =
-            ProbeChains::new_dynamic(grid, 16, &mut init).expect("valid chains");
+            ProbeChains::new_dynamic(grid, DYNAMIC_CHAINS, &mut init).expect("valid chains");
         let proxies = dynamic_chains.cells().table_len();
         let map = exp.texel_config.irradiance_map;
         let mut octant_texels = vec![Vec::new(); OCTANTS];
@@ -417,7 +490,7 @@ impl Renderer {
         let _ = map;
         Self {
             texels: ProbeTexels::new(grid, exp.texel_config),
-            radiance_texels: true,
+            content: TexelContent::Radiance,
             adgi: Some(AdgiState {
                 guided,
                 params: HeuristicParams::new(1.0e6, grid.cell_diagonal())
@@ -573,16 +646,18 @@ impl Renderer {
         }
         smooth(grid, &a.trig_v, &mut a.smooth_v);
         smooth(grid, &a.trig_r, &mut a.smooth_r);
-        // f_c = 1: the camera sees the whole grid.
+        // f_c = 1: the camera sees the whole grid. The heuristics go through their 6-10-10
+        // word (sec. 4.3), whose 10-bit f_d ends a decayed trigger at 0.
         for k in 0..probes * OCTANTS {
-            a.f_s[k] = a.f_v[k];
-            a.f_d[k] = dynamic_heuristic(
+            let h = heuristics::decode(heuristics::encode(a.params.compose(
                 1.0,
-                a.f_s[k],
+                a.f_v[k],
                 a.smooth_v[k],
                 a.smooth_r[k],
-                a.params.lighting_weight(),
-            );
+                0,
+            )));
+            a.f_s[k] = h.f_s;
+            a.f_d[k] = h.f_d;
         }
 
         // 3. Dynamic chains on the proxies (sec. 4.9): each sample = one octant of every probe
@@ -594,6 +669,13 @@ impl Renderer {
             .max_pool(&a.f_d, &mut a.proxy_f_d)
             .expect("table sizes");
         let any_change = a.proxy_f_d.iter().any(|&v| v > 0.0);
+        if std::env::var("PC_DEBUG").is_ok() && (17..=19).contains(&frame) {
+            for (i, c) in a.proxy_f_d.chunks(8).enumerate() {
+                if c.iter().any(|&v| v > 0.0) {
+                    eprintln!("frame {frame} proxy {i} {:?}: {:?}", proxies.proxy_coords(i), c);
+                }
+            }
+        }
         let mut dynamic_rays = 0_u64;
         if any_change || !a.guided {
             let samples: Vec<_> = if a.guided {
@@ -609,6 +691,7 @@ impl Renderer {
                     .step_frame(&guide, || step_uniforms(rng))
                     .to_vec()
             };
+            let map = self.texels.config().irradiance_map;
             let mut capped = vec![false; probes];
             'samples: for s in samples {
                 for coords in proxies.probes_of(s.cell as usize) {
@@ -624,7 +707,13 @@ impl Renderer {
                         capped[p] = true;
                     }
                     let pos = grid.probe_position(coords);
-                    for &(_, d) in texels {
+                    for &(index, _) in texels {
+                        // A direction uniform in the texel's square (see DYNAMIC_JITTER).
+                        let t = map.coords(index) - UVec2::ONE;
+                        let uv = (t.as_vec2() + Vec2::new(rng.random(), rng.random()))
+                            * (2.0 / map.interior() as f32)
+                            - Vec2::ONE;
+                        let d = map.decode(uv);
                         let hit =
                             scene.trace_probe_ray(pos, d, Vec2::new(rng.random(), rng.random()));
                         self.texels.update_sample(
@@ -645,6 +734,7 @@ impl Renderer {
             }
         }
         counter.rays += dynamic_rays;
+        counter.rays_dynamic = dynamic_rays;
 
         // 4. Static chains (sec. 4.8): h = exp(min(ĝ/f_s, 1)) f_s, ĝ = the octant's mean cached
         //    luminance, with the rest of the budget; one texel update per sample.
@@ -702,13 +792,14 @@ impl Renderer {
 /// probes around each probe, of the same octant and its three neighbours (one sign flipped).
 fn smooth(grid: mcg_probe_cache::ProbeGrid, src: &[f32], dst: &mut [f32]) {
     let counts = grid.counts().as_ivec3();
+    let r = SMOOTHING_RADIUS;
     for p in 0..grid.probe_count() {
         let c = grid.probe_coords(p).as_ivec3();
         for o in 0..OCTANTS {
             let mut m = 0.0_f32;
-            for dz in -2..=2 {
-                for dy in -2..=2 {
-                    for dx in -2..=2 {
+            for dz in -r..=r {
+                for dy in -r..=r {
+                    for dx in -r..=r {
                         let q = c + glam::IVec3::new(dx, dy, dz);
                         if q.cmplt(glam::IVec3::ZERO).any() || q.cmpge(counts).any() {
                             continue;
