@@ -26,6 +26,10 @@ pub enum ProbeError {
     NoChains,
     /// A chain step size (the probe spacing times its scale) is not finite.
     StepNotFinite,
+    /// A temporal trigger's decay θ is not in [0, 1).
+    TriggerDecayOutOfRange,
+    /// A clip volume's plane or box is NaN, degenerate or inverted.
+    ClipVolumeInvalid,
 }
 
 impl fmt::Display for ProbeError {
@@ -44,6 +48,8 @@ impl fmt::Display for ProbeError {
             ProbeError::ProxyBlockZero => "proxy block size is zero",
             ProbeError::NoChains => "chain count is zero",
             ProbeError::StepNotFinite => "chain step size is not finite",
+            ProbeError::TriggerDecayOutOfRange => "temporal trigger decay is not in [0, 1)",
+            ProbeError::ClipVolumeInvalid => "clip volume plane or box is invalid",
         })
     }
 }

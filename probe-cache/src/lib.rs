@@ -11,7 +11,10 @@
 //! | [`heuristics`], [`HeuristicParams`] | f_c, f_v, f_r; f_s, f_d; the 6-10-10 heuristics word | ADGI eq. 10-12, 19-20, sec. 4.3 |
 //! | [`GuidingFunction`], [`GuideParams`], [`Guide`] | h(p, ω) = exp(α ĝ/f)·f per probe octant; static and dynamic forms | ADGI eq. 2, sec. 4.8, 4.9 |
 //! | [`ProxyGrid`] | probes grouped into 3×3×3 virtual proxies, max-pooled octants | ADGI sec. 4.9 |
+//! | [`temporal_gradient`], [`ChangeDetector`], [`TemporalTrigger`], [`SmoothingKernel`] | temporal gradients of f_v, f_r, trigger, 5×5×5 × octant smoothing | ADGI eq. 13-18, Fig. 6a |
+//! | [`pilot_rays`], [`PilotFrame`], [`PilotRay`], [`PilotHit`] | one stratified pilot ray per octant, `AABBCC…` direction pattern | ADGI sec. 4.1, 4.4 |
 //! | [`ProbeChains`], [`ProbeSample`], [`ChainKind`] | static and dynamic Metropolis chains over (position, cos θ, φ) | ADGI Alg. 1, 5, sec. 4.8, 4.9 |
+//! | [`clip_volume`], [`ClipVolumes`], [`Frustum`] | inner / outer clip volumes, shell count reset N ≤ 16 | ADGI Fig. 6b, sec. 4.4, 4.8 |
 //!
 //! ## Conventions
 //! - Positions and directions are [`glam::Vec3`] (f32); colours are linear RGB.
@@ -38,21 +41,27 @@
 pub use glam;
 pub use mcg_color_codec;
 
+pub mod clip_volume;
 mod error;
 mod grid;
 pub mod guiding_function;
 pub mod heuristics;
+pub mod pilot_rays;
 pub mod probe_chains;
 pub mod proxies;
+pub mod temporal_gradient;
 
+pub use clip_volume::{ClipRegion, ClipVolume, ClipVolumes, Frustum};
 pub use error::ProbeError;
 pub use grid::{ProbeCell, ProbeGrid};
 pub use guiding_function::{Guide, GuideParams, GuidingFunction, HeuristicField};
 pub use heuristics::HeuristicParams;
+pub use pilot_rays::{PilotFrame, PilotHit, PilotPhase, PilotRay};
 pub use probe_chains::{
     ChainKind, FrameStats, ProbeChainState, ProbeChains, ProbeSample, ProbeStepUniforms,
 };
 pub use proxies::ProxyGrid;
+pub use temporal_gradient::{ChangeDetector, SmoothingKernel, TemporalTrigger};
 
 /// The README's example, compiled and run as a doctest.
 #[cfg(doctest)]

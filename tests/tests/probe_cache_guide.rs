@@ -202,7 +202,10 @@ fn dynamic_chains_follow_proxy_h() {
         &expected,
         0.001,
     );
-    println!("dynamic chains: {result:?}, last frame {:?}", chains.stats());
+    println!(
+        "dynamic chains: {result:?}, last frame {:?}",
+        chains.stats()
+    );
 }
 
 /// The guide built from f_s decoded out of 6-10-10 heuristics words (sec. 4.3) equals the f32
