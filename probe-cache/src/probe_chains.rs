@@ -94,9 +94,9 @@ pub fn fold_direction(z: f32, phi: f32) -> [f32; 2] {
     // Fast paths for the usual small excursion past one boundary.
     let z = if (-1.0..=1.0).contains(&z) {
         z
-    } else if z > 1.0 && z <= 3.0 {
+    } else if (1.0..=3.0).contains(&z) {
         2.0 - z
-    } else if z < -1.0 && z >= -3.0 {
+    } else if (-3.0..-1.0).contains(&z) {
         -2.0 - z
     } else {
         // Reflection at ±1 has period 4: t = (z + 1) mod 4 ∈ [0, 4), folded to [0, 2].
@@ -108,9 +108,9 @@ pub fn fold_direction(z: f32, phi: f32) -> [f32; 2] {
     };
     let mut phi = if (0.0..TAU).contains(&phi) {
         phi
-    } else if phi < 0.0 && phi >= -TAU {
+    } else if (-TAU..0.0).contains(&phi) {
         phi + TAU
-    } else if phi >= TAU && phi < 2.0 * TAU {
+    } else if (TAU..2.0 * TAU).contains(&phi) {
         phi - TAU
     } else {
         phi.rem_euclid(TAU)
