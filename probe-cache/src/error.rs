@@ -30,6 +30,8 @@ pub enum ProbeError {
     TriggerDecayOutOfRange,
     /// A clip volume's plane or box is NaN, degenerate or inverted.
     ClipVolumeInvalid,
+    /// A pilot schedule holds its directions for fewer than 2 frames.
+    PilotHoldTooShort,
 }
 
 impl fmt::Display for ProbeError {
@@ -50,6 +52,7 @@ impl fmt::Display for ProbeError {
             ProbeError::StepNotFinite => "chain step size is not finite",
             ProbeError::TriggerDecayOutOfRange => "temporal trigger decay is not in [0, 1)",
             ProbeError::ClipVolumeInvalid => "clip volume plane or box is invalid",
+            ProbeError::PilotHoldTooShort => "pilot directions must be held for at least 2 frames",
         })
     }
 }

@@ -56,7 +56,7 @@ pub use error::ProbeError;
 pub use grid::{ProbeCell, ProbeGrid};
 pub use guiding_function::{Guide, GuideParams, GuidingFunction, HeuristicField};
 pub use heuristics::HeuristicParams;
-pub use pilot_rays::{PilotFrame, PilotHit, PilotPhase, PilotRay};
+pub use pilot_rays::{PilotFrame, PilotHit, PilotPhase, PilotRay, PilotSchedule};
 pub use probe_chains::{
     ChainKind, FrameStats, ProbeChainState, ProbeChains, ProbeSample, ProbeStepUniforms,
 };

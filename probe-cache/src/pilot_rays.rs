@@ -14,13 +14,20 @@
 //! The same set twice must use the same uniforms: the caller's uniform source is keyed by
 //! (pattern, probe, octant) — e.g. a hash of them with a seed — not by frame.
 //!
+//! **Blind spot.** A change that happens exactly between two pairs (after frame `2k + 1`, before
+//! frame `2k + 2`) never shows in a gradient — each gradient compares two frames of one pair —
+//! so a light that switches on at that instant is not detected (sec. 4.4 accepts "halving the
+//! detection frequency"; gradual changes are always seen). [`PilotSchedule::new`] with a longer
+//! hold (`AAAABBBB…`) detects at every frame but the first of each set, so only one transition
+//! in `hold` is blind; [`PilotSchedule::ADGI`] (hold 2) is the paper's pattern.
+//!
 //! A pilot ray along ω measures two heuristics (eq. 11, 12): f_r of octant(ω) (the luminance
 //! arriving along ω) and f_v of octant(−ω) = `octant(ω) ^ 7` (eq. 11 traces t = trace(p, −ω)).
 
 use glam::{Vec2, Vec3};
 
-use crate::ProbeGrid;
 use crate::heuristics::{HeuristicParams, OCTANTS, octant_signs};
+use crate::{ProbeError, ProbeGrid};
 
 /// The two frames of a pilot direction set (sec. 4.4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -33,17 +40,70 @@ pub enum PilotPhase {
     Detect,
 }
 
+/// How long each pilot direction set is held: ADGI's `AABBCC…` (hold 2, sec. 4.4) or longer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct PilotSchedule {
+    hold: u32,
+}
+
+impl PilotSchedule {
+    /// ADGI's pattern: each direction set on two consecutive frames (`AABBCC…`).
+    pub const ADGI: Self = Self { hold: 2 };
+
+    /// Each direction set held for `hold` consecutive frames; the first frame of each set is
+    /// the reference, the others detect changes against the frame before.
+    ///
+    /// # Errors
+    /// [`ProbeError::PilotHoldTooShort`] for `hold < 2` (a gradient needs two frames with the
+    /// same rays).
+    pub const fn new(hold: u32) -> Result<Self, ProbeError> {
+        if hold < 2 {
+            return Err(ProbeError::PilotHoldTooShort);
+        }
+        Ok(Self { hold })
+    }
+
+    /// Frames per direction set.
+    #[inline]
+    #[must_use]
+    pub const fn hold(&self) -> u32 {
+        self.hold
+    }
+
+    /// The pilot frame of frame number `frame`.
+    #[inline]
+    #[must_use]
+    pub const fn frame(&self, frame: u64) -> PilotFrame {
+        let hold = self.hold as u64;
+        PilotFrame {
+            pattern: frame / hold,
+            phase: if frame % hold == 0 {
+                PilotPhase::Reference
+            } else {
+                PilotPhase::Detect
+            },
+        }
+    }
+}
+
+impl Default for PilotSchedule {
+    /// [`PilotSchedule::ADGI`].
+    fn default() -> Self {
+        Self::ADGI
+    }
+}
+
 /// Which direction set a frame traces and what its results are for (sec. 4.4's `AABBCC…`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct PilotFrame {
-    /// Index of the direction set, `frame / 2` (A = 0, B = 1, …); key the uniforms by it.
+    /// Index of the direction set, `frame / hold` (A = 0, B = 1, …); key the uniforms by it.
     pub pattern: u64,
     /// First or second frame of the pair.
     pub phase: PilotPhase,
 }
 
 impl PilotFrame {
-    /// The pilot frame of frame number `frame`.
+    /// The pilot frame of frame number `frame` in ADGI's pattern ([`PilotSchedule::ADGI`]).
     ///
     /// # Example
     /// ```
@@ -55,25 +115,18 @@ impl PilotFrame {
     #[inline]
     #[must_use]
     pub const fn of(frame: u64) -> Self {
-        Self {
-            pattern: frame / 2,
-            phase: if frame.is_multiple_of(2) {
-                PilotPhase::Reference
-            } else {
-                PilotPhase::Detect
-            },
-        }
+        PilotSchedule::ADGI.frame(frame)
     }
 
     /// Whether this frame's pilot results update the irradiance and visibility caches (the
-    /// first frame of each pair; the second would add the same directions twice).
+    /// first frame of each set; later frames would add the same directions again).
     #[inline]
     #[must_use]
     pub const fn updates_caches(&self) -> bool {
         matches!(self.phase, PilotPhase::Reference)
     }
 
-    /// Whether this frame measures the temporal gradient against the pair's first frame.
+    /// Whether this frame measures the temporal gradient against the frame before (same rays).
     #[inline]
     #[must_use]
     pub const fn measures_gradient(&self) -> bool {
@@ -188,6 +241,17 @@ mod tests {
             assert_eq!(f.updates_caches(), frame % 2 == 0);
             assert_eq!(f.measures_gradient(), frame % 2 == 1);
         }
+    }
+
+    #[test]
+    fn longer_holds() {
+        let s = PilotSchedule::new(4).unwrap();
+        let phases: Vec<bool> = (0..8).map(|f| s.frame(f).measures_gradient()).collect();
+        assert_eq!(phases, [false, true, true, true, false, true, true, true]);
+        assert_eq!(s.frame(7).pattern, 1);
+        assert_eq!(s.hold(), 4);
+        assert_eq!(PilotSchedule::new(1), Err(ProbeError::PilotHoldTooShort));
+        assert_eq!(PilotSchedule::default(), PilotSchedule::ADGI);
     }
 
     #[test]

@@ -241,8 +241,9 @@ pub fn spatial_smoothing(
 /// measurement, the triggers' states and the smoothed outputs f_Δv, f_Δr.
 ///
 /// With the alternating pilot pattern (sec. 4.4, [`PilotSchedule`](crate::pilot_rays::PilotSchedule)),
-/// call [`Self::set_reference`] with the first frame's f_v, f_r tables of each pair and
-/// [`Self::detect`] with the second's, so the gradient compares identical ray sets.
+/// call [`Self::set_reference`] with the f_v, f_r tables of the first frame of each direction
+/// set and [`Self::detect`] with the later ones', so each gradient compares identical ray sets.
+/// `detect` then keeps its input as the reference of the next `detect` (for holds > 2).
 #[derive(Clone, Debug)]
 pub struct ChangeDetector {
     grid: ProbeGrid,
@@ -289,20 +290,32 @@ impl ChangeDetector {
         Ok(())
     }
 
-    /// One detection (the second frame of a pilot pair): gradients against the reference
-    /// (eq. 13, 16), triggers (eq. 14, 17), smoothing (eq. 15, 18). Returns (f_Δv, f_Δr), also
-    /// available from [`Self::delta_visibility`] and [`Self::delta_radiance`].
+    /// One detection (a later frame of a pilot direction set): gradients against the reference
+    /// (eq. 13, 16), triggers (eq. 14, 17), smoothing (eq. 15, 18); the input becomes the new
+    /// reference. Returns (f_Δv, f_Δr), also available from [`Self::delta_visibility`] and
+    /// [`Self::delta_radiance`].
     ///
     /// # Errors
     /// [`ProbeError::TableLengthMismatch`] unless both have `probe_count · 8` entries.
     pub fn detect(&mut self, f_v: &[f32], f_r: &[f32]) -> Result<(&[f32], &[f32]), ProbeError> {
         for (current, reference, state, delta) in [
-            (f_v, &self.reference_v, &mut self.state_v, &mut self.delta_v),
-            (f_r, &self.reference_r, &mut self.state_r, &mut self.delta_r),
+            (
+                f_v,
+                &mut self.reference_v,
+                &mut self.state_v,
+                &mut self.delta_v,
+            ),
+            (
+                f_r,
+                &mut self.reference_r,
+                &mut self.state_r,
+                &mut self.delta_r,
+            ),
         ] {
             temporal_gradient(current, reference, delta)?;
             self.trigger.apply_slice(delta, state)?;
             spatial_smoothing(&self.grid, self.kernel, state, delta, &mut self.scratch)?;
+            reference.copy_from_slice(current);
         }
         Ok((&self.delta_v, &self.delta_r))
     }
@@ -455,8 +468,7 @@ mod tests {
         assert!((dv[9] - 0.6).abs() < 1e-6);
         assert!(dv.iter().enumerate().all(|(i, &x)| i == 9 || x == 0.0));
         assert!(dr.iter().all(|&x| x == 0.0));
-        // Next pair: no change → the trigger halves.
-        d.set_reference(&v1, &r0).unwrap();
+        // Next detection (the reference is now v1): no change → the trigger halves.
         d.detect(&v1, &r0).unwrap();
         assert!((d.delta_visibility()[9] - 0.3).abs() < 1e-6);
         assert!((d.trigger_states().0[9] - 0.3).abs() < 1e-6);
