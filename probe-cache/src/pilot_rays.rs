@@ -77,7 +77,7 @@ impl PilotSchedule {
         let hold = self.hold as u64;
         PilotFrame {
             pattern: frame / hold,
-            phase: if frame % hold == 0 {
+            phase: if frame.is_multiple_of(hold) {
                 PilotPhase::Reference
             } else {
                 PilotPhase::Detect
