@@ -31,6 +31,12 @@ pub enum ProbeError {
     /// A word slice handed to [`crate::ProbeTexels::from_words`] (or copied out) does not have
     /// one word per stored texel of the grid.
     WordCountMismatch,
+    /// A temporal trigger's decay θ is not in [0, 1).
+    TriggerDecayOutOfRange,
+    /// A clip volume's plane or box is NaN, degenerate or inverted.
+    ClipVolumeInvalid,
+    /// A pilot schedule holds its directions for fewer than 2 frames.
+    PilotHoldTooShort,
 }
 
 impl fmt::Display for ProbeError {
@@ -55,6 +61,9 @@ impl fmt::Display for ProbeError {
             ProbeError::WordCountMismatch => {
                 "word slice length does not match the grid's stored texel count"
             }
+            ProbeError::TriggerDecayOutOfRange => "temporal trigger decay is not in [0, 1)",
+            ProbeError::ClipVolumeInvalid => "clip volume plane or box is invalid",
+            ProbeError::PilotHoldTooShort => "pilot directions must be held for at least 2 frames",
         })
     }
 }

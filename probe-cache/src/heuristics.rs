@@ -289,6 +289,39 @@ impl HeuristicParams {
     }
 }
 
+/// The heuristics words of a whole grid for one frame (sec. 4.1-4.3): for every probe and
+/// octant, f_c of the probe's distance to `camera` (eq. 10), f_v from the pilot rays (eq. 11),
+/// f_s and f_d composed with the smoothed changes f_Δv, f_Δr (eq. 19-20, see
+/// [`ChangeDetector`](crate::temporal_gradient::ChangeDetector)), packed into `out` (sec. 4.3).
+/// The flag bits already in `out` are kept. Tables are indexed `probe_index · 8 + octant`.
+///
+/// # Errors
+/// [`ProbeError::TableLengthMismatch`] unless every table has `probe_count · 8` entries.
+pub fn compose_grid(
+    grid: &crate::ProbeGrid,
+    params: &HeuristicParams,
+    camera: Vec3,
+    f_v: &[f32],
+    delta_v: &[f32],
+    delta_r: &[f32],
+    out: &mut [HeuristicsWord],
+) -> Result<(), ProbeError> {
+    let n = grid.probe_count() * OCTANTS;
+    if f_v.len() != n || delta_v.len() != n || delta_r.len() != n || out.len() != n {
+        return Err(ProbeError::TableLengthMismatch);
+    }
+    let layout = HeuristicsLayout::ADGI;
+    for probe in 0..grid.probe_count() {
+        let f_c = params.f_c(grid.probe_position(grid.probe_coords(probe)), camera);
+        for o in 0..OCTANTS {
+            let i = probe * OCTANTS + o;
+            let flags = layout.flags(out[i]);
+            out[i] = layout.encode(params.compose(f_c, f_v[i], delta_v[i], delta_r[i], flags));
+        }
+    }
+    Ok(())
+}
+
 /// Packs heuristics into ADGI's 6-10-10 + 6-flag word (sec. 4.3, [`HeuristicsLayout::ADGI`]),
 /// rounding to nearest.
 #[inline]
@@ -430,6 +463,28 @@ mod tests {
         assert!((back.f_s - h.f_s).abs() <= 0.5 / 1023.0);
         assert!((back.f_d - h.f_d).abs() <= 0.5 / 1023.0);
         assert_eq!(back.flags, h.flags);
+    }
+
+    #[test]
+    fn compose_grid_by_hand() {
+        let grid = crate::ProbeGrid::new(Vec3::ZERO, Vec3::ONE, glam::UVec3::new(2, 1, 1)).unwrap();
+        let p = HeuristicParams::new(0.5, 1.0).unwrap();
+        let f_v = [0.5; 16];
+        let mut dv = [0.0; 16];
+        dv[9] = 1.0; // probe 1, octant 1
+        let dr = [0.0; 16];
+        let mut out = [HeuristicsWord(0); 16];
+        out[9] = HeuristicsLayout::ADGI.with_flags(out[9], 5);
+        compose_grid(&grid, &p, Vec3::ZERO, &f_v, &dv, &dr, &mut out).unwrap();
+        // Probe 0 at the camera: f_c = 1, f_s = 0.5. Probe 1 at distance 1, k = 0.5:
+        // f_c = e^{−0.5} = 0.60653, f_s = 0.30327; octant 1: f_d = 0.30327 · 1/3 = 0.10109.
+        let h0 = decode(out[0]);
+        assert!((h0.f_s - 0.5).abs() < 1e-3 && h0.f_d == 0.0);
+        let h9 = decode(out[9]);
+        assert!((h9.f_s - 0.303_27).abs() < 1e-3, "{h9:?}");
+        assert!((h9.f_d - 0.101_09).abs() < 1e-3, "{h9:?}");
+        assert_eq!(h9.flags, 5);
+        assert!(compose_grid(&grid, &p, Vec3::ZERO, &f_v[1..], &dv, &dr, &mut out).is_err());
     }
 
     #[test]

@@ -91,16 +91,34 @@ pub fn fold_direction(z: f32, phi: f32) -> [f32; 2] {
     if !(z.is_finite() && phi.is_finite()) {
         return [1.0, 0.0];
     }
-    // Reflection at ±1 has period 4: t = (z + 1) mod 4 ∈ [0, 4), folded to [0, 2].
-    let mut t = (z + 1.0).rem_euclid(4.0);
-    if t > 2.0 {
-        t = 4.0 - t;
-    }
-    let mut phi = phi.rem_euclid(TAU);
+    // Fast paths for the usual small excursion past one boundary.
+    let z = if (-1.0..=1.0).contains(&z) {
+        z
+    } else if (1.0..=3.0).contains(&z) {
+        2.0 - z
+    } else if (-3.0..-1.0).contains(&z) {
+        -2.0 - z
+    } else {
+        // Reflection at ±1 has period 4: t = (z + 1) mod 4 ∈ [0, 4), folded to [0, 2].
+        let mut t = (z + 1.0).rem_euclid(4.0);
+        if t > 2.0 {
+            t = 4.0 - t;
+        }
+        t - 1.0
+    };
+    let mut phi = if (0.0..TAU).contains(&phi) {
+        phi
+    } else if (-TAU..0.0).contains(&phi) {
+        phi + TAU
+    } else if (TAU..2.0 * TAU).contains(&phi) {
+        phi - TAU
+    } else {
+        phi.rem_euclid(TAU)
+    };
     if phi >= TAU {
-        phi = 0.0; // rem_euclid can round up to TAU for tiny negative inputs
+        phi = 0.0; // rounding can reach TAU for tiny negative inputs
     }
-    [t - 1.0, phi]
+    [z, phi]
 }
 
 /// Static or dynamic chains (sec. 4.8, 4.9): their step sizes and whether emitted
@@ -371,15 +389,27 @@ impl ProbeChains {
         self.stats
     }
 
-    /// h at a chain state: the guide at the folded state, 0 outside the domain.
+    /// Where chain state `x` points: its position, nearest probe (if inside the domain), folded
+    /// direction coordinates and unit direction.
     #[inline]
-    fn target<G: Guide + ?Sized>(cells: &ProxyGrid, guide: &G, x: &[f32; CHAIN_DIMENSIONS]) -> f32 {
-        let p = Vec3::new(x[0], x[1], x[2]);
-        if cells.nearest_probe(p).is_none() {
+    fn locate(cells: &ProxyGrid, x: &[f32; CHAIN_DIMENSIONS]) -> Located {
+        let position = Vec3::new(x[0], x[1], x[2]);
+        let folded = fold_direction(x[3], x[4]);
+        Located {
+            position,
+            probe: cells.nearest_probe(position),
+            folded,
+            direction: direction_from_chain(folded[0], folded[1]),
+        }
+    }
+
+    /// h at a located state: the guide, 0 outside the domain or for a bad value.
+    #[inline]
+    fn target<G: Guide + ?Sized>(guide: &G, at: &Located) -> f32 {
+        if at.probe.is_none() {
             return 0.0;
         }
-        let [z, phi] = fold_direction(x[3], x[4]);
-        guide.h(p, direction_from_chain(z, phi))
+        finite_or_zero(guide.h(at.position, at.direction))
     }
 
     /// Runs one frame of every chain (Alg. 1) against `guide` and returns the emitted samples
@@ -394,8 +424,14 @@ impl ProbeChains {
         G: Guide + ?Sized,
         U: FnMut() -> ProbeStepUniforms,
     {
+        if self.kind == ChainKind::Dynamic {
+            // Clear only the bits the last frame set (the table may be large).
+            for s in &self.samples {
+                let bit = s.cell as usize * OCTANTS + s.octant as usize;
+                self.claimed[bit / 64] = 0;
+            }
+        }
         self.samples.clear();
-        self.claimed.fill(0);
         let mut stats = FrameStats::default();
         let cells = self.cells;
         let walk = self.walk;
@@ -403,39 +439,43 @@ impl ProbeChains {
         let dedupe = self.kind == ChainKind::Dynamic;
         for c in 0..self.chains.len() {
             let mut chain = self.chains[c];
-            chain.target = finite_or_zero(Self::target(&cells, guide, &chain.x));
+            let mut current = Self::locate(&cells, &chain.x);
+            chain.target = Self::target(guide, &current);
             if chain.target == 0.0 {
                 // Independence restart of a chain outside the support.
                 let u = uniforms();
-                let x = self.uniform_state(&u.proposal);
-                chain = ProbeChainState {
-                    x,
-                    target: finite_or_zero(Self::target(&cells, guide, &x)),
-                };
+                chain.x = self.uniform_state(&u.proposal);
+                current = Self::locate(&cells, &chain.x);
+                chain.target = Self::target(guide, &current);
                 stats.restarts += 1;
             }
             for i in 0..schedule.iterations() {
                 let u = uniforms();
-                let accepted = walk.step(&mut chain, |x| Self::target(&cells, guide, x), &u);
+                let mut proposed = current;
+                let accepted = walk.step(
+                    &mut chain,
+                    |x| {
+                        proposed = Self::locate(&cells, x);
+                        Self::target(guide, &proposed)
+                    },
+                    &u,
+                );
                 stats.proposals += 1;
                 if accepted {
                     stats.accepted += 1;
-                    let [z, phi] = fold_direction(chain.x[3], chain.x[4]);
-                    chain.x[3] = z;
-                    chain.x[4] = phi;
+                    chain.x[3] = proposed.folded[0];
+                    chain.x[4] = proposed.folded[1];
+                    current = proposed;
                 }
                 if i < schedule.burn_in() {
                     continue;
                 }
-                let position = Vec3::new(chain.x[0], chain.x[1], chain.x[2]);
-                let probe = cells.nearest_probe(position);
-                let (Some(probe), true) = (probe, chain.target > 0.0) else {
+                let (Some(probe), true) = (current.probe, chain.target > 0.0) else {
                     stats.dropped += 1;
                     continue;
                 };
-                let direction = direction_from_chain(chain.x[3], chain.x[4]);
                 let cell = cells.proxy_of_probe(probe);
-                let o = octant(direction);
+                let o = octant(current.direction);
                 if dedupe {
                     let bit = cell * OCTANTS + o;
                     let (word, mask) = (bit / 64, 1u64 << (bit % 64));
@@ -449,8 +489,8 @@ impl ProbeChains {
                     cell: cell as u32,
                     probe,
                     octant: o as u8,
-                    position,
-                    direction,
+                    position: current.position,
+                    direction: current.direction,
                     h: chain.target,
                 });
                 stats.emitted += 1;
@@ -460,6 +500,15 @@ impl ProbeChains {
         self.stats = stats;
         &self.samples
     }
+}
+
+/// A chain state resolved into what the guide and the samples need.
+#[derive(Clone, Copy)]
+struct Located {
+    position: Vec3,
+    probe: Option<UVec3>,
+    folded: [f32; 2],
+    direction: Vec3,
 }
 
 #[inline]
@@ -642,7 +691,7 @@ mod tests {
                 0x3f93_b442,
                 0x3e5b_48e4,
                 0x3ef6_ba1b,
-                0xbeb1_faa2,
+                0xbeb1_faa3,
                 0x403b_8115
             ],
             "{x:?}"
