@@ -504,8 +504,8 @@ pub struct DynamicScene {
 /// Dimensions of the two-room scene.
 mod room {
     use glam::Vec3;
-    /// Outer extent of the interior: x ∈ [0, 10], y ∈ [0, 3], z ∈ [0, 4].
-    pub const SIZE: Vec3 = Vec3::new(10.0, 3.0, 4.0);
+    /// Outer extent of the interior: x ∈ [0, 9], y ∈ [0, 3], z ∈ [0, 4].
+    pub const SIZE: Vec3 = Vec3::new(9.0, 3.0, 4.0);
     /// The partition wall between the rooms spans x ∈ [8.0, 8.1].
     pub const WALL_X: (f32, f32) = (8.0, 8.1);
     /// The doorway: z ∈ [1.5, 2.5], y ∈ [0, 2.2].
@@ -560,7 +560,7 @@ impl DynamicScene {
         let grid = ProbeGrid::new(
             Vec3::new(0.25, 0.375, 0.25),
             Vec3::new(0.5, 0.75, 0.5),
-            UVec3::new(20, 4, 8),
+            UVec3::new(18, 4, 8),
         )
         .expect("valid constant grid");
         Self {
@@ -601,7 +601,7 @@ impl DynamicScene {
                 Vec3::new(s.x + t, s.y + t, s.z + t),
                 white
             ),
-            // Red wall at x = 0, green wall at x = 10, white walls at z = 0 and z = 4.
+            // Red wall at x = 0, green wall at x = 9, white walls at z = 0 and z = 4.
             b(
                 Vec3::new(-t, 0.0, 0.0),
                 Vec3::new(0.0, s.y, s.z),

@@ -46,8 +46,8 @@ pub use hashgrid_reference::{
 };
 pub use ks::{KsResult, assert_ks, kolmogorov_critical_value, kolmogorov_survival, ks_test};
 pub use probe_cache_reference::{
-    DYNAMIC_SHARE, Experiment, FRAMES_TO_ERROR_THRESHOLD, ExperimentConfig, Policy, QDDGI_MAX_COUNT, Run, TRIGGER_DECAY,
-    frames_to_error, mean_error,
+    DYNAMIC_SHARE, Experiment, ExperimentConfig, FRAMES_TO_ERROR_THRESHOLD, Policy,
+    QDDGI_MAX_COUNT, Run, TRIGGER_DECAY, frames_to_error, frames_to_first_below, mean_error,
 };
 pub use quadrature::{GaussLegendre, graded_theta_breaks, integrate_sphere, orthonormal_basis};
 pub use rng::{Pcg64Mcg, seeded_rng, uniform_sphere_direction, uniform_vec2};

@@ -1,152 +1,122 @@
-//! probe (exploration)
-use mcg_tests::{Experiment, ExperimentConfig, Policy, frames_to_error, mean_error};
+//! ADGI's claim at an equal ray budget (ADGI sec. 1, 5, Fig. 1 and 8): after a localised
+//! dynamic event, the probe error near the event falls faster with adaptive sampling than with
+//! DDGI's uniform rays per probe.
+//!
+//! Setup ([`ExperimentConfig::TEST`], `mcg_tests::probe_cache_reference` for every detail): the
+//! two-room scene of `mcg_probe_cache::scene` (a lit 8 m room, a dark 0.9 m closet behind a
+//! door that slides open over frames 16-17), 18 × 4 × 8 probes, 48 frames, 32 rays per probe
+//! and frame for every policy (18 432 probe rays; ADGI sec. 5 gives Q-DDGI 32), seed
+//! `0x8ad61`. Every run starts from the same converged cache of the closed-door scene. Errors
+//! are relative RMS of the probes' irradiance at their texel directions against a reference of
+//! 100 stratified rays per texel (plus next-event estimation of the light), over the 74 probes
+//! near the event (in the closet or within 1 m of the doorway).
+//!
+//! Why the comparison is fair: every policy traces the same number of probe rays per frame
+//! (asserted), each ray costs the same (one scene ray and one shadow ray), all start from the
+//! same warm cache and see the same scene, and DDGI runs with the hysteresis ADGI compares
+//! against (Q-DDGI's 0.94, Table 3). The constant-guide run spends ADGI's rays through the
+//! same machinery with h ≡ 1, so the difference between it and ADGI is the guide alone.
+//!
+//! Hypotheses (deterministic: fixed seeds, single-threaded, so each number is exact):
+//! - H1: ADGI first brings the near-event error below [`FRAMES_TO_ERROR_THRESHOLD`] (0.3, above
+//!   both policies' pre-event errors, ≈ 0.14 and ≈ 0.19) in fewer frames after the event than
+//!   uniform DDGI. Measured: ADGI 3 frames, DDGI 13, constant guide 29.
+//! - H2: the mean near-event error over the 10 frames from the event is lower with ADGI than
+//!   with uniform DDGI and than with the constant guide. Measured: 0.314, 0.417, 0.464.
+//!
+//! What the suite does NOT claim: that ADGI's error *stays* lower. After its dynamic phase its
+//! near-event texels restart their moving average from N = 10 and take tens of frames to
+//! reach N = 63 again, while DDGI's cosine-weighted blend uses every ray for half the texels;
+//! over the last 10 frames DDGI's near-event error (0.19) is below ADGI's (0.34), and with
+//! "stays below 0.3" as the criterion ADGI does not settle within 48 frames (DDGI: 13).
+//! `cargo test -p mcg-tests --release --test probe_cache_adgi -- --nocapture` prints all of it.
+//!
+//! Break tried: running the ADGI policy with constant guides (the chains uniform over (p, ω),
+//! `guided = false` for `Policy::Adgi`) makes H1 and H2 fail: 25 frames against DDGI's 13, mean
+//! error 0.445 against 0.417.
+
+use mcg_tests::{
+    Experiment, ExperimentConfig, FRAMES_TO_ERROR_THRESHOLD, Policy, frames_to_error,
+    frames_to_first_below, mean_error,
+};
 
 #[test]
-fn explore() {
-    let t = std::time::Instant::now();
+fn adaptive_sampling_brings_the_error_near_the_event_down_faster() {
     let cfg = ExperimentConfig::TEST;
     let exp = Experiment::new(cfg);
-    eprintln!("reference {:?}, near {}", t.elapsed(), exp.near.len());
-    for p in [Policy::UniformDdgi, Policy::Adgi, Policy::AdgiUnguided] {
-        let t = std::time::Instant::now();
-        let r = exp.run(p, &[]);
-        eprintln!("{:?} {:?}", p, t.elapsed());
-        eprintln!("  dyn {:?}", r.rays_dynamic);
-        eprintln!("  near {:?}", r.error_near.iter().map(|e| format!("{e:.3}")).collect::<Vec<_>>());
-        eprintln!("  all  {:?}", r.error_all.iter().map(|e| format!("{e:.3}")).collect::<Vec<_>>());
-        eprintln!("  rays {:?}", &r.rays[..4]);
-        eprintln!("  near rays {:?}", r.rays_near.iter().map(|e| format!("{e}")).collect::<Vec<_>>());
-        for th in [0.1, 0.15, 0.2, 0.3] {
-            eprintln!("  ftt {th}: {:?}", frames_to_error(&r.error_near, cfg.event_frame, th));
+    let budget = u64::from(cfg.rays_per_probe) * exp.scene.grid.probe_count() as u64;
+    let runs: Vec<_> = [Policy::Adgi, Policy::UniformDdgi, Policy::AdgiUnguided]
+        .iter()
+        .map(|&p| exp.run(p, &[]))
+        .collect();
+    let t = FRAMES_TO_ERROR_THRESHOLD;
+    let e = cfg.event_frame;
+    let window = e + 10;
+    for run in &runs {
+        // Equal budget: never more than DDGI's rays, and ADGI's cut sample lists use all but a
+        // handful of them.
+        for (f, &r) in run.rays.iter().enumerate() {
+            assert!(r <= budget, "{:?} frame {f}: {r} > {budget}", run.policy);
+            assert!(
+                r as f64 >= 0.99 * budget as f64,
+                "{:?} frame {f}: {r} rays",
+                run.policy
+            );
         }
-        eprintln!("  mean after {:.3}", mean_error(&r.error_near, cfg.event_frame, cfg.event_frame + 12));
+        println!(
+            "{:<32} first below {t}: {:>4} frames, settles below {t}: {:>5}, mean near error \
+             frames {e}-{}: {:.3}, before: {:.3}, last 10 frames: {:.3} (all probes {:.3}), \
+             share of rays near the event in frames {e}-{}: {:.2}",
+            run.policy.label(),
+            fmt(frames_to_first_below(&run.error_near, e, t)),
+            fmt(frames_to_error(&run.error_near, e, t)),
+            window - 1,
+            mean_error(&run.error_near, e, window),
+            mean_error(&run.error_near, 4, e),
+            mean_error(&run.error_near, cfg.frames - 10, cfg.frames),
+            mean_error(&run.error_all, cfg.frames - 10, cfg.frames),
+            window - 1,
+            run.rays_near[e as usize..window as usize]
+                .iter()
+                .sum::<u64>() as f64
+                / run.rays[e as usize..window as usize].iter().sum::<u64>() as f64,
+        );
     }
+    let (adgi, ddgi, unguided) = (&runs[0], &runs[1], &runs[2]);
+    // Both start below the threshold, so it measures the recovery from the event.
+    for run in &runs {
+        assert!(
+            mean_error(&run.error_near, 4, e) < t,
+            "{:?}: pre-event error above the threshold",
+            run.policy
+        );
+    }
+
+    // H1.
+    let first = |r: &mcg_tests::Run| frames_to_first_below(&r.error_near, e, t).unwrap_or(u32::MAX);
+    assert!(
+        first(adgi) < first(ddgi),
+        "H1: ADGI needs {} frames to bring the near-event error below {t}, uniform DDGI {}",
+        first(adgi),
+        first(ddgi)
+    );
+
+    // H2.
+    let m = |r: &mcg_tests::Run| mean_error(&r.error_near, e, window);
+    assert!(
+        m(adgi) < m(ddgi),
+        "H2: mean near-event error after the event: ADGI {:.3}, uniform DDGI {:.3}",
+        m(adgi),
+        m(ddgi)
+    );
+    assert!(
+        m(adgi) < m(unguided),
+        "H2: mean near-event error after the event: ADGI {:.3}, constant guide {:.3}",
+        m(adgi),
+        m(unguided)
+    );
 }
 
-#[test]
-fn explore_dyn() {
-    let cfg = ExperimentConfig::TEST;
-    let exp = Experiment::new(cfg);
-    let r = exp.run(Policy::Adgi, &[]);
-    eprintln!("dyn rays {:?}", r.rays_dynamic);
-    let mut c2 = cfg; c2.rays_per_probe = 256; c2.frames = 30; c2.event_frame = 100;
-    let exp = Experiment::new(c2);
-    for p in [Policy::UniformDdgi, Policy::Adgi] {
-    let r = exp.run(p, &[]);
-    eprintln!("{p:?} 256 rays static near {:?}", r.error_near.iter().map(|e| format!("{e:.3}")).collect::<Vec<_>>());
-    eprintln!("{p:?} 256 rays static all {:?}", r.error_all.iter().map(|e| format!("{e:.3}")).collect::<Vec<_>>());
-    }
-}
-
-#[test]
-fn explore_bias() {
-    let mut c2 = ExperimentConfig::TEST; c2.rays_per_probe = 256; c2.frames = 20; c2.event_frame = 100;
-    let exp = Experiment::new(c2);
-    let r = exp.run(Policy::UniformDdgi, &[19]);
-    let est = &r.snapshots[0].1;
-    let reference = exp.reference(19);
-    let n = exp.texels.len();
-    // worst probes
-    let mut per_probe: Vec<(f64, usize)> = (0..exp.scene.grid.probe_count()).map(|p| {
-        let e: f64 = (p*n..(p+1)*n).map(|k| f64::from((est[k]-reference[k]).length_squared())).sum();
-        (e, p)}).collect();
-    per_probe.sort_by(|a, b| b.0.partial_cmp(&a.0).unwrap());
-    let tot: f64 = per_probe.iter().map(|x| x.0).sum();
-    eprintln!("total {tot}, top {:?}", &per_probe[..8]);
-    let p = per_probe[0].1;
-    eprintln!("probe {p} at {}", exp.scene.grid.probe_position(exp.scene.grid.probe_coords(p)));
-    for k in 0..n { eprintln!("  dir {:?} est {:?} ref {:?}", exp.texels[k].1, est[p*n+k], reference[p*n+k]); }
-}
-
-#[test]
-fn explore_blend() {
-    use mcg_probe_cache::glam::{Vec2, Vec3};
-    use rand::RngExt;
-    let exp = Experiment::new({let mut c = ExperimentConfig::TEST; c.frames = 1; c});
-    let p = 183;
-    let pos = exp.scene.grid.probe_position(exp.scene.grid.probe_coords(p));
-    let scene = exp.scene.at_frame(0);
-    let mut rng = mcg_tests::seeded_rng(5);
-    let n = exp.texels.len();
-    let mut num = vec![Vec3::ZERO; n];
-    let mut den = vec![0.0f32; n];
-    for _ in 0..200_000 {
-        let d = mcg_tests::uniform_sphere_direction(&mut rng).as_vec3();
-        let l = scene.trace_probe_ray(pos, d, Vec2::new(rng.random(), rng.random())).radiance;
-        for (k, t) in exp.texels.iter().enumerate() {
-            let w = t.1.dot(d).max(0.0);
-            num[k] += w * l; den[k] += w;
-        }
-    }
-    let reference = exp.reference(0);
-    for k in 0..n { eprintln!("dir {:?} blend {:?} ref {:?}", exp.texels[k].1, num[k] / den[k] * std::f32::consts::PI, reference[p*n+k]); }
-}
-
-#[test]
-fn explore_ref() {
-    use mcg_probe_cache::glam::{Vec2, Vec3};
-    use rand::RngExt;
-    let exp = Experiment::new({let mut c = ExperimentConfig::TEST; c.frames = 1; c.reference_strata = 1; c});
-    let p = 183;
-    let pos = exp.scene.grid.probe_position(exp.scene.grid.probe_coords(p));
-    let scene = exp.scene.at_frame(0);
-    let n = Vec3::new(0.2672614, -0.80178374, 0.53452235);
-    for s in [4, 12, 32, 64, 128] {
-        let e = mcg_probe_cache::reference_irradiance(&scene, pos, &[n], s, 3)[0];
-        eprintln!("strata {s}: {e}");
-    }
-    let mut rng = mcg_tests::seeded_rng(5);
-    // plain MC cosine
-    let mut sum = Vec3::ZERO; let m = 400_000;
-    for _ in 0..m {
-        let d = mcg_probe_cache::reference::cosine_hemisphere(n, Vec2::new(rng.random(), rng.random()));
-        sum += scene.trace_probe_ray(pos, d, Vec2::new(rng.random(), rng.random())).radiance;
-    }
-    eprintln!("plain cosine MC {}", sum / m as f32 * std::f32::consts::PI);
-    let mut num = Vec3::ZERO; let mut den = 0.0;
-    for _ in 0..m {
-        let d = mcg_tests::uniform_sphere_direction(&mut rng).as_vec3();
-        let w = d.dot(n).max(0.0);
-        num += w * scene.trace_probe_ray(pos, d, Vec2::new(rng.random(), rng.random())).radiance; den += w;
-    }
-    eprintln!("uniform blend {}", num / den * std::f32::consts::PI);
-}
-
-#[test]
-fn explore_floor() {
-    use mcg_probe_cache::glam::{Vec2, Vec3};
-    use mcg_probe_cache::{ProbeTexels, TexelContent};
-    use rand::RngExt;
-    let mut c = ExperimentConfig::TEST; c.frames = 1;
-    let exp = Experiment::new(c);
-    let scene = exp.scene.at_frame(0);
-    let texels = ProbeTexels::new(exp.scene.grid, exp.texel_config);
-    let map = exp.texel_config.irradiance_map;
-    let mut rng = mcg_tests::seeded_rng(5);
-    for p in 0..exp.scene.grid.probe_count() {
-        let pos = exp.scene.grid.probe_position(exp.scene.grid.probe_coords(p));
-        let mut sum = vec![Vec3::ZERO; map.texel_count()];
-        let mut cnt = vec![0u32; map.texel_count()];
-        for _ in 0..20_000 {
-            let d = mcg_tests::uniform_sphere_direction(&mut rng).as_vec3();
-            let t = map.index(map.texel(d));
-            sum[t] += scene.trace_probe_ray(pos, d, Vec2::new(rng.random(), rng.random())).radiance;
-            cnt[t] += 1;
-        }
-        for t in 0..map.texel_count() { if cnt[t] > 0 { texels.set_irradiance(p, t, sum[t] / cnt[t] as f32, 63); } }
-    }
-    let est = exp.estimate(&texels, TexelContent::Radiance);
-    let r = exp.reference(0);
-    eprintln!("radiance-texel floor: near {:.3} all {:.3}", exp.relative_rms(&est, r, exp.near.iter().copied()), exp.relative_rms(&est, r, 0..exp.scene.grid.probe_count()));
-}
-
-#[test]
-fn explore_adgi() {
-    let cfg = ExperimentConfig::TEST;
-    let exp = Experiment::new(cfg);
-    let r = exp.run(Policy::Adgi, &[]);
-    eprintln!("near {:?}", r.error_near.iter().map(|e| format!("{e:.2}")).collect::<Vec<_>>().join(" "));
-    eprintln!("all {:?}", r.error_all.iter().map(|e| format!("{e:.2}")).collect::<Vec<_>>().join(" "));
-    eprintln!("dyn {:?}", r.rays_dynamic);
-    eprintln!("nearrays {:?}", r.rays_near);
+fn fmt(v: Option<u32>) -> String {
+    v.map_or_else(|| "never".to_owned(), |f| f.to_string())
 }

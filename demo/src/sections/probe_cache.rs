@@ -195,14 +195,21 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
             format!("{:.3}", run.error_near[before as usize]),
             format!(
                 "{:.3}",
-                mean_error(&run.error_near, cfg.event_frame, (cfg.event_frame + 8).min(tail))
+                mean_error(
+                    &run.error_near,
+                    cfg.event_frame,
+                    (cfg.event_frame + 8).min(tail)
+                )
             ),
             format!(
                 "{:.3} / {:.3}",
                 run.error_near[tail as usize - 1],
                 run.error_all[tail as usize - 1]
             ),
-            format!("{:.0} %", 100.0 * near_after as f64 / rays_after.max(1) as f64),
+            format!(
+                "{:.0} %",
+                100.0 * near_after as f64 / rays_after.max(1) as f64
+            ),
         ]);
     }
     section
@@ -220,7 +227,10 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
              discretisation floor that DDGI's cosine-blended texels do not have.",
             cfg.rays_per_probe
         ))
-        .figure(file, "Relative RMS error per frame, near the event (lines) and over all probes (dots).")
+        .figure(
+            file,
+            "Relative RMS error per frame, near the event (lines) and over all probes (dots).",
+        )
         .table(table);
 
     // 3. Memory.
@@ -249,7 +259,11 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
     let rows = [
         ("ADGI words (R9G9B8 + N, 13/13 + N)", 4 * ni, 4 * nv),
         ("RGB32F irradiance, RG32F distances", 12 * ni, 8 * nv),
-        ("RGBA32F irradiance (RTXGI), RG32F distances", 16 * ni, 8 * nv),
+        (
+            "RGBA32F irradiance (RTXGI), RG32F distances",
+            16 * ni,
+            8 * nv,
+        ),
         (
             "RGB32F + count (a plain f32 store), RG32F + count",
             16 * ni,
