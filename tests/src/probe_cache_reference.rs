@@ -119,10 +119,10 @@ pub struct ExperimentConfig {
 }
 
 impl ExperimentConfig {
-    /// The suite's setting: 48 frames, the door opening over frames 16-17, 32 rays per probe
+    /// The suite's setting: 40 frames, the door opening over frames 16-17, 32 rays per probe
     /// (ADGI sec. 5 gives Q-DDGI 32), 10² rays per reference texel.
     pub const TEST: Self = Self {
-        frames: 48,
+        frames: 40,
         event_frame: 16,
         transition_frames: 2,
         rays_per_probe: 32,
@@ -254,7 +254,14 @@ impl Experiment {
     /// `snapshot_frames`.
     #[must_use]
     pub fn run(&self, policy: Policy, snapshot_frames: &[u32]) -> Run {
-        let mut rng = seeded_rng(self.config.seed ^ policy as u64 * 0x9e37_79b9);
+        self.run_with_seed(policy, self.config.seed, snapshot_frames)
+    }
+
+    /// [`Self::run`] with the run's random numbers (rays, chains, rounding, pilot directions)
+    /// drawn from `seed` instead of the config's; the scene, reference and warm start stay.
+    #[must_use]
+    pub fn run_with_seed(&self, policy: Policy, seed: u64, snapshot_frames: &[u32]) -> Run {
+        let mut rng = seeded_rng(seed ^ policy as u64 * 0x9e37_79b9);
         let mut state = match policy {
             Policy::UniformDdgi => Renderer::ddgi(self),
             Policy::Adgi | Policy::AdgiUnguided => {
@@ -289,6 +296,7 @@ impl Experiment {
             }
             m
         };
+        state.seed = seed;
         for frame in 0..self.config.frames {
             let scene = self.scene.at_frame(frame);
             let counter = state.frame(self, &scene, frame, &near_mask, &mut rng);
@@ -366,12 +374,15 @@ fn warm_start(
     let grid = scene.grid;
     let mut ddgi = Vec::with_capacity(grid.probe_count() * texels.len());
     let mut adgi = Vec::with_capacity(grid.probe_count() * texels.len());
-    let mut rays: Vec<(Vec3, Vec3)> = Vec::new();
+    // (direction, radiance, weight): rays uniform per texel square are not uniform in solid
+    // angle, so each is weighted by its texel's solid angle over the texels' mean.
+    let mut rays: Vec<(Vec3, Vec3, f32)> = Vec::new();
     for p in 0..grid.probe_count() {
         let pos = grid.probe_position(grid.probe_coords(p));
         rays.clear();
-        for &(index, _, _) in texels {
+        for &(index, _, omega) in texels {
             let t = map.coords(index) - UVec2::ONE;
+            let weight = omega / map.mean_solid_angle();
             let mut sum = Vec3::ZERO;
             for _ in 0..WARM_START_RAYS_PER_TEXEL {
                 let uv = (t.as_vec2() + Vec2::new(rng.random(), rng.random()))
@@ -382,16 +393,14 @@ fn warm_start(
                     .trace_probe_ray(pos, d, Vec2::new(rng.random(), rng.random()))
                     .radiance;
                 sum += l;
-                rays.push((d, l));
+                rays.push((d, l, weight));
             }
             adgi.push(sum / WARM_START_RAYS_PER_TEXEL as f32);
         }
         for &(_, n, _) in texels {
             let (mut num, mut den) = (Vec3::ZERO, 0.0_f32);
-            for &(d, l) in &rays {
-                // Rays uniform per texel square are not uniform in solid angle: weight each by
-                // its texel's solid angle over the texels' mean.
-                let w = n.dot(d).max(0.0) * map.solid_angle(map.texel(d)) / map.mean_solid_angle();
+            for &(d, l, weight) in &rays {
+                let w = n.dot(d).max(0.0) * weight;
                 num += w * l;
                 den += w;
             }
@@ -440,6 +449,7 @@ struct RayCounter {
 
 /// The state of one policy across frames.
 struct Renderer {
+    seed: u64,
     texels: ProbeTexels,
     content: TexelContent,
     adgi: Option<AdgiState>,
@@ -489,6 +499,7 @@ impl Renderer {
         let mut config = exp.texel_config;
         config.moving_average = MovingAverage::new(QDDGI_MAX_COUNT).expect("N_max > 0");
         Self {
+            seed: exp.config.seed,
             texels: ProbeTexels::new(exp.scene.grid, config),
             content: TexelContent::Irradiance,
             adgi: None,
@@ -516,6 +527,7 @@ impl Renderer {
         }
         let _ = map;
         Self {
+            seed: exp.config.seed,
             texels: ProbeTexels::new(grid, exp.texel_config),
             content: TexelContent::Radiance,
             adgi: Some(AdgiState {
@@ -619,7 +631,7 @@ impl Renderer {
         let probes = grid.probe_count();
         let budget = u64::from(exp.config.rays_per_probe) * probes as u64;
         let mut counter = RayCounter::default();
-        let seed = exp.config.seed;
+        let seed = self.seed;
 
         // 1. Pilot rays (sec. 4.4): one per octant, the same set on the two frames of a pair
         //    (direction and light-sample uniforms hashed from the pattern index), so the
