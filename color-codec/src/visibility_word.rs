@@ -6,7 +6,7 @@ use glam::Vec2;
 
 use crate::bits::BitField;
 use crate::error::CodecError;
-use crate::log_codec::{LogCodec, LogField, MAX_FIELD_BITS};
+use crate::log_codec::{LogCodec, LogField, LogLanes, MAX_FIELD_BITS};
 use crate::quantize::Rounding;
 
 /// Bit layout of a visibility word: mean distance d̄ and mean squared distance d̄² through their
@@ -40,6 +40,11 @@ pub struct VisibilityLayout {
     fields: [LogField; 2],
     places: [BitField; 2],
     count: BitField,
+    /// Both fields as one 4-lane codec (lanes 0, 1 = d̄, d̄² at their places; lanes 2, 3 repeat
+    /// d̄² and are not packed), built once so `encode`/`decode` run one vector evaluation
+    /// instead of a per-field codec set-up; lane for lane the same operations as
+    /// [`LogField::encode`]/[`LogField::decode`], so the same bits.
+    lanes: LogLanes,
 }
 
 /// A packed visibility texel (see [`VisibilityLayout`] for its bit map); plain `u32` on the GPU.
@@ -92,6 +97,17 @@ impl VisibilityLayout {
                 BitField::new(mean_bits, mean_sq_bits),
             ],
             count: BitField::new(32 - count_bits, count_bits),
+            lanes: LogLanes::new(
+                [
+                    mean_codec.field(mean_bits),
+                    mean_sq_codec.field(mean_sq_bits),
+                    mean_sq_codec.field(mean_sq_bits),
+                    mean_sq_codec.field(mean_sq_bits),
+                ],
+                [0, 1, 1, 1],
+                [0, mean_bits, mean_bits, mean_bits],
+                [true, true, false, false],
+            ),
         })
     }
 
@@ -127,8 +143,11 @@ impl VisibilityLayout {
     #[inline]
     #[must_use]
     pub fn encode(&self, moments: Vec2, count: u32, rounding: Rounding) -> VisibilityWord {
-        let word = self.places[0].put(self.fields[0].encode(moments.x, rounding))
-            | self.places[1].put(self.fields[1].encode(moments.y, rounding.for_channel(1)))
+        let [m, m2, _, _] = self
+            .lanes
+            .encode([moments.x, moments.y, moments.y, moments.y], rounding);
+        let word = self.places[0].put(m)
+            | self.places[1].put(m2)
             | self.count.put(count.min(self.max_count()));
         VisibilityWord(word)
     }
@@ -137,10 +156,8 @@ impl VisibilityLayout {
     #[inline]
     #[must_use]
     pub fn decode(&self, word: VisibilityWord) -> Vec2 {
-        Vec2::new(
-            self.fields[0].decode(self.places[0].get(word.0)),
-            self.fields[1].decode(self.places[1].get(word.0)),
-        )
+        let [m, m2, _, _] = self.lanes.decode_word(word.0);
+        Vec2::new(m, m2)
     }
 
     /// The field codes `[mean, mean squared]`.
@@ -219,6 +236,36 @@ mod tests {
             for q in 0..=l.channel(i).max_code() {
                 let m = l.decode(VisibilityWord(l.places[i].put(q) | 0xfc00_0000));
                 assert!(m.is_finite() && m.cmpge(Vec2::ZERO).all(), "{i} {q}");
+            }
+        }
+    }
+
+    /// The 4-lane form equals the per-field codec bit for bit.
+    #[test]
+    fn lanes_match_per_field_codec() {
+        let l = VisibilityLayout::ADGI;
+        let mut x = 0x1234_5678u32;
+        for i in 0..20_000u32 {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            let m = l.decode(VisibilityWord(x));
+            assert_eq!(
+                m.x.to_bits(),
+                l.fields[0].decode(l.places[0].get(x)).to_bits()
+            );
+            assert_eq!(
+                m.y.to_bits(),
+                l.fields[1].decode(l.places[1].get(x)).to_bits()
+            );
+            let v = Vec2::new((x & 0xffff) as f32 * 1.7e-4, (x >> 16) as f32 * 2.3e-3);
+            let u = (i as f32 * 0.618_034) % 1.0;
+            for r in [Rounding::Down, Rounding::Nearest, Rounding::Stochastic(u)] {
+                let w = l.encode(v, 3, r);
+                let want = l.places[0].put(l.fields[0].encode(v.x, r))
+                    | l.places[1].put(l.fields[1].encode(v.y, r.for_channel(1)))
+                    | l.count.put(3);
+                assert_eq!(w.0, want, "{v} {r:?}");
             }
         }
     }

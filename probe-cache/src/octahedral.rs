@@ -17,14 +17,14 @@
 //!
 //! # Solid angle
 //! Within one octant the decode is a central (gnomonic) projection of a flat octahedron face, so
-//! a straight segment of the square that stays in one octant maps to a great-circle arc, and a
-//! triangle of the square inside one octant maps to a geodesic spherical triangle whose area
-//! (Van Oosterom & Strackee 1983) is exact. The octant boundaries are the axes `u = 0`, `v = 0`
-//! and the fold lines `|u| + |v| = 1`. Splitting each texel into 2 × 2 sub-squares and each
-//! sub-square into two triangles along the diagonal parallel to its quadrant's fold line puts
-//! every triangle inside one octant for any texel count `n` (the fold lines pass through the
-//! corners of the `2n × 2n` sub-grid), so [`octahedral_solid_angle`] is exact up to f32
-//! rounding. The density it integrates is `dω = du dv / |p|³` (the face's Jacobian: `p · (∂p/∂u
+//! a straight segment of the square that stays in one octant maps to a great-circle arc. The
+//! octant boundaries are the axes `u = 0`, `v = 0` and the fold lines `|u| + |v| = 1`. On the
+//! `2n × 2n` grid of half-texels every one of them runs along grid lines or through grid corners
+//! only (for any `n`), so every edge of a half-texel lies in one octant and the half-texel is a
+//! geodesic spherical quadrilateral, whose area is the sum of two spherical triangles (Van
+//! Oosterom & Strackee 1983). [`octahedral_solid_angle`] sums the four half-texels, which is
+//! exact up to f32 rounding (for even `n` the texels themselves would do; the split makes odd
+//! `n` exact too). The density it integrates is `dω = du dv / |p|³` (the face's Jacobian: `p · (∂p/∂u
 //! × ∂p/∂v) = 1`), which the tests integrate numerically as the reference.
 
 use glam::{Vec2, Vec3};
@@ -89,8 +89,9 @@ pub(crate) fn spherical_triangle_area(a: Vec3, b: Vec3, c: Vec3) -> f32 {
 }
 
 /// Exact solid angle (up to f32 rounding) of the square region `[lo, hi]` of the octahedral map,
-/// whose sides lie on a grid that the axes and fold lines pass through the corners of (true for
-/// every 2 × 2 sub-texel of an `n × n` grid; see the module docs).
+/// whose edges each lie in one octant (true for every half-texel; see the module docs): a
+/// geodesic quadrilateral, split into two spherical triangles along the diagonal parallel to
+/// its quadrant's fold lines (either diagonal gives the same area for such a quadrilateral).
 fn cell_area(lo: Vec2, hi: Vec2) -> f32 {
     let c00 = octahedral_decode(lo);
     let c10 = octahedral_decode(Vec2::new(hi.x, lo.y));
@@ -171,7 +172,9 @@ mod tests {
         assert!(octahedral_decode(Vec2::new(7.0, -9.0)).is_normalized());
     }
 
-    /// Reference: midpoint integration of `du dv / |p|³` in f64 on `sub × sub` points per texel.
+    /// Midpoint integration of `du dv / |p|³` in f64 on `sub × sub` points per texel; the test
+    /// takes the Richardson combination (4·I₆₄ − I₃₂)/3, which agrees with the exact areas to
+    /// 1.2·10⁻⁶ (relative) on every texel of the 3, 6, 8 and 14 maps.
     fn reference_area(n: u32, x: u32, y: u32, sub: u32) -> f64 {
         let step = 2.0 / n as f64;
         let h = step / sub as f64;
@@ -199,9 +202,10 @@ mod tests {
             for x in 0..n {
                 for y in 0..n {
                     let exact = octahedral_solid_angle(n, x, y) as f64;
-                    let reference = reference_area(n, x, y, 48);
+                    let reference =
+                        (4.0 * reference_area(n, x, y, 64) - reference_area(n, x, y, 32)) / 3.0;
                     assert!(
-                        (exact - reference).abs() < 2e-4 * reference,
+                        (exact - reference).abs() < 1e-5 * reference,
                         "n {n} ({x}, {y}): {exact} vs {reference}"
                     );
                     sum += exact;

@@ -423,7 +423,23 @@ impl ProbeTexels {
     /// ([`MovingAverage::update_atomic_swap`]).
     #[inline]
     pub fn update_irradiance(&self, probe: usize, texel: usize, value: Vec3, u: f32) -> (u32, u32) {
-        self.config.moving_average.update_atomic_swap(
+        self.update_irradiance_with(probe, texel, value, u, self.config.moving_average)
+    }
+
+    /// [`Self::update_irradiance`] with another N_max for this update — ADGI's dynamic chain
+    /// writes into the same texels with [`MovingAverage::DYNAMIC`] (N_max = 10, Table 3) while
+    /// the static chain uses [`MovingAverage::STATIC`]. A stored count above this N_max is
+    /// brought down to it.
+    #[inline]
+    pub fn update_irradiance_with(
+        &self,
+        probe: usize,
+        texel: usize,
+        value: Vec3,
+        u: f32,
+        average: MovingAverage,
+    ) -> (u32, u32) {
+        average.update_atomic_swap(
             &self.config.irradiance_layout,
             &self.irradiance[self.irradiance_offset(probe, texel)],
             value,
@@ -441,7 +457,21 @@ impl ProbeTexels {
         moments: Vec2,
         u: f32,
     ) -> (u32, u32) {
-        self.config.moving_average.update_atomic_swap(
+        self.update_visibility_with(probe, texel, moments, u, self.config.moving_average)
+    }
+
+    /// [`Self::update_visibility`] with another N_max for this update (see
+    /// [`Self::update_irradiance_with`]).
+    #[inline]
+    pub fn update_visibility_with(
+        &self,
+        probe: usize,
+        texel: usize,
+        moments: Vec2,
+        u: f32,
+        average: MovingAverage,
+    ) -> (u32, u32) {
+        average.update_atomic_swap(
             &self.config.visibility_layout,
             &self.visibility[self.visibility_offset(probe, texel)],
             moments,
@@ -612,6 +642,27 @@ mod tests {
     }
 
     #[test]
+    fn dynamic_average_per_update() {
+        let t = texels(TexelConfig::ADGI);
+        for _ in 0..30 {
+            t.update_irradiance(0, 9, Vec3::ONE, 0.5);
+        }
+        let l = IrradianceLayout::ADGI;
+        assert_eq!(l.count(t.irradiance_word(0, 9)), 30);
+        let (_, after) = t.update_irradiance_with(0, 9, Vec3::ZERO, 0.5, MovingAverage::DYNAMIC);
+        assert_eq!(l.count(IrradianceWord(after)), 10);
+        // One dynamic step moves a tenth of the way: 1 → 0.9.
+        assert!(
+            (l.decode(IrradianceWord(after)) - Vec3::splat(0.9))
+                .abs()
+                .max_element()
+                < 0.01
+        );
+        let (_, v) = t.update_visibility_with(0, 5, Vec2::ONE, 0.5, MovingAverage::DYNAMIC);
+        assert_eq!(VisibilityLayout::ADGI.count(VisibilityWord(v)), 1);
+    }
+
+    #[test]
     fn cap_counts_lowers_only() {
         let t = texels(TexelConfig::ADGI);
         for _ in 0..30 {
@@ -644,5 +695,28 @@ mod tests {
             }
         }
         assert_eq!(rotate_uniform(0.25, 0), 0.25);
+    }
+
+    #[test]
+    fn value_stability() {
+        let t = texels(TexelConfig::ADGI);
+        let a = t.update_irradiance(1, 20, Vec3::new(0.7, 0.2, 1.3), 0.25);
+        let b = t.update_irradiance(1, 20, Vec3::new(0.1, 0.9, 0.4), 0.75);
+        let c = t.update_visibility(1, 30, Vec2::new(0.4, 0.17), 0.5);
+        let down = ProbeTexels::new(
+            *t.grid(),
+            TexelConfig {
+                rounding: RoundingMode::Down,
+                ..TexelConfig::ADGI
+            },
+        );
+        let d = down.update_irradiance(0, 0, Vec3::new(0.7, 0.2, 1.3), 0.25);
+        assert_eq!(
+            [a.1, b.1, c.1, d.1],
+            [0x0669_1afa, 0x0a15_c6c7, 0x04bd_ac74, 0x0669_1af9],
+            "{:#x?}",
+            [a.1, b.1, c.1, d.1]
+        );
+        assert_eq!(b.0, a.1);
     }
 }

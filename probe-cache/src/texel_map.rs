@@ -153,8 +153,13 @@ impl TexelMap {
         let c = self.map_coords(d);
         let lo = self.border as f32;
         let hi = (self.border + self.interior() - 1) as f32;
-        // `as` saturates NaN to 0; the clamp keeps the right/top edge inside.
-        c.floor().clamp(Vec2::splat(lo), Vec2::splat(hi)).as_uvec2()
+        // `as` truncates (c ≥ 0 here, so ⌊c⌋) and saturates NaN to 0; the clamp keeps the
+        // right/top edge inside.
+        c.max(Vec2::ZERO)
+            .as_uvec2()
+            .as_vec2()
+            .clamp(Vec2::splat(lo), Vec2::splat(hi))
+            .as_uvec2()
     }
 
     /// Row-major index `y · side + x` of stored texel `t`.
@@ -239,9 +244,10 @@ impl TexelMap {
         // Interior texel units, shifted so that integer points are texel centres.
         let c = (self.encode(d) + Vec2::ONE) * (0.5 * n) - Vec2::splat(0.5);
         let c = c.clamp(Vec2::splat(-0.5), Vec2::splat(n - 0.5));
-        let f = c.floor();
-        let w = c - f;
-        let (x0, y0) = (f.x as i32, f.y as i32);
+        // ⌊c⌋ by truncating c + 1 ≥ ½ (NaN → 0 → −1): no libm `floorf` call on targets
+        // without SSE4.1, the same result.
+        let (x0, y0) = ((c.x + 1.0) as i32 - 1, (c.y + 1.0) as i32 - 1);
+        let w = c - Vec2::new(x0 as f32, y0 as f32);
         let b = UVec2::splat(self.border);
         let tap = |dx: i32, dy: i32| self.index(self.fold(x0 + dx, y0 + dy) + b);
         [

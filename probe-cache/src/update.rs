@@ -3,6 +3,7 @@
 //! threads at once: every texel word changes by compare-and-swap only ([`ProbeTexels`]).
 
 use glam::{Vec2, Vec3};
+use mcg_color_codec::MovingAverage;
 
 use crate::ProbeTexels;
 use crate::probe_texels::rotate_uniform;
@@ -61,13 +62,28 @@ impl ProbeTexels {
     /// [`Self::update_radiance_sample`] and [`Self::update_distance_sample`] separately.
     #[inline]
     pub fn update_sample(&self, probe: usize, sample: &RaySample, u: f32) {
-        self.update_radiance_sample(probe, sample.direction, sample.radiance, u);
-        self.update_distance_sample(
-            probe,
-            sample.direction,
-            sample.distance,
-            rotate_uniform(u, 1),
-        );
+        self.update_sample_with(probe, sample, u, self.config().moving_average);
+    }
+
+    /// [`Self::update_sample`] with another N_max for this sample (ADGI's dynamic chain:
+    /// [`MovingAverage::DYNAMIC`], Table 3), in both the irradiance and the visibility word.
+    #[inline]
+    pub fn update_sample_with(
+        &self,
+        probe: usize,
+        sample: &RaySample,
+        u: f32,
+        average: MovingAverage,
+    ) {
+        let im = &self.config().irradiance_map;
+        let texel = im.index(im.texel(sample.direction));
+        self.update_irradiance_with(probe, texel, sample.radiance, u, average);
+        if let Some(t) = self.normalise_distance(sample.distance) {
+            let vm = &self.config().visibility_map;
+            let texel = vm.index(vm.texel(sample.direction));
+            let moments = Vec2::new(t, t * t);
+            self.update_visibility_with(probe, texel, moments, rotate_uniform(u, 1), average);
+        }
     }
 
     /// The irradiance half of [`Self::update_sample`]: one moving-average step of the
@@ -321,7 +337,7 @@ mod tests {
 
     /// Concurrent updates lose nothing: count and value against a serial replay.
     ///
-    /// 4 threads apply 2000 updates each to 3 overlapping texels of one probe (stochastic
+    /// 4 threads (released together by a barrier) apply 50 000 updates each to 2 texels (¾ of them to one) of one probe (stochastic
     /// rounding, a distinct value per update). Each successful compare-and-swap applies the pure
     /// `MovingAverage::update` to the word current at that instant, so the run is correct iff
     /// some serial order of the updates, replayed from word 0, gives every recorded transition
@@ -330,7 +346,7 @@ mod tests {
     /// records chain into one serial order from 0 to the stored word — the transitions are the
     /// edges of a multigraph on words, and such an order exists iff they form an Eulerian trail
     /// from 0 to the final word (degree balance + all edges reachable from 0; Euler's theorem);
-    /// (3) the count is min(updates, N_max) and all 8000 calls are recorded. A lost update (a
+    /// (3) the count is min(updates, N_max) and all 200 000 calls are recorded. A lost update (a
     /// plain load/store instead of the CAS) breaks (2): two records share a `before` that
     /// occurred once.
     #[test]
@@ -338,18 +354,21 @@ mod tests {
         use std::collections::HashMap;
         let t = ProbeTexels::new(grid(), TexelConfig::ADGI);
         let config = *t.config();
-        let texels = [10usize, 11, 18];
+        let texels = [10usize, 10, 10, 11];
         let threads = 4;
-        let per = 2000;
+        let per = 50_000;
         let mut log = Vec::new();
+        let barrier = std::sync::Barrier::new(threads);
         std::thread::scope(|s| {
             let handles: Vec<_> = (0..threads)
                 .map(|th| {
                     let t = &t;
+                    let barrier = &barrier;
                     s.spawn(move || {
+                        barrier.wait();
                         (0..per)
                             .map(|i| {
-                                let texel = texels[(i + th) % 3];
+                                let texel = texels[(i + th) % 4];
                                 let v = Vec3::new(
                                     (0.013 * (th * per + i) as f32) % 5.0,
                                     0.5 + 0.1 * th as f32,
@@ -369,7 +388,7 @@ mod tests {
         });
         assert_eq!(log.len(), threads * per);
         let layout = IrradianceLayout::ADGI;
-        for &texel in &texels {
+        for texel in [10usize, 11] {
             let records: Vec<_> = log.iter().filter(|r| r.0 == texel).collect();
             // (1) each record is one pure moving-average step.
             for &&(_, v, u, before, after) in &records {
@@ -415,5 +434,134 @@ mod tests {
                 63.min(records.len() as u32)
             );
         }
+    }
+
+    /// Counts see every update: with 16-bit count fields (layouts R6 G5 B5 + 16 and 8/8 + 16,
+    /// N_max = 65 535), 4 threads released by a barrier apply 10 000 per-sample updates each to
+    /// one texel → count 40 000 in its irradiance and visibility words; and 4 threads × 10 DDGI
+    /// blends of one probe → count 40 in every interior texel. A lost update lowers a count.
+    #[test]
+    fn concurrent_counts_are_exact() {
+        use mcg_color_codec::{LogCodec, MovingAverage, VisibilityLayout};
+        let config = TexelConfig {
+            irradiance_layout: IrradianceLayout::new(6, 5, 5, 16, LogCodec::IRRADIANCE).unwrap(),
+            visibility_layout: VisibilityLayout::new(
+                8,
+                8,
+                16,
+                LogCodec::DISTANCE,
+                LogCodec::SQUARED_DISTANCE,
+            )
+            .unwrap(),
+            moving_average: MovingAverage::new(65_535).unwrap(),
+            ..TexelConfig::ADGI
+        };
+        let t = ProbeTexels::new(grid(), config);
+        let rays: Vec<RaySample> = (0..64)
+            .map(|i| {
+                let z = 1.0 - (2 * i + 1) as f32 / 64.0;
+                let phi = i as f32 * 2.399_963;
+                let r = (1.0 - z * z).sqrt();
+                RaySample {
+                    direction: Vec3::new(r * phi.cos(), r * phi.sin(), z),
+                    radiance: Vec3::splat(0.5 + 0.01 * i as f32),
+                    distance: 0.7,
+                }
+            })
+            .collect();
+        let d = Vec3::new(0.3, -0.2, 0.9);
+        let barrier = std::sync::Barrier::new(4);
+        std::thread::scope(|s| {
+            for th in 0..4u32 {
+                let t = &t;
+                let rays = &rays;
+                let barrier = &barrier;
+                s.spawn(move || {
+                    barrier.wait();
+                    for i in 0..10_000u32 {
+                        let sample = RaySample {
+                            direction: d,
+                            radiance: Vec3::splat(th as f32 + 1e-4 * i as f32),
+                            distance: 1.0 + 1e-4 * i as f32,
+                        };
+                        t.update_sample(0, &sample, rotate_uniform(0.3, th * 10_000 + i));
+                    }
+                    barrier.wait();
+                    for i in 0..10 {
+                        t.blend_rays(
+                            1,
+                            rays,
+                            &BlendWeights::DDGI,
+                            rotate_uniform(0.7, th * 10 + i),
+                        );
+                    }
+                });
+            }
+        });
+        let il = config.irradiance_layout;
+        let vl = config.visibility_layout;
+        let im = config.irradiance_map;
+        let vm = config.visibility_map;
+        assert_eq!(
+            il.count(t.irradiance_word(0, im.index(im.texel(d)))),
+            40_000
+        );
+        assert_eq!(
+            vl.count(t.visibility_word(0, vm.index(vm.texel(d)))),
+            40_000
+        );
+        for &(i, _, _) in &t.irradiance_tables.interior {
+            assert_eq!(il.count(t.irradiance_word(1, i as usize)), 40);
+        }
+        for &(i, _, _) in &t.visibility_tables.interior {
+            assert_eq!(vl.count(t.visibility_word(1, i as usize)), 40);
+        }
+    }
+
+    #[test]
+    fn value_stability() {
+        let t = ProbeTexels::new(grid(), TexelConfig::ADGI);
+        let rays = [
+            RaySample {
+                direction: Vec3::new(0.1, 0.2, 0.97),
+                radiance: Vec3::new(1.0, 0.5, 0.2),
+                distance: 0.9,
+            },
+            RaySample {
+                direction: Vec3::new(-0.6, 0.7, 0.3),
+                radiance: Vec3::new(0.2, 0.4, 0.8),
+                distance: 2.5,
+            },
+            RaySample {
+                direction: Vec3::new(0.3, -0.9, -0.2),
+                radiance: Vec3::new(3.0, 2.0, 1.0),
+                distance: 0.3,
+            },
+        ];
+        t.blend_rays(0, &rays, &BlendWeights::DDGI, 0.4);
+        t.update_sample(1, &rays[1], 0.6);
+        let im = t.config().irradiance_map;
+        let vm = t.config().visibility_map;
+        let words = [
+            t.irradiance_word(0, im.index(im.texel(Vec3::Z))).0,
+            t.irradiance_word(0, im.index(im.texel(-Vec3::Y))).0,
+            t.visibility_word(0, vm.index(vm.texel(rays[0].direction)))
+                .0,
+            t.irradiance_word(1, im.index(im.texel(rays[1].direction)))
+                .0,
+            t.visibility_word(1, vm.index(vm.texel(rays[1].direction)))
+                .0,
+        ];
+        assert_eq!(
+            words,
+            [
+                0x0575_ad07,
+                0x0636_bf87,
+                0x04ed_adea,
+                0x0609_8e8e,
+                0x05e0_73f8
+            ],
+            "{words:#x?}"
+        );
     }
 }
