@@ -3,8 +3,8 @@
 //!
 //! Fig. 6b: "we call the volume bounded by the blue frustum and black boundary as inner volume
 //! V_in. Similarly, outer volume V_out is the volume bounded by green frustum and outer grey
-//! boundary. All probes in V_out participate in the heuristic modelling [pilot rays, sec. 4.4].
-//! Probes inside the blue frustum participate in adaptive sampling [sec. 4.8]. We set the probe
+//! boundary. All probes in V_out participate in the heuristic modelling \[pilot rays, sec. 4.4\].
+//! Probes inside the blue frustum participate in adaptive sampling \[sec. 4.8\]. We set the probe
 //! state N = 16 for all probes outside V_in but inside V_out." Sec. 4.8: "We lower the
 //! hysteresis by setting N = 16 for all probes in the region V_out − V_in. This enables the probe
 //! to quickly catch-up to the most recent values."

@@ -37,6 +37,18 @@
 //! Dynamic chains emit each (proxy, octant) at most once per frame: ADGI traces a whole octant
 //! of every probe in the proxy per sample, deterministically, so "the first invocation to update
 //! the octant marks it updated" (sec. 4.9).
+//!
+//! # Using the samples
+//! - **Static** ([`ProbeSample::cell`] = probe index): trace from the probe's position along
+//!   [`ProbeSample::direction`] for irradiance and along its opposite for visibility, and
+//!   update the texels those directions land in (sec. 4.8, Alg. 2). If the probe's f_d > 0,
+//!   ADGI snaps the direction to the centre of its texel first, to keep sampling noise out of
+//!   a changing texel (end of sec. 4.9).
+//! - **Dynamic** ([`ProbeSample::cell`] = proxy index): for every probe of the proxy
+//!   ([`ProxyGrid::probes_of`]) that the deferred shader uses (e.g. in V_in, see
+//!   [`clip_volume`](crate::clip_volume)), trace the centres of the texels whose directions lie
+//!   in [`ProbeSample::octant`] (sec. 4.9: deterministic rays through texel centres).
+//! - Run the dynamic chains after the static ones (sec. 4.9).
 
 use core::f32::consts::TAU;
 
@@ -416,8 +428,8 @@ impl ProbeChains {
     /// (also kept in [`Self::samples`] until the next frame). `uniforms` is called once per
     /// step, plus once per restarted chain.
     ///
-    /// The guide must be a function over the same cells (for a [`GuidingFunction`]
-    /// (crate::GuidingFunction), built on [`Self::cells`]); its values that are NaN, infinite
+    /// The guide must be a function over the same cells (for a
+    /// [`GuidingFunction`](crate::GuidingFunction), built on [`Self::cells`]); its values that are NaN, infinite
     /// or negative count as 0.
     pub fn step_frame<G, U>(&mut self, guide: &G, mut uniforms: U) -> &[ProbeSample]
     where

@@ -4,7 +4,7 @@
 //!
 //! Sec. 4.9: "we solve the first issue [chains lagging a moving target] by increasing the chain
 //! step size and by coarsening the target function (f_d). Practically, this amounts to grouping
-//! the heuristics-probes into virtual proxies. [...] a virtual proxy represents a group [of] the
+//! the heuristics-probes into virtual proxies. \[...\] a virtual proxy represents a group \[of\] the
 //! 3 × 3 × 3 probes. This virtual probe has 8 directions and each direction represents an
 //! axis-aligned octant. The value of a texel of the virtual probe is the max of all 27 probes it
 //! represents along the corresponding direction." A sample of the dynamic chain names a proxy
