@@ -9,11 +9,11 @@
 //! |---|---|---|
 //! | [`ProbeGrid`], [`ProbeCell`] | probe lattice: origin, spacing, counts; trilinear cell lookup | DDGI; ADGI sec. 3.1 |
 //! | [`heuristics`], [`HeuristicParams`] | f_c, f_v, f_r; f_s, f_d; the 6-10-10 heuristics word | ADGI eq. 10-12, 19-20, sec. 4.3 |
-//! | [`GuidingFunction`], [`GuideParams`], [`Guide`] | h(p, ω) = exp(α ĝ/f)·f per probe octant; static and dynamic forms | ADGI eq. 2, sec. 4.8, 4.9 |
+//! | [`GuidingFunction`], [`GuideParams`], [`Guide`], [`guiding_function::octant_feedback`] | h(p, ω) = exp(α ĝ/f)·f per probe octant; static and dynamic forms; the feedback ĝ | ADGI eq. 2, sec. 4.8, 4.9 |
 //! | [`ProxyGrid`] | probes grouped into 3×3×3 virtual proxies, max-pooled octants | ADGI sec. 4.9 |
 //! | [`temporal_gradient`], [`ChangeDetector`], [`TemporalTrigger`], [`SmoothingKernel`] | temporal gradients of f_v, f_r, trigger, 5×5×5 × octant smoothing | ADGI eq. 13-18, Fig. 6a |
-//! | [`pilot_rays`], [`PilotFrame`], [`PilotRay`], [`PilotHit`] | one stratified pilot ray per octant, `AABBCC…` direction pattern | ADGI sec. 4.1, 4.4 |
-//! | [`ProbeChains`], [`ProbeSample`], [`ChainKind`] | static and dynamic Metropolis chains over (position, cos θ, φ) | ADGI Alg. 1, 5, sec. 4.8, 4.9 |
+//! | [`pilot_rays`], [`PilotSchedule`], [`PilotFrame`], [`PilotRay`], [`PilotHit`] | one stratified pilot ray per octant, `AABBCC…` direction pattern | ADGI sec. 4.1, 4.4 |
+//! | [`ProbeChains`], [`ProbeSample`], [`ChainKind`] | static and dynamic Metropolis chains over (position, cos θ, φ), sequential or on threads | ADGI Alg. 1, 5, sec. 4.8, 4.9 |
 //! | [`clip_volume`], [`ClipVolumes`], [`Frustum`] | inner / outer clip volumes, shell count reset N ≤ 16 | ADGI Fig. 6b, sec. 4.4, 4.8 |
 //!
 //! ## Conventions
