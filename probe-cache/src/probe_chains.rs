@@ -29,8 +29,8 @@
 //! Each chain re-evaluates h at its persisted state (the target changes between frames), runs
 //! M steps of the schedule and emits the states after the first K (burn-in), skipping states
 //! with h = 0 (a chain that has not yet found the target's support). A chain whose state has
-//! h = 0 at the start of a frame restarts at a uniform point of the domain (from its first
-//! step's uniforms) — an independence move out of a region the stationary distribution never
+//! h = 0 at the start of a frame restarts at a uniform point of the domain (from one extra draw
+//! of uniforms) — an independence move out of a region the stationary distribution never
 //! visits, so it does not change what the chains converge to, and lets the dynamic chains find
 //! a change that appears far from them.
 //!
@@ -187,7 +187,7 @@ pub struct ProbeSample {
     pub h: f32,
 }
 
-/// Counters of the last [`ProbeChains::step_frame`].
+/// Counters of the last [`ProbeChains::step_frame`] or [`ProbeChains::step_frame_parallel`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FrameStats {
     /// Proposals made (chains × M).
@@ -212,7 +212,7 @@ pub struct FrameStats {
 ///     ProxyGrid, glam::{UVec3, Vec3}};
 ///
 /// let grid = ProbeGrid::new(Vec3::ZERO, Vec3::splat(0.5), UVec3::new(4, 4, 4))?;
-/// // f_s per probe and octant (here: every probe in the x < 0.5 half, upward octants).
+/// // f_s per probe and octant (here: 1 for the probes with x index < 2, upward octants 0-3).
 /// let mut f_s = vec![0.0f32; grid.probe_count() * 8];
 /// for p in 0..grid.probe_count() {
 ///     if grid.probe_coords(p).x < 2 {
