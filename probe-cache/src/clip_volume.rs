@@ -410,4 +410,22 @@ mod tests {
         );
         assert_eq!(vis.count(VisibilityWord(v.load(Ordering::Relaxed))), 16);
     }
+
+    #[test]
+    fn value_stability() {
+        let f = Frustum::from_view_projection(camera()).unwrap();
+        let left = f.planes()[0].to_array().map(f32::to_bits);
+        let near = f.planes()[4].to_array().map(f32::to_bits);
+        // Left: x + (10 − z) ≥ 0 → (1, 0, −1, 10)/√2; near: 10 − z − 1 ≥ 0 → (0, 0, −1, 9).
+        assert_eq!(
+            (left, near),
+            (
+                [1060439283, 0, 3207922931, 1088570928],
+                [0, 0, 3212836864, 1091567615]
+            ),
+            "{:?} {:?}",
+            f.planes()[0],
+            f.planes()[4]
+        );
+    }
 }

@@ -277,4 +277,26 @@ mod tests {
             Err(ProbeError::TableLengthMismatch)
         );
     }
+
+    #[test]
+    fn value_stability() {
+        let g = ProbeGrid::new(
+            Vec3::new(-1.0, 0.5, 2.0),
+            Vec3::new(0.5, 1.0, 0.25),
+            UVec3::new(5, 4, 7),
+        )
+        .unwrap();
+        let p = ProxyGrid::adgi(g);
+        let got: Vec<Option<usize>> = [
+            Vec3::new(0.3, 2.9, 3.1),
+            Vec3::new(-1.2, 0.1, 1.9),
+            Vec3::new(1.2, 4.0, 3.6),
+        ]
+        .iter()
+        .map(|&x| p.proxy_at(x))
+        .collect();
+        // (0.3, 2.9, 3.1) → t = (3.1, 2.9, 4.9) → probe (3, 2, 4) → proxy (1, 0, 1) = 5;
+        // the second → probe 0; the third has t.y = 4.0 = counts.y → outside.
+        assert_eq!(got, vec![Some(5), Some(0), None], "{got:?}");
+    }
 }
