@@ -4,7 +4,8 @@
 //! - `chain_step`: one Metropolis step of [`ProbeChains::step_frame`] with the tabulated guide
 //!   h (eq. 2, static form) evaluated at every proposal, per emitted-or-discarded step, against
 //!   the choice a uniform DDGI-style scheduler makes per ray: a uniform random probe and a
-//!   uniform direction from three uniforms. Both consume pre-generated uniforms.
+//!   uniform direction from three uniforms. Both consume pre-generated uniforms. Also the same
+//!   step on 2 threads ([`ProbeChains::step_frame_parallel`]).
 //! - `guide_h`: one evaluation of [`GuidingFunction::h`] (nearest probe, octant, eq. 2) against
 //!   a plain table read at a precomputed index.
 //!
@@ -74,6 +75,20 @@ fn chain_step(c: &mut Criterion) {
                 next = (next + 1) % uniforms.len();
                 uniforms[next]
             });
+            black_box(s.len())
+        })
+    });
+    let n_uniforms = uniforms.len();
+    let mut frame = 0usize;
+    group.bench_function("metropolis_guided_2_threads", |b| {
+        b.iter(|| {
+            frame += 1;
+            let base = frame * 7919;
+            let s = chains.step_frame_parallel(
+                &guide,
+                |j, k| uniforms[(base + j * 9 + k as usize) % n_uniforms],
+                2,
+            );
             black_box(s.len())
         })
     });

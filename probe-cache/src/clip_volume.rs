@@ -3,8 +3,8 @@
 //!
 //! Fig. 6b: "we call the volume bounded by the blue frustum and black boundary as inner volume
 //! V_in. Similarly, outer volume V_out is the volume bounded by green frustum and outer grey
-//! boundary. All probes in V_out participate in the heuristic modelling [pilot rays, sec. 4.4].
-//! Probes inside the blue frustum participate in adaptive sampling [sec. 4.8]. We set the probe
+//! boundary. All probes in V_out participate in the heuristic modelling \[pilot rays, sec. 4.4\].
+//! Probes inside the blue frustum participate in adaptive sampling \[sec. 4.8\]. We set the probe
 //! state N = 16 for all probes outside V_in but inside V_out." Sec. 4.8: "We lower the
 //! hysteresis by setting N = 16 for all probes in the region V_out − V_in. This enables the probe
 //! to quickly catch-up to the most recent values."
@@ -409,5 +409,23 @@ mod tests {
             1
         );
         assert_eq!(vis.count(VisibilityWord(v.load(Ordering::Relaxed))), 16);
+    }
+
+    #[test]
+    fn value_stability() {
+        let f = Frustum::from_view_projection(camera()).unwrap();
+        let left = f.planes()[0].to_array().map(f32::to_bits);
+        let near = f.planes()[4].to_array().map(f32::to_bits);
+        // Left: x + (10 − z) ≥ 0 → (1, 0, −1, 10)/√2; near: 10 − z − 1 ≥ 0 → (0, 0, −1, 9).
+        assert_eq!(
+            (left, near),
+            (
+                [1060439283, 0, 3207922931, 1088570928],
+                [0, 0, 3212836864, 1091567615]
+            ),
+            "{:?} {:?}",
+            f.planes()[0],
+            f.planes()[4]
+        );
     }
 }

@@ -236,6 +236,44 @@ impl Guide for GuidingFunction<'_> {
     }
 }
 
+/// Rec. 709 / sRGB luminance weights, for the feedback ĝ of [`octant_feedback`].
+pub const LUMINANCE: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
+
+/// The feedback ĝ of eq. 2 for one probe: per octant, the mean luminance of the irradiance
+/// texels whose centre direction lies in it — a coarse, per-octant "mip" of the irradiance
+/// cache, as sec. 4.8 asks ("from a higher mip-level"). Compute it from the previous frame's
+/// cache so the target stays fixed within a frame.
+///
+/// `texel_directions[t]` is the centre direction of texel `t`, `irradiance(t)` its decoded
+/// irradiance (RGB). Non-finite or negative luminances count as 0; an octant without texels
+/// gets 0.
+///
+/// # Example
+/// ```
+/// use mcg_probe_cache::{guiding_function::octant_feedback, glam::Vec3};
+/// let dirs = [Vec3::new(1.0, 1.0, 1.0), Vec3::new(1.0, 2.0, 0.5), Vec3::new(-1.0, -1.0, -1.0)];
+/// let mut g = [0.0; 8];
+/// octant_feedback(&dirs, |t| Vec3::splat(t as f32 + 1.0), &mut g);
+/// assert!((g[0] - 1.5).abs() < 1e-6 && (g[7] - 3.0).abs() < 1e-6 && g[1] == 0.0);
+/// ```
+pub fn octant_feedback(
+    texel_directions: &[Vec3],
+    mut irradiance: impl FnMut(usize) -> Vec3,
+    out: &mut [f32; OCTANTS],
+) {
+    let mut sum = [0.0f32; OCTANTS];
+    let mut n = [0u32; OCTANTS];
+    for (t, &d) in texel_directions.iter().enumerate() {
+        let o = octant(d);
+        let y = irradiance(t).dot(LUMINANCE);
+        sum[o] += if y > 0.0 && y.is_finite() { y } else { 0.0 };
+        n[o] += 1;
+    }
+    for o in 0..OCTANTS {
+        out[o] = if n[o] > 0 { sum[o] / n[o] as f32 } else { 0.0 };
+    }
+}
+
 /// Which heuristic of a heuristics word a guide samples.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum HeuristicField {
@@ -387,6 +425,23 @@ mod tests {
             decode_field(&words, HeuristicField::Static, &mut [0.0; 3]),
             Err(ProbeError::TableLengthMismatch)
         );
+    }
+
+    #[test]
+    fn octant_feedback_by_hand() {
+        // Two texels in octant 3 (−x, −y, +z): luminances of (1, 0, 0) and (0, 1, 0) are 0.2126
+        // and 0.7152, mean 0.4639; one NaN texel in octant 4 counts as 0.
+        let dirs = [
+            Vec3::new(-1.0, -1.0, 1.0),
+            Vec3::new(-0.2, -3.0, 0.1),
+            Vec3::new(1.0, 1.0, -1.0),
+        ];
+        let values = [Vec3::X, Vec3::Y, Vec3::NAN];
+        let mut g = [9.0; 8];
+        octant_feedback(&dirs, |t| values[t], &mut g);
+        assert!((g[3] - 0.4639).abs() < 1e-6, "{g:?}");
+        assert_eq!(g[4], 0.0);
+        assert!(g.iter().enumerate().all(|(o, &v)| o == 3 || v == 0.0));
     }
 
     #[test]

@@ -11,11 +11,11 @@
 //! | [`scene`]: [`Scene`], [`DynamicScene`] | CPU test scene: boxes, spheres, a rectangular light, one-bounce probe rays, a door that opens | ADGI sec. 5 (Fig. 1, 8) |
 //! | [`reference`]: [`reference_irradiance`] | reference probe irradiance, many stratified rays per texel direction | ADGI sec. 5, "Reference" |
 //! | [`heuristics`], [`HeuristicParams`] | f_c, f_v, f_r; f_s, f_d; the 6-10-10 heuristics word | ADGI eq. 10-12, 19-20, sec. 4.3 |
-//! | [`GuidingFunction`], [`GuideParams`], [`Guide`] | h(p, ω) = exp(α ĝ/f)·f per probe octant; static and dynamic forms | ADGI eq. 2, sec. 4.8, 4.9 |
+//! | [`GuidingFunction`], [`GuideParams`], [`Guide`], [`guiding_function::octant_feedback`] | h(p, ω) = exp(α ĝ/f)·f per probe octant; static and dynamic forms; the feedback ĝ | ADGI eq. 2, sec. 4.8, 4.9 |
 //! | [`ProxyGrid`] | probes grouped into 3×3×3 virtual proxies, max-pooled octants | ADGI sec. 4.9 |
 //! | [`temporal_gradient`], [`ChangeDetector`], [`TemporalTrigger`], [`SmoothingKernel`] | temporal gradients of f_v, f_r, trigger, 5×5×5 × octant smoothing | ADGI eq. 13-18, Fig. 6a |
-//! | [`pilot_rays`], [`PilotFrame`], [`PilotRay`], [`PilotHit`] | one stratified pilot ray per octant, `AABBCC…` direction pattern | ADGI sec. 4.1, 4.4 |
-//! | [`ProbeChains`], [`ProbeSample`], [`ChainKind`] | static and dynamic Metropolis chains over (position, cos θ, φ) | ADGI Alg. 1, 5, sec. 4.8, 4.9 |
+//! | [`pilot_rays`], [`PilotSchedule`], [`PilotFrame`], [`PilotRay`], [`PilotHit`] | one stratified pilot ray per octant, `AABBCC…` direction pattern | ADGI sec. 4.1, 4.4 |
+//! | [`ProbeChains`], [`ProbeSample`], [`ChainKind`] | static and dynamic Metropolis chains over (position, cos θ, φ), sequential or on threads | ADGI Alg. 1, 5, sec. 4.8, 4.9 |
 //! | [`octahedral_encode`], [`octahedral_decode`], [`octahedral_solid_angle`] | RTXGI's octahedral sphere ↔ square map; exact texel solid angle | Cigolle et al. 2014; DDGI; RTXGI |
 //! | [`equal_area_encode`], [`equal_area_decode`], [`equal_area_solid_angle`] | Clarberg's equal-area map (4π/n² per texel) | Clarberg 2008 |
 //! | [`TexelMap`], [`MapKind`] | a probe's texel grid: direction ↔ texel, solid angle, RTXGI 1-texel border, bilinear taps | RTXGI; ADGI sec. 3.1, 4.5-4.6 |

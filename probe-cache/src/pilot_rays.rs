@@ -4,7 +4,7 @@
 //! Sec. 4.4: "We change the ray-directions at alternate frames in an AABBCCDD... pattern,
 //! improving the detection of temporally varying light-field surrounding the probes. We measure
 //! the time-delta (equation 13 and 16) between two frames with identical set of ray-queries,
-//! avoiding noisy gradients. [...] We use a stratified-random ray-direction such that there is
+//! avoiding noisy gradients. \[...\] We use a stratified-random ray-direction such that there is
 //! always one ray per octant. We update the irradiance and visibility cache at each alternate
 //! frame."
 //!

@@ -29,14 +29,26 @@
 //! Each chain re-evaluates h at its persisted state (the target changes between frames), runs
 //! M steps of the schedule and emits the states after the first K (burn-in), skipping states
 //! with h = 0 (a chain that has not yet found the target's support). A chain whose state has
-//! h = 0 at the start of a frame restarts at a uniform point of the domain (from its first
-//! step's uniforms) — an independence move out of a region the stationary distribution never
+//! h = 0 at the start of a frame restarts at a uniform point of the domain (from one extra draw
+//! of uniforms) — an independence move out of a region the stationary distribution never
 //! visits, so it does not change what the chains converge to, and lets the dynamic chains find
 //! a change that appears far from them.
 //!
 //! Dynamic chains emit each (proxy, octant) at most once per frame: ADGI traces a whole octant
 //! of every probe in the proxy per sample, deterministically, so "the first invocation to update
 //! the octant marks it updated" (sec. 4.9).
+//!
+//! # Using the samples
+//! - **Static** ([`ProbeSample::cell`] = probe index): trace from the probe's position along
+//!   [`ProbeSample::direction`] for irradiance and along its opposite for visibility, and
+//!   update the texels those directions land in (sec. 4.8, Alg. 2). If the probe's f_d > 0,
+//!   ADGI snaps the direction to the centre of its texel first, to keep sampling noise out of
+//!   a changing texel (end of sec. 4.9).
+//! - **Dynamic** ([`ProbeSample::cell`] = proxy index): for every probe of the proxy
+//!   ([`ProxyGrid::probes_of`]) that the deferred shader uses (e.g. in V_in, see
+//!   [`clip_volume`](crate::clip_volume)), trace the centres of the texels whose directions lie
+//!   in [`ProbeSample::octant`] (sec. 4.9: deterministic rays through texel centres).
+//! - Run the dynamic chains after the static ones (sec. 4.9).
 
 use core::f32::consts::TAU;
 
@@ -175,7 +187,7 @@ pub struct ProbeSample {
     pub h: f32,
 }
 
-/// Counters of the last [`ProbeChains::step_frame`].
+/// Counters of the last [`ProbeChains::step_frame`] or [`ProbeChains::step_frame_parallel`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FrameStats {
     /// Proposals made (chains × M).
@@ -200,7 +212,7 @@ pub struct FrameStats {
 ///     ProxyGrid, glam::{UVec3, Vec3}};
 ///
 /// let grid = ProbeGrid::new(Vec3::ZERO, Vec3::splat(0.5), UVec3::new(4, 4, 4))?;
-/// // f_s per probe and octant (here: every probe in the x < 0.5 half, upward octants).
+/// // f_s per probe and octant (here: 1 for the probes with x index < 2, upward octants 0-3).
 /// let mut f_s = vec![0.0f32; grid.probe_count() * 8];
 /// for p in 0..grid.probe_count() {
 ///     if grid.probe_coords(p).x < 2 {
@@ -323,10 +335,7 @@ impl ProbeChains {
     #[inline]
     #[must_use]
     pub fn uniform_state(&self, u: &[f32; CHAIN_DIMENSIONS]) -> [f32; CHAIN_DIMENSIONS] {
-        let c = |x: f32| if x >= 0.0 { x.min(1.0) } else { 0.0 };
-        let p = self.lo + Vec3::new(c(u[0]), c(u[1]), c(u[2])) * self.extent;
-        let [z, phi] = fold_direction(2.0 * c(u[3]) - 1.0, TAU * c(u[4]));
-        [p.x, p.y, p.z, z, phi]
+        uniform_state(self.lo, self.extent, u)
     }
 
     /// The cells (probes or proxies) the chains' samples name.
@@ -413,17 +422,92 @@ impl ProbeChains {
     }
 
     /// Runs one frame of every chain (Alg. 1) against `guide` and returns the emitted samples
-    /// (also kept in [`Self::samples`] until the next frame). `uniforms` is called once per
-    /// step, plus once per restarted chain.
+    /// (also kept in [`Self::samples`] until the next frame), in chain order. `uniforms` is
+    /// called once per step, plus once per restarted chain (before its steps).
     ///
-    /// The guide must be a function over the same cells (for a [`GuidingFunction`]
-    /// (crate::GuidingFunction), built on [`Self::cells`]); its values that are NaN, infinite
-    /// or negative count as 0.
+    /// The guide must be a function over the same cells (for a
+    /// [`GuidingFunction`](crate::GuidingFunction), built on [`Self::cells`]); its values that
+    /// are NaN, infinite or negative count as 0.
     pub fn step_frame<G, U>(&mut self, guide: &G, mut uniforms: U) -> &[ProbeSample]
     where
         G: Guide + ?Sized,
         U: FnMut() -> ProbeStepUniforms,
     {
+        self.begin_frame();
+        let runner = self.runner();
+        let mut stats = FrameStats::default();
+        let mut candidates = core::mem::take(&mut self.samples);
+        for chain in &mut self.chains {
+            runner.run(chain, guide, &mut uniforms, &mut candidates, &mut stats);
+        }
+        self.finish_frame(candidates, stats)
+    }
+
+    /// [`Self::step_frame`] on `threads` threads (scoped; `threads ≤ 1` runs on the caller's
+    /// thread). Chain `j` draws its `k`-th uniforms as `uniforms(j, k)` (k counts from 0 each
+    /// frame, restart draw included), so the result does not depend on the thread count and
+    /// equals a sequential run fed the same keyed uniforms.
+    pub fn step_frame_parallel<G, U>(
+        &mut self,
+        guide: &G,
+        uniforms: U,
+        threads: usize,
+    ) -> &[ProbeSample]
+    where
+        G: Guide + Sync + ?Sized,
+        U: Fn(usize, u32) -> ProbeStepUniforms + Sync,
+    {
+        self.begin_frame();
+        let runner = self.runner();
+        let threads = threads.clamp(1, self.chains.len());
+        let per = self.chains.len().div_ceil(threads);
+        let run_slice = |first: usize, slice: &mut [ProbeChainState]| {
+            let mut out = Vec::new();
+            let mut stats = FrameStats::default();
+            for (i, chain) in slice.iter_mut().enumerate() {
+                let mut k = 0u32;
+                let mut u = || {
+                    k += 1;
+                    uniforms(first + i, k - 1)
+                };
+                runner.run(chain, guide, &mut u, &mut out, &mut stats);
+            }
+            (out, stats)
+        };
+        let parts: Vec<(Vec<ProbeSample>, FrameStats)> = if threads == 1 {
+            vec![run_slice(0, &mut self.chains)]
+        } else {
+            std::thread::scope(|scope| {
+                let handles: Vec<_> = self
+                    .chains
+                    .chunks_mut(per)
+                    .enumerate()
+                    .map(|(t, slice)| {
+                        let run_slice = &run_slice;
+                        scope.spawn(move || run_slice(t * per, slice))
+                    })
+                    .collect();
+                handles
+                    .into_iter()
+                    .map(|h| h.join().expect("chain thread panicked"))
+                    .collect()
+            })
+        };
+        let mut candidates = core::mem::take(&mut self.samples);
+        let mut stats = FrameStats::default();
+        for (out, st) in parts {
+            candidates.extend(out);
+            stats.proposals += st.proposals;
+            stats.accepted += st.accepted;
+            stats.restarts += st.restarts;
+            stats.emitted += st.emitted;
+            stats.dropped += st.dropped;
+        }
+        self.finish_frame(candidates, stats)
+    }
+
+    /// Clears the last frame's samples and claimed (proxy, octant) bits.
+    fn begin_frame(&mut self) {
         if self.kind == ChainKind::Dynamic {
             // Clear only the bits the last frame set (the table may be large).
             for s in &self.samples {
@@ -432,74 +516,122 @@ impl ProbeChains {
             }
         }
         self.samples.clear();
-        let mut stats = FrameStats::default();
-        let cells = self.cells;
-        let walk = self.walk;
-        let schedule = self.schedule;
-        let dedupe = self.kind == ChainKind::Dynamic;
-        for c in 0..self.chains.len() {
-            let mut chain = self.chains[c];
-            let mut current = Self::locate(&cells, &chain.x);
-            chain.target = Self::target(guide, &current);
-            if chain.target == 0.0 {
-                // Independence restart of a chain outside the support.
-                let u = uniforms();
-                chain.x = self.uniform_state(&u.proposal);
-                current = Self::locate(&cells, &chain.x);
-                chain.target = Self::target(guide, &current);
-                stats.restarts += 1;
-            }
-            for i in 0..schedule.iterations() {
-                let u = uniforms();
-                let mut proposed = current;
-                let accepted = walk.step(
-                    &mut chain,
-                    |x| {
-                        proposed = Self::locate(&cells, x);
-                        Self::target(guide, &proposed)
-                    },
-                    &u,
-                );
-                stats.proposals += 1;
-                if accepted {
-                    stats.accepted += 1;
-                    chain.x[3] = proposed.folded[0];
-                    chain.x[4] = proposed.folded[1];
-                    current = proposed;
-                }
-                if i < schedule.burn_in() {
-                    continue;
-                }
-                let (Some(probe), true) = (current.probe, chain.target > 0.0) else {
-                    stats.dropped += 1;
-                    continue;
-                };
-                let cell = cells.proxy_of_probe(probe);
-                let o = octant(current.direction);
-                if dedupe {
-                    let bit = cell * OCTANTS + o;
-                    let (word, mask) = (bit / 64, 1u64 << (bit % 64));
-                    if self.claimed[word] & mask != 0 {
-                        stats.dropped += 1;
-                        continue;
-                    }
-                    self.claimed[word] |= mask;
-                }
-                self.samples.push(ProbeSample {
-                    cell: cell as u32,
-                    probe,
-                    octant: o as u8,
-                    position: current.position,
-                    direction: current.direction,
-                    h: chain.target,
-                });
-                stats.emitted += 1;
-            }
-            self.chains[c] = chain;
+    }
+
+    /// Deduplicates (dynamic chains: first in chain order wins) and stores the samples.
+    fn finish_frame(
+        &mut self,
+        mut candidates: Vec<ProbeSample>,
+        mut stats: FrameStats,
+    ) -> &[ProbeSample] {
+        if self.kind == ChainKind::Dynamic {
+            let claimed = &mut self.claimed;
+            candidates.retain(|s| {
+                let bit = s.cell as usize * OCTANTS + s.octant as usize;
+                let (word, mask) = (bit / 64, 1u64 << (bit % 64));
+                let fresh = claimed[word] & mask == 0;
+                claimed[word] |= mask;
+                fresh
+            });
+            let duplicates = stats.emitted - candidates.len() as u32;
+            stats.emitted -= duplicates;
+            stats.dropped += duplicates;
         }
+        self.samples = candidates;
         self.stats = stats;
         &self.samples
     }
+
+    fn runner(&self) -> ChainRunner {
+        ChainRunner {
+            cells: self.cells,
+            walk: self.walk,
+            schedule: self.schedule,
+            lo: self.lo,
+            extent: self.extent,
+        }
+    }
+}
+
+/// What one chain's frame needs, copied out of [`ProbeChains`] so chains can run on threads.
+#[derive(Clone, Copy)]
+struct ChainRunner {
+    cells: ProxyGrid,
+    walk: RandomWalk<CHAIN_DIMENSIONS>,
+    schedule: FrameSchedule,
+    lo: Vec3,
+    extent: Vec3,
+}
+
+impl ChainRunner {
+    /// One frame of one chain (Alg. 1): re-evaluate, restart if h = 0, M steps, emit after K.
+    fn run<G, U>(
+        &self,
+        chain: &mut ProbeChainState,
+        guide: &G,
+        uniforms: &mut U,
+        out: &mut Vec<ProbeSample>,
+        stats: &mut FrameStats,
+    ) where
+        G: Guide + ?Sized,
+        U: FnMut() -> ProbeStepUniforms,
+    {
+        let cells = self.cells;
+        let mut current = ProbeChains::locate(&cells, &chain.x);
+        chain.target = ProbeChains::target(guide, &current);
+        if chain.target == 0.0 {
+            // Independence restart of a chain outside the support.
+            let u = uniforms();
+            chain.x = uniform_state(self.lo, self.extent, &u.proposal);
+            current = ProbeChains::locate(&cells, &chain.x);
+            chain.target = ProbeChains::target(guide, &current);
+            stats.restarts += 1;
+        }
+        for i in 0..self.schedule.iterations() {
+            let u = uniforms();
+            let mut proposed = current;
+            let accepted = self.walk.step(
+                chain,
+                |x| {
+                    proposed = ProbeChains::locate(&cells, x);
+                    ProbeChains::target(guide, &proposed)
+                },
+                &u,
+            );
+            stats.proposals += 1;
+            if accepted {
+                stats.accepted += 1;
+                chain.x[3] = proposed.folded[0];
+                chain.x[4] = proposed.folded[1];
+                current = proposed;
+            }
+            if i < self.schedule.burn_in() {
+                continue;
+            }
+            let (Some(probe), true) = (current.probe, chain.target > 0.0) else {
+                stats.dropped += 1;
+                continue;
+            };
+            out.push(ProbeSample {
+                cell: cells.proxy_of_probe(probe) as u32,
+                probe,
+                octant: octant(current.direction) as u8,
+                position: current.position,
+                direction: current.direction,
+                h: chain.target,
+            });
+            stats.emitted += 1;
+        }
+    }
+}
+
+/// The point of the domain `lo + [0, 1]³ ⊙ extent` × sphere at uniforms `u`.
+#[inline]
+fn uniform_state(lo: Vec3, extent: Vec3, u: &[f32; CHAIN_DIMENSIONS]) -> [f32; CHAIN_DIMENSIONS] {
+    let c = |x: f32| if x >= 0.0 { x.min(1.0) } else { 0.0 };
+    let p = lo + Vec3::new(c(u[0]), c(u[1]), c(u[2])) * extent;
+    let [z, phi] = fold_direction(2.0 * c(u[3]) - 1.0, TAU * c(u[4]));
+    [p.x, p.y, p.z, z, phi]
 }
 
 /// A chain state resolved into what the guide and the samples need.
@@ -644,6 +776,51 @@ mod tests {
         seen.dedup();
         assert_eq!(seen.len(), 16);
         assert_eq!(chains.stats().emitted + chains.stats().dropped, 256 * 6);
+    }
+
+    #[test]
+    fn parallel_frames_do_not_depend_on_thread_count() {
+        let grid = ProbeGrid::new(Vec3::ZERO, Vec3::ONE, UVec3::new(7, 3, 4)).unwrap();
+        let keyed = |j: usize, k: u32| {
+            let mut u = lcg((j as u32).wrapping_mul(7919) ^ k.wrapping_mul(104_729) ^ 0x5bd1);
+            ProbeStepUniforms {
+                proposal: [u(), u(), u(), u(), u()],
+                accept: u(),
+            }
+        };
+        let guide = |p: Vec3, d: Vec3| {
+            if p.x < 2.0 {
+                0.0
+            } else {
+                1.0 + d.z.max(0.0) + p.y
+            }
+        };
+        for kind in [ChainKind::Static, ChainKind::Dynamic] {
+            let cells = if kind == ChainKind::Static {
+                ProxyGrid::probes(grid)
+            } else {
+                ProxyGrid::adgi(grid)
+            };
+            let run = |threads: usize| {
+                let mut u = lcg(9);
+                let mut chains = ProbeChains::new(cells, kind, 37, FrameSchedule::DEFAULT, || {
+                    [u(), u(), u(), u(), u()]
+                })
+                .unwrap();
+                let mut all = Vec::new();
+                for _ in 0..5 {
+                    all.extend_from_slice(chains.step_frame_parallel(&guide, keyed, threads));
+                }
+                (all, chains.states().to_vec(), chains.stats())
+            };
+            let one = run(1);
+            assert!(!one.0.is_empty());
+            assert_eq!(one, run(3), "{kind:?}");
+            assert_eq!(one, run(64), "{kind:?}");
+            let st = one.2;
+            assert_eq!(st.proposals, 37 * 8);
+            assert_eq!(st.emitted + st.dropped, 37 * 6);
+        }
     }
 
     #[test]

@@ -4,7 +4,7 @@
 //!
 //! Sec. 4.9: "we solve the first issue [chains lagging a moving target] by increasing the chain
 //! step size and by coarsening the target function (f_d). Practically, this amounts to grouping
-//! the heuristics-probes into virtual proxies. [...] a virtual proxy represents a group [of] the
+//! the heuristics-probes into virtual proxies. \[...\] a virtual proxy represents a group \[of\] the
 //! 3 × 3 × 3 probes. This virtual probe has 8 directions and each direction represents an
 //! axis-aligned octant. The value of a texel of the virtual probe is the max of all 27 probes it
 //! represents along the corresponding direction." A sample of the dynamic chain names a proxy
@@ -276,5 +276,27 @@ mod tests {
             p.max_pool(&table[1..], &mut out),
             Err(ProbeError::TableLengthMismatch)
         );
+    }
+
+    #[test]
+    fn value_stability() {
+        let g = ProbeGrid::new(
+            Vec3::new(-1.0, 0.5, 2.0),
+            Vec3::new(0.5, 1.0, 0.25),
+            UVec3::new(5, 4, 7),
+        )
+        .unwrap();
+        let p = ProxyGrid::adgi(g);
+        let got: Vec<Option<usize>> = [
+            Vec3::new(0.3, 2.9, 3.1),
+            Vec3::new(-1.2, 0.1, 1.9),
+            Vec3::new(1.2, 4.0, 3.6),
+        ]
+        .iter()
+        .map(|&x| p.proxy_at(x))
+        .collect();
+        // (0.3, 2.9, 3.1) → t = (3.1, 2.9, 4.9) → probe (3, 2, 4) → proxy (1, 0, 1) = 5;
+        // the second → probe 0; the third has t.y = 4.0 = counts.y → outside.
+        assert_eq!(got, vec![Some(5), Some(0), None], "{got:?}");
     }
 }
