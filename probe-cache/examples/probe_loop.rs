@@ -63,19 +63,16 @@ fn main() -> Result<(), mcg_probe_cache::ProbeError> {
 
     for frame in 0..32u32 {
         let now = scene.at_frame(frame);
-        let trace = |probe: usize, d: Vec3, rng: &mut Pcg64Mcg| {
+        // Trace from a probe and update the texel the ray lands in with N_max `average`.
+        let trace = |probe: usize, d: Vec3, rng: &mut Pcg64Mcg, average: MovingAverage| {
             let origin = grid.probe_position(grid.probe_coords(probe));
             let hit = now.trace_probe_ray(origin, d, Vec2::new(rng.random(), rng.random()));
-            texels.update_sample(
-                probe,
-                &RaySample {
-                    direction: d,
-                    radiance: hit.radiance,
-                    distance: hit.distance,
-                },
-                rng.random(),
-            );
-            hit
+            let sample = RaySample {
+                direction: d,
+                radiance: hit.radiance,
+                distance: hit.distance,
+            };
+            texels.update_sample_with(probe, &sample, rng.random(), average);
         };
         let (mut rays, mut closet) = (0, 0);
         let in_closet = |probe: usize| {
@@ -169,12 +166,11 @@ fn main() -> Result<(), mcg_probe_cache::ProbeError> {
                         break 'samples;
                     }
                     let p = grid.probe_index(coords);
-                    texels.cap_counts(p, MovingAverage::DYNAMIC.max_count());
                     let signs = mcg_probe_cache::heuristics::octant_signs(usize::from(s.octant));
                     for _ in 0..64 {
                         let u = Vec2::new(rng.random(), rng.random());
                         let d = mcg_probe_cache::pilot_rays::pilot_direction(0, u) * signs;
-                        trace(p, d, &mut rng);
+                        trace(p, d, &mut rng, MovingAverage::DYNAMIC);
                     }
                     count(&mut rays, &mut closet, p, 64);
                     dynamic += 64;
@@ -195,7 +191,7 @@ fn main() -> Result<(), mcg_probe_cache::ProbeError> {
             .to_vec();
         for s in samples.iter().take(left) {
             let p = grid.probe_index(s.probe);
-            trace(p, s.direction, &mut rng);
+            trace(p, s.direction, &mut rng, MovingAverage::STATIC);
             count(&mut rays, &mut closet, p, 1);
         }
 

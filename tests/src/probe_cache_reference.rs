@@ -18,7 +18,7 @@
 //!   composed with f_c = 1 (the camera sees the whole grid) into the 6-10-10 heuristics words
 //!   (eq. 19-20, sec. 4.3). Dynamic Metropolis chains on the 3 × 3 × 3 proxies sample f_d
 //!   (sec. 4.9); each sample traces [`DYNAMIC_RAYS_PER_OCTANT`] rays into its octant for every
-//!   probe of the proxy, whose counts drop to the dynamic N_max = 10 (Table 3). Static chains
+//!   probe of the proxy, each updating its texel with the dynamic N_max = 10 (Table 3). Static chains
 //!   sample h = exp(min(ĝ/f_s, 1)) f_s (sec. 4.8) with the rest of the budget. Every ray
 //!   updates the one texel it lands in ([`ProbeTexels::update_sample`], N_max = 63).
 //! - [`Policy::AdgiUnguided`]: ADGI with both guides replaced by a constant — the same
@@ -49,6 +49,7 @@
 //! their texels.
 
 use glam::{Quat, UVec2, Vec2, Vec3};
+use mcg_probe_cache::guiding_function::{decode_field, octant_feedback};
 use mcg_probe_cache::heuristics::{self, OCTANTS, octant};
 use mcg_probe_cache::mcg_color_codec::HeuristicsWord;
 use mcg_probe_cache::mcg_color_codec::MovingAverage;
@@ -61,7 +62,7 @@ use mcg_probe_cache::{
     ProbeStepUniforms, ProbeTexels, ProxyGrid, RaySample, TexelConfig, TexelContent,
     reference_irradiance,
 };
-use mcg_probe_cache::{HeuristicField, PilotSchedule, guiding_function::decode_field};
+use mcg_probe_cache::{HeuristicField, PilotSchedule};
 use rand::RngExt;
 
 use crate::{Pcg64Mcg, seeded_rng};
@@ -737,7 +738,6 @@ impl Renderer {
                     .to_vec()
             };
             let map = self.texels.config().irradiance_map;
-            let mut capped = vec![false; probes];
             'samples: for s in samples {
                 for coords in proxies.probes_of(s.cell as usize) {
                     let p = grid.probe_index(coords);
@@ -746,12 +746,6 @@ impl Renderer {
                     let cost = (per_texel * texels.len()) as u64;
                     if dynamic_rays + cost > dynamic_budget {
                         break 'samples;
-                    }
-                    if !capped[p] {
-                        // The dynamic N_max (Table 3) for this probe from now on.
-                        self.texels
-                            .cap_counts(p, MovingAverage::DYNAMIC.max_count());
-                        capped[p] = true;
                     }
                     let pos = grid.probe_position(coords);
                     for &(index, _) in texels
@@ -766,7 +760,8 @@ impl Renderer {
                         let d = map.decode(uv);
                         let hit =
                             scene.trace_probe_ray(pos, d, Vec2::new(rng.random(), rng.random()));
-                        self.texels.update_sample(
+                        // The dynamic N_max (Table 3).
+                        self.texels.update_sample_with(
                             p,
                             &RaySample {
                                 direction: d,
@@ -774,6 +769,7 @@ impl Renderer {
                                 distance: hit.distance,
                             },
                             rng.random(),
+                            MovingAverage::DYNAMIC,
                         );
                     }
                     dynamic_rays += cost;
@@ -788,15 +784,15 @@ impl Renderer {
 
         // 4. Static chains (sec. 4.8): h = exp(min(ĝ/f_s, 1)) f_s, ĝ = the octant's mean cached
         //    luminance, with the rest of the budget; one texel update per sample.
+        let dirs: Vec<Vec3> = exp.texels.iter().map(|t| t.1).collect();
         for p in 0..probes {
-            for o in 0..OCTANTS {
-                let texels = &a.octant_texels[o];
-                let sum: f32 = texels
-                    .iter()
-                    .map(|&(i, _)| luminance(self.texels.irradiance(p, i)))
-                    .sum();
-                a.feedback[p * OCTANTS + o] = sum / texels.len().max(1) as f32;
-            }
+            let mut g = [0.0; OCTANTS];
+            octant_feedback(
+                &dirs,
+                |k| self.texels.irradiance(p, exp.texels[k].0),
+                &mut g,
+            );
+            a.feedback[p * OCTANTS..][..OCTANTS].copy_from_slice(&g);
         }
         let static_budget = budget.saturating_sub(counter.rays);
         let samples: Vec<_> = if a.guided {
