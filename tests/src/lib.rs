@@ -46,8 +46,9 @@ pub use hashgrid_reference::{
 };
 pub use ks::{KsResult, assert_ks, kolmogorov_critical_value, kolmogorov_survival, ks_test};
 pub use probe_cache_reference::{
-    DYNAMIC_SHARE, Experiment, ExperimentConfig, FRAMES_TO_ERROR_THRESHOLD, Policy,
-    QDDGI_MAX_COUNT, Run, TRIGGER_DECAY, frames_to_error, frames_to_first_below, mean_error,
+    DYNAMIC_CHAINS, DYNAMIC_RAYS_PER_OCTANT, DYNAMIC_SHARE, Experiment, ExperimentConfig,
+    FRAMES_TO_ERROR_THRESHOLD, Policy, QDDGI_MAX_COUNT, Run, SMOOTHING_RADIUS, TRIGGER_DECAY,
+    WARM_START_RAYS_PER_TEXEL, frames_to_error, frames_to_first_below, mean_error,
 };
 pub use quadrature::{GaussLegendre, graded_theta_breaks, integrate_sphere, orthonormal_basis};
 pub use rng::{Pcg64Mcg, seeded_rng, uniform_sphere_direction, uniform_vec2};

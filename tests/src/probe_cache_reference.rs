@@ -262,7 +262,7 @@ impl Experiment {
     /// drawn from `seed` instead of the config's; the scene, reference and warm start stay.
     #[must_use]
     pub fn run_with_seed(&self, policy: Policy, seed: u64, snapshot_frames: &[u32]) -> Run {
-        let mut rng = seeded_rng(seed ^ policy as u64 * 0x9e37_79b9);
+        let mut rng = seeded_rng(seed ^ (policy as u64 * 0x9e37_79b9));
         let mut state = match policy {
             Policy::UniformDdgi => Renderer::ddgi(self),
             Policy::Adgi | Policy::AdgiUnguided => {
@@ -416,10 +416,12 @@ fn warm_start(
 #[must_use]
 pub fn frames_to_error(errors: &[f64], from: u32, threshold: f64) -> Option<u32> {
     let from = from as usize;
-    if from >= errors.len() || !(errors[errors.len() - 1] < threshold) {
+    // `e >= threshold` or NaN: not below.
+    let above = |e: f64| e.partial_cmp(&threshold) != Some(core::cmp::Ordering::Less);
+    if from >= errors.len() || above(errors[errors.len() - 1]) {
         return None;
     }
-    let last_above = errors[from..].iter().rposition(|&e| !(e < threshold));
+    let last_above = errors[from..].iter().rposition(|&e| above(e));
     Some(last_above.map_or(0, |i| i as u32 + 1))
 }
 
@@ -597,7 +599,7 @@ impl Renderer {
             .collect();
         let mut counter = RayCounter::default();
         let mut rays = Vec::with_capacity(r as usize);
-        for p in 0..grid.probe_count() {
+        for (p, &is_near) in near.iter().enumerate().take(grid.probe_count()) {
             let pos = grid.probe_position(grid.probe_coords(p));
             rays.clear();
             for &d in &dirs {
@@ -611,7 +613,7 @@ impl Renderer {
             self.texels
                 .blend_rays(p, &rays, &BlendWeights::DDGI, rng.random());
             counter.rays += u64::from(r);
-            if near[p] {
+            if is_near {
                 counter.rays_near += u64::from(r);
             }
         }

@@ -265,9 +265,9 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
             8 * nv,
         ),
         (
-            "RGB32F + count (a plain f32 store), RG32F + count",
+            "RGB32F + count, 16 B per texel for both maps (a plain f32 store)",
             16 * ni,
-            12 * nv,
+            16 * nv,
         ),
     ];
     for (name, irr, v) in rows {
@@ -284,8 +284,9 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
         .heading("Memory per probe")
         .paragraph(&format!(
             "A probe of this crate's default layout takes {adgi} bytes — {} for the whole grid \
-             above. ADGI's \"4× less\" is the irradiance word against an RGBA32F texel; against \
-             RGB32F it is 3×, and the visibility moments halve against RG32F.",
+             above. ADGI's \"4× less\" holds against a plain 16-byte f32 texel (RGB32F + \
+             count, or RGBA32F irradiance); against packed RGB32F irradiance it is 3×, and the \
+             visibility moments halve against RG32F.",
             crate::group_thousands(adgi * probes)
         ))
         .table(table);
