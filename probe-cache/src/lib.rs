@@ -9,7 +9,7 @@
 //! |---|---|---|
 //! | [`ProbeGrid`], [`ProbeCell`] | probe lattice: origin, spacing, counts; trilinear cell lookup | DDGI; ADGI sec. 3.1 |
 //! | [`scene`]: [`Scene`], [`DynamicScene`] | CPU test scene: boxes, spheres, a rectangular light, one-bounce probe rays, a door that opens | ADGI sec. 5 (Fig. 1, 8) |
-//! | [`reference`](mod@reference): [`reference_irradiance`] | reference probe irradiance, many stratified rays per texel direction | ADGI sec. 5, "Reference" |
+//! | [`reference`](mod@reference): [`reference_irradiance`], [`reference_texel_irradiance`] | reference probe irradiance, many stratified rays per texel direction (or per texel of a map) | ADGI sec. 5, "Reference" |
 //! | [`heuristics`], [`HeuristicParams`] | f_c, f_v, f_r; f_s, f_d; the 6-10-10 heuristics word | ADGI eq. 10-12, 19-20, sec. 4.3 |
 //! | [`GuidingFunction`], [`GuideParams`], [`Guide`], [`guiding_function::octant_feedback`] | h(p, ω) = exp(α ĝ/f)·f per probe octant; static and dynamic forms; the feedback ĝ | ADGI eq. 2, sec. 4.8, 4.9 |
 //! | [`ProxyGrid`] | probes grouped into 3×3×3 virtual proxies, max-pooled octants | ADGI sec. 4.9 |
@@ -83,7 +83,7 @@ pub use probe_chains::{
 pub use probe_texels::{ProbeTexels, RoundingMode, TexelConfig};
 pub use proxies::ProxyGrid;
 pub use query::{QueryConfig, TexelContent};
-pub use reference::reference_irradiance;
+pub use reference::{reference_irradiance, reference_texel_irradiance};
 pub use scene::{DynamicScene, ProbeRay, Scene, SceneEvent};
 pub use temporal_gradient::{ChangeDetector, SmoothingKernel, TemporalTrigger};
 pub use texel_map::{MAX_MAP_SIDE, MapKind, TexelMap};

@@ -15,11 +15,11 @@
 //! Back-face hits (a ray that starts inside geometry) return no radiance, as DDGI's probe
 //! classification expects.
 //!
-//! The default room ([`DynamicScene::door_opens`]) is two rooms side by side: a lit main room
-//! with the light on its ceiling, and a dark side room behind a partition wall whose doorway a
-//! sliding door closes until the event frame. When the door slides open, light falls through
-//! the doorway into the side room: the probes there and near the door change, the rest of the
-//! grid hardly does — the localised change ADGI's guide is built to find (Fig. 1 and 8 of the
+//! The default scene ([`DynamicScene::door_opens`]) is two rooms side by side: a lit 8 m main
+//! room with the light on its ceiling, and a dark 0.9 m closet behind a partition wall whose
+//! doorway a sliding door closes until the event frame. When the door slides open, light falls
+//! through the doorway into the closet: the probes there and near the door change, the rest of
+//! the grid hardly does — the localised change ADGI's guide is built to find (Fig. 1 and 8 of the
 //! paper show the same event: a gate that opens in a tunnel).
 
 use std::vec::Vec;
@@ -495,7 +495,7 @@ pub struct DynamicScene {
     /// Where the change happens (the doorway's centre, or the light's); error measurements
     /// "near the event" use probes around this point.
     pub event_center: Vec3,
-    /// The region the event changes most: the side room, behind the partition wall.
+    /// The region the event changes most: the closet behind the partition wall.
     pub event_region: Aabb,
     /// A probe grid that fits the rooms: no probe inside geometry.
     pub grid: ProbeGrid,
@@ -536,7 +536,7 @@ impl DynamicScene {
             Vec3::new(room::WALL_X.0, 0.0, room::DOOR_Z.0),
             Vec3::new(room::WALL_X.1, room::DOOR_H, room::DOOR_Z.1),
         );
-        // Slid along the wall (on the side room's face) past the doorway's far edge.
+        // Slid along the wall (on the closet's face) past the doorway's far edge.
         let open = Aabb::new(
             Vec3::new(room::WALL_X.1, 0.0, room::DOOR_Z.1 + 0.05),
             Vec3::new(room::WALL_X.1 + 0.05, room::DOOR_H, room::DOOR_Z.1 + 1.05),
@@ -876,7 +876,7 @@ mod tests {
         let scene = DynamicScene::door_opens(10, 4);
         let closed = &scene.before;
         let open = &scene.after;
-        // A floor point in the side room behind the doorway is in shadow with the door closed,
+        // A floor point in the closet behind the doorway is in shadow with the door closed,
         // and lit by the light's centre with it open.
         let p = Vec3::new(8.6, 0.0, 2.0);
         let u = Vec2::splat(0.5);

@@ -113,7 +113,7 @@ pub struct ExperimentConfig {
     pub rays_per_probe: u32,
     /// The reference traces `strata²` rays per texel direction.
     pub reference_strata: u32,
-    /// Probes within this distance of the doorway (or in the side room) are "near the event".
+    /// Probes within this distance of the doorway (or in the closet) are "near the event".
     pub near_radius: f32,
     /// Seed of the runs and of the reference.
     pub seed: u64,

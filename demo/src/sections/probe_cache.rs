@@ -58,9 +58,9 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
          and places its rays with ADGI's guide: pilot rays per probe octant detect changes of \
          visibility and radiance, dynamic Metropolis chains on 3×3×3 proxies spend rays where \
          they changed, static chains spend the rest where probes are close to surfaces. The \
-         scene is two rooms: a lit main room and a dark side room behind a partition wall whose \
-         door slides open, letting light fall into the closet behind it (the paper's tunnel \
-         gate of Fig. 1 and 8 in miniature). Rays see one bounce of light: the light itself, or a \
+         scene is a lit 8 m room and a dark 0.9 m closet behind a partition wall whose door \
+         slides open, letting light fall into the closet (the paper's tunnel gate of Fig. 1 \
+         and 8 in miniature). Rays see one bounce of light: the light itself, or a \
          surface's albedo/π times its direct irradiance.",
     );
     let cfg = config(ctx);
