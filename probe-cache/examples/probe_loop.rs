@@ -152,9 +152,11 @@ fn main() -> Result<(), mcg_probe_cache::ProbeError> {
         decode_field(&words, HeuristicField::Dynamic, &mut f_d)?;
 
         // 3. Dynamic chains on the 3×3×3 proxies, where something changed (sec. 4.9): each
-        //    sample = 64 rays into one octant of every probe of the proxy, N_max = 10.
+        //    sample = 64 rays into one octant of every probe of the proxy, N_max = 10, with up
+        //    to three quarters of the rays the pilots left.
         proxies.max_pool(&f_d, &mut proxy_f_d)?;
         let mut dynamic = 0;
+        let dynamic_budget = rays + (budget - rays) * 3 / 4;
         if proxy_f_d.iter().any(|&v| v > 0.0) {
             let guide = GuidingFunction::new(proxies, &proxy_f_d, None, GuideParams::DYNAMIC)?;
             let samples = dynamic_chains
@@ -162,7 +164,7 @@ fn main() -> Result<(), mcg_probe_cache::ProbeError> {
                 .to_vec();
             'samples: for s in samples {
                 for coords in proxies.probes_of(s.cell as usize) {
-                    if rays + 64 > budget / 2 {
+                    if rays + 64 > dynamic_budget {
                         break 'samples;
                     }
                     let p = grid.probe_index(coords);
