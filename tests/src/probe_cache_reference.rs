@@ -523,12 +523,10 @@ impl Renderer {
         let dynamic_chains =
             ProbeChains::new_dynamic(grid, DYNAMIC_CHAINS, &mut init).expect("valid chains");
         let proxies = dynamic_chains.cells().table_len();
-        let map = exp.texel_config.irradiance_map;
         let mut octant_texels = vec![Vec::new(); OCTANTS];
         for &(i, d, _) in &exp.texels {
             octant_texels[octant(d)].push((i, d));
         }
-        let _ = map;
         Self {
             seed: exp.config.seed,
             texels: ProbeTexels::new(grid, exp.texel_config),
@@ -717,7 +715,8 @@ impl Renderer {
         decode_field(&a.words, HeuristicField::Dynamic, &mut a.f_d).expect("table sizes");
 
         // 3. Dynamic chains on the proxies (sec. 4.9): each sample = one octant of every probe
-        //    in its proxy, one ray per irradiance texel centre of that octant, N_max = 10.
+        //    in its proxy, DYNAMIC_RAYS_PER_OCTANT rays spread over the octant's texels, each
+        //    updating its texel with N_max = 10.
         let non_pilot = budget.saturating_sub(counter.rays);
         let dynamic_budget = (non_pilot as f32 * DYNAMIC_SHARE) as u64;
         let proxies = a.dynamic_chains.cells();
