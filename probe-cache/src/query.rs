@@ -310,15 +310,20 @@ mod tests {
     #[test]
     fn constant_environment_gives_pi_l_everywhere() {
         let l = Vec3::new(0.9, 0.35, 2.4);
-        for config in configs() {
-            let t = ProbeTexels::new(grid(), config);
+        let grids = [
+            grid(),
+            ProbeGrid::new(Vec3::ONE, Vec3::splat(2.0), UVec3::ONE).unwrap(),
+            ProbeGrid::new(Vec3::ZERO, Vec3::new(0.5, 3.0, 1.0), UVec3::new(2, 1, 5)).unwrap(),
+        ];
+        for (config, grid) in configs().into_iter().flat_map(|c| grids.map(|g| (c, g))) {
+            let t = ProbeTexels::new(grid, config);
             t.fill_irradiance(l, 40);
             t.fill_visibility(0.4, 40);
             let bound = codec_bound(&t, l) + Vec3::splat(1e-5) * PI * l;
             let mut rng = rand_pcg::Pcg64::new(0xcafe, 0xf00d);
             use rand::RngExt;
-            let lo = grid().origin() - Vec3::splat(0.7);
-            let hi = grid().probe_position(grid().counts() - UVec3::ONE) + Vec3::splat(0.7);
+            let lo = grid.origin() - Vec3::splat(0.7);
+            let hi = grid.probe_position(grid.counts() - UVec3::ONE) + Vec3::splat(0.7);
             let mut points: Vec<Vec3> = (0..400)
                 .map(|_| lo + (hi - lo) * Vec3::new(rng.random(), rng.random(), rng.random()))
                 .collect();
@@ -326,7 +331,7 @@ mod tests {
                 (0..t.grid().probe_count())
                     .map(|i| t.grid().probe_position(t.grid().probe_coords(i))),
             );
-            points.push(grid().origin());
+            points.push(grid.origin());
             points.push(hi + Vec3::splat(100.0));
             for (k, &x) in points.iter().enumerate() {
                 let z: f32 = rng.random::<f32>() * 2.0 - 1.0;

@@ -86,6 +86,27 @@ impl ProbeTexels {
         }
     }
 
+    /// The probe nearest to `position` (each coordinate rounded to the nearest lattice point and
+    /// clamped to the grid; NaN reads as the origin): where ADGI's Algorithm 2 stores a sample
+    /// taken at a continuous position ("the closest entry in the probes").
+    #[inline]
+    #[must_use]
+    pub fn nearest_probe(&self, position: Vec3) -> usize {
+        let grid = self.grid();
+        let t = ((position - grid.origin()) / grid.spacing()).round();
+        let max = (grid.counts() - glam::UVec3::ONE).as_vec3();
+        // `max` maps NaN to 0; `as` saturates.
+        let c = t.max(Vec3::ZERO).min(max).as_uvec3();
+        grid.probe_index(c)
+    }
+
+    /// [`Self::update_sample`] at the probe nearest to `position` ([`Self::nearest_probe`]),
+    /// for samples whose position a Metropolis chain chose continuously (ADGI sec. 3, Alg. 2).
+    #[inline]
+    pub fn update_sample_at(&self, position: Vec3, sample: &RaySample, u: f32) {
+        self.update_sample(self.nearest_probe(position), sample, u);
+    }
+
     /// The irradiance half of [`Self::update_sample`]: one moving-average step of the
     /// irradiance texel that `direction` lands in toward `radiance`.
     #[inline]
@@ -562,6 +583,40 @@ mod tests {
                 0x05e0_73f8
             ],
             "{words:#x?}"
+        );
+    }
+
+    #[test]
+    fn nearest_probe_rounds_and_clamps() {
+        let t = ProbeTexels::new(grid(), TexelConfig::ADGI);
+        let g = *t.grid();
+        assert_eq!(
+            t.nearest_probe(Vec3::new(0.4, 0.6, 0.0)),
+            g.probe_index(UVec3::new(0, 1, 0))
+        );
+        assert_eq!(
+            t.nearest_probe(Vec3::new(0.6, 0.4, 3.0)),
+            g.probe_index(UVec3::new(1, 0, 0))
+        );
+        assert_eq!(
+            t.nearest_probe(Vec3::new(-9.0, 9.0, 0.0)),
+            g.probe_index(UVec3::new(0, 1, 0))
+        );
+        assert_eq!(t.nearest_probe(Vec3::NAN), 0);
+        assert_eq!(
+            t.nearest_probe(Vec3::INFINITY),
+            g.probe_index(UVec3::new(1, 1, 0))
+        );
+        let s = RaySample {
+            direction: Vec3::X,
+            radiance: Vec3::ONE,
+            distance: 1.0,
+        };
+        t.update_sample_at(Vec3::new(0.9, 0.1, 0.0), &s, 0.5);
+        let im = t.config().irradiance_map;
+        assert_eq!(
+            IrradianceLayout::ADGI.count(t.irradiance_word(1, im.index(im.texel(Vec3::X)))),
+            1
         );
     }
 }
