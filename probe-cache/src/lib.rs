@@ -8,12 +8,21 @@
 //! | item | what it is | paper |
 //! |---|---|---|
 //! | [`ProbeGrid`], [`ProbeCell`] | probe lattice: origin, spacing, counts; trilinear cell lookup | DDGI; ADGI sec. 3.1 |
+//! | [`scene`]: [`Scene`], [`DynamicScene`] | CPU test scene: boxes, spheres, a rectangular light, one-bounce probe rays, a door that opens | ADGI sec. 5 (Fig. 1, 8) |
+//! | [`reference`](mod@reference): [`reference_irradiance`], [`reference_texel_irradiance`] | reference probe irradiance, many stratified rays per texel direction (or per texel of a map) | ADGI sec. 5, "Reference" |
+//! | [`heuristics`], [`HeuristicParams`] | f_c, f_v, f_r; f_s, f_d; the 6-10-10 heuristics word | ADGI eq. 10-12, 19-20, sec. 4.3 |
+//! | [`GuidingFunction`], [`GuideParams`], [`Guide`], [`guiding_function::octant_feedback`] | h(p, ω) = exp(α ĝ/f)·f per probe octant; static and dynamic forms; the feedback ĝ | ADGI eq. 2, sec. 4.8, 4.9 |
+//! | [`ProxyGrid`] | probes grouped into 3×3×3 virtual proxies, max-pooled octants | ADGI sec. 4.9 |
+//! | [`temporal_gradient`], [`ChangeDetector`], [`TemporalTrigger`], [`SmoothingKernel`] | temporal gradients of f_v, f_r, trigger, 5×5×5 × octant smoothing | ADGI eq. 13-18, Fig. 6a |
+//! | [`pilot_rays`], [`PilotSchedule`], [`PilotFrame`], [`PilotRay`], [`PilotHit`] | one stratified pilot ray per octant, `AABBCC…` direction pattern | ADGI sec. 4.1, 4.4 |
+//! | [`ProbeChains`], [`ProbeSample`], [`ChainKind`] | static and dynamic Metropolis chains over (position, cos θ, φ), sequential or on threads | ADGI Alg. 1, 5, sec. 4.8, 4.9 |
 //! | [`octahedral_encode`], [`octahedral_decode`], [`octahedral_solid_angle`] | RTXGI's octahedral sphere ↔ square map; exact texel solid angle | Cigolle et al. 2014; DDGI; RTXGI |
 //! | [`equal_area_encode`], [`equal_area_decode`], [`equal_area_solid_angle`] | Clarberg's equal-area map (4π/n² per texel) | Clarberg 2008 |
 //! | [`TexelMap`], [`MapKind`] | a probe's texel grid: direction ↔ texel, solid angle, RTXGI 1-texel border, bilinear taps | RTXGI; ADGI sec. 3.1, 4.5-4.6 |
 //! | [`ProbeTexels`], [`TexelConfig`], [`RoundingMode`] | a grid's irradiance and visibility words in `AtomicU32` (GPU layout), moving average N_max 63/10 | ADGI sec. 4.5-4.7, Alg. 3-4, Table 3, App. B |
 //! | [`RaySample`], [`BlendWeights`], [`ProbeTexels::update_sample`], [`ProbeTexels::update_sample_at`], [`ProbeTexels::blend_rays`] | ADGI's per-sample CAS update (at a probe or the nearest one); DDGI's cosine-weighted blend | ADGI Alg. 2-4; DDGI sec. 4 |
 //! | [`QueryConfig`], [`TexelContent`], [`ProbeTexels::irradiance_at`], [`ProbeTexels::convolved`] | irradiance from 8 probes: trilinear, wrap, Chebyshev, biases, bilinear; radiance texels → irradiance texels | DDGI sec. 4-5; RTXGI; ADGI sec. 4.8 |
+//! | [`clip_volume`], [`ClipVolumes`], [`Frustum`] | inner / outer clip volumes, shell count reset N ≤ 16 | ADGI Fig. 6b, sec. 4.4, 4.8 |
 //!
 //! ## Conventions
 //! - Positions and directions are [`glam::Vec3`] (f32); colours are linear RGB.
@@ -45,23 +54,43 @@
 pub use glam;
 pub use mcg_color_codec;
 
+pub mod clip_volume;
 mod equal_area;
 mod error;
 mod grid;
+pub mod guiding_function;
+pub mod heuristics;
 mod octahedral;
+pub mod pilot_rays;
+pub mod probe_chains;
 mod probe_texels;
+pub mod proxies;
 mod query;
+pub mod reference;
+pub mod scene;
+pub mod temporal_gradient;
 mod texel_map;
 mod update;
 
+pub use clip_volume::{ClipRegion, ClipVolume, ClipVolumes, Frustum};
 pub use equal_area::{equal_area_decode, equal_area_encode, equal_area_solid_angle};
 pub use error::ProbeError;
 pub use grid::{ProbeCell, ProbeGrid};
+pub use guiding_function::{Guide, GuideParams, GuidingFunction, HeuristicField};
+pub use heuristics::HeuristicParams;
 pub use octahedral::{
     octahedral_decode, octahedral_encode, octahedral_solid_angle, octahedron_point,
 };
+pub use pilot_rays::{PilotFrame, PilotHit, PilotPhase, PilotRay, PilotSchedule};
+pub use probe_chains::{
+    ChainKind, FrameStats, ProbeChainState, ProbeChains, ProbeSample, ProbeStepUniforms,
+};
 pub use probe_texels::{ProbeTexels, RoundingMode, TexelConfig};
+pub use proxies::ProxyGrid;
 pub use query::{QueryConfig, TexelContent};
+pub use reference::{reference_irradiance, reference_texel_irradiance};
+pub use scene::{DynamicScene, ProbeRay, Scene, SceneEvent};
+pub use temporal_gradient::{ChangeDetector, SmoothingKernel, TemporalTrigger};
 pub use texel_map::{MAX_MAP_SIDE, MapKind, TexelMap};
 pub use update::{BlendWeights, RaySample};
 

@@ -8,6 +8,7 @@ pub mod color_codec;
 pub mod gpu_backend;
 pub mod hashgrid;
 pub mod markov_guide;
+pub mod probe_cache;
 pub mod smis;
 pub mod vmf;
 
@@ -30,6 +31,7 @@ pub const ALL: &[BuildFn] = &[
     hashgrid::build,
     markov_guide::build,
     gpu_backend::build,
+    probe_cache::build,
 ];
 
 /// What a section builder gets: the run's settings and where to put files.
