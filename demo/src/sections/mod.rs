@@ -30,8 +30,8 @@ pub const ALL: &[BuildFn] = &[
     smis::build,
     hashgrid::build,
     markov_guide::build,
-    gpu_backend::build,
     probe_cache::build,
+    gpu_backend::build,
 ];
 
 /// What a section builder gets: the run's settings and where to put files.
