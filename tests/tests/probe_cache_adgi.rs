@@ -10,7 +10,8 @@
 //! of the probes' irradiance at their texel directions against a reference of 100 stratified
 //! rays per texel plus 100 light samples (scene and reference seed `0x8ad61`), over the 74
 //! probes near the event (in the closet or within 1 m of the doorway). Each policy runs with
-//! the run seeds 1, 2 and 3 (rays, chains, rounding, pilot directions).
+//! the run seeds 1 to 8 (rays, chains, rounding, pilot directions); the hypotheses are about
+//! all eight together, so no seed is picked.
 //!
 //! Why the comparison is fair: every policy traces at most the same number of probe rays per
 //! frame (asserted, and ADGI uses ≥ 99 % of them), each ray costs the same (one scene ray and
@@ -20,32 +21,31 @@
 //! ADGI is the guide alone.
 //!
 //! Hypotheses (deterministic: fixed seeds, single-threaded, so every number is exact):
-//! - H1: the median over the run seeds of the frames ADGI needs after the event to first bring
-//!   the near-event error below [`FRAMES_TO_ERROR_THRESHOLD`] (0.3; above both policies'
-//!   pre-event errors, 0.13-0.17 and 0.18-0.19) is smaller than uniform DDGI's. Measured: ADGI
-//!   9, never, 4 (median 9); DDGI 11, 12, 12 (median 12); constant guide never, never, 17.
+//! - H1: the (lower) median over the run seeds of the frames ADGI needs after the event to
+//!   first bring the near-event error below [`FRAMES_TO_ERROR_THRESHOLD`] (0.3; above both
+//!   policies' pre-event errors, 0.13-0.21) is smaller than uniform DDGI's. Measured: ADGI
+//!   9, never, 4, 15, 5, 4, 7, never (median 7); DDGI 11, 12, 12, 10, 14, 13, 12, 11
+//!   (median 12); constant guide never except 17 and 10 (median never).
 //! - H2: the mean over the run seeds of the near-event error over the 10 frames from the event
 //!   is lower with ADGI than with uniform DDGI, and lower than with the constant guide.
-//!   Measured: ADGI 0.389, 0.439, 0.306 (mean 0.378); DDGI 0.417, 0.385, 0.408 (0.403);
-//!   constant guide 0.496, 0.495, 0.482 (0.491).
+//!   Measured: ADGI 0.369 (0.306-0.439), DDGI 0.399 (0.363-0.417), constant guide 0.475.
 //!
-//! The claim holds on average, not for every seed: with seed 2 ADGI's error near the event
-//! stays above 0.3 for the whole run and its 10-frame mean (0.439) is above DDGI's (0.385).
-//! The margins are modest (median 9 against 12 frames; 6 % lower mean error). Over run seeds
-//! 1-8 (measured once, not run here): ADGI is first below 0.3 sooner and has the lower 10-frame
-//! mean for 5 of the 8 seeds (1, 3, 5, 6, 7); medians 8 against 12 frames, mean 10-frame
-//! errors 0.369 against 0.399.
+//! The claim holds on average, not for every seed: for seeds 2 and 8 ADGI's error near the
+//! event never gets below 0.3, and for 2, 4 and 8 its 10-frame mean is above DDGI's. The
+//! margins are modest (median 7 against 12 frames; 8 % lower mean error). ADGI puts 42-50 % of
+//! its rays near the event in those frames, DDGI 13 %.
 //!
 //! What the suite does NOT claim: that ADGI's error *stays* lower. After its dynamic phase its
 //! near-event texels restart their moving average from N = 10 and take tens of frames to
 //! reach N = 63 again, while DDGI's cosine-weighted blend uses every ray for half the texels;
-//! over the last 10 frames DDGI's near-event error (0.19-0.24) is below ADGI's (0.28-0.39)
-//! for every seed.
+//! over the last 10 frames DDGI's near-event error (0.18-0.28) is below ADGI's (0.25-0.39)
+//! for every seed, and over all probes DDGI's (0.086-0.099) is below ADGI's (0.129-0.139):
+//! ADGI spends its rays near the event and the rest of the grid ages.
 //! `cargo test -p mcg-tests --release --test probe_cache_adgi -- --nocapture` prints it all.
 //!
 //! Break tried: running the ADGI policy with constant guides (the chains uniform over (p, ω),
-//! `guided = false` for `Policy::Adgi`) makes H1 fail: ADGI then needs never, 7 and 21 frames
-//! (median 21 against DDGI's 12).
+//! `guided = false` for `Policy::Adgi`) made H1 fail with the three seeds 1-3 this suite used
+//! first: ADGI then needed never, 7 and 21 frames (median 21 against DDGI's 12).
 
 use mcg_tests::{
     Experiment, ExperimentConfig, FRAMES_TO_ERROR_THRESHOLD, Policy, Run, frames_to_error,
@@ -53,7 +53,7 @@ use mcg_tests::{
 };
 
 /// The run seeds.
-const SEEDS: [u64; 3] = [1, 2, 3];
+const SEEDS: [u64; 8] = [1, 2, 3, 4, 5, 6, 7, 8];
 
 #[test]
 fn adaptive_sampling_brings_the_error_near_the_event_down_faster() {
@@ -81,12 +81,13 @@ fn adaptive_sampling_brings_the_error_near_the_event_down_faster() {
             report(&run, seed, cfg, t);
         }
     }
-    let median = |v: [u32; 3]| {
+    // Lower median (never counts as u32::MAX).
+    let median = |v: [u32; SEEDS.len()]| {
         let mut v = v;
         v.sort_unstable();
-        v[1]
+        v[(v.len() - 1) / 2]
     };
-    let average = |v: [f64; 3]| v.iter().sum::<f64>() / 3.0;
+    let average = |v: [f64; SEEDS.len()]| v.iter().sum::<f64>() / v.len() as f64;
     let (adgi, ddgi, unguided) = (0, 1, 2);
 
     // H1.
