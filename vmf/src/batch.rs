@@ -4,7 +4,7 @@
 //! [`Vmf::sample`] branches on κ and calls the platform's `ln`/`exp`; per call that is the
 //! fastest form, but the calls keep a loop over many lobes scalar. [`sample_batch`] computes the
 //! same inverse CDF (see `cos_theta_minus_one` in `vmf.rs` for the derivation) with every
-//! branch turned into a select and with inlined polynomial `ln`/`exp` (Cephes' `logf`/`expf`),
+//! branch turned into a select and with an inlined `ln` (atanh series) and `exp` (Cephes' `expf`),
 //! so that a loop over lobes runs several lanes at once.
 
 use glam::{Vec2, Vec3};

@@ -57,20 +57,10 @@ pub const SIN_POLY: [f32; 3] = [-1.666_665_5e-1, 8.332_161e-3, -1.951_529_6e-4];
 /// cos x ≈ 1 − x²/2 + x⁴(c₀ + x²(c₁ + x² c₂)) on [−π/4, π/4] (Cephes' `cosf`).
 pub const COS_POLY: [f32; 3] = [4.166_664_6e-2, -1.388_731_6e-3, 2.443_315_7e-5];
 
-/// ln(1 + t) ≈ t − t²/2 + t³ P(t), P(t) = Σ pᵢ tⁱ (i = 0 ..= 8, highest first here), on
-/// t ∈ [√½ − 1, √2 − 1] (Cephes' `logf`, S. Moshier): the `ln` of [`sample_batch`](crate::sample_batch).
-/// The shader twin uses WGSL's `log`, so these are not in the WGSL tables.
-pub const LN_POLY: [f32; 9] = [
-    7.037_683_6e-2,
-    -1.151_461e-1,
-    1.167_699_9e-1,
-    -1.242_014_1e-1,
-    1.424_932_3e-1,
-    -1.666_805_8e-1,
-    2.000_071_5e-1,
-    -2.499_999_4e-1,
-    3.333_333e-1,
-];
+/// 1/(2i + 1) for i = 0 ..= 4: atanh s = s Σ s^{2i}/(2i + 1), the series of the `ln` of
+/// [`sample_batch`](crate::sample_batch) (ln m = 2 atanh((m − 1)/(m + 1))). The shader twin
+/// uses WGSL's `log`, so these are not in the WGSL tables.
+pub const ATANH_SERIES: [f32; 5] = [1.0, 1.0 / 3.0, 1.0 / 5.0, 1.0 / 7.0, 1.0 / 9.0];
 
 /// eʳ ≈ 1 + r + r² P(r), P(r) = Σ pᵢ rⁱ (i = 0 ..= 5, highest first here), on
 /// |r| ≤ ½ ln 2 (Cephes' `expf`, S. Moshier): the `exp` of [`sample_batch`](crate::sample_batch).
@@ -84,7 +74,7 @@ pub const EXP_POLY: [f32; 6] = [
 ];
 
 /// ln 2 = `LN2_HI + LN2_LO`, the high part exact in f32 for small integer multiples
-/// (Cody and Waite's range reduction of [`LN_POLY`] and [`EXP_POLY`]).
+/// (Cody and Waite's range reduction of [`EXP_POLY`] and of `ln`'s exponent).
 pub const LN2_HI: f32 = 0.693_359_4;
 
 /// See [`LN2_HI`].
