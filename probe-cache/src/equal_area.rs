@@ -75,24 +75,13 @@ mod tests {
     use super::*;
     use crate::octahedral::spherical_triangle_area;
 
-    fn fib_dirs(n: usize) -> impl Iterator<Item = Vec3> {
-        (0..n).map(move |i| {
-            let z = 1.0 - (2.0 * i as f32 + 1.0) / n as f32;
-            let phi = i as f32 * 2.399_963;
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            Vec3::new(r * phi.cos(), r * phi.sin(), z)
-        })
-    }
-
     #[test]
     fn round_trips() {
-        for d in fib_dirs(20_000) {
-            let back = equal_area_decode(equal_area_encode(d));
-            assert!((back - d).length() < 2e-5, "{d} → {back}");
-        }
-        for d in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z] {
-            assert!((equal_area_decode(equal_area_encode(d)) - d).length() < 1e-6);
-        }
+        crate::test_support::assert_direction_round_trips(
+            equal_area_encode,
+            equal_area_decode,
+            2e-5,
+        );
         for i in 1..100 {
             for j in 1..100 {
                 let p = Vec2::new(-1.0 + 0.02 * i as f32, -1.0 + 0.02 * j as f32);

@@ -97,17 +97,14 @@ impl ProbeGrid {
             coords.cmplt(self.counts).all(),
             "probe coordinates outside the grid"
         );
-        (coords.x + self.counts.x * (coords.y + self.counts.y * coords.z)) as usize
+        linear_index(self.counts, coords)
     }
 
     /// Coordinates of the probe with linear index `index` (the inverse of [`Self::probe_index`]).
     #[inline]
     #[must_use]
     pub fn probe_coords(&self, index: usize) -> UVec3 {
-        let index = index as u32;
-        let x = index % self.counts.x;
-        let yz = index / self.counts.x;
-        UVec3::new(x, yz % self.counts.y, yz / self.counts.y)
+        linear_coords(self.counts, index)
     }
 
     /// World-space position of the probe at `coords`.
@@ -146,6 +143,22 @@ impl ProbeGrid {
         let w = Vec3::select(stepped, cell.alpha, Vec3::ONE - cell.alpha);
         (coords, w.x * w.y * w.z)
     }
+}
+
+/// Linear index of `coords` in a lattice of `counts` (x fastest): the layout of probes and of
+/// proxies.
+#[inline]
+pub(crate) fn linear_index(counts: UVec3, coords: UVec3) -> usize {
+    (coords.x + counts.x * (coords.y + counts.y * coords.z)) as usize
+}
+
+/// The inverse of [`linear_index`].
+#[inline]
+pub(crate) fn linear_coords(counts: UVec3, index: usize) -> UVec3 {
+    let index = index as u32;
+    let x = index % counts.x;
+    let yz = index / counts.x;
+    UVec3::new(x, yz % counts.y, yz / counts.y)
 }
 
 #[cfg(test)]

@@ -69,6 +69,8 @@ mod query;
 pub mod reference;
 pub mod scene;
 pub mod temporal_gradient;
+#[cfg(test)]
+mod test_support;
 mod texel_map;
 mod update;
 

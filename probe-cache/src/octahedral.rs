@@ -128,24 +128,13 @@ mod tests {
     use super::*;
     use core::f64::consts::PI;
 
-    fn fib_dirs(n: usize) -> impl Iterator<Item = Vec3> {
-        (0..n).map(move |i| {
-            let z = 1.0 - (2.0 * i as f32 + 1.0) / n as f32;
-            let phi = i as f32 * 2.399_963;
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            Vec3::new(r * phi.cos(), r * phi.sin(), z)
-        })
-    }
-
     #[test]
     fn round_trip_direction() {
-        for d in fib_dirs(20_000) {
-            let back = octahedral_decode(octahedral_encode(d));
-            assert!((back - d).length() < 2e-6, "{d} → {back}");
-        }
-        for d in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z] {
-            assert!((octahedral_decode(octahedral_encode(d)) - d).length() < 1e-6);
-        }
+        crate::test_support::assert_direction_round_trips(
+            octahedral_encode,
+            octahedral_decode,
+            2e-6,
+        );
     }
 
     #[test]

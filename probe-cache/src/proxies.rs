@@ -108,17 +108,14 @@ impl ProxyGrid {
     #[inline]
     #[must_use]
     pub fn proxy_index(&self, coords: UVec3) -> usize {
-        (coords.x + self.counts.x * (coords.y + self.counts.y * coords.z)) as usize
+        crate::grid::linear_index(self.counts, coords)
     }
 
     /// Proxy coordinates of linear index `index`.
     #[inline]
     #[must_use]
     pub fn proxy_coords(&self, index: usize) -> UVec3 {
-        let index = index as u32;
-        let x = index % self.counts.x;
-        let yz = index / self.counts.x;
-        UVec3::new(x, yz % self.counts.y, yz / self.counts.y)
+        crate::grid::linear_coords(self.counts, index)
     }
 
     /// Index of the proxy holding the probe at probe coordinates `probe`.

@@ -55,7 +55,7 @@ use mcg_probe_cache::mcg_color_codec::HeuristicsWord;
 use mcg_probe_cache::mcg_color_codec::MovingAverage;
 use mcg_probe_cache::pilot_rays::{PilotHit, octant_heuristics, pilot_rays};
 use mcg_probe_cache::reference::hash_uniform;
-use mcg_probe_cache::scene::Scene;
+use mcg_probe_cache::scene::{ProbeRay, Scene};
 use mcg_probe_cache::temporal_gradient::{ChangeDetector, SmoothingKernel, TemporalTrigger};
 use mcg_probe_cache::{
     BlendWeights, DynamicScene, GuideParams, GuidingFunction, HeuristicParams, ProbeChains,
@@ -450,6 +450,25 @@ struct RayCounter {
     rays_dynamic: u64,
 }
 
+impl RayCounter {
+    /// Counts `rays` rays of a probe, near the event or not.
+    fn count(&mut self, rays: u64, near: bool) {
+        self.rays += rays;
+        if near {
+            self.rays_near += rays;
+        }
+    }
+}
+
+/// The per-sample update of a probe ray's result.
+fn ray_sample(direction: Vec3, hit: &ProbeRay) -> RaySample {
+    RaySample {
+        direction,
+        radiance: hit.radiance,
+        distance: hit.distance,
+    }
+}
+
 /// The state of one policy across frames.
 struct Renderer {
     seed: u64,
@@ -610,10 +629,7 @@ impl Renderer {
             }
             self.texels
                 .blend_rays(p, &rays, &BlendWeights::DDGI, rng.random());
-            counter.rays += u64::from(r);
-            if is_near {
-                counter.rays_near += u64::from(r);
-            }
+            counter.count(u64::from(r), is_near);
         }
         counter
     }
@@ -670,20 +686,10 @@ impl Renderer {
                 luminance: luminance(hit.radiance),
             };
             if pilot.updates_caches() {
-                self.texels.update_sample(
-                    p,
-                    &RaySample {
-                        direction: ray.direction,
-                        radiance: hit.radiance,
-                        distance: hit.distance,
-                    },
-                    rng.random(),
-                );
+                self.texels
+                    .update_sample(p, &ray_sample(ray.direction, &hit), rng.random());
             }
-            counter.rays += 1;
-            if near[p] {
-                counter.rays_near += 1;
-            }
+            counter.count(1, near[p]);
             if o == OCTANTS - 1 {
                 let (f_v, f_r) = octant_heuristics(&hits, &a.params);
                 a.f_v[p * OCTANTS..][..OCTANTS].copy_from_slice(&f_v);
@@ -818,19 +824,9 @@ impl Renderer {
             let pos = grid.probe_position(s.probe);
             let hit =
                 scene.trace_probe_ray(pos, s.direction, Vec2::new(rng.random(), rng.random()));
-            self.texels.update_sample(
-                p,
-                &RaySample {
-                    direction: s.direction,
-                    radiance: hit.radiance,
-                    distance: hit.distance,
-                },
-                rng.random(),
-            );
-            counter.rays += 1;
-            if near[p] {
-                counter.rays_near += 1;
-            }
+            self.texels
+                .update_sample(p, &ray_sample(s.direction, &hit), rng.random());
+            counter.count(1, near[p]);
         }
         counter
     }
