@@ -448,9 +448,14 @@ fn save_png(
         draw(&root)?;
         root.present()?;
     }
+    write_rgb_png(path, &buffer, width, height)
+}
+
+/// Writes a `width × height` RGB8 buffer (rows top to bottom) as PNG to `path`.
+pub fn write_rgb_png(path: &Path, buffer: &[u8], width: u32, height: u32) -> Result<()> {
     image::save_buffer_with_format(
         path,
-        &buffer,
+        buffer,
         width,
         height,
         image::ExtendedColorType::Rgb8,

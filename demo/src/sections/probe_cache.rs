@@ -387,14 +387,5 @@ fn slice_figure(
         }
         root.present()?;
     }
-    image::save_buffer_with_format(
-        ctx.figure_path(file),
-        &buffer,
-        width as u32,
-        height as u32,
-        image::ExtendedColorType::Rgb8,
-        image::ImageFormat::Png,
-    )
-    .map_err(|e| format!("cannot write {file}: {e}"))?;
-    Ok(())
+    crate::plot::write_rgb_png(&ctx.figure_path(file), &buffer, width as u32, height as u32)
 }
