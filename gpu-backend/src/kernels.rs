@@ -608,12 +608,7 @@ impl<T: Pod> GpuHashTable<T> {
         keys: &[CellKey],
         frame: u32,
     ) -> Result<u32, GpuError> {
-        let kernel = lazy(
-            &self.insert_touch,
-            ctx,
-            src::HASHGRID_AGES,
-            "hashgrid_insert_touch",
-        )?;
+        let kernel = (&self.insert_touch, "hashgrid_insert_touch");
         self.run_touch(ctx, kernel, ages, keys, frame, keys.len() as u32)
     }
 
@@ -630,19 +625,14 @@ impl<T: Pod> GpuHashTable<T> {
         keys: &[CellKey],
         frame: u32,
     ) -> Result<u32, GpuError> {
-        let kernel = lazy(
-            &self.insert_touch_serial,
-            ctx,
-            src::HASHGRID_AGES,
-            "hashgrid_insert_touch_serial",
-        )?;
+        let kernel = (&self.insert_touch_serial, "hashgrid_insert_touch_serial");
         self.run_touch(ctx, kernel, ages, keys, frame, 1)
     }
 
     fn run_touch(
         &self,
         ctx: &GpuContext,
-        kernel: &ComputeKernel,
+        kernel: (&OnceLock<ComputeKernel>, &str),
         ages: &GpuBuffer<u32>,
         keys: &[CellKey],
         frame: u32,
@@ -653,6 +643,7 @@ impl<T: Pod> GpuHashTable<T> {
             // The padded one-element key buffer would insert a zero key.
             return Ok(0);
         }
+        let kernel = lazy(kernel.0, ctx, src::HASHGRID_AGES, kernel.1)?;
         let params = ctx.uniform_buffer("age params", &HashgridAgeParams::new(frame, 0));
         let inserted: GpuBuffer<u32> = ctx.zeroed_buffer("inserted", 1);
         let keys = ctx.storage_buffer("keys", keys);

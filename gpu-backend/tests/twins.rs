@@ -503,6 +503,35 @@ fn vmf_mixture_kernel_takes_any_k() {
     check::<3>(ctx, &mut rng);
 }
 
+/// Empty inputs: `GpuHashTable::{insert_or_get, insert_or_get_serial, find,
+/// insert_or_get_touch, insert_or_get_touch_serial}` with no keys return nothing and leave
+/// the checksum and age arrays as the CPU table has them (the kernels' buffers are padded to
+/// one zeroed element, which must not be read as a key). Broken once on purpose (the early
+/// return for no keys removed from `GpuHashTable::run`): the serial insert wrote the zero
+/// key and the test failed.
+#[test]
+fn empty_key_lists_change_nothing() {
+    let Some((ctx, _)) = gpu_and_rng("empty_key_lists_change_nothing", 0) else {
+        return;
+    };
+    let mut cpu = HashTable::<u32>::new(64, 8, BucketHash::Mix)
+        .unwrap()
+        .with_age_tracking();
+    let _ = cpu.insert_or_get(&CellKey::new(glam::IVec3::ONE, 1, 0));
+    let gpu = GpuHashTable::upload(ctx, &cpu).unwrap();
+    let ages = ctx.storage_buffer("ages", cpu.ages());
+    assert!(gpu.insert_or_get_serial(ctx, &[]).unwrap().is_empty());
+    assert!(gpu.insert_or_get(ctx, &[]).unwrap().is_empty());
+    assert!(gpu.find(ctx, &[]).unwrap().is_empty());
+    assert_eq!(
+        gpu.insert_or_get_touch_serial(ctx, &ages, &[], 5).unwrap(),
+        0
+    );
+    assert_eq!(gpu.insert_or_get_touch(ctx, &ages, &[], 5).unwrap(), 0);
+    assert_eq!(gpu.read_checksums(ctx).unwrap(), cpu.checksums());
+    assert_eq!(ctx.read_back(&ages).unwrap(), cpu.ages());
+}
+
 /// `pack_mixtures` writes the layout the WGSL struct has for K = 4 (checked against naga in
 /// `tests/wgsl.rs` for K = 1..=5): lobes, then weights, then padding.
 #[test]
