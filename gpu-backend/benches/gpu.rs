@@ -12,15 +12,17 @@
 //!   κ/(2π(1 − e^{−2κ})) e^{κ(μ·ω − 1)}.
 //! - `hash_insert`: 262 144 `hashgrid_insert_or_get` (65 536 distinct keys, each 4 times; a
 //!   2²⁰-slot table, so after the first iteration every call finds its key: a renderer's
-//!   steady state) with the mixing and the xor-primes bucket hash, against a naive unhashed
-//!   store (key i writes slot i mod capacity: no hash, no checksum, no probe).
+//!   steady state) with the mixing and the xor-primes bucket hash, and the age-tracked
+//!   insert-and-touch (mix), against a naive unhashed store (key i writes slot i mod
+//!   capacity: no hash, no checksum, no probe).
 //! - `hash_find`: 262 144 `hashgrid_find` in a 2²⁰-slot table holding 65 536 keys, against a
 //!   naive unhashed load (key i reads slot i mod capacity).
 //! - `vertex_key`: 262 144 adaptive-grid vertex keys (level from the camera distance with its
 //!   jitter, stochastic trilinear vertex, normal class; MCPG sec. 4), static-grid vertex keys
 //!   and jittered vertices against the naive fixed cell ⌊p/w⌋.
-//! - `codec_encode`: 262 144 colours to the ADGI log irradiance word (nearest), LogLuv32 and
-//!   R11G11B10, against storing the colour unencoded as `vec4<f32>`.
+//! - `codec_encode`: 262 144 colours to the ADGI log irradiance word (nearest), LogLuv32,
+//!   R11G11B10, RGB9E5, gamma-5 R10G10B10A2, the visibility word (xy) and the heuristics word
+//!   (clamped to 1), against storing the colour unencoded as `vec4<f32>`.
 //!
 //! - `texel_update` also folds the same updates into 13/13 + 6 visibility words
 //!   (`packed_atomic_visibility`), against the same plain store.
@@ -379,6 +381,25 @@ fn hash_insert(c: &mut Criterion, ctx: &GpuContext) {
     g.bench_function("baseline_unhashed_store", |b| {
         b.iter(|| ctx.dispatch(&naive, &bindings, n).unwrap())
     });
+    // The age-tracked insert: insert-or-get (mix), then the slot touched in the frame.
+    let touch = ctx
+        .compute_kernel(shaders::kernels::HASHGRID_AGES, "hashgrid_insert_touch")
+        .unwrap();
+    let checksums: GpuBuffer<u32> = ctx.zeroed_buffer("checksums", capacity as usize);
+    let ages: GpuBuffer<u32> = ctx.zeroed_buffer("ages", capacity as usize);
+    let age_params = ctx.uniform_buffer("age params", &HashgridAgeParams::new(1, 0));
+    let counter: GpuBuffer<u32> = ctx.zeroed_buffer("counter", 1);
+    let bindings = [
+        table.raw(),
+        checksums.raw(),
+        ages.raw(),
+        age_params.raw(),
+        counter.raw(),
+        keys.raw(),
+    ];
+    g.bench_function("insert_or_get_touch_mix", |b| {
+        b.iter(|| ctx.dispatch(&touch, &bindings, n).unwrap())
+    });
     g.finish();
 }
 
@@ -567,6 +588,42 @@ fn r11g11b10(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
     }
 }
 
+@compute @workgroup_size(64)
+fn rgb9e5(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i < arrayLength(&values) {
+        words[i] = codec_rgb9e5_pack(values[i].xyz);
+    }
+}
+
+@compute @workgroup_size(64)
+fn gamma5(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i < arrayLength(&values) {
+        words[i] = codec_gamma5_pack(values[i].xyz);
+    }
+}
+
+@compute @workgroup_size(64)
+fn visibility(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i < arrayLength(&values) {
+        words[i] = codec_visibility_encode(values[i].xy, 1u, CodecRounding(CODEC_ROUND_NEAREST, 0.0));
+    }
+}
+
+@compute @workgroup_size(64)
+fn heuristics(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i < arrayLength(&values) {
+        words[i] = codec_heuristics_encode(min(values[i].xyz, vec3<f32>(1.0)), 1u, CodecRounding(CODEC_ROUND_NEAREST, 0.0));
+    }
+}
+
 // Naive: the colour stored as it is, 16 bytes instead of 4.
 @compute @workgroup_size(64)
 fn vec4_store(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
@@ -604,6 +661,10 @@ fn codec_encode(c: &mut Criterion, ctx: &GpuContext) {
             ("log_irradiance_nearest", "log_irradiance"),
             ("logluv32", "logluv"),
             ("r11g11b10", "r11g11b10"),
+            ("rgb9e5", "rgb9e5"),
+            ("gamma5_r10g10b10a2", "gamma5"),
+            ("visibility_nearest", "visibility"),
+            ("heuristics_nearest", "heuristics"),
             ("baseline_vec4_store", "vec4_store"),
         ],
         &[values.raw(), words.raw(), floats.raw(), tables.raw()],

@@ -10,13 +10,13 @@ use glam::{IVec3, Vec3};
 use mcg_hashgrid::{CellKey, HashTable, Insert};
 use mcg_markov_guide::mcmm::PixelState;
 use mcg_markov_guide::mcpg::GridState;
-use mcg_vmf::{MapPrior, SufficientStats, Vmf, VmfMixture};
+use mcg_vmf::{FitParams, MapPrior, SufficientStats, Vmf, VmfMixture};
 
 use crate::shaders::kernels as src;
 use crate::types::{
     HashgridAgeParams, HashgridJitterQuery, HashgridLevelParams, HashgridTableParams,
-    HashgridVertexQuery, MarkovPixelQuery, TexelParams, TexelUpdate, VmfQuery, VmfSample,
-    VmfStatsQuery, VmfStatsResult, pack_mixtures,
+    HashgridVertexQuery, MarkovPixelQuery, TexelParams, TexelUpdate, VmfFitParamsGpu, VmfQuery,
+    VmfSample, VmfStatsQuery, VmfStatsResult, VmfUpdate, pack_mixtures,
 };
 use crate::{ComputeKernel, GpuBuffer, GpuContext, GpuError};
 
@@ -41,6 +41,7 @@ pub struct VmfKernels {
     pdf_and_sample: ComputeKernel,
     stats: ComputeKernel,
     convolve: OnceLock<ComputeKernel>,
+    update: OnceLock<ComputeKernel>,
 }
 
 impl VmfKernels {
@@ -50,6 +51,7 @@ impl VmfKernels {
             pdf_and_sample: ctx.compute_kernel(src::VMF, "vmf_pdf_and_sample")?,
             stats: ctx.compute_kernel(src::VMF_STATS, "vmf_stats")?,
             convolve: OnceLock::new(),
+            update: OnceLock::new(),
         })
     }
 
@@ -100,6 +102,32 @@ impl VmfKernels {
             n as u32,
         )?;
         ctx.read_back(&results)
+    }
+
+    /// For each `i`: `stats[i]` after `update(x, y, weight, fit)` with `updates[i]`'s sample
+    /// (`vmf_stats_update`, MCMM Alg. 3 / MCPG Alg. 3; the pipeline is built on the first
+    /// call). Returns the updated statistics.
+    ///
+    /// # Panics
+    /// If the slices differ in length.
+    pub fn update_stats(
+        &self,
+        ctx: &GpuContext,
+        stats: &[SufficientStats],
+        updates: &[VmfUpdate],
+        fit: &FitParams,
+    ) -> Result<Vec<SufficientStats>, GpuError> {
+        assert_eq!(stats.len(), updates.len(), "one update per statistics");
+        let kernel = lazy(&self.update, ctx, src::VMF_UPDATE, "vmf_update")?;
+        let stats = ctx.storage_buffer("stats", stats);
+        let updates_buffer = ctx.storage_buffer("updates", updates);
+        let fit = ctx.uniform_buffer("fit", &VmfFitParamsGpu::from(fit));
+        ctx.dispatch(
+            kernel,
+            &[stats.raw(), updates_buffer.raw(), fit.raw()],
+            updates.len() as u32,
+        )?;
+        ctx.read_back(&stats)
     }
 
     /// For each `i`: `lobes[i].convolve(kernel_kappas[i])` (a negative κ is a delta

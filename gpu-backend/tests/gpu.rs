@@ -13,7 +13,7 @@ use mcg_gpu_backend::kernels::{
 use mcg_gpu_backend::testing::gpu_or_skip;
 use mcg_gpu_backend::types::{
     HashgridLevelParams, HashgridTableParams, HashgridVertexQuery, TexelParams, TexelUpdate,
-    VmfFitParamsGpu, VmfQuery, VmfStatsQuery, VmfUpdate,
+    VmfQuery, VmfStatsQuery, VmfUpdate,
 };
 use mcg_gpu_backend::{GpuBuffer, GpuContext, shaders};
 use mcg_hashgrid::{
@@ -254,6 +254,7 @@ fn vmf_stats_update_matches_the_cpu() {
     let Some(ctx) = gpu_or_skip("vmf_stats_update_matches_the_cpu") else {
         return;
     };
+    let kernels = VmfKernels::new(ctx).unwrap();
     for params in [FitParams::MCMM, FitParams::MCPG] {
         let mut rng = Pcg64::seed_from_u64(23);
         let mut stats = Vec::new();
@@ -293,17 +294,9 @@ fn vmf_stats_update_matches_the_cpu() {
                 _pad: 0.0,
             });
         }
-        let fit = ctx.uniform_buffer("fit", &VmfFitParamsGpu::from(&params));
-        let stats_buffer = ctx.storage_buffer("stats", &stats);
-        let updates_buffer = ctx.storage_buffer("updates", &updates);
-        run(
-            ctx,
-            shaders::kernels::VMF_UPDATE,
-            "vmf_update",
-            &[stats_buffer.raw(), updates_buffer.raw(), fit.raw()],
-            stats.len(),
-        );
-        let gpu = ctx.read_back(&stats_buffer).unwrap();
+        let gpu = kernels
+            .update_stats(ctx, &stats, &updates, &params)
+            .unwrap();
         for i in 0..stats.len() {
             let before = stats[i];
             let u = updates[i];
