@@ -12,15 +12,40 @@
 //!   κ/(2π(1 − e^{−2κ})) e^{κ(μ·ω − 1)}.
 //! - `hash_insert`: 262 144 `hashgrid_insert_or_get` (65 536 distinct keys, each 4 times; a
 //!   2²⁰-slot table, so after the first iteration every call finds its key: a renderer's
-//!   steady state) with the mixing and the xor-primes bucket hash, against a naive unhashed
-//!   store (key i writes slot i mod capacity: no hash, no checksum, no probe).
+//!   steady state) with the mixing and the xor-primes bucket hash, and the age-tracked
+//!   insert-and-touch (mix), against a naive unhashed store (key i writes slot i mod
+//!   capacity: no hash, no checksum, no probe).
 //! - `hash_find`: 262 144 `hashgrid_find` in a 2²⁰-slot table holding 65 536 keys, against a
 //!   naive unhashed load (key i reads slot i mod capacity).
 //! - `vertex_key`: 262 144 adaptive-grid vertex keys (level from the camera distance with its
-//!   jitter, stochastic trilinear vertex, normal class; MCPG sec. 4) against the naive fixed
-//!   cell ⌊p/w⌋.
-//! - `codec_encode`: 262 144 colours to the ADGI log irradiance word (nearest), LogLuv32 and
-//!   R11G11B10, against storing the colour unencoded as `vec4<f32>`.
+//!   jitter, stochastic trilinear vertex, normal class; MCPG sec. 4), static-grid vertex keys
+//!   and jittered vertices against the naive fixed cell ⌊p/w⌋.
+//! - `codec_encode`: 262 144 colours to the ADGI log irradiance word (nearest), LogLuv32,
+//!   R11G11B10, RGB9E5, gamma-5 R10G10B10A2, the visibility word (xy) and the heuristics word
+//!   (clamped to 1), against storing the colour unencoded as `vec4<f32>`.
+//!
+//! - `texel_update` also folds the same updates into 13/13 + 6 visibility words
+//!   (`packed_atomic_visibility`), against the same plain store.
+//! - `vmf_stats_update`: 262 144 `vmf_stats_update` (weighted running means of ȳ and of the
+//!   mean cosine, N_max, α_min) against a plain running mean of the unit directions.
+//! - `vmf_reconstruct`: 262 144 `vmf_from_sufficient_stats` with the MAP prior (MCMM Alg. 2)
+//!   against Banerjee's κ of the sample mean cosine without the prior.
+//! - `vmf_product`: 262 144 `vmf_product` (normalisations in the stable form, scale with
+//!   e^{κ' − κ_a − κ_b}) against the textbook product with C(κ) = κ/(4π sinh κ) (κ ≤ 50 here,
+//!   so sinh does not overflow).
+//! - `vmf_convolve`: 262 144 `vmf_convolve` (A₃ products and the exact inverse by Newton)
+//!   against the plain harmonic rule κ' = κ κ_k/(κ + κ_k).
+//! - `vmf_mixture`: 262 144 `VmfMixture<4>` pdfs and `sample_with_pdf` against the sum of
+//!   four textbook pdfs and a linear CDF walk with the textbook sampler.
+//! - `hash_evict`: eviction of stale cells in a 2¹⁸-slot age-tracked table (about 100 000
+//!   keys over 16 frames, max_age 7: the two passes, tombstones and the trim) against a
+//!   plain clear of stale slots; each iteration first restores the checksum array (4 ×
+//!   2¹⁸ bytes written, in both arms).
+//! - `markov_state`: 262 144 MCPG grid states read on the GPU (f16 velocity, count,
+//!   statistics, and the lobe reconstructed with the prior) and MCMM pixel-state lobes,
+//!   against reading a plain `vec4<f32>` lobe.
+//! - `codec_decode`: 262 144 words decoded as the log irradiance word, LogLuv32 and
+//!   R11G11B10, against loading an unencoded `vec4<f32>`.
 //!
 //! Each iteration is one dispatch and the wait for it (buffers stay on the GPU). On lavapipe
 //! these are software numbers: read them as ratios. Without an adapter the benches print why
@@ -29,11 +54,15 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::IVec3;
 use glam::{Vec2, Vec3};
-use mcg_gpu_backend::types::{HashgridLevelParams, HashgridTableParams};
-use mcg_gpu_backend::types::{TexelParams, TexelUpdate, VmfQuery, VmfSample};
+use mcg_gpu_backend::types::{
+    HashgridAgeParams, HashgridLevelParams, HashgridTableParams, TexelParams, TexelUpdate,
+    VmfFitParamsGpu, VmfQuery, VmfSample, VmfUpdate, pack_mixtures,
+};
 use mcg_gpu_backend::{GpuBuffer, GpuContext, prelude, shaders, wgpu};
 use mcg_hashgrid::{BucketHash, CellKey, HashTable};
-use mcg_vmf::Vmf;
+use mcg_markov_guide::mcmm::PixelState;
+use mcg_markov_guide::mcpg::GridState;
+use mcg_vmf::{FitParams, SufficientStats, Vmf, VmfMixture};
 
 const NAIVE_STORE: &str = r#"
 struct TexelUpdate {
@@ -121,6 +150,26 @@ fn texel_update(c: &mut Criterion, ctx: &GpuContext) {
         b.iter(|| {
             ctx.dispatch(&packed, &[words.raw(), updates.raw(), params.raw()], n)
                 .unwrap()
+        })
+    });
+    let visibility: GpuBuffer<u32> = ctx.zeroed_buffer("visibility words", 1024);
+    let visibility_params = ctx.uniform_buffer(
+        "params",
+        &TexelParams {
+            max_count: 63,
+            rounding_mode: 1,
+            rounding_u: 0.0,
+            word_layout: 1,
+        },
+    );
+    g.bench_function("packed_atomic_visibility", |b| {
+        b.iter(|| {
+            ctx.dispatch(
+                &packed,
+                &[visibility.raw(), updates.raw(), visibility_params.raw()],
+                n,
+            )
+            .unwrap()
         })
     });
     g.bench_function("baseline_plain_vec4_store", |b| {
@@ -332,6 +381,25 @@ fn hash_insert(c: &mut Criterion, ctx: &GpuContext) {
     g.bench_function("baseline_unhashed_store", |b| {
         b.iter(|| ctx.dispatch(&naive, &bindings, n).unwrap())
     });
+    // The age-tracked insert: insert-or-get (mix), then the slot touched in the frame.
+    let touch = ctx
+        .compute_kernel(shaders::kernels::HASHGRID_AGES, "hashgrid_insert_touch")
+        .unwrap();
+    let checksums: GpuBuffer<u32> = ctx.zeroed_buffer("checksums", capacity as usize);
+    let ages: GpuBuffer<u32> = ctx.zeroed_buffer("ages", capacity as usize);
+    let age_params = ctx.uniform_buffer("age params", &HashgridAgeParams::new(1, 0));
+    let counter: GpuBuffer<u32> = ctx.zeroed_buffer("counter", 1);
+    let bindings = [
+        table.raw(),
+        checksums.raw(),
+        ages.raw(),
+        age_params.raw(),
+        counter.raw(),
+        keys.raw(),
+    ];
+    g.bench_function("insert_or_get_touch_mix", |b| {
+        b.iter(|| ctx.dispatch(&touch, &bindings, n).unwrap())
+    });
     g.finish();
 }
 
@@ -413,6 +481,28 @@ fn adaptive(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroup
     keys[i] = hashgrid_vertex_key(levels, p.xyz, vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0), fract(p.w * 7.0), p.w);
 }
 
+// The static grid's vertex key (stochastic trilinear corner of p/w, MCPG sec. 4).
+@compute @workgroup_size(64)
+fn static_grid(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&keys) {
+        return;
+    }
+    let p = positions[i];
+    keys[i] = hashgrid_static_vertex_key(levels.min_width, p.xyz, p.w);
+}
+
+// The jittered vertex of p/w.
+@compute @workgroup_size(64)
+fn jittered(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&keys) {
+        return;
+    }
+    let p = positions[i];
+    keys[i] = CellKey(hashgrid_jittered_vertex(p.xyz / levels.min_width, fract(p.www * vec3<f32>(3.0, 5.0, 7.0))), 0u);
+}
+
 // Naive: one fixed width, the cell ⌊p/w⌋, no level, no jitter, no class.
 @compute @workgroup_size(64)
 fn fixed_floor(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
@@ -450,6 +540,8 @@ fn vertex_key(c: &mut Criterion, ctx: &GpuContext) {
         &[shaders::HASHGRID_MODULE, VERTEX_KEY].concat(),
         &[
             ("adaptive_vertex_key", "adaptive"),
+            ("static_grid_vertex_key", "static_grid"),
+            ("jittered_vertex", "jittered"),
             ("baseline_fixed_floor", "fixed_floor"),
         ],
         &[levels.raw(), positions.raw(), keys.raw()],
@@ -496,6 +588,42 @@ fn r11g11b10(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
     }
 }
 
+@compute @workgroup_size(64)
+fn rgb9e5(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i < arrayLength(&values) {
+        words[i] = codec_rgb9e5_pack(values[i].xyz);
+    }
+}
+
+@compute @workgroup_size(64)
+fn gamma5(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i < arrayLength(&values) {
+        words[i] = codec_gamma5_pack(values[i].xyz);
+    }
+}
+
+@compute @workgroup_size(64)
+fn visibility(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i < arrayLength(&values) {
+        words[i] = codec_visibility_encode(values[i].xy, 1u, CodecRounding(CODEC_ROUND_NEAREST, 0.0));
+    }
+}
+
+@compute @workgroup_size(64)
+fn heuristics(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i < arrayLength(&values) {
+        words[i] = codec_heuristics_encode(min(values[i].xyz, vec3<f32>(1.0)), 1u, CodecRounding(CODEC_ROUND_NEAREST, 0.0));
+    }
+}
+
 // Naive: the colour stored as it is, 16 bytes instead of 4.
 @compute @workgroup_size(64)
 fn vec4_store(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
@@ -533,9 +661,596 @@ fn codec_encode(c: &mut Criterion, ctx: &GpuContext) {
             ("log_irradiance_nearest", "log_irradiance"),
             ("logluv32", "logluv"),
             ("r11g11b10", "r11g11b10"),
+            ("rgb9e5", "rgb9e5"),
+            ("gamma5_r10g10b10a2", "gamma5"),
+            ("visibility_nearest", "visibility"),
+            ("heuristics_nearest", "heuristics"),
             ("baseline_vec4_store", "vec4_store"),
         ],
         &[values.raw(), words.raw(), floats.raw(), tables.raw()],
+        n as u32,
+    );
+}
+
+/// `n` lobes with κ in [0.5, `max_kappa`) and directions spread over the sphere.
+fn bench_lobes(n: usize, max_kappa: f32) -> Vec<Vmf> {
+    (0..n)
+        .map(|i| {
+            let mu = Vec3::new(0.3, (i % 7) as f32 - 3.0, 1.0 - (i % 3) as f32);
+            Vmf::new(mu, 0.5 + (i as f32 * 0.618).fract() * (max_kappa - 0.5)).unwrap()
+        })
+        .collect()
+}
+
+const VMF_STATS_UPDATE: &str = r#"
+// Naive: a plain running mean of the unit directions (no weights, no mean cosine, no N_max).
+@compute @workgroup_size(64)
+fn running_mean(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&updates) || fit.max_count == 0u {
+        return;
+    }
+    var s = stats[i];
+    let u = updates[i];
+    let n = f32(s.sample_count) + 1.0;
+    let m = vec3<f32>(s.mean_target_x, s.mean_target_y, s.mean_target_z);
+    let next = m + (normalize(u.y - u.x) - m) / n;
+    s.mean_target_x = next.x;
+    s.mean_target_y = next.y;
+    s.mean_target_z = next.z;
+    s.sample_count += 1u;
+    stats[i] = s;
+}
+"#;
+
+fn vmf_stats_update(c: &mut Criterion, ctx: &GpuContext) {
+    let n = 262_144_usize;
+    let updates: Vec<VmfUpdate> = (0..n)
+        .map(|i| VmfUpdate {
+            x: Vec3::new(0.1, 0.2, -0.3),
+            weight: 0.1 + (i % 17) as f32,
+            y: Vec3::new((i % 13) as f32 - 6.0, 4.0, (i % 5) as f32),
+            _pad: 0.0,
+        })
+        .collect();
+    let stats: GpuBuffer<SufficientStats> = ctx.zeroed_buffer("stats", n);
+    let updates = ctx.storage_buffer("updates", &updates);
+    let fit = ctx.uniform_buffer("fit", &VmfFitParamsGpu::from(&FitParams::MCMM));
+    bench_entries(
+        c,
+        ctx,
+        "vmf_stats_update",
+        &[shaders::kernels::VMF_UPDATE, VMF_STATS_UPDATE].concat(),
+        &[
+            ("stats_update", "vmf_update"),
+            ("baseline_running_mean_direction", "running_mean"),
+        ],
+        &[stats.raw(), updates.raw(), fit.raw()],
+        n as u32,
+    );
+}
+
+/// Bindings of the lobe operations (`vmf_reconstruct`, `vmf_product`, `vmf_convolve`).
+const VMF_OPS: &str = r#"
+@group(0) @binding(0) var<storage, read> stats: array<SufficientStats>;
+@group(0) @binding(1) var<storage, read> a: array<Vmf>;
+@group(0) @binding(2) var<storage, read> b: array<Vmf>;
+@group(0) @binding(3) var<storage, read_write> out: array<vec4<f32>>;
+
+fn uses_all_bindings() {
+    _ = arrayLength(&stats);
+    _ = arrayLength(&a);
+    _ = arrayLength(&b);
+}
+
+// MCMM Alg. 2 lines 5-7: ȳ − x normalised, κ of the MAP mean cosine.
+@compute @workgroup_size(64)
+fn map_reconstruct(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&out) {
+        return;
+    }
+    var lobe = Vmf(vec3<f32>(0.0), -1.0);
+    _ = vmf_from_sufficient_stats(stats[i], vec3<f32>(0.1, 0.2, -0.3), VmfMapPrior(0.2, 0.5, 0u), &lobe);
+    out[i] = vec4<f32>(lobe.mu, lobe.kappa);
+}
+
+// Naive: Banerjee's κ = r(3 − r²)/(1 − r²) of the sample mean cosine, no prior, no guards.
+@compute @workgroup_size(64)
+fn banerjee_no_prior(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&out) {
+        return;
+    }
+    let s = stats[i];
+    let mu = normalize(vec3<f32>(s.mean_target_x, s.mean_target_y, s.mean_target_z) - vec3<f32>(0.1, 0.2, -0.3));
+    let r = 1.0 - s.one_minus_mean_cosine;
+    out[i] = vec4<f32>(mu, r * (3.0 - r * r) / (1.0 - r * r));
+}
+
+@compute @workgroup_size(64)
+fn product(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&out) {
+        return;
+    }
+    var p: Vmf;
+    let scale = vmf_product(a[i], b[i], &p);
+    out[i] = vec4<f32>(p.mu * scale, p.kappa);
+}
+
+// Naive: C(κ) = κ/(4π sinh κ), scale = C(κ_a) C(κ_b)/C(κ').
+fn textbook_c(kappa: f32) -> f32 {
+    return kappa / (12.566371 * sinh(kappa));
+}
+
+@compute @workgroup_size(64)
+fn textbook_product(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&out) {
+        return;
+    }
+    let m = a[i].mu * a[i].kappa + b[i].mu * b[i].kappa;
+    let kappa = length(m);
+    let scale = textbook_c(a[i].kappa) * textbook_c(b[i].kappa) / textbook_c(kappa);
+    out[i] = vec4<f32>(m / kappa * scale, kappa);
+}
+
+@compute @workgroup_size(64)
+fn convolve(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&out) {
+        return;
+    }
+    let c = vmf_convolve(a[i], b[i].kappa);
+    out[i] = vec4<f32>(c.mu, c.kappa);
+}
+
+// Naive: κ' = κ κ_k/(κ + κ_k).
+@compute @workgroup_size(64)
+fn harmonic(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&out) {
+        return;
+    }
+    let k = a[i].kappa;
+    let kk = b[i].kappa;
+    out[i] = vec4<f32>(a[i].mu, k * kk / (k + kk));
+}
+"#;
+
+/// The groups `vmf_reconstruct`, `vmf_product` and `vmf_convolve` over the same buffers.
+fn vmf_ops(c: &mut Criterion, ctx: &GpuContext) {
+    let n = 262_144_usize;
+    let x = Vec3::new(0.1, 0.2, -0.3);
+    let stats: Vec<SufficientStats> = (0..n)
+        .map(|i| {
+            let mut s = SufficientStats::EMPTY;
+            for k in 0..(1 + i % 4) {
+                let y = Vec3::new(((i + k) % 13) as f32 - 6.0, 4.0, ((i + 3 * k) % 5) as f32);
+                s.update(x, y, 0.5 + k as f32, &FitParams::MCMM);
+            }
+            s
+        })
+        .collect();
+    let stats = ctx.storage_buffer("stats", &stats);
+    let a = ctx.storage_buffer("a", &bench_lobes(n, 50.0));
+    let mut b_lobes = bench_lobes(n, 50.0);
+    b_lobes.rotate_left(1);
+    let b = ctx.storage_buffer("b", &b_lobes);
+    let out: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("out", n);
+    let source = [shaders::VMF_MODULE, VMF_OPS].concat();
+    let bindings = [stats.raw(), a.raw(), b.raw(), out.raw()];
+    for (group, entries) in [
+        (
+            "vmf_reconstruct",
+            [
+                ("map_reconstruct", "map_reconstruct"),
+                ("baseline_banerjee_no_prior", "banerjee_no_prior"),
+            ],
+        ),
+        (
+            "vmf_product",
+            [
+                ("stable_product", "product"),
+                ("baseline_textbook_sinh_product", "textbook_product"),
+            ],
+        ),
+        (
+            "vmf_convolve",
+            [
+                ("convolve_exact_inverse", "convolve"),
+                ("baseline_harmonic_kappa", "harmonic"),
+            ],
+        ),
+    ] {
+        bench_entries(c, ctx, group, &source, &entries, &bindings, n as u32);
+    }
+}
+
+/// Entry points appended to the kernel module `shaders::kernels::VMF_MIXTURE` (K = 4, bindings
+/// `mixtures`, `queries`, `samples`, `choices`); each writes its result to `samples`.
+const VMF_MIXTURE: &str = r#"
+fn uses_all_bindings() {
+    _ = arrayLength(&choices);
+}
+
+@compute @workgroup_size(64)
+fn mixture_pdf(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&samples) {
+        return;
+    }
+    samples[i] = VmfSample(queries[i].direction, vmf_mixture_pdf(mixtures[i], queries[i].direction));
+}
+
+// Naive: Σ w κ/(2π(1 − e^{−2κ})) e^{κ(μ·ω − 1)}.
+fn textbook_mixture_pdf(m: VmfMixture, w: vec3<f32>) -> f32 {
+    var pdf = 0.0;
+    for (var k = 0u; k < VMF_MIXTURE_K; k += 1u) {
+        let lobe = m.lobes[k];
+        pdf += m.weights[k] * lobe.kappa / (6.2831855 * (1.0 - exp(-2.0 * lobe.kappa))) * exp(lobe.kappa * (dot(lobe.mu, w) - 1.0));
+    }
+    return pdf;
+}
+
+@compute @workgroup_size(64)
+fn textbook_pdf_sum(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&samples) {
+        return;
+    }
+    samples[i] = VmfSample(queries[i].direction, textbook_mixture_pdf(mixtures[i], queries[i].direction));
+}
+
+@compute @workgroup_size(64)
+fn mixture_sample(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&samples) {
+        return;
+    }
+    samples[i] = vmf_mixture_sample_with_pdf(mixtures[i], queries[i].uniforms);
+}
+
+// Naive: a linear CDF walk, the textbook sampler, the textbook pdf sum.
+@compute @workgroup_size(64)
+fn linear_cdf_walk(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&samples) {
+        return;
+    }
+    let m = mixtures[i];
+    let u = queries[i].uniforms;
+    var k = 0u;
+    var start = 0.0;
+    for (; k + 1u < VMF_MIXTURE_K; k += 1u) {
+        if u.x < start + m.weights[k] {
+            break;
+        }
+        start += m.weights[k];
+    }
+    let lobe = m.lobes[k];
+    let uy = (u.x - start) / m.weights[k];
+    let kappa = lobe.kappa;
+    let cos_theta = 1.0 + log(uy + (1.0 - uy) * exp(-2.0 * kappa)) / kappa;
+    let sin_theta = sqrt(max(1.0 - cos_theta * cos_theta, 0.0));
+    let phi = 6.2831855 * u.y;
+    let w = vmf_frame_to_world(lobe.mu, vec3<f32>(cos(phi) * sin_theta, sin(phi) * sin_theta, cos_theta));
+    samples[i] = VmfSample(w, textbook_mixture_pdf(m, w));
+}
+"#;
+
+fn vmf_mixture(c: &mut Criterion, ctx: &GpuContext) {
+    let n = 262_144_usize;
+    let lobes = bench_lobes(4 * n, 200.0);
+    let mixtures: Vec<VmfMixture<4>> = lobes
+        .chunks_exact(4)
+        .enumerate()
+        .map(|(i, l)| {
+            let w = (i % 5) as f32;
+            VmfMixture::new([l[0], l[1], l[2], l[3]], [1.0, w, 0.5, 2.0 - w * 0.3]).unwrap()
+        })
+        .collect();
+    let queries: Vec<VmfQuery> = (0..n)
+        .map(|i| {
+            let w = Vec3::new((i % 13) as f32 - 6.0, 1.0, (i % 5) as f32).normalize();
+            VmfQuery::new(
+                w,
+                Vec2::new((i % 1009) as f32 / 1009.0, (i % 997) as f32 / 997.0),
+            )
+        })
+        .collect();
+    let mixtures = ctx.storage_buffer("mixtures", &pack_mixtures(&mixtures));
+    let queries = ctx.storage_buffer("queries", &queries);
+    let samples: GpuBuffer<VmfSample> = ctx.zeroed_buffer("samples", n);
+    let choices: GpuBuffer<[u32; 4]> = ctx.zeroed_buffer("choices", n);
+    bench_entries(
+        c,
+        ctx,
+        "vmf_mixture",
+        &[shaders::kernels::VMF_MIXTURE, VMF_MIXTURE].concat(),
+        &[
+            ("mixture_pdf", "mixture_pdf"),
+            ("baseline_textbook_pdf_sum", "textbook_pdf_sum"),
+            ("mixture_sample_with_pdf", "mixture_sample"),
+            ("baseline_linear_cdf_walk_textbook", "linear_cdf_walk"),
+        ],
+        &[mixtures.raw(), queries.raw(), samples.raw(), choices.raw()],
+        n as u32,
+    );
+}
+
+const PLAIN_CLEAR: &str = r#"
+struct Table {
+    capacity: u32,
+}
+struct AgeParams {
+    frame: u32,
+    max_age: u32,
+}
+@group(0) @binding(0) var<uniform> table: Table;
+@group(0) @binding(1) var<storage, read_write> checksums: array<u32>;
+@group(0) @binding(2) var<storage, read> ages: array<u32>;
+@group(0) @binding(3) var<uniform> age_params: AgeParams;
+
+// Naive: one pass, stale slots set empty (no tombstones, so probe runs may break; no count).
+@compute @workgroup_size(64)
+fn plain_clear(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let slot = id.x + id.y * groups.x * 64u;
+    if slot < table.capacity && age_params.frame - ages[slot] > age_params.max_age {
+        checksums[slot] = 0u;
+    }
+}
+"#;
+
+fn hash_evict(c: &mut Criterion, ctx: &GpuContext) {
+    let capacity = 1_u32 << 18;
+    let mut cpu = HashTable::<u32>::new(capacity, 16, BucketHash::Mix)
+        .unwrap()
+        .with_age_tracking();
+    for k in 0..100_000_i32 {
+        if k % 6250 == 0 {
+            cpu.advance_frame();
+        }
+        let key = CellKey::new(IVec3::new(k % 64, (k / 64) % 64, k / 4096), 2, 0);
+        let _ = cpu.insert_or_get(&key);
+    }
+    let initial = cpu.checksums().to_vec();
+    let table = ctx.uniform_buffer(
+        "table",
+        &HashgridTableParams::new(capacity, 16, BucketHash::Mix).unwrap(),
+    );
+    let checksums = ctx.storage_buffer("checksums", &initial);
+    let ages = ctx.storage_buffer("ages", cpu.ages());
+    let params = ctx.uniform_buffer("age params", &HashgridAgeParams::new(cpu.frame(), 7));
+    let counter: GpuBuffer<u32> = ctx.zeroed_buffer("counter", 1);
+    let kernel = |source: &str, entry: &str| ctx.compute_kernel(source, entry).unwrap();
+    let (evict, trim) = (
+        kernel(shaders::kernels::HASHGRID_AGES, "hashgrid_evict"),
+        kernel(shaders::kernels::HASHGRID_AGES, "hashgrid_trim"),
+    );
+    let clear = kernel(PLAIN_CLEAR, "plain_clear");
+    let bindings = [
+        table.raw(),
+        checksums.raw(),
+        ages.raw(),
+        params.raw(),
+        counter.raw(),
+    ];
+    let mut g = c.benchmark_group("hash_evict");
+    g.bench_function("evict_and_trim", |b| {
+        b.iter(|| {
+            ctx.write(&checksums, &initial);
+            ctx.dispatch(&evict, &bindings, capacity).unwrap();
+            ctx.dispatch(&trim, &bindings[..2], capacity).unwrap();
+        })
+    });
+    g.bench_function("baseline_plain_clear", |b| {
+        b.iter(|| {
+            ctx.write(&checksums, &initial);
+            ctx.dispatch(&clear, &bindings[..4], capacity).unwrap();
+        })
+    });
+    g.finish();
+}
+
+const MARKOV_STATE: &str = r#"
+@group(0) @binding(0) var<storage, read> grid_states: array<GridState>;
+@group(0) @binding(1) var<storage, read> pixel_states: array<PixelState>;
+@group(0) @binding(2) var<storage, read> plain: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read_write> out: array<vec4<f32>>;
+
+fn uses_all_bindings() {
+    _ = arrayLength(&grid_states);
+    _ = arrayLength(&pixel_states);
+    _ = arrayLength(&plain);
+}
+
+// MCPG: the cell's velocity, count and statistics, and its lobe with the prior.
+@compute @workgroup_size(64)
+fn grid_state(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&out) {
+        return;
+    }
+    let s = grid_states[i];
+    let x = vec3<f32>(0.1, 0.2, -0.3) + markov_grid_state_velocity(s) * 1e-3;
+    var lobe = Vmf(vec3<f32>(0.0), -1.0);
+    _ = vmf_from_sufficient_stats(markov_grid_state_stats(s), x, VmfMapPrior(0.2, 0.5, 0u), &lobe);
+    out[i] = vec4<f32>(lobe.mu, lobe.kappa);
+}
+
+// MCMM: the pixel's lobe at x with the prior (`PixelState::lobe`).
+@compute @workgroup_size(64)
+fn pixel_state(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&out) {
+        return;
+    }
+    var lobe = Vmf(vec3<f32>(0.0), -1.0);
+    _ = markov_pixel_state_lobe(pixel_states[i], vec3<f32>(0.1, 0.2, -0.3), VmfMapPrior(0.2, 0.5, 0u), &lobe);
+    out[i] = vec4<f32>(lobe.mu, lobe.kappa);
+}
+
+// Naive: the lobe stored as a plain vec4 (μ, κ).
+@compute @workgroup_size(64)
+fn plain_lobe(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&out) {
+        return;
+    }
+    out[i] = plain[i];
+}
+"#;
+
+fn markov_state(c: &mut Criterion, ctx: &GpuContext) {
+    let n = 262_144_usize;
+    let x = Vec3::new(0.1, 0.2, -0.3);
+    let stats: Vec<SufficientStats> = (0..n)
+        .map(|i| {
+            let mut s = SufficientStats::EMPTY;
+            let y = Vec3::new((i % 13) as f32 - 6.0, 4.0, (i % 5) as f32);
+            s.update(x, y, 1.0, &FitParams::MCPG);
+            s.update(x, y + Vec3::X, 0.5, &FitParams::MCPG);
+            s
+        })
+        .collect();
+    let grid: Vec<GridState> = stats
+        .iter()
+        .enumerate()
+        .map(|(i, s)| GridState::from_stats(s, 0.0, Vec3::new((i % 7) as f32, 0.0, 1.0)))
+        .collect();
+    let pixels: Vec<PixelState> = stats
+        .iter()
+        .map(|&stats| PixelState { stats, score: 1.0 })
+        .collect();
+    let plain: Vec<[f32; 4]> = bench_lobes(n, 50.0)
+        .iter()
+        .map(|l| l.mu().extend(l.kappa()).to_array())
+        .collect();
+    let grid = ctx.storage_buffer("grid states", &grid);
+    let pixels = ctx.storage_buffer("pixel states", &pixels);
+    let plain = ctx.storage_buffer("plain lobes", &plain);
+    let out: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("out", n);
+    bench_entries(
+        c,
+        ctx,
+        "markov_state",
+        &[shaders::VMF_MODULE, shaders::MARKOV_GUIDE, MARKOV_STATE].concat(),
+        &[
+            ("mcpg_grid_state_lobe", "grid_state"),
+            ("mcmm_pixel_state_lobe", "pixel_state"),
+            ("baseline_plain_vec4_lobe", "plain_lobe"),
+        ],
+        &[grid.raw(), pixels.raw(), plain.raw(), out.raw()],
+        n as u32,
+    );
+}
+
+const CODEC_DECODE: &str = r#"
+@group(0) @binding(0) var<storage, read> words: array<u32>;
+@group(0) @binding(1) var<storage, read> plain: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read_write> out: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read> codec_logluv_tables: array<f32>;
+
+fn uses_all_bindings() {
+    _ = arrayLength(&words);
+    _ = arrayLength(&plain);
+    _ = arrayLength(&codec_logluv_tables);
+}
+
+@compute @workgroup_size(64)
+fn log_irradiance(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i < arrayLength(&out) {
+        out[i] = vec4<f32>(codec_irradiance_decode(words[i]), 1.0);
+    }
+}
+
+@compute @workgroup_size(64)
+fn logluv(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i < arrayLength(&out) {
+        out[i] = vec4<f32>(codec_logluv32_unpack(words[i]), 1.0);
+    }
+}
+
+@compute @workgroup_size(64)
+fn r11g11b10(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i < arrayLength(&out) {
+        out[i] = vec4<f32>(codec_r11g11b10_unpack(words[i]), 1.0);
+    }
+}
+
+// Naive: the colour loaded unencoded, 16 bytes instead of 4.
+@compute @workgroup_size(64)
+fn vec4_load(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i < arrayLength(&out) {
+        out[i] = plain[i];
+    }
+}
+"#;
+
+fn codec_decode(c: &mut Criterion, ctx: &GpuContext) {
+    use mcg_color_codec::{ColorCodec, LogLuv32, R11G11B10};
+    let n = 262_144_usize;
+    let values: Vec<Vec3> = (0..n)
+        .map(|i| {
+            let t = i as f32 / n as f32;
+            Vec3::new(t * 20.0, (1.0 - t) * 3.0, (i % 97) as f32 * 0.01)
+        })
+        .collect();
+    // Half R11G11B10, half LogLuv32 words; every decoder reads them all (any 32 bits are a
+    // valid irradiance word).
+    let words: Vec<u32> = values
+        .iter()
+        .enumerate()
+        .map(|(i, &v)| match i % 2 {
+            0 => R11G11B10.encode(v),
+            _ => LogLuv32.encode(v),
+        })
+        .collect();
+    let plain: Vec<[f32; 4]> = values.iter().map(|v| v.extend(1.0).to_array()).collect();
+    let words = ctx.storage_buffer("words", &words);
+    let plain = ctx.storage_buffer("plain", &plain);
+    let out: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("out", n);
+    let tables = ctx.storage_buffer("tables", &prelude::logluv_tables());
+    bench_entries(
+        c,
+        ctx,
+        "codec_decode",
+        &[
+            shaders::COLOR_CODEC_MODULE,
+            shaders::COLOR_CODEC_LOGLUV,
+            CODEC_DECODE,
+        ]
+        .concat(),
+        &[
+            ("log_irradiance", "log_irradiance"),
+            ("logluv32", "logluv"),
+            ("r11g11b10", "r11g11b10"),
+            ("baseline_vec4_load", "vec4_load"),
+        ],
+        &[words.raw(), plain.raw(), out.raw(), tables.raw()],
         n as u32,
     );
 }
@@ -560,6 +1275,12 @@ fn benches(c: &mut Criterion) {
     hash_find(c, &ctx);
     vertex_key(c, &ctx);
     codec_encode(c, &ctx);
+    vmf_stats_update(c, &ctx);
+    vmf_ops(c, &ctx);
+    vmf_mixture(c, &ctx);
+    hash_evict(c, &ctx);
+    markov_state(c, &ctx);
+    codec_decode(c, &ctx);
 }
 
 criterion_group!(gpu, benches);

@@ -15,7 +15,7 @@
 //! | [`shaders::COLOR_CODEC`], [`shaders::COLOR_CODEC_LOGLUV`], [`shaders::COLOR_CODEC_TEXELS`] | R11G11B10, RGB9E5, gamma-5 R10G10B10A2, LogLuv32 (Larson 1998), the log codec, the 9/9/8 + 6 irradiance, 13/13 + 6 visibility and 6/10/10 + 6 heuristics words, the moving average as a compare-and-swap loop | ADGI eq. 21, sec. 4.3-4.7 |
 //! | [`shaders::MARKOV_GUIDE`] | the MCPG `GridState` (32 B): f16 velocity, count, sufficient statistics; the MCMM `PixelState` (28 B): validity, resampling score, lobe | MCPG Table 1; MCMM Table 1, Alg. 1-2 |
 //! | [`GpuContext`] | headless instance, adapter, device; pipelines, buffers, dispatch, read-back | — |
-//! | [`kernels`] | typed pipelines: [`VmfKernels`](kernels::VmfKernels), [`GpuHashTable`](kernels::GpuHashTable), [`GpuTexels`](kernels::GpuTexels) | — |
+//! | [`kernels`] | typed pipelines: [`VmfKernels`](kernels::VmfKernels) (pdf, sampling, statistics update, reconstruction, product, convolution), [`VmfMixtureKernel`](kernels::VmfMixtureKernel), [`HashgridKernels`](kernels::HashgridKernels) (hashes, vertex keys), [`GpuHashTable`](kernels::GpuHashTable) (insert-or-get, lookup, insert-and-touch, eviction), [`GpuTexels`](kernels::GpuTexels), [`MarkovKernels`](kernels::MarkovKernels) (grid and pixel states) | — |
 //! | [`types`] | `Pod` twins of the kernels' WGSL structs | — |
 //!
 //! # Conventions

@@ -77,12 +77,17 @@ impl VmfStatsQuery {
             other,
             prior_mean_cosine: prior.mean_cosine,
             prior_weight: prior.weight,
-            prior_decay: match prior.decay {
-                PriorDecay::SquaredCount => 0,
-                PriorDecay::Count => 1,
-            },
+            prior_decay: prior_decay_code(prior.decay),
             _pad: 0.0,
         }
+    }
+}
+
+/// The WGSL code of a prior decay (`VMF_PRIOR_DECAY_*`): 0 squared count, 1 count.
+fn prior_decay_code(decay: PriorDecay) -> u32 {
+    match decay {
+        PriorDecay::SquaredCount => 0,
+        PriorDecay::Count => 1,
     }
 }
 
@@ -324,6 +329,54 @@ impl HashgridAgeParams {
         Self {
             frame,
             max_age,
+            _pad: [0; 2],
+        }
+    }
+}
+
+/// Input of the `hashgrid_vertices` kernel: a position with the uniforms of both vertex
+/// choices and a static grid's cell width. WGSL `HashgridJitterQuery` (32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct HashgridJitterQuery {
+    /// The position, in world units.
+    pub position: Vec3,
+    /// Uniform of the stochastic trilinear corner (`StaticGrid::vertex_key`).
+    pub u_corner: f32,
+    /// Uniforms of `jittered_vertex` (the position read as grid coordinates).
+    pub u_jitter: Vec3,
+    /// Cell width of the `StaticGrid`.
+    pub width: f32,
+}
+const _: () = assert!(size_of::<HashgridJitterQuery>() == 32);
+
+/// The shading point and the fixed MAP prior of the `markov_pixel_states` kernel: WGSL
+/// `PixelQuery` (uniform, 32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct MarkovPixelQuery {
+    /// Shading point x of `PixelState::lobe`.
+    pub x: Vec3,
+    /// r̄_p of the MAP prior.
+    pub prior_mean_cosine: f32,
+    /// N_p of the MAP prior.
+    pub prior_weight: f32,
+    /// 0 for [`PriorDecay::SquaredCount`], 1 for [`PriorDecay::Count`].
+    pub prior_decay: u32,
+    /// Padding to the uniform address space's 16-byte alignment.
+    pub _pad: [u32; 2],
+}
+const _: () = assert!(size_of::<MarkovPixelQuery>() == 32);
+
+impl MarkovPixelQuery {
+    /// The query for shading point `x` with the CPU's `prior`.
+    #[must_use]
+    pub fn new(x: Vec3, prior: MapPrior) -> Self {
+        Self {
+            x,
+            prior_mean_cosine: prior.mean_cosine,
+            prior_weight: prior.weight,
+            prior_decay: prior_decay_code(prior.decay),
             _pad: [0; 2],
         }
     }

@@ -7,11 +7,13 @@
 //! tolerances derived from WGSL's precision rules (see `common::tolerance`).
 
 use glam::{IVec3, Vec2, Vec3};
-use mcg_gpu_backend::kernels::{GpuHashTable, GpuTexels, VmfKernels};
+use mcg_gpu_backend::kernels::{
+    GpuHashTable, GpuTexels, HashgridKernels, MarkovKernels, VmfKernels,
+};
 use mcg_gpu_backend::testing::gpu_or_skip;
 use mcg_gpu_backend::types::{
     HashgridLevelParams, HashgridTableParams, HashgridVertexQuery, TexelParams, TexelUpdate,
-    VmfFitParamsGpu, VmfQuery, VmfStatsQuery, VmfUpdate,
+    VmfQuery, VmfStatsQuery, VmfUpdate,
 };
 use mcg_gpu_backend::{GpuBuffer, GpuContext, shaders};
 use mcg_hashgrid::{
@@ -252,6 +254,7 @@ fn vmf_stats_update_matches_the_cpu() {
     let Some(ctx) = gpu_or_skip("vmf_stats_update_matches_the_cpu") else {
         return;
     };
+    let kernels = VmfKernels::new(ctx).unwrap();
     for params in [FitParams::MCMM, FitParams::MCPG] {
         let mut rng = Pcg64::seed_from_u64(23);
         let mut stats = Vec::new();
@@ -291,17 +294,9 @@ fn vmf_stats_update_matches_the_cpu() {
                 _pad: 0.0,
             });
         }
-        let fit = ctx.uniform_buffer("fit", &VmfFitParamsGpu::from(&params));
-        let stats_buffer = ctx.storage_buffer("stats", &stats);
-        let updates_buffer = ctx.storage_buffer("updates", &updates);
-        run(
-            ctx,
-            shaders::kernels::VMF_UPDATE,
-            "vmf_update",
-            &[stats_buffer.raw(), updates_buffer.raw(), fit.raw()],
-            stats.len(),
-        );
-        let gpu = ctx.read_back(&stats_buffer).unwrap();
+        let gpu = kernels
+            .update_stats(ctx, &stats, &updates, &params)
+            .unwrap();
         for i in 0..stats.len() {
             let before = stats[i];
             let u = updates[i];
@@ -370,25 +365,8 @@ fn hashes_checksums_and_vertices_match_the_cpu() {
             _pad: 0.0,
         })
         .collect();
-    let keys_buffer = ctx.storage_buffer("keys", &keys);
-    let hashes: GpuBuffer<[u32; 4]> = ctx.zeroed_buffer("hashes", keys.len());
-    let levels_buffer = ctx.uniform_buffer("levels", &levels);
-    let queries_buffer = ctx.storage_buffer("queries", &queries);
-    let vertex_keys: GpuBuffer<CellKey> = ctx.zeroed_buffer("vertex keys", queries.len());
-    run(
-        ctx,
-        shaders::kernels::HASHGRID_KEYS,
-        "hashgrid_hashes",
-        &[
-            keys_buffer.raw(),
-            hashes.raw(),
-            levels_buffer.raw(),
-            queries_buffer.raw(),
-            vertex_keys.raw(),
-        ],
-        keys.len(),
-    );
-    let hashes = ctx.read_back(&hashes).unwrap();
+    let kernels = HashgridKernels::new();
+    let hashes = kernels.hashes(ctx, &keys).unwrap();
     for (k, h) in keys.iter().zip(&hashes) {
         let cpu = [
             hash_xor_primes(k),
@@ -398,7 +376,7 @@ fn hashes_checksums_and_vertices_match_the_cpu() {
         ];
         assert_eq!(*h, cpu, "key {k:?}");
     }
-    let vertex_keys = ctx.read_back(&vertex_keys).unwrap();
+    let vertex_keys = kernels.vertex_keys(ctx, &levels, &queries).unwrap();
     let mut level_checked = 0;
     for (q, g) in queries.iter().zip(&vertex_keys) {
         assert_eq!(
@@ -798,26 +776,16 @@ fn grid_states_read_the_same_on_the_gpu() {
             GridState::from_stats(&s, rng.random(), v)
         })
         .collect();
-    let states_buffer = ctx.storage_buffer("states", &states);
-    let velocities: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("velocities", states.len());
-    let stats: GpuBuffer<SufficientStats> = ctx.zeroed_buffer("stats", states.len());
-    run(
-        ctx,
-        shaders::kernels::MARKOV_GUIDE,
-        "markov_grid_states",
-        &[states_buffer.raw(), velocities.raw(), stats.raw()],
-        states.len(),
-    );
-    let velocities = ctx.read_back(&velocities).unwrap();
-    let stats = ctx.read_back(&stats).unwrap();
+    let reads = MarkovKernels::new().grid_states(ctx, &states).unwrap();
     for (i, s) in states.iter().enumerate() {
         let v = s.velocity();
+        let r = reads[i];
         assert_eq!(
-            velocities[i],
-            [v.x, v.y, v.z, s.sample_count() as f32],
+            (r.velocity, r.sample_count),
+            (v, s.sample_count()),
             "state {i}"
         );
-        assert_eq!(stats[i], s.stats(), "state {i}");
+        assert_eq!(r.stats, s.stats(), "state {i}");
     }
 }
 

@@ -2,22 +2,23 @@
 //! key and the jittered vertex, the age counter (eviction of stale cells), MCMM's pixel state.
 //! Skips without an adapter (fails with `MCG_REQUIRE_GPU=1`), like `tests/gpu.rs`.
 
-use glam::{IVec3, Vec2, Vec3};
-use mcg_gpu_backend::kernels::GpuHashTable;
-use mcg_gpu_backend::types::{
-    HashgridAgeParams, HashgridTableParams, VmfQuery, VmfSample, mixture_stride_floats,
-    pack_mixtures,
+use glam::{Vec2, Vec3};
+use mcg_gpu_backend::kernels::{
+    GpuHashTable, HashgridKernels, MarkovKernels, VmfKernels, VmfMixtureKernel,
 };
+use mcg_gpu_backend::types::{HashgridJitterQuery, VmfQuery, mixture_stride_floats, pack_mixtures};
 use mcg_gpu_backend::{GpuBuffer, prelude, shaders};
 use mcg_hashgrid::{BucketHash, CellKey, HashTable, StaticGrid, jittered_vertex};
 use mcg_markov_guide::mcmm::PixelState;
 use mcg_vmf::{FitParams, MapPrior, PriorDecay, SufficientStats, Vmf, VmfMixture};
 use rand::RngExt;
 
+/// The shift of frame and ages in the wrap-around run of the eviction test: frames 0..12
+/// become u32::MAX − 5 .. 6, wrapping past 0.
+const WRAP_SHIFT: u32 = u32::MAX - 5;
+
 mod common;
-use common::{
-    EPS, JitterQuery, KAPPAS, PixelQuery, gpu_and_rng, random_key, random_unit, run, tolerance,
-};
+use common::{EPS, KAPPAS, gpu_and_rng, random_key, random_unit, run, tolerance};
 
 /// `VmfMixture<4>` pdf, component choice and `sample_with_pdf` on 8 192 mixtures (fixed seed;
 /// κ from the switch-point list, weights with zeros, uniforms incl. 0 and 1 − ε/2).
@@ -57,24 +58,10 @@ fn vmf_mixture_matches_the_cpu() {
         };
         queries.push(VmfQuery::new(random_unit(&mut rng), u));
     }
-    let mixtures_buffer = ctx.storage_buffer("mixtures", &pack_mixtures(&mixtures));
-    let queries_buffer = ctx.storage_buffer("queries", &queries);
-    let samples: GpuBuffer<VmfSample> = ctx.zeroed_buffer("samples", n);
-    let choices: GpuBuffer<[u32; 4]> = ctx.zeroed_buffer("choices", n);
-    run(
-        ctx,
-        shaders::kernels::VMF_MIXTURE,
-        "vmf_mixture_eval",
-        &[
-            mixtures_buffer.raw(),
-            queries_buffer.raw(),
-            samples.raw(),
-            choices.raw(),
-        ],
-        n,
-    );
-    let samples = ctx.read_back(&samples).unwrap();
-    let choices = ctx.read_back(&choices).unwrap();
+    let evals = VmfMixtureKernel::<4>::new(ctx)
+        .unwrap()
+        .eval(ctx, &mixtures, &queries)
+        .unwrap();
     // The pdf tolerance of the mixture at `w`: each lobe's tolerance, weighted.
     let pdf_tolerance = |m: &VmfMixture<4>, w: Vec3| -> f64 {
         let mut tol = 0.0;
@@ -91,15 +78,16 @@ fn vmf_mixture_matches_the_cpu() {
     for i in 0..n {
         let (m, q) = (&mixtures[i], queries[i]);
         let (index, u) = m.select(q.uniforms.x);
+        let e = evals[i];
         assert_eq!(
-            choices[i][..2],
-            [index as u32, u.to_bits()],
+            (e.component, e.u.to_bits()),
+            (index, u.to_bits()),
             "{i}: component choice of u = {}",
             q.uniforms.x
         );
         let cpu = f64::from(m.pdf(q.direction));
         let tol = pdf_tolerance(m, q.direction);
-        let gpu_pdf = f32::from_bits(choices[i][2]);
+        let gpu_pdf = e.pdf;
         let err = (f64::from(gpu_pdf) - cpu).abs();
         assert!(err <= tol, "{i}: pdf GPU {gpu_pdf} CPU {cpu} (tol {tol})");
         worst_pdf = worst_pdf.max(err / tol);
@@ -110,7 +98,7 @@ fn vmf_mixture_matches_the_cpu() {
         let r = f64::from(lobe.mu().dot(w)) - 1.0;
         let dr = tolerance::cos_theta_minus_one(kappa, f64::from(q.uniforms.y), r);
         let tol_dir = tolerance::direction(dr);
-        let g = samples[i];
+        let g = e.sample;
         let err_dir = f64::from((g.direction - w).length());
         assert!(
             err_dir <= tol_dir,
@@ -163,24 +151,12 @@ fn vmf_convolution_matches_the_cpu() {
             [kernel, r]
         })
         .collect();
-    let lobes_buffer = ctx.storage_buffer("lobes", &lobes);
-    let params_buffer = ctx.storage_buffer("params", &params);
-    let convolved: GpuBuffer<Vmf> = ctx.zeroed_buffer("convolved", n);
-    let kappas: GpuBuffer<f32> = ctx.zeroed_buffer("kappas", n);
-    run(
-        ctx,
-        shaders::kernels::VMF_CONVOLVE,
-        "vmf_convolve_lobes",
-        &[
-            lobes_buffer.raw(),
-            params_buffer.raw(),
-            convolved.raw(),
-            kappas.raw(),
-        ],
-        n,
-    );
-    let convolved = ctx.read_back(&convolved).unwrap();
-    let kappas = ctx.read_back(&kappas).unwrap();
+    let (kernel_kappas, mean_cosines): (Vec<f32>, Vec<f32>) =
+        params.iter().map(|&[k, r]| (k, r)).unzip();
+    let (convolved, kappas) = VmfKernels::new(ctx)
+        .unwrap()
+        .convolve(ctx, &lobes, &kernel_kappas, &mean_cosines)
+        .unwrap();
     let a = |k: f64| f64::from(mcg_vmf::mean_cosine_from_kappa(k as f32));
     // dA₃/dκ in f64: 1/κ² − 1/sinh²κ (series near 0).
     let slope = |k: f64| {
@@ -242,7 +218,7 @@ fn static_keys_and_jittered_vertices_match_the_cpu() {
         return;
     };
     let specials = [0.0, 1.0 - f32::EPSILON / 2.0, 1.0, -0.5, 0.5];
-    let queries: Vec<JitterQuery> = (0..20_000)
+    let queries: Vec<HashgridJitterQuery> = (0..20_000)
         .map(|i| {
             let scale = [1e-3_f32, 1.0, 1e3, 1e6][i % 4];
             let position = Vec3::new(
@@ -269,7 +245,7 @@ fn static_keys_and_jittered_vertices_match_the_cpu() {
             } else {
                 (position, u)
             };
-            JitterQuery {
+            HashgridJitterQuery {
                 position,
                 u_corner: u[0],
                 u_jitter: Vec3::new(u[1], u[2], u[3]),
@@ -277,23 +253,14 @@ fn static_keys_and_jittered_vertices_match_the_cpu() {
             }
         })
         .collect();
-    let queries_buffer = ctx.storage_buffer("queries", &queries);
-    let keys: GpuBuffer<CellKey> = ctx.zeroed_buffer("static keys", queries.len());
-    let jittered: GpuBuffer<[i32; 4]> = ctx.zeroed_buffer("jittered", queries.len());
-    run(
-        ctx,
-        shaders::kernels::HASHGRID_VERTICES,
-        "hashgrid_vertices",
-        &[queries_buffer.raw(), keys.raw(), jittered.raw()],
-        queries.len(),
-    );
-    let keys = ctx.read_back(&keys).unwrap();
-    let jittered = ctx.read_back(&jittered).unwrap();
+    let (keys, jittered) = HashgridKernels::new()
+        .static_vertices(ctx, &queries)
+        .unwrap();
     for (i, q) in queries.iter().enumerate() {
         let grid = StaticGrid::new(q.width).unwrap();
         assert_eq!(keys[i], grid.vertex_key(q.position, q.u_corner), "{q:?}");
         let v = jittered_vertex(q.position, q.u_jitter);
-        assert_eq!(IVec3::from_slice(&jittered[i][..3]), v, "{q:?}");
+        assert_eq!(jittered[i], v, "{q:?}");
     }
 }
 
@@ -303,26 +270,20 @@ fn static_keys_and_jittered_vertices_match_the_cpu() {
 /// filled over 12 frames (each frame a random subset touched, some keys removed, so
 /// tombstones exist), evicted on the GPU in two passes with max_age 0, 3, 7 and 100 end with
 /// the CPU's checksum array after `evict_older_than` (tombstones trimmed alike) and the same
-/// count, for both slot indexers (mask and modulo). (3) 4 096
+/// count, for both slot indexers (mask and modulo); and again for max_age 3 and 7 with frame
+/// and ages shifted by `WRAP_SHIFT` (frame wrapped past u32::MAX to 6, ages on both sides of
+/// the wrap): the wrapping rule frame − age > max_age gives the same result. All through
+/// `GpuHashTable::{insert_or_get_touch_serial, evict_older_than, insert_or_get_touch}`. (3) 4 096
 /// racing insert-and-touch invocations leave every key's slot aged to the frame and no other
 /// slot changed. Broken once on purpose (the WGSL trim cleared a tombstone followed by any
 /// non-occupied slot without walking the run): the checksum arrays differed and the test
-/// failed.
+/// failed. Broken once more (the WGSL staleness test without wrapping,
+/// `frame >= age && frame − age > max_age`): the wrapped run evicted 484 instead of 782 and
+/// the test failed.
 #[test]
 fn age_counter_evicts_the_cpu_cells() {
     let Some((ctx, mut rng)) = gpu_and_rng("age_counter_evicts_the_cpu_cells", 41) else {
         return;
-    };
-    let kernel = |entry: &str| {
-        ctx.compute_kernel(shaders::kernels::HASHGRID_AGES, entry)
-            .unwrap()
-    };
-    let (insert_serial, insert) = (
-        kernel("hashgrid_insert_touch_serial"),
-        kernel("hashgrid_insert_touch"),
-    );
-    let params = |frame: u32, max_age: u32| {
-        ctx.uniform_buffer("age params", &HashgridAgeParams::new(frame, max_age))
     };
     for capacity in [2048_u32, 2039] {
         let hash = BucketHash::Mix;
@@ -343,8 +304,6 @@ fn age_counter_evicts_the_cpu_cells() {
             }
             cpu.advance_frame();
         }
-        let table = HashgridTableParams::new(capacity, cpu.max_probes(), hash).unwrap();
-        let table_buffer = ctx.uniform_buffer("table", &table);
         // (1) serial insert-and-touch, slot for slot.
         {
             let keys: Vec<CellKey> = pool[..40]
@@ -357,45 +316,47 @@ fn age_counter_evicts_the_cpu_cells() {
                 .iter()
                 .filter(|k| after.insert_or_get(k).is_inserted())
                 .count();
-            let checksums = ctx.storage_buffer("checksums", cpu.checksums());
+            let gpu = GpuHashTable::upload(ctx, &cpu).unwrap();
             let ages = ctx.storage_buffer("ages", cpu.ages());
-            let counter = ctx.zeroed_buffer::<u32>("counter", 1);
-            let keys_buffer = ctx.storage_buffer("keys", &keys);
-            let p = params(cpu.frame(), 0);
-            ctx.dispatch(
-                &insert_serial,
-                &[
-                    table_buffer.raw(),
-                    checksums.raw(),
-                    ages.raw(),
-                    p.raw(),
-                    counter.raw(),
-                    keys_buffer.raw(),
-                ],
-                1,
-            )
-            .unwrap();
-            assert_eq!(ctx.read_back(&checksums).unwrap(), after.checksums());
+            let gpu_inserted = gpu
+                .insert_or_get_touch_serial(ctx, &ages, &keys, cpu.frame())
+                .unwrap();
+            assert_eq!(gpu.read_checksums(ctx).unwrap(), after.checksums());
             assert_eq!(ctx.read_back(&ages).unwrap(), after.ages());
-            assert_eq!(ctx.read_back(&counter).unwrap()[0] as usize, inserted);
+            assert_eq!(gpu_inserted as usize, inserted);
         }
         // (2) eviction in two passes (`GpuHashTable::evict_older_than`).
-        for max_age in [0, 3, 7, 100] {
+        // Run once as is and once with frame and ages shifted by `WRAP_SHIFT` (wrapping): the
+        // shifted ages straddle u32::MAX and the frame has wrapped past 0, and the documented
+        // rule (frame − age > max_age, wrapping) gives the CPU's result on the unshifted
+        // table, whose frame cannot be set.
+        for (max_age, shift) in [
+            (0, 0),
+            (3, 0),
+            (7, 0),
+            (100, 0),
+            (3, WRAP_SHIFT),
+            (7, WRAP_SHIFT),
+        ] {
             let mut after = cpu.clone();
             let evicted = after.evict_older_than(max_age);
             let gpu = GpuHashTable::upload(ctx, &cpu).unwrap();
-            let ages = ctx.storage_buffer("ages", cpu.ages());
+            let shifted: Vec<u32> = cpu.ages().iter().map(|a| a.wrapping_add(shift)).collect();
+            let ages = ctx.storage_buffer("ages", &shifted);
+            let frame = cpu.frame().wrapping_add(shift);
             assert_eq!(
-                gpu.evict_older_than(ctx, &ages, cpu.frame(), max_age)
-                    .unwrap(),
+                gpu.evict_older_than(ctx, &ages, frame, max_age).unwrap(),
                 evicted,
-                "evicted, max_age {max_age}"
+                "evicted, max_age {max_age}, frame {frame}"
             );
             assert_eq!(
                 gpu.read_checksums(ctx).unwrap(),
                 after.checksums(),
-                "checksums after eviction, capacity {capacity}, max_age {max_age}"
+                "checksums after eviction, capacity {capacity}, max_age {max_age}, frame {frame}"
             );
+            if shift != 0 {
+                assert!(frame < cpu.frame() && shifted.iter().any(|&a| a > frame));
+            }
             if max_age == 3 {
                 assert!(evicted > 0 && after.tombstones() < cpu.tombstones() + evicted);
             }
@@ -405,26 +366,11 @@ fn age_counter_evicts_the_cpu_cells() {
             let keys: Vec<CellKey> = (0..4096)
                 .map(|_| pool[rng.random_range(0..pool.len())])
                 .collect();
-            let checksums = ctx.storage_buffer("checksums", cpu.checksums());
+            let gpu = GpuHashTable::upload(ctx, &cpu).unwrap();
             let ages = ctx.storage_buffer("ages", cpu.ages());
-            let counter = ctx.zeroed_buffer::<u32>("counter", 1);
-            let keys_buffer = ctx.storage_buffer("keys", &keys);
             let frame = cpu.frame().wrapping_add(1);
-            let p = params(frame, 0);
-            ctx.dispatch(
-                &insert,
-                &[
-                    table_buffer.raw(),
-                    checksums.raw(),
-                    ages.raw(),
-                    p.raw(),
-                    counter.raw(),
-                    keys_buffer.raw(),
-                ],
-                keys.len() as u32,
-            )
-            .unwrap();
-            let words = ctx.read_back(&checksums).unwrap();
+            gpu.insert_or_get_touch(ctx, &ages, &keys, frame).unwrap();
+            let words = gpu.read_checksums(ctx).unwrap();
             let gpu_ages = ctx.read_back(&ages).unwrap();
             let wanted: std::collections::HashSet<u32> =
                 keys.iter().map(mcg_hashgrid::checksum).collect();
@@ -483,53 +429,107 @@ fn pixel_states_read_the_same_on_the_gpu() {
         weight: 0.5,
         decay: PriorDecay::SquaredCount,
     };
-    let query = ctx.uniform_buffer(
-        "query",
-        &PixelQuery {
-            x,
-            prior_mean_cosine: prior.mean_cosine,
-            prior_weight: prior.weight,
-            prior_decay: 0,
-            _pad: [0; 2],
-        },
-    );
-    let states_buffer = ctx.storage_buffer("states", &states);
-    let results: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("results", states.len());
-    let lobes: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("lobes", states.len());
-    run(
-        ctx,
-        shaders::kernels::MARKOV_PIXEL,
-        "markov_pixel_states",
-        &[states_buffer.raw(), query.raw(), results.raw(), lobes.raw()],
-        states.len(),
-    );
-    let results = ctx.read_back(&results).unwrap();
-    let lobes = ctx.read_back(&lobes).unwrap();
+    let reads = MarkovKernels::new()
+        .pixel_states(ctx, &states, x, prior)
+        .unwrap();
     let mut found = 0;
     for (i, s) in states.iter().enumerate() {
-        let r = results[i];
+        let r = reads[i];
         assert_eq!(
-            r[..2],
-            [s.resampling_score(), f32::from(u8::from(s.is_valid()))],
+            (r.resampling_score, r.is_valid),
+            (s.resampling_score(), s.is_valid()),
             "{i}: {s:?}"
         );
-        assert_eq!(r[3], s.stats.sample_count as f32, "{i}");
-        match s.lobe(x, prior) {
-            None => assert_eq!(r[2], -1.0, "{i}: GPU found a lobe, CPU none"),
-            Some(lobe) => {
+        assert_eq!(r.sample_count, s.stats.sample_count as f32, "{i}");
+        match (s.lobe(x, prior), r.lobe) {
+            (None, None) => {}
+            (Some(lobe), Some((mu, kappa))) => {
                 found += 1;
-                let mu = Vec3::from_slice(&lobes[i][..3]);
                 assert!((mu - lobe.mu()).length() <= 64.0 * f32::EPSILON, "{i}: μ");
                 let k = f64::from(lobe.kappa());
                 assert!(
-                    (f64::from(lobes[i][3]) - k).abs() <= 64.0 * EPS * k.max(1e-30),
-                    "{i}: κ {} vs {k}",
-                    lobes[i][3]
+                    (f64::from(kappa) - k).abs() <= 64.0 * EPS * k.max(1e-30),
+                    "{i}: κ {kappa} vs {k}"
                 );
             }
+            (cpu, gpu) => panic!("{i}: CPU lobe {cpu:?}, GPU lobe {gpu:?}"),
         }
     }
     assert!(found > 2500, "{found} lobes");
+}
+
+/// `VmfMixtureKernel::<K>` for K = 1 and 3 (the kernel's `VMF_MIXTURE_K` replaced on the
+/// host): on 512 mixtures each (fixed seed, κ in [0.5, 50], weights in (0.1, 3)), the
+/// component and the rescaled uniform equal the CPU's bit for bit and the pdf is within
+/// 10⁻⁴ relative (κ ≤ 50 keeps `tolerance::pdf` below 10⁻⁴, see the K = 4 test). A wrong K
+/// misreads the packed layout and fails. Broken once on purpose (the host left K at 4):
+/// failed.
+#[test]
+fn vmf_mixture_kernel_takes_any_k() {
+    let Some((ctx, mut rng)) = gpu_and_rng("vmf_mixture_kernel_takes_any_k", 53) else {
+        return;
+    };
+    fn check<const K: usize>(ctx: &mcg_gpu_backend::GpuContext, rng: &mut impl rand::Rng) {
+        let mixtures: Vec<VmfMixture<K>> = (0..512)
+            .map(|_| {
+                let lobes = [0; K]
+                    .map(|_| Vmf::new(random_unit(rng), rng.random_range(0.5..50.0)).unwrap());
+                VmfMixture::new(lobes, [0; K].map(|_| rng.random_range(0.1..3.0))).unwrap()
+            })
+            .collect();
+        let queries: Vec<VmfQuery> = (0..512)
+            .map(|_| VmfQuery::new(random_unit(rng), Vec2::new(rng.random(), rng.random())))
+            .collect();
+        let evals = VmfMixtureKernel::<K>::new(ctx)
+            .unwrap()
+            .eval(ctx, &mixtures, &queries)
+            .unwrap();
+        for ((m, q), e) in mixtures.iter().zip(&queries).zip(&evals) {
+            let (index, u) = m.select(q.uniforms.x);
+            assert_eq!(
+                (e.component, e.u.to_bits()),
+                (index, u.to_bits()),
+                "K = {K}"
+            );
+            let cpu = m.pdf(q.direction);
+            assert!(
+                (e.pdf - cpu).abs() <= 1e-4 * cpu + 1e-30,
+                "K = {K}: pdf GPU {} CPU {cpu}",
+                e.pdf
+            );
+        }
+    }
+    check::<1>(ctx, &mut rng);
+    check::<3>(ctx, &mut rng);
+}
+
+/// Empty inputs: `GpuHashTable::{insert_or_get, insert_or_get_serial, find,
+/// insert_or_get_touch, insert_or_get_touch_serial}` with no keys return nothing and leave
+/// the checksum and age arrays as the CPU table has them (the kernels' buffers are padded to
+/// one zeroed element, which must not be read as a key). Broken once on purpose (the early
+/// return for no keys removed from `GpuHashTable::run`): the serial insert wrote the zero
+/// key and the test failed.
+#[test]
+fn empty_key_lists_change_nothing() {
+    let Some((ctx, _)) = gpu_and_rng("empty_key_lists_change_nothing", 0) else {
+        return;
+    };
+    let mut cpu = HashTable::<u32>::new(64, 8, BucketHash::Mix)
+        .unwrap()
+        .with_age_tracking();
+    let _ = cpu.insert_or_get(&CellKey::new(glam::IVec3::ONE, 1, 0));
+    let gpu = GpuHashTable::upload(ctx, &cpu).unwrap();
+    let ages = ctx.storage_buffer("ages", cpu.ages());
+    assert!(gpu.insert_or_get_serial(ctx, &[]).unwrap().is_empty());
+    assert!(gpu.insert_or_get(ctx, &[]).unwrap().is_empty());
+    assert!(gpu.find(ctx, &[]).unwrap().is_empty());
+    assert_eq!(
+        gpu.insert_or_get_touch_serial(ctx, &ages, &[], 5).unwrap(),
+        0
+    );
+    assert_eq!(gpu.insert_or_get_touch(ctx, &ages, &[], 5).unwrap(), 0);
+    assert_eq!(gpu.read_checksums(ctx).unwrap(), cpu.checksums());
+    assert_eq!(ctx.read_back(&ages).unwrap(), cpu.ages());
 }
 
 /// `pack_mixtures` writes the layout the WGSL struct has for K = 4 (checked against naga in

@@ -6,8 +6,6 @@ use std::path::PathBuf;
 
 use mcg_gpu_backend::{prelude, shaders, types};
 
-mod common;
-use common::{JitterQuery, PixelQuery};
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 
 fn prelude_path() -> PathBuf {
@@ -434,8 +432,8 @@ fn wgsl_structs_match_the_rust_pod_types() {
     check(
         &kernel("hashgrid_vertices"),
         "HashgridJitterQuery",
-        size_of::<JitterQuery>(),
-        fields!(JitterQuery: position, u_corner, u_jitter, width),
+        size_of::<types::HashgridJitterQuery>(),
+        fields!(types::HashgridJitterQuery: position, u_corner, u_jitter, width),
     );
     check(
         &kernel("hashgrid_ages"),
@@ -446,8 +444,8 @@ fn wgsl_structs_match_the_rust_pod_types() {
     check(
         &kernel("markov_pixel"),
         "PixelQuery",
-        size_of::<PixelQuery>(),
-        fields!(PixelQuery: x, prior_mean_cosine, prior_weight, prior_decay),
+        size_of::<types::MarkovPixelQuery>(),
+        fields!(types::MarkovPixelQuery: x, prior_mean_cosine, prior_weight, prior_decay),
     );
 }
 

@@ -143,24 +143,3 @@ pub fn random_key(rng: &mut impl Rng) -> CellKey {
         key
     }
 }
-
-/// A position and the uniforms of both vertex choices (WGSL `HashgridJitterQuery`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct JitterQuery {
-    pub position: Vec3,
-    pub u_corner: f32,
-    pub u_jitter: Vec3,
-    pub width: f32,
-}
-
-/// The shading point and fixed prior of the `markov_pixel_states` kernel (WGSL `PixelQuery`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct PixelQuery {
-    pub x: Vec3,
-    pub prior_mean_cosine: f32,
-    pub prior_weight: f32,
-    pub prior_decay: u32,
-    pub _pad: [u32; 2],
-}
