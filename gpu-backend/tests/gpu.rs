@@ -7,15 +7,15 @@
 //! tolerances derived from WGSL's precision rules (see `common::tolerance`).
 
 use glam::{IVec3, Vec2, Vec3};
+use mcg_gpu_backend::GpuContext;
 use mcg_gpu_backend::kernels::{
-    GpuHashTable, GpuTexels, HashgridKernels, MarkovKernels, VmfKernels,
+    CodecKernels, GpuHashTable, GpuTexels, HashgridKernels, MarkovKernels, VmfKernels,
 };
 use mcg_gpu_backend::testing::gpu_or_skip;
 use mcg_gpu_backend::types::{
     HashgridLevelParams, HashgridTableParams, HashgridVertexQuery, TexelParams, TexelUpdate,
     VmfQuery, VmfStatsQuery, VmfUpdate,
 };
-use mcg_gpu_backend::{GpuBuffer, GpuContext, shaders};
 use mcg_hashgrid::{
     AdaptiveGrid, BucketHash, CellKey, ConcurrentTable, HashTable, Insert, checksum, hash_mix,
     hash_mix_coherent, hash_xor_primes, normal_class, stochastic_trilinear,
@@ -25,7 +25,7 @@ use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 
 mod common;
-use common::{EPS, KAPPAS, gpu_and_rng, random_key, random_unit, run, tolerance};
+use common::{EPS, KAPPAS, gpu_and_rng, random_key, random_unit, tolerance};
 
 /// vMF pdf and `sample_with_pdf` on 22 × 512 lobes, queries and uniform pairs (fixed seed),
 /// incl. uniforms 0 and 1 − ε: every GPU value within the [`tolerance`] of the CPU's.
@@ -557,20 +557,9 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
             values.push([a, b, 1.5, 0.5]);
         }
     }
-    let values_buffer = ctx.storage_buffer("values", &values);
-    let words: GpuBuffer<[u32; 4]> = ctx.zeroed_buffer("words", 3 * values.len());
-    let decoded: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("decoded", 7 * values.len());
-    run(
-        ctx,
-        shaders::kernels::COLOR_CODEC,
-        "codec_pack_unpack",
-        &[values_buffer.raw(), words.raw(), decoded.raw()],
-        values.len(),
-    );
-    let words = ctx.read_back(&words).unwrap();
-    let decoded = ctx.read_back(&decoded).unwrap();
+    let reads = CodecKernels::new().pack_unpack(ctx, &values).unwrap();
     let irr = IrradianceLayout::ADGI;
-    for (i, v) in values.iter().enumerate() {
+    for (i, (v, read)) in values.iter().zip(&reads).enumerate() {
         let rgb = Vec3::new(v[0], v[1], v[2]);
         let count = i as u32 % 64;
         let cpu = [
@@ -580,8 +569,7 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
             irr.encode(rgb, count, Rounding::Down).0,
         ];
         assert_eq!(
-            words[3 * i],
-            cpu,
+            read.formats, cpu,
             "R11G11B10, RGB9E5, gamma-5, irradiance (down) of {rgb}"
         );
         let nearest = irr.encode(rgb, count, Rounding::Nearest).0;
@@ -591,18 +579,18 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
         let vis_nearest = vis.encode(moments, count, Rounding::Nearest);
         let vis_stochastic = vis.encode(moments, count, Rounding::Stochastic(v[3]));
         assert_eq!(
-            words[3 * i + 1][2..],
+            read.rounded[2..],
             [vis_nearest.0, vis_stochastic.0],
             "visibility of {moments}, u = {}",
             v[3]
         );
         assert_eq!(
-            decoded[7 * i + 5][..2],
+            read.decoded[5][..2],
             vis.decode(vis_nearest).to_array(),
             "visibility decode of {moments}"
         );
         assert_eq!(
-            words[3 * i + 1][..2],
+            read.rounded[..2],
             [nearest, stochastic],
             "irradiance of {rgb}, u = {}",
             v[3]
@@ -617,13 +605,13 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
         let h_nearest = heu.encode_with(h, Rounding::Nearest);
         let h_stochastic = heu.encode_with(h, Rounding::Stochastic(v[3]));
         assert_eq!(
-            words[3 * i + 2][..2],
+            read.heuristics[..2],
             [h_nearest.0, h_stochastic.0],
             "heuristics of {h:?}"
         );
         let hd = heu.decode(h_nearest);
         assert_eq!(
-            decoded[7 * i + 6],
+            read.decoded[6],
             [hd.f_v, hd.f_s, hd.f_d, hd.flags as f32],
             "heuristics decode of {h:?}"
         );
@@ -635,7 +623,7 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
             irr.decode(nearest.into()),
         ];
         for (k, d) in cpu_decoded.iter().enumerate() {
-            assert_eq!(decoded[7 * i + k][..3], d.to_array(), "decode {k} of {rgb}");
+            assert_eq!(read.decoded[k][..3], d.to_array(), "decode {k} of {rgb}");
         }
     }
 }

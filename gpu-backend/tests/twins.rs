@@ -4,10 +4,10 @@
 
 use glam::{Vec2, Vec3};
 use mcg_gpu_backend::kernels::{
-    GpuHashTable, HashgridKernels, MarkovKernels, VmfKernels, VmfMixtureKernel,
+    CodecKernels, GpuHashTable, HashgridKernels, MarkovKernels, VmfKernels, VmfMixtureKernel,
 };
+use mcg_gpu_backend::prelude;
 use mcg_gpu_backend::types::{HashgridJitterQuery, VmfQuery, mixture_stride_floats, pack_mixtures};
-use mcg_gpu_backend::{GpuBuffer, prelude, shaders};
 use mcg_hashgrid::{BucketHash, CellKey, HashTable, StaticGrid, jittered_vertex};
 use mcg_markov_guide::mcmm::PixelState;
 use mcg_vmf::{FitParams, MapPrior, PriorDecay, SufficientStats, Vmf, VmfMixture};
@@ -18,7 +18,7 @@ use rand::RngExt;
 const WRAP_SHIFT: u32 = u32::MAX - 5;
 
 mod common;
-use common::{EPS, KAPPAS, gpu_and_rng, random_key, random_unit, run, tolerance};
+use common::{EPS, KAPPAS, gpu_and_rng, random_key, random_unit, tolerance};
 
 /// `VmfMixture<4>` pdf, component choice and `sample_with_pdf` on 8 192 mixtures (fixed seed;
 /// κ from the switch-point list, weights with zeros, uniforms incl. 0 and 1 − ε/2).
@@ -618,47 +618,19 @@ fn logluv32_matches_the_cpu_bit_for_bit() {
         words.push(rng.random());
     }
     values.resize(words.len(), [0.0; 4]);
-    let n = values.len();
-    let inputs: Vec<[u32; 4]> = values
-        .iter()
-        .zip(&words)
-        .map(|(v, &w)| [v[0].to_bits(), v[1].to_bits(), v[2].to_bits(), w])
-        .collect();
-    let inputs_buffer = ctx.storage_buffer("values", &inputs);
-    let tables = ctx.storage_buffer("tables", &prelude::logluv_tables());
-    let packed: GpuBuffer<[u32; 2]> = ctx.zeroed_buffer("packed", n);
-    let unpacked: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("unpacked", 2 * n);
-    run(
-        ctx,
-        shaders::kernels::COLOR_CODEC_LOGLUV,
-        "codec_logluv",
-        &[
-            inputs_buffer.raw(),
-            packed.raw(),
-            unpacked.raw(),
-            tables.raw(),
-        ],
-        n,
-    );
-    let packed = ctx.read_back(&packed).unwrap();
-    let unpacked = ctx.read_back(&unpacked).unwrap();
-    for i in 0..n {
-        let v = Vec3::from_slice(&values[i][..3]);
+    let colours: Vec<Vec3> = values.iter().map(|v| Vec3::from_slice(&v[..3])).collect();
+    let reads = CodecKernels::new().logluv(ctx, &colours, &words).unwrap();
+    for (i, ((&v, &w), read)) in colours.iter().zip(&words).zip(&reads).enumerate() {
         assert_eq!(
-            packed[i],
+            read.packed,
             [LogLuv32::pack_xyz(v), LogLuv32.encode(v)],
             "{i}: pack of {v:?}"
         );
-        let w = words[i];
         assert_eq!(
-            unpacked[2 * i][..3],
-            LogLuv32::unpack_xyz(w).to_array(),
+            read.xyz,
+            LogLuv32::unpack_xyz(w),
             "{i}: unpack_xyz of {w:#010x}"
         );
-        assert_eq!(
-            unpacked[2 * i + 1][..3],
-            LogLuv32.decode(w).to_array(),
-            "{i}: decode of {w:#010x}"
-        );
+        assert_eq!(read.rgb, LogLuv32.decode(w), "{i}: decode of {w:#010x}");
     }
 }

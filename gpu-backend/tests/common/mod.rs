@@ -9,19 +9,6 @@ use mcg_hashgrid::CellKey;
 use rand::{Rng, RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 
-/// Builds the compute pipeline of `entry` in `source` and runs it once with `bindings[i]` at
-/// `@binding(i)` for `invocations` invocations (see `GpuContext::dispatch`).
-pub fn run(
-    ctx: &GpuContext,
-    source: &str,
-    entry: &str,
-    bindings: &[&mcg_gpu_backend::wgpu::Buffer],
-    invocations: usize,
-) {
-    let kernel = ctx.compute_kernel(source, entry).unwrap();
-    ctx.dispatch(&kernel, bindings, invocations as u32).unwrap();
-}
-
 /// The shared context and a generator seeded with `seed`, or `None` (after printing why) when
 /// there is no adapter and `MCG_REQUIRE_GPU` is not `1`.
 pub fn gpu_and_rng(test: &str, seed: u64) -> Option<(&'static GpuContext, Pcg64)> {
