@@ -10,7 +10,7 @@
 use glam::{Vec2, Vec3};
 
 use crate::Vmf;
-use crate::constants::{KAPPA_SAMPLE_SATURATED, KAPPA_TINY};
+use crate::constants::KAPPA_TINY;
 use crate::math;
 
 /// Draws `out[i]` from `lobes[i]` with the uniforms `uniforms[i]` in [0, 1)², for every `i`.
@@ -48,17 +48,16 @@ pub fn sample_batch(lobes: &[Vmf], uniforms: &[Vec2], out: &mut [Vec3]) {
 
 /// `cos θ − 1` for concentration κ at the uniform ξ: the inverse CDF
 /// `r = ln(1 + ξ expm1(−2κ)) / κ` of [`Vmf::sample`], in the same three regimes (Goldberg's
-/// `ln(u)·x/(u − 1)` near the peak, `u = (1 − ξ) + ξ e^{−2κ}` in the tail, no `exp` above
-/// κ = 17, the limit −2ξ below κ = 10⁻⁷), each computed for every lane and selected.
+/// `ln(u)·x/(u − 1)` near the peak, `u = (1 − ξ) + ξ e^{−2κ}` in the tail, the limit −2ξ
+/// below κ = 10⁻⁷), each computed for every lane and selected.
 /// The divisions by κ of the regimes share one division.
 #[inline(always)]
 fn cos_theta_minus_one_branch_free(kappa: f32, xi: f32) -> f32 {
-    // e^{−2κ} and expm1(−2κ); above κ = 17 they are replaced by 0 and −1 exactly. The clamp
-    // keeps the polynomial in range for large κ (whose value is then discarded).
-    let (decay, expm1) = math::exp_expm1_fast((-2.0 * kappa).max(-40.0));
-    let saturated = kappa > KAPPA_SAMPLE_SATURATED;
-    let decay = if saturated { 0.0 } else { decay };
-    let scale = if saturated { -1.0 } else { expm1 };
+    // e^{−2κ} and expm1(−2κ). Above κ = 17 (`KAPPA_SAMPLE_SATURATED`) the scalar path
+    // replaces them by 0 and −1; here that happens by itself: e^{−2κ} < 2⁻⁴⁹ makes
+    // `e^{−2κ} − 1` round to −1 and vanishes next to 1 − ξ ≥ 2⁻²⁴ in the tail sum, so the
+    // results are the same. The clamp keeps the polynomial's 2ⁿ a normal float.
+    let (decay, scale) = math::exp_expm1_fast((-2.0 * kappa).max(-40.0));
     let x = xi * scale;
     let near = 1.0 + x;
     let tail = x < -0.5;

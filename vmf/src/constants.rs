@@ -74,7 +74,7 @@ pub const EXP_POLY: [f32; 6] = [
 ];
 
 /// ln 2 = `LN2_HI + LN2_LO`, the high part exact in f32 for small integer multiples
-/// (Cody and Waite's range reduction of [`EXP_POLY`] and of `ln`'s exponent).
+/// (Cody and Waite's range reduction of [`EXP_POLY`]).
 pub const LN2_HI: f32 = 0.693_359_4;
 
 /// See [`LN2_HI`].
