@@ -241,6 +241,29 @@ fn bench_entries(
     g.finish();
 }
 
+/// WGSL compute entry points, one per `(entry, statement)`: each runs `uses_all_bindings()`
+/// (so every entry point of a group binds the same buffers) and then `statement` once per
+/// element `i < arrayLength(&guard)`.
+fn per_element_entries(guard: &str, entries: &[(&str, &str)]) -> String {
+    entries
+        .iter()
+        .map(|(entry, statement)| {
+            format!(
+                "
+@compute @workgroup_size(64)
+fn {entry}(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {{
+    uses_all_bindings();
+    let i = mcg_invocation_index(id, groups);
+    if i < arrayLength(&{guard}) {{
+        {statement}
+    }}
+}}
+"
+            )
+        })
+        .collect()
+}
+
 const VMF_PDF: &str = r#"
 @group(0) @binding(0) var<storage, read> lobes: array<Vmf>;
 @group(0) @binding(1) var<storage, read> queries: array<vec4<f32>>;
@@ -560,79 +583,6 @@ fn uses_all_bindings() {
     _ = arrayLength(&floats);
     _ = arrayLength(&codec_logluv_tables);
 }
-
-@compute @workgroup_size(64)
-fn log_irradiance(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i < arrayLength(&values) {
-        words[i] = codec_irradiance_encode(values[i].xyz, 1u, CodecRounding(CODEC_ROUND_NEAREST, 0.0));
-    }
-}
-
-@compute @workgroup_size(64)
-fn logluv(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i < arrayLength(&values) {
-        words[i] = codec_logluv32_pack(values[i].xyz);
-    }
-}
-
-@compute @workgroup_size(64)
-fn r11g11b10(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i < arrayLength(&values) {
-        words[i] = codec_r11g11b10_pack(values[i].xyz);
-    }
-}
-
-@compute @workgroup_size(64)
-fn rgb9e5(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i < arrayLength(&values) {
-        words[i] = codec_rgb9e5_pack(values[i].xyz);
-    }
-}
-
-@compute @workgroup_size(64)
-fn gamma5(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i < arrayLength(&values) {
-        words[i] = codec_gamma5_pack(values[i].xyz);
-    }
-}
-
-@compute @workgroup_size(64)
-fn visibility(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i < arrayLength(&values) {
-        words[i] = codec_visibility_encode(values[i].xy, 1u, CodecRounding(CODEC_ROUND_NEAREST, 0.0));
-    }
-}
-
-@compute @workgroup_size(64)
-fn heuristics(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i < arrayLength(&values) {
-        words[i] = codec_heuristics_encode(min(values[i].xyz, vec3<f32>(1.0)), 1u, CodecRounding(CODEC_ROUND_NEAREST, 0.0));
-    }
-}
-
-// Naive: the colour stored as it is, 16 bytes instead of 4.
-@compute @workgroup_size(64)
-fn vec4_store(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i < arrayLength(&values) {
-        floats[i] = values[i];
-    }
-}
 "#;
 
 fn codec_encode(c: &mut Criterion, ctx: &GpuContext) {
@@ -655,6 +605,20 @@ fn codec_encode(c: &mut Criterion, ctx: &GpuContext) {
             shaders::COLOR_CODEC_MODULE,
             shaders::COLOR_CODEC_LOGLUV,
             CODEC_ENCODE,
+            &per_element_entries(
+                "values",
+                &[
+                    ("log_irradiance", "words[i] = codec_irradiance_encode(values[i].xyz, 1u, CodecRounding(CODEC_ROUND_NEAREST, 0.0));"),
+                    ("logluv", "words[i] = codec_logluv32_pack(values[i].xyz);"),
+                    ("r11g11b10", "words[i] = codec_r11g11b10_pack(values[i].xyz);"),
+                    ("rgb9e5", "words[i] = codec_rgb9e5_pack(values[i].xyz);"),
+                    ("gamma5", "words[i] = codec_gamma5_pack(values[i].xyz);"),
+                    ("visibility", "words[i] = codec_visibility_encode(values[i].xy, 1u, CodecRounding(CODEC_ROUND_NEAREST, 0.0));"),
+                    ("heuristics", "words[i] = codec_heuristics_encode(min(values[i].xyz, vec3<f32>(1.0)), 1u, CodecRounding(CODEC_ROUND_NEAREST, 0.0));"),
+                    // Naive: the colour stored as it is, 16 bytes instead of 4.
+                    ("vec4_store", "floats[i] = values[i];"),
+                ],
+            ),
         ]
         .concat(),
         &[
@@ -1171,43 +1135,6 @@ fn uses_all_bindings() {
     _ = arrayLength(&plain);
     _ = arrayLength(&codec_logluv_tables);
 }
-
-@compute @workgroup_size(64)
-fn log_irradiance(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i < arrayLength(&out) {
-        out[i] = vec4<f32>(codec_irradiance_decode(words[i]), 1.0);
-    }
-}
-
-@compute @workgroup_size(64)
-fn logluv(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i < arrayLength(&out) {
-        out[i] = vec4<f32>(codec_logluv32_unpack(words[i]), 1.0);
-    }
-}
-
-@compute @workgroup_size(64)
-fn r11g11b10(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i < arrayLength(&out) {
-        out[i] = vec4<f32>(codec_r11g11b10_unpack(words[i]), 1.0);
-    }
-}
-
-// Naive: the colour loaded unencoded, 16 bytes instead of 4.
-@compute @workgroup_size(64)
-fn vec4_load(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i < arrayLength(&out) {
-        out[i] = plain[i];
-    }
-}
 "#;
 
 fn codec_decode(c: &mut Criterion, ctx: &GpuContext) {
@@ -1242,6 +1169,25 @@ fn codec_decode(c: &mut Criterion, ctx: &GpuContext) {
             shaders::COLOR_CODEC_MODULE,
             shaders::COLOR_CODEC_LOGLUV,
             CODEC_DECODE,
+            &per_element_entries(
+                "out",
+                &[
+                    (
+                        "log_irradiance",
+                        "out[i] = vec4<f32>(codec_irradiance_decode(words[i]), 1.0);",
+                    ),
+                    (
+                        "logluv",
+                        "out[i] = vec4<f32>(codec_logluv32_unpack(words[i]), 1.0);",
+                    ),
+                    (
+                        "r11g11b10",
+                        "out[i] = vec4<f32>(codec_r11g11b10_unpack(words[i]), 1.0);",
+                    ),
+                    // Naive: the colour loaded unencoded, 16 bytes instead of 4.
+                    ("vec4_load", "out[i] = plain[i];"),
+                ],
+            ),
         ]
         .concat(),
         &[
