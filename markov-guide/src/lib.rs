@@ -12,6 +12,7 @@
 //! | [`mcmm::collaborative_discovery`], [`mcmm::bspline_offset`] | weighted resampling of neighbour states | MCMM Alg. 1 |
 //! | [`mcmm::choose_technique`], [`mcmm::technique_pdf`] | defensive hemisphere / lobe choice and its pdf | MCMM Alg. 2, App. A |
 //! | [`mcmm::update`] | acceptance min(1, f/S_c.f), reset, MLE update | MCMM Alg. 3 |
+//! | [`mcmm::ScoreDensity`] | the density in the score f: the chain's technique (paper) or the tile's mixture (SSMIS denominator; our extension) | MCMM Alg. 3 line 1, eq. 9 |
 //! | [`mcmm::CosineChainTechnique`], [`mcmm::McmmPrior`] | a chain as an `mcg_smis::Technique`; uninformed or light-size prior | MCMM eq. 8-9, sec. 5 |
 //! | [`mcpg::GridState`] | world-space chain state (w̄, N, ȳ, r̄, T, v) in 32 bytes | MCPG Table 1 |
 //! | [`mcpg::prepare_candidate`], [`mcpg::CandidateSet`], [`mcpg::GridEnsemble`] | candidates from the adaptive and static grids, velocity prediction, collision and normal rejection, reservoir choice | MCPG Alg. 1, eq. 10 |

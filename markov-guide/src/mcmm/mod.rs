@@ -6,7 +6,7 @@
 //! One iteration for pixel p, with S the tentative state and S_c the current one:
 //! 1. [`collaborative_discovery`]: resample S from neighbour states of the previous frame.
 //! 2. [`choose_technique`]: hemisphere (cosine or BSDF) or the lobe of S; the renderer samples
-//!    ω, traces to x₂ and computes f = lum(L_e f_r)/p(ω).
+//!    ω, traces to x₂ and computes f = lum(L_e f_r)/p(ω) (p per [`ScoreDensity`]).
 //! 3. [`update`]: acceptance min(1, f/S_c.f), reset after a hemisphere sample, MLE update.
 //!
 //! The SMIS estimator over a tile of chains (eq. 8, 9) takes its pdfs from [`technique_pdf`].
@@ -17,7 +17,7 @@ mod sampling;
 mod state;
 mod update;
 
-pub use params::{McmmParams, McmmPrior};
+pub use params::{McmmParams, McmmPrior, ScoreDensity};
 pub use resampling::{bspline_offset, collaborative_discovery, resample_neighbour};
 pub use sampling::{CosineChainTechnique, SampleChoice, choose_technique, technique_pdf};
 pub use state::PixelState;

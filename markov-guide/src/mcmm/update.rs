@@ -9,8 +9,8 @@ use super::{McmmParams, PixelState};
 /// sample. Returns whether S was accepted.
 ///
 /// Inputs: the shading point `x1`, the traced vertex `x2`, the score `f = lum(L_e f_r)/p(ω)`
-/// (line 1, computed by the renderer), whether ω came from the hemisphere technique, and one
-/// uniform `u`.
+/// (line 1, computed by the renderer, with p as [`McmmParams::score_density`] says), whether ω
+/// came from the hemisphere technique, and one uniform `u`.
 ///
 /// 1. a = min(1, f / S_c.f); accept when f > 0 and (S_c invalid or u < a) (lines 2-4).
 /// 2. On acceptance after a hemisphere sample, S is reset to {0} (line 6): the new light starts

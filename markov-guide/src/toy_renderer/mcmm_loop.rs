@@ -3,11 +3,13 @@
 use std::vec::Vec;
 
 use glam::{Vec2, Vec3};
-use mcg_smis::{CyclicShift, MAX_TILE_SIZE, Technique, XorPermutation, smis, smis_one_sample};
+use mcg_smis::{
+    CyclicShift, MAX_TILE_SIZE, Technique, XorPermutation, mixture_pdf, smis, smis_one_sample,
+};
 use rand::{Rng, RngExt};
 
 use crate::mcmm::{
-    CosineChainTechnique, McmmParams, PixelState, PixelStateBuffers, bspline_offset,
+    CosineChainTechnique, McmmParams, PixelState, PixelStateBuffers, ScoreDensity, bspline_offset,
     collaborative_discovery, update,
 };
 use crate::toy_scene::{TOY_NORMAL, ToyScene};
@@ -80,6 +82,26 @@ impl McmmToyConfig {
             steps: 4,
             sampling,
             params,
+        }
+    }
+
+    /// A 32 × 32-pixel image (4 × 8 tiles of 8 × 4) of pixels 0.05 apart centred on the
+    /// origin, 4 steps, the paper's constants including its 45-pixel neighbour window: enough
+    /// tiles that neighbour resampling (Alg. 1) draws from a population larger than one tile,
+    /// as on a real frame.
+    #[must_use]
+    pub fn image(sampling: Sampling) -> Self {
+        let spacing = 0.05;
+        Self {
+            tile_width: 8,
+            tile_height: 4,
+            tiles_x: 4,
+            tiles_y: 8,
+            origin: Vec3::new(-15.5 * spacing, -15.5 * spacing, 0.0),
+            pixel_spacing: spacing,
+            steps: 4,
+            sampling,
+            params: McmmParams::PAPER,
         }
     }
 
@@ -199,7 +221,8 @@ impl McmmToyRenderer {
     /// discovery from the previous frame's states (Alg. 1); SSMIS then permutes the chains of
     /// the tile with a random xor mask — after discovery, so that the technique a pixel samples
     /// is a uniform pick from the set its estimator sums over; the chain's technique
-    /// (Alg. 2) samples ω; the scene is traced; the score f = value/p(ω | S) goes into Alg. 3.
+    /// (Alg. 2) samples ω; the scene is traced; the score f = value/p(ω) goes into Alg. 3,
+    /// with p(ω | S) or the tile's mixture density as [`McmmParams::score_density`] says.
     /// At the end of the frame every chain's S_c is written to the pixel it ended at.
     pub fn render_frame<R: Rng + ?Sized>(&mut self, scene: &ToyScene, rng: &mut R) -> Vec<f32> {
         let config = self.config;
@@ -221,6 +244,7 @@ impl McmmToyRenderer {
         let mut techniques = std::vec![empty; n * steps];
         let mut samples = std::vec![Vec3::ZERO; n * steps];
         let mut values = std::vec![0.0f32; n * steps];
+        let mut scores = std::vec![0.0f32; n * steps];
         let mut estimates = std::vec![0.0f32; n];
         let mut set = Vec::with_capacity(size);
 
@@ -271,9 +295,21 @@ impl McmmToyRenderer {
                 let (w, from_hemisphere) = technique.sample_with_branch(u_select, u);
                 let hit = scene.trace(x, w);
                 let value = hit.radiance * TOY_NORMAL.dot(w).max(0.0);
-                let pdf = technique.pdf(&w);
-                let score = if pdf > 0.0 { value / pdf } else { 0.0 };
+                let pdf = match params.score_density {
+                    ScoreDensity::Technique => technique.pdf(&w),
+                    ScoreDensity::TileMixture => {
+                        tile_techniques(&mut set, &step_states, index, size, x, &params);
+                        mixture_pdf(&set, &w)
+                    }
+                };
+                // value/p, or 0 where p = 0 or the ratio overflows (as mcg-smis does).
+                let score = if pdf > 0.0 && (value / pdf).is_finite() {
+                    value / pdf
+                } else {
+                    0.0
+                };
                 let slot = index * steps + step;
+                scores[slot] = score;
                 techniques[slot] = technique;
                 samples[slot] = w;
                 values[slot] = value;
@@ -296,18 +332,17 @@ impl McmmToyRenderer {
                 Sampling::Guided(Decorrelation::Ssmis) => {
                     // Eq. 9 at each pixel over all of its tile's states at this step, each
                     // reconstructed at the pixel's own shading point.
+                    // With the tile-mixture score the score already is this estimate.
                     for (index, estimate) in estimates.iter_mut().enumerate() {
-                        let x = self.shading_point(index);
-                        let tile = index / size * size;
-                        set.clear();
-                        set.extend(
-                            step_states[tile..tile + size]
-                                .iter()
-                                .map(|s| CosineChainTechnique::new(s, x, TOY_NORMAL, &params)),
-                        );
                         let slot = index * steps + step;
-                        *estimate +=
-                            smis_one_sample(&set, &samples[slot], values[slot]) / steps as f32;
+                        let one_sample = if params.score_density == ScoreDensity::TileMixture {
+                            scores[slot]
+                        } else {
+                            let x = self.shading_point(index);
+                            tile_techniques(&mut set, &step_states, index, size, x, &params);
+                            smis_one_sample(&set, &samples[slot], values[slot])
+                        };
+                        *estimate += one_sample / steps as f32;
                     }
                 }
                 Sampling::Cosine => {
@@ -349,4 +384,24 @@ impl McmmToyRenderer {
         self.buffers.swap();
         estimates
     }
+}
+
+/// The techniques of all states of `index`'s tile at this step, each reconstructed at the
+/// shading point `x` of pixel `index`: the set of the SSMIS estimator (eq. 9) and of
+/// [`ScoreDensity::TileMixture`].
+fn tile_techniques(
+    set: &mut Vec<CosineChainTechnique>,
+    step_states: &[PixelState],
+    index: usize,
+    size: usize,
+    x: Vec3,
+    params: &McmmParams,
+) {
+    let tile = index / size * size;
+    set.clear();
+    set.extend(
+        step_states[tile..tile + size]
+            .iter()
+            .map(|s| CosineChainTechnique::new(s, x, TOY_NORMAL, params)),
+    );
 }
