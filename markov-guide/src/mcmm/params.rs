@@ -161,6 +161,8 @@ mod tests {
     #[test]
     fn paper_defaults_validate_and_bad_values_do_not() {
         assert_eq!(McmmParams::PAPER.validate(), Ok(()));
+        assert_eq!(McmmParams::PAPER.score_density, ScoreDensity::Technique);
+        assert_eq!(McmmParams::default(), McmmParams::PAPER);
         let mut p = McmmParams::PAPER;
         p.hemisphere_probability = f32::NAN;
         assert_eq!(p.validate(), Err(ParamsError::ProbabilityOutOfRange));
