@@ -64,11 +64,11 @@
 //!   holding the same 143 233 keys, one value read per query on both sides. On a 19 MB table
 //!   (2¹⁹ slots, 32-byte values) whose lines stay in the caches between passes:
 //!   [`HashTable::find_many`] plus the value reads ≈ 9.3 ns per key against ≈ 20.5 ns (×2.2),
-//!   per-key [`HashTable::get`] ≈ 13 ns (×1.6), in scanline, 8 × 8-tile or random order
+//!   per-key [`HashTable::get`] ≈ 13 ns (×1.4–1.6), in scanline, 8 × 8-tile or random order
 //!   alike; cache-resident (1.2 MB): `get` ≈ 7 ns against ≈ 14 ns (×1.9). With the caches
 //!   evicted before every pass (the tables come from memory, as after the rest of a
 //!   renderer's frame): `find_many` plus values ≈ 17 ns against ≈ 55–64 ns (×3.1–3.7; criterion
-//!   means ×3.7), `get` ≈ 38 ns (×1.4–1.7). The 3× is therefore met by `find_many`
+//!   means ×3.5–3.7), `get` ≈ 37–43 ns (×1.4–1.7). The 3× is therefore met by `find_many`
 //!   from memory, not with warm caches: there a batched lookup costs the hash (≈ 3.0 ns: 12
 //!   multiplies, and on this CPU one multiply per cycle) plus ≈ 3.7 ns for the checksum reads
 //!   and the decisions plus ≈ 1.7 ns for the value reads, where 3× would need ≈ 6.8 ns in all.
@@ -87,11 +87,13 @@
 //!   (mask) and a prime one (exact fast modulo) differ by ≲ 15 %.
 //!   [`ConcurrentTable::insert_or_get`] from 2 threads of a persistent pool (each thread a
 //!   contiguous half of the stream; spawning, emptying the table, evicting it from both
-//!   cores' L2 and waking the workers not timed, see the bench's docs): ×1.6 of one thread
-//!   for the 143 233 distinct keys in 2¹⁹ slots (≈ 14.5 → 9 ns per insert), ×1.8 in 2²¹ slots,
-//!   ×1.6–1.9 for every pixel's key (repeats); on the same machine 2 threads of pure hashing
-//!   give ×1.98 and of read-only `find`s of the same keys ×1.9: the rest is cache lines that
-//!   both cores write moving between them. `examples/speed.rs`, section `concurrent`, prints
+//!   cores' L2 and waking the workers not timed, see the bench's docs), minimum of runs:
+//!   ×1.5–1.6 of one thread for the 143 233 distinct keys in 2¹⁹ slots (≈ 14 → 9 ns per
+//!   insert), ×1.8 in 2²¹ slots, ×1.8–1.96 for every pixel's key (repeats); criterion means
+//!   swing between ×1.3 and ×2.3 with the neighbours. On the same machine 2 threads of pure
+//!   hashing give ×2.0 and of read-only `find`s of the same keys ×1.9: the rest is cache
+//!   lines that both cores write moving between them (a 2 MB table of 32 768 lines, ≈ 4
+//!   inserts per line from both threads; the 8 MB table shares fewer). `examples/speed.rs`, section `concurrent`, prints
 //!   all of it with 1- and 2-thread runs alternating.
 //! - **Concurrency.** [`ConcurrentTable`] claims slots by compare-and-swap on the checksum
 //!   word and owns no values; the thread that gets [`Insert::Inserted`] initialises the value in
