@@ -1,12 +1,27 @@
 //! Min-of-runs timing of the lookup and insert benches, for a shared, noisy machine.
 //!
 //! Criterion reports means, which a busy neighbour process inflates by whatever share of the
-//! core it takes. This probe runs each case many times (each run a whole pass over the
-//! stream, ≈ 0.1–2 ms) and prints the *minimum* and the median time per key: the minimum is
-//! the time of a run that was not preempted, the figure a quiet machine gives. Run it with
-//! `cargo run --release -p mcg-hashgrid --example speed` and state `uptime`'s load with the
-//! numbers; `-- 1500 concurrent` runs one section with 1.5 s per case. The streams are those
-//! of the criterion bench (`benches/common/stream.rs`).
+//! core (or of the shared L3 and memory) it takes. This probe runs each case many times (each
+//! run a whole pass over the stream, ≈ 0.1–5 ms) and prints the *minimum* and the median time
+//! per key: the minimum is the time of a run that was not disturbed, the figure a quiet machine
+//! gives. Run it with `cargo run --release -p mcg-hashgrid --example speed` and state
+//! `uptime`'s load with the numbers; `-- 1500 concurrent` runs one section (`lookup`, `insert`,
+//! `concurrent`) with 1.5 s per case. The streams are those of the criterion bench
+//! (`benches/common/stream.rs`).
+//!
+//! - `diag`: parts of a lookup (hashing, `find` alone, the memory reads with the slots known,
+//!   a cache-resident table) to see where the time goes.
+//! - `lookup_cold`, `lookup/{scanline,tiles,random}`: the criterion groups. The cases of a
+//!   group take turns (one untimed run, then 4 timed ones, per turn), so a slow spell of a
+//!   neighbour hits the `HashMap` baseline and the tables alike; ratios are of minima. In
+//!   `lookup_cold` every timed run is preceded (untimed) by a write to each line of a 64 MiB
+//!   buffer (twice the L3), and there is no untimed run.
+//! - `insert`: the distinct keys into an emptied table / map.
+//! - `concurrent`: 1 vs 2 threads on the persistent workers of `benches/common/pool.rs` (what
+//!   is timed is documented there), 1- and 2-thread runs alternating: two calibrations that
+//!   show what the machine allows (pure hashing; read-only `find` of every pixel's key in the
+//!   filled table: the same random reads, no writes), then `ConcurrentTable::insert_or_get`
+//!   of the distinct keys and of every pixel's key, with 2¹⁹ and 2²¹ slots.
 
 use std::collections::HashMap;
 use std::hint::black_box;
@@ -14,6 +29,8 @@ use std::time::{Duration, Instant};
 
 use mcg_hashgrid::{BucketHash, CellKey, ConcurrentTable, HashTable, checksum, mix_and_checksum};
 
+#[path = "../benches/common/pool.rs"]
+mod pool;
 #[path = "../benches/common/stream.rs"]
 mod stream;
 
@@ -33,6 +50,51 @@ fn time(elements: usize, budget: Duration, mut run: impl FnMut()) -> (f64, f64) 
     samples.sort_by(f64::total_cmp);
     (samples[0], samples[samples.len() / 2])
 }
+
+/// Min and median ns per element of each case, the cases taking turns (so a slow spell of a
+/// neighbour on the shared machine hits all of them alike): per turn one untimed run (it
+/// brings the case's own tables back into the caches after the other cases) and
+/// [`RUNS_PER_TURN`] timed ones, for `budget` per case in all. Ratios are against case 0's
+/// minimum.
+///
+/// With `cold`, no untimed run: `cold` is called (untimed) before every timed run instead.
+fn interleaved(
+    group: &str,
+    elements: usize,
+    budget: Duration,
+    cases: &mut [Case<'_>],
+    mut cold: Option<&mut dyn FnMut()>,
+) {
+    let mut samples = vec![Vec::new(); cases.len()];
+    let start = Instant::now();
+    while start.elapsed() < budget * cases.len() as u32 || samples[0].len() < 10 {
+        for ((_, run), samples) in cases.iter_mut().zip(&mut samples) {
+            if cold.is_none() {
+                run();
+            }
+            for _ in 0..RUNS_PER_TURN {
+                if let Some(evict) = cold.as_mut() {
+                    evict();
+                }
+                let t = Instant::now();
+                run();
+                samples.push(t.elapsed().as_secs_f64() * 1e9 / elements as f64);
+            }
+        }
+    }
+    let mut base = None;
+    for ((name, _), samples) in cases.iter().zip(&mut samples) {
+        samples.sort_by(f64::total_cmp);
+        let min = report(group, name, base, (samples[0], samples[samples.len() / 2]));
+        base.get_or_insert(min);
+    }
+}
+
+/// A named pass of a group of [`interleaved`].
+type Case<'a> = (String, Box<dyn FnMut() + 'a>);
+
+/// Timed runs per turn of [`interleaved`].
+const RUNS_PER_TURN: usize = 4;
 
 fn report(group: &str, name: &str, base: Option<f64>, (min, med): (f64, f64)) -> f64 {
     let ratio = base.map_or(String::new(), |b| format!("  ×{:.2} vs baseline", b / min));
@@ -219,18 +281,74 @@ fn main() {
                 }),
             );
         }
+        {
+            // Cold caches: before every pass (untimed) a write to each cache line of a 64 MiB
+            // buffer (twice the L3), so the table's lines come from memory.
+            let q = &inp.scanline;
+            let packed: Vec<u64> = q.iter().map(stream::pack).collect();
+            let mut evict = vec![0_u8; 64 << 20];
+            let mut evict_all = || {
+                for b in evict.iter_mut().step_by(64) {
+                    *b = b.wrapping_add(1);
+                }
+                black_box(&mut evict);
+            };
+            let t = &tables[0].1;
+            let mut slots = vec![None; q.len()];
+            let mut cases: Vec<Case<'_>> = vec![
+                (
+                    "hashmap_siphash".into(),
+                    Box::new(|| {
+                        black_box(
+                            black_box(&packed)
+                                .iter()
+                                .map(|k| map.get(k).map_or(0.0, |s| s[0]))
+                                .sum::<f32>(),
+                        );
+                    }),
+                ),
+                (
+                    "mix_pow2".into(),
+                    Box::new(|| {
+                        black_box(
+                            black_box(q)
+                                .iter()
+                                .map(|k| t.get(k).map_or(0.0, |s| s[0]))
+                                .sum::<f32>(),
+                        );
+                    }),
+                ),
+                (
+                    "mix_pow2_find_many".into(),
+                    Box::new(|| {
+                        t.find_many(black_box(q), &mut slots);
+                        black_box(
+                            slots
+                                .iter()
+                                .map(|s| s.map_or(0.0, |s| t.values()[s as usize][0]))
+                                .sum::<f32>(),
+                        );
+                    }),
+                ),
+            ];
+            interleaved(
+                "lookup_cold",
+                q.len(),
+                budget,
+                &mut cases,
+                Some(&mut evict_all),
+            );
+        }
         for (order, queries) in [
             ("scanline", &inp.scanline),
             ("tiles", &inp.tiles),
             ("random", &inp.random),
         ] {
-            let group = format!("lookup/{order}");
             let packed: Vec<u64> = queries.iter().map(stream::pack).collect();
-            let base = report(
-                &group,
-                "hashmap_siphash",
-                None,
-                time(queries.len(), budget, || {
+            let map = &map;
+            let mut cases: Vec<Case<'_>> = vec![(
+                "hashmap_siphash".into(),
+                Box::new(|| {
                     black_box(
                         black_box(&packed)
                             .iter()
@@ -238,14 +356,12 @@ fn main() {
                             .sum::<f32>(),
                     );
                 }),
-            );
+            )];
             for (name, t) in &tables[..2] {
                 let mut slots = vec![None; queries.len()];
-                report(
-                    &group,
-                    &format!("{name}_find_many"),
-                    Some(base),
-                    time(queries.len(), budget, || {
+                cases.push((
+                    format!("{name}_find_many"),
+                    Box::new(move || {
                         t.find_many(black_box(queries), &mut slots);
                         black_box(
                             slots
@@ -254,14 +370,12 @@ fn main() {
                                 .sum::<f32>(),
                         );
                     }),
-                );
+                ));
             }
             for (name, t) in &tables {
-                report(
-                    &group,
-                    name,
-                    Some(base),
-                    time(queries.len(), budget, || {
+                cases.push((
+                    name.to_string(),
+                    Box::new(move || {
                         black_box(
                             black_box(queries)
                                 .iter()
@@ -269,8 +383,15 @@ fn main() {
                                 .sum::<f32>(),
                         );
                     }),
-                );
+                ));
             }
+            interleaved(
+                &format!("lookup/{order}"),
+                queries.len(),
+                budget,
+                &mut cases,
+                None,
+            );
         }
     }
     if only("insert") {
@@ -309,144 +430,110 @@ fn main() {
         }
     }
     if only("concurrent") {
-        // Concurrent inserts: 1 vs 2 threads, each thread a contiguous share of the stream:
-        // the distinct keys (disjoint per thread) and every pixel's key of all frames (repeats,
-        // both threads on the same cells).
-        // Calibration: the same split of pure arithmetic (hashing the pixel keys, no table),
-        // which scales by the number of cores the machine actually gives us.
-        let keys = &inp.pixels;
-        let mut one = 0.0;
-        for threads in [1_usize, 2] {
-            let chunk = keys.len().div_ceil(threads);
-            let r = time(keys.len(), budget, || {
-                std::thread::scope(|s| {
-                    for part in keys.chunks(chunk) {
-                        s.spawn(move || {
-                            black_box(
-                                black_box(part)
-                                    .iter()
-                                    .fold(0, |a, k| a ^ mix_and_checksum(k).0),
-                            )
-                        });
-                    }
-                });
-            });
-            let min = report(
-                "concurrent",
-                &format!("hash_only_threads_{threads}"),
-                None,
-                r,
-            );
-            if threads == 1 {
-                one = min;
-            } else {
-                println!(
-                    "concurrent     hash only (machine ceiling): speed-up 2 vs 1 thread ×{:.2}",
-                    one / min
-                );
+        concurrent(&inp, budget);
+    }
+}
+
+/// Min and median over `budget` of 1- and 2-thread runs of `work(worker, threads)` on the
+/// persistent workers of `common/pool.rs` (runs alternate, so both see the same neighbours;
+/// each run after `reset` and the L2 eviction, both untimed); prints ns per element and the
+/// speed-up 2 vs 1 thread.
+fn scaling(
+    name: &str,
+    elements: usize,
+    budget: Duration,
+    work: impl Fn(usize, usize) + Sync,
+    reset: impl Fn(),
+) {
+    let mut samples = [Vec::new(), Vec::new()];
+    pool::with_workers(work, |w| {
+        let start = Instant::now();
+        while start.elapsed() < budget || samples[1].len() < 10 {
+            for threads in [1_usize, 2] {
+                let d = w.run(threads, &reset);
+                samples[threads - 1].push(d.as_secs_f64() * 1e9 / elements as f64);
             }
         }
-        // Calibration 2: read-only lookups (`HashTable::get`, `&self`) of the pixel keys from
-        // 1 and 2 threads: random reads of the same 19 MB, no writes, no compare-and-swap.
-        let lt = table(inp.pow2, BucketHash::Mix, &inp.fill);
-        let mut one = 0.0;
-        for threads in [1_usize, 2] {
-            let chunk = keys.len().div_ceil(threads);
-            let lt = &lt;
-            let r = time(keys.len(), budget, || {
-                std::thread::scope(|s| {
-                    for part in keys.chunks(chunk) {
-                        s.spawn(move || {
-                            black_box(
-                                black_box(part)
-                                    .iter()
-                                    .map(|k| lt.get(k).map_or(0.0, |v| v[0]))
-                                    .sum::<f32>(),
-                            )
-                        });
-                    }
-                });
-            });
-            let min = report(
-                "concurrent",
-                &format!("get_only_threads_{threads}"),
-                None,
-                r,
+    });
+    for v in &mut samples {
+        v.sort_by(f64::total_cmp);
+    }
+    let min = samples.each_ref().map(|v| v[0]);
+    let med = samples.each_ref().map(|v| v[v.len() / 2]);
+    println!(
+        "concurrent     {name:<26} {} runs: 1 thread min {:6.2} / median {:6.2} ns; \
+         2 threads min {:6.2} / median {:6.2} ns; speed-up ×{:.2} (min), ×{:.2} (median)",
+        samples[0].len(),
+        min[0],
+        med[0],
+        min[1],
+        med[1],
+        min[0] / min[1],
+        med[0] / med[1],
+    );
+}
+
+/// 2 vs 1 thread: `ConcurrentTable::insert_or_get`, and two calibrations that show what the
+/// machine allows (the same split and workers, no table writes).
+fn concurrent(inp: &stream::Inputs, budget: Duration) {
+    let pixels = &inp.pixels;
+    // Calibration 1: pure arithmetic (hashing every pixel key), which scales with the number
+    // of cores the machine actually gives us.
+    scaling(
+        "hash_only (pixels)",
+        pixels.len(),
+        budget,
+        |w, n| {
+            black_box(
+                pool::share(pixels, w, n)
+                    .iter()
+                    .fold(0, |a, k| a ^ mix_and_checksum(k).0),
             );
-            if threads == 1 {
-                one = min;
-            } else {
-                println!(
-                    "concurrent     get only: speed-up 2 vs 1 thread ×{:.2}",
-                    one / min
-                );
-            }
+        },
+        || {},
+    );
+    for cap in [inp.pow2, 4 * inp.pow2] {
+        // Calibration 2: read-only lookups (`find`, `&self`) of every pixel key in the
+        // filled table: the same random reads of the same memory as the inserts, without
+        // writes or compare-and-swap: the memory system's ceiling for this access pattern.
+        let filled = ConcurrentTable::new(cap, MAX_PROBES, BucketHash::Mix).unwrap();
+        for k in &inp.fill {
+            filled.insert_or_get(k);
         }
-        // Tables of 2¹⁹ slots (2 MB of checksum words: one core's L2) and 2²¹ (8 MB, MCPG's
-        // 10⁶-slot scale). 1- and 2-thread runs alternate, so both see the same neighbours.
-        for cap in [inp.pow2, 4 * inp.pow2] {
-            let mut ct = ConcurrentTable::new(cap, MAX_PROBES, BucketHash::Mix).unwrap();
-            for (name, keys) in [("distinct", &inp.fill), ("pixels", &inp.pixels)] {
-                // Wall-clock time per key of 1- and 2-thread runs, and of the 2-thread runs the
-                // busiest thread's own time (from its first to its last insert): the wall time
-                // a machine with a free core for each thread would show.
-                let mut samples = [Vec::new(), Vec::new(), Vec::new()];
-                let start = Instant::now();
-                while start.elapsed() < 2 * budget || samples[1].len() < 10 {
-                    for threads in [1_usize, 2] {
-                        ct.clear();
-                        let chunk = keys.len().div_ceil(threads);
-                        let t0 = Instant::now();
-                        let t = &ct;
-                        let busy = std::thread::scope(|s| {
-                            let handles: Vec<_> = keys
-                                .chunks(chunk)
-                                .map(|part| {
-                                    s.spawn(move || {
-                                        let t1 = Instant::now();
-                                        for k in black_box(part) {
-                                            black_box(t.insert_or_get(k));
-                                        }
-                                        t1.elapsed()
-                                    })
-                                })
-                                .collect();
-                            handles
-                                .into_iter()
-                                .map(|h| h.join().unwrap())
-                                .max()
-                                .unwrap()
-                        });
-                        let per_key = |d: Duration| d.as_secs_f64() * 1e9 / keys.len() as f64;
-                        samples[threads - 1].push(per_key(t0.elapsed()));
-                        if threads == 2 {
-                            samples[2].push(per_key(busy));
-                        }
-                    }
-                }
-                for v in &mut samples {
-                    v.sort_by(f64::total_cmp);
-                }
-                let min = samples.each_ref().map(|v| v[0]);
-                let med = samples.each_ref().map(|v| v[v.len() / 2]);
-                println!(
-                    "concurrent     {name:<8} {cap:>7} slots, {} runs: 1 thread min {:.2} / median {:.2} ns; \
-                     2 threads min {:.2} / median {:.2} ns (wall-clock speed-up ×{:.2} min, ×{:.2} median); \
-                     busiest of the 2 threads min {:.2} / median {:.2} ns (speed-up with a core per thread \
-                     ×{:.2} min, ×{:.2} median)",
-                    samples[0].len(),
-                    min[0],
-                    med[0],
-                    min[1],
-                    med[1],
-                    min[0] / min[1],
-                    med[0] / med[1],
-                    min[2],
-                    med[2],
-                    min[0] / min[2],
-                    med[0] / med[2],
+        scaling(
+            &format!("find_only {cap}"),
+            pixels.len(),
+            budget,
+            |w, n| {
+                black_box(
+                    pool::share(pixels, w, n)
+                        .iter()
+                        .fold(0, |a, k| a ^ filled.find(k).unwrap_or(0)),
                 );
-            }
+            },
+            || {},
+        );
+        // Inserts into the emptied table: the distinct keys (disjoint per thread) and every
+        // pixel's key of all frames (repeats, both threads on the same cells). The table sits
+        // in an RwLock only so that the calling thread can empty it between runs (`clear`
+        // takes `&mut`); the workers take the read lock once per run.
+        let table =
+            std::sync::RwLock::new(ConcurrentTable::new(cap, MAX_PROBES, BucketHash::Mix).unwrap());
+        for (name, keys) in [("distinct", &inp.fill), ("pixels", &inp.pixels)] {
+            scaling(
+                &format!("insert_{name} {cap}"),
+                keys.len(),
+                budget,
+                |w, n| {
+                    let t = table.read().unwrap();
+                    let mut inserted = 0_u32;
+                    for k in pool::share(keys, w, n) {
+                        inserted += u32::from(t.insert_or_get(k).is_inserted());
+                    }
+                    black_box(inserted);
+                },
+                || table.write().unwrap().clear(),
+            );
         }
     }
 }

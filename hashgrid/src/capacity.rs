@@ -63,9 +63,17 @@ impl SlotIndexer {
         if self.magic == 0 {
             h & self.mask
         } else {
-            let low = self.magic.wrapping_mul(h as u64);
-            ((low as u128 * self.capacity as u128) >> 64) as u32
+            self.modulo(h)
         }
+    }
+
+    /// `h mod capacity` by the fast modulo alone, for a capacity that is not a power of two
+    /// (the table's batch loop calls it after checking [`is_mask`](Self::is_mask) once).
+    #[inline]
+    #[must_use]
+    pub(crate) const fn modulo(&self, h: u32) -> u32 {
+        let low = self.magic.wrapping_mul(h as u64);
+        ((low as u128 * self.capacity as u128) >> 64) as u32
     }
 
     /// The slot after `slot`, wrapping from the last slot to slot 0 (linear probing).

@@ -58,29 +58,49 @@
 //!   a stream of keys takes ≈ 2.9 ns per key instead of ≈ 3.9 ns, and a cache-resident
 //!   [`HashTable::get`] ≈ 7.3 ns instead of ≈ 10 ns (pcg4d's multiplies are independent
 //!   across words, Murmur3's rounds one long chain, so more of the lookup overlaps).
-//! - **Speed.** Measured with `cargo run --release -p mcg-hashgrid --example speed` (minimum of
-//!   many runs, on a shared 2-core AMD EPYC VM) and the criterion bench, against
-//!   `std::collections::HashMap<u64, [f32; 8]>` (SipHash-1-3) holding the same keys: per-key
-//!   [`HashTable::get`] ≈ 1.6× faster on a 19 MB table (≈ 12 ns vs ≈ 20 ns per lookup, in
-//!   scanline, 8 × 8-tile or random order alike), ≈ 1.9× on a cache-resident one (≈ 7 ns vs
-//!   ≈ 14 ns), and [`HashTable::find_many`] (a batch of keys hashed, then their home slots
-//!   read, before any is decided) ≈ 2–2.4× on the large table (≈ 9 ns). Lookups cost the
-//!   hash (≈ 3 ns) plus two dependent memory reads (the checksum word, then the value); the
-//!   reads alone, with the slots known, take ≈ 2.5 ns per key, so the hash and the latency
-//!   between hashing and reading are what is left, and a `HashMap` pays the same memory reads
-//!   (its control bytes, then its bucket). The issue's 3× would need ≈ 6.7 ns per lookup on
-//!   the large table: less than the `HashMap`'s SipHash alone (≈ 8 ns) and less than this
-//!   table's lookup when everything is in cache (≈ 7 ns).
+//! - **Speed.** Measured with `cargo run --release -p mcg-hashgrid --example speed` (cases of a
+//!   group taking turns, minimum of many runs, on a shared 2-vCPU AMD EPYC VM) and the
+//!   criterion bench, against `std::collections::HashMap<u64, [f32; 8]>` (SipHash-1-3)
+//!   holding the same 143 233 keys, one value read per query on both sides. On a 19 MB table
+//!   (2¹⁹ slots, 32-byte values) whose lines stay in the caches between passes:
+//!   [`HashTable::find_many`] plus the value reads ≈ 8 ns per key (7.9–8.4) against
+//!   ≈ 20–22 ns (×2.4–2.8), per-key [`HashTable::get`] ≈ 13–14 ns (×1.5), in scanline,
+//!   8 × 8-tile or random order alike; cache-resident (1.2 MB): `find_many` ≈ 5.9 ns, `get`
+//!   ≈ 7 ns, against ≈ 14 ns. With the caches evicted before every pass (the tables come from
+//!   memory, as after the rest of a renderer's frame): `find_many` plus values ≈ 18–19.5 ns
+//!   against ≈ 74–76 ns (×3.8–4.1; criterion means ×3.5–3.7), `get` ≈ 43 ns (×1.7). The
+//!   issue's 3× is therefore met by `find_many` when the table comes from memory, and not
+//!   quite with warm caches (the `HashMap`'s own minimum there also moves between ≈ 20 and
+//!   ≈ 40 ns from one process to the next; the ratios above use its fastest, ≈ 20–22 ns).
+//!   Where the warm time goes: `find_many` alone ≈ 5.5 ns (hashing ≈ 2–3 ns, then the
+//!   checksum reads and decisions), the value reads ≈ 2 ns. `find_many` runs one copy of its
+//!   batch loop per hash and kind of capacity, so the loop branches on neither per key; with
+//!   the mask and [`BucketHash::Mix`], LLVM then hashes 4 keys at once in SSE2 lanes
+//!   (`pmuludq`): ≈ 8 instead of ≈ 9.3 ns per key with value reads (forcing scalar hashing
+//!   there: 10.1–10.5 ns). Batches of 256 keys: from memory ≈ 20 ns per key against ≈ 25 ns
+//!   with batches of 16 (more misses in flight); 64 to 1024 alike with warm caches.
+//!   Tried and dropped, measured on the same streams: a batched value lookup that also reads
+//!   each home slot's value before deciding (so both misses overlap; with a plain read, as
+//!   `unsafe` is not used for a prefetch) and hands values to a closure: 9.6–12 ns for
+//!   batches of 8 to 1024 (before the per-kind loops), the early read itself +0.5–0.9 ns;
+//!   pipelining it (hash and read batch i + 1 before deciding batch i): 10–12.7 ns; separate
+//!   home and checksum arrays, deciding the keys not in their home slot in a second pass, or
+//!   reading two slots per key up front: no gain (±0.3 ns). A real prefetch instruction
+//!   (`_mm_prefetch`, `unsafe`) measured ≈ 7 ns warm (×2.8–3.0) and ≈ 17 ns from memory
+//!   (×4.1–4.4); it is not used.
 //!   Probe windows that do not wrap are taken as one sub-slice (one bounds check, no `unsafe`);
 //!   comparing four checksums at once into bit masks measured slower. A power-of-two capacity
 //!   (mask) and a prime one (exact fast modulo) differ by ≲ 15 %.
-//!   [`ConcurrentTable`] inserts from 2 threads (each a contiguous half of the stream): each
-//!   thread's own busy time is ≈ 0.52–0.55 of the 1-thread time (×1.8–1.96 "with a core per
-//!   thread", 143 233 distinct keys, 2¹⁹ or 2²¹ slots), but the wall-clock speed-up on the
-//!   shared 2-core VM was ×1.0–1.5: timestamps show the second thread mostly starting when the
-//!   first ends (the other core busy with neighbours' processes). `examples/speed.rs`,
-//!   section `concurrent`, prints both, alternating 1- and 2-thread runs; measure on a machine
-//!   with a free core before relying on the wall-clock figure.
+//!   [`ConcurrentTable::insert_or_get`] from 2 threads of a persistent pool (each thread a
+//!   contiguous half of the stream; spawning, emptying the table, evicting it from both
+//!   cores' L2 and waking the workers not timed, see the bench's docs), minimum of runs:
+//!   ×1.5–1.6 of one thread for the 143 233 distinct keys in 2¹⁹ slots (≈ 14 → 9 ns per
+//!   insert), ×1.8 in 2²¹ slots, ×1.8–1.96 for every pixel's key (repeats); criterion means
+//!   swing between ×1.3 and ×2.3 with the neighbours. On the same machine 2 threads of pure
+//!   hashing give ×2.0 and of read-only `find`s of the same keys ×1.9: the rest is cache
+//!   lines that both cores write moving between them (a 2 MB table of 32 768 lines, ≈ 4
+//!   inserts per line from both threads; the 8 MB table shares fewer). `examples/speed.rs`,
+//!   section `concurrent`, prints all of it with 1- and 2-thread runs alternating.
 //! - **Concurrency.** [`ConcurrentTable`] claims slots by compare-and-swap on the checksum
 //!   word and owns no values; the thread that gets [`Insert::Inserted`] initialises the value in
 //!   the caller's own array (typically atomics). Evictions and the plain `&[u32]` upload view
