@@ -46,15 +46,16 @@ use std::time::{Duration, Instant};
 use criterion::{BenchmarkGroup, Criterion, Throughput, criterion_group, criterion_main};
 use mcg_hashgrid::{BucketHash, CellKey, ConcurrentTable, HashTable};
 
+#[path = "common/lookups.rs"]
+mod lookups;
 #[path = "common/pool.rs"]
 mod pool;
 #[path = "common/stream.rs"]
 mod stream;
 
-use stream::{Inputs, inputs, pack};
+use lookups::{State, find_many_pass, get_pass, hashmap_pass};
 
-/// A 32-byte guiding state, as MCPG's (ours is ≤ 32 bytes plus the 4-byte checksum).
-type State = [f32; 8];
+use stream::{Inputs, inputs, pack};
 
 const MAX_PROBES: u32 = 16;
 
@@ -77,38 +78,18 @@ fn table(cap: u32, hash: BucketHash, keys: &[CellKey]) -> HashTable<State> {
 type Group<'a> = BenchmarkGroup<'a, criterion::measurement::WallTime>;
 
 fn bench_get(g: &mut Group<'_>, name: &str, t: &HashTable<State>, queries: &[CellKey]) {
-    g.bench_function(name, |b| {
-        b.iter(|| {
-            black_box(queries)
-                .iter()
-                .map(|k| t.get(k).map_or(0.0, |s| s[0]))
-                .sum::<f32>()
-        })
-    });
+    g.bench_function(name, |b| b.iter(|| get_pass(t, queries)));
 }
 
 fn bench_find_many(g: &mut Group<'_>, name: &str, t: &HashTable<State>, queries: &[CellKey]) {
     let mut slots = vec![None; queries.len()];
-    g.bench_function(name, |b| {
-        b.iter(|| {
-            t.find_many(black_box(queries), &mut slots);
-            slots
-                .iter()
-                .map(|s| s.map_or(0.0, |s| t.values()[s as usize][0]))
-                .sum::<f32>()
-        })
-    });
+    g.bench_function(name, |b| b.iter(|| find_many_pass(t, queries, &mut slots)));
 }
 
 fn bench_map(g: &mut Group<'_>, map: &HashMap<u64, State>, queries: &[CellKey]) {
     let packed: Vec<u64> = queries.iter().map(pack).collect();
     g.bench_function("hashmap_u64_baseline", |b| {
-        b.iter(|| {
-            black_box(&packed)
-                .iter()
-                .map(|k| map.get(k).map_or(0.0, |s| s[0]))
-                .sum::<f32>()
-        })
+        b.iter(|| hashmap_pass(map, &packed))
     });
 }
 
@@ -184,24 +165,14 @@ fn bench_lookup_cold(c: &mut Criterion) {
     g.bench_function("hashmap_u64_baseline", |b| {
         b.iter_custom(|iters| {
             timed(iters, &mut evict, evict_all, |_| {
-                black_box(
-                    black_box(&packed)
-                        .iter()
-                        .map(|k| map.get(k).map_or(0.0, |s| s[0]))
-                        .sum::<f32>(),
-                );
+                black_box(hashmap_pass(&map, &packed));
             })
         })
     });
     g.bench_function("table_mix_pow2", |b| {
         b.iter_custom(|iters| {
             timed(iters, &mut evict, evict_all, |_| {
-                black_box(
-                    black_box(queries)
-                        .iter()
-                        .map(|k| t.get(k).map_or(0.0, |s| s[0]))
-                        .sum::<f32>(),
-                );
+                black_box(get_pass(&t, queries));
             })
         })
     });
@@ -209,13 +180,7 @@ fn bench_lookup_cold(c: &mut Criterion) {
     g.bench_function("table_mix_pow2_find_many", |b| {
         b.iter_custom(|iters| {
             timed(iters, &mut evict, evict_all, |_| {
-                t.find_many(black_box(queries), &mut slots);
-                black_box(
-                    slots
-                        .iter()
-                        .map(|s| s.map_or(0.0, |s| t.values()[s as usize][0]))
-                        .sum::<f32>(),
-                );
+                black_box(find_many_pass(&t, queries, &mut slots));
             })
         })
     });

@@ -29,12 +29,15 @@ use std::time::{Duration, Instant};
 
 use mcg_hashgrid::{BucketHash, CellKey, ConcurrentTable, HashTable, checksum, mix_and_checksum};
 
+#[path = "../benches/common/lookups.rs"]
+mod lookups;
 #[path = "../benches/common/pool.rs"]
 mod pool;
 #[path = "../benches/common/stream.rs"]
 mod stream;
 
-type State = [f32; 8];
+use lookups::{State, find_many_pass, get_pass, hashmap_pass};
+
 const MAX_PROBES: u32 = 16;
 
 /// (min, median) nanoseconds per element of `run` over `budget`.
@@ -223,12 +226,7 @@ fn main() {
                 "get in-cache (8192 in 32768)",
                 None,
                 time(sq.len(), budget, || {
-                    black_box(
-                        black_box(&sq)
-                            .iter()
-                            .map(|k| small.get(k).map_or(0.0, |s| s[0]))
-                            .sum::<f32>(),
-                    );
+                    black_box(get_pass(&small, &sq));
                 }),
             );
             let mut sslots = vec![None; sq.len()];
@@ -237,13 +235,7 @@ fn main() {
                 "find_many+values in-cache",
                 None,
                 time(sq.len(), budget, || {
-                    small.find_many(black_box(&sq), &mut sslots);
-                    black_box(
-                        sslots
-                            .iter()
-                            .map(|s| s.map_or(0.0, |s| small.values()[s as usize][0]))
-                            .sum::<f32>(),
-                    );
+                    black_box(find_many_pass(&small, &sq, &mut sslots));
                 }),
             );
             // Memory floor of the big table: slots known, only the checksum word and the value read.
@@ -272,12 +264,7 @@ fn main() {
                 "hashmap in-cache (8192)",
                 None,
                 time(sq.len(), budget, || {
-                    black_box(
-                        black_box(&sp)
-                            .iter()
-                            .map(|k| smap.get(k).map_or(0.0, |s| s[0]))
-                            .sum::<f32>(),
-                    );
+                    black_box(hashmap_pass(&smap, &sp));
                 }),
             );
         }
@@ -299,35 +286,19 @@ fn main() {
                 (
                     "hashmap_siphash".into(),
                     Box::new(|| {
-                        black_box(
-                            black_box(&packed)
-                                .iter()
-                                .map(|k| map.get(k).map_or(0.0, |s| s[0]))
-                                .sum::<f32>(),
-                        );
+                        black_box(hashmap_pass(&map, &packed));
                     }),
                 ),
                 (
                     "mix_pow2".into(),
                     Box::new(|| {
-                        black_box(
-                            black_box(q)
-                                .iter()
-                                .map(|k| t.get(k).map_or(0.0, |s| s[0]))
-                                .sum::<f32>(),
-                        );
+                        black_box(get_pass(t, q));
                     }),
                 ),
                 (
                     "mix_pow2_find_many".into(),
                     Box::new(|| {
-                        t.find_many(black_box(q), &mut slots);
-                        black_box(
-                            slots
-                                .iter()
-                                .map(|s| s.map_or(0.0, |s| t.values()[s as usize][0]))
-                                .sum::<f32>(),
-                        );
+                        black_box(find_many_pass(t, q, &mut slots));
                     }),
                 ),
             ];
@@ -349,12 +320,7 @@ fn main() {
             let mut cases: Vec<Case<'_>> = vec![(
                 "hashmap_siphash".into(),
                 Box::new(|| {
-                    black_box(
-                        black_box(&packed)
-                            .iter()
-                            .map(|k| map.get(k).map_or(0.0, |s| s[0]))
-                            .sum::<f32>(),
-                    );
+                    black_box(hashmap_pass(map, &packed));
                 }),
             )];
             for (name, t) in &tables[..2] {
@@ -362,13 +328,7 @@ fn main() {
                 cases.push((
                     format!("{name}_find_many"),
                     Box::new(move || {
-                        t.find_many(black_box(queries), &mut slots);
-                        black_box(
-                            slots
-                                .iter()
-                                .map(|s| s.map_or(0.0, |s| t.values()[s as usize][0]))
-                                .sum::<f32>(),
-                        );
+                        black_box(find_many_pass(t, queries, &mut slots));
                     }),
                 ));
             }
@@ -376,12 +336,7 @@ fn main() {
                 cases.push((
                     name.to_string(),
                     Box::new(move || {
-                        black_box(
-                            black_box(queries)
-                                .iter()
-                                .map(|k| t.get(k).map_or(0.0, |s| s[0]))
-                                .sum::<f32>(),
-                        );
+                        black_box(get_pass(t, queries));
                     }),
                 ));
             }
