@@ -91,12 +91,7 @@ struct VmfQuery {
     direction: vec3<f32>,
     uniforms: vec2<f32>,
 }
-@compute @workgroup_size(64)
-fn textbook(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&pdfs) {
-        return;
-    }
+fn textbook_at(i: u32) {
     let lobe = lobes[i];
     let u = queries[i].uniforms;
     let k = lobe.kappa;
@@ -109,12 +104,7 @@ fn textbook(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroup
     samples[i] = VmfSample(w, pdf);
 }
 
-@compute @workgroup_size(64)
-fn stable(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&pdfs) {
-        return;
-    }
+fn stable_at(i: u32) {
     let s = vmf_sample_with_pdf(lobes[i], queries[i].uniforms);
     pdfs[i] = s.pdf;
     samples[i] = s;
@@ -204,7 +194,12 @@ fn vmf_sample(c: &mut Criterion, ctx: &GpuContext) {
     let queries = ctx.storage_buffer("queries", &queries);
     let pdfs: GpuBuffer<f32> = ctx.zeroed_buffer("pdfs", n);
     let samples: GpuBuffer<VmfSample> = ctx.zeroed_buffer("samples", n);
-    let source = [shaders::VMF_MODULE, TEXTBOOK_SAMPLER].concat();
+    let source = [
+        shaders::VMF_MODULE,
+        TEXTBOOK_SAMPLER,
+        &entry_points("pdfs", &["textbook", "stable"]),
+    ]
+    .concat();
     let stable = ctx.compute_kernel(&source, "stable").unwrap();
     let textbook = ctx.compute_kernel(&source, "textbook").unwrap();
     let bindings = [lobes.raw(), queries.raw(), pdfs.raw(), samples.raw()];
@@ -241,6 +236,23 @@ fn bench_entries(
     g.finish();
 }
 
+/// One WGSL compute entry point `entry`: one invocation per element, which runs `prologue`
+/// and then `statement` for element `i` when `i < arrayLength(&guard)`.
+fn per_element_entry(entry: &str, prologue: &str, guard: &str, statement: &str) -> String {
+    format!(
+        "
+@compute @workgroup_size(64)
+fn {entry}(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {{
+    {prologue}
+    let i = mcg_invocation_index(id, groups);
+    if i < arrayLength(&{guard}) {{
+        {statement}
+    }}
+}}
+"
+    )
+}
+
 /// WGSL compute entry points, one per `(entry, statement)`: each runs `uses_all_bindings()`
 /// (so every entry point of a group binds the same buffers) and then `statement` once per
 /// element `i < arrayLength(&guard)`.
@@ -248,17 +260,31 @@ fn per_element_entries(guard: &str, entries: &[(&str, &str)]) -> String {
     entries
         .iter()
         .map(|(entry, statement)| {
-            format!(
-                "
-@compute @workgroup_size(64)
-fn {entry}(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {{
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i < arrayLength(&{guard}) {{
-        {statement}
-    }}
-}}
-"
+            per_element_entry(entry, "uses_all_bindings();", guard, statement)
+        })
+        .collect()
+}
+
+/// WGSL compute entry points `name`, one per name, that call the group's function
+/// `name_at(i: u32)` once per element `i < arrayLength(&guard)`.
+fn entry_points(guard: &str, names: &[&str]) -> String {
+    names
+        .iter()
+        .map(|name| per_element_entry(name, "", guard, &format!("{name}_at(i);")))
+        .collect()
+}
+
+/// [`entry_points`] that first call the group's `uses_all_bindings()`, for groups where some
+/// `name_at` leaves a binding unused (every entry point of a group binds the same buffers).
+fn all_binding_entry_points(guard: &str, names: &[&str]) -> String {
+    names
+        .iter()
+        .map(|name| {
+            per_element_entry(
+                name,
+                "uses_all_bindings();",
+                guard,
+                &format!("{name}_at(i);"),
             )
         })
         .collect()
@@ -269,22 +295,12 @@ const VMF_PDF: &str = r#"
 @group(0) @binding(1) var<storage, read> queries: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> pdfs: array<f32>;
 
-@compute @workgroup_size(64)
-fn stable(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&pdfs) {
-        return;
-    }
+fn stable_at(i: u32) {
     pdfs[i] = vmf_pdf(lobes[i], queries[i].xyz);
 }
 
 // κ/(2π(1 − e^{−2κ})) e^{κ(μ·ω − 1)}: cancels near the peak and at small κ.
-@compute @workgroup_size(64)
-fn textbook(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&pdfs) {
-        return;
-    }
+fn textbook_at(i: u32) {
     let lobe = lobes[i];
     let k = lobe.kappa;
     pdfs[i] = k / (6.2831855 * (1.0 - exp(-2.0 * k))) * exp(k * (dot(lobe.mu, queries[i].xyz) - 1.0));
@@ -315,7 +331,12 @@ fn vmf_pdf(c: &mut Criterion, ctx: &GpuContext) {
         c,
         ctx,
         "vmf_pdf",
-        &[shaders::VMF_MODULE, VMF_PDF].concat(),
+        &[
+            shaders::VMF_MODULE,
+            VMF_PDF,
+            &entry_points("pdfs", &["stable", "textbook"]),
+        ]
+        .concat(),
         &[
             ("stable_pdf", "stable"),
             ("baseline_textbook_pdf", "textbook"),
@@ -336,23 +357,13 @@ const TABLE_BINDINGS: &str = r#"
 const HASH_TABLE: &str = r#"
 
 // insert-or-get with the table's bucket hash, the checksum and bounded linear probing.
-@compute @workgroup_size(64)
-fn insert_or_get(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&slots) {
-        return;
-    }
+fn insert_or_get_at(i: u32) {
     let key = keys[i];
     slots[i] = hashgrid_insert_or_get(table, hashgrid_home_slot(table, key), hashgrid_checksum(key)).slot;
 }
 
 // Naive: no hash, no checksum, no probing: key i stores its x word at slot i mod capacity.
-@compute @workgroup_size(64)
-fn unhashed_store(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&slots) {
-        return;
-    }
+fn unhashed_store_at(i: u32) {
     let slot = i % table.capacity;
     atomicStore(&hashgrid_checksums[slot], bitcast<u32>(keys[i].cell.x) | 2u);
     slots[i] = slot;
@@ -379,6 +390,7 @@ fn hash_insert(c: &mut Criterion, ctx: &GpuContext) {
         shaders::HASHGRID_TABLE,
         TABLE_BINDINGS,
         HASH_TABLE,
+        &entry_points("slots", &["insert_or_get", "unhashed_store"]),
     ]
     .concat();
     let insert = ctx.compute_kernel(&source, "insert_or_get").unwrap();
@@ -428,23 +440,13 @@ fn hash_insert(c: &mut Criterion, ctx: &GpuContext) {
 
 const HASH_FIND: &str = r#"
 
-@compute @workgroup_size(64)
-fn find(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&slots) {
-        return;
-    }
+fn find_at(i: u32) {
     let key = keys[i];
     slots[i] = hashgrid_find(table, hashgrid_home_slot(table, key), hashgrid_checksum(key));
 }
 
 // Naive: key i reads slot i mod capacity (no hash, no checksum, no probe).
-@compute @workgroup_size(64)
-fn unhashed_load(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&slots) {
-        return;
-    }
+fn unhashed_load_at(i: u32) {
     slots[i] = atomicLoad(&hashgrid_checksums[i % table.capacity]) ^ bitcast<u32>(keys[i].cell.x);
 }
 "#;
@@ -477,6 +479,7 @@ fn hash_find(c: &mut Criterion, ctx: &GpuContext) {
             shaders::HASHGRID_TABLE,
             TABLE_BINDINGS,
             HASH_FIND,
+            &entry_points("slots", &["find", "unhashed_load"]),
         ]
         .concat(),
         &[
@@ -494,45 +497,25 @@ const VERTEX_KEY: &str = r#"
 @group(0) @binding(2) var<storage, read_write> keys: array<CellKey>;
 
 // Level from the camera distance with its jitter, stochastic trilinear vertex, normal class.
-@compute @workgroup_size(64)
-fn adaptive(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&keys) {
-        return;
-    }
+fn adaptive_at(i: u32) {
     let p = positions[i];
     keys[i] = hashgrid_vertex_key(levels, p.xyz, vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0), fract(p.w * 7.0), p.w);
 }
 
 // The static grid's vertex key (stochastic trilinear corner of p/w, MCPG sec. 4).
-@compute @workgroup_size(64)
-fn static_grid(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&keys) {
-        return;
-    }
+fn static_grid_at(i: u32) {
     let p = positions[i];
     keys[i] = hashgrid_static_vertex_key(levels.min_width, p.xyz, p.w);
 }
 
 // The jittered vertex of p/w.
-@compute @workgroup_size(64)
-fn jittered(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&keys) {
-        return;
-    }
+fn jittered_at(i: u32) {
     let p = positions[i];
     keys[i] = CellKey(hashgrid_jittered_vertex(p.xyz / levels.min_width, fract(p.www * vec3<f32>(3.0, 5.0, 7.0))), 0u);
 }
 
 // Naive: one fixed width, the cell ⌊p/w⌋, no level, no jitter, no class.
-@compute @workgroup_size(64)
-fn fixed_floor(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&keys) {
-        return;
-    }
+fn fixed_floor_at(i: u32) {
     keys[i] = CellKey(vec3<i32>(floor(positions[i].xyz / levels.min_width)), 0u);
 }
 "#;
@@ -560,7 +543,15 @@ fn vertex_key(c: &mut Criterion, ctx: &GpuContext) {
         c,
         ctx,
         "vertex_key",
-        &[shaders::HASHGRID_MODULE, VERTEX_KEY].concat(),
+        &[
+            shaders::HASHGRID_MODULE,
+            VERTEX_KEY,
+            &entry_points(
+                "keys",
+                &["adaptive", "static_grid", "jittered", "fixed_floor"],
+            ),
+        ]
+        .concat(),
         &[
             ("adaptive_vertex_key", "adaptive"),
             ("static_grid_vertex_key", "static_grid"),
@@ -708,39 +699,21 @@ fn uses_all_bindings() {
 }
 
 // MCMM Alg. 2 lines 5-7: ȳ − x normalised, κ of the MAP mean cosine.
-@compute @workgroup_size(64)
-fn map_reconstruct(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&out) {
-        return;
-    }
+fn map_reconstruct_at(i: u32) {
     var lobe = Vmf(vec3<f32>(0.0), -1.0);
     _ = vmf_from_sufficient_stats(stats[i], vec3<f32>(0.1, 0.2, -0.3), VmfMapPrior(0.2, 0.5, 0u), &lobe);
     out[i] = vec4<f32>(lobe.mu, lobe.kappa);
 }
 
 // Naive: Banerjee's κ = r(3 − r²)/(1 − r²) of the sample mean cosine, no prior, no guards.
-@compute @workgroup_size(64)
-fn banerjee_no_prior(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&out) {
-        return;
-    }
+fn banerjee_no_prior_at(i: u32) {
     let s = stats[i];
     let mu = normalize(vec3<f32>(s.mean_target_x, s.mean_target_y, s.mean_target_z) - vec3<f32>(0.1, 0.2, -0.3));
     let r = 1.0 - s.one_minus_mean_cosine;
     out[i] = vec4<f32>(mu, r * (3.0 - r * r) / (1.0 - r * r));
 }
 
-@compute @workgroup_size(64)
-fn product(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&out) {
-        return;
-    }
+fn product_at(i: u32) {
     var p: Vmf;
     let scale = vmf_product(a[i], b[i], &p);
     out[i] = vec4<f32>(p.mu * scale, p.kappa);
@@ -751,38 +724,20 @@ fn textbook_c(kappa: f32) -> f32 {
     return kappa / (12.566371 * sinh(kappa));
 }
 
-@compute @workgroup_size(64)
-fn textbook_product(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&out) {
-        return;
-    }
+fn textbook_product_at(i: u32) {
     let m = a[i].mu * a[i].kappa + b[i].mu * b[i].kappa;
     let kappa = length(m);
     let scale = textbook_c(a[i].kappa) * textbook_c(b[i].kappa) / textbook_c(kappa);
     out[i] = vec4<f32>(m / kappa * scale, kappa);
 }
 
-@compute @workgroup_size(64)
-fn convolve(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&out) {
-        return;
-    }
+fn convolve_at(i: u32) {
     let c = vmf_convolve(a[i], b[i].kappa);
     out[i] = vec4<f32>(c.mu, c.kappa);
 }
 
 // Naive: κ' = κ κ_k/(κ + κ_k).
-@compute @workgroup_size(64)
-fn harmonic(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&out) {
-        return;
-    }
+fn harmonic_at(i: u32) {
     let k = a[i].kappa;
     let kk = b[i].kappa;
     out[i] = vec4<f32>(a[i].mu, k * kk / (k + kk));
@@ -809,7 +764,22 @@ fn vmf_ops(c: &mut Criterion, ctx: &GpuContext) {
     b_lobes.rotate_left(1);
     let b = ctx.storage_buffer("b", &b_lobes);
     let out: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("out", n);
-    let source = [shaders::VMF_MODULE, VMF_OPS].concat();
+    let source = [
+        shaders::VMF_MODULE,
+        VMF_OPS,
+        &all_binding_entry_points(
+            "out",
+            &[
+                "map_reconstruct",
+                "banerjee_no_prior",
+                "product",
+                "textbook_product",
+                "convolve",
+                "harmonic",
+            ],
+        ),
+    ]
+    .concat();
     let bindings = [stats.raw(), a.raw(), b.raw(), out.raw()];
     for (group, entries) in [
         (
@@ -845,13 +815,7 @@ fn uses_all_bindings() {
     _ = arrayLength(&choices);
 }
 
-@compute @workgroup_size(64)
-fn mixture_pdf(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&samples) {
-        return;
-    }
+fn mixture_pdf_at(i: u32) {
     samples[i] = VmfSample(queries[i].direction, vmf_mixture_pdf(mixtures[i], queries[i].direction));
 }
 
@@ -865,34 +829,16 @@ fn textbook_mixture_pdf(m: VmfMixture, w: vec3<f32>) -> f32 {
     return pdf;
 }
 
-@compute @workgroup_size(64)
-fn textbook_pdf_sum(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&samples) {
-        return;
-    }
+fn textbook_pdf_sum_at(i: u32) {
     samples[i] = VmfSample(queries[i].direction, textbook_mixture_pdf(mixtures[i], queries[i].direction));
 }
 
-@compute @workgroup_size(64)
-fn mixture_sample(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&samples) {
-        return;
-    }
+fn mixture_sample_at(i: u32) {
     samples[i] = vmf_mixture_sample_with_pdf(mixtures[i], queries[i].uniforms);
 }
 
 // Naive: a linear CDF walk, the textbook sampler, the textbook pdf sum.
-@compute @workgroup_size(64)
-fn linear_cdf_walk(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&samples) {
-        return;
-    }
+fn linear_cdf_walk_at(i: u32) {
     let m = mixtures[i];
     let u = queries[i].uniforms;
     var k = 0u;
@@ -942,7 +888,20 @@ fn vmf_mixture(c: &mut Criterion, ctx: &GpuContext) {
         c,
         ctx,
         "vmf_mixture",
-        &[shaders::kernels::VMF_MIXTURE, VMF_MIXTURE].concat(),
+        &[
+            shaders::kernels::VMF_MIXTURE,
+            VMF_MIXTURE,
+            &all_binding_entry_points(
+                "samples",
+                &[
+                    "mixture_pdf",
+                    "textbook_pdf_sum",
+                    "mixture_sample",
+                    "linear_cdf_walk",
+                ],
+            ),
+        ]
+        .concat(),
         &[
             ("mixture_pdf", "mixture_pdf"),
             ("baseline_textbook_pdf_sum", "textbook_pdf_sum"),
@@ -1041,13 +1000,7 @@ fn uses_all_bindings() {
 }
 
 // MCPG: the cell's velocity, count and statistics, and its lobe with the prior.
-@compute @workgroup_size(64)
-fn grid_state(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&out) {
-        return;
-    }
+fn grid_state_at(i: u32) {
     let s = grid_states[i];
     let x = vec3<f32>(0.1, 0.2, -0.3) + markov_grid_state_velocity(s) * 1e-3;
     var lobe = Vmf(vec3<f32>(0.0), -1.0);
@@ -1056,26 +1009,14 @@ fn grid_state(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgro
 }
 
 // MCMM: the pixel's lobe at x with the prior (`PixelState::lobe`).
-@compute @workgroup_size(64)
-fn pixel_state(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&out) {
-        return;
-    }
+fn pixel_state_at(i: u32) {
     var lobe = Vmf(vec3<f32>(0.0), -1.0);
     _ = markov_pixel_state_lobe(pixel_states[i], vec3<f32>(0.1, 0.2, -0.3), VmfMapPrior(0.2, 0.5, 0u), &lobe);
     out[i] = vec4<f32>(lobe.mu, lobe.kappa);
 }
 
 // Naive: the lobe stored as a plain vec4 (μ, κ).
-@compute @workgroup_size(64)
-fn plain_lobe(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    uses_all_bindings();
-    let i = mcg_invocation_index(id, groups);
-    if i >= arrayLength(&out) {
-        return;
-    }
+fn plain_lobe_at(i: u32) {
     out[i] = plain[i];
 }
 "#;
@@ -1113,7 +1054,13 @@ fn markov_state(c: &mut Criterion, ctx: &GpuContext) {
         c,
         ctx,
         "markov_state",
-        &[shaders::VMF_MODULE, shaders::MARKOV_GUIDE, MARKOV_STATE].concat(),
+        &[
+            shaders::VMF_MODULE,
+            shaders::MARKOV_GUIDE,
+            MARKOV_STATE,
+            &all_binding_entry_points("out", &["grid_state", "pixel_state", "plain_lobe"]),
+        ]
+        .concat(),
         &[
             ("mcpg_grid_state_lobe", "grid_state"),
             ("mcmm_pixel_state_lobe", "pixel_state"),
