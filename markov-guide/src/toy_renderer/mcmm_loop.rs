@@ -3,9 +3,7 @@
 use std::vec::Vec;
 
 use glam::{Vec2, Vec3};
-use mcg_smis::{
-    CyclicShift, MAX_TILE_SIZE, Technique, XorPermutation, mixture_pdf, smis, smis_one_sample,
-};
+use mcg_smis::{CyclicShift, MAX_TILE_SIZE, Technique, XorPermutation, smis, smis_one_sample};
 use rand::{Rng, RngExt};
 
 use crate::mcmm::{
@@ -295,18 +293,16 @@ impl McmmToyRenderer {
                 let (w, from_hemisphere) = technique.sample_with_branch(u_select, u);
                 let hit = scene.trace(x, w);
                 let value = hit.radiance * TOY_NORMAL.dot(w).max(0.0);
-                let pdf = match params.score_density {
-                    ScoreDensity::Technique => technique.pdf(&w),
+                // f = value/p as a one-sample SMIS estimate over the scoring set (0 where
+                // p = 0 or the ratio overflows): the chain's own technique, or the tile.
+                let score = match params.score_density {
+                    ScoreDensity::Technique => {
+                        smis_one_sample(core::slice::from_ref(&technique), &w, value)
+                    }
                     ScoreDensity::TileMixture => {
                         tile_techniques(&mut set, &step_states, index, size, x, &params);
-                        mixture_pdf(&set, &w)
+                        smis_one_sample(&set, &w, value)
                     }
-                };
-                // value/p, or 0 where p = 0 or the ratio overflows (as mcg-smis does).
-                let score = if pdf > 0.0 && (value / pdf).is_finite() {
-                    value / pdf
-                } else {
-                    0.0
                 };
                 let slot = index * steps + step;
                 scores[slot] = score;
