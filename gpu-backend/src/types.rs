@@ -5,7 +5,9 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 use mcg_hashgrid::{AdaptiveGrid, BucketHash, SlotIndexer};
-use mcg_vmf::{MapPrior, PriorDecay, Vmf, VmfMixture};
+use mcg_vmf::{MapPrior, Vmf, VmfMixture};
+
+use crate::codes;
 
 /// Input of the `vmf_pdf_and_sample` kernel: a direction to evaluate the pdf at and two
 /// uniforms to sample with. WGSL `VmfQuery` (32 bytes).
@@ -14,12 +16,10 @@ use mcg_vmf::{MapPrior, PriorDecay, Vmf, VmfMixture};
 pub struct VmfQuery {
     /// Unit direction ω for `vmf_pdf`.
     pub direction: Vec3,
-    /// Padding (WGSL aligns the following `vec2<f32>` to 8 bytes, after `vec3`'s 12).
-    pub _pad0: f32,
+    _pad0: f32,
     /// Uniforms in [0, 1)² for `vmf_sample_with_pdf`.
     pub uniforms: Vec2,
-    /// Padding to the struct's 16-byte alignment.
-    pub _pad1: [f32; 2],
+    _pad1: [f32; 2],
 }
 const _: () = assert!(size_of::<VmfQuery>() == 32);
 
@@ -62,8 +62,7 @@ pub struct VmfStatsQuery {
     pub prior_weight: f32,
     /// 0 for [`PriorDecay::SquaredCount`], 1 for [`PriorDecay::Count`].
     pub prior_decay: u32,
-    /// Padding to 16-byte alignment.
-    pub _pad: f32,
+    _pad: f32,
 }
 const _: () = assert!(size_of::<VmfStatsQuery>() == 48);
 
@@ -77,19 +76,13 @@ impl VmfStatsQuery {
             other,
             prior_mean_cosine: prior.mean_cosine,
             prior_weight: prior.weight,
-            prior_decay: prior_decay_code(prior.decay),
+            prior_decay: codes::prior_decay(prior.decay),
             _pad: 0.0,
         }
     }
 }
 
 /// The WGSL code of a prior decay (`VMF_PRIOR_DECAY_*`): 0 squared count, 1 count.
-fn prior_decay_code(decay: PriorDecay) -> u32 {
-    match decay {
-        PriorDecay::SquaredCount => 0,
-        PriorDecay::Count => 1,
-    }
-}
 
 /// Output of the `vmf_stats` kernel: WGSL `VmfStatsResult` (48 bytes). Lobes are raw
 /// `[μ, κ]` because the GPU marks "no lobe" with κ = −1, which [`Vmf`] does not allow.
@@ -106,8 +99,7 @@ pub struct VmfStatsResult {
     pub mean_cosine: f32,
     /// Banerjee's κ of that mean cosine.
     pub kappa_back: f32,
-    /// Padding.
-    pub _pad: f32,
+    _pad: f32,
 }
 const _: () = assert!(size_of::<VmfStatsResult>() == 48);
 
@@ -124,10 +116,13 @@ pub struct HashgridTableParams {
     pub is_mask: u32,
     /// Probe bound.
     pub max_probes: u32,
-    /// 0 xor-primes, 1 mix, 2 mix-coherent.
+    /// The bucket hash (`codes::HASH_*`).
     pub bucket_hash: u32,
-    /// Padding to the uniform address space's 16-byte alignment.
-    pub _pad: [u32; 3],
+    /// Index of the table's first checksum word in `mcg_hashgrid_words`.
+    pub checksum_offset: u32,
+    /// Index of the table's first age word in `mcg_hashgrid_words` (age-tracked tables).
+    pub age_offset: u32,
+    reserved: u32,
 }
 const _: () = assert!(size_of::<HashgridTableParams>() == 32);
 
@@ -143,13 +138,21 @@ impl HashgridTableParams {
             mask: if indexer.is_mask() { capacity - 1 } else { 0 },
             is_mask: u32::from(indexer.is_mask()),
             max_probes,
-            bucket_hash: match hash {
-                BucketHash::XorPrimes => 0,
-                BucketHash::Mix => 1,
-                BucketHash::MixCoherent => 2,
-            },
-            _pad: [0; 3],
+            bucket_hash: codes::bucket_hash(hash),
+            checksum_offset: 0,
+            age_offset: 0,
+            reserved: 0,
         })
+    }
+
+    /// These parameters with the table's checksum words at `checksum_offset` and its age words
+    /// at `age_offset` of the shared `mcg_hashgrid_words` array, so several tables share one
+    /// buffer (e.g. the adaptive grid at 0, the static grid after it).
+    #[must_use]
+    pub const fn at_offsets(mut self, checksum_offset: u32, age_offset: u32) -> Self {
+        self.checksum_offset = checksum_offset;
+        self.age_offset = age_offset;
+        self
     }
 }
 
@@ -168,8 +171,7 @@ pub struct HashgridLevelParams {
     pub ln_per_level: f32,
     /// Highest level.
     pub max_level: u32,
-    /// Padding.
-    pub _pad: [u32; 3],
+    _pad: [u32; 3],
 }
 const _: () = assert!(size_of::<HashgridLevelParams>() == 32);
 
@@ -204,8 +206,7 @@ pub struct HashgridVertexQuery {
     pub u_corner: f32,
     /// Camera position (sets the level by distance).
     pub camera: Vec3,
-    /// Padding.
-    pub _pad: f32,
+    _pad: f32,
 }
 const _: () = assert!(size_of::<HashgridVertexQuery>() == 48);
 
@@ -247,8 +248,7 @@ pub struct VmfUpdate {
     pub weight: f32,
     /// Target point y.
     pub y: Vec3,
-    /// Padding to 16-byte alignment.
-    pub _pad: f32,
+    _pad: f32,
 }
 const _: () = assert!(size_of::<VmfUpdate>() == 32);
 
@@ -262,8 +262,7 @@ pub struct VmfFitParamsGpu {
     pub alpha_min: f32,
     /// 0 for `MeanCosineUpdate::Resultant`, 1 for `Projected`.
     pub mean_cosine_update: u32,
-    /// Padding to the uniform address space's 16-byte alignment.
-    pub _pad: u32,
+    _pad: u32,
 }
 const _: () = assert!(size_of::<VmfFitParamsGpu>() == 16);
 
@@ -272,10 +271,7 @@ impl From<&mcg_vmf::FitParams> for VmfFitParamsGpu {
         Self {
             max_count: p.max_count,
             alpha_min: p.alpha_min,
-            mean_cosine_update: match p.mean_cosine_update {
-                mcg_vmf::MeanCosineUpdate::Resultant => 0,
-                mcg_vmf::MeanCosineUpdate::Projected => 1,
-            },
+            mean_cosine_update: codes::mean_cosine_update(p.mean_cosine_update),
             _pad: 0,
         }
     }
@@ -317,8 +313,7 @@ pub struct HashgridAgeParams {
     pub frame: u32,
     /// Slots with frame − age > `max_age` (wrapping) are evicted.
     pub max_age: u32,
-    /// Padding to the uniform address space's 16-byte alignment.
-    pub _pad: [u32; 2],
+    _pad: [u32; 2],
 }
 const _: () = assert!(size_of::<HashgridAgeParams>() == 16);
 
@@ -363,8 +358,7 @@ pub struct MarkovPixelQuery {
     pub prior_weight: f32,
     /// 0 for [`PriorDecay::SquaredCount`], 1 for [`PriorDecay::Count`].
     pub prior_decay: u32,
-    /// Padding to the uniform address space's 16-byte alignment.
-    pub _pad: [u32; 2],
+    _pad: [u32; 2],
 }
 const _: () = assert!(size_of::<MarkovPixelQuery>() == 32);
 
@@ -376,7 +370,7 @@ impl MarkovPixelQuery {
             x,
             prior_mean_cosine: prior.mean_cosine,
             prior_weight: prior.weight,
-            prior_decay: prior_decay_code(prior.decay),
+            prior_decay: codes::prior_decay(prior.decay),
             _pad: [0; 2],
         }
     }
