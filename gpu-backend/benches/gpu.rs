@@ -54,11 +54,12 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::IVec3;
 use glam::{Vec2, Vec3};
+use mcg_gpu_backend::shaders::{self, Module, kernels};
 use mcg_gpu_backend::types::{
     HashgridAgeParams, HashgridLevelParams, HashgridTableParams, TexelParams, TexelUpdate,
     VmfFitParamsGpu, VmfQuery, VmfSample, VmfUpdate, pack_mixtures,
 };
-use mcg_gpu_backend::{GpuBuffer, GpuContext, prelude, shaders, wgpu};
+use mcg_gpu_backend::{GpuBuffer, GpuContext, wgpu};
 use mcg_hashgrid::{BucketHash, CellKey, HashTable};
 use mcg_markov_guide::mcmm::PixelState;
 use mcg_markov_guide::mcpg::GridState;
@@ -121,7 +122,10 @@ fn texel_update(c: &mut Criterion, ctx: &GpuContext) {
         .collect();
     let updates = ctx.storage_buffer("updates", &updates);
     let packed = ctx
-        .compute_kernel(shaders::kernels::COLOR_CODEC_TEXELS, "codec_texel_updates")
+        .compute_kernel(
+            &kernels::plain(kernels::COLOR_CODEC_TEXELS),
+            "codec_texel_updates",
+        )
         .unwrap();
     let words: GpuBuffer<u32> = ctx.zeroed_buffer("words", 1024);
     let params = ctx.uniform_buffer(
@@ -133,7 +137,9 @@ fn texel_update(c: &mut Criterion, ctx: &GpuContext) {
             word_layout: 0,
         },
     );
-    let naive = ctx.compute_kernel(NAIVE_STORE, "naive_store").unwrap();
+    let naive = ctx
+        .compute_kernel(&kernels::plain(NAIVE_STORE), "naive_store")
+        .unwrap();
     let plain: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("plain", 1024);
     let mut g = c.benchmark_group("texel_update");
     g.bench_function("packed_atomic_moving_average", |b| {
@@ -195,13 +201,17 @@ fn vmf_sample(c: &mut Criterion, ctx: &GpuContext) {
     let pdfs: GpuBuffer<f32> = ctx.zeroed_buffer("pdfs", n);
     let samples: GpuBuffer<VmfSample> = ctx.zeroed_buffer("samples", n);
     let source = [
-        shaders::VMF_MODULE,
+        &lib(&[Module::Vmf, Module::Dispatch]),
         TEXTBOOK_SAMPLER,
         &entry_points("pdfs", &["textbook", "stable"]),
     ]
     .concat();
-    let stable = ctx.compute_kernel(&source, "stable").unwrap();
-    let textbook = ctx.compute_kernel(&source, "textbook").unwrap();
+    let stable = ctx
+        .compute_kernel(&kernels::plain(&source), "stable")
+        .unwrap();
+    let textbook = ctx
+        .compute_kernel(&kernels::plain(&source), "textbook")
+        .unwrap();
     let bindings = [lobes.raw(), queries.raw(), pdfs.raw(), samples.raw()];
     let mut g = c.benchmark_group("vmf_sample");
     g.bench_function("stable_sample_with_pdf", |b| {
@@ -225,7 +235,12 @@ fn bench_entries(
 ) {
     let kernels: Vec<_> = entries
         .iter()
-        .map(|(name, entry)| (*name, ctx.compute_kernel(source, entry).unwrap()))
+        .map(|(name, entry)| {
+            (
+                *name,
+                ctx.compute_kernel(&kernels::plain(source), entry).unwrap(),
+            )
+        })
         .collect();
     let mut g = c.benchmark_group(group);
     for (name, kernel) in &kernels {
@@ -238,6 +253,12 @@ fn bench_entries(
 
 /// One WGSL compute entry point `entry`: one invocation per element, which runs `prologue`
 /// and then `statement` for element `i` when `i < arrayLength(&guard)`.
+/// The library's plain WGSL for `modules` (and what they import), with the kernels' bindings:
+/// the hash words at binding 1, the LogLuv tables at binding 3.
+fn lib(modules: &[Module]) -> String {
+    shaders::wgsl(modules, kernels::KERNEL_DEFS).unwrap()
+}
+
 fn per_element_entry(entry: &str, prologue: &str, guard: &str, statement: &str) -> String {
     format!(
         "
@@ -332,7 +353,7 @@ fn vmf_pdf(c: &mut Criterion, ctx: &GpuContext) {
         ctx,
         "vmf_pdf",
         &[
-            shaders::VMF_MODULE,
+            &lib(&[Module::Vmf, Module::Dispatch]),
             VMF_PDF,
             &entry_points("pdfs", &["stable", "textbook"]),
         ]
@@ -349,8 +370,8 @@ fn vmf_pdf(c: &mut Criterion, ctx: &GpuContext) {
 /// The bindings of `HASH_TABLE` and `HASH_FIND`.
 const TABLE_BINDINGS: &str = r#"
 @group(0) @binding(0) var<uniform> table: HashgridTable;
-@group(0) @binding(1) var<storage, read_write> hashgrid_checksums: array<atomic<u32>>;
-@group(0) @binding(2) var<storage, read> keys: array<CellKey>;
+// Binding 1: `mcg_hashgrid_words` (mcg::hashgrid_table).
+@group(0) @binding(2) var<storage, read> keys: array<HashgridCellKey>;
 @group(0) @binding(3) var<storage, read_write> slots: array<u32>;
 "#;
 
@@ -365,7 +386,7 @@ fn insert_or_get_at(i: u32) {
 // Naive: no hash, no checksum, no probing: key i stores its x word at slot i mod capacity.
 fn unhashed_store_at(i: u32) {
     let slot = i % table.capacity;
-    atomicStore(&hashgrid_checksums[slot], bitcast<u32>(keys[i].cell.x) | 2u);
+    atomicStore(&mcg_hashgrid_words[slot], bitcast<u32>(keys[i].cell.x) | 2u);
     slots[i] = slot;
 }
 "#;
@@ -386,15 +407,18 @@ fn hash_insert(c: &mut Criterion, ctx: &GpuContext) {
     let keys = ctx.storage_buffer("keys", &keys);
     let slots: GpuBuffer<u32> = ctx.zeroed_buffer("slots", n as usize);
     let source = [
-        shaders::HASHGRID_MODULE,
-        shaders::HASHGRID_TABLE,
+        &lib(&[Module::HashgridTable, Module::Dispatch]),
         TABLE_BINDINGS,
         HASH_TABLE,
         &entry_points("slots", &["insert_or_get", "unhashed_store"]),
     ]
     .concat();
-    let insert = ctx.compute_kernel(&source, "insert_or_get").unwrap();
-    let naive = ctx.compute_kernel(&source, "unhashed_store").unwrap();
+    let insert = ctx
+        .compute_kernel(&kernels::plain(&source), "insert_or_get")
+        .unwrap();
+    let naive = ctx
+        .compute_kernel(&kernels::plain(&source), "unhashed_store")
+        .unwrap();
     let capacity = 1 << 20;
     let mut g = c.benchmark_group("hash_insert");
     for (name, hash) in [
@@ -418,16 +442,18 @@ fn hash_insert(c: &mut Criterion, ctx: &GpuContext) {
     });
     // The age-tracked insert: insert-or-get (mix), then the slot touched in the frame.
     let touch = ctx
-        .compute_kernel(shaders::kernels::HASHGRID_AGES, "hashgrid_insert_touch")
+        .compute_kernel(
+            &kernels::plain(kernels::HASHGRID_AGES),
+            "hashgrid_insert_touch",
+        )
         .unwrap();
-    let checksums: GpuBuffer<u32> = ctx.zeroed_buffer("checksums", capacity as usize);
-    let ages: GpuBuffer<u32> = ctx.zeroed_buffer("ages", capacity as usize);
+    let aged = ctx.uniform_buffer("aged table", &params.at_offsets(0, capacity));
+    let words: GpuBuffer<u32> = ctx.zeroed_buffer("words", 2 * capacity as usize);
     let age_params = ctx.uniform_buffer("age params", &HashgridAgeParams::new(1, 0));
     let counter: GpuBuffer<u32> = ctx.zeroed_buffer("counter", 1);
     let bindings = [
-        table.raw(),
-        checksums.raw(),
-        ages.raw(),
+        aged.raw(),
+        words.raw(),
         age_params.raw(),
         counter.raw(),
         keys.raw(),
@@ -447,7 +473,7 @@ fn find_at(i: u32) {
 
 // Naive: key i reads slot i mod capacity (no hash, no checksum, no probe).
 fn unhashed_load_at(i: u32) {
-    slots[i] = atomicLoad(&hashgrid_checksums[i % table.capacity]) ^ bitcast<u32>(keys[i].cell.x);
+    slots[i] = atomicLoad(&mcg_hashgrid_words[i % table.capacity]) ^ bitcast<u32>(keys[i].cell.x);
 }
 "#;
 
@@ -475,8 +501,7 @@ fn hash_find(c: &mut Criterion, ctx: &GpuContext) {
         ctx,
         "hash_find",
         &[
-            shaders::HASHGRID_MODULE,
-            shaders::HASHGRID_TABLE,
+            &lib(&[Module::HashgridTable, Module::Dispatch]),
             TABLE_BINDINGS,
             HASH_FIND,
             &entry_points("slots", &["find", "unhashed_load"]),
@@ -494,7 +519,7 @@ fn hash_find(c: &mut Criterion, ctx: &GpuContext) {
 const VERTEX_KEY: &str = r#"
 @group(0) @binding(0) var<uniform> levels: HashgridLevels;
 @group(0) @binding(1) var<storage, read> positions: array<vec4<f32>>;
-@group(0) @binding(2) var<storage, read_write> keys: array<CellKey>;
+@group(0) @binding(2) var<storage, read_write> keys: array<HashgridCellKey>;
 
 // Level from the camera distance with its jitter, stochastic trilinear vertex, normal class.
 fn adaptive_at(i: u32) {
@@ -511,12 +536,12 @@ fn static_grid_at(i: u32) {
 // The jittered vertex of p/w.
 fn jittered_at(i: u32) {
     let p = positions[i];
-    keys[i] = CellKey(hashgrid_jittered_vertex(p.xyz / levels.min_width, fract(p.www * vec3<f32>(3.0, 5.0, 7.0))), 0u);
+    keys[i] = HashgridCellKey(hashgrid_jittered_vertex(p.xyz / levels.min_width, fract(p.www * vec3<f32>(3.0, 5.0, 7.0))), 0u);
 }
 
 // Naive: one fixed width, the cell ⌊p/w⌋, no level, no jitter, no class.
 fn fixed_floor_at(i: u32) {
-    keys[i] = CellKey(vec3<i32>(floor(positions[i].xyz / levels.min_width)), 0u);
+    keys[i] = HashgridCellKey(vec3<i32>(floor(positions[i].xyz / levels.min_width)), 0u);
 }
 "#;
 
@@ -544,7 +569,7 @@ fn vertex_key(c: &mut Criterion, ctx: &GpuContext) {
         ctx,
         "vertex_key",
         &[
-            shaders::HASHGRID_MODULE,
+            &lib(&[Module::Hashgrid, Module::Dispatch]),
             VERTEX_KEY,
             &entry_points(
                 "keys",
@@ -567,12 +592,12 @@ const CODEC_ENCODE: &str = r#"
 @group(0) @binding(0) var<storage, read> values: array<vec4<f32>>;
 @group(0) @binding(1) var<storage, read_write> words: array<u32>;
 @group(0) @binding(2) var<storage, read_write> floats: array<vec4<f32>>;
-@group(0) @binding(3) var<storage, read> codec_logluv_tables: array<f32>;
+// Binding 3: `mcg_codec_logluv_tables` (mcg::color_codec_logluv).
 
 fn uses_all_bindings() {
     _ = arrayLength(&words);
     _ = arrayLength(&floats);
-    _ = arrayLength(&codec_logluv_tables);
+    _ = arrayLength(&mcg_codec_logluv_tables);
 }
 "#;
 
@@ -587,14 +612,13 @@ fn codec_encode(c: &mut Criterion, ctx: &GpuContext) {
     let values = ctx.storage_buffer("values", &values);
     let words: GpuBuffer<u32> = ctx.zeroed_buffer("words", n);
     let floats: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("floats", n);
-    let tables = ctx.storage_buffer("tables", &prelude::logluv_tables());
+    let tables = ctx.storage_buffer("tables", &shaders::constants::logluv_tables());
     bench_entries(
         c,
         ctx,
         "codec_encode",
         &[
-            shaders::COLOR_CODEC_MODULE,
-            shaders::COLOR_CODEC_LOGLUV,
+            &lib(&[Module::ColorCodecLogluv, Module::Dispatch]),
             CODEC_ENCODE,
             &per_element_entries(
                 "values",
@@ -661,11 +685,12 @@ fn running_mean(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workg
 fn vmf_stats_update(c: &mut Criterion, ctx: &GpuContext) {
     let n = 262_144_usize;
     let updates: Vec<VmfUpdate> = (0..n)
-        .map(|i| VmfUpdate {
-            x: Vec3::new(0.1, 0.2, -0.3),
-            weight: 0.1 + (i % 17) as f32,
-            y: Vec3::new((i % 13) as f32 - 6.0, 4.0, (i % 5) as f32),
-            _pad: 0.0,
+        .map(|i| {
+            VmfUpdate::new(
+                Vec3::new(0.1, 0.2, -0.3),
+                Vec3::new((i % 13) as f32 - 6.0, 4.0, (i % 5) as f32),
+                0.1 + (i % 17) as f32,
+            )
         })
         .collect();
     let stats: GpuBuffer<SufficientStats> = ctx.zeroed_buffer("stats", n);
@@ -675,7 +700,7 @@ fn vmf_stats_update(c: &mut Criterion, ctx: &GpuContext) {
         c,
         ctx,
         "vmf_stats_update",
-        &[shaders::kernels::VMF_UPDATE, VMF_STATS_UPDATE].concat(),
+        &[kernels::VMF_UPDATE, VMF_STATS_UPDATE].concat(),
         &[
             ("stats_update", "vmf_update"),
             ("baseline_running_mean_direction", "running_mean"),
@@ -687,7 +712,7 @@ fn vmf_stats_update(c: &mut Criterion, ctx: &GpuContext) {
 
 /// Bindings of the lobe operations (`vmf_reconstruct`, `vmf_product`, `vmf_convolve`).
 const VMF_OPS: &str = r#"
-@group(0) @binding(0) var<storage, read> stats: array<SufficientStats>;
+@group(0) @binding(0) var<storage, read> stats: array<VmfSufficientStats>;
 @group(0) @binding(1) var<storage, read> a: array<Vmf>;
 @group(0) @binding(2) var<storage, read> b: array<Vmf>;
 @group(0) @binding(3) var<storage, read_write> out: array<vec4<f32>>;
@@ -765,7 +790,7 @@ fn vmf_ops(c: &mut Criterion, ctx: &GpuContext) {
     let b = ctx.storage_buffer("b", &b_lobes);
     let out: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("out", n);
     let source = [
-        shaders::VMF_MODULE,
+        &lib(&[Module::Vmf, Module::Dispatch]),
         VMF_OPS,
         &all_binding_entry_points(
             "out",
@@ -808,7 +833,7 @@ fn vmf_ops(c: &mut Criterion, ctx: &GpuContext) {
     }
 }
 
-/// Entry points appended to the kernel module `shaders::kernels::VMF_MIXTURE` (K = 4, bindings
+/// Entry points appended to the kernel module `kernels::VMF_MIXTURE` (K = 4, bindings
 /// `mixtures`, `queries`, `samples`, `choices`); each writes its result to `samples`.
 const VMF_MIXTURE: &str = r#"
 fn uses_all_bindings() {
@@ -889,7 +914,7 @@ fn vmf_mixture(c: &mut Criterion, ctx: &GpuContext) {
         ctx,
         "vmf_mixture",
         &[
-            shaders::kernels::VMF_MIXTURE,
+            kernels::VMF_MIXTURE,
             VMF_MIXTURE,
             &all_binding_entry_points(
                 "samples",
@@ -922,16 +947,16 @@ struct AgeParams {
     max_age: u32,
 }
 @group(0) @binding(0) var<uniform> table: Table;
-@group(0) @binding(1) var<storage, read_write> checksums: array<u32>;
-@group(0) @binding(2) var<storage, read> ages: array<u32>;
-@group(0) @binding(3) var<uniform> age_params: AgeParams;
+// The table's words: checksums, then ages (`mcg_hashgrid_words` of the library's kernel).
+@group(0) @binding(1) var<storage, read_write> words: array<u32>;
+@group(0) @binding(2) var<uniform> age_params: AgeParams;
 
 // Naive: one pass, stale slots set empty (no tombstones, so probe runs may break; no count).
 @compute @workgroup_size(64)
 fn plain_clear(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let slot = id.x + id.y * groups.x * 64u;
-    if slot < table.capacity && age_params.frame - ages[slot] > age_params.max_age {
-        checksums[slot] = 0u;
+    if slot < table.capacity && age_params.frame - words[table.capacity + slot] > age_params.max_age {
+        words[slot] = 0u;
     }
 }
 "#;
@@ -948,48 +973,44 @@ fn hash_evict(c: &mut Criterion, ctx: &GpuContext) {
         let key = CellKey::new(IVec3::new(k % 64, (k / 64) % 64, k / 4096), 2, 0);
         let _ = cpu.insert_or_get(&key);
     }
-    let initial = cpu.checksums().to_vec();
+    let initial = [cpu.checksums(), cpu.ages()].concat();
     let table = ctx.uniform_buffer(
         "table",
-        &HashgridTableParams::new(capacity, 16, BucketHash::Mix).unwrap(),
+        &HashgridTableParams::new(capacity, 16, BucketHash::Mix)
+            .unwrap()
+            .at_offsets(0, capacity),
     );
-    let checksums = ctx.storage_buffer("checksums", &initial);
-    let ages = ctx.storage_buffer("ages", cpu.ages());
+    let words = ctx.storage_buffer("words", &initial);
     let params = ctx.uniform_buffer("age params", &HashgridAgeParams::new(cpu.frame(), 7));
     let counter: GpuBuffer<u32> = ctx.zeroed_buffer("counter", 1);
-    let kernel = |source: &str, entry: &str| ctx.compute_kernel(source, entry).unwrap();
+    let kernel =
+        |source: &str, entry: &str| ctx.compute_kernel(&kernels::plain(source), entry).unwrap();
     let (evict, trim) = (
-        kernel(shaders::kernels::HASHGRID_AGES, "hashgrid_evict"),
-        kernel(shaders::kernels::HASHGRID_AGES, "hashgrid_trim"),
+        kernel(kernels::HASHGRID_AGES, "hashgrid_evict"),
+        kernel(kernels::HASHGRID_AGES, "hashgrid_trim"),
     );
     let clear = kernel(PLAIN_CLEAR, "plain_clear");
-    let bindings = [
-        table.raw(),
-        checksums.raw(),
-        ages.raw(),
-        params.raw(),
-        counter.raw(),
-    ];
+    let bindings = [table.raw(), words.raw(), params.raw(), counter.raw()];
     let mut g = c.benchmark_group("hash_evict");
     g.bench_function("evict_and_trim", |b| {
         b.iter(|| {
-            ctx.write(&checksums, &initial);
+            ctx.write(&words, &initial).unwrap();
             ctx.dispatch(&evict, &bindings, capacity).unwrap();
             ctx.dispatch(&trim, &bindings[..2], capacity).unwrap();
         })
     });
     g.bench_function("baseline_plain_clear", |b| {
         b.iter(|| {
-            ctx.write(&checksums, &initial);
-            ctx.dispatch(&clear, &bindings[..4], capacity).unwrap();
+            ctx.write(&words, &initial).unwrap();
+            ctx.dispatch(&clear, &bindings[..3], capacity).unwrap();
         })
     });
     g.finish();
 }
 
 const MARKOV_STATE: &str = r#"
-@group(0) @binding(0) var<storage, read> grid_states: array<GridState>;
-@group(0) @binding(1) var<storage, read> pixel_states: array<PixelState>;
+@group(0) @binding(0) var<storage, read> grid_states: array<MarkovGridState>;
+@group(0) @binding(1) var<storage, read> pixel_states: array<MarkovPixelState>;
 @group(0) @binding(2) var<storage, read> plain: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read_write> out: array<vec4<f32>>;
 
@@ -1055,8 +1076,7 @@ fn markov_state(c: &mut Criterion, ctx: &GpuContext) {
         ctx,
         "markov_state",
         &[
-            shaders::VMF_MODULE,
-            shaders::MARKOV_GUIDE,
+            &lib(&[Module::Markov, Module::Dispatch]),
             MARKOV_STATE,
             &all_binding_entry_points("out", &["grid_state", "pixel_state", "plain_lobe"]),
         ]
@@ -1075,12 +1095,12 @@ const CODEC_DECODE: &str = r#"
 @group(0) @binding(0) var<storage, read> words: array<u32>;
 @group(0) @binding(1) var<storage, read> plain: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> out: array<vec4<f32>>;
-@group(0) @binding(3) var<storage, read> codec_logluv_tables: array<f32>;
+// Binding 3: `mcg_codec_logluv_tables` (mcg::color_codec_logluv).
 
 fn uses_all_bindings() {
     _ = arrayLength(&words);
     _ = arrayLength(&plain);
-    _ = arrayLength(&codec_logluv_tables);
+    _ = arrayLength(&mcg_codec_logluv_tables);
 }
 "#;
 
@@ -1107,14 +1127,13 @@ fn codec_decode(c: &mut Criterion, ctx: &GpuContext) {
     let words = ctx.storage_buffer("words", &words);
     let plain = ctx.storage_buffer("plain", &plain);
     let out: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("out", n);
-    let tables = ctx.storage_buffer("tables", &prelude::logluv_tables());
+    let tables = ctx.storage_buffer("tables", &shaders::constants::logluv_tables());
     bench_entries(
         c,
         ctx,
         "codec_decode",
         &[
-            shaders::COLOR_CODEC_MODULE,
-            shaders::COLOR_CODEC_LOGLUV,
+            &lib(&[Module::ColorCodecLogluv, Module::Dispatch]),
             CODEC_DECODE,
             &per_element_entries(
                 "out",

@@ -1,10 +1,11 @@
-//! Include mcg's WGSL in your own compute pipeline, built with plain wgpu calls.
+//! Import mcg's WGSL modules into your own compute shader with naga_oil, and run it in a
+//! pipeline built with plain wgpu calls.
 //!
-//! The shader below is yours: it puts `shaders::PRELUDE` and the library modules it needs in
-//! front of its own code, declares its own bindings, and calls `vmf_sample_with_pdf` and
-//! `hashgrid_checksum` like any WGSL function. The host side uses only wgpu (the device comes
-//! from `GpuContext` for brevity; any `wgpu::Device` works). The results are checked against
-//! the CPU crates.
+//! The shader below is yours: it `#import`s what it needs from `mcg::vmf` and `mcg::hashgrid`,
+//! declares its own bindings, and calls `vmf_sample_with_pdf` and `hashgrid_checksum` like any
+//! WGSL function. naga_oil composes it (errors name your file and line); the host side uses
+//! only wgpu (the device comes from `GpuContext` for brevity; any `wgpu::Device` works). The
+//! results are checked against the CPU crates.
 //!
 //! Run: `cargo run --release -p mcg-gpu-backend --example own_pipeline`
 
@@ -13,10 +14,14 @@ use mcg_gpu_backend::mcg_vmf::{
     Vmf,
     glam::{Vec2, Vec3},
 };
+use mcg_gpu_backend::naga_oil::compose::{Composer, NagaModuleDescriptor};
 use mcg_gpu_backend::wgpu::{self, util::DeviceExt};
 use mcg_gpu_backend::{GpuContext, shaders};
 
 const MY_CODE: &str = r#"
+#import mcg::vmf::{Vmf, vmf_sample_with_pdf}
+#import mcg::hashgrid::{hashgrid_cell_key, hashgrid_normal_class, hashgrid_checksum}
+
 struct Out {
     direction: vec3<f32>,
     pdf: f32,
@@ -60,11 +65,20 @@ fn main() {
     println!("adapter: {}", ctx.adapter_info().name);
     let (device, queue) = (ctx.device(), ctx.queue());
 
-    // 1. Compose: the prelude and the modules, then your code.
-    let source = [shaders::PRELUDE, shaders::VMF, shaders::HASHGRID, MY_CODE].concat();
+    // 1. Compose with naga_oil: register mcg's modules, then build your shader.
+    let mut composer = Composer::default();
+    shaders::add_to_composer(&mut composer).expect("mcg's modules compose");
+    let naga_module = match composer.make_naga_module(NagaModuleDescriptor {
+        source: MY_CODE,
+        file_path: "examples/own_pipeline.wgsl",
+        ..Default::default()
+    }) {
+        Ok(module) => module,
+        Err(e) => panic!("{}", e.emit_to_string(&composer)),
+    };
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("my shader"),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
+        source: wgpu::ShaderSource::Naga(std::borrow::Cow::Owned(naga_module)),
     });
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some("my pipeline"),

@@ -61,8 +61,8 @@ pub mod types;
 #[cfg(feature = "runtime")]
 pub use runtime::{
     CodecKernels, CodecPackRead, ComputeKernel, GpuBuffer, GpuContext, GpuError, GpuHashTable,
-    GpuTexels, GridStateRead, HashgridKernels, LogLuvRead, MarkovKernels, PixelStateRead,
-    VmfKernels, VmfMixtureEval, VmfMixtureKernel, testing,
+    GpuTexels, GridStateQueryRead, GridStateRead, HashgridKernels, LogLuvRead, MarkovKernels,
+    PixelStateRead, VmfKernels, VmfMixtureEval, VmfMixtureKernel, testing,
 };
 
 /// Invocations per workgroup of every kernel in this crate (WebGPU guarantees 256).

@@ -5,7 +5,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 use mcg_hashgrid::{AdaptiveGrid, BucketHash, SlotIndexer};
-use mcg_vmf::{MapPrior, Vmf, VmfMixture};
+use mcg_vmf::{MapPrior, SufficientStats, Vmf, VmfMixture};
 
 use crate::codes;
 
@@ -210,7 +210,22 @@ pub struct HashgridVertexQuery {
 }
 const _: () = assert!(size_of::<HashgridVertexQuery>() == 48);
 
-/// Size in `f32`s of one WGSL `VmfMixture` with `k` lobes (`shaders::VMF_MIXTURE`): 4k floats
+impl HashgridVertexQuery {
+    /// The query of `AdaptiveGrid::vertex_key(position, normal, camera, xi_level, u_corner)`.
+    #[must_use]
+    pub fn new(position: Vec3, normal: Vec3, camera: Vec3, xi_level: f32, u_corner: f32) -> Self {
+        Self {
+            position,
+            xi_level,
+            normal,
+            u_corner,
+            camera,
+            _pad: 0.0,
+        }
+    }
+}
+
+/// Size in `f32`s of one WGSL `VmfMixture` with `k` lobes (`mcg::vmf_mixture`): 4k floats
 /// of lobes (μ, κ), k weights, padded to WGSL's 16-byte struct alignment.
 #[must_use]
 pub const fn mixture_stride_floats(k: usize) -> usize {
@@ -251,6 +266,19 @@ pub struct VmfUpdate {
     _pad: f32,
 }
 const _: () = assert!(size_of::<VmfUpdate>() == 32);
+
+impl VmfUpdate {
+    /// The sample with target `y` seen from `x` with weight `weight`.
+    #[must_use]
+    pub fn new(x: Vec3, y: Vec3, weight: f32) -> Self {
+        Self {
+            x,
+            weight,
+            y,
+            _pad: 0.0,
+        }
+    }
+}
 
 /// `mcg_vmf::FitParams` for WGSL (`VmfFitParams`, bound as a uniform, 16 bytes).
 #[repr(C)]
@@ -372,6 +400,54 @@ impl MarkovPixelQuery {
             prior_weight: prior.weight,
             prior_decay: codes::prior_decay(prior.decay),
             _pad: [0; 2],
+        }
+    }
+}
+
+/// The inputs of `markov_grid_state_pack` (`GridState::from_stats`) for the
+/// `markov_grid_write` kernel: WGSL `MarkovGridWrite` (40 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct MarkovGridWrite {
+    /// The fit statistics.
+    pub stats: SufficientStats,
+    /// The update time T.
+    pub time: f32,
+    /// The velocity v (packed to three halves on the GPU).
+    pub velocity: Vec3,
+}
+const _: () = assert!(size_of::<MarkovGridWrite>() == 40);
+
+/// The time, shading point and MAP prior of the `markov_grid_queries` kernel: WGSL
+/// `GridQuery` (uniform, 32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct MarkovGridQuery {
+    /// Shading point x of `GridState::lobe`.
+    pub x: Vec3,
+    /// t_now of `GridState::predicted`.
+    pub now: f32,
+    /// r̄_p of the MAP prior.
+    pub prior_mean_cosine: f32,
+    /// N_p of the MAP prior.
+    pub prior_weight: f32,
+    /// The prior's decay (`codes::PRIOR_DECAY_*`).
+    pub prior_decay: u32,
+    _pad: u32,
+}
+const _: () = assert!(size_of::<MarkovGridQuery>() == 32);
+
+impl MarkovGridQuery {
+    /// The query at time `now` for shading point `x` with the CPU's `prior`.
+    #[must_use]
+    pub fn new(x: Vec3, now: f32, prior: MapPrior) -> Self {
+        Self {
+            x,
+            now,
+            prior_mean_cosine: prior.mean_cosine,
+            prior_weight: prior.weight,
+            prior_decay: codes::prior_decay(prior.decay),
+            _pad: 0,
         }
     }
 }

@@ -96,7 +96,9 @@ fn every_module_composes_through_naga_oil_and_validates() {
                 shader_defs: naga_oil_defs(DEFS),
                 ..Default::default()
             })
-            .unwrap_or_else(|e| panic!("{}: {}", module.import_path(), e.emit_to_string(&composer)));
+            .unwrap_or_else(|e| {
+                panic!("{}: {}", module.import_path(), e.emit_to_string(&composer))
+            });
         validate(module.import_path(), &composed, &source);
     }
 }
@@ -108,7 +110,11 @@ fn every_module_composes_as_plain_wgsl_and_validates() {
         parse_and_validate(module.import_path(), &plain);
         // Each dependency exactly once, in an order where it comes after what it imports.
         for dep in module.dependencies() {
-            assert!(dep < module || Module::ALL.iter().position(|&m| m == dep) < Module::ALL.iter().position(|&m| m == module));
+            assert!(
+                dep < module
+                    || Module::ALL.iter().position(|&m| m == dep)
+                        < Module::ALL.iter().position(|&m| m == module)
+            );
             let marker = format!("// ---- {} ", dep.import_path());
             assert_eq!(plain.matches(&marker).count(), 1, "{module:?}: {dep:?}");
         }
@@ -188,7 +194,11 @@ fn every_module_scope_name_carries_an_mcg_prefix() {
         );
     }
     assert!(total > 300, "{total} names scanned");
-    assert!(unprefixed.is_empty(), "unprefixed names:\n{}", unprefixed.join("\n"));
+    assert!(
+        unprefixed.is_empty(),
+        "unprefixed names:\n{}",
+        unprefixed.join("\n")
+    );
     // The scan itself is checked.
     assert!(!has_mcg_prefix("GridState") && !has_mcg_prefix("DISTANCE_BETA"));
     assert!(has_mcg_prefix("Vmf") && has_mcg_prefix("HASHGRID_FULL") && has_mcg_prefix("mcg_pi"));

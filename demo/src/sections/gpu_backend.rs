@@ -6,8 +6,8 @@
 use std::time::Instant;
 
 use mcg_gpu_backend::GpuContext;
-use mcg_gpu_backend::kernels::{CodecKernels, GpuHashTable, HashgridKernels, VmfKernels};
 use mcg_gpu_backend::types::VmfQuery;
+use mcg_gpu_backend::{CodecKernels, GpuHashTable, HashgridKernels, VmfKernels};
 use mcg_hashgrid::{BucketHash, CellKey, ConcurrentTable, HashTable, checksum, hash_mix};
 use mcg_vmf::Vmf;
 use mcg_vmf::glam::{IVec3, Vec2, Vec3};
@@ -71,7 +71,7 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
             VmfQuery::new(l.sample(u), u)
         })
         .collect();
-    let kernels = VmfKernels::new(&gpu)?;
+    let kernels = VmfKernels::new();
     let t = Instant::now();
     let (pdfs, _) = kernels.pdf_and_sample(&gpu, &lobes, &queries)?;
     let dt = t.elapsed();

@@ -8,9 +8,7 @@ use mcg_hashgrid::{CellKey, HashTable, Insert};
 use super::lazy;
 use crate::codes;
 use crate::shaders::kernels as src;
-use crate::types::{
-    HashgridAgeParams, HashgridTableParams,
-};
+use crate::types::{HashgridAgeParams, HashgridTableParams};
 use crate::{ComputeKernel, GpuBuffer, GpuContext, GpuError};
 
 /// A hash table on the GPU: the checksum words and ages of a [`HashTable`] uploaded as they
@@ -186,7 +184,11 @@ impl<T: Pod> GpuHashTable<T> {
             ],
             capacity,
         )?;
-        ctx.dispatch(trim, &[self.params_buffer.raw(), self.words.raw()], capacity)?;
+        ctx.dispatch(
+            trim,
+            &[self.params_buffer.raw(), self.words.raw()],
+            capacity,
+        )?;
         Ok(ctx.read_back(&evicted)?[0])
     }
 
@@ -273,4 +275,3 @@ impl<T: Pod> GpuHashTable<T> {
         ctx.write(&self.words, &words)
     }
 }
-

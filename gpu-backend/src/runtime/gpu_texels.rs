@@ -1,9 +1,7 @@
 //! Packed texel words on the GPU.
 
 use crate::shaders::kernels as src;
-use crate::types::{
-    TexelParams, TexelUpdate,
-};
+use crate::types::{TexelParams, TexelUpdate};
 use crate::{ComputeKernel, GpuBuffer, GpuContext, GpuError};
 
 /// Packed texel words on the GPU (ADGI irradiance or visibility words, `mcg_color_codec`'s
@@ -21,7 +19,8 @@ impl GpuTexels {
     pub fn upload(ctx: &GpuContext, words: &[u32]) -> Result<Self, GpuError> {
         Ok(Self {
             words: ctx.storage_buffer("texels", words),
-            update: ctx.compute_kernel(&src::plain(src::COLOR_CODEC_TEXELS), "codec_texel_updates")?,
+            update: ctx
+                .compute_kernel(&src::plain(src::COLOR_CODEC_TEXELS), "codec_texel_updates")?,
         })
     }
 

@@ -7,10 +7,7 @@ use mcg_hashgrid::CellKey;
 
 use super::lazy;
 use crate::shaders::kernels as src;
-use crate::types::{
-    HashgridJitterQuery, HashgridLevelParams,
-    HashgridVertexQuery,
-};
+use crate::types::{HashgridJitterQuery, HashgridLevelParams, HashgridVertexQuery};
 use crate::{ComputeKernel, GpuBuffer, GpuContext, GpuError};
 
 /// The hash-grid key kernels: bucket hashes and checksums of keys, adaptive-grid vertex keys
@@ -111,4 +108,3 @@ impl HashgridKernels {
         ))
     }
 }
-

@@ -9,7 +9,7 @@ use mcg_vmf::{MapPrior, SufficientStats};
 
 use super::lazy;
 use crate::shaders::kernels as src;
-use crate::types::MarkovPixelQuery;
+use crate::types::{MarkovGridQuery, MarkovGridWrite, MarkovPixelQuery};
 use crate::{ComputeKernel, GpuBuffer, GpuContext, GpuError};
 
 /// An MCPG `GridState` as the GPU reads it ([`MarkovKernels::grid_states`]).
@@ -36,13 +36,28 @@ pub struct PixelStateRead {
     pub sample_count: f32,
 }
 
+/// An MCPG `GridState` queried on the GPU ([`MarkovKernels::grid_state_queries`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridStateQueryRead {
+    /// `GridState::is_valid`.
+    pub is_valid: bool,
+    /// `GridState::resampling_weight`.
+    pub resampling_weight: f32,
+    /// `GridState::predicted(now)` (MCPG eq. 10).
+    pub predicted: GridState,
+    /// `GridState::lobe(x, prior)` as (μ, κ), not re-validated on the host.
+    pub lobe: Option<(Vec3, f32)>,
+}
+
 /// The mcg-markov-guide state kernels: MCPG grid states (MCPG Table 1) and MCMM pixel states
-/// (MCMM Table 1, Alg. 1-2), uploaded as they are and read on the GPU. Pipelines are built
-/// on first use.
+/// (MCMM Table 1, Alg. 1-2), written, read and queried on the GPU. Pipelines are built on
+/// first use.
 #[derive(Debug, Default)]
 pub struct MarkovKernels {
     grid: OnceLock<ComputeKernel>,
     pixel: OnceLock<ComputeKernel>,
+    write: OnceLock<ComputeKernel>,
+    query: OnceLock<ComputeKernel>,
 }
 
 impl MarkovKernels {
@@ -114,5 +129,74 @@ impl MarkovKernels {
             })
             .collect())
     }
-}
 
+    /// Grid states packed on the GPU from statistics, time and velocity
+    /// (`markov_grid_state_pack`, `GridState::from_stats`), and pixel states from the same
+    /// statistics with the time as score (`markov_pixel_state_pack`).
+    pub fn write_states(
+        &self,
+        ctx: &GpuContext,
+        writes: &[MarkovGridWrite],
+    ) -> Result<(Vec<GridState>, Vec<PixelState>), GpuError> {
+        let kernel = lazy(
+            &self.write,
+            ctx,
+            src::MARKOV_GRID_WRITE,
+            "markov_grid_write",
+        )?;
+        let n = writes.len();
+        let writes = ctx.storage_buffer("writes", writes);
+        let grid: GpuBuffer<GridState> = ctx.zeroed_buffer("grid states", n);
+        let pixel: GpuBuffer<PixelState> = ctx.zeroed_buffer("pixel states", n);
+        ctx.dispatch(kernel, &[writes.raw(), grid.raw(), pixel.raw()], n as u32)?;
+        Ok((ctx.read_back(&grid)?, ctx.read_back(&pixel)?))
+    }
+
+    /// Each grid state's validity, resampling weight, prediction at `query.now` and lobe at
+    /// `query.x`, computed on the GPU (`markov_grid_state_is_valid`, `_resampling_weight`,
+    /// `_predicted`, `_lobe`).
+    pub fn grid_state_queries(
+        &self,
+        ctx: &GpuContext,
+        states: &[GridState],
+        query: &MarkovGridQuery,
+    ) -> Result<Vec<GridStateQueryRead>, GpuError> {
+        let kernel = lazy(
+            &self.query,
+            ctx,
+            src::MARKOV_GRID_QUERY,
+            "markov_grid_queries",
+        )?;
+        let n = states.len();
+        let states = ctx.storage_buffer("states", states);
+        let query = ctx.uniform_buffer("query", query);
+        let results: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("results", n);
+        let predicted: GpuBuffer<GridState> = ctx.zeroed_buffer("predicted", n);
+        let lobes: GpuBuffer<[f32; 4]> = ctx.zeroed_buffer("lobes", n);
+        ctx.dispatch(
+            kernel,
+            &[
+                states.raw(),
+                query.raw(),
+                results.raw(),
+                predicted.raw(),
+                lobes.raw(),
+            ],
+            n as u32,
+        )?;
+        let results = ctx.read_back(&results)?;
+        let predicted = ctx.read_back(&predicted)?;
+        let lobes = ctx.read_back(&lobes)?;
+        Ok(results
+            .into_iter()
+            .zip(predicted)
+            .zip(lobes)
+            .map(|((r, predicted), l)| GridStateQueryRead {
+                is_valid: r[0] != 0.0,
+                resampling_weight: r[1],
+                predicted,
+                lobe: (r[2] != -1.0).then(|| (Vec3::new(l[0], l[1], l[2]), l[3])),
+            })
+            .collect())
+    }
+}

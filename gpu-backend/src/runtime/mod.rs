@@ -22,7 +22,7 @@ pub use error::GpuError;
 pub use gpu_hash_table::GpuHashTable;
 pub use gpu_texels::GpuTexels;
 pub use hashgrid_kernels::HashgridKernels;
-pub use markov_kernels::{GridStateRead, MarkovKernels, PixelStateRead};
+pub use markov_kernels::{GridStateQueryRead, GridStateRead, MarkovKernels, PixelStateRead};
 pub use vmf_kernels::VmfKernels;
 pub use vmf_mixture_kernel::{VmfMixtureEval, VmfMixtureKernel};
 
@@ -43,4 +43,3 @@ pub(crate) fn lazy<'a>(
     let kernel = ctx.compute_kernel(&src::plain(source), entry)?;
     Ok(cell.get_or_init(|| kernel))
 }
-

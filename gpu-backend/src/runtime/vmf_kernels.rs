@@ -7,8 +7,7 @@ use mcg_vmf::{FitParams, SufficientStats, Vmf};
 use super::lazy;
 use crate::shaders::kernels as src;
 use crate::types::{
-    VmfFitParamsGpu, VmfQuery,
-    VmfSample, VmfStatsQuery, VmfStatsResult, VmfUpdate,
+    VmfFitParamsGpu, VmfQuery, VmfSample, VmfStatsQuery, VmfStatsResult, VmfUpdate,
 };
 use crate::{ComputeKernel, GpuBuffer, GpuContext, GpuError};
 
@@ -140,4 +139,3 @@ impl VmfKernels {
         Ok((ctx.read_back(&convolved)?, ctx.read_back(&kappas)?))
     }
 }
-

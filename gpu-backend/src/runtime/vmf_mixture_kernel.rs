@@ -5,10 +5,7 @@ use std::sync::OnceLock;
 use mcg_vmf::VmfMixture;
 
 use crate::shaders::kernels as src;
-use crate::types::{
-    VmfQuery,
-    VmfSample, pack_mixtures,
-};
+use crate::types::{VmfQuery, VmfSample, pack_mixtures};
 use crate::{ComputeKernel, GpuBuffer, GpuContext, GpuError};
 
 /// One mixture evaluated by [`VmfMixtureKernel::eval`].
@@ -54,12 +51,11 @@ impl<const K: usize> VmfMixtureKernel<K> {
         let mut defs = src::KERNEL_DEFS.to_vec();
         let k = u32::try_from(K).unwrap_or(u32::MAX);
         defs.push((crate::shaders::defs::VMF_MIXTURE_K, k));
-        let source = crate::shaders::compose(src::VMF_MIXTURE, &defs).map_err(|e| {
-            GpuError::Shader {
+        let source =
+            crate::shaders::compose(src::VMF_MIXTURE, &defs).map_err(|e| GpuError::Shader {
                 entry_point: "vmf_mixture_eval".into(),
                 message: e.to_string(),
-            }
-        })?;
+            })?;
         let kernel = ctx.compute_kernel(&source, "vmf_mixture_eval")?;
         Ok(self.eval.get_or_init(|| kernel))
     }
@@ -101,4 +97,3 @@ impl<const K: usize> VmfMixtureKernel<K> {
             .collect())
     }
 }
-

@@ -105,8 +105,16 @@ pub fn generate() -> String {
     out.push_str("\n// mcg-gpu-backend: the random-number convention (`sampling`).\n");
     push_u32(&mut out, "MCG_PCG_HASH_MUL", sampling::PCG_HASH_MUL);
     push_u32(&mut out, "MCG_PCG_HASH_INC", sampling::PCG_HASH_INC);
-    push_u32(&mut out, "MCG_PCG_HASH_OUTPUT_MUL", sampling::PCG_HASH_OUTPUT_MUL);
-    push_f32(&mut out, "MCG_UNIFORM_FLOAT_SCALE", sampling::UNIFORM_FLOAT_SCALE);
+    push_u32(
+        &mut out,
+        "MCG_PCG_HASH_OUTPUT_MUL",
+        sampling::PCG_HASH_OUTPUT_MUL,
+    );
+    push_f32(
+        &mut out,
+        "MCG_UNIFORM_FLOAT_SCALE",
+        sampling::UNIFORM_FLOAT_SCALE,
+    );
 
     out.push_str("\n// mcg-gpu-backend: enum codes (`codes`).\n");
     for &(name, v) in crate::codes::WGSL_CODES {
@@ -185,7 +193,11 @@ fn push_mcpg_params(out: &mut String, p: &McpgParams) {
     );
     push_f32(out, "MCPG_PRIOR_SCALE", p.prior_scale);
     push_f32(out, "MCPG_PRIOR_MIN_WEIGHT", p.prior_min_weight);
-    push_f32(out, "MCPG_STATIC_NORMAL_THRESHOLD", p.static_normal_threshold);
+    push_f32(
+        out,
+        "MCPG_STATIC_NORMAL_THRESHOLD",
+        p.static_normal_threshold,
+    );
     let (DiscardRule::Paper { ratio } | DiscardRule::Engine { ratio }) = p.discard;
     push_f32(out, "MCPG_DISCARD_RATIO", ratio);
 }

@@ -315,6 +315,11 @@ pub mod kernels {
     pub const MARKOV_GUIDE: &str = include_str!("kernels/markov_guide.wgsl");
     /// Entry point `markov_pixel_states`: bindings `pixel_states`, `query`, `results`, `lobes`.
     pub const MARKOV_PIXEL: &str = include_str!("kernels/markov_pixel.wgsl");
+    /// Entry point `markov_grid_write`: bindings `writes`, `grid_states`, `pixel_states`.
+    pub const MARKOV_GRID_WRITE: &str = include_str!("kernels/markov_grid_write.wgsl");
+    /// Entry point `markov_grid_queries`: bindings `states`, `query`, `results`, `predicted`,
+    /// `lobes`.
+    pub const MARKOV_GRID_QUERY: &str = include_str!("kernels/markov_grid_query.wgsl");
 
     /// Every kernel with its name and entry points, for validation loops.
     pub const ALL: &[(&str, &str, &[&str])] = &[
@@ -324,11 +329,19 @@ pub mod kernels {
         ("vmf_convolve", VMF_CONVOLVE, &["vmf_convolve_lobes"]),
         ("vmf_mixture", VMF_MIXTURE, &["vmf_mixture_eval"]),
         ("hashgrid_keys", HASHGRID_KEYS, &["hashgrid_hashes"]),
-        ("hashgrid_vertices", HASHGRID_VERTICES, &["hashgrid_vertices"]),
+        (
+            "hashgrid_vertices",
+            HASHGRID_VERTICES,
+            &["hashgrid_vertices"],
+        ),
         (
             "hashgrid_table",
             HASHGRID_TABLE,
-            &["hashgrid_insert", "hashgrid_insert_serial", "hashgrid_lookup"],
+            &[
+                "hashgrid_insert",
+                "hashgrid_insert_serial",
+                "hashgrid_lookup",
+            ],
         ),
         (
             "hashgrid_ages",
@@ -342,9 +355,23 @@ pub mod kernels {
         ),
         ("color_codec", COLOR_CODEC, &["codec_pack_unpack"]),
         ("color_codec_logluv", COLOR_CODEC_LOGLUV, &["codec_logluv"]),
-        ("color_codec_texels", COLOR_CODEC_TEXELS, &["codec_texel_updates"]),
+        (
+            "color_codec_texels",
+            COLOR_CODEC_TEXELS,
+            &["codec_texel_updates"],
+        ),
         ("markov_guide", MARKOV_GUIDE, &["markov_grid_states"]),
         ("markov_pixel", MARKOV_PIXEL, &["markov_pixel_states"]),
+        (
+            "markov_grid_write",
+            MARKOV_GRID_WRITE,
+            &["markov_grid_write"],
+        ),
+        (
+            "markov_grid_query",
+            MARKOV_GRID_QUERY,
+            &["markov_grid_queries"],
+        ),
     ];
 
     /// A kernel as plain WGSL (composed with [`KERNEL_DEFS`]).

@@ -414,9 +414,7 @@ mod tests {
     #[test]
     fn nested_and_multi_line_imports_expand() {
         let src = "#import mcg::vmf::{Vmf, vmf_pdf}\n#import mcg::{\n  hashgrid::hashgrid_find_x,\n  math\n}\n#import mcg::sampling as S\n";
-        let got: Vec<_> = imports(src)
-            .map(|i| (i.module, i.item, i.line))
-            .collect();
+        let got: Vec<_> = imports(src).map(|i| (i.module, i.item, i.line)).collect();
         assert_eq!(
             got,
             vec![
