@@ -60,7 +60,7 @@ pub struct VmfStatsQuery {
     pub prior_mean_cosine: f32,
     /// N_p of the MAP prior.
     pub prior_weight: f32,
-    /// 0 for [`PriorDecay::SquaredCount`], 1 for [`PriorDecay::Count`].
+    /// The prior's decay (`codes::PRIOR_DECAY_*`).
     pub prior_decay: u32,
     _pad: f32,
 }
@@ -81,8 +81,6 @@ impl VmfStatsQuery {
         }
     }
 }
-
-/// The WGSL code of a prior decay (`VMF_PRIOR_DECAY_*`): 0 squared count, 1 count.
 
 /// Output of the `vmf_stats` kernel: WGSL `VmfStatsResult` (48 bytes). Lobes are raw
 /// `[μ, κ]` because the GPU marks "no lobe" with κ = −1, which [`Vmf`] does not allow.
@@ -384,7 +382,7 @@ pub struct MarkovPixelQuery {
     pub prior_mean_cosine: f32,
     /// N_p of the MAP prior.
     pub prior_weight: f32,
-    /// 0 for [`PriorDecay::SquaredCount`], 1 for [`PriorDecay::Count`].
+    /// The prior's decay (`codes::PRIOR_DECAY_*`).
     pub prior_decay: u32,
     _pad: [u32; 2],
 }

@@ -110,11 +110,8 @@ fn every_module_composes_as_plain_wgsl_and_validates() {
         parse_and_validate(module.import_path(), &plain);
         // Each dependency exactly once, in an order where it comes after what it imports.
         for dep in module.dependencies() {
-            assert!(
-                dep < module
-                    || Module::ALL.iter().position(|&m| m == dep)
-                        < Module::ALL.iter().position(|&m| m == module)
-            );
+            let position = |m: Module| Module::ALL.iter().position(|&a| a == m);
+            assert!(position(dep) < position(module), "{dep:?} after {module:?}");
             let marker = format!("// ---- {} ", dep.import_path());
             assert_eq!(plain.matches(&marker).count(), 1, "{module:?}: {dep:?}");
         }

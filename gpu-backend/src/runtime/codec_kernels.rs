@@ -90,7 +90,7 @@ impl CodecKernels {
     }
 
     /// LogLuv32 on the GPU (`codec_logluv`, with the step tables of
-    /// [`prelude::logluv_tables`](crate::prelude::logluv_tables)): each `colours[i]` packed,
+    /// [`logluv_tables`](crate::shaders::constants::logluv_tables)): each `colours[i]` packed,
     /// each `words[i]` unpacked.
     ///
     /// # Panics

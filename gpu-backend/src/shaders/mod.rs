@@ -250,6 +250,8 @@ impl Module {
 /// ```
 #[cfg(feature = "compose")]
 #[cfg_attr(docsrs, doc(cfg(feature = "compose")))]
+// naga_oil's own error type, as its `Composer` methods return it.
+#[allow(clippy::result_large_err)]
 pub fn add_to_composer(
     composer: &mut naga_oil::compose::Composer,
 ) -> Result<(), naga_oil::compose::ComposerError> {
