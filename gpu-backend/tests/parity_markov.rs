@@ -63,7 +63,7 @@ fn grid_states_read_the_same_on_the_gpu() {
 /// MCMM pixel states built on the CPU and uploaded as they are (`Pod`, 28 bytes): validity,
 /// resampling score and sample count bit for bit, and the lobe at a shading point with a
 /// fixed prior: "no lobe" exactly where the CPU says `None`, μ within 64 ε and κ within
-/// 64 ε relative (arithmetic only, as in the reconstruction test of `tests/gpu.rs`), on 4 096
+/// 64 ε relative (arithmetic only, as in the reconstruction test of `tests/parity_vmf.rs`), on 4 096
 /// states incl. empty, negative-score and infinite ones. Broken once on purpose (the WGSL
 /// validity check without the score's sign): failed.
 #[test]

@@ -551,7 +551,7 @@ fn vmf_mixture_kernel_takes_any_k() {
 }
 
 /// `pack_mixtures` writes the layout the WGSL struct has for K = 4 (checked against naga in
-/// `tests/wgsl.rs` for K = 1..=5): lobes, then weights, then padding.
+/// `tests/modules.rs` for K = 1..=5): lobes, then weights, then padding.
 #[test]
 fn packed_mixtures_have_the_wgsl_layout() {
     let m = VmfMixture::new(
