@@ -5,10 +5,13 @@
 //!
 //! `cargo run --release -p mcg-hashgrid --example instructions -- CASE BITS PASSES`, with
 //! CASE one of `mcg_get`, `mcg_find_many`, `hashbrown_get`, `fx_get`, `std_get`,
-//! `mcg_insert`, `hashbrown_insert`, `fx_insert`; BITS the log₂ of the slot count.
+//! `mcg_insert`, `hashbrown_insert`, `fx_insert`; BITS the log₂ of the slot count. With a
+//! fourth argument `time`, it also prints the fastest pass in ns per operation (a quick
+//! min-of-runs check; the criterion bench is the reference).
 
 use std::collections::HashMap;
 use std::hint::black_box;
+use std::time::Instant;
 
 use mcg_hashgrid::{BucketHash, HashTable};
 use rustc_hash::FxBuildHasher;
@@ -31,7 +34,13 @@ fn main() {
     let packed: Vec<u64> = s.queries.iter().map(pack).collect();
     let fill: Vec<u64> = s.fill.iter().map(pack).collect();
     let mut table = HashTable::<State>::new(1 << bits, 16, BucketHash::default()).unwrap();
+    let timing = args.get(4).is_some_and(|a| a == "time");
+    let mut best = f64::INFINITY;
     let mut sum = 0.0_f32;
+    // Called after each pass with its start: keeps the fastest pass.
+    let mut lap = |t0: Instant, ops: usize| {
+        best = best.min(t0.elapsed().as_secs_f64() * 1e9 / ops as f64);
+    };
     match case {
         "mcg_get" | "mcg_find_many" => {
             for k in &s.fill {
@@ -39,29 +48,37 @@ fn main() {
             }
             let mut slots = vec![None; s.queries.len()];
             for _ in 0..passes {
+                let t0 = Instant::now();
                 sum += if case == "mcg_get" {
                     get_pass(&table, &s.queries)
                 } else {
                     find_many_pass(&table, &s.queries, &mut slots)
                 };
+                lap(t0, s.queries.len());
             }
         }
         "hashbrown_get" => {
             let m: hashbrown::HashMap<u64, State> = fill.iter().map(|&k| (k, [1.0; 8])).collect();
             for _ in 0..passes {
+                let t0 = Instant::now();
                 sum += black_box(&packed).iter().map(|k| m.get(k).map_or(0.0, |v| v[0])).sum::<f32>();
+                lap(t0, packed.len());
             }
         }
         "fx_get" => {
             let m: HashMap<u64, State, FxBuildHasher> = fill.iter().map(|&k| (k, [1.0; 8])).collect();
             for _ in 0..passes {
+                let t0 = Instant::now();
                 sum += black_box(&packed).iter().map(|k| m.get(k).map_or(0.0, |v| v[0])).sum::<f32>();
+                lap(t0, packed.len());
             }
         }
         "std_get" => {
             let m: HashMap<u64, State> = fill.iter().map(|&k| (k, [1.0; 8])).collect();
             for _ in 0..passes {
+                let t0 = Instant::now();
                 sum += black_box(&packed).iter().map(|k| m.get(k).map_or(0.0, |v| v[0])).sum::<f32>();
+                lap(t0, packed.len());
             }
         }
         // Inserts: the fill keys into an emptied structure, `passes` times; a pass per
@@ -69,9 +86,11 @@ fn main() {
         "mcg_insert" => {
             for _ in 0..passes {
                 table.clear();
+                let t0 = Instant::now();
                 for k in black_box(&s.fill) {
                     table.entry(k).unwrap().0[0] += 1.0;
                 }
+                lap(t0, s.fill.len());
             }
             sum += table.len() as f32;
         }
@@ -79,9 +98,11 @@ fn main() {
             let mut m = hashbrown::HashMap::<u64, State>::with_capacity(fill.len());
             for _ in 0..passes {
                 m.clear();
+                let t0 = Instant::now();
                 for &k in black_box(&fill) {
                     m.entry(k).or_insert([0.0; 8])[0] += 1.0;
                 }
+                lap(t0, fill.len());
             }
             sum += m.len() as f32;
         }
@@ -89,14 +110,19 @@ fn main() {
             let mut m = HashMap::<u64, State, FxBuildHasher>::with_capacity_and_hasher(fill.len(), FxBuildHasher);
             for _ in 0..passes {
                 m.clear();
+                let t0 = Instant::now();
                 for &k in black_box(&fill) {
                     m.entry(k).or_insert([0.0; 8])[0] += 1.0;
                 }
+                lap(t0, fill.len());
             }
             sum += m.len() as f32;
         }
         _ => panic!("unknown case {case}; {usage}"),
     }
     let per_pass = if case.ends_with("_insert") { s.fill.len() } else { s.queries.len() };
+    if timing {
+        println!("{case} {bits}: fastest pass {best:.2} ns per operation");
+    }
     println!("{case} {bits} {passes} {per_pass} {sum}");
 }
