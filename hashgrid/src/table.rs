@@ -78,6 +78,8 @@ pub struct HashTable<T> {
     indexer: SlotIndexer,
     hash: BucketHash,
     max_probes: u32,
+    /// [`probe::group_lanes`] of `max_probes`.
+    lanes: u32,
     checksums: Vec<u32>,
     values: Vec<T>,
     ages: Vec<u32>,
@@ -96,6 +98,7 @@ impl<T: Pod> HashTable<T> {
             indexer,
             hash,
             max_probes,
+            lanes: probe::group_lanes(max_probes),
             checksums: vec![EMPTY; capacity as usize],
             values: vec![T::zeroed(); capacity as usize],
             ages: Vec::new(),
@@ -264,11 +267,11 @@ impl<T: Pod> HashTable<T> {
                 } else if f == EMPTY {
                     None
                 } else {
-                    probe::find(
+                    probe::find_plain(
                         &self.checksums,
-                        |&w| w,
                         &self.indexer,
                         self.max_probes,
+                        self.lanes,
                         home,
                         c,
                     )
