@@ -24,9 +24,9 @@ use std::hint::black_box;
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use criterion::measurement::WallTime;
+use criterion::{BenchmarkGroup, Criterion, Throughput, criterion_group, criterion_main};
 use half::f16;
 use half::slice::HalfFloatSliceExt;
-use criterion::{BenchmarkGroup, Criterion, Throughput, criterion_group, criterion_main};
 use mcg_color_codec::glam::Vec3;
 use mcg_color_codec::{
     ColorCodec, Gamma5R10G10B10A2, IrradianceLayout, LogLuv32, LogRgb, MovingAverage, R11G11B10,
@@ -234,8 +234,7 @@ fn bench_batch(c: &mut Criterion) {
     g.bench_function("half_f16x3_peer", |b| {
         b.iter(|| {
             halves.convert_from_f32_slice(bytemuck::cast_slice(black_box(&input)));
-            black_box(&halves)
-                .convert_to_f32_slice(bytemuck::cast_slice_mut(&mut out));
+            black_box(&halves).convert_to_f32_slice(bytemuck::cast_slice_mut(&mut out));
             black_box(&out);
         })
     });

@@ -120,7 +120,12 @@ fn flush_entries<'a>(entries: impl Iterator<Item = (&'a u64, &'a State)>, capaci
 }
 
 /// Times `run` after an untimed `reset`, `iters` times.
-fn timed<S>(iters: u64, state: &mut S, reset: impl Fn(&mut S), mut run: impl FnMut(&mut S)) -> Duration {
+fn timed<S>(
+    iters: u64,
+    state: &mut S,
+    reset: impl Fn(&mut S),
+    mut run: impl FnMut(&mut S),
+) -> Duration {
     let mut total = Duration::ZERO;
     for _ in 0..iters {
         reset(state);
@@ -164,24 +169,52 @@ fn bench_lookup(c: &mut Criterion) {
         g.sample_size(10);
         g.measurement_time(Duration::from_secs(3));
         g.bench_function(id("mcg_get"), |b| {
-            b.iter_custom(|n| timed(n, &mut (), |_| flush_table(&t), |_| {
-                black_box(get_pass(&t, &s.queries));
-            }))
+            b.iter_custom(|n| {
+                timed(
+                    n,
+                    &mut (),
+                    |_| flush_table(&t),
+                    |_| {
+                        black_box(get_pass(&t, &s.queries));
+                    },
+                )
+            })
         });
         g.bench_function(id("mcg_find_many"), |b| {
-            b.iter_custom(|n| timed(n, &mut slots, |_| flush_table(&t), |sl| {
-                black_box(find_many_pass(&t, &s.queries, sl));
-            }))
+            b.iter_custom(|n| {
+                timed(
+                    n,
+                    &mut slots,
+                    |_| flush_table(&t),
+                    |sl| {
+                        black_box(find_many_pass(&t, &s.queries, sl));
+                    },
+                )
+            })
         });
         g.bench_function(id("hashbrown_foldhash"), |b| {
-            b.iter_custom(|n| timed(n, &mut (), |_| flush_entries(brown.iter(), brown.capacity()), |_| {
-                black_box(map_pass(|k| brown.get(k).map(|v| v[0]), &packed));
-            }))
+            b.iter_custom(|n| {
+                timed(
+                    n,
+                    &mut (),
+                    |_| flush_entries(brown.iter(), brown.capacity()),
+                    |_| {
+                        black_box(map_pass(|k| brown.get(k).map(|v| v[0]), &packed));
+                    },
+                )
+            })
         });
         g.bench_function(id("fxhashmap"), |b| {
-            b.iter_custom(|n| timed(n, &mut (), |_| flush_entries(fx.iter(), fx.capacity()), |_| {
-                black_box(map_pass(|k| fx.get(k).map(|v| v[0]), &packed));
-            }))
+            b.iter_custom(|n| {
+                timed(
+                    n,
+                    &mut (),
+                    |_| flush_entries(fx.iter(), fx.capacity()),
+                    |_| {
+                        black_box(map_pass(|k| fx.get(k).map(|v| v[0]), &packed));
+                    },
+                )
+            })
         });
         g.finish();
     }
@@ -199,37 +232,45 @@ fn bench_insert(c: &mut Criterion) {
         g.measurement_time(Duration::from_secs(3));
         let mut t = HashTable::<State>::new(1 << bits, MAX_PROBES, BucketHash::default()).unwrap();
         g.bench_function(id("mcg_entry"), |b| {
-            b.iter_custom(|n| timed(n, &mut t, HashTable::clear, |t| {
-                for k in black_box(keys) {
-                    if let Some((v, _)) = t.entry(k) {
-                        v[0] += 1.0;
+            b.iter_custom(|n| {
+                timed(n, &mut t, HashTable::clear, |t| {
+                    for k in black_box(keys) {
+                        if let Some((v, _)) = t.entry(k) {
+                            v[0] += 1.0;
+                        }
                     }
-                }
-            }))
+                })
+            })
         });
         let mut brown = hashbrown::HashMap::<u64, State>::with_capacity(keys.len());
         g.bench_function(id("hashbrown_foldhash"), |b| {
-            b.iter_custom(|n| timed(n, &mut brown, hashbrown::HashMap::clear, |m| {
-                for &k in black_box(&packed) {
-                    m.entry(k).or_insert([0.0; 8])[0] += 1.0;
-                }
-            }))
+            b.iter_custom(|n| {
+                timed(n, &mut brown, hashbrown::HashMap::clear, |m| {
+                    for &k in black_box(&packed) {
+                        m.entry(k).or_insert([0.0; 8])[0] += 1.0;
+                    }
+                })
+            })
         });
         let mut fx = FxHashMap::<u64, State>::with_capacity_and_hasher(keys.len(), FxBuildHasher);
         g.bench_function(id("fxhashmap"), |b| {
-            b.iter_custom(|n| timed(n, &mut fx, HashMap::clear, |m| {
-                for &k in black_box(&packed) {
-                    m.entry(k).or_insert([0.0; 8])[0] += 1.0;
-                }
-            }))
+            b.iter_custom(|n| {
+                timed(n, &mut fx, HashMap::clear, |m| {
+                    for &k in black_box(&packed) {
+                        m.entry(k).or_insert([0.0; 8])[0] += 1.0;
+                    }
+                })
+            })
         });
         let mut std_map = HashMap::<u64, State>::with_capacity(keys.len());
         g.bench_function(id("std_hashmap"), |b| {
-            b.iter_custom(|n| timed(n, &mut std_map, HashMap::clear, |m| {
-                for &k in black_box(&packed) {
-                    m.entry(k).or_insert([0.0; 8])[0] += 1.0;
-                }
-            }))
+            b.iter_custom(|n| {
+                timed(n, &mut std_map, HashMap::clear, |m| {
+                    for &k in black_box(&packed) {
+                        m.entry(k).or_insert([0.0; 8])[0] += 1.0;
+                    }
+                })
+            })
         });
         g.finish();
     }
@@ -247,7 +288,9 @@ fn bench_concurrent(c: &mut Criterion) {
         g.measurement_time(Duration::from_secs(3));
         // In an RwLock only so that the bench can empty it between runs (`clear` takes
         // `&mut`); each worker takes the read lock once per run.
-        let table = RwLock::new(ConcurrentTable::new(1 << bits, MAX_PROBES, BucketHash::default()).unwrap());
+        let table = RwLock::new(
+            ConcurrentTable::new(1 << bits, MAX_PROBES, BucketHash::default()).unwrap(),
+        );
         pool::with_workers(
             |w, n| {
                 let t = table.read().unwrap();
@@ -259,7 +302,11 @@ fn bench_concurrent(c: &mut Criterion) {
             },
             |workers| {
                 g.bench_function(id("mcg_concurrent_table"), |b| {
-                    b.iter_custom(|n| (0..n).map(|_| workers.run(2, || table.write().unwrap().clear())).sum())
+                    b.iter_custom(|n| {
+                        (0..n)
+                            .map(|_| workers.run(2, || table.write().unwrap().clear()))
+                            .sum()
+                    })
                 });
             },
         );
@@ -277,7 +324,10 @@ fn bench_concurrent(c: &mut Criterion) {
                 });
             },
         );
-        let locked = Mutex::new(FxHashMap::<u64, State>::with_capacity_and_hasher(keys.len(), FxBuildHasher));
+        let locked = Mutex::new(FxHashMap::<u64, State>::with_capacity_and_hasher(
+            keys.len(),
+            FxBuildHasher,
+        ));
         pool::with_workers(
             |w, n| {
                 for &k in black_box(pool::share(&packed, w, n)) {
@@ -286,7 +336,11 @@ fn bench_concurrent(c: &mut Criterion) {
             },
             |workers| {
                 g.bench_function(id("mutex_fxhashmap"), |b| {
-                    b.iter_custom(|n| (0..n).map(|_| workers.run(2, || locked.lock().unwrap().clear())).sum())
+                    b.iter_custom(|n| {
+                        (0..n)
+                            .map(|_| workers.run(2, || locked.lock().unwrap().clear()))
+                            .sum()
+                    })
                 });
             },
         );

@@ -61,15 +61,22 @@ fn main() {
             let m: hashbrown::HashMap<u64, State> = fill.iter().map(|&k| (k, [1.0; 8])).collect();
             for _ in 0..passes {
                 let t0 = Instant::now();
-                sum += black_box(&packed).iter().map(|k| m.get(k).map_or(0.0, |v| v[0])).sum::<f32>();
+                sum += black_box(&packed)
+                    .iter()
+                    .map(|k| m.get(k).map_or(0.0, |v| v[0]))
+                    .sum::<f32>();
                 lap(t0, packed.len());
             }
         }
         "fx_get" => {
-            let m: HashMap<u64, State, FxBuildHasher> = fill.iter().map(|&k| (k, [1.0; 8])).collect();
+            let m: HashMap<u64, State, FxBuildHasher> =
+                fill.iter().map(|&k| (k, [1.0; 8])).collect();
             for _ in 0..passes {
                 let t0 = Instant::now();
-                sum += black_box(&packed).iter().map(|k| m.get(k).map_or(0.0, |v| v[0])).sum::<f32>();
+                sum += black_box(&packed)
+                    .iter()
+                    .map(|k| m.get(k).map_or(0.0, |v| v[0]))
+                    .sum::<f32>();
                 lap(t0, packed.len());
             }
         }
@@ -77,7 +84,10 @@ fn main() {
             let m: HashMap<u64, State> = fill.iter().map(|&k| (k, [1.0; 8])).collect();
             for _ in 0..passes {
                 let t0 = Instant::now();
-                sum += black_box(&packed).iter().map(|k| m.get(k).map_or(0.0, |v| v[0])).sum::<f32>();
+                sum += black_box(&packed)
+                    .iter()
+                    .map(|k| m.get(k).map_or(0.0, |v| v[0]))
+                    .sum::<f32>();
                 lap(t0, packed.len());
             }
         }
@@ -107,7 +117,10 @@ fn main() {
             sum += m.len() as f32;
         }
         "fx_insert" => {
-            let mut m = HashMap::<u64, State, FxBuildHasher>::with_capacity_and_hasher(fill.len(), FxBuildHasher);
+            let mut m = HashMap::<u64, State, FxBuildHasher>::with_capacity_and_hasher(
+                fill.len(),
+                FxBuildHasher,
+            );
             for _ in 0..passes {
                 m.clear();
                 let t0 = Instant::now();
@@ -120,7 +133,11 @@ fn main() {
         }
         _ => panic!("unknown case {case}; {usage}"),
     }
-    let per_pass = if case.ends_with("_insert") { s.fill.len() } else { s.queries.len() };
+    let per_pass = if case.ends_with("_insert") {
+        s.fill.len()
+    } else {
+        s.queries.len()
+    };
     if timing {
         println!("{case} {bits}: fastest pass {best:.2} ns per operation");
     }

@@ -30,7 +30,7 @@ pub enum BucketHash {
     /// Word [`MIX_WORD`](crate::constants::MIX_WORD) of [`pcg4d`] of the four words
     /// ([`hash_mix`]): every output bit depends on every input bit; uniform bucket occupancy
     /// on structured keys. 12 multiplies in two dependent rounds, plus the [`checksum`]'s
-    /// fold: a lookup hashes in ≈ 2.5× the instructions of [`BucketHash::Fold`].
+    /// fold: a lookup hashes in ≈ 3× the instructions of [`BucketHash::Fold`].
     Mix,
     /// [`pcg4d`] of the key with `x` divided by 4, xor'ed with the low 2 bits of `x`
     /// ([`hash_mix_coherent`]): runs of 4 vertices along x land in 4 neighbouring slots (one
@@ -194,7 +194,7 @@ const fn finish(t: u32) -> u32 {
 /// ```
 ///
 /// Each fold is a linear map of two words mod 2³², injective on every box of keys of sides
-/// below ≈ 44 000 cells (the shortest vector of its kernel lattice is ≈ 60 000 long, see
+/// below ≈ 42 000 cells (the shortest vector of its kernel lattice is ≈ 60 000 long, see
 /// [`FOLD_X`](crate::constants::FOLD_X)); xor'ing two folds is not linear mod 2³², and the
 /// multiply–xorshift finisher (Wellons' `lowbias32`, first round) carries every bit into the
 /// low bits that a power-of-two mask reads. Five multiplies, the first four independent: a
@@ -212,8 +212,8 @@ pub const fn hash_fold(key: &CellKey) -> u32 {
 ///
 /// `(a, b) ↦ (hash, b + hash)` is a bijection (the finisher is one, and `a = (t ⊕ b)` is
 /// recovered from `t` and `b`), so two distinct keys share both the bucket hash and the
-/// checksum only if they share both folds, which no two keys within ≈ 44 000 cells of each
-/// other in x, y and in z, meta do. Keys sharing a checksum have different bucket hashes.
+/// checksum only if they share both folds, which no two keys within ≈ 42 000 of each other
+/// in every word do. Keys sharing a checksum have different bucket hashes.
 #[inline]
 #[must_use]
 pub const fn fold_and_checksum(key: &CellKey) -> (u32, u32) {

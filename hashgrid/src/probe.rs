@@ -110,7 +110,12 @@ pub(crate) const fn group_lanes(max_probes: u32) -> u32 {
 /// slot by slot mispredicts its loop exit on the ≈ α/2 of keys not in their home slot, and
 /// each misprediction discards the work the CPU had started on the following lookups).
 #[inline(always)]
-pub(crate) fn group(words: &[u32], home: u32, lanes: u32, checksum: u32) -> Option<(u32, u32, u32)> {
+pub(crate) fn group(
+    words: &[u32],
+    home: u32,
+    lanes: u32,
+    checksum: u32,
+) -> Option<(u32, u32, u32)> {
     let start = home as usize;
     let w: &[u32; GROUP as usize] = words.get(start..start + GROUP as usize)?.try_into().ok()?;
     let (hit, empty, tomb) = group_masks(*w, checksum);
@@ -132,7 +137,10 @@ fn group_masks(w: [u32; 4], checksum: u32) -> (u32, u32, u32) {
         // SAFETY: these intrinsics only need SSE and SSE2, which this build enables (the
         // `cfg` above; both are part of the x86-64 baseline). They take no pointers.
         unsafe {
-            _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(v, _mm_set1_epi32(x as i32)))) as u32
+            _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(
+                v,
+                _mm_set1_epi32(x as i32),
+            ))) as u32
         }
     };
     (mask(checksum), mask(EMPTY), mask(TOMBSTONE))

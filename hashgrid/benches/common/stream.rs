@@ -53,7 +53,12 @@ fn frame_keys(grid: &AdaptiveGrid, frame: usize, rng: &mut Pcg64Mcg) -> Vec<Cell
 }
 
 /// One frame's keys seen from `camera` turned by `yaw` radians.
-fn frame_keys_from(grid: &AdaptiveGrid, camera: Vec3, yaw: f32, rng: &mut Pcg64Mcg) -> Vec<CellKey> {
+fn frame_keys_from(
+    grid: &AdaptiveGrid,
+    camera: Vec3,
+    yaw: f32,
+    rng: &mut Pcg64Mcg,
+) -> Vec<CellKey> {
     let (sin, cos) = yaw.sin_cos();
     let mut keys = Vec::with_capacity((WIDTH * WIDTH) as usize);
     for j in 0..WIDTH {
@@ -148,7 +153,11 @@ pub fn slot_bits() -> Vec<u32> {
         .ok()
         .map(|s| {
             s.split(',')
-                .map(|b| b.trim().parse().expect("MCG_BENCH_SLOTS: comma-separated log2 sizes"))
+                .map(|b| {
+                    b.trim()
+                        .parse()
+                        .expect("MCG_BENCH_SLOTS: comma-separated log2 sizes")
+                })
                 .collect()
         })
         .unwrap_or_else(|| vec![16, 19])
