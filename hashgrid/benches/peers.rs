@@ -34,7 +34,7 @@ use std::time::{Duration, Instant};
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use dashmap::DashMap;
-use mcg_hashgrid::{BucketHash, CellKey, ConcurrentTable, HashTable};
+use mcg_hashgrid::{BucketHash, ConcurrentTable, HashTable};
 use rustc_hash::{FxBuildHasher, FxHashMap};
 
 #[path = "common/lookups.rs"]
