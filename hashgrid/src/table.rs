@@ -78,8 +78,6 @@ pub struct HashTable<T> {
     indexer: SlotIndexer,
     hash: BucketHash,
     max_probes: u32,
-    /// [`probe::group_lanes`] of `max_probes`.
-    lanes: u32,
     checksums: Vec<u32>,
     values: Vec<T>,
     ages: Vec<u32>,
@@ -98,7 +96,6 @@ impl<T: Pod> HashTable<T> {
             indexer,
             hash,
             max_probes,
-            lanes: probe::group_lanes(max_probes),
             checksums: vec![EMPTY; capacity as usize],
             values: vec![T::zeroed(); capacity as usize],
             ages: Vec::new(),
@@ -273,14 +270,7 @@ impl<T: Pod> HashTable<T> {
                 } else if f == EMPTY {
                     None
                 } else {
-                    probe::find_plain(
-                        &self.checksums,
-                        &self.indexer,
-                        self.max_probes,
-                        self.lanes,
-                        home,
-                        c,
-                    )
+                    probe::find_plain(&self.checksums, &self.indexer, self.max_probes, home, c)
                 };
             }
         }
@@ -589,6 +579,26 @@ mod tests {
         t.find_many(&keys, &mut out);
         assert_eq!(out, [Some(15), Some(0)]);
         t.find_many(&[], &mut []);
+    }
+
+    #[test]
+    fn find_many_with_fewer_probes_than_a_group() {
+        // max_probes 1..=3, below the 4-slot group: `find_many` must not look past the
+        // probe limit. Tables nearly full, so keys sit past their home slots and windows wrap.
+        for probes in 1..=3 {
+            for cap in [13_u32, 16] {
+                let mut t = HashTable::<u32>::new(cap, probes, BucketHash::Fold).unwrap();
+                for i in 0..200 {
+                    t.insert_or_get(&key(i));
+                }
+                let keys: Vec<CellKey> = (0..300).map(key).collect();
+                let mut out = vec![None; keys.len()];
+                t.find_many(&keys, &mut out);
+                let want: Vec<Option<u32>> = keys.iter().map(|k| t.find(k)).collect();
+                assert_eq!(out, want, "{probes} probes, {cap} slots");
+                assert!(want.iter().filter(|s| s.is_some()).count() >= cap as usize / 2);
+            }
+        }
     }
 
     #[test]
