@@ -94,7 +94,6 @@ pub(crate) const GROUP: u32 = 4;
 /// The [`GROUP`] words from `home` compared at once, as bit masks (bit i: slot `home + i`):
 /// `(equal to checksum, EMPTY)`. `None` when the group would run past the last slot (then the
 /// caller walks slot by slot, wrapping).
-
 ///
 /// Branch-free: a key that sits a few slots past its home slot costs no misprediction (a walk
 /// slot by slot mispredicts its loop exit on the ≈ α/2 of keys not in their home slot, and

@@ -16,7 +16,7 @@
 #![allow(dead_code)]
 
 use mcg_hashgrid::glam::{Vec2, Vec3};
-use mcg_hashgrid::{AdaptiveGrid, CellKey, next_prime};
+use mcg_hashgrid::{AdaptiveGrid, BucketHash, CellKey, next_prime};
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
@@ -161,6 +161,17 @@ pub fn slot_bits() -> Vec<u32> {
                 .collect()
         })
         .unwrap_or_else(|| vec![16, 19])
+}
+
+/// The bucket hash of the peer benches' tables: `MCG_BENCH_HASH` (a [`BucketHash::name`], e.g.
+/// `mix`), else the default.
+pub fn bench_hash() -> BucketHash {
+    std::env::var("MCG_BENCH_HASH").map_or(BucketHash::default(), |name| {
+        BucketHash::ALL
+            .into_iter()
+            .find(|h| h.name() == name)
+            .expect("MCG_BENCH_HASH: xor-primes, mix, mix-coherent or fold")
+    })
 }
 
 /// A table of `1 << bits` slots filled to load 1/4, and the lookups of a renderer.
