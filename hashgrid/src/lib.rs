@@ -68,7 +68,8 @@
 //! of many passes on a shared 2-vCPU VM, baseline x86-64): [`HashTable::get`] takes 1.3–2.2×
 //! hashbrown's time warm (the most on small tables), [`HashTable::find_many`] 1.4–1.9×, an
 //! insert 1.28–1.39×; 53 instructions per `get` against 34. [`ConcurrentTable`] inserts from
-//! 2 threads ≈ 3× faster than `DashMap` and ≈ 1.5× than `Mutex<FxHashMap>` at 2¹⁹ slots;
+//! 2 threads 3.1–6.2× faster than `DashMap` and 1.5–7.5× than `Mutex<FxHashMap>` (2¹⁹–2²²
+//! slots, criterion means);
 //! std's SipHash `HashMap` takes 2.2–2.4× the table's `get` time. Run `cargo bench -p
 //! mcg-hashgrid --bench peers` (criterion, every peer in the same group) and
 //! `scripts/hashgrid-instructions` (callgrind); the numbers, what limits them and the
