@@ -8,6 +8,12 @@
 //! - `batch_encode`, `batch_decode`: the slice API (`encode_slice` / `decode_slice`) over the
 //!   same 1024 colours: R11G11B10's default per-colour loop against the log codec's batch form
 //!   (four colours per vector), with the f32 copy.
+//! - `round_trip` and `batch_round_trip` also hold the `half` crate's 3 × f16 (6 bytes, what
+//!   a renderer keeps when it does not pack): per colour (`f16::from_f32` / `to_f32`, software
+//!   conversions on baseline x86-64, which lacks F16C) and through its slice conversions.
+//!   `batch_round_trip`: `encode_slice` then `decode_slice` of the 1024 colours, the slice
+//!   API's round trip; targets: the log codec's round trip within 1.3× of R11G11B10's per
+//!   colour and 1.1× through the slice API.
 //! - `moving_average`: the atomic CAS update (`MovingAverage::update_atomic`) with 1 and 2
 //!   threads against the same update as a plain, unsynchronised read-modify-write and a plain
 //!   store of the encoded sample.
@@ -19,6 +25,8 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 use criterion::measurement::WallTime;
 use criterion::{BenchmarkGroup, Criterion, Throughput, criterion_group, criterion_main};
+use half::f16;
+use half::slice::HalfFloatSliceExt;
 use mcg_color_codec::glam::Vec3;
 use mcg_color_codec::{
     ColorCodec, Gamma5R10G10B10A2, IrradianceLayout, LogLuv32, LogRgb, MovingAverage, R11G11B10,
@@ -131,6 +139,15 @@ fn bench_codecs(c: &mut Criterion) {
         };
     }
     each_codec!(g, rt);
+    g.bench_function("half_f16x3_peer", |b| {
+        b.iter(|| {
+            for (o, &c) in out.iter_mut().zip(black_box(&input)) {
+                let h = black_box([f16::from_f32(c.x), f16::from_f32(c.y), f16::from_f32(c.z)]);
+                *o = Vec3::new(h[0].to_f32(), h[1].to_f32(), h[2].to_f32());
+            }
+            black_box(&out);
+        })
+    });
     g.finish();
 }
 
@@ -191,6 +208,36 @@ fn bench_batch(c: &mut Criterion) {
         };
     }
     each_batch_codec!(g, dec);
+    g.finish();
+
+    let mut g = group(c, "batch_round_trip");
+    g.bench_function("f32_copy_baseline", |b| {
+        b.iter(|| {
+            out.copy_from_slice(black_box(&input));
+            black_box(&out);
+        })
+    });
+    macro_rules! rt {
+        ($g:expr, $name:expr, $codec:expr) => {
+            $g.bench_function($name, |b| {
+                let codec = $codec;
+                b.iter(|| {
+                    codec.encode_slice(black_box(&input), &mut words);
+                    codec.decode_slice(black_box(&words), &mut out);
+                    black_box(&out);
+                })
+            });
+        };
+    }
+    each_batch_codec!(g, rt);
+    let mut halves = vec![f16::ZERO; 3 * BATCH];
+    g.bench_function("half_f16x3_peer", |b| {
+        b.iter(|| {
+            halves.convert_from_f32_slice(bytemuck::cast_slice(black_box(&input)));
+            black_box(&halves).convert_to_f32_slice(bytemuck::cast_slice_mut(&mut out));
+            black_box(&out);
+        })
+    });
     g.finish();
 }
 

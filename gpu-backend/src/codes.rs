@@ -12,6 +12,8 @@ pub const HASH_XOR_PRIMES: u32 = 0;
 pub const HASH_MIX: u32 = 1;
 /// `HASHGRID_HASH_MIX_COHERENT`: [`BucketHash::MixCoherent`].
 pub const HASH_MIX_COHERENT: u32 = 2;
+/// `HASHGRID_HASH_FOLD`: [`BucketHash::Fold`].
+pub const HASH_FOLD: u32 = 3;
 /// `HASHGRID_FOUND`: [`Insert::Found`].
 pub const INSERT_FOUND: u32 = 0;
 /// `HASHGRID_INSERTED`: [`Insert::Inserted`].
@@ -40,6 +42,7 @@ pub const WGSL_CODES: &[(&str, u32)] = &[
     ("HASHGRID_HASH_XOR_PRIMES", HASH_XOR_PRIMES),
     ("HASHGRID_HASH_MIX", HASH_MIX),
     ("HASHGRID_HASH_MIX_COHERENT", HASH_MIX_COHERENT),
+    ("HASHGRID_HASH_FOLD", HASH_FOLD),
     ("HASHGRID_FOUND", INSERT_FOUND),
     ("HASHGRID_INSERTED", INSERT_INSERTED),
     ("HASHGRID_FULL", INSERT_FULL),
@@ -60,6 +63,7 @@ pub const fn bucket_hash(hash: BucketHash) -> u32 {
         BucketHash::XorPrimes => HASH_XOR_PRIMES,
         BucketHash::Mix => HASH_MIX,
         BucketHash::MixCoherent => HASH_MIX_COHERENT,
+        BucketHash::Fold => HASH_FOLD,
     }
 }
 

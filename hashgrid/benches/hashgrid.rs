@@ -10,7 +10,8 @@
 //! keys in ≈ 10.5 MB. Lookups are the 65 536 keys of one of those frames (44 122 distinct).
 //!
 //! - `lookup` (scanline order), `lookup_tiles` (8 × 8 tiles), `lookup_random` (the same keys
-//!   shuffled: no coherence): `HashTable::get` per key (`table_*`) and `HashTable::find_many`
+//!   shuffled: no coherence): `HashTable::get` per key (`table_*`; `table_fold_pow2` is the
+//!   default hash, the `mix` cases pcg4d; peers other than std's map: `benches/peers.rs`) and `HashTable::find_many`
 //!   over the whole frame followed by the value reads (`*_find_many`), against `HashMap::get`;
 //!   every pass reads one value per query on both sides. Criterion repeats a pass back to back,
 //!   so the table's and the map's lines stay in the caches between passes (warm).
@@ -120,6 +121,7 @@ fn bench_lookup(c: &mut Criterion) {
     bench_get(&mut g, "table_mix_pow2", &mix_pow2, &inp.scanline);
     bench_find_many(&mut g, "table_mix_pow2_find_many", &mix_pow2, &inp.scanline);
     for (name, cap, hash) in [
+        ("table_fold_pow2", inp.pow2, BucketHash::Fold),
         ("table_mix_prime", inp.prime, BucketHash::Mix),
         ("table_mix_coherent_pow2", inp.pow2, BucketHash::MixCoherent),
         ("table_xor_prime", inp.prime, BucketHash::XorPrimes),
@@ -250,6 +252,7 @@ fn bench_insert(c: &mut Criterion) {
         })
     });
     for (name, cap, hash) in [
+        ("table_fold_pow2", inp.pow2, BucketHash::Fold),
         ("table_mix_pow2", inp.pow2, BucketHash::Mix),
         ("table_mix_prime", inp.prime, BucketHash::Mix),
         ("table_mix_coherent_pow2", inp.pow2, BucketHash::MixCoherent),

@@ -28,11 +28,24 @@ pub const PCG_INC: u32 = 1_013_904_223;
 /// Which word of [`pcg4d`](crate::pcg4d)`([x, y, z, meta])` is the mixing bucket hash
 /// ([`hash_mix`](crate::hash_mix)): 3, the last word of the second round.
 pub const MIX_WORD: usize = 3;
-/// Which word of [`pcg4d`](crate::pcg4d)`([x, y, z, meta])` is the checksum
-/// ([`checksum`](crate::checksum)): 2. A different word of the same permutation than
-/// [`MIX_WORD`], so one permutation gives both, and two keys sharing a bucket share a
-/// checksum with probability ≈ 2⁻³² only.
-pub const CHECKSUM_WORD: usize = 2;
+
+/// Multiplier of x in the first fold of [`hash_fold`](crate::hash_fold) (⌊2³²/φ⌋ rounded to
+/// odd). With [`FOLD_Y`], the fold `x·FOLD_X + y·FOLD_Y` is injective on every box of
+/// (x, y) whose sides are below ≈ 44 700: the shortest nonzero (Δx, Δy) it maps to 0 mod 2³²
+/// has length ≈ 63 200 (Gauss lattice reduction).
+pub const FOLD_X: u32 = 0x9E37_79B1;
+/// Multiplier of y in the first fold of [`hash_fold`](crate::hash_fold) (xxHash's 4th prime).
+pub const FOLD_Y: u32 = 0x27D4_EB2F;
+/// Multiplier of z in the second fold of [`hash_fold`](crate::hash_fold) (xxHash's 2nd prime).
+/// With [`FOLD_META`], the fold `z·FOLD_Z + meta·FOLD_META` maps no nonzero (Δz, Δmeta) of
+/// length below ≈ 60 400 to 0 mod 2³².
+pub const FOLD_Z: u32 = 0x85EB_CA77;
+/// Multiplier of the meta word in the second fold of [`hash_fold`](crate::hash_fold)
+/// (xxHash's 3rd prime).
+pub const FOLD_META: u32 = 0xC2B2_AE3D;
+/// Multiplier of the finisher of [`hash_fold`](crate::hash_fold) (the first multiplier of
+/// Wellons' `lowbias32`).
+pub const FOLD_FINISH: u32 = 0x7FEB_352D;
 
 /// log₂ of the run length of [`BucketHash::MixCoherent`](crate::BucketHash::MixCoherent):
 /// runs of 2² = 4 vertices consecutive in x hash to 4 neighbouring slots.
@@ -102,8 +115,12 @@ pub const U32_CONSTANTS: &[(&str, u32)] = &[
     ("HASHGRID_PCG_MUL", PCG_MUL),
     ("HASHGRID_PCG_INC", PCG_INC),
     ("HASHGRID_MIX_WORD", MIX_WORD as u32),
-    ("HASHGRID_CHECKSUM_WORD", CHECKSUM_WORD as u32),
     ("HASHGRID_COHERENT_RUN_BITS", COHERENT_RUN_BITS),
+    ("HASHGRID_FOLD_X", FOLD_X),
+    ("HASHGRID_FOLD_Y", FOLD_Y),
+    ("HASHGRID_FOLD_Z", FOLD_Z),
+    ("HASHGRID_FOLD_META", FOLD_META),
+    ("HASHGRID_FOLD_FINISH", FOLD_FINISH),
     ("HASHGRID_EMPTY", EMPTY),
     ("HASHGRID_TOMBSTONE", TOMBSTONE),
     ("HASHGRID_FIRST_CHECKSUM", FIRST_CHECKSUM),
@@ -147,7 +164,7 @@ mod tests {
         assert_eq!(u32_named("HASHGRID_PRIME_Y"), 2_654_435_761);
         assert_eq!(u32_named("HASHGRID_PCG_INC"), PCG_INC);
         assert_eq!(u32_named("HASHGRID_MAX_LEVEL"), 255);
-        const { assert!(MIX_WORD != CHECKSUM_WORD && MIX_WORD < 4 && CHECKSUM_WORD < 4) };
+        const { assert!(MIX_WORD < 4) };
         assert_eq!(LEVEL_BITS + CLASS_BITS + EXTRA_BITS, 32);
         assert_eq!(CLASS_SHIFT, LEVEL_SHIFT + LEVEL_BITS);
         assert_eq!(EXTRA_SHIFT, CLASS_SHIFT + CLASS_BITS);

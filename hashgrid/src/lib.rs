@@ -11,8 +11,8 @@
 //! | item | what it is | paper |
 //! |---|---|---|
 //! | [`CellKey`], [`normal_class`] | vertex key `[x, y, z, level·class·extra]`, cube-map class of the normal | MCPG sec. 4 "Hash Grid" |
-//! | [`BucketHash`], [`hash_xor_primes`], [`hash_mix`], [`hash_mix_coherent`] | bucket hash: xor of primes (Instant-NGP), pcg4d mixing, or mixing that keeps runs of 4 along x together | MCPG sec. 4, `hash(x) = ⊕ πᵢxᵢ mod B` |
-//! | [`pcg4d`], [`mix_and_checksum`] | the 4-word permutation behind the mixing hash and the checksum, one pass for both | Jarzynski & Olano 2020, "pcg4d" |
+//! | [`BucketHash`], [`hash_fold`], [`hash_xor_primes`], [`hash_mix`], [`hash_mix_coherent`] | bucket hash: two folds and a finisher (default), xor of primes (Instant-NGP), pcg4d mixing, or mixing that keeps runs of 4 along x together | MCPG sec. 4, `hash(x) = ⊕ πᵢxᵢ mod B` |
+//! | [`fold_and_checksum`], [`pcg4d`], [`mix_and_checksum`] | bucket hash and checksum in one pass; the 4-word permutation behind the mixing hash | Jarzynski & Olano 2020, "pcg4d" |
 //! | [`checksum`] | separate full 32-bit hash stored in the slot, 0 = empty | MCPG sec. 4, Table 1 "hash" |
 //! | [`AdaptiveGrid`], [`LevelParams`], [`geometric_jitter`] | level from camera distance, jitter to coarser levels | MCPG sec. 4, Step 1 |
 //! | [`StaticGrid`] | fixed cell width, no normal | MCPG sec. 4 "static grid" |
@@ -35,77 +35,45 @@
 //!   checksums and `Pod` values that upload as they are.
 //!
 //! ## Design choices (measured in the `hashgrid` suites and the demo's section `hashgrid`)
-//! - **Bucket hash.** [`BucketHash::Mix`] (the default) passes chi-square occupancy tests on
-//!   planes, lines, a voxelised sphere and a camera's multi-level key stream, and loses as few
-//!   inserts to the probe limit as random keys do. MCPG's xor of primes is cheaper and keeps
-//!   x-neighbours in neighbouring slots, but on the multi-level stream it is over-dispersed
-//!   (X²/df ≈ 1.5) and loses ~9 % of inserts at load 0.25 with 8 probes.
-//!   [`BucketHash::MixCoherent`] sits between: uniform runs of 4 along x, more clustering, and
-//!   a second mixing pass for the checksum; on the benches' renderer streams (stochastic
-//!   trilinear corners of neighbouring pixels) its locality did not pay for that.
+//! - **Bucket hash.** [`BucketHash::Fold`] (the default): two multiply–add folds of the key's
+//!   words, xor'ed, one multiply–xorshift finisher; the checksum comes from the same pass
+//!   ([`fold_and_checksum`], 5 multiplies). It passes the chi-square occupancy tests on planes,
+//!   lines, a voxelised sphere and a camera's multi-level key stream, like [`BucketHash::Mix`]
+//!   (word 3 of Jarzynski and Olano's [`pcg4d`], the previous default), in a third of the
+//!   instructions. MCPG's xor of primes is cheaper still and keeps x-neighbours in
+//!   neighbouring slots, but on the multi-level stream it is over-dispersed (X²/df ≈ 1.5) and
+//!   loses ~9 % of inserts at load 0.25 with 8 probes. [`BucketHash::MixCoherent`] keeps runs
+//!   of 4 along x together, at the price of more clustering.
 //! - **Capacity.** Any capacity works: the index is `h mod B` ([`SlotIndexer`], an exact fast
-//!   modulo on the CPU, `%` on the GPU) and a mask when `B` is a power of two. With `Mix` both
-//!   behave the same; a prime `B` helps weak hashes. (merian-quake's sizes 32 777 259 and
-//!   800 009 are odd but not prime.)
+//!   modulo on the CPU, `%` on the GPU) and a mask when `B` is a power of two. With `Fold` or
+//!   `Mix` both behave the same; a prime `B` helps weak hashes. (merian-quake's sizes
+//!   32 777 259 and 800 009 are odd but not prime.)
 //! - **Probing.** Linear, at most `max_probes` slots, wrapping from the last slot to slot 0;
 //!   [`Insert::Full`] beyond. Linear probing clusters: even ideal hashing fails ≈ 2.5 % of
 //!   inserts at load 0.5 with 8 probes, so size tables for a load ≲ 0.25 or raise the limit.
-//! - **Checksum.** Another word of the same [`pcg4d`] permutation as the mixing hash, all 32 bits
-//!   kept in a `u32` array beside the values: distinct keys share it with probability 2⁻³², and
-//!   because the two words are 64 bits of one 128-bit permutation (not functions of each
-//!   other), two such keys also need to share a probe window to be confused. One pcg4d (12
-//!   multiplies) gives both, where the first version ran Murmur3 twice (two seeds): hashing
-//!   a stream of keys takes ≈ 2.9 ns per key instead of ≈ 3.9 ns, and a cache-resident
-//!   [`HashTable::get`] ≈ 7.3 ns instead of ≈ 10 ns (pcg4d's multiplies are independent
-//!   across words, Murmur3's rounds one long chain, so more of the lookup overlaps).
-//! - **Speed.** Measured with `cargo run --release -p mcg-hashgrid --example speed` (cases of a
-//!   group taking turns, minimum of many runs, on a shared 2-vCPU AMD EPYC VM) and the
-//!   criterion bench, against `std::collections::HashMap<u64, [f32; 8]>` (SipHash-1-3)
-//!   holding the same 143 233 keys, one value read per query on both sides. On a 19 MB table
-//!   (2¹⁹ slots, 32-byte values) whose lines stay in the caches between passes:
-//!   [`HashTable::find_many`] plus the value reads ≈ 8 ns per key (7.9–8.4) against
-//!   ≈ 20–22 ns (×2.4–2.8), per-key [`HashTable::get`] ≈ 13–14 ns (×1.5), in scanline,
-//!   8 × 8-tile or random order alike; cache-resident (1.2 MB): `find_many` ≈ 5.9 ns, `get`
-//!   ≈ 7 ns, against ≈ 14 ns. With the caches evicted before every pass (the tables come from
-//!   memory, as after the rest of a renderer's frame): `find_many` plus values ≈ 18–19.5 ns
-//!   against ≈ 74–76 ns (×3.8–4.1; criterion means ×3.5–3.7), `get` ≈ 43 ns (×1.7). The
-//!   issue's 3× is therefore met by `find_many` when the table comes from memory, and not
-//!   quite with warm caches (the `HashMap`'s own minimum there also moves between ≈ 20 and
-//!   ≈ 40 ns from one process to the next; the ratios above use its fastest, ≈ 20–22 ns).
-//!   Where the warm time goes: `find_many` alone ≈ 5.5 ns (hashing ≈ 2–3 ns, then the
-//!   checksum reads and decisions), the value reads ≈ 2 ns. `find_many` runs one copy of its
-//!   batch loop per hash and kind of capacity, so the loop branches on neither per key; with
-//!   the mask and [`BucketHash::Mix`], LLVM then hashes 4 keys at once in SSE2 lanes
-//!   (`pmuludq`): ≈ 8 instead of ≈ 9.3 ns per key with value reads (forcing scalar hashing
-//!   there: 10.1–10.5 ns). Batches of 256 keys: from memory ≈ 20 ns per key against ≈ 25 ns
-//!   with batches of 16 (more misses in flight); 64 to 1024 alike with warm caches.
-//!   Tried and dropped, measured on the same streams: a batched value lookup that also reads
-//!   each home slot's value before deciding (so both misses overlap; with a plain read, as
-//!   `unsafe` is not used for a prefetch) and hands values to a closure: 9.6–12 ns for
-//!   batches of 8 to 1024 (before the per-kind loops), the early read itself +0.5–0.9 ns;
-//!   pipelining it (hash and read batch i + 1 before deciding batch i): 10–12.7 ns; separate
-//!   home and checksum arrays, deciding the keys not in their home slot in a second pass, or
-//!   reading two slots per key up front: no gain (±0.3 ns). A real prefetch instruction
-//!   (`_mm_prefetch`, `unsafe`) measured ≈ 7 ns warm (×2.8–3.0) and ≈ 17 ns from memory
-//!   (×4.1–4.4); it is not used.
-//!   Probe windows that do not wrap are taken as one sub-slice (one bounds check, no `unsafe`);
-//!   comparing four checksums at once into bit masks measured slower. A power-of-two capacity
-//!   (mask) and a prime one (exact fast modulo) differ by ≲ 15 %.
-//!   [`ConcurrentTable::insert_or_get`] from 2 threads of a persistent pool (each thread a
-//!   contiguous half of the stream; spawning, emptying the table, evicting it from both
-//!   cores' L2 and waking the workers not timed, see the bench's docs), minimum of runs:
-//!   ×1.5–1.6 of one thread for the 143 233 distinct keys in 2¹⁹ slots (≈ 14 → 9 ns per
-//!   insert), ×1.8 in 2²¹ slots, ×1.8–1.96 for every pixel's key (repeats); criterion means
-//!   swing between ×1.3 and ×2.3 with the neighbours. On the same machine 2 threads of pure
-//!   hashing give ×2.0 and of read-only `find`s of the same keys ×1.9: the rest is cache
-//!   lines that both cores write moving between them (a 2 MB table of 32 768 lines, ≈ 4
-//!   inserts per line from both threads; the 8 MB table shares fewer). `examples/speed.rs`,
-//!   section `concurrent`, prints all of it with 1- and 2-thread runs alternating.
+//! - **Checksum.** [`checksum`]: the second fold plus the fold hash, all 32 bits kept in a
+//!   `u32` array beside the values, for every bucket hash: distinct keys share it with
+//!   probability 2⁻³² (the `hashgrid_checksum` suite counts it), and keys that share it never
+//!   share the fold hash (the pair is a bijection of the two folds), so two keys are confused
+//!   only if they also share a probe window.
 //! - **Concurrency.** [`ConcurrentTable`] claims slots by compare-and-swap on the checksum
 //!   word and owns no values; the thread that gets [`Insert::Inserted`] initialises the value in
 //!   the caller's own array (typically atomics). Evictions and the plain `&[u32]` upload view
-//!   need `&mut self`; the view is the crate's only `unsafe` (an `&[AtomicU32]` read as `&[u32]`,
-//!   which std documents as having the same size and bit validity).
+//!   need `&mut self`; the view is one of the crate's two `unsafe` blocks (an `&[AtomicU32]`
+//!   read as `&[u32]`, which std documents as having the same size and bit validity); the
+//!   other calls three SSE2 compare intrinsics.
+//!
+//! ## Performance
+//! Against hashbrown with foldhash holding the same keys (2¹⁶–2²⁴ slots at load 1/4, fastest
+//! of many passes on a shared 2-vCPU VM, baseline x86-64): [`HashTable::get`] takes 1.3–2.2×
+//! hashbrown's time warm (the most on small tables), [`HashTable::find_many`] 1.4–1.9×, an
+//! insert 1.28–1.39×; 53 instructions per `get` against 34. [`ConcurrentTable`] inserts from
+//! 2 threads 3.1–6.2× faster than `DashMap` and 1.5–7.5× than `Mutex<FxHashMap>` (2¹⁹–2²²
+//! slots, criterion means);
+//! std's SipHash `HashMap` takes 2.2–2.4× the table's `get` time. Run `cargo bench -p
+//! mcg-hashgrid --bench peers` (criterion, every peer in the same group) and
+//! `scripts/hashgrid-instructions` (callgrind); the numbers, what limits them and the
+//! measurement diary are in `benches/README.md`.
 //!
 //! ## Features
 //! - `std` (default): float functions from the standard library; implies `alloc`.
@@ -125,7 +93,7 @@
 //! assert_eq!(key.class, 2); // +y
 //!
 //! // A table of 10⁶ slots of 32-byte states, probing at most 8 slots.
-//! let mut table = HashTable::<[f32; 8]>::new(1_000_003, 8, BucketHash::Mix)?;
+//! let mut table = HashTable::<[f32; 8]>::new(1_000_003, 8, BucketHash::Fold)?;
 //! let (state, fresh) = table.entry(&key).expect("table is not full");
 //! assert!(fresh);
 //! state[0] += 1.0;
@@ -135,8 +103,9 @@
 //! ```
 #![no_std]
 #![deny(missing_docs)]
-// One `unsafe` block: `ConcurrentTable::checksums` views `&[AtomicU32]` as `&[u32]` for upload
-// (documented there); everything else is safe code.
+// Two `unsafe` blocks: `ConcurrentTable::checksums` views `&[AtomicU32]` as `&[u32]` for upload
+// (documented there), and `probe::group_masks` calls SSE2 compare intrinsics (no pointers);
+// everything else is safe code.
 #![deny(unsafe_code)]
 // `!(x > 0.0)` is how this crate rejects NaN together with the out-of-range values.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -170,7 +139,8 @@ pub use capacity::{SlotIndexer, next_prime};
 pub use concurrent::ConcurrentTable;
 pub use error::{GridError, TableError};
 pub use hash::{
-    BucketHash, checksum, hash_mix, hash_mix_coherent, hash_xor_primes, mix_and_checksum, pcg4d,
+    BucketHash, checksum, fold_and_checksum, hash_fold, hash_mix, hash_mix_coherent,
+    hash_xor_primes, mix_and_checksum, pcg4d,
 };
 pub use key::{CellKey, normal_class};
 pub use level::{

@@ -88,17 +88,101 @@ pub(crate) fn find<E>(
     None
 }
 
+/// Slots compared at once by [`group`].
+pub(crate) const GROUP: u32 = 4;
+
+/// The [`GROUP`] words from `home` compared at once, as bit masks (bit i: slot `home + i`):
+/// `(equal to checksum, EMPTY)`. `None` when the group would run past the last slot (then the
+/// caller walks slot by slot, wrapping).
+///
+/// Branch-free: a key that sits a few slots past its home slot costs no misprediction (a walk
+/// slot by slot mispredicts its loop exit on the ≈ α/2 of keys not in their home slot, and
+/// each misprediction discards the work the CPU had started on the following lookups). Only
+/// [`HashTable::find_many`](crate::HashTable::find_many) uses it: in a per-key `get` the
+/// value's address would then wait for the checksum words, where a predicted walk lets the
+/// CPU load the value at once (measured: `get` 9.9 → 14 ns on a 19 MB table).
+#[inline(always)]
+pub(crate) fn group(words: &[u32], home: u32, checksum: u32) -> Option<(u32, u32)> {
+    let start = home as usize;
+    let w: &[u32; GROUP as usize] = words.get(start..start + GROUP as usize)?.try_into().ok()?;
+    Some(group_masks(*w, checksum))
+}
+
+/// The two masks of [`group`] with SSE2 (baseline x86-64): one unaligned 16-byte load, two
+/// `pcmpeqd` + `movmskps` (LLVM turns the portable loop below into ≈ 25 scalar instructions).
+#[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+#[inline(always)]
+#[allow(unsafe_code)]
+fn group_masks(w: [u32; 4], checksum: u32) -> (u32, u32) {
+    use core::arch::x86_64::{
+        __m128i, _mm_castsi128_ps, _mm_cmpeq_epi32, _mm_movemask_ps, _mm_set1_epi32,
+    };
+    let v: __m128i = bytemuck::cast(w);
+    let mask = |x: u32| {
+        // SAFETY: these intrinsics only need SSE and SSE2, which this build enables (the
+        // `cfg` above; both are part of the x86-64 baseline). They take no pointers.
+        unsafe {
+            _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(
+                v,
+                _mm_set1_epi32(x as i32),
+            ))) as u32
+        }
+    };
+    (mask(checksum), mask(EMPTY))
+}
+
+/// The two masks of [`group`], portable.
+#[cfg(not(all(target_arch = "x86_64", target_feature = "sse2")))]
+#[inline(always)]
+fn group_masks(w: [u32; 4], checksum: u32) -> (u32, u32) {
+    let (mut hit, mut empty) = (0, 0);
+    for (i, &v) in w.iter().enumerate() {
+        hit |= u32::from(v == checksum) << i;
+        empty |= u32::from(v == EMPTY) << i;
+    }
+    (hit, empty)
+}
+
+/// [`find`] on plain words, deciding from one [`group`] first: the first slot holding the
+/// checksum or empty ends the search, whichever comes first. Only when neither is among the
+/// first [`GROUP`] slots (or the group would wrap, or `max_probes` < [`GROUP`]: the group
+/// would read past the probe limit) does it walk on slot by slot.
+#[inline(always)]
+pub(crate) fn find_plain(
+    words: &[u32],
+    indexer: &SlotIndexer,
+    max_probes: u32,
+    home: u32,
+    checksum: u32,
+) -> Option<u32> {
+    if max_probes >= GROUP
+        && let Some((hit, empty)) = group(words, home, checksum)
+    {
+        let stop = hit | empty;
+        if stop != 0 {
+            let i = stop.trailing_zeros();
+            return ((hit >> i) & 1 != 0).then_some(home + i);
+        }
+        if max_probes <= GROUP {
+            return None;
+        }
+    }
+    find(words, |&w| w, indexer, max_probes, home, checksum)
+}
+
 /// Insert-or-get with bounded linear probing, safe under concurrent inserts.
 ///
-/// 1. Walk from `home` until the checksum, an empty slot or the probe limit; remember the
-///    first free slot (empty or tombstone). Found → done.
-/// 2. From the first free slot on, try to claim a free slot by compare-and-swap; a failed CAS
-///    re-reads the slot: if another thread put this checksum there, it is found; if it put
-///    another one, move to the next slot.
+/// One walk from `home`: until the checksum (found), an empty slot or the probe limit,
+/// remembering the first free slot (empty or tombstone) and the word read there. Then claim
+/// that slot by compare-and-swap against the word read, without reading it again; a failed
+/// CAS gives the word another thread put there: this checksum means found, another one means
+/// move on to the next slot and try again (reading it).
 ///
 /// Every thread inserting the same key tries the same first free slot, and slots only go from
 /// free to taken while inserts run (evictions need exclusive access), so the key ends in
 /// exactly one slot. Never loops more than `max_probes` slots (plus one retry per lost CAS).
+/// (The first version walked to the first free slot and then read it again in a second loop:
+/// with the plain table, ≈ 15 % more time per insert.)
 #[inline]
 pub(crate) fn insert_or_get<S: Slots>(
     slots: &mut S,
@@ -116,7 +200,7 @@ pub(crate) fn insert_or_get<S: Slots>(
         }
         if v == EMPTY || v == TOMBSTONE {
             if first_free.is_none() {
-                first_free = Some((i, slot));
+                first_free = Some((i, slot, v));
             }
             if v == EMPTY {
                 break;
@@ -124,25 +208,28 @@ pub(crate) fn insert_or_get<S: Slots>(
         }
         slot = indexer.next(slot);
     }
-    let Some((mut i, mut slot)) = first_free else {
+    let Some((mut i, mut slot, mut v)) = first_free else {
         return Insert::Full;
     };
-    while i < max_probes {
-        let mut v = slots.load(slot);
-        loop {
-            if v == checksum {
-                return Insert::Found(slot);
-            }
-            if v != EMPTY && v != TOMBSTONE {
-                break;
-            }
+    loop {
+        if v == checksum {
+            return Insert::Found(slot);
+        }
+        if v == EMPTY || v == TOMBSTONE {
             match slots.claim(slot, v, checksum) {
                 Ok(()) => return Insert::Inserted(slot),
-                Err(actual) => v = actual,
+                // Another thread took the slot: look at what it wrote.
+                Err(actual) => {
+                    v = actual;
+                    continue;
+                }
             }
         }
         i += 1;
+        if i >= max_probes {
+            return Insert::Full;
+        }
         slot = indexer.next(slot);
+        v = slots.load(slot);
     }
-    Insert::Full
 }

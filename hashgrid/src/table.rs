@@ -8,7 +8,7 @@ use bytemuck::Pod;
 use crate::capacity::SlotIndexer;
 use crate::constants::{EMPTY, TOMBSTONE};
 use crate::error::TableError;
-use crate::hash::{BucketHash, mix_and_checksum};
+use crate::hash::{BucketHash, fold_and_checksum, mix_and_checksum};
 use crate::key::CellKey;
 use crate::probe::{self, Insert, Slots};
 
@@ -174,14 +174,21 @@ impl<T: Pod> HashTable<T> {
     #[must_use]
     pub fn find(&self, key: &CellKey) -> Option<u32> {
         let (h, c) = self.hash.hash_and_checksum(key);
-        probe::find(
-            &self.checksums,
-            |&w| w,
-            &self.indexer,
-            self.max_probes,
-            self.indexer.index(h),
-            c,
-        )
+        let home = self.indexer.index(h);
+        // The home slot first: it decides ≈ 85 % of lookups at load 1/4 in a few instructions
+        // (no probe window to set up), and the branch predicts well.
+        match self.checksums.get(home as usize) {
+            Some(&w) if w == c => Some(home),
+            Some(&EMPTY) => None,
+            _ => probe::find(
+                &self.checksums,
+                |&w| w,
+                &self.indexer,
+                self.max_probes,
+                home,
+                c,
+            ),
+        }
     }
 
     /// [`find`](Self::find) for a batch of keys: `out[i] = find(&keys[i])`.
@@ -192,14 +199,13 @@ impl<T: Pod> HashTable<T> {
     /// overlap); (3) decide each key from its home word, walking on only for keys whose home
     /// slot holds another key (≈ α/2 of them at load α). A per-key `find` mispredicts its
     /// probe loop on those keys, and each misprediction discards the loads the CPU had
-    /// started for the following keys; here they have already been issued. The loop is
-    /// compiled once per hash and kind of capacity (no per-key branch on either, and with a
-    /// power-of-two capacity and [`BucketHash::Mix`] the hashing runs 4 keys at a time in
-    /// SIMD lanes). Measured on a 19 MB table (`examples/speed.rs`, minimum of many runs),
-    /// lookups and value reads: ≈ 8 ns per key against ≈ 14 ns for `get` while the table's
-    /// lines stay in the caches between passes, and ≈ 19 ns against ≈ 43 ns for `get` when
-    /// every pass starts with the caches evicted, where the batch size matters: ≈ 25 ns with
-    /// batches of 16, ≈ 20 ns from 256 on (more misses in flight at once). The batch arrays
+    /// started for the following keys; here they have already been issued, and the keys not
+    /// in their home slot are decided from one compare of 4 slots at once (no loop branch to
+    /// mispredict). The loop is compiled once per hash and kind of capacity (no per-key branch
+    /// on either). Measured with value reads (`benches/README.md`, 2¹⁹ slots, load 1/4,
+    /// minimum of runs): ≈ 8 ns per key against ≈ 10 ns for `get` with warm caches, and
+    /// ≈ 19 ns against ≈ 24 ns for `get` when every pass starts with the table flushed from
+    /// the caches; batches of 256 keep more misses in flight than batches of 16. The batch arrays
     /// live on the stack (≈ 3 KiB, zeroed once per call). A renderer's wavefront of hit
     /// points (or a GPU-style pass over a tile) has such batches.
     ///
@@ -216,6 +222,13 @@ impl<T: Pod> HashTable<T> {
         // ≈ 1.3 ns per key less on the bench's stream.
         let ix = self.indexer;
         match (self.hash, ix.is_mask()) {
+            (BucketHash::Fold, true) => {
+                let mask = ix.capacity() - 1;
+                self.find_many_with(keys, out, fold_and_checksum, |h| h & mask);
+            }
+            (BucketHash::Fold, false) => {
+                self.find_many_with(keys, out, fold_and_checksum, |h| ix.modulo(h));
+            }
             (BucketHash::Mix, true) => {
                 let mask = ix.capacity() - 1;
                 self.find_many_with(keys, out, mix_and_checksum, |h| h & mask);
@@ -257,14 +270,7 @@ impl<T: Pod> HashTable<T> {
                 } else if f == EMPTY {
                     None
                 } else {
-                    probe::find(
-                        &self.checksums,
-                        |&w| w,
-                        &self.indexer,
-                        self.max_probes,
-                        home,
-                        c,
-                    )
+                    probe::find_plain(&self.checksums, &self.indexer, self.max_probes, home, c)
                 };
             }
         }
@@ -295,14 +301,23 @@ impl<T: Pod> HashTable<T> {
     pub fn insert_or_get(&mut self, key: &CellKey) -> Insert {
         let (h, c) = self.hash.hash_and_checksum(key);
         let home = self.indexer.index(h);
-        // Remember whether the claimed slot was a tombstone for the counters.
-        let outcome = {
-            let mut slots = TrackingSlots {
-                words: &mut self.checksums,
-                claimed_tombstone: false,
-            };
-            let r = probe::insert_or_get(&mut slots, &self.indexer, self.max_probes, home, c);
-            (r, slots.claimed_tombstone)
+        // The home slot first (most inserts and repeats end there): this key, or an empty slot
+        // that it takes (no key sits past an empty slot). Otherwise the general walk, which
+        // remembers whether the claimed slot was a tombstone for the counters.
+        let outcome = match self.checksums.get_mut(home as usize) {
+            Some(w) if *w == c => (Insert::Found(home), false),
+            Some(w) if *w == EMPTY => {
+                *w = c;
+                (Insert::Inserted(home), false)
+            }
+            _ => {
+                let mut slots = TrackingSlots {
+                    words: &mut self.checksums,
+                    claimed_tombstone: false,
+                };
+                let r = probe::insert_or_get(&mut slots, &self.indexer, self.max_probes, home, c);
+                (r, slots.claimed_tombstone)
+            }
         };
         match outcome {
             (Insert::Inserted(slot), was_tombstone) => {
@@ -564,6 +579,26 @@ mod tests {
         t.find_many(&keys, &mut out);
         assert_eq!(out, [Some(15), Some(0)]);
         t.find_many(&[], &mut []);
+    }
+
+    #[test]
+    fn find_many_with_fewer_probes_than_a_group() {
+        // max_probes 1..=3, below the 4-slot group: `find_many` must not look past the
+        // probe limit. Tables nearly full, so keys sit past their home slots and windows wrap.
+        for probes in 1..=3 {
+            for cap in [13_u32, 16] {
+                let mut t = HashTable::<u32>::new(cap, probes, BucketHash::Fold).unwrap();
+                for i in 0..200 {
+                    t.insert_or_get(&key(i));
+                }
+                let keys: Vec<CellKey> = (0..300).map(key).collect();
+                let mut out = vec![None; keys.len()];
+                t.find_many(&keys, &mut out);
+                let want: Vec<Option<u32>> = keys.iter().map(|k| t.find(k)).collect();
+                assert_eq!(out, want, "{probes} probes, {cap} slots");
+                assert!(want.iter().filter(|s| s.is_some()).count() >= cap as usize / 2);
+            }
+        }
     }
 
     #[test]

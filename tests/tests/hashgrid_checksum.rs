@@ -14,7 +14,7 @@
 //! table directly (≈ probes · 2⁻³² ≈ 2·10⁻⁹ per lookup, far below anything a test can count).
 
 use glam::IVec3;
-use mcg_hashgrid::{CellKey, checksum, hash_mix};
+use mcg_hashgrid::{CellKey, checksum, hash_fold, hash_mix};
 
 /// 2²¹ distinct structured keys: a 128³ block of vertices (2²¹) spread over 8 levels and
 /// 6 normal classes by coordinate parity, so the stream is planes, lines and levels at once.
@@ -76,7 +76,8 @@ fn checksum_collisions_match_the_birthday_expectation() {
 }
 
 /// The checksum and the bucket hash are independent: among the ≈ 512 pairs of distinct keys
-/// with equal checksums (n = 2²¹, as above), none also has an equal 32-bit `Mix` bucket hash
+/// with equal checksums (n = 2²¹, as above), none also has an equal 32-bit `Fold` (the
+/// default; excluded by construction, see `fold_and_checksum`) or `Mix` bucket hash
 /// (expected 512 · 2⁻³² ≈ 10⁻⁷). A checksum derived from the bucket hash (e.g. a bijection of
 /// it, such as a second finaliser of the same 32-bit intermediate) would put every such pair
 /// in the same probe window, so that each checksum collision became a false match. (Tried:
@@ -85,13 +86,16 @@ fn checksum_collisions_match_the_birthday_expectation() {
 #[test]
 fn checksum_collisions_do_not_share_buckets() {
     let keys = keys();
-    let mut pairs: Vec<(u32, u32)> = keys.iter().map(|k| (checksum(k), hash_mix(k))).collect();
+    let mut pairs: Vec<(u32, u32, u32)> = keys
+        .iter()
+        .map(|k| (checksum(k), hash_fold(k), hash_mix(k)))
+        .collect();
     pairs.sort_unstable();
     let (mut colliding, mut same_bucket) = (0, 0);
     for w in pairs.windows(2) {
         if w[0].0 == w[1].0 {
             colliding += 1;
-            same_bucket += u32::from(w[0].1 == w[1].1);
+            same_bucket += u32::from(w[0].1 == w[1].1 || w[0].2 == w[1].2);
         }
     }
     println!("{colliding} checksum collisions, {same_bucket} of them with equal bucket hashes");

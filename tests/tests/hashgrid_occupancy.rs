@@ -55,12 +55,12 @@ fn test_stream(keys: &[CellKey], bins: u32, hash: BucketHash) -> ChiSquareResult
     chi_square_test(&counts, &expected)
 }
 
-/// The mixing hashes (`Mix` and `MixCoherent`) pass on every stream and capacity
-/// (2 × 16 tests at α = 0.001).
+/// The mixing hashes (`Fold`, the default, `Mix` and `MixCoherent`) pass on every stream and
+/// capacity (3 × 16 tests at α = 0.001).
 #[test]
 fn mix_hashes_are_uniform_on_structured_streams() {
     let mut failures = Vec::new();
-    for hash in [BucketHash::Mix, BucketHash::MixCoherent] {
+    for hash in [BucketHash::Fold, BucketHash::Mix, BucketHash::MixCoherent] {
         for (name, keys) in streams() {
             for bins in CAPACITIES {
                 let r = test_stream(&keys, bins, hash);

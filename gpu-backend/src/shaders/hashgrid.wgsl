@@ -6,10 +6,12 @@
 // The table functions (`hashgrid_find`, `hashgrid_insert_or_get`) are in `hashgrid_table.wgsl`.
 
 #import mcg::constants::{
-    HASHGRID_CHECKSUM_WORD, HASHGRID_CLASS_BITS, HASHGRID_CLASS_NONE, HASHGRID_CLASS_SHIFT,
-    HASHGRID_COHERENT_RUN_BITS, HASHGRID_FIRST_CHECKSUM, HASHGRID_LEVEL_BITS, HASHGRID_LEVEL_SHIFT,
-    HASHGRID_MIX_WORD, HASHGRID_ONE_MINUS_EPSILON, HASHGRID_PCG_INC, HASHGRID_PCG_MUL,
-    HASHGRID_PRIME_META, HASHGRID_PRIME_X, HASHGRID_PRIME_Y, HASHGRID_PRIME_Z
+    HASHGRID_CLASS_BITS, HASHGRID_CLASS_NONE, HASHGRID_CLASS_SHIFT, HASHGRID_COHERENT_RUN_BITS,
+    HASHGRID_FIRST_CHECKSUM, HASHGRID_FOLD_FINISH, HASHGRID_FOLD_META, HASHGRID_FOLD_X,
+    HASHGRID_FOLD_Y, HASHGRID_FOLD_Z, HASHGRID_HASH_FOLD, HASHGRID_HASH_MIX_COHERENT,
+    HASHGRID_HASH_XOR_PRIMES, HASHGRID_LEVEL_BITS, HASHGRID_LEVEL_SHIFT, HASHGRID_MIX_WORD,
+    HASHGRID_ONE_MINUS_EPSILON, HASHGRID_PCG_INC, HASHGRID_PCG_MUL, HASHGRID_PRIME_META,
+    HASHGRID_PRIME_X, HASHGRID_PRIME_Y, HASHGRID_PRIME_Z
 }
 #import mcg::math::mcg_rounded
 
@@ -111,20 +113,37 @@ fn hashgrid_hash_mix_coherent(key: HashgridCellKey) -> u32 {
     return hashgrid_pcg4d(vec4<u32>(run, w.y, w.z, w.w))[HASHGRID_MIX_WORD] ^ low;
 }
 
-// The 32-bit checksum stored in a slot: word HASHGRID_CHECKSUM_WORD of the same permutation,
-// never HASHGRID_EMPTY or HASHGRID_TOMBSTONE.
+// The two folds of the fold hash: (x·FOLD_X + y·FOLD_Y, z·FOLD_Z + meta·FOLD_META); `hash.rs::folds`.
+fn hashgrid_folds(key: HashgridCellKey) -> vec2<u32> {
+    let w = hashgrid_key_words(key);
+    return vec2<u32>(w.x * HASHGRID_FOLD_X + w.y * HASHGRID_FOLD_Y, w.z * HASHGRID_FOLD_Z + w.w * HASHGRID_FOLD_META);
+}
+
+// The fold bucket hash (the default): t = a ^ b; t ^= t >> 16; t *= FOLD_FINISH; t ^ (t >> 15).
+fn hashgrid_hash_fold(key: HashgridCellKey) -> u32 {
+    let f = hashgrid_folds(key);
+    var t = f.x ^ f.y;
+    t = (t ^ (t >> 16u)) * HASHGRID_FOLD_FINISH;
+    return t ^ (t >> 15u);
+}
+
+// The 32-bit checksum stored in a slot (every bucket hash): the second fold plus the fold
+// hash, never HASHGRID_EMPTY or HASHGRID_TOMBSTONE.
 fn hashgrid_checksum(key: HashgridCellKey) -> u32 {
-    return hashgrid_reserve(hashgrid_pcg4d(hashgrid_key_words(key))[HASHGRID_CHECKSUM_WORD]);
+    return hashgrid_reserve(hashgrid_folds(key).y + hashgrid_hash_fold(key));
 }
 
 // `BucketHash::hash` for HASHGRID_HASH_*.
 fn hashgrid_bucket_hash(bucket_hash: u32, key: HashgridCellKey) -> u32 {
     switch bucket_hash {
-        case 0u: {
+        case HASHGRID_HASH_XOR_PRIMES: {
             return hashgrid_hash_xor_primes(key);
         }
-        case 2u: {
+        case HASHGRID_HASH_MIX_COHERENT: {
             return hashgrid_hash_mix_coherent(key);
+        }
+        case HASHGRID_HASH_FOLD: {
+            return hashgrid_hash_fold(key);
         }
         default: {
             return hashgrid_hash_mix(key);

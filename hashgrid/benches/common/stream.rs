@@ -16,7 +16,7 @@
 #![allow(dead_code)]
 
 use mcg_hashgrid::glam::{Vec2, Vec3};
-use mcg_hashgrid::{AdaptiveGrid, CellKey, next_prime};
+use mcg_hashgrid::{AdaptiveGrid, BucketHash, CellKey, next_prime};
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
@@ -49,8 +49,17 @@ fn hit_room(camera: Vec3, dir: Vec3) -> (Vec3, Vec3) {
 
 /// One frame's keys, indexed by pixel `j * WIDTH + i` (scanline order).
 fn frame_keys(grid: &AdaptiveGrid, frame: usize, rng: &mut Pcg64Mcg) -> Vec<CellKey> {
-    let camera = Vec3::new(0.0, 1.7, 0.0);
-    let (sin, cos) = (frame as f32 * 0.11).sin_cos();
+    frame_keys_from(grid, Vec3::new(0.0, 1.7, 0.0), frame as f32 * 0.11, rng)
+}
+
+/// One frame's keys seen from `camera` turned by `yaw` radians.
+fn frame_keys_from(
+    grid: &AdaptiveGrid,
+    camera: Vec3,
+    yaw: f32,
+    rng: &mut Pcg64Mcg,
+) -> Vec<CellKey> {
+    let (sin, cos) = yaw.sin_cos();
     let mut keys = Vec::with_capacity((WIDTH * WIDTH) as usize);
     for j in 0..WIDTH {
         for i in 0..WIDTH {
@@ -134,5 +143,82 @@ pub fn inputs() -> Inputs {
         random,
         prime: next_prime(pow2).unwrap(),
         pow2,
+    }
+}
+
+/// The peer benches' sizes: log₂ of the slot counts, from `MCG_BENCH_SLOTS` (e.g.
+/// `16,19,22,24`), else 16 and 19 (what a default run on 2 cores affords).
+pub fn slot_bits() -> Vec<u32> {
+    std::env::var("MCG_BENCH_SLOTS")
+        .ok()
+        .map(|s| {
+            s.split(',')
+                .map(|b| {
+                    b.trim()
+                        .parse()
+                        .expect("MCG_BENCH_SLOTS: comma-separated log2 sizes")
+                })
+                .collect()
+        })
+        .unwrap_or_else(|| vec![16, 19])
+}
+
+/// The bucket hash of the peer benches' tables: `MCG_BENCH_HASH` (a [`BucketHash::name`], e.g.
+/// `mix`), else the default.
+pub fn bench_hash() -> BucketHash {
+    std::env::var("MCG_BENCH_HASH").map_or(BucketHash::default(), |name| {
+        BucketHash::ALL
+            .into_iter()
+            .find(|h| h.name() == name)
+            .expect("MCG_BENCH_HASH: xor-primes, mix, mix-coherent or fold")
+    })
+}
+
+/// A table of `1 << bits` slots filled to load 1/4, and the lookups of a renderer.
+pub struct Sized {
+    /// log₂ of the slot count.
+    pub bits: u32,
+    /// `(1 << bits) / 4` distinct keys, in first-seen order.
+    pub fill: Vec<CellKey>,
+    /// 65 536 pixels' keys that are in `fill`, in the order the frames visited them
+    /// (scanline, frame after frame; repeated when the frames had fewer).
+    pub queries: Vec<CellKey>,
+}
+
+/// The keys of frames seen from random camera positions and headings in the room (seeded),
+/// until `(1 << bits) / 4` distinct keys: 16 384 for 2¹⁶ slots, 4 194 304 for 2²⁴.
+pub fn sized(bits: u32) -> Sized {
+    let grid = AdaptiveGrid::mcpg();
+    let mut rng = Pcg64Mcg::seed_from_u64(0x5153 + u64::from(bits));
+    let n = (1_usize << bits) / 4;
+    let mut seen = std::collections::HashSet::with_capacity(n);
+    let mut fill = Vec::with_capacity(n);
+    let mut pixels = Vec::new();
+    while fill.len() < n {
+        let camera = Vec3::new(
+            rng.random_range(-18.0..18.0),
+            rng.random_range(0.5..9.0),
+            rng.random_range(-18.0..18.0),
+        );
+        let keys = frame_keys_from(&grid, camera, rng.random_range(0.0..6.3), &mut rng);
+        for k in &keys {
+            if fill.len() < n && seen.insert(*k) {
+                fill.push(*k);
+            }
+        }
+        if pixels.len() < 1 << 16 {
+            pixels.extend(keys.into_iter().filter(|k| seen.contains(k)));
+        }
+    }
+    // Small tables: the first frames' hits repeated up to 65 536 lookups.
+    let seen_pixels = pixels.len();
+    while pixels.len() < 1 << 16 {
+        pixels.push(pixels[pixels.len() - seen_pixels]);
+    }
+    pixels.truncate(1 << 16);
+    Sized {
+        bits,
+        fill,
+        queries: pixels,
     }
 }

@@ -4,7 +4,9 @@
 #import mcg::constants::MCG_WORKGROUP_SIZE
 #import mcg::dispatch::mcg_invocation_index
 #import mcg::vmf::VmfSufficientStats
-#import mcg::markov::{MarkovGridState, MarkovPixelState, markov_grid_state_pack, markov_pixel_state_pack}
+#import mcg::markov::{
+    MarkovGridState, MarkovPixelState, markov_grid_state_pack, markov_pixel_state_pack
+}
 
 // What `GridState::from_stats` takes (`MarkovGridWrite` on the host, 40 bytes).
 struct MarkovGridWrite {

@@ -1,0 +1,358 @@
+//! Criterion benchmarks of the tables against the maps a Rust renderer author picks, each group
+//! holding `mcg-hashgrid` and its peers, per table size:
+//!
+//! - `hashbrown` with its default hasher (foldhash), `rustc_hash::FxHashMap`, std's `HashMap`
+//!   (SipHash-1-3), all `<u64, [f32; 8]>` with the key packed into a `u64`
+//!   (`common/stream.rs::pack`);
+//! - for concurrent inserts, `DashMap` (with the Fx hasher) and `Mutex<FxHashMap>`.
+//!
+//! Sizes: 2ᵇ slots for the `b` in `MCG_BENCH_SLOTS` (default `16,19`; the full sweep
+//! is `MCG_BENCH_SLOTS=16,19,22,24`); the table's hash: `MCG_BENCH_HASH` (default `fold`), filled to load 1/4 with distinct keys of a renderer's
+//! frames (`common/stream.rs::sized`); lookups are 65 536 pixels' keys (all hits) in the
+//! order the frames visited them. The maps hold the same keys (their own capacity).
+//!
+//! - `peers_lookup/2^b`: warm (criterion repeats the pass, so what fits stays in the caches):
+//!   `mcg_get` (`HashTable::get` per key), `mcg_find_many` (one `find_many` over the pass, then
+//!   the value reads), and `get` of each map; every lookup reads one value word.
+//! - `peers_lookup_cold/2^b`: the same passes, each after flushing the structure's memory from
+//!   every cache level (`clflush` over the table's two arrays; over every entry of a map and
+//!   its control bytes), untimed.
+//! - `peers_insert/2^b`: the distinct keys into an emptied table / map (emptying not timed).
+//! - `peers_concurrent_insert/2^b`: 2 threads of a persistent pool (`common/pool.rs`, what is
+//!   timed is documented there), each inserting a contiguous half of the distinct keys:
+//!   `ConcurrentTable::insert_or_get`, `DashMap::entry().or_insert`, and the `entry` of an
+//!   `FxHashMap` behind a `Mutex` locked per key.
+//!
+//! Instruction counts of the same passes (robust on a noisy machine):
+//! `scripts/hashgrid-instructions`.
+
+use std::collections::HashMap;
+use std::hash::BuildHasher;
+use std::hint::black_box;
+use std::sync::{Mutex, RwLock};
+use std::time::{Duration, Instant};
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use dashmap::DashMap;
+use mcg_hashgrid::{ConcurrentTable, HashTable};
+use rustc_hash::{FxBuildHasher, FxHashMap};
+
+#[path = "common/lookups.rs"]
+mod lookups;
+#[path = "common/pool.rs"]
+mod pool;
+#[path = "common/stream.rs"]
+mod stream;
+
+use lookups::{State, find_many_pass, get_pass};
+use stream::{Sized, bench_hash, pack, sized, slot_bits};
+
+const MAX_PROBES: u32 = 16;
+
+/// The table of `s`, filled. Linear probing loses a few keys to the probe limit even with an
+/// ideal hash (≈ 4·10⁻⁵ of them at load 1/4 with 16 probes): they are counted and left out
+/// (their lookups are misses).
+fn table(s: &Sized) -> HashTable<State> {
+    let mut t = HashTable::<State>::new(1 << s.bits, MAX_PROBES, bench_hash()).unwrap();
+    let mut full = 0;
+    for k in &s.fill {
+        match t.entry(k) {
+            Some((v, _)) => v[0] = 1.0,
+            None => full += 1,
+        }
+    }
+    eprintln!("2^{}: {} keys, {full} did not fit", s.bits, s.fill.len());
+    t
+}
+
+fn map<S: BuildHasher + Default>(s: &Sized) -> HashMap<u64, State, S> {
+    let m: HashMap<u64, State, S> = s.fill.iter().map(|k| (pack(k), [1.0; 8])).collect();
+    assert_eq!(m.len(), s.fill.len(), "packing is injective on this stream");
+    m
+}
+
+fn hashbrown_map(s: &Sized) -> hashbrown::HashMap<u64, State> {
+    s.fill.iter().map(|k| (pack(k), [1.0; 8])).collect()
+}
+
+/// One lookup pass of a map: `get` per packed key, one value word read per hit.
+#[inline]
+fn map_pass<M: Fn(&u64) -> Option<f32>>(get: M, packed: &[u64]) -> f32 {
+    black_box(packed)
+        .iter()
+        .map(|k| get(k).unwrap_or(0.0))
+        .sum()
+}
+
+/// Flushes every cache line of `bytes` from all cache levels.
+fn flush(bytes: &[u8]) {
+    for line in bytes.chunks(64) {
+        // SAFETY: `clflush` of an address inside a live allocation (the slice); SSE2 is part
+        // of the x86-64 baseline.
+        #[cfg(target_arch = "x86_64")]
+        unsafe {
+            std::arch::x86_64::_mm_clflush(line.as_ptr());
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        black_box(line);
+    }
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a fence has no memory-safety preconditions.
+    unsafe {
+        std::arch::x86_64::_mm_mfence();
+    }
+}
+
+fn flush_table(t: &HashTable<State>) {
+    flush(bytemuck::cast_slice(t.checksums()));
+    flush(bytemuck::cast_slice(t.values()));
+}
+
+/// Flushes a hashbrown-layout map (std's `HashMap` is hashbrown): every entry, and the
+/// control bytes, which follow the entry of bucket 0, the highest entry address: from the
+/// end of the highest occupied entry on, one byte per bucket (buckets: the power of two
+/// above 8/7 of the capacity).
+fn flush_entries<'a>(entries: impl Iterator<Item = (&'a u64, &'a State)>, capacity: usize) {
+    let mut top = 0_usize;
+    for (k, _) in entries {
+        let p = std::ptr::from_ref(k).cast::<u8>();
+        // SAFETY: one entry (`(u64, State)`, 40 bytes) of the live map starts at `p`.
+        flush(unsafe { std::slice::from_raw_parts(p, 40) });
+        top = top.max(p as usize);
+    }
+    let buckets = (capacity * 8 / 7).next_power_of_two();
+    let ctrl = (top + 40) as *const u8;
+    // SAFETY: the control bytes start at or after the end of the highest entry and span
+    // `buckets + 16` bytes, so these `buckets` bytes lie inside the map's allocation.
+    flush(unsafe { std::slice::from_raw_parts(ctrl, buckets) });
+}
+
+/// Times `run` after an untimed `reset`, `iters` times.
+fn timed<S>(
+    iters: u64,
+    state: &mut S,
+    reset: impl Fn(&mut S),
+    mut run: impl FnMut(&mut S),
+) -> Duration {
+    let mut total = Duration::ZERO;
+    for _ in 0..iters {
+        reset(state);
+        let start = Instant::now();
+        run(state);
+        total += start.elapsed();
+    }
+    total
+}
+
+fn bench_lookup(c: &mut Criterion) {
+    for bits in slot_bits() {
+        let s = sized(bits);
+        let t = table(&s);
+        let brown = hashbrown_map(&s);
+        let fx: HashMap<u64, State, FxBuildHasher> = map(&s);
+        let std_map: HashMap<u64, State> = map(&s);
+        let packed: Vec<u64> = s.queries.iter().map(pack).collect();
+        let mut slots = vec![None; s.queries.len()];
+        let id = |name: &str| BenchmarkId::new(name, format!("2^{bits}"));
+        {
+            let mut g = c.benchmark_group("peers_lookup");
+            g.throughput(Throughput::Elements(s.queries.len() as u64));
+            g.bench_function(id("mcg_get"), |b| b.iter(|| get_pass(&t, &s.queries)));
+            g.bench_function(id("mcg_find_many"), |b| {
+                b.iter(|| find_many_pass(&t, &s.queries, &mut slots))
+            });
+            g.bench_function(id("hashbrown_foldhash"), |b| {
+                b.iter(|| map_pass(|k| brown.get(k).map(|v| v[0]), &packed))
+            });
+            g.bench_function(id("fxhashmap"), |b| {
+                b.iter(|| map_pass(|k| fx.get(k).map(|v| v[0]), &packed))
+            });
+            g.bench_function(id("std_hashmap"), |b| {
+                b.iter(|| map_pass(|k| std_map.get(k).map(|v| v[0]), &packed))
+            });
+            g.finish();
+        }
+        let mut g = c.benchmark_group("peers_lookup_cold");
+        g.throughput(Throughput::Elements(s.queries.len() as u64));
+        g.sample_size(10);
+        g.measurement_time(Duration::from_secs(3));
+        g.bench_function(id("mcg_get"), |b| {
+            b.iter_custom(|n| {
+                timed(
+                    n,
+                    &mut (),
+                    |_| flush_table(&t),
+                    |_| {
+                        black_box(get_pass(&t, &s.queries));
+                    },
+                )
+            })
+        });
+        g.bench_function(id("mcg_find_many"), |b| {
+            b.iter_custom(|n| {
+                timed(
+                    n,
+                    &mut slots,
+                    |_| flush_table(&t),
+                    |sl| {
+                        black_box(find_many_pass(&t, &s.queries, sl));
+                    },
+                )
+            })
+        });
+        g.bench_function(id("hashbrown_foldhash"), |b| {
+            b.iter_custom(|n| {
+                timed(
+                    n,
+                    &mut (),
+                    |_| flush_entries(brown.iter(), brown.capacity()),
+                    |_| {
+                        black_box(map_pass(|k| brown.get(k).map(|v| v[0]), &packed));
+                    },
+                )
+            })
+        });
+        g.bench_function(id("fxhashmap"), |b| {
+            b.iter_custom(|n| {
+                timed(
+                    n,
+                    &mut (),
+                    |_| flush_entries(fx.iter(), fx.capacity()),
+                    |_| {
+                        black_box(map_pass(|k| fx.get(k).map(|v| v[0]), &packed));
+                    },
+                )
+            })
+        });
+        g.finish();
+    }
+}
+
+fn bench_insert(c: &mut Criterion) {
+    for bits in slot_bits() {
+        let s = sized(bits);
+        let keys = &s.fill;
+        let packed: Vec<u64> = keys.iter().map(pack).collect();
+        let id = |name: &str| BenchmarkId::new(name, format!("2^{bits}"));
+        let mut g = c.benchmark_group("peers_insert");
+        g.throughput(Throughput::Elements(keys.len() as u64));
+        g.sample_size(10);
+        g.measurement_time(Duration::from_secs(3));
+        let mut t = HashTable::<State>::new(1 << bits, MAX_PROBES, bench_hash()).unwrap();
+        g.bench_function(id("mcg_entry"), |b| {
+            b.iter_custom(|n| {
+                timed(n, &mut t, HashTable::clear, |t| {
+                    for k in black_box(keys) {
+                        if let Some((v, _)) = t.entry(k) {
+                            v[0] += 1.0;
+                        }
+                    }
+                })
+            })
+        });
+        let mut brown = hashbrown::HashMap::<u64, State>::with_capacity(keys.len());
+        g.bench_function(id("hashbrown_foldhash"), |b| {
+            b.iter_custom(|n| {
+                timed(n, &mut brown, hashbrown::HashMap::clear, |m| {
+                    for &k in black_box(&packed) {
+                        m.entry(k).or_insert([0.0; 8])[0] += 1.0;
+                    }
+                })
+            })
+        });
+        let mut fx = FxHashMap::<u64, State>::with_capacity_and_hasher(keys.len(), FxBuildHasher);
+        g.bench_function(id("fxhashmap"), |b| {
+            b.iter_custom(|n| {
+                timed(n, &mut fx, HashMap::clear, |m| {
+                    for &k in black_box(&packed) {
+                        m.entry(k).or_insert([0.0; 8])[0] += 1.0;
+                    }
+                })
+            })
+        });
+        let mut std_map = HashMap::<u64, State>::with_capacity(keys.len());
+        g.bench_function(id("std_hashmap"), |b| {
+            b.iter_custom(|n| {
+                timed(n, &mut std_map, HashMap::clear, |m| {
+                    for &k in black_box(&packed) {
+                        m.entry(k).or_insert([0.0; 8])[0] += 1.0;
+                    }
+                })
+            })
+        });
+        g.finish();
+    }
+}
+
+fn bench_concurrent(c: &mut Criterion) {
+    for bits in slot_bits() {
+        let s = sized(bits);
+        let keys = &s.fill;
+        let packed: Vec<u64> = keys.iter().map(pack).collect();
+        let id = |name: &str| BenchmarkId::new(name, format!("2^{bits}"));
+        let mut g = c.benchmark_group("peers_concurrent_insert");
+        g.throughput(Throughput::Elements(keys.len() as u64));
+        g.sample_size(10);
+        g.measurement_time(Duration::from_secs(3));
+        // In an RwLock only so that the bench can empty it between runs (`clear` takes
+        // `&mut`); each worker takes the read lock once per run.
+        let table = RwLock::new(ConcurrentTable::new(1 << bits, MAX_PROBES, bench_hash()).unwrap());
+        pool::with_workers(
+            |w, n| {
+                let t = table.read().unwrap();
+                let mut inserted = 0_u32;
+                for k in black_box(pool::share(keys, w, n)) {
+                    inserted += u32::from(t.insert_or_get(k).is_inserted());
+                }
+                black_box(inserted);
+            },
+            |workers| {
+                g.bench_function(id("mcg_concurrent_table"), |b| {
+                    b.iter_custom(|n| {
+                        (0..n)
+                            .map(|_| workers.run(2, || table.write().unwrap().clear()))
+                            .sum()
+                    })
+                });
+            },
+        );
+        let dash: DashMap<u64, State, FxBuildHasher> =
+            DashMap::with_capacity_and_hasher(keys.len(), FxBuildHasher);
+        pool::with_workers(
+            |w, n| {
+                for &k in black_box(pool::share(&packed, w, n)) {
+                    dash.entry(k).or_insert([0.0; 8])[0] += 1.0;
+                }
+            },
+            |workers| {
+                g.bench_function(id("dashmap_fx"), |b| {
+                    b.iter_custom(|n| (0..n).map(|_| workers.run(2, || dash.clear())).sum())
+                });
+            },
+        );
+        let locked = Mutex::new(FxHashMap::<u64, State>::with_capacity_and_hasher(
+            keys.len(),
+            FxBuildHasher,
+        ));
+        pool::with_workers(
+            |w, n| {
+                for &k in black_box(pool::share(&packed, w, n)) {
+                    locked.lock().unwrap().entry(k).or_insert([0.0; 8])[0] += 1.0;
+                }
+            },
+            |workers| {
+                g.bench_function(id("mutex_fxhashmap"), |b| {
+                    b.iter_custom(|n| {
+                        (0..n)
+                            .map(|_| workers.run(2, || locked.lock().unwrap().clear()))
+                            .sum()
+                    })
+                });
+            },
+        );
+        g.finish();
+    }
+}
+
+criterion_group!(benches, bench_lookup, bench_insert, bench_concurrent);
+criterion_main!(benches);

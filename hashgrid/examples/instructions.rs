@@ -1,0 +1,152 @@
+//! One case of the peer benches (`benches/peers.rs`) run a given number of times, for
+//! instruction counting under valgrind: `scripts/hashgrid-instructions` runs each case with 1
+//! and with 3 passes under `callgrind` and divides the difference of the two instruction
+//! totals by 2 · queries, so building the stream and the tables cancels out.
+//!
+//! `cargo run --release -p mcg-hashgrid --example instructions -- CASE BITS PASSES`, with
+//! `MCG_BENCH_HASH` picks the table's hash as in the benches. CASE one of `mcg_get`, `mcg_find_many`, `hashbrown_get`, `fx_get`, `std_get`,
+//! `mcg_insert`, `hashbrown_insert`, `fx_insert`; BITS the log₂ of the slot count. With a
+//! fourth argument `time`, it also prints the fastest pass in ns per operation (a quick
+//! min-of-runs check; the criterion bench is the reference).
+
+use std::collections::HashMap;
+use std::hint::black_box;
+use std::time::Instant;
+
+use mcg_hashgrid::HashTable;
+use rustc_hash::FxBuildHasher;
+
+#[path = "../benches/common/lookups.rs"]
+mod lookups;
+#[path = "../benches/common/stream.rs"]
+mod stream;
+
+use lookups::{State, find_many_pass, get_pass};
+use stream::{pack, sized};
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let usage = "usage: instructions CASE BITS PASSES";
+    let case = args.get(1).expect(usage).as_str();
+    let bits: u32 = args.get(2).expect(usage).parse().expect(usage);
+    let passes: usize = args.get(3).expect(usage).parse().expect(usage);
+    let s = sized(bits);
+    let packed: Vec<u64> = s.queries.iter().map(pack).collect();
+    let fill: Vec<u64> = s.fill.iter().map(pack).collect();
+    let mut table = HashTable::<State>::new(1 << bits, 16, stream::bench_hash()).unwrap();
+    let timing = args.get(4).is_some_and(|a| a == "time");
+    let mut best = f64::INFINITY;
+    let mut sum = 0.0_f32;
+    // Called after each pass with its start: keeps the fastest pass.
+    let mut lap = |t0: Instant, ops: usize| {
+        best = best.min(t0.elapsed().as_secs_f64() * 1e9 / ops as f64);
+    };
+    match case {
+        "mcg_get" | "mcg_find_many" => {
+            let mut full = 0;
+            for k in &s.fill {
+                match table.entry(k) {
+                    Some((v, _)) => v[0] = 1.0,
+                    None => full += 1,
+                }
+            }
+            eprintln!("{} keys, {full} did not fit", s.fill.len());
+            let mut slots = vec![None; s.queries.len()];
+            for _ in 0..passes {
+                let t0 = Instant::now();
+                sum += if case == "mcg_get" {
+                    get_pass(&table, &s.queries)
+                } else {
+                    find_many_pass(&table, &s.queries, &mut slots)
+                };
+                lap(t0, s.queries.len());
+            }
+        }
+        "hashbrown_get" => {
+            let m: hashbrown::HashMap<u64, State> = fill.iter().map(|&k| (k, [1.0; 8])).collect();
+            for _ in 0..passes {
+                let t0 = Instant::now();
+                sum += black_box(&packed)
+                    .iter()
+                    .map(|k| m.get(k).map_or(0.0, |v| v[0]))
+                    .sum::<f32>();
+                lap(t0, packed.len());
+            }
+        }
+        "fx_get" => {
+            let m: HashMap<u64, State, FxBuildHasher> =
+                fill.iter().map(|&k| (k, [1.0; 8])).collect();
+            for _ in 0..passes {
+                let t0 = Instant::now();
+                sum += black_box(&packed)
+                    .iter()
+                    .map(|k| m.get(k).map_or(0.0, |v| v[0]))
+                    .sum::<f32>();
+                lap(t0, packed.len());
+            }
+        }
+        "std_get" => {
+            let m: HashMap<u64, State> = fill.iter().map(|&k| (k, [1.0; 8])).collect();
+            for _ in 0..passes {
+                let t0 = Instant::now();
+                sum += black_box(&packed)
+                    .iter()
+                    .map(|k| m.get(k).map_or(0.0, |v| v[0]))
+                    .sum::<f32>();
+                lap(t0, packed.len());
+            }
+        }
+        // Inserts: the fill keys into an emptied structure, `passes` times; a pass per
+        // query count is reported by the script, so these print the key count to use.
+        "mcg_insert" => {
+            for _ in 0..passes {
+                table.clear();
+                let t0 = Instant::now();
+                for k in black_box(&s.fill) {
+                    if let Some((v, _)) = table.entry(k) {
+                        v[0] += 1.0;
+                    }
+                }
+                lap(t0, s.fill.len());
+            }
+            sum += table.len() as f32;
+        }
+        "hashbrown_insert" => {
+            let mut m = hashbrown::HashMap::<u64, State>::with_capacity(fill.len());
+            for _ in 0..passes {
+                m.clear();
+                let t0 = Instant::now();
+                for &k in black_box(&fill) {
+                    m.entry(k).or_insert([0.0; 8])[0] += 1.0;
+                }
+                lap(t0, fill.len());
+            }
+            sum += m.len() as f32;
+        }
+        "fx_insert" => {
+            let mut m = HashMap::<u64, State, FxBuildHasher>::with_capacity_and_hasher(
+                fill.len(),
+                FxBuildHasher,
+            );
+            for _ in 0..passes {
+                m.clear();
+                let t0 = Instant::now();
+                for &k in black_box(&fill) {
+                    m.entry(k).or_insert([0.0; 8])[0] += 1.0;
+                }
+                lap(t0, fill.len());
+            }
+            sum += m.len() as f32;
+        }
+        _ => panic!("unknown case {case}; {usage}"),
+    }
+    let per_pass = if case.ends_with("_insert") {
+        s.fill.len()
+    } else {
+        s.queries.len()
+    };
+    if timing {
+        println!("{case} {bits}: fastest pass {best:.2} ns per operation");
+    }
+    println!("{case} {bits} {passes} {per_pass} {sum}");
+}
