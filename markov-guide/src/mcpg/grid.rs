@@ -15,7 +15,7 @@ pub struct GridSlot {
 }
 
 /// The uniforms of one `grid.load` or `grid.store`: which grid, the level jitter and the corner.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct GridUniforms {
     /// Chooses the adaptive grid when below p_adaptive.
     pub grid: f32,

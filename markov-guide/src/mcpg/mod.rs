@@ -16,17 +16,35 @@
 
 #[cfg(feature = "std")]
 mod grid;
+#[cfg(feature = "std")]
+mod guide;
+#[cfg(feature = "std")]
+mod irradiance_cache;
 mod params;
 mod resampling;
 mod sampling;
+#[cfg(feature = "std")]
+mod shared_grid;
 pub mod single_scattering;
 mod state;
 mod update;
 
 #[cfg(feature = "std")]
+pub use crate::error::GuideError;
+#[cfg(feature = "std")]
 pub use grid::{GridEnsemble, GridSlot, GridUniforms};
+#[cfg(feature = "std")]
+pub use guide::{
+    BeginUniforms, CandidateUniforms, FinishUniforms, Guide, GuideConfig, GuidedSample,
+    GuidedVertex, Hemisphere, IsotropicPhase, Lambertian, MAX_CANDIDATES, PAPER_SCENE_EXTENT,
+    SampleUniforms, Scatter, Traced, Transition, Vertex, VertexObservation, luminance,
+};
+#[cfg(feature = "std")]
+pub use irradiance_cache::{CacheCell, CacheConfig, IrradianceCache};
 pub use params::{DiscardRule, McpgParams};
 pub use resampling::{CandidateSet, GridKind, distance_prior, prepare_candidate};
 pub use sampling::{CosineVertexTechnique, SampleChoice, choose_technique};
+#[cfg(feature = "std")]
+pub use shared_grid::{SharedGrid, SharedStates};
 pub use state::GridState;
 pub use update::{Observation, should_discard, update};
