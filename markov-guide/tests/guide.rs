@@ -315,10 +315,10 @@ fn two_threads_share_a_guide() {
     let z = pooled_z(&acc, &scene);
     assert!(z.abs() < 3.5, "z = {z}");
     let (a, _) = guide.grids_mut();
-    assert!(a.snapshot().iter().all(|s| bytemuck_finite(s)));
+    assert!(a.snapshot().iter().all(state_is_finite));
 }
 
-fn bytemuck_finite(s: &mcg_markov_guide::mcpg::GridState) -> bool {
+fn state_is_finite(s: &mcg_markov_guide::mcpg::GridState) -> bool {
     s.mean_target.is_finite()
         && s.weight_sum.is_finite()
         && s.one_minus_mean_cosine.is_finite()
@@ -376,7 +376,7 @@ fn bad_input_leaves_states_finite_and_estimates_unbiased() {
         a.snapshot()
             .iter()
             .chain(&s.snapshot())
-            .all(bytemuck_finite)
+            .all(state_is_finite)
     );
     assert!(
         guide
@@ -406,6 +406,7 @@ fn irradiance_cache_accumulates_and_evicts() {
         accumulation: 0.25,
         coarser_levels: 2,
         max_age: 2,
+        level_bias: 0,
     };
     let mut cache = IrradianceCache::new(grid, config).unwrap();
     let (x, n, cam) = (
@@ -413,26 +414,27 @@ fn irradiance_cache_accumulates_and_evicts() {
         Vec3::Z,
         Vec3::new(0.0, 0.0, 2.0),
     );
-    assert_eq!(cache.query(x, n, cam, 0.5), Vec3::ZERO);
-    assert!(cache.add(x, n, cam, 0.5, Vec3::new(1.0, 2.0, 3.0)));
-    assert!(cache.add(x, n, cam, 0.5, Vec3::new(3.0, 2.0, 1.0)));
-    assert!(!cache.add(x, n, cam, 0.5, Vec3::new(f32::NAN, 0.0, 0.0)));
-    assert_eq!(cache.query(x, n, cam, 0.5), Vec3::ZERO); // not committed yet
+    let level = cache.level(x, cam);
+    assert_eq!(cache.query(x, n, level, 0.5), Vec3::ZERO);
+    assert!(cache.add(x, n, level, 0.5, Vec3::new(1.0, 2.0, 3.0)));
+    assert!(cache.add(x, n, level, 0.5, Vec3::new(3.0, 2.0, 1.0)));
+    assert!(!cache.add(x, n, level, 0.5, Vec3::new(f32::NAN, 0.0, 0.0)));
+    assert_eq!(cache.query(x, n, level, 0.5), Vec3::ZERO); // not committed yet
     cache.end_frame();
-    assert_eq!(cache.query(x, n, cam, 0.5), Vec3::splat(2.0));
+    assert_eq!(cache.query(x, n, level, 0.5), Vec3::splat(2.0));
     // Second frame: α = 1/2; then α_min = 1/4 from the fourth frame on.
-    cache.add(x, n, cam, 0.5, Vec3::splat(4.0));
+    cache.add(x, n, level, 0.5, Vec3::splat(4.0));
     cache.end_frame();
-    assert_eq!(cache.query(x, n, cam, 0.5), Vec3::splat(3.0));
+    assert_eq!(cache.query(x, n, level, 0.5), Vec3::splat(3.0));
     for _ in 0..2 {
-        cache.add(x, n, cam, 0.5, Vec3::splat(3.0));
+        cache.add(x, n, level, 0.5, Vec3::splat(3.0));
         cache.end_frame();
     }
-    cache.add(x, n, cam, 0.5, Vec3::splat(7.0));
+    cache.add(x, n, level, 0.5, Vec3::splat(7.0));
     cache.end_frame();
-    assert_eq!(cache.query(x, n, cam, 0.5), Vec3::splat(4.0));
+    assert_eq!(cache.query(x, n, level, 0.5), Vec3::splat(4.0));
     // The other side of the surface is another cell.
-    assert_eq!(cache.query(x, -n, cam, 0.5), Vec3::ZERO);
+    assert_eq!(cache.query(x, -n, level, 0.5), Vec3::ZERO);
     assert_eq!(cache.cells().iter().filter(|c| c.weight > 0.0).count(), 1);
     // Idle: evicted after more than max_age frames.
     for _ in 0..4 {
@@ -454,6 +456,7 @@ fn cache_goes_coarser_on_collision() {
         accumulation: 0.25,
         coarser_levels: 6,
         max_age: 100,
+        level_bias: 0,
     };
     let mut cache = IrradianceCache::new(grid, config).unwrap();
     let cam = Vec3::ZERO;
@@ -462,18 +465,28 @@ fn cache_goes_coarser_on_collision() {
         .collect();
     let stored: Vec<bool> = points
         .iter()
-        .map(|&p| cache.add(p, Vec3::Z, cam, 0.0, Vec3::ONE))
+        .map(|&p| cache.add(p, Vec3::Z, cache.level(p, cam), 0.0, Vec3::ONE))
         .collect();
     cache.end_frame();
     assert!(stored.iter().all(|&s| s), "{stored:?}");
     // 8 slots, all taken: a ninth far point can only share a coarse cell or be dropped.
     let far = Vec3::new(100.0, 100.0, 100.0);
-    if cache.add(far, Vec3::Z, cam, 0.0, Vec3::splat(5.0)) {
+    if cache.add(far, Vec3::Z, cache.level(far, cam), 0.0, Vec3::splat(5.0)) {
         cache.end_frame();
-        assert!(cache.query(far, Vec3::Z, cam, 0.0).max_element() > 0.0);
+        assert!(
+            cache
+                .query(far, Vec3::Z, cache.level(far, cam), 0.0)
+                .max_element()
+                > 0.0
+        );
     }
     for &p in &points {
-        assert!(cache.query(p, Vec3::Z, cam, 0.0).max_element() > 0.0);
+        assert!(
+            cache
+                .query(p, Vec3::Z, cache.level(p, cam), 0.0)
+                .max_element()
+                > 0.0
+        );
     }
 }
 

@@ -170,6 +170,23 @@ impl GuideConfig {
     }
 }
 
+impl GuideConfig {
+    /// The same configuration with the adaptive grid's angular resolution set so that a cell
+    /// spans about 8 pixels of an image `height_pixels` high with vertical field of view
+    /// `fov_y` (radians). The paper's 0.6° is about 8 pixels of a 1080-pixel-high image with a
+    /// 60° field of view; at lower resolutions the same 0.6° gives cells smaller than a pixel,
+    /// many more states than pixels, and a slower, colder grid. Invalid input leaves the
+    /// configuration unchanged.
+    #[must_use]
+    pub fn for_camera(mut self, fov_y: f32, height_pixels: u32) -> Self {
+        let cell = 8.0 * fov_y / height_pixels as f32;
+        if cell > 0.0 && cell < core::f32::consts::PI {
+            self.adaptive.tan_half_angle = (0.5 * cell).tan();
+        }
+        self
+    }
+}
+
 impl Default for GuideConfig {
     /// [`GuideConfig::PAPER`].
     fn default() -> Self {
@@ -579,14 +596,16 @@ impl Guide {
             set: CandidateSet::new(),
             slots: [None; MAX_CANDIDATES],
             lobes: [Vmf::uniform(); MAX_CANDIDATES],
+            normalizations: [0.0; MAX_CANDIDATES],
             shares: [0.0; MAX_CANDIDATES],
             scatter_share: 0.0,
+            class: normal_class(vertex.key_direction),
+            target_level: self.adaptive.target_level(self.camera.distance(x)),
         };
         if !x.is_finite() {
             return v;
         }
-        let class = normal_class(vertex.key_direction);
-        let target_level = self.adaptive.target_level(self.camera.distance(x));
+        let (class, target_level) = (v.class, v.target_level);
         let mut keys = [(GridKind::Static, CellKey::unclassed(Default::default())); MAX_CANDIDATES];
         for (key, c) in keys.iter_mut().zip(&u.candidates).take(count) {
             let g = GridUniforms {
@@ -596,15 +615,25 @@ impl Guide {
             };
             *key = self.key(x, class, target_level, &g);
         }
+        // One batch: every lookup, then every state, so that the lookups' memory accesses
+        // overlap instead of waiting on each other.
+        for (slot, (kind, key)) in v.slots.iter_mut().zip(&keys).take(count) {
+            *slot = self.grid(*kind).find(key).map(|s| (*kind, s));
+        }
+        let mut states = [None; MAX_CANDIDATES];
+        for (state, slot) in states.iter_mut().zip(&mut v.slots).take(count) {
+            if let Some((kind, s)) = *slot {
+                *state = self.grid(kind).state(s);
+                if state.is_none() {
+                    *slot = None;
+                }
+            }
+        }
         let now = self.frame as f32;
         for k in 0..count {
-            let (kind, key) = keys[k];
-            let loaded = self.grid(kind).load(&key);
-            let (state, collided) = match loaded {
-                Some((state, slot)) => {
-                    v.slots[k] = Some((kind, slot));
-                    (state, false)
-                }
+            let kind = keys[k].0;
+            let (state, collided) = match states[k] {
+                Some(state) => (state, false),
                 None => (GridState::EMPTY, true),
             };
             let candidate = prepare_candidate(state, collided, kind, x, vertex.normal, now, params);
@@ -625,11 +654,17 @@ pub struct GuidedVertex<'g, S> {
     set: CandidateSet<MAX_CANDIDATES>,
     slots: [Option<(GridKind, u32)>; MAX_CANDIDATES],
     lobes: [Vmf; MAX_CANDIDATES],
+    /// C(κ) of each lobe, for the pdf.
+    normalizations: [f32; MAX_CANDIDATES],
     /// w̄_k / Σw̄ of candidates with a lobe, 0 otherwise.
     shares: [f32; MAX_CANDIDATES],
     /// The shares of valid candidates whose lobe cannot be built at x: Alg. 2 answers them
     /// with the scatter technique.
     scatter_share: f32,
+    /// The cube-map class of the key direction.
+    class: u8,
+    /// The adaptive grid's target level at x.
+    target_level: u32,
 }
 
 impl<S: Scatter> GuidedVertex<'_, S> {
@@ -644,6 +679,12 @@ impl<S: Scatter> GuidedVertex<'_, S> {
             (Hemisphere::CosineProduct, Some(n)) => Vmf::clamped_cosine(n).ok(),
             _ => None,
         };
+        // The product's lobe only (Vmf::product also integrates the product, which costs
+        // three normalisations we do not need): μ' ∝ κμ + κ_c n, κ' = |κμ + κ_c n|.
+        let times_cosine = |lobe: Vmf, c: &Vmf| -> Vmf {
+            let m = lobe.mu() * lobe.kappa() + c.mu() * c.kappa();
+            Vmf::new(m, m.length()).unwrap_or(lobe)
+        };
         for (k, s) in self.set.states().iter().enumerate() {
             let w = s.resampling_weight();
             if !(w > 0.0) {
@@ -652,10 +693,12 @@ impl<S: Scatter> GuidedVertex<'_, S> {
             let share = w / total;
             match s.lobe(x, distance_prior(s, x, params)) {
                 Some(lobe) => {
-                    self.lobes[k] = match &cosine {
-                        Some(c) => lobe.product(c).0,
+                    let lobe = match &cosine {
+                        Some(c) => times_cosine(lobe, c),
                         None => lobe,
                     };
+                    self.lobes[k] = lobe;
+                    self.normalizations[k] = lobe.normalization();
                     self.shares[k] = share;
                 }
                 None => self.scatter_share += share,
@@ -719,7 +762,11 @@ impl<S: Scatter> GuidedVertex<'_, S> {
         let mut lobes = self.scatter_share * scatter;
         for k in 0..self.set.states().len() {
             if self.shares[k] > 0.0 {
-                lobes += self.shares[k] * self.lobes[k].pdf(w);
+                // Vmf::pdf with its normalisation computed once in `begin`.
+                let lobe = &self.lobes[k];
+                let d2 = (w - lobe.mu()).length_squared();
+                lobes +=
+                    self.shares[k] * (self.normalizations[k] * (-0.5 * lobe.kappa() * d2).exp());
             }
         }
         let p = self.guide.config.params.bsdf_probability;
@@ -758,7 +805,12 @@ impl<S: Scatter> GuidedVertex<'_, S> {
                 previous_position,
             } => {
                 let reflected = observation.reflected.unwrap_or_else(|| match &guide.cache {
-                    Some(cache) => cache.query(position, normal, guide.camera, u.cache),
+                    Some(cache) => cache.query(
+                        position,
+                        normal,
+                        guide.adaptive.target_level(guide.camera.distance(position)),
+                        u.cache,
+                    ),
                     None => Vec3::ZERO,
                 });
                 (
@@ -779,7 +831,7 @@ impl<S: Scatter> GuidedVertex<'_, S> {
             Vec3::ZERO
         };
         if let (Some(cache), Some(n)) = (&guide.cache, self.vertex.normal) {
-            cache.add(x, n, guide.camera, u.cache, carried);
+            cache.add(x, n, self.target_level, u.cache, carried);
         }
         let estimate = luminance(carried);
         let now = guide.frame as f32;
@@ -797,9 +849,7 @@ impl<S: Scatter> GuidedVertex<'_, S> {
         };
         match update(&chosen, self.set.mean_weight(), &obs, u.accept, params) {
             Some(new) => {
-                let class = normal_class(self.vertex.key_direction);
-                let level = guide.adaptive.target_level(guide.camera.distance(x));
-                let (kind, key) = guide.key(x, class, level, &u.store);
+                let (kind, key) = guide.key(x, self.class, self.target_level, &u.store);
                 if guide.grid(kind).store(&key, &new) {
                     Transition::Stored
                 } else {

@@ -42,16 +42,22 @@ pub struct CacheConfig {
     pub coarser_levels: u32,
     /// Cells not touched for more frames than this are evicted by `end_frame`.
     pub max_age: u32,
+    /// How many levels coarser than the guiding states' target level the cache's cells are
+    /// ([`IrradianceCache::level`]); radiance is smoother than its directional distribution.
+    /// 4 is 4× the width with the default levels (width ×4 every 4 levels).
+    pub level_bias: u32,
 }
 
 impl CacheConfig {
-    /// 2¹⁶ + 1 slots (a prime is not needed: the table reduces modulo any capacity), α_min =
-    /// 0.05, 3 coarser levels, eviction after 64 idle frames.
+    /// 2¹⁶ slots, α_min = 0.05, 1 coarser level on collision (each level tried costs a
+    /// lookup on every miss), eviction after 64 idle frames, cells 4 levels coarser than the
+    /// guiding states'.
     pub const DEFAULT: Self = Self {
         capacity: 1 << 16,
         accumulation: 0.05,
-        coarser_levels: 3,
+        coarser_levels: 1,
         max_age: 64,
+        level_bias: 4,
     };
 
     fn validate(&self) -> Result<(), ParamsError> {
@@ -78,12 +84,14 @@ impl Default for CacheConfig {
 /// - [`end_frame`](Self::end_frame) (`&mut self`): blends each cell's frame mean in with
 ///   α = max(1/frames, α_min) and evicts cells idle for `max_age` frames.
 ///
-/// A cell is the stochastic-trilinear vertex of the target level (no jitter to coarser levels);
+/// A cell is the stochastic-trilinear vertex of the target level plus `level_bias` (no jitter);
 /// an insert that finds its probe neighbourhood full moves one level coarser, up to
 /// `coarser_levels` times, and a lookup that misses does the same.
 #[derive(Debug)]
 pub struct IrradianceCache {
     grid: AdaptiveGrid,
+    /// `grid.width(level)` for every level.
+    widths: Box<[f32; 256]>,
     table: ConcurrentTable,
     cells: Vec<CacheCell>,
     /// Per slot: R, G, B sums (f32 bits) and the sample count of the current frame.
@@ -102,8 +110,13 @@ impl IrradianceCache {
         let table = ConcurrentTable::new(config.capacity, 8, BucketHash::Mix)
             .map_err(GuideError::Table)?
             .with_age_tracking();
+        let mut widths = Box::new([0.0; 256]);
+        for (level, w) in widths.iter_mut().enumerate() {
+            *w = grid.width(level as u32);
+        }
         Ok(Self {
             grid,
+            widths,
             table,
             cells: std::vec![CacheCell::default(); config.capacity as usize],
             accumulators: (0..config.capacity)
@@ -119,30 +132,48 @@ impl IrradianceCache {
         &self.config
     }
 
+    /// The adaptive grid's target level at `position` seen from `camera` (no jitter): the
+    /// `level` of [`add`](Self::add) and [`query`](Self::query), before the cache's
+    /// `level_bias`.
+    #[inline]
+    #[must_use]
+    pub fn level(&self, position: Vec3, camera: Vec3) -> u32 {
+        self.grid.target_level(camera.distance(position))
+    }
+
+    #[inline]
+    fn cell_level(&self, level: u32, extra: u32) -> u32 {
+        level
+            .saturating_add(self.config.level_bias)
+            .saturating_add(extra)
+            .min(self.grid.params().max_level)
+    }
+
     #[inline]
     fn key(&self, position: Vec3, normal: Vec3, level: u32, corner: f32) -> CellKey {
-        let width = self.grid.width(level);
+        let width = self.widths[level as usize];
         let vertex = mcg_hashgrid::stochastic_trilinear(position / width, corner);
         CellKey::new(vertex, level as u8, normal_class(normal))
     }
 
-    /// Adds one sample of outgoing radiance at a surface point. Samples with a NaN, infinite
-    /// or negative component are ignored. Returns `false` when no slot was found within
-    /// `coarser_levels` coarser levels (the sample is dropped).
+    /// Adds one sample of outgoing radiance at a surface point, from the cell of `level`
+    /// ([`level`](Self::level)) on. Samples with a NaN, infinite or negative component are
+    /// ignored. Returns `false` when no slot was found within `coarser_levels` coarser levels
+    /// (the sample is dropped).
     pub fn add(
         &self,
         position: Vec3,
         normal: Vec3,
-        camera: Vec3,
+        level: u32,
         corner: f32,
         radiance: Vec3,
     ) -> bool {
-        if !(radiance.is_finite() && radiance.min_element() >= 0.0) || !position.is_finite() {
+        if !(radiance.is_finite() && radiance.min_element() >= 0.0 && position.is_finite()) {
             return false;
         }
-        let base = self.grid.target_level(camera.distance(position));
+        let base = level;
         for extra in 0..=self.config.coarser_levels {
-            let level = (base + extra).min(self.grid.params().max_level);
+            let level = self.cell_level(base, extra);
             let key = self.key(position, normal, level, corner);
             if let Some(slot) = self.table.insert_or_get(&key).slot() {
                 let acc = &self.accumulators[slot as usize];
@@ -157,15 +188,16 @@ impl IrradianceCache {
     }
 
     /// The cached outgoing radiance at a surface point: the committed value of the first cell
-    /// found from the target level on, up to `coarser_levels` coarser; 0 when none holds one.
+    /// found from `level` ([`level`](Self::level)) on, up to `coarser_levels` coarser; 0 when
+    /// none holds one.
     #[must_use]
-    pub fn query(&self, position: Vec3, normal: Vec3, camera: Vec3, corner: f32) -> Vec3 {
+    pub fn query(&self, position: Vec3, normal: Vec3, level: u32, corner: f32) -> Vec3 {
         if !position.is_finite() {
             return Vec3::ZERO;
         }
-        let base = self.grid.target_level(camera.distance(position));
+        let base = level;
         for extra in 0..=self.config.coarser_levels {
-            let level = (base + extra).min(self.grid.params().max_level);
+            let level = self.cell_level(base, extra);
             let key = self.key(position, normal, level, corner);
             if let Some(slot) = self.table.find(&key) {
                 let cell = &self.cells[slot as usize];

@@ -1,18 +1,48 @@
 //! World-space Markov chain path guiding (MCPG, Alber et al. 2025): chain states at hash-grid
 //! vertices (Table 1), moved by grid resampling (Alg. 1), sampling (Alg. 2) and the acceptance
 //! plus maximum-likelihood transition (Alg. 3), with the discard heuristic, the
-//! previous-position lookup and velocity prediction of sec. 5.
+//! previous-position lookup and velocity prediction of sec. 5, and the irradiance cache of
+//! sec. 4.
 //!
+//! # The guide
+//! [`Guide`] is MCPG as one object (feature `std`): the adaptive and static grids, the
+//! irradiance cache and the constants, every per-vertex call through `&self` from any number of
+//! threads. Per path vertex: [`Guide::begin`] (Alg. 1), [`GuidedVertex::sample`] and
+//! [`GuidedVertex::pdf`] (Alg. 2, the exact density to divide by), trace, then
+//! [`GuidedVertex::finish`] (Alg. 3 and the cache); per frame [`Guide::end_frame`]. A forward
+//! path tracer multiplies its throughput by f·|cos θ|/p at each vertex, with p =
+//! [`GuidedSample::pdf`]; that per-vertex product is eq. 6.
+//!
+//! # What to expect
+//! - **Warm-up.** The grids start empty: every vertex samples the BSDF until chains are
+//!   accepted. In the `guided_room` example (a room lit only through the gap around a panel,
+//!   3 bounces) the per-frame error is that of cosine sampling for the first frames and falls
+//!   below it after about 4; the ratio settles within about 16 frames (the README has the
+//!   numbers).
+//! - **p_bsdf is also the chain-restart rate.** After a BSDF sample the transition continues
+//!   from the empty state (Alg. 2 line 4), so an accepted BSDF sample stores a fresh
+//!   one-sample chain over whatever it overwrites. A large p_bsdf finds new light sooner but
+//!   keeps resetting good chains: with p_bsdf = 0.5 guiding lost to cosine sampling in the
+//!   room of issue 16's report; 0.1 (the default, the authors' engine uses 0.1-0.15) is the
+//!   balance.
+//! - **Scale.** The paper's lengths are in Quake units; [`GuideConfig::for_scene`] carries
+//!   them to any scene and documents how each parameter scales, [`GuideConfig::for_camera`]
+//!   sets the angular resolution from the image.
+//! - **Hemisphere.** Lobes live on the whole sphere; [`Hemisphere::CosineProduct`] multiplies
+//!   each by a vMF fit of the clamped cosine, so fewer directions go below the surface.
+//!
+//! # The parts
 //! Per path vertex x with normal n at time T:
 //! 1. Load N_mc candidates (adaptive grid with p = 0.7, else static), each with
 //!    [`prepare_candidate`] (velocity prediction, collision and normal rejection), into a
 //!    [`CandidateSet`]. In the first sample of a frame, load at the vertex's previous-frame
 //!    position (sec. 5, "Dynamic Geometry"): the caller passes that position to its grid lookup.
 //! 2. [`choose_technique`]: BSDF or the chosen state's lobe; sample ω; trace to hit_next.
-//! 3. Estimate with f / [`CandidateSet::pdf`] (eq. 6-7), f_mc = lum of that estimate for the
-//!    transition.
-//! 4. [`update`] (eq. 8, Alg. 3) and store the returned state at a freshly chosen level and
-//!    corner; or, for a rejected lobe sample, [`should_discard`] and zero the slot it came from.
+//! 3. Divide f·cos by [`CandidateSet::pdf`] (eq. 6-7, per vertex); f_mc = lum of that
+//!    estimate for the transition.
+//! 4. [`update`] or [`update_from`] (eq. 8, Alg. 3) and store the returned state at a freshly
+//!    chosen level and corner; or, for a rejected lobe sample, [`should_discard`] and zero the
+//!    slot it came from.
 
 #[cfg(feature = "std")]
 mod grid;
@@ -47,4 +77,4 @@ pub use sampling::{CosineVertexTechnique, SampleChoice, choose_technique};
 #[cfg(feature = "std")]
 pub use shared_grid::{SharedGrid, SharedStates};
 pub use state::GridState;
-pub use update::{Observation, should_discard, update};
+pub use update::{Observation, should_discard, update, update_from};

@@ -12,6 +12,24 @@ use super::GridState;
 /// The words of one [`GridState`] (32 bytes = 8 words) stored as atomics.
 const WORDS: usize = 8;
 
+/// One slot: the state's words and its sequence word in one 64-byte cache line, so that a
+/// load touches one line besides the checksum.
+#[repr(C, align(64))]
+#[derive(Debug)]
+struct Slot {
+    words: [AtomicU32; WORDS],
+    sequence: AtomicU32,
+}
+
+impl Slot {
+    fn empty() -> Self {
+        Self {
+            words: core::array::from_fn(|_| AtomicU32::new(0)),
+            sequence: AtomicU32::new(0),
+        }
+    }
+}
+
 /// Per-slot [`GridState`]s that many threads load and store at once, each state as eight
 /// [`AtomicU32`] words behind a sequence word (a seqlock).
 ///
@@ -28,11 +46,11 @@ const WORDS: usize = 8;
 /// So a reader sees either a state some writer wrote whole, or nothing. With one thread no
 /// store is ever dropped and no read ever misses: single-threaded runs are deterministic bit
 /// for bit. The states keep [`GridState`]'s `#[repr(C)]` layout word for word
-/// ([`SharedStates::snapshot`] copies them out for upload).
+/// ([`SharedStates::snapshot`] copies them out for upload); on the CPU each state and its
+/// sequence word share one 64-byte cache line (64 bytes per slot).
 #[derive(Debug)]
 pub struct SharedStates {
-    words: Box<[[AtomicU32; WORDS]]>,
-    sequence: Box<[AtomicU32]>,
+    slots: Box<[Slot]>,
 }
 
 impl SharedStates {
@@ -40,23 +58,20 @@ impl SharedStates {
     #[must_use]
     pub fn new(len: usize) -> Self {
         Self {
-            words: (0..len)
-                .map(|_| core::array::from_fn(|_| AtomicU32::new(0)))
-                .collect(),
-            sequence: (0..len).map(|_| AtomicU32::new(0)).collect(),
+            slots: (0..len).map(|_| Slot::empty()).collect(),
         }
     }
 
     /// The number of slots.
     #[must_use]
     pub fn len(&self) -> usize {
-        self.words.len()
+        self.slots.len()
     }
 
     /// `true` when there are no slots.
     #[must_use]
     pub fn is_empty(&self) -> bool {
-        self.words.is_empty()
+        self.slots.is_empty()
     }
 
     /// The state at `slot`, or `None` when a writer was inside (a torn read) or `slot` is out
@@ -64,8 +79,7 @@ impl SharedStates {
     #[inline]
     #[must_use]
     pub fn load(&self, slot: u32) -> Option<GridState> {
-        let i = slot as usize;
-        let (words, sequence) = (self.words.get(i)?, &self.sequence[i]);
+        let Slot { words, sequence } = self.slots.get(slot as usize)?;
         let before = sequence.load(Ordering::Acquire);
         if before & 1 == 1 {
             return None;
@@ -99,11 +113,9 @@ impl SharedStates {
 
     #[inline]
     fn write(&self, slot: u32, body: impl FnOnce(&[AtomicU32; WORDS])) -> bool {
-        let i = slot as usize;
-        let Some(words) = self.words.get(i) else {
+        let Some(Slot { words, sequence }) = self.slots.get(slot as usize) else {
             return false;
         };
-        let sequence = &self.sequence[i];
         let s = sequence.load(Ordering::Relaxed);
         if s & 1 == 1
             || sequence
@@ -120,7 +132,7 @@ impl SharedStates {
 
     /// Empties `slot` (exclusive access, no sequence protocol needed).
     pub fn reset(&mut self, slot: u32) {
-        if let Some(words) = self.words.get_mut(slot as usize) {
+        if let Some(Slot { words, .. }) = self.slots.get_mut(slot as usize) {
             for w in words.iter_mut() {
                 *w.get_mut() = 0;
             }
@@ -131,9 +143,9 @@ impl SharedStates {
     /// (`bytemuck::cast_slice` gives its bytes). Takes `&mut self`, so no writer is inside.
     #[must_use]
     pub fn snapshot(&mut self) -> Vec<GridState> {
-        self.words
+        self.slots
             .iter_mut()
-            .map(|w| bytemuck::cast(w.each_mut().map(|a| *a.get_mut())))
+            .map(|s| bytemuck::cast(s.words.each_mut().map(|a| *a.get_mut())))
             .collect()
     }
 }
@@ -171,6 +183,21 @@ impl SharedGrid {
     pub fn load(&self, key: &CellKey) -> Option<(GridState, u32)> {
         let slot = self.table.find(key)?;
         Some((self.states.load(slot)?, slot))
+    }
+
+    /// The slot holding `key`, if any (the first half of [`load`](Self::load), for loading
+    /// several candidates in one batch: all lookups first, then all states).
+    #[inline]
+    #[must_use]
+    pub fn find(&self, key: &CellKey) -> Option<u32> {
+        self.table.find(key)
+    }
+
+    /// The state at `slot`; `None` for a torn read (the second half of [`load`](Self::load)).
+    #[inline]
+    #[must_use]
+    pub fn state(&self, slot: u32) -> Option<GridState> {
+        self.states.load(slot)
     }
 
     /// Writes `state` at `key` (claiming a slot if needed). `false` when the probe
