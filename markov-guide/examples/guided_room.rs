@@ -11,6 +11,14 @@
 //! cargo run -p mcg-markov-guide --release --example guided_room -- [--size 96] [--frames 64]
 //!     [--spp 8] [--reference-spp 2048] [--threads 2] [--bounces 3] [--seed 1]
 //!     [--hemisphere sphere|product] [--bsdf-probability 0.1] [--no-cache]
+//!     [--cache-level-bias 4]
+//! ```
+//!
+//! The reference image is kept in the temporary directory between runs (keyed by size,
+//! bounces, reference spp and seed). Times are reported as wall clock and as this process's
+//! CPU time (from `/proc/self/stat`), which is the steadier measure on a shared machine.
+//!
+//! ```text
 //! ```
 
 use std::f32::consts::PI;
@@ -325,6 +333,18 @@ fn render_frame(
     (image, counts)
 }
 
+/// CPU seconds this process has used (user + system, from `/proc/self/stat`, in clock ticks of
+/// 1/100 s); `None` where that file does not exist. On a machine shared with other work the
+/// CPU time of a frame measures its cost better than the wall-clock time.
+fn cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the parenthesised command name; utime and stime are fields 14 and 15.
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    let ticks = fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
+}
+
 fn mse(image: &[Vec3], reference: &[Vec3]) -> f64 {
     image
         .iter()
@@ -384,6 +404,7 @@ impl Accumulator {
 struct Run {
     mse_late: f64,
     seconds_per_frame: f64,
+    cpu_seconds_per_frame: Option<f64>,
     counts: Counts,
     accumulated: Accumulator,
     mse_per_frame: Vec<f64>,
@@ -399,13 +420,14 @@ fn run(
     let size = settings.size;
     let mut accumulated = Accumulator::new(size * size);
     let mut counts = Counts::default();
-    let (mut late, mut late_frames, mut seconds) = (0.0, 0, 0.0);
+    let (mut late, mut late_frames, mut seconds, mut cpu) = (0.0, 0, 0.0, Some(0.0));
     let mut mse_per_frame = Vec::new();
     if let Some(g) = &mut guide {
         g.set_camera(CAMERA);
     }
     for frame in 0..settings.frames {
         let start = Instant::now();
+        let cpu_start = cpu_seconds();
         let (image, c) = render_frame(
             scene,
             guide.as_ref(),
@@ -417,12 +439,14 @@ fn run(
             g.end_frame();
         }
         let elapsed = start.elapsed().as_secs_f64();
+        let cpu_elapsed = cpu_seconds().zip(cpu_start).map(|(b, a)| b - a);
         let e = mse(&image, reference);
         mse_per_frame.push(e);
         if frame >= settings.frames / 2 {
             late += e;
             late_frames += 1;
             seconds += elapsed;
+            cpu = cpu.zip(cpu_elapsed).map(|(c, e)| c + e);
             counts.lobe_samples += c.lobe_samples;
             counts.lobe_below += c.lobe_below;
         }
@@ -442,6 +466,7 @@ fn run(
     Run {
         mse_late: late / late_frames as f64,
         seconds_per_frame: seconds / late_frames as f64,
+        cpu_seconds_per_frame: cpu.map(|c| c / late_frames as f64),
         counts,
         accumulated,
         mse_per_frame,
@@ -461,6 +486,7 @@ fn main() {
     let mut hemisphere = Hemisphere::CosineProduct;
     let mut bsdf_probability = None;
     let mut cache = true;
+    let mut level_bias = None;
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
     while i < args.len() {
@@ -475,6 +501,9 @@ fn main() {
             "--threads" => settings.threads = value().parse().expect("--threads N"),
             "--bounces" => settings.bounces = value().parse().expect("--bounces N"),
             "--seed" => settings.seed = value().parse().expect("--seed N"),
+            "--cache-level-bias" => {
+                level_bias = Some(value().parse().expect("--cache-level-bias N"))
+            }
             "--bsdf-probability" => {
                 bsdf_probability = Some(value().parse().expect("--bsdf-probability P"))
             }
@@ -494,16 +523,42 @@ fn main() {
     }
     let scene = Scene::room();
     let start = Instant::now();
-    let (reference, _) = render_frame(
-        &scene,
-        None,
-        &settings,
-        settings.reference_spp,
-        u64::MAX - settings.seed,
-    );
+    // The reference depends on size, bounces, spp and seed only; keep it between runs.
+    let path = std::env::temp_dir().join(format!(
+        "guided_room_reference_{}_{}_{}_{}.f32",
+        settings.size, settings.bounces, settings.reference_spp, settings.seed
+    ));
+    let stored: Option<Vec<Vec3>> = std::fs::read(&path).ok().and_then(|bytes| {
+        let floats: Vec<f32> = bytes
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        (floats.len() == 3 * settings.size * settings.size)
+            .then(|| floats.chunks_exact(3).map(Vec3::from_slice).collect())
+    });
+    let reference = match stored {
+        Some(r) => r,
+        None => {
+            let (r, _) = render_frame(
+                &scene,
+                None,
+                &settings,
+                settings.reference_spp,
+                u64::MAX - settings.seed,
+            );
+            let bytes: Vec<u8> = r
+                .iter()
+                .flat_map(|p| p.to_array())
+                .flat_map(f32::to_le_bytes)
+                .collect();
+            let _ = std::fs::write(&path, bytes);
+            r
+        }
+    };
     println!(
-        "reference: {} spp cosine sampling, {:.1} s",
+        "reference: {} spp cosine sampling ({}), {:.1} s",
         settings.reference_spp,
+        path.display(),
         start.elapsed().as_secs_f64()
     );
     let mut config = GuideConfig::for_scene(Vec3::ZERO, Vec3::ONE)
@@ -514,6 +569,9 @@ fn main() {
     }
     if !cache {
         config.cache = None;
+    }
+    if let (Some(c), Some(b)) = (&mut config.cache, level_bias) {
+        c.level_bias = b;
     }
     let cosine = run(&scene, None, &settings, &reference, settings.seed);
     let guided = run(
@@ -537,15 +595,23 @@ fn main() {
     );
     for (name, r) in [("cosine", &cosine), ("MCPG", &guided)] {
         println!(
-            "  {name:6}: per-frame MSE {:.5}, {:.1} ms per frame",
+            "  {name:6}: per-frame MSE {:.5}, {:.1} ms per frame (wall), {} ms CPU per frame",
             r.mse_late,
-            1e3 * r.seconds_per_frame
+            1e3 * r.seconds_per_frame,
+            r.cpu_seconds_per_frame
+                .map_or("?".to_string(), |c| format!("{:.1}", 1e3 * c))
         );
     }
     let equal_spp = guided.mse_late / cosine.mse_late;
     let equal_time = equal_spp * guided.seconds_per_frame / cosine.seconds_per_frame;
     println!("  MSE ratio MCPG/cosine at equal spp:  {equal_spp:.3}");
-    println!("  MSE ratio MCPG/cosine at equal time: {equal_time:.3}");
+    println!("  MSE ratio MCPG/cosine at equal time: {equal_time:.3} (wall clock)");
+    if let (Some(g), Some(c)) = (guided.cpu_seconds_per_frame, cosine.cpu_seconds_per_frame) {
+        println!(
+            "  MSE ratio MCPG/cosine at equal time: {:.3} (CPU time)",
+            equal_spp * g / c
+        );
+    }
     println!(
         "  guided directions below the surface: {:.2} % of {} lobe samples",
         100.0 * guided.counts.lobe_below as f64 / guided.counts.lobe_samples.max(1) as f64,
