@@ -11,7 +11,7 @@
 //! cargo run -p mcg-markov-guide --release --example guided_room -- [--size 96] [--frames 64]
 //!     [--spp 8] [--reference-spp 2048] [--threads 2] [--bounces 3] [--seed 1]
 //!     [--hemisphere sphere|product] [--bsdf-probability 0.1] [--no-cache]
-//!     [--cache-level-bias 4]
+//!     [--cache-level-bias 2]
 //! ```
 //!
 //! The reference image is kept in the temporary directory between runs (keyed by size,

@@ -44,20 +44,23 @@ pub struct CacheConfig {
     pub max_age: u32,
     /// How many levels coarser than the guiding states' target level the cache's cells are
     /// ([`IrradianceCache::level`]); radiance is smoother than its directional distribution.
-    /// 4 is 4× the width with the default levels (width ×4 every 4 levels).
+    /// With the default levels (width ×4 every 4 levels) 2 is twice the width. In the
+    /// `guided_room` example (96 × 96, 48 frames) the guided MSE relative to cosine sampling
+    /// was 0.135 with bias 0, 0.174 with 1, 0.152-0.158 with 2, 0.233 with 4 and 0.242 with 6;
+    /// 2 costs 15 % less time than 0 (fewer cells).
     pub level_bias: u32,
 }
 
 impl CacheConfig {
     /// 2¹⁶ slots, α_min = 0.05, 1 coarser level on collision (each level tried costs a
-    /// lookup on every miss), eviction after 64 idle frames, cells 4 levels coarser than the
+    /// lookup on every miss), eviction after 64 idle frames, cells 2 levels coarser than the
     /// guiding states'.
     pub const DEFAULT: Self = Self {
         capacity: 1 << 16,
         accumulation: 0.05,
         coarser_levels: 1,
         max_age: 64,
-        level_bias: 4,
+        level_bias: 2,
     };
 
     fn validate(&self) -> Result<(), ParamsError> {
