@@ -24,7 +24,7 @@
 //! - **p_bsdf is also the chain-restart rate.** After a BSDF sample the transition continues
 //!   from the empty state (Alg. 2 line 4), so an accepted BSDF sample stores a fresh
 //!   one-sample chain over whatever it overwrites. A large p_bsdf finds new light sooner but
-//!   keeps resetting good chains: in `guided_room` the MSE relative to cosine sampling was 0.15
+//!   keeps resetting good chains: in `guided_room` (96 × 96) the MSE relative to cosine sampling was 0.15
 //!   with p_bsdf = 0.1 (the default; the authors' engine uses 0.1-0.15), 0.24 with 0.2 and
 //!   0.38 with 0.5, which loses to cosine sampling at equal time.
 //! - **Scale.** The paper's lengths are in Quake units; [`GuideConfig::for_scene`] carries
