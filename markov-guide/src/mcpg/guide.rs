@@ -111,12 +111,18 @@ pub struct GuideConfig {
     /// How far the virtual target of an escaped ray lies (MCPG sec. 4: "virtual points
     /// displaced in the direction of the light source").
     pub environment_distance: f32,
+    /// States of grid vertices not looked up or stored for more frames than this are freed by
+    /// [`Guide::end_frame`]. The tables probe for a free slot (the GPU's overwrite on a hash
+    /// collision has no CPU twin), so without eviction a guide whose camera keeps moving fills
+    /// its tables and stops storing. `None` never evicts (and saves one age store per access).
+    pub max_state_age: Option<u32>,
 }
 
 impl GuideConfig {
     /// The paper's setting, in Quake units: [`McpgParams::PAPER`], [`LevelParams::MCPG`]
     /// (0.6°, finest cell 0.01), static cells 25 wide, 2²⁰ adaptive and 2¹⁶ static slots, the
-    /// cache with [`CacheConfig::DEFAULT`], whole-sphere lobes, escaped rays' targets 10⁵ away.
+    /// cache with [`CacheConfig::DEFAULT`], whole-sphere lobes, escaped rays' targets 10⁵ away,
+    /// states idle for 64 frames evicted.
     pub const PAPER: Self = Self {
         params: McpgParams::PAPER,
         adaptive: LevelParams::MCPG,
@@ -126,6 +132,7 @@ impl GuideConfig {
         cache: Some(CacheConfig::DEFAULT),
         hemisphere: Hemisphere::Sphere,
         environment_distance: 1.0e5,
+        max_state_age: Some(64),
     };
 
     /// The paper's setting carried over to a scene whose bounds are `min`..`max`, with the
@@ -467,6 +474,13 @@ impl Guide {
         for (level, w) in widths.iter_mut().enumerate() {
             *w = adaptive.width(level as u32);
         }
+        let aged = |g: SharedGrid| {
+            if config.max_state_age.is_some() {
+                g.with_age_tracking()
+            } else {
+                g
+            }
+        };
         let cache = match config.cache {
             Some(c) => Some(IrradianceCache::new(adaptive, c)?),
             None => None,
@@ -476,9 +490,12 @@ impl Guide {
             adaptive,
             widths,
             static_grid,
-            adaptive_states: SharedGrid::new(config.adaptive_capacity)
-                .map_err(GuideError::Table)?,
-            static_states: SharedGrid::new(config.static_capacity).map_err(GuideError::Table)?,
+            adaptive_states: aged(
+                SharedGrid::new(config.adaptive_capacity).map_err(GuideError::Table)?,
+            ),
+            static_states: aged(
+                SharedGrid::new(config.static_capacity).map_err(GuideError::Table)?,
+            ),
             cache,
             camera: Vec3::ZERO,
             frame: 0,
@@ -526,10 +543,15 @@ impl Guide {
     }
 
     /// Ends the frame: folds the frame's samples into the irradiance cache and evicts its
-    /// idle cells, then advances the time by one frame.
+    /// idle cells, evicts idle states ([`GuideConfig::max_state_age`]), then advances the time
+    /// by one frame.
     pub fn end_frame(&mut self) {
         if let Some(cache) = &mut self.cache {
             cache.end_frame();
+        }
+        if let Some(max_age) = self.config.max_state_age {
+            self.adaptive_states.evict_older_than(max_age);
+            self.static_states.evict_older_than(max_age);
         }
         self.frame = self.frame.wrapping_add(1);
     }
