@@ -53,3 +53,33 @@ impl fmt::Display for ParamsError {
 }
 
 impl core::error::Error for ParamsError {}
+
+/// Why [`mcpg::Guide::new`](crate::mcpg::Guide::new) (or the irradiance cache) rejected its
+/// configuration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum GuideError {
+    /// The MCPG constants (or the cache's accumulation factor) are invalid.
+    Params(ParamsError),
+    /// A grid's geometry is invalid.
+    Grid(mcg_hashgrid::GridError),
+    /// A table's capacity or probe limit is invalid.
+    Table(mcg_hashgrid::TableError),
+    /// The escaped rays' target distance is NaN, infinite, zero or negative.
+    EnvironmentDistanceNotPositive,
+}
+
+impl fmt::Display for GuideError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            GuideError::Params(e) => write!(f, "guide constants: {e}"),
+            GuideError::Grid(e) => write!(f, "guide grid: {e}"),
+            GuideError::Table(e) => write!(f, "guide table: {e}"),
+            GuideError::EnvironmentDistanceNotPositive => {
+                f.write_str("environment distance is not positive and finite")
+            }
+        }
+    }
+}
+
+impl core::error::Error for GuideError {}

@@ -14,10 +14,13 @@
 //! | [`mcmm::update`] | acceptance min(1, f/S_c.f), reset, MLE update | MCMM Alg. 3 |
 //! | [`mcmm::ScoreDensity`] | the density in the score f: the chain's technique (paper) or the tile's mixture (SSMIS denominator; our extension) | MCMM Alg. 3 line 1, eq. 9 |
 //! | [`mcmm::CosineChainTechnique`], [`mcmm::McmmPrior`] | a chain as an `mcg_smis::Technique`; uninformed or light-size prior | MCMM eq. 8-9, sec. 5 |
+//! | [`mcpg::Guide`], [`mcpg::GuidedVertex`], [`mcpg::GuideConfig`] | MCPG as one object: `begin` / `sample` / `pdf` / `finish` per vertex through `&self` from many threads, `end_frame` per frame; scene and camera scaling, cosine product | MCPG Alg. 1-3, sec. 4-5 |
+//! | [`mcpg::SharedGrid`], [`mcpg::SharedStates`] | lock-free grid of 32-byte states (seqlock per slot) on `mcg_hashgrid::ConcurrentTable` | MCPG sec. 4 "Synchronization" |
+//! | [`mcpg::IrradianceCache`], [`mcpg::CacheCell`] | adaptive hash grid of radiance, coarser levels on collision, small accumulation factor; `Pod` cells | MCPG sec. 4 "Irradiance Caching" |
 //! | [`mcpg::GridState`] | world-space chain state (w̄, N, ȳ, r̄, T, v) in 32 bytes | MCPG Table 1 |
 //! | [`mcpg::prepare_candidate`], [`mcpg::CandidateSet`], [`mcpg::GridEnsemble`] | candidates from the adaptive and static grids, velocity prediction, collision and normal rejection, reservoir choice | MCPG Alg. 1, eq. 10 |
 //! | [`mcpg::choose_technique`], [`mcpg::CandidateSet::pdf`], [`mcpg::CosineVertexTechnique`] | BSDF or lobe with the distance prior; the estimator's pdf over all accessed states, as an `mcg_smis::Technique` for the path form | MCPG Alg. 2, eq. 6-7 |
-//! | [`mcpg::update`], [`mcpg::should_discard`] | acceptance against the mean candidate score, MLE update, velocity; discard heuristic | MCPG eq. 8-9, Alg. 3, sec. 5 |
+//! | [`mcpg::update`], [`mcpg::update_from`], [`mcpg::should_discard`] | acceptance against the mean candidate score, MLE update, velocity; discard heuristic | MCPG eq. 8-9, Alg. 3, sec. 5 |
 //! | [`mcpg::single_scattering`] | phase function and jittered view direction instead of BSDF and normal | MCPG sec. 4 |
 //! | [`Reservoir`] | one-pass weighted reservoir sampling | Chao 1982; MCMM Alg. 1, MCPG Alg. 1 |
 //! | [`cosine_hemisphere`] | the defensive cosine technique | MCMM Alg. 2, MCPG Alg. 2 |
@@ -81,7 +84,7 @@ pub mod toy_renderer;
 #[cfg(feature = "std")]
 pub mod toy_scene;
 
-pub use error::{ParamsError, WalkError};
+pub use error::{GuideError, ParamsError, WalkError};
 pub use hemisphere::{cosine_hemisphere, cosine_hemisphere_pdf};
 pub use metropolis::{
     ADGI_DIRECTION_STEP, FrameSchedule, MetropolisChain, RandomWalk, StepUniforms,

@@ -15,7 +15,7 @@ pub struct GridSlot {
 }
 
 /// The uniforms of one `grid.load` or `grid.store`: which grid, the level jitter and the corner.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct GridUniforms {
     /// Chooses the adaptive grid when below p_adaptive.
     pub grid: f32,
@@ -105,7 +105,9 @@ impl GridEnsemble {
 
     /// `grid.load(x, n)` of MCPG Alg. 1 line 5: the state at a freshly chosen vertex near
     /// `position` (the vertex's previous-frame position for the first sample of a frame, sec. 5),
-    /// whether the lookup missed (the collision of line 6), the grid it came from and its slot.
+    /// whether the lookup missed (the collision of line 6; always `slot.is_none()`, see
+    /// [`lookup`](Self::lookup)), the grid it came from and its slot. For a whole vertex through
+    /// `&self` from many threads, use [`Guide`](super::Guide).
     #[must_use]
     pub fn load(
         &self,
@@ -125,6 +127,21 @@ impl GridEnsemble {
             ),
             None => (GridState::EMPTY, true, grid, None),
         }
+    }
+
+    /// `grid.load(x, n)` without the redundant flag of [`load`](Self::load): the state (empty
+    /// when the lookup missed, the collision of Alg. 1 line 6), the grid it was chosen from and
+    /// its slot (`None` exactly when the lookup missed).
+    #[must_use]
+    pub fn lookup(
+        &self,
+        position: Vec3,
+        normal: Vec3,
+        camera: Vec3,
+        u: &GridUniforms,
+    ) -> (GridState, GridKind, Option<GridSlot>) {
+        let (state, _, grid, slot) = self.load(position, normal, camera, u);
+        (state, grid, slot)
     }
 
     /// `grid.store(s)` of MCPG Alg. 3 line 12: writes `state` at a freshly chosen vertex near

@@ -64,6 +64,20 @@ impl McpgParams {
         discard: DiscardRule::Engine { ratio: 1.0e-3 },
     };
 
+    /// The constants for a scene measured in units `s` times the paper's (Quake units; s =
+    /// scene units per Quake unit): the prior scale N_p·d² is an area, so it becomes
+    /// `prior_scale · s²`; every other constant is dimensionless and stays. Lengths of the
+    /// grids scale with s too ([`GuideConfig::for_scene`](super::GuideConfig::for_scene)).
+    /// A non-finite or non-positive `s` returns the constants unchanged.
+    #[must_use]
+    pub fn scaled(self, s: f32) -> Self {
+        let mut p = self;
+        if s > 0.0 && s.is_finite() {
+            p.prior_scale *= s * s;
+        }
+        p
+    }
+
     /// Checks probabilities, weights and counts.
     ///
     /// # Errors

@@ -86,8 +86,10 @@ impl<const N: usize> CandidateSet<N> {
 
 /// The sampling technique of one path vertex with a Lambertian (cosine) BSDF: the vertex's
 /// accessed states with Alg. 2's choice, as an [`mcg_smis::Technique`] whose density is
-/// [`CandidateSet::pdf`]. A path's estimate is then MCPG eq. 6, `mcg_smis::path_estimate` over
-/// one such technique per vertex (the product of the vertices' densities, in linear time).
+/// [`CandidateSet::pdf`]. A forward path tracer needs no more than that density: it multiplies
+/// its throughput by f·|cos θ|/p at every vertex, which is MCPG eq. 6.
+/// `mcg_smis::path_estimate` over one such technique per vertex computes the same product for
+/// a path stored as a whole (in linear time).
 ///
 /// The uniform is `(u_choice, u_direction)`: `u_choice` is Alg. 2's ξ against p_bsdf.
 #[derive(Clone, Copy, Debug)]

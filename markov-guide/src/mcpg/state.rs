@@ -132,7 +132,8 @@ impl GridState {
     #[inline]
     #[must_use]
     pub fn predicted(&self, now: f32) -> Self {
-        if !self.is_valid() {
+        // v = 0 (every static scene) moves nothing: skip the f16 decoding.
+        if self.velocity == [0; 3] || !self.is_valid() {
             return *self;
         }
         let moved = self.mean_target + (now - self.time) * self.velocity();

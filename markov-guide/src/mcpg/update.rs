@@ -2,7 +2,7 @@
 
 use mcg_vmf::glam::Vec3;
 
-use super::{DiscardRule, GridState, McpgParams, distance_prior};
+use super::{CandidateSet, DiscardRule, GridState, McpgParams, distance_prior};
 
 /// What the renderer observed for one guided sample, the inputs of MCPG Alg. 3.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -20,6 +20,42 @@ pub struct Observation {
     pub now: f32,
     /// T − T_prev, the time since the previous frame (the denominator of eq. 9).
     pub frame_time: f32,
+}
+
+impl Observation {
+    /// An observation in a static scene: hit_next did not move (x_prev = x, so v = 0) and
+    /// frames are one time unit apart.
+    #[inline]
+    #[must_use]
+    pub const fn static_scene(x: Vec3, next: Vec3, estimate: f32, now: f32) -> Self {
+        Self {
+            x,
+            next,
+            next_previous: next,
+            estimate,
+            now,
+            frame_time: 1.0,
+        }
+    }
+}
+
+/// [`update`] from the candidates themselves: continues from the chosen candidate after a lobe
+/// sample (`lobe_sampled`), from the empty state after a BSDF sample (Alg. 2 line 4), with the
+/// set's mean weight, so that the caller cannot pass the wrong state.
+#[inline]
+#[must_use]
+pub fn update_from<const N: usize>(
+    set: &CandidateSet<N>,
+    lobe_sampled: bool,
+    observation: &Observation,
+    u: f32,
+    params: &McpgParams,
+) -> Option<GridState> {
+    let state = match (lobe_sampled, set.selected()) {
+        (true, Some(s)) => *s,
+        _ => GridState::EMPTY,
+    };
+    update(&state, set.mean_weight(), observation, u, params)
 }
 
 /// MCPG Alg. 3: acceptance against the mean candidate score (eq. 8), then the MLE update.
@@ -151,6 +187,21 @@ mod tests {
         o.next = Vec3::splat(f32::NAN);
         let new = update(&s, 1.0, &o, 0.0, &p).unwrap();
         assert!(new.mean_target.is_finite());
+    }
+
+    #[test]
+    fn update_from_continues_from_the_right_state() {
+        let p = McpgParams::PAPER;
+        let s = state_towards(Vec3::new(0.0, 0.0, 2.0), 2.0);
+        let mut set = CandidateSet::<2>::new();
+        set.offer(s, 0.0);
+        let o = Observation::static_scene(Vec3::ZERO, Vec3::new(0.0, 0.0, 2.0), 1.0, 3.0);
+        assert_eq!(o.next_previous, o.next);
+        let lobe = update_from(&set, true, &o, 0.0, &p).unwrap();
+        assert_eq!(lobe, update(&s, set.mean_weight(), &o, 0.0, &p).unwrap());
+        assert_eq!(lobe.sample_count(), 2);
+        let bsdf = update_from(&set, false, &o, 0.0, &p).unwrap();
+        assert_eq!(bsdf.sample_count(), 1);
     }
 
     #[test]

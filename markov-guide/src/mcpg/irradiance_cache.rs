@@ -1,0 +1,272 @@
+//! MCPG's irradiance cache (sec. 4, "Irradiance Caching"): outgoing radiance at surface points
+//! in an adaptive hash grid, queried for L(hit_next, −ω) when the chains are trained.
+
+use std::boxed::Box;
+use std::vec::Vec;
+
+use core::sync::atomic::{AtomicU32, Ordering};
+
+use bytemuck::{Pod, Zeroable};
+use mcg_hashgrid::{AdaptiveGrid, BucketHash, CellKey, ConcurrentTable, normal_class};
+use mcg_vmf::glam::Vec3;
+
+use crate::error::ParamsError;
+
+use super::GuideError;
+
+/// One cache cell as the GPU reads it: linear RGB radiance and the number of frames folded in
+/// (16 bytes, `#[repr(C)]` + `Pod`, all zeros = empty). The checksum that names the cell lives in
+/// the table's checksum array beside it, as for the guiding states.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct CacheCell {
+    /// The cached outgoing (reflected) radiance, linear RGB.
+    pub radiance: [f32; 3],
+    /// Frames with samples folded into `radiance`, capped at 1/α_min (the blend factor is
+    /// max(1/weight, α_min)). 0 means empty.
+    pub weight: f32,
+}
+
+const _: () = assert!(core::mem::size_of::<CacheCell>() == 16);
+
+/// The settings of the [`IrradianceCache`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CacheConfig {
+    /// Slots of the cache's table.
+    pub capacity: u32,
+    /// α_min, the smallest blend factor of a frame's mean into a cell (MCPG: "a small
+    /// accumulation factor"); the first frames average arithmetically (α = 1/frames).
+    pub accumulation: f32,
+    /// How many coarser levels an insert tries after a full probe neighbourhood (MCPG: "coarser
+    /// levels are accessed only upon hash collisions"), and a lookup after a miss.
+    pub coarser_levels: u32,
+    /// Cells not touched for more frames than this are evicted by `end_frame`.
+    pub max_age: u32,
+    /// How many levels coarser than the guiding states' target level the cache's cells are
+    /// ([`IrradianceCache::level`]); radiance is smoother than its directional distribution.
+    /// With the default levels (width ×4 every 4 levels) 2 is twice the width. In the
+    /// `guided_room` example (96 × 96, 48 frames) the guided MSE relative to cosine sampling
+    /// was 0.135 with bias 0, 0.174 with 1, 0.152-0.158 with 2, 0.233 with 4 and 0.242 with 6;
+    /// 2 costs 15 % less time than 0 (fewer cells).
+    pub level_bias: u32,
+}
+
+impl CacheConfig {
+    /// 2¹⁶ slots, α_min = 0.05, 1 coarser level on collision (each level tried costs a
+    /// lookup on every miss), eviction after 64 idle frames, cells 2 levels coarser than the
+    /// guiding states'.
+    pub const DEFAULT: Self = Self {
+        capacity: 1 << 16,
+        accumulation: 0.05,
+        coarser_levels: 1,
+        max_age: 64,
+        level_bias: 2,
+    };
+
+    fn validate(&self) -> Result<(), ParamsError> {
+        if !(self.accumulation > 0.0 && self.accumulation <= 1.0) {
+            return Err(ParamsError::ProbabilityOutOfRange);
+        }
+        Ok(())
+    }
+}
+
+impl Default for CacheConfig {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// MCPG's irradiance cache: an adaptive hash grid (level from the camera distance as for the
+/// guiding states, the normal's cube-map class in the key) of [`CacheCell`]s.
+///
+/// - [`add`](Self::add) (`&self`, many threads): one radiance sample at a surface point, summed
+///   into the cell's per-frame accumulator (f32 sums by compare-and-swap, a count).
+/// - [`query`](Self::query) (`&self`): the cell's committed radiance; reads never see a value
+///   being written, because cells change only in [`end_frame`](Self::end_frame).
+/// - [`end_frame`](Self::end_frame) (`&mut self`): blends each cell's frame mean in with
+///   α = max(1/frames, α_min) and evicts cells idle for `max_age` frames.
+///
+/// A cell is the stochastic-trilinear vertex of the target level plus `level_bias` (no jitter);
+/// an insert that finds its probe neighbourhood full moves one level coarser, up to
+/// `coarser_levels` times, and a lookup that misses does the same.
+#[derive(Debug)]
+pub struct IrradianceCache {
+    grid: AdaptiveGrid,
+    /// `grid.width(level)` for every level.
+    widths: Box<[f32; 256]>,
+    table: ConcurrentTable,
+    cells: Vec<CacheCell>,
+    /// Per slot: R, G, B sums (f32 bits) and the sample count of the current frame.
+    accumulators: Box<[[AtomicU32; 4]]>,
+    config: CacheConfig,
+}
+
+impl IrradianceCache {
+    /// An empty cache on `grid`'s levels.
+    ///
+    /// # Errors
+    /// [`GuideError::Table`] for a capacity below 8, [`GuideError::Params`] for an
+    /// accumulation factor outside (0, 1].
+    pub fn new(grid: AdaptiveGrid, config: CacheConfig) -> Result<Self, GuideError> {
+        config.validate().map_err(GuideError::Params)?;
+        let table = ConcurrentTable::new(config.capacity, 8, BucketHash::Mix)
+            .map_err(GuideError::Table)?
+            .with_age_tracking();
+        let mut widths = Box::new([0.0; 256]);
+        for (level, w) in widths.iter_mut().enumerate() {
+            *w = grid.width(level as u32);
+        }
+        Ok(Self {
+            grid,
+            widths,
+            table,
+            cells: std::vec![CacheCell::default(); config.capacity as usize],
+            accumulators: (0..config.capacity)
+                .map(|_| core::array::from_fn(|_| AtomicU32::new(0)))
+                .collect(),
+            config,
+        })
+    }
+
+    /// The settings.
+    #[must_use]
+    pub const fn config(&self) -> &CacheConfig {
+        &self.config
+    }
+
+    /// The adaptive grid's target level at `position` seen from `camera` (no jitter): the
+    /// `level` of [`add`](Self::add) and [`query`](Self::query), before the cache's
+    /// `level_bias`.
+    #[inline]
+    #[must_use]
+    pub fn level(&self, position: Vec3, camera: Vec3) -> u32 {
+        self.grid.target_level(camera.distance(position))
+    }
+
+    #[inline]
+    fn cell_level(&self, level: u32, extra: u32) -> u32 {
+        level
+            .saturating_add(self.config.level_bias)
+            .saturating_add(extra)
+            .min(self.grid.params().max_level)
+    }
+
+    #[inline]
+    fn key(&self, position: Vec3, normal: Vec3, level: u32, corner: f32) -> CellKey {
+        let width = self.widths[level as usize];
+        let vertex = mcg_hashgrid::stochastic_trilinear(position / width, corner);
+        CellKey::new(vertex, level as u8, normal_class(normal))
+    }
+
+    /// Adds one sample of outgoing radiance at a surface point, from the cell of `level`
+    /// ([`level`](Self::level)) on. Samples with a NaN, infinite or negative component are
+    /// ignored. Returns `false` when no slot was found within `coarser_levels` coarser levels
+    /// (the sample is dropped).
+    pub fn add(
+        &self,
+        position: Vec3,
+        normal: Vec3,
+        level: u32,
+        corner: f32,
+        radiance: Vec3,
+    ) -> bool {
+        if !(radiance.is_finite() && radiance.min_element() >= 0.0 && position.is_finite()) {
+            return false;
+        }
+        let base = level;
+        for extra in 0..=self.config.coarser_levels {
+            let level = self.cell_level(base, extra);
+            let key = self.key(position, normal, level, corner);
+            if let Some(slot) = self.table.insert_or_get(&key).slot() {
+                let acc = &self.accumulators[slot as usize];
+                for (word, value) in acc.iter().zip(radiance.to_array()) {
+                    add_f32(word, value);
+                }
+                acc[3].fetch_add(1, Ordering::Relaxed);
+                return true;
+            }
+        }
+        false
+    }
+
+    /// The cached outgoing radiance at a surface point: the committed value of the first cell
+    /// found from `level` ([`level`](Self::level)) on, up to `coarser_levels` coarser; 0 when
+    /// none holds one.
+    #[must_use]
+    pub fn query(&self, position: Vec3, normal: Vec3, level: u32, corner: f32) -> Vec3 {
+        if !position.is_finite() {
+            return Vec3::ZERO;
+        }
+        let base = level;
+        for extra in 0..=self.config.coarser_levels {
+            let level = self.cell_level(base, extra);
+            let key = self.key(position, normal, level, corner);
+            if let Some(slot) = self.table.find(&key) {
+                let cell = &self.cells[slot as usize];
+                if cell.weight > 0.0 {
+                    return Vec3::from_array(cell.radiance);
+                }
+            }
+        }
+        Vec3::ZERO
+    }
+
+    /// Folds the frame's samples into the cells (α = max(1/frames, α_min)), clears the
+    /// accumulators, advances the age counter and evicts cells idle for more than `max_age`
+    /// frames. Returns the number of cells evicted.
+    pub fn end_frame(&mut self) -> u32 {
+        let alpha_min = self.config.accumulation;
+        let max_weight = 1.0 / alpha_min;
+        for (cell, acc) in self.cells.iter_mut().zip(self.accumulators.iter_mut()) {
+            let count = core::mem::take(acc[3].get_mut());
+            if count == 0 {
+                continue;
+            }
+            let sum = Vec3::new(
+                f32::from_bits(core::mem::take(acc[0].get_mut())),
+                f32::from_bits(core::mem::take(acc[1].get_mut())),
+                f32::from_bits(core::mem::take(acc[2].get_mut())),
+            );
+            let mean = sum / count as f32;
+            if !mean.is_finite() {
+                continue;
+            }
+            cell.weight = (cell.weight + 1.0).min(max_weight);
+            let alpha = (1.0 / cell.weight).max(alpha_min);
+            let old = Vec3::from_array(cell.radiance);
+            cell.radiance = old.lerp(mean, alpha).to_array();
+        }
+        self.table.advance_frame();
+        let cells = &mut self.cells;
+        self.table.evict_older_than(self.config.max_age, |slot| {
+            cells[slot as usize] = CacheCell::default()
+        })
+    }
+
+    /// The cells in slot order, uploadable as they are (`bytemuck::cast_slice`), beside the
+    /// table's checksum words ([`ConcurrentTable::checksums`] of [`table`](Self::table)).
+    #[must_use]
+    pub fn cells(&self) -> &[CacheCell] {
+        &self.cells
+    }
+
+    /// The slot index.
+    #[must_use]
+    pub const fn table(&self) -> &ConcurrentTable {
+        &self.table
+    }
+}
+
+/// `word += value` on f32 bits, by compare-and-swap.
+#[inline]
+fn add_f32(word: &AtomicU32, value: f32) {
+    let mut current = word.load(Ordering::Relaxed);
+    loop {
+        let next = (f32::from_bits(current) + value).to_bits();
+        match word.compare_exchange_weak(current, next, Ordering::Relaxed, Ordering::Relaxed) {
+            Ok(_) => return,
+            Err(seen) => current = seen,
+        }
+    }
+}
