@@ -62,8 +62,8 @@ impl GridEnsemble {
         Ok(Self {
             adaptive: AdaptiveGrid::mcpg(),
             static_grid: StaticGrid::mcpg(),
-            adaptive_table: HashTable::new(adaptive_capacity, 8, BucketHash::Mix)?,
-            static_table: HashTable::new(static_capacity, 8, BucketHash::Mix)?,
+            adaptive_table: HashTable::new(adaptive_capacity, 8, BucketHash::default())?,
+            static_table: HashTable::new(static_capacity, 8, BucketHash::default())?,
             adaptive_probability,
         })
     }

@@ -110,7 +110,7 @@ impl IrradianceCache {
     /// accumulation factor outside (0, 1].
     pub fn new(grid: AdaptiveGrid, config: CacheConfig) -> Result<Self, GuideError> {
         config.validate().map_err(GuideError::Params)?;
-        let table = ConcurrentTable::new(config.capacity, 8, BucketHash::Mix)
+        let table = ConcurrentTable::new(config.capacity, 8, BucketHash::default())
             .map_err(GuideError::Table)?
             .with_age_tracking();
         let mut widths = Box::new([0.0; 256]);

@@ -165,7 +165,7 @@ impl SharedGrid {
     /// A [`TableError`] for a capacity below 8.
     pub fn new(capacity: u32) -> Result<Self, TableError> {
         Ok(Self {
-            table: ConcurrentTable::new(capacity, 8, BucketHash::Mix)?,
+            table: ConcurrentTable::new(capacity, 8, BucketHash::default())?,
             states: SharedStates::new(capacity as usize),
         })
     }
