@@ -192,7 +192,11 @@ impl Bvh {
                 1 + walk(nodes, n.index as usize).max(walk(nodes, n.index as usize + 1))
             }
         }
-        if self.nodes.is_empty() { 0 } else { walk(&self.nodes, 0) }
+        if self.nodes.is_empty() {
+            0
+        } else {
+            walk(&self.nodes, 0)
+        }
     }
 
     /// The closest triangle hit by the ray `origin + t·direction`, `t ∈ (t_min, t_max)`.
@@ -240,7 +244,9 @@ impl Bvh {
             let node = self.nodes[stack[top] as usize];
             if node.count > 0 {
                 for i in node.index..node.index + node.count {
-                    if let Some(t) = self.triangles[i as usize].intersect(origin, direction, t_min, *t_far) {
+                    if let Some(t) =
+                        self.triangles[i as usize].intersect(origin, direction, t_min, *t_far)
+                    {
                         *t_far = t;
                         if on_hit(i, t) {
                             return;
@@ -253,7 +259,11 @@ impl Bvh {
             let ta = box_entry(&self.nodes[a as usize], origin, inv, t_min, *t_far);
             let tb = box_entry(&self.nodes[a as usize + 1], origin, inv, t_min, *t_far);
             // Push the farther child first so that the nearer one is popped next.
-            let (near, far, t_near, t_farther) = if ta <= tb { (a, a + 1, ta, tb) } else { (a + 1, a, tb, ta) };
+            let (near, far, t_near, t_farther) = if ta <= tb {
+                (a, a + 1, ta, tb)
+            } else {
+                (a + 1, a, tb, ta)
+            };
             if t_farther < f32::INFINITY {
                 stack[top] = far;
                 top += 1;
@@ -323,13 +333,22 @@ mod tests {
                 .triangles
                 .iter()
                 .enumerate()
-                .filter_map(|(i, t)| t.intersect(origin, direction, 1e-4, f32::INFINITY).map(|t| (t, i as u32)))
+                .filter_map(|(i, t)| {
+                    t.intersect(origin, direction, 1e-4, f32::INFINITY)
+                        .map(|t| (t, i as u32))
+                })
                 .min_by(|a, b| a.0.total_cmp(&b.0));
             let fast = bvh.intersect(origin, direction, 1e-4, f32::INFINITY);
             assert_eq!(fast.map(|h| h.t), brute.map(|b| b.0));
-            assert_eq!(bvh.occluded(origin, direction, 1e-4, f32::INFINITY), brute.is_some());
+            assert_eq!(
+                bvh.occluded(origin, direction, 1e-4, f32::INFINITY),
+                brute.is_some()
+            );
             hits += usize::from(brute.is_some());
         }
-        assert!(hits > 200, "the test rays must hit often enough to decide: {hits}");
+        assert!(
+            hits > 200,
+            "the test rays must hit often enough to decide: {hits}"
+        );
     }
 }

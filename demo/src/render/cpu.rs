@@ -159,10 +159,13 @@ pub fn trace_path<S: VertexSampler>(
     // emitter hits need no MIS weight).
     let mut last_pdf = 0.0;
     // Recorded vertices: (vertex, sample, radiance before the sample, throughput after it).
-    let mut recorded: [Option<(Vertex, BsdfSample, Vec3, Vec3)>; MAX_RECORDED] = [None; MAX_RECORDED];
+    let mut recorded: [Option<(Vertex, BsdfSample, Vec3, Vec3)>; MAX_RECORDED] =
+        [None; MAX_RECORDED];
     let mut depth = 0;
     loop {
-        let Some(hit) = scene.bvh.intersect(o, d, 0.0, f32::INFINITY) else { break };
+        let Some(hit) = scene.bvh.intersect(o, d, 0.0, f32::INFINITY) else {
+            break;
+        };
         let tri = scene.bvh.triangles[hit.triangle as usize];
         let material = *scene.material(hit.triangle);
         let cross = tri.cross();
@@ -183,15 +186,24 @@ pub fn trace_path<S: VertexSampler>(
             break;
         }
         let normal = if cos_front > 0.0 { n_front } else { -n_front };
-        let vertex = Vertex { position, normal, wo: -d, material, depth };
+        let vertex = Vertex {
+            position,
+            normal,
+            wo: -d,
+            material,
+            depth,
+        };
         let origin_next = offset(position, normal);
         // Three uniforms for light sampling are drawn for every method, so that the stream
         // of the BSDF sample does not depend on the method.
         let (ul, u1, u2) = (u(), u(), u());
         if method == Method::Nee {
-            radiance += throughput * light_sample(scene, sampler, &vertex, origin_next, [ul, u1, u2]);
+            radiance +=
+                throughput * light_sample(scene, sampler, &vertex, origin_next, [ul, u1, u2]);
         }
-        let Some(sample) = sampler.sample(&vertex, Vec3::new(u(), u(), u())) else { break };
+        let Some(sample) = sampler.sample(&vertex, Vec3::new(u(), u(), u())) else {
+            break;
+        };
         let before = radiance;
         throughput *= sample.weight;
         if let Some(slot) = recorded.get_mut(depth as usize) {
@@ -207,8 +219,16 @@ pub fn trace_path<S: VertexSampler>(
     }
     for (vertex, sample, before, throughput) in recorded.iter().flatten() {
         let gained = radiance - *before;
-        let incident = Vec3::select(throughput.cmpgt(Vec3::ZERO), gained / *throughput, Vec3::ZERO);
-        sampler.finish(&Observation { vertex: *vertex, sample: *sample, radiance: incident });
+        let incident = Vec3::select(
+            throughput.cmpgt(Vec3::ZERO),
+            gained / *throughput,
+            Vec3::ZERO,
+        );
+        sampler.finish(&Observation {
+            vertex: *vertex,
+            sample: *sample,
+            radiance: incident,
+        });
     }
     radiance
 }
@@ -256,22 +276,42 @@ pub fn render_frame<S: VertexSampler>(
     frame: u32,
     new_sampler: impl Fn() -> S + Sync,
 ) -> Vec<Vec3> {
-    let RenderSettings { width, height, spp, bounces, seed, method } = *settings;
+    let RenderSettings {
+        width,
+        height,
+        spp,
+        bounces,
+        seed,
+        method,
+    } = *settings;
     let mut image = vec![Vec3::ZERO; (width * height) as usize];
-    image.par_chunks_mut(width as usize).enumerate().for_each(|(y, row)| {
-        let mut sampler = new_sampler();
-        for (x, pixel) in row.iter_mut().enumerate() {
-            let index = y as u32 * width + x as u32;
-            let mut sum = Vec3::ZERO;
-            for s in 0..spp {
-                let mut rng = path_seed(seed, frame, index, s);
-                let jx = next_uniform(&mut rng);
-                let jy = next_uniform(&mut rng);
-                let d = scene.camera.direction(x as f32 + jx, y as f32 + jy, width, height);
-                sum += trace_path(scene, &mut sampler, method, bounces, scene.camera.position, d, &mut rng);
+    image
+        .par_chunks_mut(width as usize)
+        .enumerate()
+        .for_each(|(y, row)| {
+            let mut sampler = new_sampler();
+            for (x, pixel) in row.iter_mut().enumerate() {
+                let index = y as u32 * width + x as u32;
+                let mut sum = Vec3::ZERO;
+                for s in 0..spp {
+                    let mut rng = path_seed(seed, frame, index, s);
+                    let jx = next_uniform(&mut rng);
+                    let jy = next_uniform(&mut rng);
+                    let d = scene
+                        .camera
+                        .direction(x as f32 + jx, y as f32 + jy, width, height);
+                    sum += trace_path(
+                        scene,
+                        &mut sampler,
+                        method,
+                        bounces,
+                        scene.camera.position,
+                        d,
+                        &mut rng,
+                    );
+                }
+                *pixel = sum / spp as f32;
             }
-            *pixel = sum / spp as f32;
-        }
-    });
+        });
     image
 }

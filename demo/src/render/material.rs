@@ -185,17 +185,40 @@ mod tests {
     fn sampling_matches_eval_and_pdf() {
         let n = Vec3::Z;
         let materials = [
-            Material { base_color: [0.9, 0.6, 0.3], metallic: 1.0, emission: [0.0; 3], roughness: 0.5 },
-            Material { base_color: [0.9, 0.6, 0.3], metallic: 1.0, emission: [0.0; 3], roughness: 0.2 },
-            Material { base_color: [0.9, 0.6, 0.3], metallic: 0.5, emission: [0.0; 3], roughness: 0.7 },
+            Material {
+                base_color: [0.9, 0.6, 0.3],
+                metallic: 1.0,
+                emission: [0.0; 3],
+                roughness: 0.5,
+            },
+            Material {
+                base_color: [0.9, 0.6, 0.3],
+                metallic: 1.0,
+                emission: [0.0; 3],
+                roughness: 0.2,
+            },
+            Material {
+                base_color: [0.9, 0.6, 0.3],
+                metallic: 0.5,
+                emission: [0.0; 3],
+                roughness: 0.7,
+            },
             Material::lambertian(Vec3::new(0.8, 0.5, 0.2), Vec3::ZERO),
         ];
         let mut state = 99u32;
         let mut u = || mcg_gpu_backend::sampling::next_uniform(&mut state);
         for (k, material) in materials.iter().enumerate() {
             for wo in [Vec3::Z, Vec3::new(0.8, 0.0, 0.6)] {
-                let mut sampled = [RunningStats::new(), RunningStats::new(), RunningStats::new()];
-                let mut uniform = [RunningStats::new(), RunningStats::new(), RunningStats::new()];
+                let mut sampled = [
+                    RunningStats::new(),
+                    RunningStats::new(),
+                    RunningStats::new(),
+                ];
+                let mut uniform = [
+                    RunningStats::new(),
+                    RunningStats::new(),
+                    RunningStats::new(),
+                ];
                 for _ in 0..200_000 {
                     let s = material.sample(n, wo, Vec3::new(u(), u(), u()));
                     let w = s.map_or(Vec3::ZERO, |s| {
@@ -214,9 +237,16 @@ mod tests {
                     }
                 }
                 for c in 0..3 {
-                    let se = (sampled[c].standard_error().powi(2) + uniform[c].standard_error().powi(2)).sqrt();
+                    let se = (sampled[c].standard_error().powi(2)
+                        + uniform[c].standard_error().powi(2))
+                    .sqrt();
                     let z = (sampled[c].mean() - uniform[c].mean()) / se;
-                    assert!(z.abs() < 5.0, "material {k}, ωo {wo}, channel {c}: z = {z:.2} ({} vs {})", sampled[c].mean(), uniform[c].mean());
+                    assert!(
+                        z.abs() < 5.0,
+                        "material {k}, ωo {wo}, channel {c}: z = {z:.2} ({} vs {})",
+                        sampled[c].mean(),
+                        uniform[c].mean()
+                    );
                 }
             }
         }

@@ -46,7 +46,10 @@ pub enum Device {
 
 /// The arguments of `mcg-demo render`.
 #[derive(Clone, Debug, clap::Parser)]
-#[command(name = "mcg-demo render", about = "Path traces a glTF 2.0 scene and writes EXR, PNG and JSON.")]
+#[command(
+    name = "mcg-demo render",
+    about = "Path traces a glTF 2.0 scene and writes EXR, PNG and JSON."
+)]
 pub struct RenderArgs {
     /// The glTF 2.0 scene (.gltf with .bin or embedded buffers, or .glb).
     #[arg(long)]
@@ -184,8 +187,10 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     } else {
         let bar = ProgressBar::new(u64::from(args.frames));
         bar.set_style(
-            ProgressStyle::with_template("{msg} [{bar:30}] frame {pos}/{len} ({elapsed}, eta {eta})")
-                .map_err(|e| e.to_string())?,
+            ProgressStyle::with_template(
+                "{msg} [{bar:30}] frame {pos}/{len} ({elapsed}, eta {eta})",
+            )
+            .map_err(|e| e.to_string())?,
         );
         bar.set_message(format!("{} {}", args.method.name(), args.scene.display()));
         bar
@@ -265,6 +270,7 @@ pub fn write_outputs(dir: &Path, rendered: &Rendered) -> Result<Vec<PathBuf>> {
     rendered.image.write_exr(&exr)?;
     rendered.image.write_png(&png)?;
     let text = serde_json::to_string_pretty(&rendered.report)?;
-    std::fs::write(&json, text + "\n").map_err(|e| format!("cannot write {}: {e}", json.display()))?;
+    std::fs::write(&json, text + "\n")
+        .map_err(|e| format!("cannot write {}: {e}", json.display()))?;
     Ok(vec![exr, png, json])
 }

@@ -109,7 +109,11 @@ impl fmt::Display for SceneError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Unreadable { path, reason } => {
-                write!(f, "{}: not a readable glTF 2.0 file: {reason}", path.display())
+                write!(
+                    f,
+                    "{}: not a readable glTF 2.0 file: {reason}",
+                    path.display()
+                )
             }
             Self::NoScene { path } => write!(f, "{}: the file has no scene", path.display()),
             Self::NoCamera { path } => write!(
@@ -138,9 +142,17 @@ impl fmt::Display for SceneError {
                 path.display()
             ),
             Self::NonFinite { path, what } => {
-                write!(f, "{}: {what} is not finite or out of range", path.display())
+                write!(
+                    f,
+                    "{}: {what} is not finite or out of range",
+                    path.display()
+                )
             }
-            Self::UnsupportedAnimation { path, animation, reason } => write!(
+            Self::UnsupportedAnimation {
+                path,
+                animation,
+                reason,
+            } => write!(
                 f,
                 "{}: animation {animation} is not supported: {reason}",
                 path.display()
@@ -189,7 +201,9 @@ pub struct SceneFile {
 
 impl fmt::Debug for SceneFile {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.debug_struct("SceneFile").field("path", &self.path).finish_non_exhaustive()
+        f.debug_struct("SceneFile")
+            .field("path", &self.path)
+            .finish_non_exhaustive()
     }
 }
 
@@ -229,7 +243,11 @@ impl SceneFile {
         if document.scenes().len() == 0 {
             return Err(SceneError::NoScene { path });
         }
-        Ok(Self { path, document, buffers })
+        Ok(Self {
+            path,
+            document,
+            buffers,
+        })
     }
 
     /// The file's path.
@@ -276,7 +294,16 @@ impl SceneFile {
                 emission: emission.to_array(),
                 roughness: pbr.roughness_factor().clamp(0.0, 1.0),
             };
-            let values = [r, g, b, material.metallic, material.roughness, emission.x, emission.y, emission.z];
+            let values = [
+                r,
+                g,
+                b,
+                material.metallic,
+                material.roughness,
+                emission.x,
+                emission.y,
+                emission.z,
+            ];
             if values.iter().any(|v| !v.is_finite()) {
                 return Err(SceneError::NonFinite {
                     path: path.clone(),
@@ -359,7 +386,10 @@ impl SceneFile {
             let reader = primitive.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
             let positions: Vec<Vec3> = reader
                 .read_positions()
-                .ok_or_else(|| SceneError::MissingPositions { path: path.clone(), mesh: mesh.index() })?
+                .ok_or_else(|| SceneError::MissingPositions {
+                    path: path.clone(),
+                    mesh: mesh.index(),
+                })?
                 .map(|p| world.transform_point3(Vec3::from(p)))
                 .collect();
             if positions.iter().any(|p| !p.is_finite()) {
@@ -376,10 +406,13 @@ impl SceneFile {
             let material = primitive.material().index().map_or(0, |i| i as u32 + 1);
             for t in indices.chunks_exact(3) {
                 let vertex = |k: usize| {
-                    positions.get(t[k] as usize).copied().ok_or_else(|| SceneError::Unreadable {
-                        path: path.clone(),
-                        reason: format!("mesh {} has an index past its vertices", mesh.index()),
-                    })
+                    positions
+                        .get(t[k] as usize)
+                        .copied()
+                        .ok_or_else(|| SceneError::Unreadable {
+                            path: path.clone(),
+                            reason: format!("mesh {} has an index past its vertices", mesh.index()),
+                        })
                 };
                 let (a, mut b, mut c) = (vertex(0)?, vertex(1)?, vertex(2)?);
                 if mirrored {
@@ -401,7 +434,11 @@ impl SceneFile {
             .document
             .nodes()
             .map(|n| match n.transform() {
-                gltf::scene::Transform::Decomposed { translation, rotation, scale } => Some((
+                gltf::scene::Transform::Decomposed {
+                    translation,
+                    rotation,
+                    scale,
+                } => Some((
                     Vec3::from(translation),
                     Quat::from_array(rotation),
                     Vec3::from(scale),
@@ -441,9 +478,13 @@ impl SceneFile {
                     _ => return Err(unsupported("morph-target weights".to_owned())),
                 };
                 if times.is_empty() || times.len() != values.len() {
-                    return Err(unsupported("keyframe times and values differ in count".to_owned()));
+                    return Err(unsupported(
+                        "keyframe times and values differ in count".to_owned(),
+                    ));
                 }
-                let v = sample_keyframes(&times, &values, time, interpolation == Interpolation::Step);
+                let rotation = channel.target().property() == Property::Rotation;
+                let step = interpolation == Interpolation::Step;
+                let v = sample_keyframes(&times, &values, time, step, rotation);
                 match channel.target().property() {
                     Property::Translation => node_trs.0 = Vec3::new(v[0], v[1], v[2]),
                     Property::Rotation => node_trs.1 = Quat::from_array(v).normalize(),
@@ -466,9 +507,16 @@ impl SceneFile {
 }
 
 /// The keyframe value at `time`: clamped before the first and after the last key; between
-/// keys the earlier value (STEP) or the linear blend (LINEAR; for rotations followed by a
-/// normalisation, a normalised lerp of quaternions on the same hemisphere).
-fn sample_keyframes(times: &[f32], values: &[[f32; 4]], time: f32, step: bool) -> [f32; 4] {
+/// keys the earlier value (STEP) or the linear blend (LINEAR; for a `rotation`, the later
+/// quaternion is first moved to the earlier one's hemisphere, and the caller normalises: a
+/// normalised lerp).
+fn sample_keyframes(
+    times: &[f32],
+    values: &[[f32; 4]],
+    time: f32,
+    step: bool,
+    rotation: bool,
+) -> [f32; 4] {
     let next = times.partition_point(|&t| t <= time);
     if next == 0 {
         return values[0];
@@ -482,7 +530,7 @@ fn sample_keyframes(times: &[f32], values: &[[f32; 4]], time: f32, step: bool) -
     }
     let s = (time - times[next - 1]) / (times[next] - times[next - 1]);
     let dot: f32 = (0..4).map(|i| a[i] * b[i]).sum();
-    let sign = if dot < 0.0 { -1.0 } else { 1.0 };
+    let sign = if rotation && dot < 0.0 { -1.0 } else { 1.0 };
     core::array::from_fn(|i| a[i] + s * (sign * b[i] - a[i]))
 }
 
@@ -523,7 +571,14 @@ impl Scene {
             bvh.triangles[i as usize].emitter_pmf = (p / total) as f32;
         }
         *emitter_cdf.last_mut().expect("non-empty") = 1.0;
-        Some(Self { camera, bvh, materials, emitters, emitter_cdf, warnings })
+        Some(Self {
+            camera,
+            bvh,
+            materials,
+            emitters,
+            emitter_cdf,
+            warnings,
+        })
     }
 
     /// The material of triangle `triangle` (leaf order).
@@ -536,7 +591,10 @@ impl Scene {
     /// [`Scene::emitter_cdf`]: its triangle index and probability.
     #[must_use]
     pub fn pick_emitter(&self, u: f32) -> (u32, f32) {
-        let k = self.emitter_cdf.partition_point(|&c| c <= u).min(self.emitters.len() - 1);
+        let k = self
+            .emitter_cdf
+            .partition_point(|&c| c <= u)
+            .min(self.emitters.len() - 1);
         let t = self.emitters[k];
         (t, self.bvh.triangles[t as usize].emitter_pmf)
     }

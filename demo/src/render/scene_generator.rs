@@ -44,11 +44,25 @@ struct Mat {
 }
 
 const fn diffuse(name: &'static str, base: [f32; 3]) -> Mat {
-    Mat { name, base, metallic: 0.0, roughness: 1.0, emissive: [0.0; 3], strength: 1.0 }
+    Mat {
+        name,
+        base,
+        metallic: 0.0,
+        roughness: 1.0,
+        emissive: [0.0; 3],
+        strength: 1.0,
+    }
 }
 
 const fn light(name: &'static str, colour: [f32; 3], strength: f32) -> Mat {
-    Mat { name, base: [0.0; 3], metallic: 0.0, roughness: 1.0, emissive: colour, strength }
+    Mat {
+        name,
+        base: [0.0; 3],
+        metallic: 0.0,
+        roughness: 1.0,
+        emissive: colour,
+        strength,
+    }
 }
 
 const WHITE: Mat = diffuse("white", [0.75, 0.75, 0.75]);
@@ -82,7 +96,10 @@ fn cuboid(out: &mut Vec<[Vec3; 3]>, lo: Vec3, hi: Vec3) {
 }
 
 fn part(material: Mat, triangles: Vec<[Vec3; 3]>) -> Part {
-    Part { material, triangles }
+    Part {
+        material,
+        triangles,
+    }
 }
 
 /// The room's shell (front faces inwards) with an optional doorway in the right wall
@@ -90,16 +107,46 @@ fn part(material: Mat, triangles: Vec<[Vec3; 3]>) -> Part {
 fn room(doorway: bool) -> Vec<Part> {
     let (w, h, d) = (2.0, 3.0, 2.5);
     let mut floor = Vec::new();
-    quad(&mut floor, Vec3::new(-w, 0.0, -d), Vec3::Z * 2.0 * d, Vec3::X * 2.0 * w);
+    quad(
+        &mut floor,
+        Vec3::new(-w, 0.0, -d),
+        Vec3::Z * 2.0 * d,
+        Vec3::X * 2.0 * w,
+    );
     let mut white = Vec::new();
-    quad(&mut white, Vec3::new(-w, h, -d), Vec3::X * 2.0 * w, Vec3::Z * 2.0 * d); // ceiling
-    quad(&mut white, Vec3::new(-w, 0.0, -d), Vec3::X * 2.0 * w, Vec3::Y * h); // back
-    quad(&mut white, Vec3::new(-w, 0.0, d), Vec3::Y * h, Vec3::X * 2.0 * w); // front
+    quad(
+        &mut white,
+        Vec3::new(-w, h, -d),
+        Vec3::X * 2.0 * w,
+        Vec3::Z * 2.0 * d,
+    ); // ceiling
+    quad(
+        &mut white,
+        Vec3::new(-w, 0.0, -d),
+        Vec3::X * 2.0 * w,
+        Vec3::Y * h,
+    ); // back
+    quad(
+        &mut white,
+        Vec3::new(-w, 0.0, d),
+        Vec3::Y * h,
+        Vec3::X * 2.0 * w,
+    ); // front
     let mut red = Vec::new();
-    quad(&mut red, Vec3::new(-w, 0.0, -d), Vec3::Y * h, Vec3::Z * 2.0 * d);
+    quad(
+        &mut red,
+        Vec3::new(-w, 0.0, -d),
+        Vec3::Y * h,
+        Vec3::Z * 2.0 * d,
+    );
     let mut green = Vec::new();
     let right = |out: &mut Vec<[Vec3; 3]>, z0: f32, z1: f32, y0: f32, y1: f32| {
-        quad(out, Vec3::new(w, y0, z0), Vec3::Z * (z1 - z0), Vec3::Y * (y1 - y0));
+        quad(
+            out,
+            Vec3::new(w, y0, z0),
+            Vec3::Z * (z1 - z0),
+            Vec3::Y * (y1 - y0),
+        );
     };
     if doorway {
         right(&mut green, -d, -0.5, 0.0, h);
@@ -109,8 +156,16 @@ fn room(doorway: bool) -> Vec<Part> {
         right(&mut green, -d, d, 0.0, h);
     }
     let mut boxes = Vec::new();
-    cuboid(&mut boxes, Vec3::new(-1.4, 0.0, -1.6), Vec3::new(-0.5, 1.4, -0.7));
-    cuboid(&mut boxes, Vec3::new(0.5, 0.0, -0.6), Vec3::new(1.3, 0.8, 0.2));
+    cuboid(
+        &mut boxes,
+        Vec3::new(-1.4, 0.0, -1.6),
+        Vec3::new(-0.5, 1.4, -0.7),
+    );
+    cuboid(
+        &mut boxes,
+        Vec3::new(0.5, 0.0, -0.6),
+        Vec3::new(1.3, 0.8, 0.2),
+    );
     vec![
         part(FLOOR, floor),
         part(WHITE, white),
@@ -123,9 +178,18 @@ fn room(doorway: bool) -> Vec<Part> {
 /// The hidden light (facing up) and its panel, centred on x = 0 in the node's frame.
 fn hidden_light() -> Vec<Part> {
     let mut lamp = Vec::new();
-    quad(&mut lamp, Vec3::new(-0.15, 2.3, -0.15), Vec3::Z * 0.3, Vec3::X * 0.3);
+    quad(
+        &mut lamp,
+        Vec3::new(-0.15, 2.3, -0.15),
+        Vec3::Z * 0.3,
+        Vec3::X * 0.3,
+    );
     let mut panel = Vec::new();
-    cuboid(&mut panel, Vec3::new(-0.6, 2.2, -0.6), Vec3::new(0.6, 2.25, 0.6));
+    cuboid(
+        &mut panel,
+        Vec3::new(-0.6, 2.2, -0.6),
+        Vec3::new(0.6, 2.25, 0.6),
+    );
     vec![
         part(light("hidden_light", [1.0, 0.95, 0.85], 400.0), lamp),
         part(PANEL, panel),
@@ -149,11 +213,20 @@ struct Channel {
 }
 
 /// Serialises nodes, channels and scene extras into glTF JSON and its binary buffer.
-fn write_gltf(name: &str, nodes: &[Node], channels: &[Channel], extras: Value) -> (String, Vec<u8>) {
+fn write_gltf(
+    name: &str,
+    nodes: &[Node],
+    channels: &[Channel],
+    extras: Value,
+) -> (String, Vec<u8>) {
     let mut bin: Vec<u8> = Vec::new();
     let mut views = Vec::new();
     let mut accessors = Vec::new();
-    let mut push_floats = |bin: &mut Vec<u8>, data: &[f32], kind: &str, count: usize, bounds: Option<(Value, Value)>| {
+    let mut push_floats = |bin: &mut Vec<u8>,
+                           data: &[f32],
+                           kind: &str,
+                           count: usize,
+                           bounds: Option<(Value, Value)>| {
         let offset = bin.len();
         for f in data {
             bin.extend_from_slice(&f.to_le_bytes());
@@ -175,9 +248,22 @@ fn write_gltf(name: &str, nodes: &[Node], channels: &[Channel], extras: Value) -
     for node in nodes {
         let mut primitives = Vec::new();
         for p in &node.parts {
-            let flat: Vec<f32> = p.triangles.iter().flatten().flat_map(|v| v.to_array()).collect();
-            let lo = p.triangles.iter().flatten().fold(Vec3::INFINITY, |a, &b| a.min(b));
-            let hi = p.triangles.iter().flatten().fold(Vec3::NEG_INFINITY, |a, &b| a.max(b));
+            let flat: Vec<f32> = p
+                .triangles
+                .iter()
+                .flatten()
+                .flat_map(|v| v.to_array())
+                .collect();
+            let lo = p
+                .triangles
+                .iter()
+                .flatten()
+                .fold(Vec3::INFINITY, |a, &b| a.min(b));
+            let hi = p
+                .triangles
+                .iter()
+                .flatten()
+                .fold(Vec3::NEG_INFINITY, |a, &b| a.max(b));
             let position = push_floats(
                 &mut bin,
                 &flat,
@@ -196,11 +282,12 @@ fn write_gltf(name: &str, nodes: &[Node], channels: &[Channel], extras: Value) -
             });
             if m.emissive != [0.0; 3] {
                 material["emissiveFactor"] = json!(m.emissive);
-                material["extensions"] =
-                    json!({ "KHR_materials_emissive_strength": { "emissiveStrength": m.strength } });
+                material["extensions"] = json!({ "KHR_materials_emissive_strength": { "emissiveStrength": m.strength } });
             }
             materials.push(material);
-            primitives.push(json!({ "attributes": { "POSITION": position }, "material": materials.len() - 1 }));
+            primitives.push(
+                json!({ "attributes": { "POSITION": position }, "material": materials.len() - 1 }),
+            );
         }
         meshes.push(json!({ "name": node.name, "primitives": primitives }));
         let mut n = json!({ "name": node.name, "mesh": meshes.len() - 1 });
@@ -222,13 +309,19 @@ fn write_gltf(name: &str, nodes: &[Node], channels: &[Channel], extras: Value) -
             Some((json!([c.times[0]]), json!([c.times[c.times.len() - 1]]))),
         );
         let flat: Vec<f32> = c.values.iter().flatten().copied().collect();
-        let kind = if c.values[0].len() == 4 { "VEC4" } else { "VEC3" };
+        let kind = if c.values[0].len() == 4 {
+            "VEC4"
+        } else {
+            "VEC3"
+        };
         let output = push_floats(&mut bin, &flat, kind, c.values.len(), None);
         samplers.push(json!({
             "input": input, "output": output,
             "interpolation": if c.step { "STEP" } else { "LINEAR" },
         }));
-        gltf_channels.push(json!({ "sampler": samplers.len() - 1, "target": { "node": c.node, "path": c.path } }));
+        gltf_channels.push(
+            json!({ "sampler": samplers.len() - 1, "target": { "node": c.node, "path": c.path } }),
+        );
     }
     let mut doc = json!({
         "asset": { "version": "2.0", "generator": "mcg-demo scene_generator" },
@@ -244,7 +337,8 @@ fn write_gltf(name: &str, nodes: &[Node], channels: &[Channel], extras: Value) -
         "buffers": [{ "uri": format!("{name}.bin"), "byteLength": bin.len() }],
     });
     if !gltf_channels.is_empty() {
-        doc["animations"] = json!([{ "name": "motion", "samplers": samplers, "channels": gltf_channels }]);
+        doc["animations"] =
+            json!([{ "name": "motion", "samplers": samplers, "channels": gltf_channels }]);
     }
     let mut text = serde_json::to_string_pretty(&doc).expect("JSON values serialise");
     text.push('\n');
@@ -254,7 +348,11 @@ fn write_gltf(name: &str, nodes: &[Node], channels: &[Channel], extras: Value) -
 /// The built-in scenes: `(name, glTF JSON, binary buffer)` each, in [`SCENE_NAMES`] order.
 #[must_use]
 pub fn built_in_scenes() -> Vec<(&'static str, String, Vec<u8>)> {
-    let static_node = |parts| Node { name: "room", parts, translation: Vec3::ZERO };
+    let static_node = |parts| Node {
+        name: "room",
+        parts,
+        translation: Vec3::ZERO,
+    };
 
     // (a) Hidden light.
     let mut parts = room(false);
@@ -271,7 +369,8 @@ pub fn built_in_scenes() -> Vec<(&'static str, String, Vec<u8>)> {
     let mut k = 0;
     let colour = |k: usize| {
         let hue = k as f32 / 24.0 * core::f32::consts::TAU;
-        let c = Vec3::new(hue.cos(), (hue - 2.094).cos(), (hue + 2.094).cos()) * 0.5 + Vec3::splat(0.5);
+        let c =
+            Vec3::new(hue.cos(), (hue - 2.094).cos(), (hue + 2.094).cos()) * 0.5 + Vec3::splat(0.5);
         (c / c.max_element()).to_array()
     };
     for i in 0..4 {
@@ -291,9 +390,20 @@ pub fn built_in_scenes() -> Vec<(&'static str, String, Vec<u8>)> {
         k += 1;
     }
     let mut metal = Vec::new();
-    cuboid(&mut metal, Vec3::new(-0.3, 0.0, 0.6), Vec3::new(0.3, 0.6, 1.2));
+    cuboid(
+        &mut metal,
+        Vec3::new(-0.3, 0.0, 0.6),
+        Vec3::new(0.3, 0.6, 1.2),
+    );
     parts.push(part(
-        Mat { name: "metal", base: [0.95, 0.64, 0.54], metallic: 1.0, roughness: 0.3, emissive: [0.0; 3], strength: 1.0 },
+        Mat {
+            name: "metal",
+            base: [0.95, 0.64, 0.54],
+            metallic: 1.0,
+            roughness: 0.3,
+            emissive: [0.0; 3],
+            strength: 1.0,
+        },
         metal,
     ));
     let (b_json, b_bin) = write_gltf(
@@ -307,23 +417,67 @@ pub fn built_in_scenes() -> Vec<(&'static str, String, Vec<u8>)> {
     let mut parts = room(true);
     let mut side = Vec::new();
     let (x0, x1, z0, z1, h) = (2.0, 3.5, -1.0, 1.0, 3.0);
-    quad(&mut side, Vec3::new(x0, 0.0, z0), Vec3::Z * (z1 - z0), Vec3::X * (x1 - x0)); // floor
-    quad(&mut side, Vec3::new(x0, h, z0), Vec3::X * (x1 - x0), Vec3::Z * (z1 - z0)); // ceiling
-    quad(&mut side, Vec3::new(x1, 0.0, z0), Vec3::Z * (z1 - z0), Vec3::Y * h); // far wall
-    quad(&mut side, Vec3::new(x0, 0.0, z0), Vec3::X * (x1 - x0), Vec3::Y * h); // z0 wall
-    quad(&mut side, Vec3::new(x0, 0.0, z1), Vec3::Y * h, Vec3::X * (x1 - x0)); // z1 wall
+    quad(
+        &mut side,
+        Vec3::new(x0, 0.0, z0),
+        Vec3::Z * (z1 - z0),
+        Vec3::X * (x1 - x0),
+    ); // floor
+    quad(
+        &mut side,
+        Vec3::new(x0, h, z0),
+        Vec3::X * (x1 - x0),
+        Vec3::Z * (z1 - z0),
+    ); // ceiling
+    quad(
+        &mut side,
+        Vec3::new(x1, 0.0, z0),
+        Vec3::Z * (z1 - z0),
+        Vec3::Y * h,
+    ); // far wall
+    quad(
+        &mut side,
+        Vec3::new(x0, 0.0, z0),
+        Vec3::X * (x1 - x0),
+        Vec3::Y * h,
+    ); // z0 wall
+    quad(
+        &mut side,
+        Vec3::new(x0, 0.0, z1),
+        Vec3::Y * h,
+        Vec3::X * (x1 - x0),
+    ); // z1 wall
     parts.push(part(WHITE, side));
     let mut lamp = Vec::new();
-    quad(&mut lamp, Vec3::new(2.6, 2.999, -0.2), Vec3::X * 0.4, Vec3::Z * 0.4);
+    quad(
+        &mut lamp,
+        Vec3::new(2.6, 2.999, -0.2),
+        Vec3::X * 0.4,
+        Vec3::Z * 0.4,
+    );
     parts.push(part(light("side_light", [1.0, 0.7, 0.4], 60.0), lamp));
     let mut door = Vec::new();
-    cuboid(&mut door, Vec3::new(-0.025, 0.0, 0.0), Vec3::new(0.025, 2.2, 1.0));
+    cuboid(
+        &mut door,
+        Vec3::new(-0.025, 0.0, 0.0),
+        Vec3::new(0.025, 2.2, 1.0),
+    );
     let nodes = [
         static_node(parts),
-        Node { name: "moving_light", parts: hidden_light(), translation: Vec3::new(-1.0, 0.0, 0.0) },
-        Node { name: "door", parts: vec![part(PANEL, door)], translation: Vec3::new(2.0, 0.0, -0.5) },
+        Node {
+            name: "moving_light",
+            parts: hidden_light(),
+            translation: Vec3::new(-1.0, 0.0, 0.0),
+        },
+        Node {
+            name: "door",
+            parts: vec![part(PANEL, door)],
+            translation: Vec3::new(2.0, 0.0, -0.5),
+        },
     ];
-    let open = Quat::from_rotation_y(core::f32::consts::FRAC_PI_2).to_array().to_vec();
+    let open = Quat::from_rotation_y(core::f32::consts::FRAC_PI_2)
+        .to_array()
+        .to_vec();
     let channels = [
         Channel {
             node: 1,
@@ -365,9 +519,13 @@ pub fn built_in_scenes() -> Vec<(&'static str, String, Vec<u8>)> {
 pub fn write_built_in_scenes(dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     for (name, text, bin) in built_in_scenes() {
-        for (file, bytes) in [(format!("{name}.gltf"), text.as_bytes()), (format!("{name}.bin"), &bin[..])] {
+        for (file, bytes) in [
+            (format!("{name}.gltf"), text.as_bytes()),
+            (format!("{name}.bin"), &bin[..]),
+        ] {
             let path = dir.join(file);
-            std::fs::write(&path, bytes).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+            std::fs::write(&path, bytes)
+                .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
         }
     }
     Ok(())
