@@ -5,8 +5,11 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use mcg_demo::render::bvh::Triangle;
-use mcg_demo::render::cpu::{BsdfSampler, Method, RenderSettings, render_frame};
-use mcg_demo::render::material::Material;
+use mcg_demo::render::cpu::{
+    BsdfSampler, Method, Observation, RenderSettings, Vertex, VertexSampler, path_seed,
+    render_frame, trace_path,
+};
+use mcg_demo::render::material::{BsdfSample, Material};
 use mcg_demo::render::scene::{Camera, Scene, SceneError, SceneFile, frame_time};
 use mcg_demo::render::scene_generator::{DOOR_OPENS_AT_FRAME, SCENE_NAMES, built_in_scenes};
 use mcg_demo::render::{Device, RenderArgs, render, write_outputs};
@@ -130,11 +133,11 @@ fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
     let mut doc: serde_json::Value = serde_json::from_str(json).unwrap();
     doc["buffers"][0].as_object_mut().unwrap().remove("uri");
     let mut j = serde_json::to_vec(&doc).unwrap();
-    while j.len() % 4 != 0 {
+    while !j.len().is_multiple_of(4) {
         j.push(b' ');
     }
     let mut b = bin.to_vec();
-    while b.len() % 4 != 0 {
+    while !b.len().is_multiple_of(4) {
         b.push(0);
     }
     let total = 12 + 8 + j.len() + 8 + b.len();
@@ -427,4 +430,84 @@ fn render_command_writes_exr_png_and_json() {
     args.width = 8;
     assert!(render(&args).unwrap_err().to_string().contains("nee.exr"));
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A sampler that samples the BSDF and records what `finish` reports, per depth.
+#[derive(Default)]
+struct Recording(Vec<(u32, Vec3)>);
+
+impl VertexSampler for Recording {
+    fn sample(&mut self, v: &Vertex, u: Vec3) -> Option<BsdfSample> {
+        BsdfSampler.sample(v, u)
+    }
+    fn pdf(&self, v: &Vertex, wi: Vec3) -> f32 {
+        BsdfSampler.pdf(v, wi)
+    }
+    fn finish(&mut self, o: &Observation) {
+        self.0.push((o.vertex.depth, o.radiance));
+    }
+}
+
+/// The guide seam reports the radiance that arrived along each sampled direction. In the
+/// furnace with `bsdf` every path is exact, so at depth d (d scattering events before the
+/// vertex) the incident radiance is Σ_{k=0}^{B−1−d} ρ^k L_e — checked for 64 paths (seed 3)
+/// at B = 4 to a relative 10⁻⁵ (f32 rounding); with `nee` the reports are positive and their
+/// mean at depth 0 matches the same value within 5 standard errors over 4096 paths (leaving
+/// out the MIS-discarded share of the next hit's emission fails it at z ≈ −66, checked).
+#[test]
+fn finish_reports_incident_radiance() {
+    let (rho, le) = (Vec3::new(0.5, 0.3, 0.8), Vec3::new(1.0, 2.0, 0.5));
+    let scene = furnace(rho, le);
+    let bounces = 4;
+    let incident = |d: u32| -> Vec3 { (0..bounces - d).map(|k| rho.powf(k as f32) * le).sum() };
+    let mut bsdf = Recording::default();
+    for i in 0..64 {
+        let mut rng = path_seed(3, 0, i, 0);
+        let d = Vec3::new(0.3, -0.2, -1.0).normalize();
+        trace_path(
+            &scene,
+            &mut bsdf,
+            Method::Bsdf,
+            bounces,
+            scene.camera.position,
+            d,
+            &mut rng,
+        );
+    }
+    assert_eq!(bsdf.0.len(), 64 * bounces as usize);
+    for (depth, radiance) in &bsdf.0 {
+        let e = incident(*depth);
+        assert!(
+            ((*radiance - e) / e).abs().max_element() < 1e-5,
+            "depth {depth}: {radiance} vs {e}"
+        );
+    }
+    let mut nee = Recording::default();
+    for i in 0..4096 {
+        let mut rng = path_seed(3, 1, i, 0);
+        let d = Vec3::new(0.3, -0.2, -1.0).normalize();
+        trace_path(
+            &scene,
+            &mut nee,
+            Method::Nee,
+            bounces,
+            scene.camera.position,
+            d,
+            &mut rng,
+        );
+    }
+    let stats: RunningStats = nee
+        .0
+        .iter()
+        .filter(|(d, _)| *d == 0)
+        .map(|(_, r)| f64::from(r.x))
+        .collect();
+    assert_eq!(stats.count(), 4096);
+    let z = (stats.mean() - f64::from(incident(0).x)) / stats.standard_error();
+    assert!(
+        z.abs() < 5.0,
+        "nee: mean {} vs {} (z = {z:.2})",
+        stats.mean(),
+        incident(0).x
+    );
 }

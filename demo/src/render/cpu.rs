@@ -79,7 +79,9 @@ pub struct Vertex {
 }
 
 /// What a sampler learns once its path is complete: the radiance that arrived at `vertex`
-/// along the direction it sampled (estimated by the rest of the path, MIS weights included).
+/// along the direction it sampled, estimated by the rest of the path — the emission of the
+/// next hit in full, plus the next vertex's light samples and everything after them with
+/// their MIS weights (an unbiased estimate of the incident radiance for every method).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Observation {
     /// The vertex, as given to [`VertexSampler::sample`].
@@ -141,6 +143,19 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
 /// still traced but not reported.
 const MAX_RECORDED: usize = 16;
 
+/// A vertex of the path as [`VertexSampler::finish`] will need it.
+#[derive(Clone, Copy)]
+struct Recorded {
+    vertex: Vertex,
+    sample: BsdfSample,
+    /// The path's radiance before the vertex's sample.
+    before: Vec3,
+    /// The throughput after the sample.
+    throughput: Vec3,
+    /// The share of the next hit's emission that its MIS weight left out.
+    discarded: Vec3,
+}
+
 /// Traces one path from the camera ray `(origin, direction)` and returns its radiance.
 pub fn trace_path<S: VertexSampler>(
     scene: &Scene,
@@ -158,14 +173,9 @@ pub fn trace_path<S: VertexSampler>(
     // The density of the direction that produced the current ray (0 for the camera ray, whose
     // emitter hits need no MIS weight).
     let mut last_pdf = 0.0;
-    // Recorded vertices: (vertex, sample, radiance before the sample, throughput after it).
-    let mut recorded: [Option<(Vertex, BsdfSample, Vec3, Vec3)>; MAX_RECORDED] =
-        [None; MAX_RECORDED];
-    let mut depth = 0;
-    loop {
-        let Some(hit) = scene.bvh.intersect(o, d, 0.0, f32::INFINITY) else {
-            break;
-        };
+    let mut recorded: [Option<Recorded>; MAX_RECORDED] = [None; MAX_RECORDED];
+    let mut depth = 0u32;
+    while let Some(hit) = scene.bvh.intersect(o, d, 0.0, f32::INFINITY) {
         let tri = scene.bvh.triangles[hit.triangle as usize];
         let material = *scene.material(hit.triangle);
         let cross = tri.cross();
@@ -181,6 +191,15 @@ pub fn trace_path<S: VertexSampler>(
                 1.0
             };
             radiance += throughput * material.emission() * weight;
+            // The vertex whose sample found this emitter observes all of its emission: the
+            // MIS weight splits the estimate of *its* direct light with its light sample,
+            // not the radiance arriving along the sampled direction.
+            if let Some(Some(r)) = depth
+                .checked_sub(1)
+                .and_then(|d| recorded.get_mut(d as usize))
+            {
+                r.discarded += throughput * material.emission() * (1.0 - weight);
+            }
         }
         if depth == bounces {
             break;
@@ -207,7 +226,13 @@ pub fn trace_path<S: VertexSampler>(
         let before = radiance;
         throughput *= sample.weight;
         if let Some(slot) = recorded.get_mut(depth as usize) {
-            *slot = Some((vertex, sample, before, throughput));
+            *slot = Some(Recorded {
+                vertex,
+                sample,
+                before,
+                throughput,
+                discarded: Vec3::ZERO,
+            });
         }
         last_pdf = sample.pdf;
         o = origin_next;
@@ -217,8 +242,15 @@ pub fn trace_path<S: VertexSampler>(
             break;
         }
     }
-    for (vertex, sample, before, throughput) in recorded.iter().flatten() {
-        let gained = radiance - *before;
+    for r in recorded.iter().flatten() {
+        let Recorded {
+            vertex,
+            sample,
+            before,
+            throughput,
+            discarded,
+        } = r;
+        let gained = radiance - *before + *discarded;
         let incident = Vec3::select(
             throughput.cmpgt(Vec3::ZERO),
             gained / *throughput,

@@ -88,7 +88,7 @@ pub fn srgb_encode(c: f32) -> f32 {
     }
 }
 
-/// The ε of [`relative_mse`] that keeps black reference pixels from dominating.
+/// The ε of [`Errors::rel_mse`] that keeps black reference pixels from dominating.
 pub const REL_MSE_EPSILON: f64 = 1e-2;
 
 /// Errors of an image against a reference of the same size.
