@@ -293,7 +293,7 @@ fn furnace_matches_the_truncated_neumann_series() {
             seed: 7,
             method,
         };
-        let image = render_frame(&scene, &settings, 0, || BsdfSampler);
+        let image = render_frame(&scene, &settings, 0, || BsdfSampler, || ());
         for c in 0..3 {
             let stats: RunningStats = image.iter().map(|p| f64::from(p[c])).collect();
             let diff = stats.mean() - f64::from(expected[c]);
@@ -344,9 +344,10 @@ fn bsdf_and_nee_agree_per_tile() {
             (w * h) as usize
         ];
         for f in 0..frames {
-            for (s, p) in pixels
-                .iter_mut()
-                .zip(render_frame(&scene, &settings, f, || BsdfSampler))
+            for (s, p) in
+                pixels
+                    .iter_mut()
+                    .zip(render_frame(&scene, &settings, f, || BsdfSampler, || ()))
             {
                 for c in 0..3 {
                     s[c].push(f64::from(p[c]));

@@ -301,12 +301,14 @@ fn light_sample<S: VertexSampler>(
 }
 
 /// Renders one frame: `spp` paths per pixel, returns the per-pixel mean radiance, row-major
-/// from the top-left, `width × height` entries. `new_sampler` makes one sampler per row task.
+/// from the top-left, `width × height` entries. `new_sampler` makes one sampler per row task;
+/// `row_done` is called after each row (for progress bars).
 pub fn render_frame<S: VertexSampler>(
     scene: &Scene,
     settings: &RenderSettings,
     frame: u32,
     new_sampler: impl Fn() -> S + Sync,
+    row_done: impl Fn() + Sync,
 ) -> Vec<Vec3> {
     let RenderSettings {
         width,
@@ -344,6 +346,7 @@ pub fn render_frame<S: VertexSampler>(
                 }
                 *pixel = sum / spp as f32;
             }
+            row_done();
         });
     image
 }

@@ -206,7 +206,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             scene = file.build(frame_time(frame))?;
         }
         let started = Instant::now();
-        let image = render_frame(&scene, &settings, frame, || BsdfSampler);
+        let image = render_frame(&scene, &settings, frame, || BsdfSampler, || progress.inc(1));
         frame_times_s.push(started.elapsed().as_secs_f64());
         for (s, p) in sum.iter_mut().zip(&image) {
             *s += *p;
@@ -216,7 +216,6 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             let mean: Vec<Vec3> = sum.iter().map(|s| *s * scale).collect();
             errs.extend(errors(&mean, &r.pixels));
         }
-        progress.inc(1);
     }
     progress.finish_and_clear();
     let scale = 1.0 / args.frames as f32;
