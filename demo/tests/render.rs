@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
-use mcg_demo::render::bvh::Triangle;
+use mcg_demo::render::bvh::{Hit, Triangle};
 use mcg_demo::render::cpu::{
     BsdfSampler, Method, Observation, RenderSettings, Vertex, VertexSampler, path_seed,
     render_frame, trace_path,
@@ -511,4 +511,68 @@ fn finish_reports_incident_radiance() {
         stats.mean(),
         incident(0).x
     );
+}
+
+/// A base-colour texture is read: a triangle with texture coordinates (0,0), (1,0), (0,1) at
+/// its corners and a 2×2 PNG (red, green / grey, blue) embedded as a data URI, factor
+/// (0.5, 1, 1). The material at barycentrics (b1, b2) = texture coordinates (u, v) is the
+/// factor times the sRGB-decoded texel there.
+#[test]
+fn base_colour_texture_multiplies_the_factor() {
+    let dir = temp_dir("texture");
+    let mut png = Vec::new();
+    let texels = vec![255, 0, 0, 0, 255, 0, 128, 128, 128, 0, 0, 255];
+    image::RgbImage::from_raw(2, 2, texels)
+        .unwrap()
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    let floats: [f32; 15] = [
+        0.0, 0.0, -1.0, 1.0, 0.0, -1.0, 0.0, 1.0, -1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0,
+    ];
+    let bytes: Vec<u8> = floats.iter().flat_map(|f| f.to_le_bytes()).collect();
+    let doc = serde_json::json!({
+        "asset": { "version": "2.0" },
+        "scene": 0,
+        "scenes": [{ "nodes": [0, 1] }],
+        "nodes": [{ "mesh": 0 }, { "camera": 0 }],
+        "cameras": [{ "type": "perspective", "perspective": { "yfov": 1.0, "znear": 0.1 } }],
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0, "TEXCOORD_0": 1 }, "material": 0 }] }],
+        "materials": [{
+            "pbrMetallicRoughness": { "baseColorFactor": [0.5, 1.0, 1.0, 1.0], "baseColorTexture": { "index": 0 } },
+            "emissiveFactor": [1.0, 1.0, 1.0],
+        }],
+        "textures": [{ "source": 0 }],
+        "images": [{ "uri": format!("data:image/png;base64,{}", base64(&png)) }],
+        "accessors": [
+            { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+              "min": [0.0, 0.0, -1.0], "max": [1.0, 1.0, -1.0] },
+            { "bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2" },
+        ],
+        "bufferViews": [{ "buffer": 0, "byteLength": 36 }, { "buffer": 0, "byteOffset": 36, "byteLength": 24 }],
+        "buffers": [{ "byteLength": 60, "uri": format!("data:application/octet-stream;base64,{}", base64(&bytes)) }],
+    });
+    let path = dir.join("textured.gltf");
+    std::fs::write(&path, serde_json::to_string(&doc).unwrap()).unwrap();
+    let scene = SceneFile::open(&path).unwrap().build(0.0).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let grey = (128.0f32 / 255.0 + 0.055).powf(2.4) / 1.055f32.powf(2.4);
+    let hit = |b1, b2| Hit {
+        t: 1.0,
+        triangle: 0,
+        b1,
+        b2,
+    };
+    let at = |b1, b2| Vec3::from(scene.material_at(&hit(b1, b2)).base_color);
+    for (b1, b2, expected) in [
+        (0.25, 0.25, Vec3::new(0.5, 0.0, 0.0)),
+        (0.75, 0.1, Vec3::new(0.0, 1.0, 0.0)),
+        (0.1, 0.75, Vec3::new(0.5 * grey, grey, grey)),
+    ] {
+        let got = at(b1, b2);
+        assert!(
+            (got - expected).abs().max_element() < 1e-5,
+            "({b1}, {b2}): {got} vs {expected}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }

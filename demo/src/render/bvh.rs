@@ -89,10 +89,17 @@ impl Triangle {
 
     /// Möller–Trumbore ray/triangle test (Möller and Trumbore 1997, "Fast, Minimum Storage
     /// Ray/Triangle Intersection"): the distance `t` in `(t_min, t_max)` along the unit
-    /// `direction`, or `None`. Both faces are hit.
+    /// `direction` and the barycentric coordinates `(b1, b2)` of the hit (weights of `v1` and
+    /// `v2`), or `None`. Both faces are hit.
     #[inline]
     #[must_use]
-    pub fn intersect(&self, origin: Vec3, direction: Vec3, t_min: f32, t_max: f32) -> Option<f32> {
+    pub fn intersect(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<(f32, f32, f32)> {
         let e1 = Vec3::from(self.e1);
         let e2 = Vec3::from(self.e2);
         let p = direction.cross(e2);
@@ -112,7 +119,7 @@ impl Triangle {
             return None;
         }
         let t = e2.dot(q) * inv;
-        (t > t_min && t < t_max).then_some(t)
+        (t > t_min && t < t_max).then_some((t, b1, b2))
     }
 }
 
@@ -123,6 +130,10 @@ pub struct Hit {
     pub t: f32,
     /// Index of the triangle in [`Bvh::triangles`] (leaf order).
     pub triangle: u32,
+    /// Barycentric weight of the triangle's `v1` at the hit.
+    pub b1: f32,
+    /// Barycentric weight of the triangle's `v2` at the hit.
+    pub b2: f32,
 }
 
 /// Depth of the traversal stack; the builder's trees over the scenes of this renderer stay far
@@ -136,6 +147,9 @@ pub struct Bvh {
     pub nodes: Vec<BvhNode>,
     /// The triangles in leaf order.
     pub triangles: Vec<Triangle>,
+    /// For each entry of `triangles`, its index in the builder's input (to reorder data kept
+    /// beside the triangles, such as texture coordinates).
+    pub source: Vec<u32>,
 }
 
 impl Bvh {
@@ -171,12 +185,13 @@ impl Bvh {
                 count: n.prim_count,
             })
             .collect();
-        let triangles = bvh2
-            .primitive_indices
-            .iter()
-            .map(|&i| triangles[i as usize])
-            .collect();
-        let bvh = Self { nodes, triangles };
+        let source = bvh2.primitive_indices;
+        let triangles = source.iter().map(|&i| triangles[i as usize]).collect();
+        let bvh = Self {
+            nodes,
+            triangles,
+            source,
+        };
         debug_assert!(bvh.depth() < STACK_SIZE);
         bvh
     }
@@ -204,8 +219,13 @@ impl Bvh {
     pub fn intersect(&self, origin: Vec3, direction: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         let mut t_far = t_max;
-        self.walk(origin, direction, t_min, &mut t_far, |i, t| {
-            best = Some(Hit { t, triangle: i });
+        self.walk(origin, direction, t_min, &mut t_far, |i, (t, b1, b2)| {
+            best = Some(Hit {
+                t,
+                triangle: i,
+                b1,
+                b2,
+            });
             false
         });
         best
@@ -223,15 +243,16 @@ impl Bvh {
         hit
     }
 
-    /// The stack walk shared by both queries: `on_hit(triangle, t)` is called for each hit
-    /// closer than `t_far` (which then shrinks to `t`) and stops the walk by returning `true`.
+    /// The stack walk shared by both queries: `on_hit(triangle, (t, b1, b2))` is called for
+    /// each hit closer than `t_far` (which then shrinks to `t`) and stops the walk by returning
+    /// `true`.
     fn walk(
         &self,
         origin: Vec3,
         direction: Vec3,
         t_min: f32,
         t_far: &mut f32,
-        mut on_hit: impl FnMut(u32, f32) -> bool,
+        mut on_hit: impl FnMut(u32, (f32, f32, f32)) -> bool,
     ) {
         if self.nodes.is_empty() {
             return;
@@ -244,11 +265,11 @@ impl Bvh {
             let node = self.nodes[stack[top] as usize];
             if node.count > 0 {
                 for i in node.index..node.index + node.count {
-                    if let Some(t) =
+                    if let Some(hit) =
                         self.triangles[i as usize].intersect(origin, direction, t_min, *t_far)
                     {
-                        *t_far = t;
-                        if on_hit(i, t) {
+                        *t_far = hit.0;
+                        if on_hit(i, hit) {
                             return;
                         }
                     }
@@ -335,7 +356,7 @@ mod tests {
                 .enumerate()
                 .filter_map(|(i, t)| {
                     t.intersect(origin, direction, 1e-4, f32::INFINITY)
-                        .map(|t| (t, i as u32))
+                        .map(|h| (h.0, i as u32))
                 })
                 .min_by(|a, b| a.0.total_cmp(&b.0));
             let fast = bvh.intersect(origin, direction, 1e-4, f32::INFINITY);

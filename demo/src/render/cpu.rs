@@ -177,7 +177,7 @@ pub fn trace_path<S: VertexSampler>(
     let mut depth = 0u32;
     while let Some(hit) = scene.bvh.intersect(o, d, 0.0, f32::INFINITY) {
         let tri = scene.bvh.triangles[hit.triangle as usize];
-        let material = *scene.material(hit.triangle);
+        let material = scene.material_at(&hit);
         let cross = tri.cross();
         let area = 0.5 * cross.length();
         let n_front = cross / (2.0 * area);

@@ -26,9 +26,12 @@ use mcg_vmf::Frame;
 /// (the integrator has no delta lobes).
 pub const MIN_ALPHA: f32 = 1e-3;
 
-/// A material, 32 bytes (two `vec4`s in WGSL).
+/// [`Material::base_color_texture`] of a material without texture.
+pub const NO_TEXTURE: u32 = u32::MAX;
+
+/// A material, 48 bytes (three `vec4`s in WGSL).
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Material {
     /// Linear RGB base colour: the Lambertian albedo and the conductor's `F₀`.
     pub base_color: [f32; 3],
@@ -38,6 +41,25 @@ pub struct Material {
     pub emission: [f32; 3],
     /// glTF perceptual roughness in [0, 1]; `α = roughness²`.
     pub roughness: f32,
+    /// Index of the base-colour texture in the scene's textures, or [`NO_TEXTURE`]; the
+    /// texture's linear RGB multiplies `base_color`.
+    pub base_color_texture: u32,
+    /// Padding to 16 bytes; always 0.
+    pub pad: [u32; 3],
+}
+
+impl Default for Material {
+    /// glTF's default material: white, fully metallic, fully rough, no emission, no texture.
+    fn default() -> Self {
+        Self {
+            base_color: [1.0; 3],
+            metallic: 1.0,
+            emission: [0.0; 3],
+            roughness: 1.0,
+            base_color_texture: NO_TEXTURE,
+            pad: [0; 3],
+        }
+    }
 }
 
 /// A sampled incident direction with its density and weight.
@@ -59,7 +81,7 @@ impl Material {
             base_color: albedo.to_array(),
             metallic: 0.0,
             emission: emission.to_array(),
-            roughness: 1.0,
+            ..Self::default()
         }
     }
 
@@ -190,18 +212,21 @@ mod tests {
                 metallic: 1.0,
                 emission: [0.0; 3],
                 roughness: 0.5,
+                ..Material::default()
             },
             Material {
                 base_color: [0.9, 0.6, 0.3],
                 metallic: 1.0,
                 emission: [0.0; 3],
                 roughness: 0.2,
+                ..Material::default()
             },
             Material {
                 base_color: [0.9, 0.6, 0.3],
                 metallic: 0.5,
                 emission: [0.0; 3],
                 roughness: 0.7,
+                ..Material::default()
             },
             Material::lambertian(Vec3::new(0.8, 0.5, 0.2), Vec3::ZERO),
         ];

@@ -43,7 +43,7 @@ pub enum Device {
     /// The GPU when a wgpu adapter exists, the CPU otherwise (today: always the CPU, as the
     /// WGSL tracer is not written yet; a one-line message says so).
     Auto,
-    /// The CPU tracer ([`cpu`]).
+    /// The CPU tracer (rayon threads).
     Cpu,
 }
 

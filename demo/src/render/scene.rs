@@ -11,8 +11,10 @@
 //!   perspective camera; it looks down its local −Z with +Y up (glTF 2.0 §3.10). `yfov` is
 //!   used; the aspect ratio is the image's.
 //! - **Materials** ([`Material`]): `baseColorFactor` (RGB), `metallicFactor`,
-//!   `roughnessFactor`, `emissiveFactor × KHR_materials_emissive_strength`. A base-colour
-//!   texture is not sampled; its factor is used and [`Scene::warnings`] says so.
+//!   `roughnessFactor`, `emissiveFactor × KHR_materials_emissive_strength`, and the
+//!   base-colour texture (8-bit PNG or JPEG, sRGB-decoded, `TEXCOORD_0`, nearest texel with
+//!   REPEAT wrapping — the glTF sampler is not read), which multiplies `baseColorFactor`.
+//!   A texture on another coordinate set is ignored, and [`Scene::warnings`] says so.
 //! - **Animations**: translation, rotation and scale channels with STEP or LINEAR
 //!   interpolation (rotations LINEAR by normalised lerp of the quaternions), evaluated at
 //!   the time of the frame ([`frame_time`]); the dynamic built-in scene uses them.
@@ -26,8 +28,10 @@ use std::path::{Path, PathBuf};
 use glam::{Mat4, Quat, Vec3};
 use gltf::animation::{Interpolation, Property, util::ReadOutputs};
 
-use super::bvh::{Bvh, Triangle};
-use super::material::Material;
+use bytemuck::{Pod, Zeroable};
+
+use super::bvh::{Bvh, Hit, Triangle};
+use super::material::{Material, NO_TEXTURE};
 
 /// Frames per second of the renderer's clock: frame `f` shows the scene at `f / FRAME_RATE`
 /// seconds of its animations.
@@ -93,6 +97,15 @@ pub enum SceneError {
         /// What holds the value.
         what: String,
     },
+    /// A base-colour texture is not an 8-bit image, or cannot be decoded.
+    UnsupportedTexture {
+        /// The file.
+        path: PathBuf,
+        /// Index of the image.
+        image: usize,
+        /// What is wrong.
+        reason: String,
+    },
     /// An animation uses CUBICSPLINE interpolation, morph targets, or targets a node whose
     /// transform is a matrix; or its keyframes are unreadable.
     UnsupportedAnimation {
@@ -148,6 +161,15 @@ impl fmt::Display for SceneError {
                     path.display()
                 )
             }
+            Self::UnsupportedTexture {
+                path,
+                image,
+                reason,
+            } => write!(
+                f,
+                "{}: image {image} cannot be used as a base-colour texture: {reason}",
+                path.display()
+            ),
             Self::UnsupportedAnimation {
                 path,
                 animation,
@@ -197,6 +219,33 @@ pub struct SceneFile {
     path: PathBuf,
     document: gltf::Document,
     buffers: Vec<gltf::buffer::Data>,
+    /// Every image of the file, decoded to linear RGBA (empty when no material uses one).
+    images: Vec<(u32, u32, Vec<[f32; 4]>)>,
+}
+
+/// Where a texture's texels are in [`Scene::texels`]: 16 bytes, one `vec4<u32>` in WGSL.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct TextureInfo {
+    /// Index of the first texel (row-major from the top-left).
+    pub offset: u32,
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// Padding; always 0.
+    pub pad: u32,
+}
+
+/// The texture coordinates (`TEXCOORD_0`) of a triangle's three vertices: 32 bytes, two
+/// `vec4`s in WGSL; all zero for a triangle without them.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TriangleUv {
+    /// `(u, v)` of `v0`, `v1` and `v2`.
+    pub uv: [[f32; 2]; 3],
+    /// Padding; always 0.
+    pub pad: [f32; 2],
 }
 
 impl fmt::Debug for SceneFile {
@@ -222,7 +271,14 @@ pub struct Scene {
     /// Inclusive cumulative distribution over `emitters`, proportional to each triangle's
     /// emitted power `area × luminance(L_e)`; the last entry is 1.
     pub emitter_cdf: Vec<f32>,
-    /// Things the loader ignored (e.g. textures), one sentence each.
+    /// Texture coordinates per triangle, in the order of `bvh.triangles` (empty when no
+    /// material has a texture).
+    pub uvs: Vec<TriangleUv>,
+    /// The textures, indexed by [`Material::base_color_texture`].
+    pub textures: Vec<TextureInfo>,
+    /// Linear RGBA texels of all textures.
+    pub texels: Vec<[f32; 4]>,
+    /// Things the loader ignored, one sentence each.
     pub warnings: Vec<String>,
 }
 
@@ -243,10 +299,28 @@ impl SceneFile {
         if document.scenes().len() == 0 {
             return Err(SceneError::NoScene { path });
         }
+        let textured = document
+            .materials()
+            .any(|m| m.pbr_metallic_roughness().base_color_texture().is_some());
+        let mut images = Vec::new();
+        if textured {
+            let decoded =
+                gltf::import_images(&document, path.parent(), &buffers).map_err(unreadable)?;
+            for (i, data) in decoded.into_iter().enumerate() {
+                images.push(linear_rgba(data).map_err(|reason| {
+                    SceneError::UnsupportedTexture {
+                        path: path.clone(),
+                        image: i,
+                        reason,
+                    }
+                })?);
+            }
+        }
         Ok(Self {
             path,
             document,
             buffers,
+            images,
         })
     }
 
@@ -277,22 +351,32 @@ impl SceneFile {
         let locals = self.local_transforms(time)?;
 
         let mut warnings = Vec::new();
-        let mut materials = vec![Material {
-            base_color: [1.0; 3],
-            metallic: 1.0,
-            emission: [0.0; 3],
-            roughness: 1.0,
-        }];
+        let mut materials = vec![Material::default()];
         for m in self.document.materials() {
             let pbr = m.pbr_metallic_roughness();
             let [r, g, b, _] = pbr.base_color_factor();
             let strength = m.emissive_strength().unwrap_or(1.0);
             let emission = Vec3::from(m.emissive_factor()) * strength;
+            let texture = match pbr.base_color_texture() {
+                Some(info) if info.tex_coord() == 0 => info.texture().source().index() as u32,
+                Some(info) => {
+                    warnings.push(format!(
+                        "material {} takes its base-colour texture from TEXCOORD_{}; only \
+                         TEXCOORD_0 is read, so its baseColorFactor is used alone",
+                        m.index().unwrap_or(0),
+                        info.tex_coord()
+                    ));
+                    NO_TEXTURE
+                }
+                None => NO_TEXTURE,
+            };
             let material = Material {
                 base_color: [r, g, b],
                 metallic: pbr.metallic_factor().clamp(0.0, 1.0),
                 emission: emission.to_array(),
                 roughness: pbr.roughness_factor().clamp(0.0, 1.0),
+                base_color_texture: texture,
+                pad: [0; 3],
             };
             let values = [
                 r,
@@ -310,16 +394,11 @@ impl SceneFile {
                     what: format!("a factor of material {}", m.index().unwrap_or(0)),
                 });
             }
-            if pbr.base_color_texture().is_some() {
-                warnings.push(format!(
-                    "material {} has a base-colour texture; its baseColorFactor is used instead",
-                    m.index().unwrap_or(0)
-                ));
-            }
             materials.push(material);
         }
 
         let mut triangles = Vec::new();
+        let mut uvs = Vec::new();
         let mut camera = None;
         let mut stack: Vec<(gltf::Node, Mat4)> =
             scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
@@ -352,7 +431,7 @@ impl SceneFile {
                 });
             }
             if let Some(mesh) = node.mesh() {
-                self.push_mesh(&mesh, world, &mut triangles)?;
+                self.push_mesh(&mesh, world, &materials, &mut triangles, &mut uvs)?;
             }
             for child in node.children().collect::<Vec<_>>().into_iter().rev() {
                 stack.push((child, world));
@@ -362,16 +441,32 @@ impl SceneFile {
         if triangles.is_empty() {
             return Err(SceneError::NoTriangles { path: path.clone() });
         }
-        Scene::new(camera, &triangles, materials, warnings)
-            .ok_or_else(|| SceneError::NoEmitters { path: path.clone() })
+        let mut scene = Scene::new(camera, &triangles, materials, warnings)
+            .ok_or_else(|| SceneError::NoEmitters { path: path.clone() })?;
+        if !self.images.is_empty() {
+            scene.uvs = scene.bvh.source.iter().map(|&i| uvs[i as usize]).collect();
+            for (width, height, texels) in &self.images {
+                scene.textures.push(TextureInfo {
+                    offset: scene.texels.len() as u32,
+                    width: *width,
+                    height: *height,
+                    pad: 0,
+                });
+                scene.texels.extend_from_slice(texels);
+            }
+        }
+        Ok(scene)
     }
 
-    /// Appends the world-space triangles of `mesh` under the transform `world`.
+    /// Appends the world-space triangles of `mesh` under the transform `world`, and their
+    /// texture coordinates (zero where the material has no texture).
     fn push_mesh(
         &self,
         mesh: &gltf::Mesh,
         world: Mat4,
+        materials: &[Material],
         out: &mut Vec<Triangle>,
+        out_uvs: &mut Vec<TriangleUv>,
     ) -> Result<(), SceneError> {
         let path = &self.path;
         let mirrored = world.determinant() < 0.0;
@@ -404,6 +499,13 @@ impl SceneFile {
             };
             // glTF's default material is our material 0; file materials start at 1.
             let material = primitive.material().index().map_or(0, |i| i as u32 + 1);
+            let tex_coords: Vec<[f32; 2]> = match reader
+                .read_tex_coords(0)
+                .filter(|_| materials[material as usize].base_color_texture != NO_TEXTURE)
+            {
+                Some(t) => t.into_f32().collect(),
+                None => Vec::new(),
+            };
             for t in indices.chunks_exact(3) {
                 let vertex = |k: usize| {
                     positions
@@ -415,12 +517,19 @@ impl SceneFile {
                         })
                 };
                 let (a, mut b, mut c) = (vertex(0)?, vertex(1)?, vertex(2)?);
+                let uv = |k: usize| tex_coords.get(t[k] as usize).copied().unwrap_or_default();
+                let mut uv = TriangleUv {
+                    uv: [uv(0), uv(1), uv(2)],
+                    pad: [0.0; 2],
+                };
                 if mirrored {
                     core::mem::swap(&mut b, &mut c);
+                    uv.uv.swap(1, 2);
                 }
                 let tri = Triangle::new(a, b, c, material);
                 if tri.area() > 0.0 {
                     out.push(tri);
+                    out_uvs.push(uv);
                 }
             }
         }
@@ -534,6 +643,57 @@ fn sample_keyframes(
     core::array::from_fn(|i| a[i] + s * (sign * b[i] - a[i]))
 }
 
+/// An 8-bit glTF image as linear RGBA: colour channels sRGB-decoded (IEC 61966-2-1; glTF
+/// stores base colours in sRGB), alpha linear; grey images are replicated to RGB.
+fn linear_rgba(data: gltf::image::Data) -> Result<(u32, u32, Vec<[f32; 4]>), String> {
+    use gltf::image::Format;
+    let channels = match data.format {
+        Format::R8 => 1,
+        Format::R8G8 => 2,
+        Format::R8G8B8 => 3,
+        Format::R8G8B8A8 => 4,
+        other => return Err(format!("{other:?} texels; only 8-bit images are supported")),
+    };
+    let decode = |b: u8| {
+        let c = f32::from(b) / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    if data.pixels.len() != (data.width * data.height) as usize * channels || data.width == 0 {
+        return Err("the pixel data does not match the image size".to_owned());
+    }
+    let texels = data
+        .pixels
+        .chunks_exact(channels)
+        .map(|p| match channels {
+            1 | 2 => {
+                let g = decode(p[0]);
+                [
+                    g,
+                    g,
+                    g,
+                    if channels == 2 {
+                        f32::from(p[1]) / 255.0
+                    } else {
+                        1.0
+                    },
+                ]
+            }
+            3 => [decode(p[0]), decode(p[1]), decode(p[2]), 1.0],
+            _ => [
+                decode(p[0]),
+                decode(p[1]),
+                decode(p[2]),
+                f32::from(p[3]) / 255.0,
+            ],
+        })
+        .collect();
+    Ok((data.width, data.height, texels))
+}
+
 /// Rec. 709 luminance of linear RGB.
 #[must_use]
 pub fn luminance(c: Vec3) -> f32 {
@@ -577,8 +737,38 @@ impl Scene {
             materials,
             emitters,
             emitter_cdf,
+            uvs: Vec::new(),
+            textures: Vec::new(),
+            texels: Vec::new(),
             warnings,
         })
+    }
+
+    /// The material at a hit, with its base-colour texture (if any) looked up at the hit's
+    /// texture coordinates — nearest texel, REPEAT wrapping — and multiplied in.
+    #[must_use]
+    pub fn material_at(&self, hit: &Hit) -> Material {
+        let mut m = *self.material(hit.triangle);
+        if m.base_color_texture == NO_TEXTURE {
+            return m;
+        }
+        let (Some(uv), Some(tex)) = (
+            self.uvs.get(hit.triangle as usize),
+            self.textures.get(m.base_color_texture as usize),
+        ) else {
+            return m;
+        };
+        let b0 = 1.0 - hit.b1 - hit.b2;
+        let u = b0 * uv.uv[0][0] + hit.b1 * uv.uv[1][0] + hit.b2 * uv.uv[2][0];
+        let v = b0 * uv.uv[0][1] + hit.b1 * uv.uv[1][1] + hit.b2 * uv.uv[2][1];
+        let x = ((u - u.floor()) * tex.width as f32) as u32;
+        let y = ((v - v.floor()) * tex.height as f32) as u32;
+        let texel = self.texels
+            [(tex.offset + y.min(tex.height - 1) * tex.width + x.min(tex.width - 1)) as usize];
+        for (b, t) in m.base_color.iter_mut().zip(texel) {
+            *b *= t;
+        }
+        m
     }
 
     /// The material of triangle `triangle` (leaf order).
