@@ -136,8 +136,9 @@ pub struct Hit {
     pub b2: f32,
 }
 
-/// Depth of the traversal stack; the builder's trees over the scenes of this renderer stay far
-/// below it, and [`Bvh::build`] checks it.
+/// Depth of the traversal stack: [`Bvh::intersect`] and [`Bvh::occluded`] need a tree of
+/// [`Bvh::depth`] at most `STACK_SIZE` (the scene loader reports a deeper one as an error;
+/// PLOC trees over millions of triangles stay far below it).
 pub const STACK_SIZE: usize = 64;
 
 /// A BVH over triangles in the flattened layout of this module.
@@ -187,13 +188,11 @@ impl Bvh {
             .collect();
         let source = bvh2.primitive_indices;
         let triangles = source.iter().map(|&i| triangles[i as usize]).collect();
-        let bvh = Self {
+        Self {
             nodes,
             triangles,
             source,
-        };
-        debug_assert!(bvh.depth() < STACK_SIZE);
-        bvh
+        }
     }
 
     /// The depth of the tree (1 for a root leaf, 0 when empty).

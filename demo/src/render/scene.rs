@@ -97,6 +97,13 @@ pub enum SceneError {
         /// What holds the value.
         what: String,
     },
+    /// The BVH is deeper than the tracer's traversal stack ([`super::bvh::STACK_SIZE`]).
+    BvhTooDeep {
+        /// The file.
+        path: PathBuf,
+        /// The depth of the tree.
+        depth: usize,
+    },
     /// A base-colour texture is not an 8-bit image, or cannot be decoded.
     UnsupportedTexture {
         /// The file.
@@ -161,6 +168,13 @@ impl fmt::Display for SceneError {
                     path.display()
                 )
             }
+            Self::BvhTooDeep { path, depth } => write!(
+                f,
+                "{}: the BVH over its triangles is {depth} levels deep; the tracer walks at \
+                 most {}",
+                path.display(),
+                super::bvh::STACK_SIZE
+            ),
             Self::UnsupportedTexture {
                 path,
                 image,
@@ -443,6 +457,13 @@ impl SceneFile {
         }
         let mut scene = Scene::new(camera, &triangles, materials, warnings)
             .ok_or_else(|| SceneError::NoEmitters { path: path.clone() })?;
+        let depth = scene.bvh.depth();
+        if depth > super::bvh::STACK_SIZE {
+            return Err(SceneError::BvhTooDeep {
+                path: path.clone(),
+                depth,
+            });
+        }
         if !self.images.is_empty() {
             scene.uvs = scene.bvh.source.iter().map(|&i| uvs[i as usize]).collect();
             for (width, height, texels) in &self.images {
