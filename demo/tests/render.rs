@@ -128,7 +128,7 @@ fn base64(bytes: &[u8]) -> String {
     out
 }
 
-/// A `.glb` container (glTF 2.0 §4.4) of a `.gltf` whose single buffer is `bin`.
+/// A `.glb` container (glTF 2.0 specification, "Binary glTF Layout") of a `.gltf` whose single buffer is `bin`.
 fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
     let mut doc: serde_json::Value = serde_json::from_str(json).unwrap();
     doc["buffers"][0].as_object_mut().unwrap().remove("uri");

@@ -98,7 +98,7 @@ pub struct Errors {
     pub rmse: f64,
     /// Relative MSE: the mean over pixels and channels of (x − r)² / (r² + ε), ε =
     /// [`REL_MSE_EPSILON`] (Rousselle et al. 2011, "Adaptive Sampling and Reconstruction
-    /// using Greedy Error Minimization", §5).
+    /// using Greedy Error Minimization", SIGGRAPH Asia).
     pub rel_mse: f64,
 }
 

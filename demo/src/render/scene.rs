@@ -5,11 +5,12 @@
 //! - **Geometry**: every triangle primitive (`mode` TRIANGLES, with or without indices) of
 //!   every mesh node of the default scene (or the first scene), with the node's world
 //!   transform. A transform that mirrors (negative determinant) swaps the winding back, as
-//!   glTF 2.0 §3.7.4 requires, so front faces stay front faces. Shading normals and texture
-//!   coordinates are not used: shading uses the geometric normal.
+//!   the glTF 2.0 specification requires (section "Transformations"), so front faces stay
+//!   front faces. Shading normals are not used: shading uses the geometric normal.
+//!   `TEXCOORD_0` is read for textured materials.
 //! - **Camera**: the first node of the default scene, depth first, that carries a
-//!   perspective camera; it looks down its local −Z with +Y up (glTF 2.0 §3.10). `yfov` is
-//!   used; the aspect ratio is the image's.
+//!   perspective camera; it looks down its local −Z with +Y up (glTF 2.0 specification,
+//!   section "Cameras"). `yfov` is used; the aspect ratio is the image's.
 //! - **Materials** ([`Material`]): `baseColorFactor` (RGB), `metallicFactor`,
 //!   `roughnessFactor`, `emissiveFactor × KHR_materials_emissive_strength`, and the
 //!   base-colour texture (8-bit PNG or JPEG, sRGB-decoded, `TEXCOORD_0`, nearest texel with

@@ -282,7 +282,9 @@ fn write_gltf(
             });
             if m.emissive != [0.0; 3] {
                 material["emissiveFactor"] = json!(m.emissive);
-                material["extensions"] = json!({ "KHR_materials_emissive_strength": { "emissiveStrength": m.strength } });
+                material["extensions"] = json!({
+                    "KHR_materials_emissive_strength": { "emissiveStrength": m.strength }
+                });
             }
             materials.push(material);
             primitives.push(
@@ -296,7 +298,7 @@ fn write_gltf(
         }
         gltf_nodes.push(n);
     }
-    // The camera: 60° vertical field of view, at (0, 1.5, 2.3), looking down −z (identity rotation).
+    // The camera: 60° vertical field of view, at (0, 1.5, 2.3), looking down −z (no rotation).
     gltf_nodes.push(json!({ "name": "camera", "camera": 0, "translation": [0.0, 1.5, 2.3] }));
     let mut samplers = Vec::new();
     let mut gltf_channels = Vec::new();
@@ -327,7 +329,11 @@ fn write_gltf(
         "asset": { "version": "2.0", "generator": "mcg-demo scene_generator" },
         "extensionsUsed": ["KHR_materials_emissive_strength"],
         "scene": 0,
-        "scenes": [{ "name": name, "nodes": (0..gltf_nodes.len()).collect::<Vec<_>>(), "extras": { "mcg": extras } }],
+        "scenes": [{
+            "name": name,
+            "nodes": (0..gltf_nodes.len()).collect::<Vec<_>>(),
+            "extras": { "mcg": extras },
+        }],
         "nodes": gltf_nodes,
         "cameras": [{ "type": "perspective", "perspective": { "yfov": 60f32.to_radians(), "znear": 0.01 } }],
         "meshes": meshes,
