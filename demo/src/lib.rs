@@ -12,6 +12,7 @@
 //! | [`report`] | the HTML page: title, intro, sections with paragraphs, figures and tables |
 //! | [`plot`] | thin helpers over `plotters`: line charts with log axes, histograms against a curve |
 //! | [`sections`] | one module per section of the report, listed in [`sections::ALL`] |
+//! | [`render`] | the path tracer of `mcg-demo render`: glTF scenes, BVH, materials, methods, image files |
 //!
 //! ## Adding a section
 //!
@@ -29,6 +30,7 @@
 #![forbid(unsafe_code)]
 
 pub mod plot;
+pub mod render;
 pub mod report;
 pub mod sections;
 

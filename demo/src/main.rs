@@ -2,16 +2,22 @@
 //!
 //! ```text
 //! cargo run --release -p mcg-demo [-- --out DIR] [--quick] [--samples N] [--seed N] [--no-progress]
+//! cargo run --release -p mcg-demo -- render --scene FILE --method bsdf|nee [OPTIONS]   (see render --help)
+//! cargo run --release -p mcg-demo -- scenes [--out demo/scenes]
 //! ```
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
+use clap::Parser;
 use mcg_demo::Config;
+use mcg_demo::render::{RenderArgs, ScenesArgs, run_render, scene_generator};
 
 const USAGE: &str = "\
 Usage: mcg-demo [OPTIONS]
+       mcg-demo render --scene FILE [OPTIONS]   (path traces a glTF scene; render --help)
+       mcg-demo scenes [--out DIR]              (writes the built-in scenes)
 
 Writes an HTML report with PNG charts that shows the mcg crates at work.
 
@@ -63,8 +69,38 @@ fn parse_args(args: impl IntoIterator<Item = String>) -> Result<Command, String>
     Ok(Command::Run(config))
 }
 
+/// `mcg-demo render …` and `mcg-demo scenes …`: clap parses the arguments after the name.
+fn run_subcommand(name: &str, args: &[String]) -> ExitCode {
+    let argv = std::iter::once(format!("mcg-demo {name}")).chain(args.iter().cloned());
+    let result = if name == "render" {
+        let args = RenderArgs::try_parse_from(argv).unwrap_or_else(|e| e.exit());
+        let started = Instant::now();
+        run_render(&args).map(|paths| {
+            for p in paths {
+                println!("{}", p.display());
+            }
+            println!("rendered in {:.1} s", started.elapsed().as_secs_f64());
+        })
+    } else {
+        let args = ScenesArgs::try_parse_from(argv).unwrap_or_else(|e| e.exit());
+        scene_generator::write_built_in_scenes(&args.out)
+            .map(|()| println!("scenes written to {}", args.out.display()))
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("mcg-demo: {error}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
 fn main() -> ExitCode {
-    let config = match parse_args(std::env::args().skip(1)) {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if let Some(name @ ("render" | "scenes")) = args.first().map(String::as_str) {
+        return run_subcommand(name, &args[1..]);
+    }
+    let config = match parse_args(args) {
         Ok(Command::Run(config)) => config,
         Ok(Command::Help) => {
             println!("{USAGE}");

@@ -1,0 +1,352 @@
+//! The CPU path tracer: unidirectional path tracing over a [`Scene`], one rayon task per image
+//! row, with every random decision drawn from the counter-based stream of
+//! [`mcg_gpu_backend::sampling`] so that a GPU tracer seeded the same way draws the same
+//! numbers.
+//!
+//! Conventions: `bounces` counts scattering events (1 = direct light only: emission seen by the
+//! camera plus light scattered once); no Russian roulette; a box pixel filter (uniform jitter
+//! in the pixel); no environment light (rays that leave the scene carry nothing); emission
+//! from front faces only; both faces scatter.
+//!
+//! Methods ([`Method`]): `bsdf` samples directions from the BSDF and finds lights only by
+//! chance; `nee` adds one light sample per scattering event (an emitter triangle picked in
+//! proportion to its power, a uniform point on it) and weights both strategies with the power
+//! heuristic (Veach and Guibas 1995, "Optimally Combining Sampling Techniques for Monte Carlo
+//! Rendering", eq. 9 with β = 2).
+//!
+//! The direction of each bounce comes from a [`VertexSampler`] — the seam where a path guide
+//! (MCPG's begin / sample / pdf / finish) replaces BSDF sampling without touching the rest of
+//! the loop.
+
+use glam::Vec3;
+use mcg_gpu_backend::sampling::{next_uniform, pcg_hash};
+use rayon::prelude::*;
+
+use super::material::{BsdfSample, Material};
+use super::scene::Scene;
+
+/// How directions are chosen and lights are found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// BSDF sampling only; lights are found by chance.
+    Bsdf,
+    /// BSDF sampling plus light sampling, combined by multiple importance sampling.
+    Nee,
+}
+
+impl Method {
+    /// The method's name on the command line and in file names.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Bsdf => "bsdf",
+            Self::Nee => "nee",
+        }
+    }
+}
+
+/// What one render pass computes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RenderSettings {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Samples per pixel per frame.
+    pub spp: u32,
+    /// Scattering events per path (1 = direct light).
+    pub bounces: u32,
+    /// Seed of the random stream.
+    pub seed: u32,
+    /// The method.
+    pub method: Method,
+}
+
+/// The state of a path at a scattering vertex, as a [`VertexSampler`] sees it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Vertex {
+    /// The hit point.
+    pub position: Vec3,
+    /// The unit geometric normal, turned towards `wo`.
+    pub normal: Vec3,
+    /// The unit direction back along the incoming ray.
+    pub wo: Vec3,
+    /// The material.
+    pub material: Material,
+    /// Scattering events before this one (0 at the first hit).
+    pub depth: u32,
+}
+
+/// What a sampler learns once its path is complete: the radiance that arrived at `vertex`
+/// along the direction it sampled, estimated by the rest of the path — the emission of the
+/// next hit in full, plus the next vertex's light samples and everything after them with
+/// their MIS weights (an unbiased estimate of the incident radiance for every method).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Observation {
+    /// The vertex, as given to [`VertexSampler::sample`].
+    pub vertex: Vertex,
+    /// The sampled direction and its density.
+    pub sample: BsdfSample,
+    /// Incident radiance along `sample.direction`, linear RGB.
+    pub radiance: Vec3,
+}
+
+/// The per-vertex direction sampler of the path loop: MCPG's seam (begin with the vertex,
+/// sample a direction, evaluate the density of another, and learn from the finished path).
+/// Implementations hold their own state; one is created per rayon task.
+pub trait VertexSampler {
+    /// Samples the next direction at `vertex` from three uniforms; `None` ends the path.
+    fn sample(&mut self, vertex: &Vertex, u: Vec3) -> Option<BsdfSample>;
+    /// The density with which [`VertexSampler::sample`] picks `wi` at `vertex` (for MIS).
+    fn pdf(&self, vertex: &Vertex, wi: Vec3) -> f32;
+    /// Called once per sampled vertex when the path is complete, in path order.
+    fn finish(&mut self, observation: &Observation);
+}
+
+/// Plain BSDF sampling ([`Material::sample`]); learns nothing.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BsdfSampler;
+
+impl VertexSampler for BsdfSampler {
+    fn sample(&mut self, v: &Vertex, u: Vec3) -> Option<BsdfSample> {
+        v.material.sample(v.normal, v.wo, u)
+    }
+    fn pdf(&self, v: &Vertex, wi: Vec3) -> f32 {
+        v.material.pdf(v.normal, v.wo, wi)
+    }
+    fn finish(&mut self, _: &Observation) {}
+}
+
+/// The seed of the random stream of one path: a hash of (seed, frame, pixel, sample), each
+/// word mixed through [`pcg_hash`] (the WGSL tracer computes the same).
+#[must_use]
+pub fn path_seed(seed: u32, frame: u32, pixel: u32, sample: u32) -> u32 {
+    pcg_hash(seed ^ pcg_hash(pixel ^ pcg_hash(frame.wrapping_mul(0x9e37_79b9) ^ pcg_hash(sample))))
+}
+
+/// Offset of ray origins off a surface, relative to the size of the coordinates (metres).
+const RAY_OFFSET: f32 = 1e-4;
+
+/// `p` moved off its surface along `n` by a distance that grows with `|p|`.
+fn offset(p: Vec3, n: Vec3) -> Vec3 {
+    p + n * (RAY_OFFSET * p.abs().max_element().max(1.0))
+}
+
+/// Power heuristic weight `a² / (a² + b²)` (Veach and Guibas 1995, eq. 9, β = 2).
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
+}
+
+/// Most scattering events a path records for [`VertexSampler::finish`]; deeper vertices are
+/// still traced but not reported.
+const MAX_RECORDED: usize = 16;
+
+/// A vertex of the path as [`VertexSampler::finish`] will need it.
+#[derive(Clone, Copy)]
+struct Recorded {
+    vertex: Vertex,
+    sample: BsdfSample,
+    /// The path's radiance before the vertex's sample.
+    before: Vec3,
+    /// The throughput after the sample.
+    throughput: Vec3,
+    /// The share of the next hit's emission that its MIS weight left out.
+    discarded: Vec3,
+}
+
+/// Traces one path from the camera ray `(origin, direction)` and returns its radiance.
+pub fn trace_path<S: VertexSampler>(
+    scene: &Scene,
+    sampler: &mut S,
+    method: Method,
+    bounces: u32,
+    origin: Vec3,
+    direction: Vec3,
+    rng: &mut u32,
+) -> Vec3 {
+    let mut u = || next_uniform(rng);
+    let mut radiance = Vec3::ZERO;
+    let mut throughput = Vec3::ONE;
+    let (mut o, mut d) = (origin, direction);
+    // The density of the direction that produced the current ray (0 for the camera ray, whose
+    // emitter hits need no MIS weight).
+    let mut last_pdf = 0.0;
+    let mut recorded: [Option<Recorded>; MAX_RECORDED] = [None; MAX_RECORDED];
+    let mut depth = 0u32;
+    while let Some(hit) = scene.bvh.intersect(o, d, 0.0, f32::INFINITY) {
+        let tri = scene.bvh.triangles[hit.triangle as usize];
+        let material = scene.material_at(&hit);
+        let cross = tri.cross();
+        let area = 0.5 * cross.length();
+        let n_front = cross / (2.0 * area);
+        let cos_front = -n_front.dot(d);
+        let position = o + hit.t * d;
+        if cos_front > 0.0 && material.is_emitter() {
+            let weight = if method == Method::Nee && last_pdf > 0.0 {
+                let light_pdf = tri.emitter_pmf / area * hit.t * hit.t / cos_front;
+                power_heuristic(last_pdf, light_pdf)
+            } else {
+                1.0
+            };
+            radiance += throughput * material.emission() * weight;
+            // The vertex whose sample found this emitter observes all of its emission: the
+            // MIS weight splits the estimate of *its* direct light with its light sample,
+            // not the radiance arriving along the sampled direction.
+            if let Some(Some(r)) = depth
+                .checked_sub(1)
+                .and_then(|d| recorded.get_mut(d as usize))
+            {
+                r.discarded += throughput * material.emission() * (1.0 - weight);
+            }
+        }
+        if depth == bounces {
+            break;
+        }
+        let normal = if cos_front > 0.0 { n_front } else { -n_front };
+        let vertex = Vertex {
+            position,
+            normal,
+            wo: -d,
+            material,
+            depth,
+        };
+        let origin_next = offset(position, normal);
+        // Three uniforms for light sampling are drawn for every method, so that the stream
+        // of the BSDF sample does not depend on the method.
+        let (ul, u1, u2) = (u(), u(), u());
+        if method == Method::Nee {
+            radiance +=
+                throughput * light_sample(scene, sampler, &vertex, origin_next, [ul, u1, u2]);
+        }
+        let Some(sample) = sampler.sample(&vertex, Vec3::new(u(), u(), u())) else {
+            break;
+        };
+        let before = radiance;
+        throughput *= sample.weight;
+        if let Some(slot) = recorded.get_mut(depth as usize) {
+            *slot = Some(Recorded {
+                vertex,
+                sample,
+                before,
+                throughput,
+                discarded: Vec3::ZERO,
+            });
+        }
+        last_pdf = sample.pdf;
+        o = origin_next;
+        d = sample.direction;
+        depth += 1;
+        if throughput == Vec3::ZERO {
+            break;
+        }
+    }
+    for r in recorded.iter().flatten() {
+        let Recorded {
+            vertex,
+            sample,
+            before,
+            throughput,
+            discarded,
+        } = r;
+        let gained = radiance - *before + *discarded;
+        let incident = Vec3::select(
+            throughput.cmpgt(Vec3::ZERO),
+            gained / *throughput,
+            Vec3::ZERO,
+        );
+        sampler.finish(&Observation {
+            vertex: *vertex,
+            sample: *sample,
+            radiance: incident,
+        });
+    }
+    radiance
+}
+
+/// One light sample at `vertex` with MIS weight: `f·cos·L_e·w / p_light`, 0 when the point is
+/// occluded, on the emitter's back face, or below the surface.
+fn light_sample<S: VertexSampler>(
+    scene: &Scene,
+    sampler: &S,
+    vertex: &Vertex,
+    origin: Vec3,
+    u: [f32; 3],
+) -> Vec3 {
+    let (t, pmf) = scene.pick_emitter(u[0]);
+    let tri = scene.bvh.triangles[t as usize];
+    let su = u[1].sqrt();
+    let y = tri.point(su * (1.0 - u[2]), su * u[2]);
+    let to_light = y - origin;
+    let dist2 = to_light.length_squared();
+    let dist = dist2.sqrt();
+    let wi = to_light / dist;
+    let cross = tri.cross();
+    let area = 0.5 * cross.length();
+    let cos_light = -(cross / (2.0 * area)).dot(wi);
+    if !(cos_light > 0.0) || vertex.normal.dot(wi) <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let f_cos = vertex.material.eval(vertex.normal, vertex.wo, wi);
+    if f_cos == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    if scene.bvh.occluded(origin, wi, 0.0, dist * (1.0 - 1e-4)) {
+        return Vec3::ZERO;
+    }
+    let light_pdf = pmf / area * dist2 / cos_light;
+    let w = power_heuristic(light_pdf, sampler.pdf(vertex, wi));
+    f_cos * scene.material(t).emission() * (w / light_pdf)
+}
+
+/// Renders one frame: `spp` paths per pixel, returns the per-pixel mean radiance, row-major
+/// from the top-left, `width × height` entries. `new_sampler` makes one sampler per row task;
+/// `row_done` is called after each row (for progress bars).
+pub fn render_frame<S: VertexSampler>(
+    scene: &Scene,
+    settings: &RenderSettings,
+    frame: u32,
+    new_sampler: impl Fn() -> S + Sync,
+    row_done: impl Fn() + Sync,
+) -> Vec<Vec3> {
+    let RenderSettings {
+        width,
+        height,
+        spp,
+        bounces,
+        seed,
+        method,
+    } = *settings;
+    let mut image = vec![Vec3::ZERO; (width * height) as usize];
+    image
+        .par_chunks_mut(width as usize)
+        .enumerate()
+        .for_each(|(y, row)| {
+            let mut sampler = new_sampler();
+            for (x, pixel) in row.iter_mut().enumerate() {
+                let index = y as u32 * width + x as u32;
+                let mut sum = Vec3::ZERO;
+                for s in 0..spp {
+                    let mut rng = path_seed(seed, frame, index, s);
+                    let jx = next_uniform(&mut rng);
+                    let jy = next_uniform(&mut rng);
+                    let d = scene
+                        .camera
+                        .direction(x as f32 + jx, y as f32 + jy, width, height);
+                    sum += trace_path(
+                        scene,
+                        &mut sampler,
+                        method,
+                        bounces,
+                        scene.camera.position,
+                        d,
+                        &mut rng,
+                    );
+                }
+                *pixel = sum / spp as f32;
+            }
+            row_done();
+        });
+    image
+}

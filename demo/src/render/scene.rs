@@ -1,0 +1,813 @@
+//! glTF 2.0 scenes: loading, animation, and the traceable [`Scene`] built from them.
+//!
+//! What is read (everything else in a file is ignored):
+//!
+//! - **Geometry**: every triangle primitive (`mode` TRIANGLES, with or without indices) of
+//!   every mesh node of the default scene (or the first scene), with the node's world
+//!   transform. A transform that mirrors (negative determinant) swaps the winding back, as
+//!   the glTF 2.0 specification requires (section "Transformations"), so front faces stay
+//!   front faces. Shading normals are not used: shading uses the geometric normal.
+//!   `TEXCOORD_0` is read for textured materials.
+//! - **Camera**: the first node of the default scene, depth first, that carries a
+//!   perspective camera; it looks down its local −Z with +Y up (glTF 2.0 specification,
+//!   section "Cameras"). `yfov` is used; the aspect ratio is the image's.
+//! - **Materials** ([`Material`]): `baseColorFactor` (RGB), `metallicFactor`,
+//!   `roughnessFactor`, `emissiveFactor × KHR_materials_emissive_strength`, and the
+//!   base-colour texture (8-bit PNG or JPEG, sRGB-decoded, `TEXCOORD_0`, nearest texel with
+//!   REPEAT wrapping — the glTF sampler is not read), which multiplies `baseColorFactor`.
+//!   A texture on another coordinate set is ignored, and [`Scene::warnings`] says so.
+//! - **Animations**: translation, rotation and scale channels with STEP or LINEAR
+//!   interpolation (rotations LINEAR by normalised lerp of the quaternions), evaluated at
+//!   the time of the frame ([`frame_time`]); the dynamic built-in scene uses them.
+//!
+//! Conventions (glTF 2.0): metres, radians, linear scene-referred RGB radiance; emission from
+//! the front face only (counter-clockwise winding seen from the front).
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use glam::{Mat4, Quat, Vec3};
+use gltf::animation::{Interpolation, Property, util::ReadOutputs};
+
+use bytemuck::{Pod, Zeroable};
+
+use super::bvh::{Bvh, Hit, Triangle};
+use super::material::{Material, NO_TEXTURE};
+
+/// Frames per second of the renderer's clock: frame `f` shows the scene at `f / FRAME_RATE`
+/// seconds of its animations.
+pub const FRAME_RATE: f32 = 24.0;
+
+/// The animation time of frame `frame`, in seconds ([`FRAME_RATE`]).
+#[must_use]
+pub fn frame_time(frame: u32) -> f32 {
+    frame as f32 / FRAME_RATE
+}
+
+/// What is wrong with a scene file. Every variant names the file.
+#[derive(Debug)]
+pub enum SceneError {
+    /// The file could not be read or is not valid glTF 2.0 (the reason is the parser's).
+    Unreadable {
+        /// The file.
+        path: PathBuf,
+        /// The reader's or parser's message.
+        reason: String,
+    },
+    /// The file holds no scene.
+    NoScene {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The default scene has no node with a perspective camera.
+    NoCamera {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The default scene has no triangle.
+    NoTriangles {
+        /// The file.
+        path: PathBuf,
+    },
+    /// No triangle emits light (no material with a positive emissive factor).
+    NoEmitters {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A mesh primitive is not made of triangles (points, lines, strips or fans).
+    UnsupportedPrimitiveMode {
+        /// The file.
+        path: PathBuf,
+        /// Index of the mesh.
+        mesh: usize,
+        /// The primitive's mode, as glTF names it.
+        mode: String,
+    },
+    /// A mesh primitive has no POSITION attribute.
+    MissingPositions {
+        /// The file.
+        path: PathBuf,
+        /// Index of the mesh.
+        mesh: usize,
+    },
+    /// A vertex position, transform or material value is NaN or infinite, or a camera's
+    /// `yfov` is not in (0, π).
+    NonFinite {
+        /// The file.
+        path: PathBuf,
+        /// What holds the value.
+        what: String,
+    },
+    /// The BVH is deeper than the tracer's traversal stack ([`super::bvh::STACK_SIZE`]).
+    BvhTooDeep {
+        /// The file.
+        path: PathBuf,
+        /// The depth of the tree.
+        depth: usize,
+    },
+    /// A base-colour texture is not an 8-bit image, or cannot be decoded.
+    UnsupportedTexture {
+        /// The file.
+        path: PathBuf,
+        /// Index of the image.
+        image: usize,
+        /// What is wrong.
+        reason: String,
+    },
+    /// An animation uses CUBICSPLINE interpolation, morph targets, or targets a node whose
+    /// transform is a matrix; or its keyframes are unreadable.
+    UnsupportedAnimation {
+        /// The file.
+        path: PathBuf,
+        /// Index of the animation.
+        animation: usize,
+        /// What is not supported.
+        reason: String,
+    },
+}
+
+impl fmt::Display for SceneError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Unreadable { path, reason } => {
+                write!(
+                    f,
+                    "{}: not a readable glTF 2.0 file: {reason}",
+                    path.display()
+                )
+            }
+            Self::NoScene { path } => write!(f, "{}: the file has no scene", path.display()),
+            Self::NoCamera { path } => write!(
+                f,
+                "{}: the default scene has no perspective camera (the renderer looks through \
+                 the first one)",
+                path.display()
+            ),
+            Self::NoTriangles { path } => {
+                write!(f, "{}: the default scene has no triangles", path.display())
+            }
+            Self::NoEmitters { path } => write!(
+                f,
+                "{}: no emitters — no material has a positive emissiveFactor, so the image \
+                 would be black",
+                path.display()
+            ),
+            Self::UnsupportedPrimitiveMode { path, mesh, mode } => write!(
+                f,
+                "{}: mesh {mesh} has a primitive of mode {mode}; only TRIANGLES are supported",
+                path.display()
+            ),
+            Self::MissingPositions { path, mesh } => write!(
+                f,
+                "{}: mesh {mesh} has a primitive without POSITION",
+                path.display()
+            ),
+            Self::NonFinite { path, what } => {
+                write!(
+                    f,
+                    "{}: {what} is not finite or out of range",
+                    path.display()
+                )
+            }
+            Self::BvhTooDeep { path, depth } => write!(
+                f,
+                "{}: the BVH over its triangles is {depth} levels deep; the tracer walks at \
+                 most {}",
+                path.display(),
+                super::bvh::STACK_SIZE
+            ),
+            Self::UnsupportedTexture {
+                path,
+                image,
+                reason,
+            } => write!(
+                f,
+                "{}: image {image} cannot be used as a base-colour texture: {reason}",
+                path.display()
+            ),
+            Self::UnsupportedAnimation {
+                path,
+                animation,
+                reason,
+            } => write!(
+                f,
+                "{}: animation {animation} is not supported: {reason}",
+                path.display()
+            ),
+        }
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+/// A perspective pinhole camera in world space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// The eye position.
+    pub position: Vec3,
+    /// Unit vector to the image's right.
+    pub right: Vec3,
+    /// Unit vector to the image's top.
+    pub up: Vec3,
+    /// Unit viewing direction (the camera's local −Z).
+    pub forward: Vec3,
+    /// Vertical field of view in radians.
+    pub yfov: f32,
+}
+
+impl Camera {
+    /// The unit direction through the image point `(x, y)` in pixels (fractional, origin at
+    /// the top-left corner, y down) of a `width × height` image.
+    #[must_use]
+    pub fn direction(&self, x: f32, y: f32, width: u32, height: u32) -> Vec3 {
+        let tan_y = (0.5 * self.yfov).tan();
+        let tan_x = tan_y * width as f32 / height as f32;
+        let sx = (2.0 * x / width as f32 - 1.0) * tan_x;
+        let sy = (1.0 - 2.0 * y / height as f32) * tan_y;
+        (self.forward + sx * self.right + sy * self.up).normalize()
+    }
+}
+
+/// A glTF file in memory: the document and its buffers, ready to be built into a [`Scene`] at
+/// any animation time.
+pub struct SceneFile {
+    path: PathBuf,
+    document: gltf::Document,
+    buffers: Vec<gltf::buffer::Data>,
+    /// Every image of the file, decoded to linear RGBA (empty when no material uses one).
+    images: Vec<(u32, u32, Vec<[f32; 4]>)>,
+}
+
+/// Where a texture's texels are in [`Scene::texels`]: 16 bytes, one `vec4<u32>` in WGSL.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct TextureInfo {
+    /// Index of the first texel (row-major from the top-left).
+    pub offset: u32,
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// Padding; always 0.
+    pub pad: u32,
+}
+
+/// The texture coordinates (`TEXCOORD_0`) of a triangle's three vertices: 32 bytes, two
+/// `vec4`s in WGSL; all zero for a triangle without them.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TriangleUv {
+    /// `(u, v)` of `v0`, `v1` and `v2`.
+    pub uv: [[f32; 2]; 3],
+    /// Padding; always 0.
+    pub pad: [f32; 2],
+}
+
+impl fmt::Debug for SceneFile {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("SceneFile")
+            .field("path", &self.path)
+            .finish_non_exhaustive()
+    }
+}
+
+/// A scene ready to trace: the camera, the BVH over world-space triangles, materials, and the
+/// emitter table of light sampling.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The camera.
+    pub camera: Camera,
+    /// The BVH and the triangles in its leaf order.
+    pub bvh: Bvh,
+    /// Materials, indexed by [`Triangle::material`]; index 0 is glTF's default material.
+    pub materials: Vec<Material>,
+    /// Indices (into `bvh.triangles`) of the front-emitting triangles.
+    pub emitters: Vec<u32>,
+    /// Inclusive cumulative distribution over `emitters`, proportional to each triangle's
+    /// emitted power `area × luminance(L_e)`; the last entry is 1.
+    pub emitter_cdf: Vec<f32>,
+    /// Texture coordinates per triangle, in the order of `bvh.triangles` (empty when no
+    /// material has a texture).
+    pub uvs: Vec<TriangleUv>,
+    /// The textures, indexed by [`Material::base_color_texture`].
+    pub textures: Vec<TextureInfo>,
+    /// Linear RGBA texels of all textures.
+    pub texels: Vec<[f32; 4]>,
+    /// Things the loader ignored, one sentence each.
+    pub warnings: Vec<String>,
+}
+
+impl SceneFile {
+    /// Reads a `.gltf` (with `.bin` files or embedded base64 buffers) or a `.glb`.
+    ///
+    /// # Errors
+    /// [`SceneError::Unreadable`] when the file is missing or not glTF 2.0,
+    /// [`SceneError::NoScene`] when it holds no scene.
+    pub fn open(path: impl AsRef<Path>) -> Result<Self, SceneError> {
+        let path = path.as_ref().to_path_buf();
+        let unreadable = |e: gltf::Error| SceneError::Unreadable {
+            path: path.clone(),
+            reason: e.to_string(),
+        };
+        let gltf::Gltf { document, blob } = gltf::Gltf::open(&path).map_err(unreadable)?;
+        let buffers = gltf::import_buffers(&document, path.parent(), blob).map_err(unreadable)?;
+        if document.scenes().len() == 0 {
+            return Err(SceneError::NoScene { path });
+        }
+        let textured = document
+            .materials()
+            .any(|m| m.pbr_metallic_roughness().base_color_texture().is_some());
+        let mut images = Vec::new();
+        if textured {
+            let decoded =
+                gltf::import_images(&document, path.parent(), &buffers).map_err(unreadable)?;
+            for (i, data) in decoded.into_iter().enumerate() {
+                images.push(linear_rgba(data).map_err(|reason| {
+                    SceneError::UnsupportedTexture {
+                        path: path.clone(),
+                        image: i,
+                        reason,
+                    }
+                })?);
+            }
+        }
+        Ok(Self {
+            path,
+            document,
+            buffers,
+            images,
+        })
+    }
+
+    /// The file's path.
+    #[must_use]
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Whether the file has animations (then each frame needs its own [`SceneFile::build`]).
+    #[must_use]
+    pub fn is_animated(&self) -> bool {
+        self.document.animations().len() > 0
+    }
+
+    /// Builds the scene at animation time `time` (seconds).
+    ///
+    /// # Errors
+    /// [`SceneError`] when the default scene has no camera, no triangles or no emitters, or
+    /// uses what the renderer does not support (see the module docs).
+    pub fn build(&self, time: f32) -> Result<Scene, SceneError> {
+        let path = &self.path;
+        let scene = self
+            .document
+            .default_scene()
+            .or_else(|| self.document.scenes().next())
+            .ok_or_else(|| SceneError::NoScene { path: path.clone() })?;
+        let locals = self.local_transforms(time)?;
+
+        let mut warnings = Vec::new();
+        let mut materials = vec![Material::default()];
+        for m in self.document.materials() {
+            let pbr = m.pbr_metallic_roughness();
+            let [r, g, b, _] = pbr.base_color_factor();
+            let strength = m.emissive_strength().unwrap_or(1.0);
+            let emission = Vec3::from(m.emissive_factor()) * strength;
+            let texture = match pbr.base_color_texture() {
+                Some(info) if info.tex_coord() == 0 => info.texture().source().index() as u32,
+                Some(info) => {
+                    warnings.push(format!(
+                        "material {} takes its base-colour texture from TEXCOORD_{}; only \
+                         TEXCOORD_0 is read, so its baseColorFactor is used alone",
+                        m.index().unwrap_or(0),
+                        info.tex_coord()
+                    ));
+                    NO_TEXTURE
+                }
+                None => NO_TEXTURE,
+            };
+            let material = Material {
+                base_color: [r, g, b],
+                metallic: pbr.metallic_factor().clamp(0.0, 1.0),
+                emission: emission.to_array(),
+                roughness: pbr.roughness_factor().clamp(0.0, 1.0),
+                base_color_texture: texture,
+                pad: [0; 3],
+            };
+            let values = [
+                r,
+                g,
+                b,
+                material.metallic,
+                material.roughness,
+                emission.x,
+                emission.y,
+                emission.z,
+            ];
+            if values.iter().any(|v| !v.is_finite()) {
+                return Err(SceneError::NonFinite {
+                    path: path.clone(),
+                    what: format!("a factor of material {}", m.index().unwrap_or(0)),
+                });
+            }
+            materials.push(material);
+        }
+
+        let mut triangles = Vec::new();
+        let mut uvs = Vec::new();
+        let mut camera = None;
+        let mut stack: Vec<(gltf::Node, Mat4)> =
+            scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+        stack.reverse();
+        while let Some((node, parent)) = stack.pop() {
+            let world = parent * locals[node.index()];
+            if !world.is_finite() {
+                return Err(SceneError::NonFinite {
+                    path: path.clone(),
+                    what: format!("the transform of node {}", node.index()),
+                });
+            }
+            if camera.is_none()
+                && let Some(c) = node.camera()
+                && let gltf::camera::Projection::Perspective(p) = c.projection()
+            {
+                let yfov = p.yfov();
+                if !(yfov > 0.0 && yfov < core::f32::consts::PI) {
+                    return Err(SceneError::NonFinite {
+                        path: path.clone(),
+                        what: format!("the yfov of camera {}", c.index()),
+                    });
+                }
+                camera = Some(Camera {
+                    position: world.transform_point3(Vec3::ZERO),
+                    right: world.transform_vector3(Vec3::X).normalize(),
+                    up: world.transform_vector3(Vec3::Y).normalize(),
+                    forward: world.transform_vector3(Vec3::NEG_Z).normalize(),
+                    yfov,
+                });
+            }
+            if let Some(mesh) = node.mesh() {
+                self.push_mesh(&mesh, world, &materials, &mut triangles, &mut uvs)?;
+            }
+            for child in node.children().collect::<Vec<_>>().into_iter().rev() {
+                stack.push((child, world));
+            }
+        }
+        let camera = camera.ok_or_else(|| SceneError::NoCamera { path: path.clone() })?;
+        if triangles.is_empty() {
+            return Err(SceneError::NoTriangles { path: path.clone() });
+        }
+        let mut scene = Scene::new(camera, &triangles, materials, warnings)
+            .ok_or_else(|| SceneError::NoEmitters { path: path.clone() })?;
+        let depth = scene.bvh.depth();
+        if depth > super::bvh::STACK_SIZE {
+            return Err(SceneError::BvhTooDeep {
+                path: path.clone(),
+                depth,
+            });
+        }
+        if !self.images.is_empty() {
+            scene.uvs = scene.bvh.source.iter().map(|&i| uvs[i as usize]).collect();
+            for (width, height, texels) in &self.images {
+                scene.textures.push(TextureInfo {
+                    offset: scene.texels.len() as u32,
+                    width: *width,
+                    height: *height,
+                    pad: 0,
+                });
+                scene.texels.extend_from_slice(texels);
+            }
+        }
+        Ok(scene)
+    }
+
+    /// Appends the world-space triangles of `mesh` under the transform `world`, and their
+    /// texture coordinates (zero where the material has no texture).
+    fn push_mesh(
+        &self,
+        mesh: &gltf::Mesh,
+        world: Mat4,
+        materials: &[Material],
+        out: &mut Vec<Triangle>,
+        out_uvs: &mut Vec<TriangleUv>,
+    ) -> Result<(), SceneError> {
+        let path = &self.path;
+        let mirrored = world.determinant() < 0.0;
+        for primitive in mesh.primitives() {
+            if primitive.mode() != gltf::mesh::Mode::Triangles {
+                return Err(SceneError::UnsupportedPrimitiveMode {
+                    path: path.clone(),
+                    mesh: mesh.index(),
+                    mode: format!("{:?}", primitive.mode()),
+                });
+            }
+            let reader = primitive.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
+            let positions: Vec<Vec3> = reader
+                .read_positions()
+                .ok_or_else(|| SceneError::MissingPositions {
+                    path: path.clone(),
+                    mesh: mesh.index(),
+                })?
+                .map(|p| world.transform_point3(Vec3::from(p)))
+                .collect();
+            if positions.iter().any(|p| !p.is_finite()) {
+                return Err(SceneError::NonFinite {
+                    path: path.clone(),
+                    what: format!("a vertex position of mesh {}", mesh.index()),
+                });
+            }
+            let indices: Vec<u32> = match reader.read_indices() {
+                Some(i) => i.into_u32().collect(),
+                None => (0..positions.len() as u32).collect(),
+            };
+            // glTF's default material is our material 0; file materials start at 1.
+            let material = primitive.material().index().map_or(0, |i| i as u32 + 1);
+            let tex_coords: Vec<[f32; 2]> = match reader
+                .read_tex_coords(0)
+                .filter(|_| materials[material as usize].base_color_texture != NO_TEXTURE)
+            {
+                Some(t) => t.into_f32().collect(),
+                None => Vec::new(),
+            };
+            for t in indices.chunks_exact(3) {
+                let vertex = |k: usize| {
+                    positions
+                        .get(t[k] as usize)
+                        .copied()
+                        .ok_or_else(|| SceneError::Unreadable {
+                            path: path.clone(),
+                            reason: format!("mesh {} has an index past its vertices", mesh.index()),
+                        })
+                };
+                let (a, mut b, mut c) = (vertex(0)?, vertex(1)?, vertex(2)?);
+                let uv = |k: usize| tex_coords.get(t[k] as usize).copied().unwrap_or_default();
+                let mut uv = TriangleUv {
+                    uv: [uv(0), uv(1), uv(2)],
+                    pad: [0.0; 2],
+                };
+                if mirrored {
+                    core::mem::swap(&mut b, &mut c);
+                    uv.uv.swap(1, 2);
+                }
+                let tri = Triangle::new(a, b, c, material);
+                if tri.area() > 0.0 {
+                    out.push(tri);
+                    out_uvs.push(uv);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Every node's local transform at `time`: its TRS (or matrix) with animated channels
+    /// replaced by their values at `time`.
+    fn local_transforms(&self, time: f32) -> Result<Vec<Mat4>, SceneError> {
+        let mut trs: Vec<Option<(Vec3, Quat, Vec3)>> = self
+            .document
+            .nodes()
+            .map(|n| match n.transform() {
+                gltf::scene::Transform::Decomposed {
+                    translation,
+                    rotation,
+                    scale,
+                } => Some((
+                    Vec3::from(translation),
+                    Quat::from_array(rotation),
+                    Vec3::from(scale),
+                )),
+                gltf::scene::Transform::Matrix { .. } => None,
+            })
+            .collect();
+        for animation in self.document.animations() {
+            let unsupported = |reason: String| SceneError::UnsupportedAnimation {
+                path: self.path.clone(),
+                animation: animation.index(),
+                reason,
+            };
+            for channel in animation.channels() {
+                let node = channel.target().node().index();
+                let interpolation = channel.sampler().interpolation();
+                if interpolation == Interpolation::CubicSpline {
+                    return Err(unsupported("CUBICSPLINE interpolation".to_owned()));
+                }
+                let Some(node_trs) = trs[node].as_mut() else {
+                    return Err(unsupported(format!("node {node} has a matrix transform")));
+                };
+                let reader = channel.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
+                let times: Vec<f32> = reader
+                    .read_inputs()
+                    .ok_or_else(|| unsupported("unreadable keyframe times".to_owned()))?
+                    .collect();
+                let outputs = reader
+                    .read_outputs()
+                    .ok_or_else(|| unsupported("unreadable keyframe values".to_owned()))?;
+                let values: Vec<[f32; 4]> = match (channel.target().property(), outputs) {
+                    (Property::Translation, ReadOutputs::Translations(v))
+                    | (Property::Scale, ReadOutputs::Scales(v)) => {
+                        v.map(|[x, y, z]| [x, y, z, 0.0]).collect()
+                    }
+                    (Property::Rotation, ReadOutputs::Rotations(v)) => v.into_f32().collect(),
+                    _ => return Err(unsupported("morph-target weights".to_owned())),
+                };
+                if times.is_empty() || times.len() != values.len() {
+                    return Err(unsupported(
+                        "keyframe times and values differ in count".to_owned(),
+                    ));
+                }
+                let rotation = channel.target().property() == Property::Rotation;
+                let step = interpolation == Interpolation::Step;
+                let v = sample_keyframes(&times, &values, time, step, rotation);
+                match channel.target().property() {
+                    Property::Translation => node_trs.0 = Vec3::new(v[0], v[1], v[2]),
+                    Property::Rotation => node_trs.1 = Quat::from_array(v).normalize(),
+                    _ => node_trs.2 = Vec3::new(v[0], v[1], v[2]),
+                }
+            }
+        }
+        Ok(self
+            .document
+            .nodes()
+            .zip(trs)
+            .map(|(n, t)| match t {
+                Some((translation, rotation, scale)) => {
+                    Mat4::from_scale_rotation_translation(scale, rotation, translation)
+                }
+                None => Mat4::from_cols_array_2d(&n.transform().matrix()),
+            })
+            .collect())
+    }
+}
+
+/// The keyframe value at `time`: clamped before the first and after the last key; between
+/// keys the earlier value (STEP) or the linear blend (LINEAR; for a `rotation`, the later
+/// quaternion is first moved to the earlier one's hemisphere, and the caller normalises: a
+/// normalised lerp).
+fn sample_keyframes(
+    times: &[f32],
+    values: &[[f32; 4]],
+    time: f32,
+    step: bool,
+    rotation: bool,
+) -> [f32; 4] {
+    let next = times.partition_point(|&t| t <= time);
+    if next == 0 {
+        return values[0];
+    }
+    if next == times.len() {
+        return values[times.len() - 1];
+    }
+    let (a, b) = (values[next - 1], values[next]);
+    if step {
+        return a;
+    }
+    let s = (time - times[next - 1]) / (times[next] - times[next - 1]);
+    let dot: f32 = (0..4).map(|i| a[i] * b[i]).sum();
+    let sign = if rotation && dot < 0.0 { -1.0 } else { 1.0 };
+    core::array::from_fn(|i| a[i] + s * (sign * b[i] - a[i]))
+}
+
+/// An 8-bit glTF image as linear RGBA: colour channels sRGB-decoded (IEC 61966-2-1; glTF
+/// stores base colours in sRGB), alpha linear; grey images are replicated to RGB.
+fn linear_rgba(data: gltf::image::Data) -> Result<(u32, u32, Vec<[f32; 4]>), String> {
+    use gltf::image::Format;
+    let channels = match data.format {
+        Format::R8 => 1,
+        Format::R8G8 => 2,
+        Format::R8G8B8 => 3,
+        Format::R8G8B8A8 => 4,
+        other => return Err(format!("{other:?} texels; only 8-bit images are supported")),
+    };
+    let decode = |b: u8| {
+        let c = f32::from(b) / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    if data.pixels.len() != (data.width * data.height) as usize * channels || data.width == 0 {
+        return Err("the pixel data does not match the image size".to_owned());
+    }
+    let texels = data
+        .pixels
+        .chunks_exact(channels)
+        .map(|p| match channels {
+            1 | 2 => {
+                let g = decode(p[0]);
+                [
+                    g,
+                    g,
+                    g,
+                    if channels == 2 {
+                        f32::from(p[1]) / 255.0
+                    } else {
+                        1.0
+                    },
+                ]
+            }
+            3 => [decode(p[0]), decode(p[1]), decode(p[2]), 1.0],
+            _ => [
+                decode(p[0]),
+                decode(p[1]),
+                decode(p[2]),
+                f32::from(p[3]) / 255.0,
+            ],
+        })
+        .collect();
+    Ok((data.width, data.height, texels))
+}
+
+/// Rec. 709 luminance of linear RGB.
+#[must_use]
+pub fn luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+}
+
+impl Scene {
+    /// Builds the BVH over `triangles` and the emitter table; `None` when no triangle emits.
+    #[must_use]
+    pub fn new(
+        camera: Camera,
+        triangles: &[Triangle],
+        materials: Vec<Material>,
+        warnings: Vec<String>,
+    ) -> Option<Self> {
+        let mut bvh = Bvh::build(triangles);
+        let mut emitters = Vec::new();
+        let mut power = Vec::new();
+        for (i, t) in bvh.triangles.iter().enumerate() {
+            let p = t.area() * luminance(materials[t.material as usize].emission());
+            if p > 0.0 {
+                emitters.push(i as u32);
+                power.push(f64::from(p));
+            }
+        }
+        if emitters.is_empty() {
+            return None;
+        }
+        let total: f64 = power.iter().sum();
+        let mut acc = 0.0;
+        let mut emitter_cdf = Vec::with_capacity(power.len());
+        for (&i, p) in emitters.iter().zip(&power) {
+            acc += p;
+            emitter_cdf.push((acc / total) as f32);
+            bvh.triangles[i as usize].emitter_pmf = (p / total) as f32;
+        }
+        *emitter_cdf.last_mut().expect("non-empty") = 1.0;
+        Some(Self {
+            camera,
+            bvh,
+            materials,
+            emitters,
+            emitter_cdf,
+            uvs: Vec::new(),
+            textures: Vec::new(),
+            texels: Vec::new(),
+            warnings,
+        })
+    }
+
+    /// The material at a hit, with its base-colour texture (if any) looked up at the hit's
+    /// texture coordinates — nearest texel, REPEAT wrapping — and multiplied in.
+    #[must_use]
+    pub fn material_at(&self, hit: &Hit) -> Material {
+        let mut m = *self.material(hit.triangle);
+        if m.base_color_texture == NO_TEXTURE {
+            return m;
+        }
+        let (Some(uv), Some(tex)) = (
+            self.uvs.get(hit.triangle as usize),
+            self.textures.get(m.base_color_texture as usize),
+        ) else {
+            return m;
+        };
+        let b0 = 1.0 - hit.b1 - hit.b2;
+        let u = b0 * uv.uv[0][0] + hit.b1 * uv.uv[1][0] + hit.b2 * uv.uv[2][0];
+        let v = b0 * uv.uv[0][1] + hit.b1 * uv.uv[1][1] + hit.b2 * uv.uv[2][1];
+        let x = ((u - u.floor()) * tex.width as f32) as u32;
+        let y = ((v - v.floor()) * tex.height as f32) as u32;
+        let texel = self.texels
+            [(tex.offset + y.min(tex.height - 1) * tex.width + x.min(tex.width - 1)) as usize];
+        for (b, t) in m.base_color.iter_mut().zip(texel) {
+            *b *= t;
+        }
+        m
+    }
+
+    /// The material of triangle `triangle` (leaf order).
+    #[must_use]
+    pub fn material(&self, triangle: u32) -> &Material {
+        &self.materials[self.bvh.triangles[triangle as usize].material as usize]
+    }
+
+    /// Picks an emitter from a uniform `u ∈ [0, 1)` by binary search in
+    /// [`Scene::emitter_cdf`]: its triangle index and probability.
+    #[must_use]
+    pub fn pick_emitter(&self, u: f32) -> (u32, f32) {
+        let k = self
+            .emitter_cdf
+            .partition_point(|&c| c <= u)
+            .min(self.emitters.len() - 1);
+        let t = self.emitters[k];
+        (t, self.bvh.triangles[t as usize].emitter_pmf)
+    }
+}

@@ -1,0 +1,538 @@
+//! The generator of the built-in scenes in `demo/scenes/` (`mcg-demo scenes` rewrites them;
+//! a test checks that the committed files equal its output byte for byte).
+//!
+//! All three are closed rooms, 4 m wide (x ∈ [−2, 2]), 3 m high (y ∈ [0, 3]) and 5 m deep
+//! (z ∈ [−2.5, 2.5]), seen by a 60° camera at (0, 1.5, 2.3) looking down −z, with a red left
+//! wall, a green right wall and two boxes. Each is a `.gltf` with its geometry in a `.bin`
+//! next to it (non-indexed triangles, counter-clockwise seen from the front).
+//!
+//! - `hidden_light_room`: one 0.3 m square light facing the ceiling, hidden under a 1.2 m
+//!   square panel hung at 2.2 m — the room is lit almost only indirectly (MCPG's case).
+//! - `many_lights_room`: 24 small lights of different colours on the ceiling and the back
+//!   wall, a polished metal box (direct light from many sources, MCMM's case).
+//! - `dynamic_room`: the hidden light room with a doorway in the right wall to a small side
+//!   room lit by a warm light. Animations (glTF, [`super::scene::FRAME_RATE`] = 24 frames per
+//!   second): the hidden light and its panel slide along x from −1 m to +1 m over frames 0–64
+//!   (LINEAR), and the door turns open by 90° about its hinge at frame [`DOOR_OPENS_AT_FRAME`]
+//!   (STEP). The scene's `extras.mcg` repeats both facts for readers of the file.
+
+use std::path::Path;
+
+use glam::{Quat, Vec3};
+use serde_json::{Value, json};
+
+use super::scene::FRAME_RATE;
+use crate::Result;
+
+/// The frame at which the door of `dynamic_room` opens.
+pub const DOOR_OPENS_AT_FRAME: u32 = 32;
+/// The frame at which the moving light of `dynamic_room` reaches its end position.
+pub const LIGHT_STOPS_AT_FRAME: u32 = 64;
+
+/// Names of the built-in scenes (file stems under `demo/scenes/`).
+pub const SCENE_NAMES: [&str; 3] = ["hidden_light_room", "many_lights_room", "dynamic_room"];
+
+/// A material of the generator: glTF metallic-roughness factors and emission.
+#[derive(Clone, Copy)]
+struct Mat {
+    name: &'static str,
+    base: [f32; 3],
+    metallic: f32,
+    roughness: f32,
+    emissive: [f32; 3],
+    strength: f32,
+}
+
+const fn diffuse(name: &'static str, base: [f32; 3]) -> Mat {
+    Mat {
+        name,
+        base,
+        metallic: 0.0,
+        roughness: 1.0,
+        emissive: [0.0; 3],
+        strength: 1.0,
+    }
+}
+
+const fn light(name: &'static str, colour: [f32; 3], strength: f32) -> Mat {
+    Mat {
+        name,
+        base: [0.0; 3],
+        metallic: 0.0,
+        roughness: 1.0,
+        emissive: colour,
+        strength,
+    }
+}
+
+const WHITE: Mat = diffuse("white", [0.75, 0.75, 0.75]);
+const RED: Mat = diffuse("red", [0.63, 0.08, 0.06]);
+const GREEN: Mat = diffuse("green", [0.12, 0.45, 0.1]);
+const FLOOR: Mat = diffuse("floor", [0.55, 0.5, 0.45]);
+const PANEL: Mat = diffuse("panel", [0.7, 0.7, 0.7]);
+
+/// One mesh: triangles of one material, placed by a node.
+struct Part {
+    material: Mat,
+    triangles: Vec<[Vec3; 3]>,
+}
+
+/// Two triangles of the parallelogram `p, p + u, p + u + v, p + v`; front face along `u × v`.
+fn quad(out: &mut Vec<[Vec3; 3]>, p: Vec3, u: Vec3, v: Vec3) {
+    out.push([p, p + u, p + u + v]);
+    out.push([p, p + u + v, p + v]);
+}
+
+/// The six faces of the box `[lo, hi]`, front faces outwards.
+fn cuboid(out: &mut Vec<[Vec3; 3]>, lo: Vec3, hi: Vec3) {
+    let d = hi - lo;
+    let (x, y, z) = (Vec3::X * d.x, Vec3::Y * d.y, Vec3::Z * d.z);
+    quad(out, lo, z, y); // −x
+    quad(out, lo + x, y, z); // +x
+    quad(out, lo, x, z); // −y
+    quad(out, lo + y, z, x); // +y
+    quad(out, lo, y, x); // −z
+    quad(out, lo + z, x, y); // +z
+}
+
+fn part(material: Mat, triangles: Vec<[Vec3; 3]>) -> Part {
+    Part {
+        material,
+        triangles,
+    }
+}
+
+/// The room's shell (front faces inwards) with an optional doorway in the right wall
+/// (z ∈ [−0.5, 0.5], y ∈ [0, 2.2]), and the two boxes.
+fn room(doorway: bool) -> Vec<Part> {
+    let (w, h, d) = (2.0, 3.0, 2.5);
+    let mut floor = Vec::new();
+    quad(
+        &mut floor,
+        Vec3::new(-w, 0.0, -d),
+        Vec3::Z * 2.0 * d,
+        Vec3::X * 2.0 * w,
+    );
+    let mut white = Vec::new();
+    quad(
+        &mut white,
+        Vec3::new(-w, h, -d),
+        Vec3::X * 2.0 * w,
+        Vec3::Z * 2.0 * d,
+    ); // ceiling
+    quad(
+        &mut white,
+        Vec3::new(-w, 0.0, -d),
+        Vec3::X * 2.0 * w,
+        Vec3::Y * h,
+    ); // back
+    quad(
+        &mut white,
+        Vec3::new(-w, 0.0, d),
+        Vec3::Y * h,
+        Vec3::X * 2.0 * w,
+    ); // front
+    let mut red = Vec::new();
+    quad(
+        &mut red,
+        Vec3::new(-w, 0.0, -d),
+        Vec3::Y * h,
+        Vec3::Z * 2.0 * d,
+    );
+    let mut green = Vec::new();
+    let right = |out: &mut Vec<[Vec3; 3]>, z0: f32, z1: f32, y0: f32, y1: f32| {
+        quad(
+            out,
+            Vec3::new(w, y0, z0),
+            Vec3::Z * (z1 - z0),
+            Vec3::Y * (y1 - y0),
+        );
+    };
+    if doorway {
+        right(&mut green, -d, -0.5, 0.0, h);
+        right(&mut green, 0.5, d, 0.0, h);
+        right(&mut green, -0.5, 0.5, 2.2, h);
+    } else {
+        right(&mut green, -d, d, 0.0, h);
+    }
+    let mut boxes = Vec::new();
+    cuboid(
+        &mut boxes,
+        Vec3::new(-1.4, 0.0, -1.6),
+        Vec3::new(-0.5, 1.4, -0.7),
+    );
+    cuboid(
+        &mut boxes,
+        Vec3::new(0.5, 0.0, -0.6),
+        Vec3::new(1.3, 0.8, 0.2),
+    );
+    vec![
+        part(FLOOR, floor),
+        part(WHITE, white),
+        part(RED, red),
+        part(GREEN, green),
+        part(WHITE, boxes),
+    ]
+}
+
+/// The hidden light (facing up) and its panel, centred on x = 0 in the node's frame.
+fn hidden_light() -> Vec<Part> {
+    let mut lamp = Vec::new();
+    quad(
+        &mut lamp,
+        Vec3::new(-0.15, 2.3, -0.15),
+        Vec3::Z * 0.3,
+        Vec3::X * 0.3,
+    );
+    let mut panel = Vec::new();
+    cuboid(
+        &mut panel,
+        Vec3::new(-0.6, 2.2, -0.6),
+        Vec3::new(0.6, 2.25, 0.6),
+    );
+    vec![
+        part(light("hidden_light", [1.0, 0.95, 0.85], 400.0), lamp),
+        part(PANEL, panel),
+    ]
+}
+
+/// A node: the parts it carries and its translation; `animated` nodes get animation channels.
+struct Node {
+    name: &'static str,
+    parts: Vec<Part>,
+    translation: Vec3,
+}
+
+/// An animation channel: node index, property, keyframe times and values (3 or 4 wide).
+struct Channel {
+    node: usize,
+    path: &'static str,
+    step: bool,
+    times: Vec<f32>,
+    values: Vec<Vec<f32>>,
+}
+
+/// Serialises nodes, channels and scene extras into glTF JSON and its binary buffer.
+fn write_gltf(
+    name: &str,
+    nodes: &[Node],
+    channels: &[Channel],
+    extras: Value,
+) -> (String, Vec<u8>) {
+    let mut bin: Vec<u8> = Vec::new();
+    let mut views = Vec::new();
+    let mut accessors = Vec::new();
+    let mut push_floats = |bin: &mut Vec<u8>,
+                           data: &[f32],
+                           kind: &str,
+                           count: usize,
+                           bounds: Option<(Value, Value)>| {
+        let offset = bin.len();
+        for f in data {
+            bin.extend_from_slice(&f.to_le_bytes());
+        }
+        views.push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": data.len() * 4 }));
+        let mut accessor = json!({
+            "bufferView": views.len() - 1, "componentType": 5126, "count": count, "type": kind,
+        });
+        if let Some((min, max)) = bounds {
+            accessor["min"] = min;
+            accessor["max"] = max;
+        }
+        accessors.push(accessor);
+        accessors.len() - 1
+    };
+    let mut materials = Vec::new();
+    let mut meshes = Vec::new();
+    let mut gltf_nodes = Vec::new();
+    for node in nodes {
+        let mut primitives = Vec::new();
+        for p in &node.parts {
+            let flat: Vec<f32> = p
+                .triangles
+                .iter()
+                .flatten()
+                .flat_map(|v| v.to_array())
+                .collect();
+            let lo = p
+                .triangles
+                .iter()
+                .flatten()
+                .fold(Vec3::INFINITY, |a, &b| a.min(b));
+            let hi = p
+                .triangles
+                .iter()
+                .flatten()
+                .fold(Vec3::NEG_INFINITY, |a, &b| a.max(b));
+            let position = push_floats(
+                &mut bin,
+                &flat,
+                "VEC3",
+                p.triangles.len() * 3,
+                Some((json!(lo.to_array()), json!(hi.to_array()))),
+            );
+            let m = p.material;
+            let mut material = json!({
+                "name": m.name,
+                "pbrMetallicRoughness": {
+                    "baseColorFactor": [m.base[0], m.base[1], m.base[2], 1.0],
+                    "metallicFactor": m.metallic,
+                    "roughnessFactor": m.roughness,
+                },
+            });
+            if m.emissive != [0.0; 3] {
+                material["emissiveFactor"] = json!(m.emissive);
+                material["extensions"] = json!({
+                    "KHR_materials_emissive_strength": { "emissiveStrength": m.strength }
+                });
+            }
+            materials.push(material);
+            primitives.push(
+                json!({ "attributes": { "POSITION": position }, "material": materials.len() - 1 }),
+            );
+        }
+        meshes.push(json!({ "name": node.name, "primitives": primitives }));
+        let mut n = json!({ "name": node.name, "mesh": meshes.len() - 1 });
+        if node.translation != Vec3::ZERO {
+            n["translation"] = json!(node.translation.to_array());
+        }
+        gltf_nodes.push(n);
+    }
+    // The camera: 60° vertical field of view, at (0, 1.5, 2.3), looking down −z (no rotation).
+    gltf_nodes.push(json!({ "name": "camera", "camera": 0, "translation": [0.0, 1.5, 2.3] }));
+    let mut samplers = Vec::new();
+    let mut gltf_channels = Vec::new();
+    for c in channels {
+        let input = push_floats(
+            &mut bin,
+            &c.times,
+            "SCALAR",
+            c.times.len(),
+            Some((json!([c.times[0]]), json!([c.times[c.times.len() - 1]]))),
+        );
+        let flat: Vec<f32> = c.values.iter().flatten().copied().collect();
+        let kind = if c.values[0].len() == 4 {
+            "VEC4"
+        } else {
+            "VEC3"
+        };
+        let output = push_floats(&mut bin, &flat, kind, c.values.len(), None);
+        samplers.push(json!({
+            "input": input, "output": output,
+            "interpolation": if c.step { "STEP" } else { "LINEAR" },
+        }));
+        gltf_channels.push(
+            json!({ "sampler": samplers.len() - 1, "target": { "node": c.node, "path": c.path } }),
+        );
+    }
+    let mut doc = json!({
+        "asset": { "version": "2.0", "generator": "mcg-demo scene_generator" },
+        "extensionsUsed": ["KHR_materials_emissive_strength"],
+        "scene": 0,
+        "scenes": [{
+            "name": name,
+            "nodes": (0..gltf_nodes.len()).collect::<Vec<_>>(),
+            "extras": { "mcg": extras },
+        }],
+        "nodes": gltf_nodes,
+        "cameras": [{ "type": "perspective", "perspective": { "yfov": 60f32.to_radians(), "znear": 0.01 } }],
+        "meshes": meshes,
+        "materials": materials,
+        "accessors": accessors,
+        "bufferViews": views,
+        "buffers": [{ "uri": format!("{name}.bin"), "byteLength": bin.len() }],
+    });
+    if !gltf_channels.is_empty() {
+        doc["animations"] =
+            json!([{ "name": "motion", "samplers": samplers, "channels": gltf_channels }]);
+    }
+    let mut text = serde_json::to_string_pretty(&doc).expect("JSON values serialise");
+    text.push('\n');
+    (text, bin)
+}
+
+/// The built-in scenes: `(name, glTF JSON, binary buffer)` each, in [`SCENE_NAMES`] order.
+#[must_use]
+pub fn built_in_scenes() -> Vec<(&'static str, String, Vec<u8>)> {
+    let static_node = |parts| Node {
+        name: "room",
+        parts,
+        translation: Vec3::ZERO,
+    };
+
+    // (a) Hidden light.
+    let mut parts = room(false);
+    parts.extend(hidden_light());
+    let (a_json, a_bin) = write_gltf(
+        SCENE_NAMES[0],
+        &[static_node(parts)],
+        &[],
+        json!({ "description": "a closed room lit by a small light hidden above a panel" }),
+    );
+
+    // (b) Many lights: 4×4 on the ceiling, 8 on the back wall, colours around the hue circle.
+    let mut parts = room(false);
+    let mut k = 0;
+    let colour = |k: usize| {
+        let hue = k as f32 / 24.0 * core::f32::consts::TAU;
+        let c =
+            Vec3::new(hue.cos(), (hue - 2.094).cos(), (hue + 2.094).cos()) * 0.5 + Vec3::splat(0.5);
+        (c / c.max_element()).to_array()
+    };
+    for i in 0..4 {
+        for j in 0..4 {
+            let mut tris = Vec::new();
+            let p = Vec3::new(-1.5 + i as f32, 2.999, -2.0 + 1.2 * j as f32);
+            quad(&mut tris, p, Vec3::X * 0.12, Vec3::Z * 0.12); // faces down
+            parts.push(part(light("ceiling_light", colour(k), 60.0), tris));
+            k += 1;
+        }
+    }
+    for i in 0..8 {
+        let mut tris = Vec::new();
+        let p = Vec3::new(-1.75 + 0.5 * i as f32, 1.0 + 0.8 * (i % 2) as f32, -2.499);
+        quad(&mut tris, p, Vec3::X * 0.1, Vec3::Y * 0.1); // faces +z, into the room
+        parts.push(part(light("wall_light", colour(k), 60.0), tris));
+        k += 1;
+    }
+    let mut metal = Vec::new();
+    cuboid(
+        &mut metal,
+        Vec3::new(-0.3, 0.0, 0.6),
+        Vec3::new(0.3, 0.6, 1.2),
+    );
+    parts.push(part(
+        Mat {
+            name: "metal",
+            base: [0.95, 0.64, 0.54],
+            metallic: 1.0,
+            roughness: 0.3,
+            emissive: [0.0; 3],
+            strength: 1.0,
+        },
+        metal,
+    ));
+    let (b_json, b_bin) = write_gltf(
+        SCENE_NAMES[1],
+        &[static_node(parts)],
+        &[],
+        json!({ "description": "a closed room lit directly by 24 small lights of different colours" }),
+    );
+
+    // (c) Dynamic: moving hidden light, door to a lit side room opening at a known frame.
+    let mut parts = room(true);
+    let mut side = Vec::new();
+    let (x0, x1, z0, z1, h) = (2.0, 3.5, -1.0, 1.0, 3.0);
+    quad(
+        &mut side,
+        Vec3::new(x0, 0.0, z0),
+        Vec3::Z * (z1 - z0),
+        Vec3::X * (x1 - x0),
+    ); // floor
+    quad(
+        &mut side,
+        Vec3::new(x0, h, z0),
+        Vec3::X * (x1 - x0),
+        Vec3::Z * (z1 - z0),
+    ); // ceiling
+    quad(
+        &mut side,
+        Vec3::new(x1, 0.0, z0),
+        Vec3::Z * (z1 - z0),
+        Vec3::Y * h,
+    ); // far wall
+    quad(
+        &mut side,
+        Vec3::new(x0, 0.0, z0),
+        Vec3::X * (x1 - x0),
+        Vec3::Y * h,
+    ); // z0 wall
+    quad(
+        &mut side,
+        Vec3::new(x0, 0.0, z1),
+        Vec3::Y * h,
+        Vec3::X * (x1 - x0),
+    ); // z1 wall
+    parts.push(part(WHITE, side));
+    let mut lamp = Vec::new();
+    quad(
+        &mut lamp,
+        Vec3::new(2.6, 2.999, -0.2),
+        Vec3::X * 0.4,
+        Vec3::Z * 0.4,
+    );
+    parts.push(part(light("side_light", [1.0, 0.7, 0.4], 60.0), lamp));
+    let mut door = Vec::new();
+    cuboid(
+        &mut door,
+        Vec3::new(-0.025, 0.0, 0.0),
+        Vec3::new(0.025, 2.2, 1.0),
+    );
+    let nodes = [
+        static_node(parts),
+        Node {
+            name: "moving_light",
+            parts: hidden_light(),
+            translation: Vec3::new(-1.0, 0.0, 0.0),
+        },
+        Node {
+            name: "door",
+            parts: vec![part(PANEL, door)],
+            translation: Vec3::new(2.0, 0.0, -0.5),
+        },
+    ];
+    let open = Quat::from_rotation_y(core::f32::consts::FRAC_PI_2)
+        .to_array()
+        .to_vec();
+    let channels = [
+        Channel {
+            node: 1,
+            path: "translation",
+            step: false,
+            times: vec![0.0, LIGHT_STOPS_AT_FRAME as f32 / FRAME_RATE],
+            values: vec![vec![-1.0, 0.0, 0.0], vec![1.0, 0.0, 0.0]],
+        },
+        Channel {
+            node: 2,
+            path: "rotation",
+            step: true,
+            times: vec![0.0, DOOR_OPENS_AT_FRAME as f32 / FRAME_RATE],
+            values: vec![vec![0.0, 0.0, 0.0, 1.0], open],
+        },
+    ];
+    let (c_json, c_bin) = write_gltf(
+        SCENE_NAMES[2],
+        &nodes,
+        &channels,
+        json!({
+            "description": "the hidden light room with a moving light and a door to a lit side room",
+            "frame_rate": FRAME_RATE,
+            "door_opens_at_frame": DOOR_OPENS_AT_FRAME,
+            "light_moves_until_frame": LIGHT_STOPS_AT_FRAME,
+        }),
+    );
+    vec![
+        (SCENE_NAMES[0], a_json, a_bin),
+        (SCENE_NAMES[1], b_json, b_bin),
+        (SCENE_NAMES[2], c_json, c_bin),
+    ]
+}
+
+/// Writes the built-in scenes as `<name>.gltf` + `<name>.bin` into `dir` (created if missing).
+///
+/// # Errors
+/// When a file cannot be written.
+pub fn write_built_in_scenes(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    for (name, text, bin) in built_in_scenes() {
+        for (file, bytes) in [
+            (format!("{name}.gltf"), text.as_bytes()),
+            (format!("{name}.bin"), &bin[..]),
+        ] {
+            let path = dir.join(file);
+            std::fs::write(&path, bytes)
+                .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        }
+    }
+    Ok(())
+}
