@@ -250,9 +250,9 @@ impl SufficientStats {
             return true;
         }
         let beta = (alpha * weight / weight_sum).min(1.0);
-        let direction = (y - x).normalize_or_zero();
+        let direction = math::normalize_robust(y - x).unwrap_or(Vec3::ZERO);
         let mean_direction = if self.weight_sum > 0.0 {
-            (self.mean_target - x).try_normalize().unwrap_or(direction)
+            math::normalize_robust(self.mean_target - x).unwrap_or(direction)
         } else {
             direction
         };
@@ -289,14 +289,15 @@ impl SufficientStats {
     }
 
     /// Mean direction μ = (ȳ − x)/|ȳ − x| from shading point `x` (MCMM Alg. 2 line 5), or
-    /// `None` when the statistics are empty or ȳ coincides with `x`.
+    /// `None` when the statistics are empty, ȳ coincides with `x` or `x` is not finite.
+    /// Unit length to f32 precision however close ȳ is to `x` (and however far).
     #[inline]
     #[must_use]
     pub fn mean_direction(&self, x: Vec3) -> Option<Vec3> {
         if !self.is_valid() {
             return None;
         }
-        (self.mean_target - x).try_normalize()
+        math::normalize_robust(self.mean_target - x)
     }
 
     /// Distance |ȳ − x| from shading point `x` to the mean target, the input of distance
@@ -448,6 +449,35 @@ mod tests {
                     && s.mean_cosine().is_finite()
             );
         }
+    }
+
+    #[test]
+    fn tiny_and_huge_offsets_give_unit_mean_directions() {
+        // Issue 14 row 3: x = 0 towards (3e-22, 4e-22, 0) gave |μ| = 1.0011 (|ȳ − x|² is
+        // subnormal); offsets beyond 1.8·10¹⁹ gave no direction at all.
+        for (y, want) in [
+            (Vec3::new(3e-22, 4e-22, 0.0), Vec3::new(0.6, 0.8, 0.0)),
+            (Vec3::new(0.0, 3e-38, -4e-38), Vec3::new(0.0, 0.6, -0.8)),
+            (Vec3::new(3e37, -4e37, 0.0), Vec3::new(0.6, -0.8, 0.0)),
+        ] {
+            let mut s = SufficientStats::EMPTY;
+            assert!(s.update(Vec3::ZERO, y, 1.0, &FitParams::MCMM));
+            assert!(s.update(Vec3::ZERO, y, 1.0, &FitParams::MCPG));
+            assert!(s.mean_cosine() > 0.999_99, "{s:?}");
+            let mu = s.mean_direction(Vec3::ZERO).unwrap();
+            assert!((mu.length() - 1.0).abs() < 1e-6, "{y}: {mu}");
+            assert!((mu - want).length() < 1e-6, "{y}: {mu}");
+            let lobe = s.to_vmf(Vec3::ZERO, MapPrior::uninformed(0.2)).unwrap();
+            assert!(lobe.mu().is_normalized(), "{y}: {lobe:?}");
+        }
+        let s = SufficientStats {
+            mean_target: Vec3::X,
+            weight_sum: 1.0,
+            one_minus_mean_cosine: 0.1,
+            sample_count: 3,
+        };
+        assert_eq!(s.mean_direction(Vec3::new(f32::NAN, 0.0, 0.0)), None);
+        assert_eq!(s.mean_direction(Vec3::new(f32::INFINITY, 0.0, 0.0)), None);
     }
 
     #[test]
