@@ -73,7 +73,13 @@ pub struct AdaptiveGrid {
 
 impl AdaptiveGrid {
     /// Validates `params`: tan(α/2) and `min_width` positive and finite, `power` finite and
-    /// above 1, `steps` ≥ 1, `max_level` ≤ 255.
+    /// above 1, `steps` ≥ 1, `max_level` ≤ 255, and the coarsest width
+    /// `w_min · POWER^(max_level/STEPS)` finite, below e⁸⁸ ≈ 1.7·10³⁸ (MCPG's defaults reach
+    /// 2.4·10³⁶; with 255 levels, POWER^(1/STEPS) up to about 1.6 fits for w_min = 0.01).
+    ///
+    /// # Errors
+    /// The [`GridError`] variant named for the first broken condition;
+    /// [`GridError::CoarsestWidthNotFinite`] for the last one.
     pub fn new(params: LevelParams) -> Result<Self, GridError> {
         if !(params.tan_half_angle > 0.0 && params.tan_half_angle.is_finite()) {
             return Err(GridError::TanHalfAngleNotPositive);
@@ -91,6 +97,12 @@ impl AdaptiveGrid {
             return Err(GridError::MaxLevelTooLarge);
         }
         let ln_power = math::ln(params.power);
+        // ln of the coarsest width; `width` evaluates exp of the same sum.
+        let ln_coarsest =
+            math::ln(params.min_width) + params.max_level as f32 * (ln_power / params.steps as f32);
+        if !(ln_coarsest < LN_WIDTH_MAX) {
+            return Err(GridError::CoarsestWidthNotFinite);
+        }
         Ok(Self {
             params,
             levels_per_ln: params.steps as f32 / ln_power,
@@ -139,10 +151,12 @@ impl AdaptiveGrid {
         (self.target_level(distance) + geometric_jitter(xi)).min(self.params.max_level)
     }
 
-    /// Cell width of `level`: `w_min · POWER^(level/STEPS)`.
+    /// Cell width of `level`: `w_min · POWER^(level/STEPS)`. Levels above `max_level` are
+    /// treated as `max_level`, so the width is always finite.
     #[inline]
     #[must_use]
     pub fn width(&self, level: u32) -> f32 {
+        let level = level.min(self.params.max_level);
         self.params.min_width * math::exp(level as f32 * self.ln_per_level)
     }
 
@@ -172,6 +186,10 @@ impl Default for AdaptiveGrid {
         Self::mcpg()
     }
 }
+
+/// ln of the largest coarsest width [`AdaptiveGrid::new`] accepts: 88, so the width
+/// (e⁸⁸ ≈ 1.65·10³⁸) and the rounding of its `exp` stay below `f32::MAX` ≈ e^88.72.
+const LN_WIDTH_MAX: f32 = 88.0;
 
 /// `⌊−log₂(1 − ξ)⌋`: the number of extra, coarser levels, k with probability 2^−(k+1)
 /// (a geometric distribution with p = ½; mean 1).
@@ -283,6 +301,29 @@ mod tests {
         assert_eq!(bad(|p| p.power = f32::NAN), GridError::PowerNotAboveOne);
         assert_eq!(bad(|p| p.steps = 0), GridError::StepsZero);
         assert_eq!(bad(|p| p.max_level = 256), GridError::MaxLevelTooLarge);
+        // Issue 14 row 8: power 10¹⁰ per level was accepted and width(level 25) was +∞.
+        assert_eq!(
+            bad(|p| {
+                p.power = 1e10;
+                p.steps = 1;
+            }),
+            GridError::CoarsestWidthNotFinite
+        );
+        assert_eq!(bad(|p| p.min_width = 1e38), GridError::CoarsestWidthNotFinite);
+        let g = AdaptiveGrid::new(LevelParams {
+            power: 1e10,
+            steps: 1,
+            max_level: 3,
+            ..ok
+        })
+        .unwrap();
+        for level in [0, 3, 4, 255, u32::MAX] {
+            let w = g.width(level);
+            assert!(w.is_finite() && w > 0.0, "{level}: {w}");
+        }
+        assert_eq!(g.width(u32::MAX), g.width(3));
+        let w = g.width(g.level(1e30, 0.999_999_9));
+        assert!(w.is_finite(), "{w}");
         assert!(AdaptiveGrid::new(ok).is_ok());
         assert_eq!(StaticGrid::new(0.0), Err(GridError::WidthNotPositive));
         assert_eq!(StaticGrid::new(f32::NAN), Err(GridError::WidthNotPositive));
