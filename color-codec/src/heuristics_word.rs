@@ -273,7 +273,10 @@ mod tests {
         let back = l.decode(w);
         assert_eq!((back.f_v, back.f_d, back.flags), (1.0, 1.0, 0));
         assert_eq!(l.flags(HeuristicsWord(u32::MAX)), 0);
-        assert_eq!(l.with_flags(HeuristicsWord(0x1234_5678), u32::MAX).0, 0x1234_5678);
+        assert_eq!(
+            l.with_flags(HeuristicsWord(0x1234_5678), u32::MAX).0,
+            0x1234_5678
+        );
         for word in [0, 1, 0x8000_0000, u32::MAX] {
             let h = l.decode(HeuristicsWord(word));
             assert_eq!(l.encode(h), HeuristicsWord(word), "{word:#x}");

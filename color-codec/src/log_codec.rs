@@ -586,14 +586,20 @@ mod tests {
         assert_eq!(LogCodec::gamma_min(f32::NAN), 2f32.powi(-11));
         for beta in [1e-30, 0.01, 0.5, 5.0, 8.0, 44.3, 79.9, 80.0] {
             let g = LogCodec::gamma_min(beta);
-            assert_eq!(LogCodec::new(beta, g / 2.0), Err(CodecError::MaxValueOverflows));
+            assert_eq!(
+                LogCodec::new(beta, g / 2.0),
+                Err(CodecError::MaxValueOverflows)
+            );
             let codec = LogCodec::new(beta, g).unwrap();
             assert!(codec.max_value().is_finite(), "{beta}");
             for bits in [1, 9, 16] {
                 let field = codec.field(bits);
                 for code in [0, 1, field.max_code() - 1, field.max_code(), u32::MAX] {
                     let v = field.decode(code);
-                    assert!(v.is_finite() && v >= 0.0, "β {beta} {bits} bits code {code}: {v}");
+                    assert!(
+                        v.is_finite() && v >= 0.0,
+                        "β {beta} {bits} bits code {code}: {v}"
+                    );
                 }
             }
         }

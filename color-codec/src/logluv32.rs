@@ -245,8 +245,14 @@ mod tests {
         assert!(f64::from(top) >= Y_MAX && f64::from(f32::from_bits(top.to_bits() - 1)) < Y_MAX);
         assert_eq!(LogLuv32::pack_xyz(Vec3::new(top, top, top)) >> 16, LE_MAX);
         let below = f32::from_bits(top.to_bits() - 1);
-        assert_eq!(LogLuv32::pack_xyz(Vec3::new(below, below, below)) >> 16, LE_MAX - 1);
-        assert_eq!(LogLuv32::pack_xyz(Vec3::splat(1.837_197_6e19)) >> 16, LE_MAX - 1);
+        assert_eq!(
+            LogLuv32::pack_xyz(Vec3::new(below, below, below)) >> 16,
+            LE_MAX - 1
+        );
+        assert_eq!(
+            LogLuv32::pack_xyz(Vec3::splat(1.837_197_6e19)) >> 16,
+            LE_MAX - 1
+        );
     }
 
     #[test]

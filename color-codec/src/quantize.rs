@@ -124,7 +124,10 @@ mod tests {
     fn wide_codes_saturate_instead_of_overflowing() {
         // Issue 14 row 6: overflowed (debug panic; release returned 2³¹ or 0).
         for rounding in [Rounding::Down, Rounding::Nearest, Rounding::Stochastic(0.0)] {
-            assert_eq!(quantize(f32::INFINITY, u32::MAX, rounding), MAX_QUANTIZE_CODE);
+            assert_eq!(
+                quantize(f32::INFINITY, u32::MAX, rounding),
+                MAX_QUANTIZE_CODE
+            );
             assert_eq!(quantize(f32::MAX, 1 << 30, rounding), MAX_QUANTIZE_CODE);
             assert_eq!(quantize(-1.0, u32::MAX, rounding), 0);
             assert_eq!(quantize(f32::NAN, u32::MAX, rounding), 0);
@@ -133,8 +136,14 @@ mod tests {
             assert_eq!(quantize_unorm(1.0, u32::MAX, rounding), MAX_QUANTIZE_CODE);
             assert_eq!(quantize_unorm(0.5, 0, rounding), 0);
         }
-        assert_eq!(quantize(16_777_214.6, u32::MAX, Rounding::Nearest), MAX_QUANTIZE_CODE);
-        assert_eq!(quantize_unorm(1.0, 24, Rounding::Nearest), MAX_QUANTIZE_CODE);
+        assert_eq!(
+            quantize(16_777_214.6, u32::MAX, Rounding::Nearest),
+            MAX_QUANTIZE_CODE
+        );
+        assert_eq!(
+            quantize_unorm(1.0, 24, Rounding::Nearest),
+            MAX_QUANTIZE_CODE
+        );
     }
 
     #[test]

@@ -190,7 +190,16 @@ mod tests {
     fn wide_mantissas_are_clamped() {
         // Issue 14 row 6: n ≥ 23 overflowed a shift (debug panic, release garbage).
         for n in [22, 23, 24, 26, 31, 32, u32::MAX] {
-            for v in [0.0, 1.0, 0.3, 65000.0, 1e-9, f32::MAX, f32::INFINITY, f32::NAN] {
+            for v in [
+                0.0,
+                1.0,
+                0.3,
+                65000.0,
+                1e-9,
+                f32::MAX,
+                f32::INFINITY,
+                f32::NAN,
+            ] {
                 let code = f32_to_ufloat(v, n);
                 assert_eq!(code, f32_to_ufloat(v, 22), "{v} {n}");
                 let back = ufloat_to_f32(code, n);

@@ -144,7 +144,10 @@ mod tests {
         // Issue 14: all-(−0) packed to 0x88000000 (exponent 17); the extension gives 0.
         assert_eq!(Rgb9E5::pack(Vec3::splat(-0.0)), 0);
         assert_eq!(Rgb9E5::pack(Vec3::new(-0.0, 0.0, -0.0)), 0);
-        assert_eq!(Rgb9E5::pack(Vec3::new(-0.0, 1.0, -0.0)), Rgb9E5::pack(Vec3::Y));
+        assert_eq!(
+            Rgb9E5::pack(Vec3::new(-0.0, 1.0, -0.0)),
+            Rgb9E5::pack(Vec3::Y)
+        );
         let w = Rgb9E5::pack(Vec3::new(f32::INFINITY, 1e9, 1.0));
         assert_eq!(Rgb9E5::unpack(w).x, RGB9E5_MAX);
         // max = 1 → E = 16, step 2⁻⁸: mantissas 256, 128, 64.

@@ -82,7 +82,11 @@ impl SlotIndexer {
     #[must_use]
     pub const fn next(&self, slot: u32) -> u32 {
         // `capacity ≥ 1`; comparing before adding cannot overflow, even for u32::MAX.
-        if slot >= self.capacity - 1 { 0 } else { slot + 1 }
+        if slot >= self.capacity - 1 {
+            0
+        } else {
+            slot + 1
+        }
     }
 }
 

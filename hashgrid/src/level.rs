@@ -309,7 +309,10 @@ mod tests {
             }),
             GridError::CoarsestWidthNotFinite
         );
-        assert_eq!(bad(|p| p.min_width = 1e38), GridError::CoarsestWidthNotFinite);
+        assert_eq!(
+            bad(|p| p.min_width = 1e38),
+            GridError::CoarsestWidthNotFinite
+        );
         let g = AdaptiveGrid::new(LevelParams {
             power: 1e10,
             steps: 1,

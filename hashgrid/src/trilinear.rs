@@ -203,7 +203,10 @@ mod tests {
         // release wrapped to i32::MIN, the opposite end of the grid).
         for (q, want) in [
             (Vec3::new(1e12, 0.0, 0.0), IVec3::new(i32::MAX, 0, 0)),
-            (Vec3::new(2_147_483_648.0, 0.0, 0.0), IVec3::new(i32::MAX, 0, 0)),
+            (
+                Vec3::new(2_147_483_648.0, 0.0, 0.0),
+                IVec3::new(i32::MAX, 0, 0),
+            ),
             (Vec3::INFINITY, IVec3::MAX),
             (Vec3::NEG_INFINITY, IVec3::MIN),
             (Vec3::splat(-1e12), IVec3::MIN),
