@@ -6,7 +6,8 @@ use core::fmt;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum CodecError {
-    /// The log codec's range parameter β is NaN, not positive, or above [`LogCodec::BETA_MAX`](crate::LogCodec::BETA_MAX).
+    /// The log codec's range parameter β is NaN or outside
+    /// [[`LogCodec::BETA_MIN`](crate::LogCodec::BETA_MIN), [`LogCodec::BETA_MAX`](crate::LogCodec::BETA_MAX)] = [0.14, 80].
     BetaOutOfRange,
     /// The log codec's scale parameter γ is NaN, infinite, or not positive.
     GammaNotPositive,
@@ -26,7 +27,7 @@ pub enum CodecError {
 impl fmt::Display for CodecError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
-            CodecError::BetaOutOfRange => "log codec beta is not in (0, 80]",
+            CodecError::BetaOutOfRange => "log codec beta is not in [0.14, 80]",
             CodecError::GammaNotPositive => "log codec gamma is not a positive finite number",
             CodecError::MaxValueOverflows => {
                 "log codec gamma is too small for beta: (e^beta - 1)/gamma overflows f32"

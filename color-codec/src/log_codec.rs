@@ -45,6 +45,12 @@ impl LogCodec {
     /// Largest accepted β: e^β must stay finite in f32 (e^88.7 overflows), with margin.
     pub const BETA_MAX: f32 = 80.0;
 
+    /// Smallest accepted β: 0.14. Below about 0.1345 the encoder's tolerance ε̂ (see
+    /// [`LogField`], "Rounding down exactly") reaches ½ code at 16 bits and the exact
+    /// round-down (and with it `encode(decode(q)) = q`) is no longer guaranteed; far below,
+    /// the scales M/β overflow f32.
+    pub const BETA_MIN: f32 = 0.14;
+
     /// ADGI's irradiance codec, (β, γ) = (5, 15) (sec. 4.5).
     pub const IRRADIANCE: LogCodec = LogCodec {
         beta: 5.0,
@@ -61,7 +67,7 @@ impl LogCodec {
         gamma: 20.0,
     };
 
-    /// A codec with range parameter β ∈ (0, [`BETA_MAX`](Self::BETA_MAX)] and scale γ > 0
+    /// A codec with range parameter β ∈ [[`BETA_MIN`](Self::BETA_MIN), [`BETA_MAX`](Self::BETA_MAX)] = [0.14, 80] and scale γ > 0
     /// (finite) with γ ≥ [`LogCodec::gamma_min`]`(β)` = 2^{⌈β log₂e⌉ − 127}, which keeps the
     /// largest encodable value (e^β − 1)/γ ≤ 2¹²⁷ and 1/γ finite, so every code decodes finite
     /// (e.g. γ ≥ 2⁻¹¹ ≈ 4.9·10⁻⁴ at β = 80, γ ≥ 2⁻¹¹⁹ at ADGI's β = 5).
@@ -70,7 +76,7 @@ impl LogCodec {
     /// [`CodecError::BetaOutOfRange`] or [`CodecError::GammaNotPositive`] (NaN fails both
     /// checks); [`CodecError::MaxValueOverflows`] for a positive γ below `gamma_min(β)`.
     pub const fn new(beta: f32, gamma: f32) -> Result<Self, CodecError> {
-        if !(beta > 0.0 && beta <= Self::BETA_MAX) {
+        if !(beta >= Self::BETA_MIN && beta <= Self::BETA_MAX) {
             return Err(CodecError::BetaOutOfRange);
         }
         if !(gamma > 0.0 && gamma < f32::INFINITY) {
@@ -555,6 +561,11 @@ mod tests {
     fn construction() {
         assert_eq!(LogCodec::new(5.0, 15.0), Ok(LogCodec::IRRADIANCE));
         assert_eq!(LogCodec::new(0.0, 15.0), Err(CodecError::BetaOutOfRange));
+        // Below BETA_MIN the scales grow without bound (β = 10⁻⁴⁵ made M/β infinite).
+        for beta in [0.139, 1e-3, 1e-30, 1e-45] {
+            assert_eq!(LogCodec::new(beta, 15.0), Err(CodecError::BetaOutOfRange));
+        }
+        assert!(LogCodec::new(LogCodec::BETA_MIN, 15.0).is_ok());
         assert_eq!(
             LogCodec::new(f32::NAN, 15.0),
             Err(CodecError::BetaOutOfRange)
@@ -577,14 +588,14 @@ mod tests {
             Err(CodecError::MaxValueOverflows)
         );
         assert_eq!(
-            LogCodec::new(1e-30, 1e-45),
+            LogCodec::new(0.2, 1e-45),
             Err(CodecError::MaxValueOverflows)
         );
         assert_eq!(LogCodec::gamma_min(80.0), 2f32.powi(-11));
         assert_eq!(LogCodec::gamma_min(5.0), 2f32.powi(-119));
         assert_eq!(LogCodec::gamma_min(1e-30), 2f32.powi(-126));
         assert_eq!(LogCodec::gamma_min(f32::NAN), 2f32.powi(-11));
-        for beta in [1e-30, 0.01, 0.5, 5.0, 8.0, 44.3, 79.9, 80.0] {
+        for beta in [LogCodec::BETA_MIN, 0.5, 5.0, 8.0, 44.3, 79.9, 80.0] {
             let g = LogCodec::gamma_min(beta);
             assert_eq!(
                 LogCodec::new(beta, g / 2.0),

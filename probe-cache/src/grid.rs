@@ -139,7 +139,8 @@ impl ProbeGrid {
     #[must_use]
     pub fn corner(&self, cell: ProbeCell, corner: u32) -> (UVec3, f32) {
         let step = UVec3::new(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
-        let coords = (cell.base + step).min(self.counts - UVec3::ONE);
+        // Saturating: a base at u32::MAX (counts near 2³², or a hand-made cell) must not wrap.
+        let coords = cell.base.saturating_add(step).min(self.counts - UVec3::ONE);
         let stepped = step.cmpeq(UVec3::ONE);
         let w = Vec3::select(stepped, cell.alpha, Vec3::ONE - cell.alpha);
         (coords, w.x * w.y * w.z)

@@ -163,7 +163,7 @@ impl Default for SmoothingKernel {
 /// (probe, octant) is the mean of `input` over the probes within `spatial_radius` along each
 /// axis that exist in the grid, and (with `directional`) over the octant and its three
 /// edge-adjacent octants. Non-finite inputs count as 0 and means that overflow saturate at
-/// `f32::MAX`, so the output is always finite. A radius beyond the grid covers the whole axis.
+/// ±`f32::MAX`, so the output is always finite. A radius beyond the grid covers the whole axis.
 /// `scratch` is a buffer of the same length (its contents are overwritten).
 ///
 /// The filter is separable (a box of in-grid probes is a product of per-axis intervals), so it
@@ -231,7 +231,7 @@ pub fn spatial_smoothing(
                     s += src[k];
                 }
                 // A sum of huge finite values can overflow; keep the table finite.
-                dst[base + o] = (s * inv).min(f32::MAX);
+                dst[base + o] = (s * inv).clamp(-f32::MAX, f32::MAX);
             }
         }
         src_is_out = !src_is_out;

@@ -493,6 +493,8 @@ mod tests {
     }
 
     proptest! {
+        #![proptest_config(crate::proptest_support::proptest_config(256))]
+
         #[test]
         fn bilinear_weights_are_a_partition_and_taps_interior(
             x in -1.0f32..1.0, y in -1.0f32..1.0, z in -1.0f32..1.0, which in 0usize..10

@@ -84,6 +84,22 @@ pub(crate) fn normalize_robust(v: glam::Vec3) -> Option<glam::Vec3> {
     (v / largest).try_normalize()
 }
 
+/// |v| without overflow: `v.length()` (bit-identical) where |v|² is finite, else the length of
+/// `v` scaled by its largest component magnitude, saturating at `f32::MAX` (NaN stays NaN).
+#[inline]
+pub(crate) fn length_robust(v: glam::Vec3) -> f32 {
+    let length_squared = v.length_squared();
+    if length_squared.is_finite() {
+        return sqrt(length_squared);
+    }
+    let largest = v.abs().max_element();
+    if !(largest <= f32::MAX) {
+        // ±∞ gives +∞ saturated, NaN stays NaN.
+        return if largest.is_nan() { f32::NAN } else { f32::MAX };
+    }
+    (largest * (v / largest).length()).min(f32::MAX)
+}
+
 /// (sin 2πt, cos 2πt) for a turn fraction `t` (usually a uniform in [0, 1)).
 ///
 /// Reduces exactly in turns (t·4 − round(t·4) is exact in f32, unlike 2πt), then evaluates

@@ -116,12 +116,21 @@ impl MapPrior {
     /// MCPG's distance prior (sec. 4 "Step 2", Alg. 2 line 7): r_p = 0 and
     /// N_p = max(`min_weight`, `scale` / `distance`²), where `distance` = |ȳ − x| (see
     /// [`SufficientStats::target_distance`]). The paper uses `scale` = 1; the authors' engine
-    /// 0.2-0.3 with `min_weight` = 10⁻⁴. A zero distance gives an infinite weight, which
-    /// [`SufficientStats::posterior_mean_cosine`] treats as "prior only".
+    /// 0.2-0.3 with `min_weight` = 10⁻⁴. A zero distance (or one whose square underflows)
+    /// gives an infinite weight, which [`SufficientStats::posterior_mean_cosine`] treats as
+    /// "prior only"; any other finite input gives a finite weight (saturating at `f32::MAX`).
     #[inline]
     #[must_use]
     pub fn inverse_square_distance(scale: f32, min_weight: f32, distance: f32) -> Self {
-        Self::uninformed((scale / (distance * distance)).max(min_weight))
+        let squared = distance * distance;
+        let weight = scale / squared;
+        // Saturate an overflowing quotient, but keep 1/0 = ∞ ("prior only").
+        let weight = if squared != 0.0 && weight > f32::MAX {
+            f32::MAX
+        } else {
+            weight
+        };
+        Self::uninformed(weight.max(min_weight))
     }
 }
 
@@ -301,16 +310,19 @@ impl SufficientStats {
     }
 
     /// Distance |ȳ − x| from shading point `x` to the mean target, the input of distance
-    /// priors such as [`MapPrior::inverse_square_distance`].
+    /// priors such as [`MapPrior::inverse_square_distance`]. Accurate however far apart the
+    /// points are (|ȳ − x|² is not formed where it would overflow) and saturating at
+    /// `f32::MAX`, so finite points give a finite distance.
     #[inline]
     #[must_use]
     pub fn target_distance(&self, x: Vec3) -> f32 {
-        (self.mean_target - x).length()
+        math::length_robust(self.mean_target - x)
     }
 
     /// The MAP mean cosine r = (N² r̄ + N_p r_p)/(N² + N_p) (MCMM Alg. 2 line 6, MCPG Alg. 2
-    /// line 7), or with N instead of N² for [`PriorDecay::Count`]. r̄ is clamped to [0, 1]
-    /// first. An infinite N_p gives r_p; N = N_p = 0 gives 0.
+    /// line 7), or with N instead of N² for [`PriorDecay::Count`]. r̄ and r_p are clamped to
+    /// [0, 1] first (a NaN r_p counts as 0), so the result is finite whenever N_p is not NaN.
+    /// An infinite N_p gives r_p; N = N_p = 0 gives 0.
     #[inline]
     #[must_use]
     pub fn posterior_mean_cosine(&self, prior: MapPrior) -> f32 {
@@ -327,7 +339,8 @@ impl SufficientStats {
             PriorDecay::Count => n,
         };
         let prior_weight = prior.weight.max(0.0);
-        let prior_complement = 1.0 - prior.mean_cosine;
+        // `max` maps NaN to 0; in-range values pass unchanged.
+        let prior_complement = 1.0 - prior.mean_cosine.max(0.0).min(1.0);
         if prior_weight == f32::INFINITY {
             return prior_complement;
         }

@@ -141,11 +141,14 @@ impl Vmf {
     /// Density of direction `w` (unit length) in solid angle measure, in sr⁻¹.
     ///
     /// Finite and ≥ 0 for every unit `w` and every valid lobe; exactly 1/(4π) when κ = 0. A
-    /// non-unit `w` is not renormalised (its distance to μ is used as is); NaN in `w` gives NaN.
+    /// non-unit `w` is not renormalised (its distance to μ is used as is, and a finite `w` so
+    /// far away that the squared distance overflows gives 0, or 1/(4π) at κ = 0); NaN in `w`
+    /// gives NaN.
     #[inline]
     #[must_use]
     pub fn pdf(&self, w: Vec3) -> f32 {
-        let distance_squared = (w - self.mu).length_squared();
+        // `min` keeps κ = 0 from multiplying an overflowed distance (0 · ∞ = NaN).
+        let distance_squared = (w - self.mu).length_squared().min(f32::MAX);
         normalization(self.kappa) * math::exp(-0.5 * self.kappa * distance_squared)
     }
 
