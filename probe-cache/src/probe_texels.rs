@@ -699,7 +699,8 @@ mod tests {
         let t = texels(TexelConfig::default());
         let probes = t.grid().probe_count();
         let ni = t.config().irradiance_map.texel_count();
-        let calls: [(&str, Box<dyn Fn(&ProbeTexels) + std::panic::RefUnwindSafe>); 7] = [
+        type Call = Box<dyn Fn(&ProbeTexels) + std::panic::RefUnwindSafe>;
+        let calls: [(&str, Call); 7] = [
             (
                 "irradiance",
                 Box::new(move |t| {

@@ -55,7 +55,7 @@ fn any_codec() -> impl Strategy<Value = (f32, f32)> {
 
 fn codec_of((beta, gamma): (f32, f32)) -> Result<LogCodec, CodecError> {
     let codec = LogCodec::new(beta, gamma);
-    let want = if !(beta >= LogCodec::BETA_MIN && beta <= LogCodec::BETA_MAX) {
+    let want = if !(LogCodec::BETA_MIN..=LogCodec::BETA_MAX).contains(&beta) {
         Err(CodecError::BetaOutOfRange)
     } else if !(gamma > 0.0 && gamma.is_finite()) {
         Err(CodecError::GammaNotPositive)

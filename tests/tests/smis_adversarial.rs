@@ -40,6 +40,7 @@ impl Technique for Boxcar {
             0.0
         }
     }
+    #[allow(clippy::manual_clamp)] // `clamp` would keep NaN
     fn sample(&self, u: f32) -> f32 {
         // `max` maps NaN to 0.
         self.a + self.w * u.max(0.0).min(1.0)

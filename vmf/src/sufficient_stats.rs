@@ -339,7 +339,8 @@ impl SufficientStats {
             PriorDecay::Count => n,
         };
         let prior_weight = prior.weight.max(0.0);
-        // `max` maps NaN to 0; in-range values pass unchanged.
+        // `max` maps NaN to 0 (`clamp` would keep it); in-range values pass unchanged.
+        #[allow(clippy::manual_clamp)]
         let prior_complement = 1.0 - prior.mean_cosine.max(0.0).min(1.0);
         if prior_weight == f32::INFINITY {
             return prior_complement;

@@ -203,6 +203,7 @@ const ONE_MINUS_HALF_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 /// A uniform clamped into [0, 1 − 2⁻²⁴]; NaN gives 0 (`max` returns its non-NaN operand).
 /// Leaves every value in [0, 1) unchanged, so in-range results are bit-identical.
 #[inline(always)]
+#[allow(clippy::manual_clamp)] // `clamp` would keep NaN
 pub(crate) fn clamp_uniform(u: f32) -> f32 {
     u.max(0.0).min(ONE_MINUS_HALF_EPSILON)
 }
