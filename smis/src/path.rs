@@ -164,11 +164,13 @@ mod tests {
         assert_eq!(path_pdf_naive(&vs, &[0.1, 0.1]), 0.0);
         assert_eq!(path_mixture_pdf(&vs, &[0.1, 0.1]), 0.0);
         assert_eq!(path_estimate(1.0, &vs, &[0.1, 0.1]), 0.0);
-        // Overflowing product: the estimate is 0, not NaN.
+        // Overflowing product: saturates at f32::MAX (was +∞), the estimate is ~0, not NaN.
         let tiny = [Boxcar { a: 0.0, w: 1e-30 }];
         let vs: [&[Boxcar]; 2] = [&tiny, &tiny];
-        assert_eq!(path_pdf(&vs, &[0.0, 0.0]), f32::INFINITY);
-        assert_eq!(path_estimate(1.0, &vs, &[0.0, 0.0]), 0.0);
+        assert_eq!(path_pdf(&vs, &[0.0, 0.0]), f32::MAX);
+        assert_eq!(path_pdf_naive(&vs, &[0.0, 0.0]), f32::MAX);
+        assert_eq!(path_mixture_pdf(&vs, &[0.0, 0.0]), f32::MAX);
+        assert_eq!(path_estimate(1.0, &vs, &[0.0, 0.0]), 1.0 / f32::MAX);
     }
 
     #[test]
