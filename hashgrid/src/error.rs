@@ -17,8 +17,8 @@ pub enum GridError {
     StepsZero,
     /// `max_level` exceeds [`MAX_LEVEL`](crate::constants::MAX_LEVEL) (255, the key's 8 bits).
     MaxLevelTooLarge,
-    /// The coarsest cell width `w_min · POWER^(max_level/STEPS)` is not below e⁸⁸ ≈ 1.7·10³⁸
-    /// (it would overflow f32).
+    /// The coarsest cell width `w_min · POWER^(max_level/STEPS)`, or the width ratio
+    /// `POWER^(max_level/STEPS)` alone, is not below e^88.5 ≈ 2.7·10³⁸ (it would overflow f32).
     CoarsestWidthNotFinite,
 }
 

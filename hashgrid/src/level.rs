@@ -73,8 +73,9 @@ pub struct AdaptiveGrid {
 
 impl AdaptiveGrid {
     /// Validates `params`: tan(α/2) and `min_width` positive and finite, `power` finite and
-    /// above 1, `steps` ≥ 1, `max_level` ≤ 255, and the coarsest width
-    /// `w_min · POWER^(max_level/STEPS)` finite, below e⁸⁸ ≈ 1.7·10³⁸ (MCPG's defaults reach
+    /// above 1, `steps` ≥ 1, `max_level` ≤ 255, and both the width ratio
+    /// `POWER^(max_level/STEPS)` and the coarsest width `w_min · POWER^(max_level/STEPS)`
+    /// below e^88.5 ≈ 2.7·10³⁸ (MCPG's defaults reach
     /// 2.4·10³⁶; with 255 levels, POWER^(1/STEPS) up to about 1.6 fits for w_min = 0.01).
     ///
     /// # Errors
@@ -97,10 +98,11 @@ impl AdaptiveGrid {
             return Err(GridError::MaxLevelTooLarge);
         }
         let ln_power = math::ln(params.power);
-        // ln of the coarsest width; `width` evaluates exp of the same sum.
-        let ln_coarsest =
-            math::ln(params.min_width) + params.max_level as f32 * (ln_power / params.steps as f32);
-        if !(ln_coarsest < LN_WIDTH_MAX) {
+        // `width` evaluates w_min · exp(level · ln POWER / STEPS): both the exponential (the
+        // width ratio) and the product (the coarsest width) must stay finite.
+        let ln_ratio = params.max_level as f32 * (ln_power / params.steps as f32);
+        let ln_coarsest = math::ln(params.min_width) + ln_ratio;
+        if !(ln_ratio < LN_WIDTH_MAX && ln_coarsest < LN_WIDTH_MAX) {
             return Err(GridError::CoarsestWidthNotFinite);
         }
         Ok(Self {
@@ -122,11 +124,13 @@ impl AdaptiveGrid {
         &self.params
     }
 
-    /// Target cell width `2 · tan(α/2) · distance`.
+    /// Target cell width `2 · tan(α/2) · distance`; 0 at distance 0 for every valid tan(α/2)
+    /// (the product is formed as `tan(α/2) · distance · 2`, the same bits wherever it does not
+    /// overflow, so a huge tan(α/2) at distance 0 gives 0, not ∞ · 0 = NaN).
     #[inline]
     #[must_use]
     pub fn target_width(&self, distance: f32) -> f32 {
-        2.0 * self.params.tan_half_angle * distance
+        self.params.tan_half_angle * distance * 2.0
     }
 
     /// The level without jitter: `round(STEPS · ln(max(w, w_min)/w_min) / ln POWER)`, clamped
@@ -187,9 +191,10 @@ impl Default for AdaptiveGrid {
     }
 }
 
-/// ln of the largest coarsest width [`AdaptiveGrid::new`] accepts: 88, so the width
-/// (e⁸⁸ ≈ 1.65·10³⁸) and the rounding of its `exp` stay below `f32::MAX` ≈ e^88.72.
-const LN_WIDTH_MAX: f32 = 88.0;
+/// ln of the largest width ratio and coarsest width [`AdaptiveGrid::new`] accepts: 88.5, so
+/// both (e^88.5 ≈ 2.7·10³⁸) and the rounding of `exp` stay below `f32::MAX` ≈ e^88.72 (MCPG's
+/// defaults have a ratio of 4^63.75 = e^88.4).
+const LN_WIDTH_MAX: f32 = 88.5;
 
 /// `⌊−log₂(1 − ξ)⌋`: the number of extra, coarser levels, k with probability 2^−(k+1)
 /// (a geometric distribution with p = ½; mean 1).
@@ -311,6 +316,23 @@ mod tests {
         );
         assert_eq!(
             bad(|p| p.min_width = 1e38),
+            GridError::CoarsestWidthNotFinite
+        );
+        let wide = AdaptiveGrid::new(LevelParams {
+            tan_half_angle: f32::MAX,
+            ..ok
+        })
+        .unwrap();
+        assert_eq!(wide.target_width(0.0), 0.0);
+        assert_eq!(wide.target_level(0.0), 0);
+        // A tiny w_min does not excuse a ratio whose exp overflows (found by scripts/fuzz).
+        assert_eq!(
+            bad(|p| {
+                p.min_width = 1e-45;
+                p.power = 1e20;
+                p.steps = 43;
+                p.max_level = 83;
+            }),
             GridError::CoarsestWidthNotFinite
         );
         let g = AdaptiveGrid::new(LevelParams {
