@@ -270,7 +270,9 @@ impl TexelMap {
         // ⌊c⌋ by truncating c + 1 ≥ ½ (NaN → 0 → −1): no libm `floorf` call on targets
         // without SSE4.1, the same result.
         let (x0, y0) = ((c.x + 1.0) as i32 - 1, (c.y + 1.0) as i32 - 1);
-        let w = c - Vec2::new(x0 as f32, y0 as f32);
+        // c + 1 can round up to the next integer for c just below one (|c − ⌊c⌋| < 2⁻²⁵), which
+        // would make w slightly negative: keep the weights in [0, 1] (no-op otherwise).
+        let w = (c - Vec2::new(x0 as f32, y0 as f32)).clamp(Vec2::ZERO, Vec2::ONE);
         let b = UVec2::splat(self.border);
         let tap = |dx: i32, dy: i32| self.index(self.fold(x0 + dx, y0 + dy) + b);
         [
@@ -470,6 +472,22 @@ mod tests {
                 assert_eq!(map.is_border(t), map.is_border(c));
                 let a = map.solid_angle(t);
                 assert!(a.is_finite() && a >= 0.0, "{map:?} {t}: {a}");
+            }
+        }
+    }
+
+    #[test]
+    fn bilinear_weights_stay_in_the_unit_interval() {
+        // Found by scripts/fuzz: c + 1 rounded up for c = −ε, giving a weight of −ε.
+        for kind in [MapKind::Octahedral, MapKind::EqualArea] {
+            let map = TexelMap::new(kind, 3, true).unwrap();
+            for d in [Vec3::new(1.0, -0.0, -1e-7), Vec3::new(-1e-9, 1.0, 1e-8)] {
+                for (i, w) in map.bilinear(d) {
+                    assert!(
+                        i < map.texel_count() && (0.0..=1.0).contains(&w),
+                        "{kind:?} {d}: {i} {w}"
+                    );
+                }
             }
         }
     }
