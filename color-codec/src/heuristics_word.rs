@@ -258,6 +258,32 @@ mod tests {
     }
 
     #[test]
+    fn zero_flag_bits() {
+        // Issue 14 row 5: a layout without flag bits shifted by 32 (debug panic).
+        let l = HeuristicsLayout::new(10, 11, 11, 0).unwrap();
+        assert_eq!(l.widths(), [10, 11, 11, 0]);
+        let h = Heuristics {
+            f_v: 1.0,
+            f_s: 0.5,
+            f_d: 1.0,
+            flags: u32::MAX,
+        };
+        let w = l.encode(h);
+        assert_eq!(w.0 >> 21, 0x7ff);
+        let back = l.decode(w);
+        assert_eq!((back.f_v, back.f_d, back.flags), (1.0, 1.0, 0));
+        assert_eq!(l.flags(HeuristicsWord(u32::MAX)), 0);
+        assert_eq!(
+            l.with_flags(HeuristicsWord(0x1234_5678), u32::MAX).0,
+            0x1234_5678
+        );
+        for word in [0, 1, 0x8000_0000, u32::MAX] {
+            let h = l.decode(HeuristicsWord(word));
+            assert_eq!(l.encode(h), HeuristicsWord(word), "{word:#x}");
+        }
+    }
+
+    #[test]
     fn value_stability() {
         let l = HeuristicsLayout::ADGI;
         let w = l.encode(Heuristics {

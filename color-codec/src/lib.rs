@@ -103,8 +103,10 @@ pub use irradiance_word::{IrradianceLayout, IrradianceWord};
 pub use log_codec::{LogCodec, LogField, MAX_FIELD_BITS};
 pub use logluv32::{LogLuv32, SRGB_TO_XYZ, XYZ_TO_SRGB};
 pub use moving_average::{CountedLayout, MovingAverage};
-pub use quantize::{Rounding, quantize, quantize_unorm};
-pub use r11g11b10::{B10_MAX, R11_MAX, R11G11B10, f32_to_ufloat, ufloat_to_f32};
+pub use quantize::{MAX_QUANTIZE_CODE, Rounding, quantize, quantize_unorm};
+pub use r11g11b10::{
+    B10_MAX, R11_MAX, R11G11B10, UFLOAT_MAX_MANTISSA_BITS, f32_to_ufloat, ufloat_to_f32,
+};
 pub use rgb9e5::{RGB9E5_MAX, Rgb9E5};
 pub use visibility_word::{VisibilityLayout, VisibilityWord};
 

@@ -45,6 +45,12 @@ impl LogCodec {
     /// Largest accepted β: e^β must stay finite in f32 (e^88.7 overflows), with margin.
     pub const BETA_MAX: f32 = 80.0;
 
+    /// Smallest accepted β: 0.14. Below about 0.1345 the encoder's tolerance ε̂ (see
+    /// [`LogField`], "Rounding down exactly") reaches ½ code at 16 bits and the exact
+    /// round-down (and with it `encode(decode(q)) = q`) is no longer guaranteed; far below,
+    /// the scales M/β overflow f32.
+    pub const BETA_MIN: f32 = 0.14;
+
     /// ADGI's irradiance codec, (β, γ) = (5, 15) (sec. 4.5).
     pub const IRRADIANCE: LogCodec = LogCodec {
         beta: 5.0,
@@ -61,18 +67,45 @@ impl LogCodec {
         gamma: 20.0,
     };
 
-    /// A codec with range parameter β ∈ (0, [`BETA_MAX`](Self::BETA_MAX)] and scale γ > 0 (finite).
+    /// A codec with range parameter β ∈ [[`BETA_MIN`](Self::BETA_MIN), [`BETA_MAX`](Self::BETA_MAX)] = [0.14, 80] and scale γ > 0
+    /// (finite) with γ ≥ [`LogCodec::gamma_min`]`(β)` = 2^{⌈β log₂e⌉ − 127}, which keeps the
+    /// largest encodable value (e^β − 1)/γ ≤ 2¹²⁷ and 1/γ finite, so every code decodes finite
+    /// (e.g. γ ≥ 2⁻¹¹ ≈ 4.9·10⁻⁴ at β = 80, γ ≥ 2⁻¹¹⁹ at ADGI's β = 5).
     ///
     /// # Errors
-    /// [`CodecError::BetaOutOfRange`] or [`CodecError::GammaNotPositive`] (NaN fails both checks).
+    /// [`CodecError::BetaOutOfRange`] or [`CodecError::GammaNotPositive`] (NaN fails both
+    /// checks); [`CodecError::MaxValueOverflows`] for a positive γ below `gamma_min(β)`.
     pub const fn new(beta: f32, gamma: f32) -> Result<Self, CodecError> {
-        if !(beta > 0.0 && beta <= Self::BETA_MAX) {
+        if !(beta >= Self::BETA_MIN && beta <= Self::BETA_MAX) {
             return Err(CodecError::BetaOutOfRange);
         }
         if !(gamma > 0.0 && gamma < f32::INFINITY) {
             return Err(CodecError::GammaNotPositive);
         }
+        if gamma < Self::gamma_min(beta) {
+            return Err(CodecError::MaxValueOverflows);
+        }
         Ok(Self { beta, gamma })
+    }
+
+    /// The smallest γ that [`LogCodec::new`] accepts with range parameter `beta` ∈
+    /// (0, [`BETA_MAX`](Self::BETA_MAX)]: 2^{⌈β log₂e⌉ − 127}, a power of two with
+    /// e^β/γ_min ≤ 2¹²⁷ (so (e^β − 1)/γ stays below `f32::MAX` by a factor of 2 or more).
+    /// `beta` outside that range is clamped into it (NaN as `BETA_MAX`).
+    #[must_use]
+    pub const fn gamma_min(beta: f32) -> f32 {
+        let beta = if beta <= Self::BETA_MAX {
+            if beta > 0.0 { beta } else { 0.0 }
+        } else {
+            Self::BETA_MAX
+        };
+        // ⌈β log₂e⌉ ∈ 0 ..= 116, then at least 1 so that 2^{k − 127} is a normal float.
+        let t = beta * core::f32::consts::LOG2_E;
+        let k = t as u32;
+        let k = if (k as f32) < t { k + 1 } else { k };
+        let k = if k < 1 { 1 } else { k };
+        // 2^{k − 127}: biased exponent k.
+        f32::from_bits(k << 23)
     }
 
     /// β, the range parameter.
@@ -528,6 +561,11 @@ mod tests {
     fn construction() {
         assert_eq!(LogCodec::new(5.0, 15.0), Ok(LogCodec::IRRADIANCE));
         assert_eq!(LogCodec::new(0.0, 15.0), Err(CodecError::BetaOutOfRange));
+        // Below BETA_MIN the scales grow without bound (β = 10⁻⁴⁵ made M/β infinite).
+        for beta in [0.139, 1e-3, 1e-30, 1e-45] {
+            assert_eq!(LogCodec::new(beta, 15.0), Err(CodecError::BetaOutOfRange));
+        }
+        assert!(LogCodec::new(LogCodec::BETA_MIN, 15.0).is_ok());
         assert_eq!(
             LogCodec::new(f32::NAN, 15.0),
             Err(CodecError::BetaOutOfRange)
@@ -543,6 +581,39 @@ mod tests {
             Err(CodecError::GammaNotPositive)
         );
         assert!(LogCodec::new(80.0, 1e-3).is_ok());
+        // Issue 14 row 4: (80, 10⁻⁴) was accepted and decoded its top code to +∞; γ = 10⁻⁴⁵
+        // made 1/γ infinite.
+        assert_eq!(
+            LogCodec::new(80.0, 1e-4),
+            Err(CodecError::MaxValueOverflows)
+        );
+        assert_eq!(
+            LogCodec::new(0.2, 1e-45),
+            Err(CodecError::MaxValueOverflows)
+        );
+        assert_eq!(LogCodec::gamma_min(80.0), 2f32.powi(-11));
+        assert_eq!(LogCodec::gamma_min(5.0), 2f32.powi(-119));
+        assert_eq!(LogCodec::gamma_min(1e-30), 2f32.powi(-126));
+        assert_eq!(LogCodec::gamma_min(f32::NAN), 2f32.powi(-11));
+        for beta in [LogCodec::BETA_MIN, 0.5, 5.0, 8.0, 44.3, 79.9, 80.0] {
+            let g = LogCodec::gamma_min(beta);
+            assert_eq!(
+                LogCodec::new(beta, g / 2.0),
+                Err(CodecError::MaxValueOverflows)
+            );
+            let codec = LogCodec::new(beta, g).unwrap();
+            assert!(codec.max_value().is_finite(), "{beta}");
+            for bits in [1, 9, 16] {
+                let field = codec.field(bits);
+                for code in [0, 1, field.max_code() - 1, field.max_code(), u32::MAX] {
+                    let v = field.decode(code);
+                    assert!(
+                        v.is_finite() && v >= 0.0,
+                        "β {beta} {bits} bits code {code}: {v}"
+                    );
+                }
+            }
+        }
         assert_eq!(LogCodec::IRRADIANCE.field(0).bits(), 1);
         assert_eq!(LogCodec::IRRADIANCE.field(40).bits(), 16);
     }

@@ -20,7 +20,7 @@ use crate::math::exp2;
 /// and libtiff's `tif_luv.c` (`LogL16fromY`, `Luv32fromXYZ`, `Luv32toXYZ`) without dithering
 /// (`SGILOGENCODE_NODITHER`, i.e. truncation):
 /// ```text
-/// Le = ⌊256 (log₂ Y + 64)⌋ for 5.4136769·10⁻²⁰ < Y < 1.8371976·10¹⁹  (0 below, 0x7fff above)
+/// Le = ⌊256 (log₂ Y + 64)⌋ for 5.4136769·10⁻²⁰ < Y < 2^{32767/256 − 64} ≈ 1.8396865·10¹⁹  (0 below, 0x7fff above)
 /// ue = min(⌊410 u′⌋, 255), ve = min(⌊410 v′⌋, 255),  u′ = 4X/(X + 15Y + 3Z), v′ = 9Y/(X + 15Y + 3Z)
 ///      (u′, v′ = 0.2105, 0.4737, the neutral point, when Le = 0)
 /// Y = 2^{(Le + ½)/256 − 64},  u′ = (ue + ½)/410,  v′ = (ve + ½)/410   (decode; Le = 0 → black)
@@ -31,6 +31,11 @@ use crate::math::exp2;
 /// Departures, for non-colours only: the sign bit is never set by `encode` (negative channels
 /// count as 0, NaN as 0) and words with the sign bit decode to black; decoded RGB channels are
 /// clamped at 0 (chromaticities outside the sRGB gamut give negative channels otherwise).
+/// Le saturates at 0x7fff from Y = 2^{32767/256 − 64}, where the formula itself reaches
+/// 0x7fff, rather than from libtiff's 1.8371976·10¹⁹: libtiff's bound lies below the decoded
+/// luminance of Le = 0x7ffe (1.8371976·10¹⁹ + 2·10¹¹), so with it that code re-encoded as
+/// 0x7fff and no word with Le = 0x7ffe round-tripped. Codes differ from libtiff only for Y in
+/// [1.8371976·10¹⁹, 1.8396865·10¹⁹), which get 0x7ffe.
 ///
 /// # Round-trip error bound
 /// In XYZ: `|Ŷ/Y − 1| ≤ 2^{1/512} − 1 ≈ 0.136 %` for Y in range, and `|û′ − u′|, |v̂′ − v′| ≤ 1/820`
@@ -74,8 +79,10 @@ pub(crate) const UV_SCALE: f64 = 410.0;
 pub(crate) const INV_UV_SCALE: f32 = 1.0 / 410.0;
 /// Largest 15-bit log-luminance code (written for Y at or above [`Y_MAX`]).
 pub(crate) const LE_MAX: u32 = 0x7fff;
-/// Y at or above which Le saturates at [`LE_MAX`] (libtiff's bound).
-pub(crate) const Y_MAX: f64 = 1.837_197_6e19;
+/// Y at or above which Le saturates at [`LE_MAX`]: 2^{32767/256 − 64}, the smallest Y whose
+/// code by the formula is 0x7fff (libtiff's 1.8371976·10¹⁹ is below the decoded value of
+/// Le = 0x7ffe, which then did not round-trip).
+pub(crate) const Y_MAX: f64 = 1.839_686_511_232_855_4e19;
 /// Y at or below which Le is 0 (black).
 pub(crate) const Y_MIN: f64 = 5.413_676_9e-20;
 
@@ -102,7 +109,7 @@ impl LogLuv32 {
         let le = if y >= Y_MAX {
             LE_MAX
         } else if y > Y_MIN {
-            (256.0 * (log2_f64(y) + 64.0)) as u32
+            ((256.0 * (log2_f64(y) + 64.0)) as u32).min(LE_MAX)
         } else {
             0
         };
@@ -220,6 +227,32 @@ mod tests {
         );
         assert_eq!(LogLuv32.decode(0x8000_0000 | 0x4000_5ab0), Vec3::ZERO);
         assert_eq!(LogLuv32.encode(Vec3::splat(f32::INFINITY)) >> 16, 0x7fff);
+    }
+
+    #[test]
+    fn every_luminance_code_round_trips_in_xyz() {
+        // Issue 14 row 20: Le = 0x7ffe decoded to Y = 1.8371976·10¹⁹ + 2·10¹¹, at or above
+        // libtiff's saturation bound, and re-encoded as 0x7fff.
+        for le in 1..=LE_MAX {
+            for uv in [0x4a_c3, 0x51_c0, 0x60_70] {
+                let w = le << 16 | uv;
+                assert_eq!(LogLuv32::pack_xyz(LogLuv32::unpack_xyz(w)), w, "{w:#x}");
+            }
+        }
+        // Saturation starts exactly where the formula reaches 0x7fff.
+        // The smallest f32 at or above Y_MAX (`as` rounds to nearest, here down).
+        let top = f32::from_bits((Y_MAX as f32).to_bits() + 1);
+        assert!(f64::from(top) >= Y_MAX && f64::from(f32::from_bits(top.to_bits() - 1)) < Y_MAX);
+        assert_eq!(LogLuv32::pack_xyz(Vec3::new(top, top, top)) >> 16, LE_MAX);
+        let below = f32::from_bits(top.to_bits() - 1);
+        assert_eq!(
+            LogLuv32::pack_xyz(Vec3::new(below, below, below)) >> 16,
+            LE_MAX - 1
+        );
+        assert_eq!(
+            LogLuv32::pack_xyz(Vec3::splat(1.837_197_6e19)) >> 16,
+            LE_MAX - 1
+        );
     }
 
     #[test]

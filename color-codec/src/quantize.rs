@@ -46,10 +46,14 @@ impl Rounding {
     }
 }
 
+/// The largest code [`quantize`] returns, 2²⁴ − 1: every code up to it is exact in f32.
+pub const MAX_QUANTIZE_CODE: u32 = (1 << 24) - 1;
+
 /// Rounds `x`, a value in code units, to an integer code in `0..=max_code` with `rounding`.
 ///
 /// `x` below 0 and NaN give 0, `x` above `max_code` (and +∞) give `max_code`. Codes must fit
-/// an f32 exactly (`max_code < 2²⁴`; this crate's fields have at most 16 bits).
+/// an f32 exactly: a `max_code` above [`MAX_QUANTIZE_CODE`] = 2²⁴ − 1 is treated as 2²⁴ − 1
+/// (this crate's fields have at most 16 bits).
 ///
 /// # Example
 /// ```
@@ -67,6 +71,7 @@ pub fn quantize(x: f32, max_code: u32, rounding: Rounding) -> u32 {
     // Branch-free so that loops over texels vectorise: `max` maps NaN to 0, the clamp keeps
     // the value in i32 range (codes are < 2²⁴), truncation is then ⌊x⌋, and the difference is
     // exact in f32.
+    let max_code = max_code.min(MAX_QUANTIZE_CODE);
     let x = x.max(0.0).min(max_code as f32);
     let q = x as i32;
     let frac = x - q as f32;
@@ -79,11 +84,12 @@ pub fn quantize(x: f32, max_code: u32, rounding: Rounding) -> u32 {
 }
 
 /// Quantises `x ∈ [0, 1]` to a `bits`-bit UNORM code, `quantize(x · (2^bits − 1))`.
-/// Out-of-range inputs saturate, NaN gives 0.
+/// Out-of-range inputs saturate, NaN gives 0. `bits` above 24 is treated as 24 (the widest
+/// code [`quantize`] supports); 0 bits give code 0.
 #[inline(always)]
 #[must_use]
 pub fn quantize_unorm(x: f32, bits: u32, rounding: Rounding) -> u32 {
-    let max = (1u32 << bits) - 1;
+    let max = (1u32 << bits.min(24)) - 1;
     quantize(x * max as f32, max, rounding)
 }
 
@@ -112,6 +118,32 @@ mod tests {
         }
         assert_eq!(quantize_unorm(1.0, 10, Rounding::Nearest), 1023);
         assert_eq!(quantize_unorm(0.5, 1, Rounding::Down), 0);
+    }
+
+    #[test]
+    fn wide_codes_saturate_instead_of_overflowing() {
+        // Issue 14 row 6: overflowed (debug panic; release returned 2³¹ or 0).
+        for rounding in [Rounding::Down, Rounding::Nearest, Rounding::Stochastic(0.0)] {
+            assert_eq!(
+                quantize(f32::INFINITY, u32::MAX, rounding),
+                MAX_QUANTIZE_CODE
+            );
+            assert_eq!(quantize(f32::MAX, 1 << 30, rounding), MAX_QUANTIZE_CODE);
+            assert_eq!(quantize(-1.0, u32::MAX, rounding), 0);
+            assert_eq!(quantize(f32::NAN, u32::MAX, rounding), 0);
+            assert_eq!(quantize(1000.5, u32::MAX, Rounding::Down), 1000);
+            assert_eq!(quantize_unorm(1.0, 32, rounding), MAX_QUANTIZE_CODE);
+            assert_eq!(quantize_unorm(1.0, u32::MAX, rounding), MAX_QUANTIZE_CODE);
+            assert_eq!(quantize_unorm(0.5, 0, rounding), 0);
+        }
+        assert_eq!(
+            quantize(16_777_214.6, u32::MAX, Rounding::Nearest),
+            MAX_QUANTIZE_CODE
+        );
+        assert_eq!(
+            quantize_unorm(1.0, 24, Rounding::Nearest),
+            MAX_QUANTIZE_CODE
+        );
     }
 
     #[test]

@@ -37,11 +37,17 @@ pub const R11_MAX: f32 = 65024.0;
 /// Largest finite 10-bit float, e = 30, m = 31: 64512.
 pub const B10_MAX: f32 = 64512.0;
 
+/// The most mantissa bits [`f32_to_ufloat`] and [`ufloat_to_f32`] support: 22 (one fewer than
+/// f32's, so encoding always rounds at least one bit away); larger `n` is treated as 22.
+pub const UFLOAT_MAX_MANTISSA_BITS: u32 = 22;
+
 /// Encodes `v` to an unsigned float with 5 exponent bits and `n` mantissa bits, rounding to
 /// nearest even; negatives and NaN → 0, too large and +∞ → the largest finite code.
+/// `n` above [`UFLOAT_MAX_MANTISSA_BITS`] is treated as 22.
 #[inline(always)]
 #[must_use]
 pub fn f32_to_ufloat(v: f32, n: u32) -> u32 {
+    let n = n.min(UFLOAT_MAX_MANTISSA_BITS);
     let max_code = (30u32 << n) | ((1 << n) - 1);
     let v = if v > 0.0 { v } else { 0.0 };
     let bits = v.to_bits();
@@ -63,10 +69,11 @@ pub fn f32_to_ufloat(v: f32, n: u32) -> u32 {
 }
 
 /// Decodes an unsigned float with 5 exponent bits and `n` mantissa bits; e = 31 words decode
-/// to the largest finite value.
+/// to the largest finite value. `n` above [`UFLOAT_MAX_MANTISSA_BITS`] is treated as 22.
 #[inline(always)]
 #[must_use]
 pub fn ufloat_to_f32(code: u32, n: u32) -> f32 {
+    let n = n.min(UFLOAT_MAX_MANTISSA_BITS);
     let max_code = (30u32 << n) | ((1 << n) - 1);
     let code = (code & ((1 << (n + 5)) - 1)).min(max_code);
     // Placing the bits under the f32 exponent field gives 2^{e−127}(1 + m/2ⁿ) (or the f32
@@ -177,6 +184,31 @@ mod tests {
         // Smallest denormal 2^-20: half of it ties to even (0), just above rounds up.
         assert_eq!(f32_to_ufloat(2f32.powi(-21), 6), 0);
         assert_eq!(f32_to_ufloat(2f32.powi(-21) * 1.001, 6), 1);
+    }
+
+    #[test]
+    fn wide_mantissas_are_clamped() {
+        // Issue 14 row 6: n ≥ 23 overflowed a shift (debug panic, release garbage).
+        for n in [22, 23, 24, 26, 31, 32, u32::MAX] {
+            for v in [
+                0.0,
+                1.0,
+                0.3,
+                65000.0,
+                1e-9,
+                f32::MAX,
+                f32::INFINITY,
+                f32::NAN,
+            ] {
+                let code = f32_to_ufloat(v, n);
+                assert_eq!(code, f32_to_ufloat(v, 22), "{v} {n}");
+                let back = ufloat_to_f32(code, n);
+                assert!(back.is_finite() && back >= 0.0, "{v} {n}: {back}");
+            }
+        }
+        // 22 mantissa bits are f32 with one bit rounded away.
+        assert_eq!(ufloat_to_f32(f32_to_ufloat(0.3, 22), 22), 0.3_f32);
+        assert_eq!(ufloat_to_f32(f32_to_ufloat(1.5, 40), 40), 1.5);
     }
 
     #[test]

@@ -48,7 +48,9 @@ impl Rgb9E5 {
     #[must_use]
     pub fn pack(rgb: Vec3) -> u32 {
         // `max` then `min` with NaN → 0: `v >= 0.0` is false for NaN.
-        let clamp = |v: f32| if v >= 0.0 { v.min(RGB9E5_MAX) } else { 0.0 };
+        // `v > 0` (not `>=`): −0 becomes +0, whose zero exponent bits the algorithm expects
+        // (the sign bit of −0 would read as exponent 17).
+        let clamp = |v: f32| if v > 0.0 { v.min(RGB9E5_MAX) } else { 0.0 };
         let (r, g, b) = (clamp(rgb.x), clamp(rgb.y), clamp(rgb.z));
         let max_c = r.max(g).max(b);
         // ⌊log₂ max_c⌋ from the exponent field (0 and f32 denormals give −127, clamped below).
@@ -139,6 +141,13 @@ mod tests {
     #[test]
     fn bad_input_and_value_stability() {
         assert_eq!(Rgb9E5::pack(Vec3::new(f32::NAN, -1.0, -0.0)), 0);
+        // Issue 14: all-(−0) packed to 0x88000000 (exponent 17); the extension gives 0.
+        assert_eq!(Rgb9E5::pack(Vec3::splat(-0.0)), 0);
+        assert_eq!(Rgb9E5::pack(Vec3::new(-0.0, 0.0, -0.0)), 0);
+        assert_eq!(
+            Rgb9E5::pack(Vec3::new(-0.0, 1.0, -0.0)),
+            Rgb9E5::pack(Vec3::Y)
+        );
         let w = Rgb9E5::pack(Vec3::new(f32::INFINITY, 1e9, 1.0));
         assert_eq!(Rgb9E5::unpack(w).x, RGB9E5_MAX);
         // max = 1 → E = 16, step 2⁻⁸: mantissas 256, 128, 64.

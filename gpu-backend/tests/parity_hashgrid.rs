@@ -37,7 +37,9 @@ fn hashes_checksums_and_vertices_match_the_cpu() {
     };
     let mut keys: Vec<CellKey> = (0..20_000).map(|_| random_key(&mut rng)).collect();
     for c in [i32::MIN, -1, 0, 1, i32::MAX] {
-        keys.push(CellKey::new(IVec3::new(c, -c, c / 3), 255, 255).with_extra(u16::MAX));
+        keys.push(
+            CellKey::new(IVec3::new(c, c.wrapping_neg(), c / 3), 255, 255).with_extra(u16::MAX),
+        );
     }
     let grid = AdaptiveGrid::mcpg();
     let levels = HashgridLevelParams::from(&grid);

@@ -76,12 +76,17 @@ impl SlotIndexer {
         ((low as u128 * self.capacity as u128) >> 64) as u32
     }
 
-    /// The slot after `slot`, wrapping from the last slot to slot 0 (linear probing).
+    /// The slot after `slot`, wrapping from the last slot to slot 0 (linear probing). A `slot`
+    /// outside `0..capacity` also gives slot 0.
     #[inline]
     #[must_use]
     pub const fn next(&self, slot: u32) -> u32 {
-        let n = slot + 1;
-        if n == self.capacity { 0 } else { n }
+        // `capacity ≥ 1`; comparing before adding cannot overflow, even for u32::MAX.
+        if slot >= self.capacity - 1 {
+            0
+        } else {
+            slot + 1
+        }
     }
 }
 
@@ -164,6 +169,12 @@ mod tests {
         assert_eq!(ix.next(3), 4);
         assert_eq!(ix.next(4), 0);
         assert_eq!(SlotIndexer::new(1).unwrap().next(0), 0);
+        // Issue 14: `next(u32::MAX)` overflowed (debug panic); out-of-range slots give 0.
+        assert_eq!(SlotIndexer::new(1).unwrap().next(u32::MAX), 0);
+        assert_eq!(ix.next(5), 0);
+        assert_eq!(ix.next(u32::MAX), 0);
+        assert_eq!(SlotIndexer::new(u32::MAX).unwrap().next(u32::MAX - 1), 0);
+        assert_eq!(SlotIndexer::new(u32::MAX).unwrap().next(u32::MAX), 0);
     }
 
     #[test]

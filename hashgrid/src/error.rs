@@ -17,6 +17,9 @@ pub enum GridError {
     StepsZero,
     /// `max_level` exceeds [`MAX_LEVEL`](crate::constants::MAX_LEVEL) (255, the key's 8 bits).
     MaxLevelTooLarge,
+    /// The coarsest cell width `w_min · POWER^(max_level/STEPS)`, or the width ratio
+    /// `POWER^(max_level/STEPS)` alone, is not below e^88.5 ≈ 2.7·10³⁸ (it would overflow f32).
+    CoarsestWidthNotFinite,
 }
 
 impl fmt::Display for GridError {
@@ -29,6 +32,7 @@ impl fmt::Display for GridError {
             GridError::PowerNotAboveOne => "level width ratio is not a finite number above 1",
             GridError::StepsZero => "levels per width ratio is zero",
             GridError::MaxLevelTooLarge => "maximum level does not fit in 8 bits",
+            GridError::CoarsestWidthNotFinite => "coarsest cell width overflows f32",
         })
     }
 }

@@ -73,7 +73,14 @@ pub struct AdaptiveGrid {
 
 impl AdaptiveGrid {
     /// Validates `params`: tan(α/2) and `min_width` positive and finite, `power` finite and
-    /// above 1, `steps` ≥ 1, `max_level` ≤ 255.
+    /// above 1, `steps` ≥ 1, `max_level` ≤ 255, and both the width ratio
+    /// `POWER^(max_level/STEPS)` and the coarsest width `w_min · POWER^(max_level/STEPS)`
+    /// below e^88.5 ≈ 2.7·10³⁸ (MCPG's defaults reach
+    /// 2.4·10³⁶; with 255 levels, POWER^(1/STEPS) up to about 1.6 fits for w_min = 0.01).
+    ///
+    /// # Errors
+    /// The [`GridError`] variant named for the first broken condition;
+    /// [`GridError::CoarsestWidthNotFinite`] for the last one.
     pub fn new(params: LevelParams) -> Result<Self, GridError> {
         if !(params.tan_half_angle > 0.0 && params.tan_half_angle.is_finite()) {
             return Err(GridError::TanHalfAngleNotPositive);
@@ -91,6 +98,13 @@ impl AdaptiveGrid {
             return Err(GridError::MaxLevelTooLarge);
         }
         let ln_power = math::ln(params.power);
+        // `width` evaluates w_min · exp(level · ln POWER / STEPS): both the exponential (the
+        // width ratio) and the product (the coarsest width) must stay finite.
+        let ln_ratio = params.max_level as f32 * (ln_power / params.steps as f32);
+        let ln_coarsest = math::ln(params.min_width) + ln_ratio;
+        if !(ln_ratio < LN_WIDTH_MAX && ln_coarsest < LN_WIDTH_MAX) {
+            return Err(GridError::CoarsestWidthNotFinite);
+        }
         Ok(Self {
             params,
             levels_per_ln: params.steps as f32 / ln_power,
@@ -110,11 +124,13 @@ impl AdaptiveGrid {
         &self.params
     }
 
-    /// Target cell width `2 · tan(α/2) · distance`.
+    /// Target cell width `2 · tan(α/2) · distance`; 0 at distance 0 for every valid tan(α/2)
+    /// (the product is formed as `tan(α/2) · distance · 2`, the same bits wherever it does not
+    /// overflow, so a huge tan(α/2) at distance 0 gives 0, not ∞ · 0 = NaN).
     #[inline]
     #[must_use]
     pub fn target_width(&self, distance: f32) -> f32 {
-        2.0 * self.params.tan_half_angle * distance
+        self.params.tan_half_angle * distance * 2.0
     }
 
     /// The level without jitter: `round(STEPS · ln(max(w, w_min)/w_min) / ln POWER)`, clamped
@@ -139,10 +155,12 @@ impl AdaptiveGrid {
         (self.target_level(distance) + geometric_jitter(xi)).min(self.params.max_level)
     }
 
-    /// Cell width of `level`: `w_min · POWER^(level/STEPS)`.
+    /// Cell width of `level`: `w_min · POWER^(level/STEPS)`. Levels above `max_level` are
+    /// treated as `max_level`, so the width is always finite.
     #[inline]
     #[must_use]
     pub fn width(&self, level: u32) -> f32 {
+        let level = level.min(self.params.max_level);
         self.params.min_width * math::exp(level as f32 * self.ln_per_level)
     }
 
@@ -172,6 +190,11 @@ impl Default for AdaptiveGrid {
         Self::mcpg()
     }
 }
+
+/// ln of the largest width ratio and coarsest width [`AdaptiveGrid::new`] accepts: 88.5, so
+/// both (e^88.5 ≈ 2.7·10³⁸) and the rounding of `exp` stay below `f32::MAX` ≈ e^88.72 (MCPG's
+/// defaults have a ratio of 4^63.75 = e^88.4).
+const LN_WIDTH_MAX: f32 = 88.5;
 
 /// `⌊−log₂(1 − ξ)⌋`: the number of extra, coarser levels, k with probability 2^−(k+1)
 /// (a geometric distribution with p = ½; mean 1).
@@ -283,6 +306,49 @@ mod tests {
         assert_eq!(bad(|p| p.power = f32::NAN), GridError::PowerNotAboveOne);
         assert_eq!(bad(|p| p.steps = 0), GridError::StepsZero);
         assert_eq!(bad(|p| p.max_level = 256), GridError::MaxLevelTooLarge);
+        // Issue 14 row 8: power 10¹⁰ per level was accepted and width(level 25) was +∞.
+        assert_eq!(
+            bad(|p| {
+                p.power = 1e10;
+                p.steps = 1;
+            }),
+            GridError::CoarsestWidthNotFinite
+        );
+        assert_eq!(
+            bad(|p| p.min_width = 1e38),
+            GridError::CoarsestWidthNotFinite
+        );
+        let wide = AdaptiveGrid::new(LevelParams {
+            tan_half_angle: f32::MAX,
+            ..ok
+        })
+        .unwrap();
+        assert_eq!(wide.target_width(0.0), 0.0);
+        assert_eq!(wide.target_level(0.0), 0);
+        // A tiny w_min does not excuse a ratio whose exp overflows (found by scripts/fuzz).
+        assert_eq!(
+            bad(|p| {
+                p.min_width = 1e-45;
+                p.power = 1e20;
+                p.steps = 43;
+                p.max_level = 83;
+            }),
+            GridError::CoarsestWidthNotFinite
+        );
+        let g = AdaptiveGrid::new(LevelParams {
+            power: 1e10,
+            steps: 1,
+            max_level: 3,
+            ..ok
+        })
+        .unwrap();
+        for level in [0, 3, 4, 255, u32::MAX] {
+            let w = g.width(level);
+            assert!(w.is_finite() && w > 0.0, "{level}: {w}");
+        }
+        assert_eq!(g.width(u32::MAX), g.width(3));
+        let w = g.width(g.level(1e30, 0.999_999_9));
+        assert!(w.is_finite(), "{w}");
         assert!(AdaptiveGrid::new(ok).is_ok());
         assert_eq!(StaticGrid::new(0.0), Err(GridError::WidthNotPositive));
         assert_eq!(StaticGrid::new(f32::NAN), Err(GridError::WidthNotPositive));

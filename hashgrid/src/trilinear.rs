@@ -25,15 +25,23 @@ pub fn floor_ivec3(q: Vec3) -> IVec3 {
 
 /// The lower corner `⌊q⌋` and the fractional position `f = q − ⌊q⌋` in [0, 1]³.
 ///
-/// `f` is clamped to [0, 1] (it can round to 1 just below an integer, and it is 0 for NaN and
-/// for |q| beyond the `i32` range).
+/// `f` is clamped to [0, 1] (it can round to 1 just below an integer), and it is 0 for NaN
+/// and for q beyond the `i32` range (q ≥ 2³¹ or q < −2³¹, where `⌊q⌋` saturates at
+/// `i32::MAX` / `i32::MIN`), so the vertex choices below never step past the saturated corner:
+/// points beyond the range map to the outermost vertex, never wrap to the opposite end.
 #[inline]
 #[must_use]
 pub fn cell_and_fraction(q: Vec3) -> (IVec3, Vec3) {
     let base = floor_ivec3(q);
     let f = (q - base.as_vec3()).max(Vec3::ZERO).min(Vec3::ONE);
+    // Below −2³¹ the clamp already gives 0; at and above 2³¹ (`i32::MAX` reads back as 2³¹),
+    // f would be q − 2³¹ > 0 and the upper corner would overflow.
+    let f = Vec3::select(q.cmplt(Vec3::splat(I32_RANGE_END)), f, Vec3::ZERO);
     (base, f)
 }
+
+/// 2³¹, where `⌊q⌋` leaves the `i32` range.
+const I32_RANGE_END: f32 = 2_147_483_648.0;
 
 /// The eight trilinear weights `W(c)` of the corners of a cell for the fractional position `f`,
 /// indexed by `cx + 2·cy + 4·cz`. They sum to 1 up to rounding.
@@ -191,6 +199,39 @@ mod tests {
             let _ = jittered_vertex(q, Vec3::splat(0.5));
         }
         assert_eq!(stochastic_trilinear(Vec3::NAN, 0.5), IVec3::ZERO);
+        // Issue 14 row 7: beyond the i32 range the upper corner overflowed (debug panic;
+        // release wrapped to i32::MIN, the opposite end of the grid).
+        for (q, want) in [
+            (Vec3::new(1e12, 0.0, 0.0), IVec3::new(i32::MAX, 0, 0)),
+            (
+                Vec3::new(2_147_483_648.0, 0.0, 0.0),
+                IVec3::new(i32::MAX, 0, 0),
+            ),
+            (Vec3::INFINITY, IVec3::MAX),
+            (Vec3::NEG_INFINITY, IVec3::MIN),
+            (Vec3::splat(-1e12), IVec3::MIN),
+            (Vec3::new(-1e-10, 3e9, 0.5), IVec3::new(0, i32::MAX, 0)),
+        ] {
+            for u in [0.0, 0.5, 0.999_999_9, 1.0] {
+                let v = stochastic_trilinear(q, u);
+                let j = jittered_vertex(q, Vec3::splat(u));
+                assert_eq!((v.x, v.y), (want.x, want.y), "{q} {u}");
+                assert_eq!((j.x, j.y), (want.x, want.y), "{q} {u}");
+            }
+            let (_, f) = cell_and_fraction(q);
+            for axis in 0..3 {
+                if !(q[axis].abs() < 2_147_483_648.0) {
+                    assert_eq!(f[axis], 0.0, "{q}: {f}");
+                }
+            }
+        }
+        assert_eq!(
+            crate::StaticGrid::mcpg().vertex_key(Vec3::new(1e12, 0.0, 0.0), 0.9),
+            crate::CellKey::unclassed(IVec3::new(i32::MAX, 0, 0))
+        );
+        // Just inside the range: 2³¹ − 128 is an integer, f = 0.
+        let (b, f) = cell_and_fraction(Vec3::splat(2_147_483_520.0));
+        assert_eq!((b, f), (IVec3::splat(2_147_483_520), Vec3::ZERO));
         // −10⁻¹⁰ + 1 rounds to 1: the point is at vertex 0.
         assert_eq!(
             stochastic_trilinear(Vec3::new(-1e-10, 0.0, 0.0), 0.3),

@@ -11,6 +11,8 @@ pub enum WalkError {
     StepNotFinite,
     /// A step size σ is zero or negative.
     StepNotPositive,
+    /// A step size σ is above [`RandomWalk::STEP_MAX`](crate::RandomWalk::STEP_MAX) (10³⁰).
+    StepAboveMax,
     /// The walk has no dimensions (`D = 0`).
     NoDimensions,
     /// The burn-in K is not smaller than the number of steps per frame M.
@@ -22,6 +24,7 @@ impl fmt::Display for WalkError {
         f.write_str(match self {
             WalkError::StepNotFinite => "random-walk step size is not finite",
             WalkError::StepNotPositive => "random-walk step size is not positive",
+            WalkError::StepAboveMax => "random-walk step size is above 1e30",
             WalkError::NoDimensions => "random walk has no dimensions",
             WalkError::BurnInTooLong => "burn-in is not shorter than the steps per frame",
         })
@@ -29,6 +32,28 @@ impl fmt::Display for WalkError {
 }
 
 impl core::error::Error for WalkError {}
+
+/// Why [`PixelStateBuffers::new`](crate::mcmm::PixelStateBuffers::new) could not create its
+/// buffers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum BufferError {
+    /// The width or height exceeds `i32::MAX`, or the buffers would exceed `isize::MAX` bytes.
+    DimensionAboveMax,
+    /// The allocator could not provide the buffers.
+    AllocationFailed,
+}
+
+impl fmt::Display for BufferError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            BufferError::DimensionAboveMax => "state buffer dimensions are too large",
+            BufferError::AllocationFailed => "state buffer allocation failed",
+        })
+    }
+}
+
+impl core::error::Error for BufferError {}
 
 /// Why a guide's parameter set (e.g. [`McmmParams`](crate::mcmm::McmmParams)) failed validation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -84,7 +84,7 @@ pub mod toy_renderer;
 #[cfg(feature = "std")]
 pub mod toy_scene;
 
-pub use error::{GuideError, ParamsError, WalkError};
+pub use error::{BufferError, GuideError, ParamsError, WalkError};
 pub use hemisphere::{cosine_hemisphere, cosine_hemisphere_pdf};
 pub use metropolis::{
     ADGI_DIRECTION_STEP, FrameSchedule, MetropolisChain, RandomWalk, StepUniforms,

@@ -121,11 +121,13 @@ pub struct RandomWalk<const D: usize> {
 }
 
 impl<const D: usize> RandomWalk<D> {
-    /// A walk with per-dimension step sizes σ (standard deviations of the proposal).
+    /// A walk with per-dimension step sizes σ (standard deviations of the proposal), each in
+    /// (0, [`RandomWalk::STEP_MAX`]] = (0, 10³⁰].
     ///
     /// # Errors
     /// [`WalkError::StepNotFinite`] or [`WalkError::StepNotPositive`] for a σ that is NaN,
-    /// infinite, zero or negative; [`WalkError::NoDimensions`] when `D = 0`.
+    /// infinite, zero or negative; [`WalkError::StepAboveMax`] for σ > 10³⁰ (σ·Φ⁻¹(u), up to
+    /// 5.6σ, must stay finite); [`WalkError::NoDimensions`] when `D = 0`.
     pub fn new(step: [f32; D]) -> Result<Self, WalkError> {
         if D == 0 {
             return Err(WalkError::NoDimensions);
@@ -137,9 +139,16 @@ impl<const D: usize> RandomWalk<D> {
             if !(s > 0.0) {
                 return Err(WalkError::StepNotPositive);
             }
+            if s > Self::STEP_MAX {
+                return Err(WalkError::StepAboveMax);
+            }
         }
         Ok(Self { step })
     }
+
+    /// The largest accepted step size σ, 10³⁰: far beyond any scene scale, and small enough
+    /// that a step σ·Φ⁻¹(u) (|Φ⁻¹(u)| ≤ 5.6) is a finite f32.
+    pub const STEP_MAX: f32 = 1.0e30;
 
     /// The per-dimension step sizes σ.
     #[inline]
@@ -149,10 +158,15 @@ impl<const D: usize> RandomWalk<D> {
     }
 
     /// The proposal x' = x + σ ⊙ Φ⁻¹(u) (ADGI Alg. 5 line 2).
+    ///
+    /// Each coordinate saturates at ±`f32::MAX`, so a finite `x` always gives a finite
+    /// proposal (NaN in `x` stays NaN; `u` is handled as in [`standard_normal_from_uniform`]).
     #[inline]
     #[must_use]
     pub fn propose(&self, x: &[f32; D], u: &[f32; D]) -> [f32; D] {
-        core::array::from_fn(|i| x[i] + self.step[i] * standard_normal_from_uniform(u[i]))
+        core::array::from_fn(|i| {
+            (x[i] + self.step[i] * standard_normal_from_uniform(u[i])).clamp(-f32::MAX, f32::MAX)
+        })
     }
 
     /// One random-walk step (ADGI Alg. 5): proposes, evaluates `target` once at the proposal,
@@ -380,6 +394,30 @@ mod tests {
         assert_eq!(d[0], 1.5);
         assert!((d[3] - 6.0 * ADGI_DIRECTION_STEP).abs() < 1e-7);
         assert!((ADGI_DIRECTION_STEP as f64 - (core::f64::consts::PI / 256.0).sqrt()).abs() < 1e-7);
+    }
+
+    #[test]
+    fn huge_steps_are_rejected_and_proposals_stay_finite() {
+        // Issue 14 row 11: σ = f32::MAX was accepted, `propose` returned ∞ and an accepting
+        // chain ended at NaN.
+        assert_eq!(RandomWalk::new([f32::MAX]), Err(WalkError::StepAboveMax));
+        assert_eq!(RandomWalk::new([0.1, 1.1e30]), Err(WalkError::StepAboveMax));
+        let walk = RandomWalk::new([RandomWalk::<1>::STEP_MAX]).unwrap();
+        let mut chain = MetropolisChain::new([0.0]);
+        for i in 0..64 {
+            for x in [0.0, f32::MAX, -f32::MAX, 3e38] {
+                for u in [0.0, 1e-30, 0.5, 1.0 - 1e-7, 1.0, f32::NAN] {
+                    let p = walk.propose(&[x], &[u]);
+                    assert!(p[0].is_finite(), "x {x} u {u}: {p:?}");
+                }
+            }
+            let u = StepUniforms {
+                proposal: [if i % 2 == 0 { 1e-9 } else { 1.0 - 1e-7 }],
+                accept: 0.0,
+            };
+            walk.step(&mut chain, |_| 1.0, &u);
+            assert!(chain.x[0].is_finite(), "step {i}: {chain:?}");
+        }
     }
 
     #[test]

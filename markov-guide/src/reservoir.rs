@@ -6,7 +6,10 @@
 /// probability sampling plan*), using one caller uniform per candidate.
 ///
 /// Weights that are NaN, infinite or negative count as 0: such a candidate is never selected
-/// and does not change the sum.
+/// and does not change the sum. The sum saturates at `f32::MAX` instead of overflowing to +∞
+/// (a finite sum beyond that is not representable; a candidate offered after the sum has
+/// saturated is kept with probability w / `f32::MAX`), so every positive weight stays
+/// selectable.
 ///
 /// # Example
 /// ```
@@ -46,8 +49,10 @@ impl<T> Reservoir<T> {
     #[inline]
     pub fn offer(&mut self, candidate: T, weight: f32, u: f32) -> bool {
         let weight = crate::math::finite_non_negative_or_zero(weight);
-        self.weight_sum += weight;
-        // Overflow of the sum to +∞ keeps the held item; weight 0 is never taken.
+        // Saturates at f32::MAX (a no-op below it): a sum of +∞ would make every later
+        // candidate unselectable.
+        self.weight_sum = (self.weight_sum + weight).min(f32::MAX);
+        // Weight 0 is never taken.
         let take = weight > 0.0 && u * self.weight_sum < weight;
         if take {
             self.selected = Some(candidate);
@@ -105,6 +110,19 @@ mod tests {
             let p = counts[i] as f32 / total;
             assert!((p - weights[i] / 6.0).abs() < 0.01, "{i}: {p}");
         }
+    }
+
+    #[test]
+    fn huge_weights_saturate_the_sum() {
+        // Issue 14 row 10: two offers of f32::MAX made the sum +∞ and nothing selectable.
+        let mut r = Reservoir::new();
+        assert!(r.offer(0, f32::MAX, 0.9));
+        assert!(r.offer(1, f32::MAX, 0.5));
+        assert_eq!(r.weight_sum(), f32::MAX);
+        assert!(r.offer(2, f32::MAX, 0.25));
+        assert!(!r.offer(3, f32::MAX, 1.0));
+        assert_eq!(r.selected(), Some(&2));
+        assert_eq!(r.weight_sum(), f32::MAX);
     }
 
     #[test]

@@ -63,11 +63,13 @@ pub fn equal_area_decode(p: Vec2) -> Vec3 {
     Vec3::new(x, y, z).normalize()
 }
 
-/// Solid angle of any texel of an `n × n` equal-area map: `4π / n²`.
+/// Solid angle of any texel of an `n × n` equal-area map: `4π / n²`. `n = 0` is treated as 1
+/// (one texel covering the sphere, 4π) so the result is always finite.
 #[inline]
 #[must_use]
 pub fn equal_area_solid_angle(n: u32) -> f32 {
-    4.0 * PI / (n as f32 * n as f32)
+    let n = n.max(1) as f32;
+    4.0 * PI / (n * n)
 }
 
 #[cfg(test)]
@@ -119,6 +121,15 @@ mod tests {
             let want = f64::from(equal_area_solid_angle(n));
             assert!((s - want).abs() < 2e-3 * want, "({x}, {y}): {s} vs {want}");
         }
+    }
+
+    #[test]
+    fn zero_side_is_finite() {
+        // Issue 14 row 16: n = 0 gave +∞.
+        assert_eq!(equal_area_solid_angle(0), 4.0 * PI);
+        assert_eq!(equal_area_solid_angle(1), 4.0 * PI);
+        let tiny = equal_area_solid_angle(u32::MAX);
+        assert!(tiny.is_finite() && tiny > 0.0);
     }
 
     #[test]

@@ -42,8 +42,9 @@ impl ProbeGrid {
         if !(spacing.min_element() > 0.0) || !spacing.is_finite() {
             return Err(ProbeError::SpacingNotPositive);
         }
-        let total = u64::from(counts.x) * u64::from(counts.y) * u64::from(counts.z);
-        if counts.min_element() == 0 || total > u64::from(u32::MAX) {
+        // In u128: three u32 factors cannot overflow it (u64 could: 2³¹ · 2³¹ · 4 = 2⁶⁴).
+        let total = u128::from(counts.x) * u128::from(counts.y) * u128::from(counts.z);
+        if counts.min_element() == 0 || total > u128::from(u32::MAX) {
             return Err(ProbeError::CountsOutOfRange);
         }
         Ok(Self {
@@ -138,7 +139,8 @@ impl ProbeGrid {
     #[must_use]
     pub fn corner(&self, cell: ProbeCell, corner: u32) -> (UVec3, f32) {
         let step = UVec3::new(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
-        let coords = (cell.base + step).min(self.counts - UVec3::ONE);
+        // Saturating: a base at u32::MAX (counts near 2³², or a hand-made cell) must not wrap.
+        let coords = cell.base.saturating_add(step).min(self.counts - UVec3::ONE);
         let stepped = step.cmpeq(UVec3::ONE);
         let w = Vec3::select(stepped, cell.alpha, Vec3::ONE - cell.alpha);
         (coords, w.x * w.y * w.z)
@@ -202,6 +204,21 @@ mod tests {
             ProbeGrid::new(Vec3::ZERO, s, UVec3::splat(2048)),
             Err(ProbeError::CountsOutOfRange)
         );
+        // Issue 14 row 13: 2³¹ · 2³¹ · 4 = 2⁶⁴ overflowed the u64 product (debug panic;
+        // release accepted the grid with probe_count() == 0).
+        for counts in [
+            UVec3::new(1 << 31, 1 << 31, 4),
+            UVec3::splat(u32::MAX),
+            UVec3::new(1 << 16, 1 << 16, 1),
+        ] {
+            assert_eq!(
+                ProbeGrid::new(Vec3::ZERO, s, counts),
+                Err(ProbeError::CountsOutOfRange),
+                "{counts}"
+            );
+        }
+        let g = ProbeGrid::new(Vec3::ZERO, s, UVec3::new(u32::MAX, 1, 1)).unwrap();
+        assert_eq!(g.probe_count(), u32::MAX as usize);
     }
 
     #[test]

@@ -64,6 +64,9 @@ mod octahedral;
 pub mod pilot_rays;
 pub mod probe_chains;
 mod probe_texels;
+#[cfg(test)]
+#[path = "../tests/support/mod.rs"]
+mod proptest_support;
 pub mod proxies;
 mod query;
 pub mod reference;

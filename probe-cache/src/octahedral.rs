@@ -109,9 +109,12 @@ fn cell_area(lo: Vec2, hi: Vec2) -> f32 {
 
 /// Solid angle of interior texel `(x, y)` of an `n × n` octahedral map (texel `(x, y)` covers
 /// `u ∈ [−1 + 2x/n, −1 + 2(x+1)/n]`, likewise `v` with `y`). Exact up to f32 rounding (module
-/// docs); the `n²` values sum to 4π. `x`, `y` must be below `n`.
+/// docs); the `n²` values sum to 4π. `x`, `y` are meant to be below `n`: larger ones are
+/// clamped to `n − 1`, and `n = 0` is treated as 1, so the result is always finite.
 #[must_use]
 pub fn octahedral_solid_angle(n: u32, x: u32, y: u32) -> f32 {
+    let n = n.max(1);
+    let (x, y) = (x.min(n - 1), y.min(n - 1));
     let step = 2.0 / n as f32;
     let lo = Vec2::new(-1.0 + step * x as f32, -1.0 + step * y as f32);
     let half = 0.5 * step;

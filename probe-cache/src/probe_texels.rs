@@ -305,17 +305,33 @@ impl ProbeTexels {
     }
 
     /// Index of probe `probe`'s stored irradiance texel `texel` in the word array.
+    ///
+    /// # Panics
+    /// If `probe ≥ grid().probe_count()` or `texel ≥ irradiance_map.texel_count()`.
     #[inline]
     #[must_use]
     pub fn irradiance_offset(&self, probe: usize, texel: usize) -> usize {
-        probe * self.config.irradiance_map.texel_count() + texel
+        texel_offset(
+            probe,
+            texel,
+            self.grid.probe_count(),
+            self.config.irradiance_map.texel_count(),
+        )
     }
 
     /// Index of probe `probe`'s stored visibility texel `texel` in the word array.
+    ///
+    /// # Panics
+    /// If `probe ≥ grid().probe_count()` or `texel ≥ visibility_map.texel_count()`.
     #[inline]
     #[must_use]
     pub fn visibility_offset(&self, probe: usize, texel: usize) -> usize {
-        probe * self.config.visibility_map.texel_count() + texel
+        texel_offset(
+            probe,
+            texel,
+            self.grid.probe_count(),
+            self.config.visibility_map.texel_count(),
+        )
     }
 
     /// The irradiance words as atomics (layout in the module docs), e.g. for a caller's own
@@ -368,6 +384,9 @@ impl ProbeTexels {
     }
 
     /// The irradiance word of stored texel `texel` of probe `probe`.
+    ///
+    /// # Panics
+    /// If `probe` or `texel` is out of range (see [`Self::irradiance_offset`]).
     #[inline]
     #[must_use]
     pub fn irradiance_word(&self, probe: usize, texel: usize) -> IrradianceWord {
@@ -377,6 +396,9 @@ impl ProbeTexels {
     }
 
     /// The visibility word of stored texel `texel` of probe `probe`.
+    ///
+    /// # Panics
+    /// If `probe` or `texel` is out of range (see [`Self::visibility_offset`]).
     #[inline]
     #[must_use]
     pub fn visibility_word(&self, probe: usize, texel: usize) -> VisibilityWord {
@@ -386,6 +408,9 @@ impl ProbeTexels {
     }
 
     /// The decoded value of an irradiance texel (module docs: `E/π` or radiance).
+    ///
+    /// # Panics
+    /// If `probe` or `texel` is out of range (see [`Self::irradiance_offset`]).
     #[inline]
     #[must_use]
     pub fn irradiance(&self, probe: usize, texel: usize) -> Vec3 {
@@ -418,6 +443,9 @@ impl ProbeTexels {
     }
 
     /// The decoded moments `(t̄, t̄²)` of a visibility texel, in cell diagonals.
+    ///
+    /// # Panics
+    /// If `probe` or `texel` is out of range (see [`Self::visibility_offset`]).
     #[inline]
     #[must_use]
     pub fn visibility(&self, probe: usize, texel: usize) -> Vec2 {
@@ -427,6 +455,9 @@ impl ProbeTexels {
     }
 
     /// Overwrites an irradiance texel with `value` and `count` (round to nearest).
+    ///
+    /// # Panics
+    /// If `probe` or `texel` is out of range (see [`Self::irradiance_offset`]).
     #[inline]
     pub fn set_irradiance(&self, probe: usize, texel: usize, value: Vec3, count: u32) {
         let w = self
@@ -437,6 +468,9 @@ impl ProbeTexels {
     }
 
     /// Overwrites a visibility texel with the moments `(t̄, t̄²)` (cell diagonals) and `count`.
+    ///
+    /// # Panics
+    /// If `probe` or `texel` is out of range (see [`Self::visibility_offset`]).
     #[inline]
     pub fn set_visibility(&self, probe: usize, texel: usize, moments: Vec2, count: u32) {
         let w = self
@@ -486,6 +520,9 @@ impl ProbeTexels {
     /// uniform `u`. A NaN component leaves the word unchanged; +∞ saturates. Returns
     /// `(before, after)`: the word the step was applied to and the word written
     /// ([`MovingAverage::update_atomic_swap`]).
+    ///
+    /// # Panics
+    /// If `probe` or `texel` is out of range (see [`Self::irradiance_offset`]).
     #[inline]
     pub fn update_irradiance(&self, probe: usize, texel: usize, value: Vec3, u: f32) -> (u32, u32) {
         self.update_irradiance_with(probe, texel, value, u, self.config.moving_average)
@@ -495,6 +532,9 @@ impl ProbeTexels {
     /// writes into the same texels with [`MovingAverage::DYNAMIC`] (N_max = 10, Table 3) while
     /// the static chain uses [`MovingAverage::STATIC`]. A stored count above this N_max is
     /// brought down to it.
+    ///
+    /// # Panics
+    /// If `probe` or `texel` is out of range (see [`Self::irradiance_offset`]).
     #[inline]
     pub fn update_irradiance_with(
         &self,
@@ -514,6 +554,9 @@ impl ProbeTexels {
 
     /// One moving-average step of visibility texel `texel` of probe `probe` toward the moments
     /// `(t, t²)` (cell diagonals). Returns `(before, after)` as [`Self::update_irradiance`].
+    ///
+    /// # Panics
+    /// If `probe` or `texel` is out of range (see [`Self::visibility_offset`]).
     #[inline]
     pub fn update_visibility(
         &self,
@@ -527,6 +570,9 @@ impl ProbeTexels {
 
     /// [`Self::update_visibility`] with another N_max for this update (see
     /// [`Self::update_irradiance_with`]).
+    ///
+    /// # Panics
+    /// If `probe` or `texel` is out of range (see [`Self::visibility_offset`]).
     #[inline]
     pub fn update_visibility_with(
         &self,
@@ -547,7 +593,11 @@ impl ProbeTexels {
     /// Lowers the count of every texel of probe `probe` to at most `count`, keeping the
     /// values: the next samples then weigh more (ADGI sec. 4.8 sets N = 16 for probes between
     /// the inner and outer clip volumes so they catch up quickly). Never raises a count.
+    ///
+    /// # Panics
+    /// If `probe ≥ grid().probe_count()`.
     pub fn cap_counts(&self, probe: usize, count: u32) {
+        self.assert_probe(probe);
         let il = self.config.irradiance_layout;
         let ni = self.config.irradiance_map.texel_count();
         for a in &self.irradiance[probe * ni..(probe + 1) * ni] {
@@ -576,8 +626,19 @@ impl ProbeTexels {
         }
     }
 
+    /// Panics with a message naming `probe` unless it indexes a probe of the grid.
+    #[inline(always)]
+    fn assert_probe(&self, probe: usize) {
+        let count = self.grid.probe_count();
+        assert!(probe < count, "probe {probe} out of range ({count} probes)");
+    }
+
     /// [`Self::refresh_borders`] for one probe.
+    ///
+    /// # Panics
+    /// If `probe ≥ grid().probe_count()`.
     pub fn refresh_probe_borders(&self, probe: usize) {
+        self.assert_probe(probe);
         let ni = self.config.irradiance_map.texel_count();
         let words = &self.irradiance[probe * ni..(probe + 1) * ni];
         for &(dst, src) in &self.irradiance_tables.border {
@@ -595,6 +656,17 @@ impl ProbeTexels {
             );
         }
     }
+}
+
+/// `probe · texel_count + texel`, after checking both indices (so the product cannot overflow
+/// into a wrong but in-range offset).
+#[inline(always)]
+fn texel_offset(probe: usize, texel: usize, probe_count: usize, texel_count: usize) -> usize {
+    assert!(
+        probe < probe_count && texel < texel_count,
+        "probe {probe} / texel {texel} out of range ({probe_count} probes, {texel_count} texels)"
+    );
+    probe * texel_count + texel
 }
 
 fn copy_out(words: &[AtomicU32], out: &mut [u32]) -> Result<(), ProbeError> {
@@ -617,6 +689,65 @@ mod tests {
         let grid =
             ProbeGrid::new(Vec3::ZERO, Vec3::new(1.0, 2.0, 2.0), UVec3::new(3, 2, 2)).unwrap();
         ProbeTexels::new(grid, config)
+    }
+
+    #[test]
+    fn out_of_range_indices_panic_with_a_message() {
+        // Issue 14: out-of-range probe indices panicked without a `# Panics` section; the
+        // offsets could also wrap into a wrong, in-range texel. Each call now panics with a
+        // message naming the index (documented).
+        let t = texels(TexelConfig::default());
+        let probes = t.grid().probe_count();
+        let ni = t.config().irradiance_map.texel_count();
+        type Call = Box<dyn Fn(&ProbeTexels) + std::panic::RefUnwindSafe>;
+        let calls: [(&str, Call); 7] = [
+            (
+                "irradiance",
+                Box::new(move |t| {
+                    let _ = t.irradiance(probes, 0);
+                }),
+            ),
+            (
+                "visibility",
+                Box::new(|t| {
+                    let _ = t.visibility(0, usize::MAX);
+                }),
+            ),
+            (
+                "offset wrap",
+                Box::new(|t| {
+                    let _ = t.irradiance_offset(usize::MAX / 64 + 1, 0);
+                }),
+            ),
+            (
+                "update_irradiance",
+                Box::new(move |t| {
+                    let _ = t.update_irradiance(probes, 0, Vec3::ONE, 0.5);
+                }),
+            ),
+            (
+                "update_visibility",
+                Box::new(move |t| {
+                    let _ = t.update_visibility(0, ni * 16, Vec2::ONE, 0.5);
+                }),
+            ),
+            ("cap_counts", Box::new(|t| t.cap_counts(usize::MAX, 3))),
+            (
+                "refresh_probe_borders",
+                Box::new(move |t| t.refresh_probe_borders(probes)),
+            ),
+        ];
+        for (name, call) in calls {
+            let err = std::panic::catch_unwind(|| call(&t)).expect_err(name);
+            let msg = err
+                .downcast_ref::<String>()
+                .map(String::as_str)
+                .unwrap_or_default();
+            assert!(msg.contains("out of range"), "{name}: {msg}");
+        }
+        // In range still works.
+        let _ = t.irradiance(probes - 1, ni - 1);
+        t.cap_counts(probes - 1, 3);
     }
 
     #[test]

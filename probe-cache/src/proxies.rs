@@ -65,7 +65,8 @@ impl ProxyGrid {
         Self {
             grid: self.grid,
             block,
-            counts: (self.grid.counts() + UVec3::splat(block - 1)) / block,
+            // ⌈c / block⌉ as (c − 1)/block + 1 (c ≥ 1): `c + block − 1` overflows for large blocks.
+            counts: (self.grid.counts() - UVec3::ONE) / block + UVec3::ONE,
         }
     }
 
@@ -151,7 +152,9 @@ impl ProxyGrid {
     /// The probes of proxy `index`, as probe coordinates (x fastest).
     pub fn probes_of(&self, index: usize) -> impl Iterator<Item = UVec3> + use<> {
         let lo = self.proxy_coords(index) * self.block;
-        let hi = (lo + UVec3::splat(self.block)).min(self.grid.counts());
+        let hi = lo
+            .saturating_add(UVec3::splat(self.block))
+            .min(self.grid.counts());
         (lo.z..hi.z).flat_map(move |z| {
             (lo.y..hi.y).flat_map(move |y| (lo.x..hi.x).map(move |x| UVec3::new(x, y, z)))
         })
@@ -162,7 +165,9 @@ impl ProxyGrid {
     #[must_use]
     pub fn probes_in(&self, index: usize) -> u32 {
         let lo = self.proxy_coords(index) * self.block;
-        let hi = (lo + UVec3::splat(self.block)).min(self.grid.counts());
+        let hi = lo
+            .saturating_add(UVec3::splat(self.block))
+            .min(self.grid.counts());
         let n = hi - lo;
         n.x * n.y * n.z
     }
@@ -226,6 +231,27 @@ mod tests {
         // Proxy (2, 0, 1) holds x ∈ {6}, y ∈ {0, 1, 2}, z ∈ {3}: 3 probes.
         assert_eq!(p.probes_in(p.proxy_index(UVec3::new(2, 0, 1))), 3);
         assert_eq!(ProxyGrid::probes(grid()).proxy_count(), 84);
+    }
+
+    #[test]
+    fn huge_blocks_hold_the_whole_grid() {
+        // Issue 14 row 14: `counts + block − 1` overflowed (debug panic); release gave 0
+        // proxies while `proxy_at` still returned Some(0).
+        for block in [7, 8, 1 << 31, u32::MAX - 1, u32::MAX] {
+            let p = ProxyGrid::new(grid(), block).unwrap();
+            assert_eq!(p.counts(), UVec3::ONE, "{block}");
+            assert_eq!(p.proxy_count(), 1);
+            assert_eq!(p.table_len(), 8);
+            assert_eq!(p.proxy_at(Vec3::new(1.0, 0.5, 1.0)), Some(0));
+            assert_eq!(p.probes_in(0), 84);
+            assert_eq!(p.probes_of(0).count(), 84);
+        }
+        // A long axis with a block of 2³¹: ⌈3·10⁹ / 2³¹⌉ = 2 proxies, the second holding the
+        // rest of the axis.
+        let long = ProbeGrid::new(Vec3::ZERO, Vec3::ONE, UVec3::new(3_000_000_000, 1, 1)).unwrap();
+        let p = ProxyGrid::new(long, 1 << 31).unwrap();
+        assert_eq!(p.counts(), UVec3::new(2, 1, 1));
+        assert_eq!(p.probes_in(1), 3_000_000_000 - (1 << 31));
     }
 
     #[test]

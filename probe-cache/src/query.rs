@@ -510,6 +510,8 @@ mod tests {
     }
 
     proptest! {
+        #![proptest_config(crate::proptest_support::proptest_config(256))]
+
         /// Adversarial inputs never give NaN or negative values.
         #[test]
         fn adversarial_inputs_are_finite(

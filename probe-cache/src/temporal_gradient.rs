@@ -162,8 +162,9 @@ impl Default for SmoothingKernel {
 /// The spatial and directional smoothing of eq. 15 / 18 as a normalised box filter: `out` at
 /// (probe, octant) is the mean of `input` over the probes within `spatial_radius` along each
 /// axis that exist in the grid, and (with `directional`) over the octant and its three
-/// edge-adjacent octants. Non-finite inputs count as 0. `scratch` is a buffer of the same
-/// length (its contents are overwritten).
+/// edge-adjacent octants. Non-finite inputs count as 0 and means that overflow saturate at
+/// ±`f32::MAX`, so the output is always finite. A radius beyond the grid covers the whole axis.
+/// `scratch` is a buffer of the same length (its contents are overwritten).
 ///
 /// The filter is separable (a box of in-grid probes is a product of per-axis intervals), so it
 /// costs `(3 · (2r + 1) + 4)` reads per entry.
@@ -189,10 +190,12 @@ pub fn spatial_smoothing(
     {
         for o in 0..OCTANTS {
             o_chunk[o] = if kernel.directional {
-                0.25 * (finite(i_chunk[o])
-                    + finite(i_chunk[o ^ 1])
-                    + finite(i_chunk[o ^ 2])
-                    + finite(i_chunk[o ^ 4]))
+                // ¼ applied to each term: the same bits as ¼ of the sum for every normal
+                // value (scaling by a power of two is exact), but no overflow for huge ones.
+                0.25 * finite(i_chunk[o])
+                    + 0.25 * finite(i_chunk[o ^ 1])
+                    + 0.25 * finite(i_chunk[o ^ 2])
+                    + 0.25 * finite(i_chunk[o ^ 4])
             } else {
                 finite(i_chunk[o])
             };
@@ -217,7 +220,7 @@ pub fn spatial_smoothing(
         for probe in 0..grid.probe_count() {
             let i = grid.probe_coords(probe)[axis];
             let lo = i.saturating_sub(r);
-            let hi = (i + r).min(len - 1);
+            let hi = i.saturating_add(r).min(len - 1);
             let inv = 1.0 / (hi - lo + 1) as f32;
             let base = probe * OCTANTS;
             for o in 0..OCTANTS {
@@ -227,7 +230,8 @@ pub fn spatial_smoothing(
                     let k = base + o + (j as usize) * stride - (i as usize) * stride;
                     s += src[k];
                 }
-                dst[base + o] = s * inv;
+                // A sum of huge finite values can overflow; keep the table finite.
+                dst[base + o] = (s * inv).clamp(-f32::MAX, f32::MAX);
             }
         }
         src_is_out = !src_is_out;
@@ -277,16 +281,24 @@ impl ChangeDetector {
         }
     }
 
-    /// Stores the reference f_v, f_r tables (the first frame of a pilot pair).
+    /// Stores the reference f_v, f_r tables (the first frame of a pilot pair). A NaN or
+    /// infinite entry is no measurement: the reference keeps its previous value there.
     ///
     /// # Errors
-    /// [`ProbeError::TableLengthMismatch`] unless both have `probe_count · 8` entries.
+    /// [`ProbeError::TableLengthMismatch`] unless both have `probe_count · 8` entries; the
+    /// detector is then unchanged.
     pub fn set_reference(&mut self, f_v: &[f32], f_r: &[f32]) -> Result<(), ProbeError> {
+        self.check_lengths(f_v, f_r)?;
+        keep_finite(&mut self.reference_v, f_v);
+        keep_finite(&mut self.reference_r, f_r);
+        Ok(())
+    }
+
+    /// Both tables have `probe_count · 8` entries.
+    fn check_lengths(&self, f_v: &[f32], f_r: &[f32]) -> Result<(), ProbeError> {
         if f_v.len() != self.reference_v.len() || f_r.len() != self.reference_r.len() {
             return Err(ProbeError::TableLengthMismatch);
         }
-        self.reference_v.copy_from_slice(f_v);
-        self.reference_r.copy_from_slice(f_r);
         Ok(())
     }
 
@@ -295,9 +307,16 @@ impl ChangeDetector {
     /// reference. Returns (f_Δv, f_Δr), also available from [`Self::delta_visibility`] and
     /// [`Self::delta_radiance`].
     ///
+    /// A NaN or infinite entry is no measurement: its gradient is 0 (as in
+    /// [`temporal_gradient`]) and the reference keeps its previous value there, so the next
+    /// finite measurement is still compared with the last finite one.
+    ///
     /// # Errors
-    /// [`ProbeError::TableLengthMismatch`] unless both have `probe_count · 8` entries.
+    /// [`ProbeError::TableLengthMismatch`] unless both have `probe_count · 8` entries; the
+    /// detector (reference, trigger states, outputs) is then unchanged.
     pub fn detect(&mut self, f_v: &[f32], f_r: &[f32]) -> Result<(&[f32], &[f32]), ProbeError> {
+        // Validate both tables before touching any state.
+        self.check_lengths(f_v, f_r)?;
         for (current, reference, state, delta) in [
             (
                 f_v,
@@ -315,7 +334,7 @@ impl ChangeDetector {
             temporal_gradient(current, reference, delta)?;
             self.trigger.apply_slice(delta, state)?;
             spatial_smoothing(&self.grid, self.kernel, state, delta, &mut self.scratch)?;
-            reference.copy_from_slice(current);
+            keep_finite(reference, current);
         }
         Ok((&self.delta_v, &self.delta_r))
     }
@@ -336,6 +355,15 @@ impl ChangeDetector {
     #[must_use]
     pub fn trigger_states(&self) -> (&[f32], &[f32]) {
         (&self.state_v, &self.state_r)
+    }
+}
+
+/// `reference[i] = current[i]` where `current[i]` is finite; other entries keep their value.
+fn keep_finite(reference: &mut [f32], current: &[f32]) {
+    for (r, &c) in reference.iter_mut().zip(current) {
+        if c.is_finite() {
+            *r = c;
+        }
     }
 }
 
@@ -474,6 +502,91 @@ mod tests {
         assert!((d.trigger_states().0[9] - 0.3).abs() < 1e-6);
         assert!(d.delta_radiance().iter().all(|&x| x == 0.0));
         assert!(d.detect(&v1[1..], &r0).is_err());
+    }
+
+    #[test]
+    fn huge_radius_covers_the_axis() {
+        // Issue 14 row 15: `i + r` overflowed for r = u32::MAX (debug panic; release used a
+        // wrong window).
+        let g = ProbeGrid::new(Vec3::ZERO, Vec3::ONE, UVec3::new(4, 3, 2)).unwrap();
+        let input: Vec<f32> = (0..24 * 8).map(|i| ((i * 37) % 11) as f32 / 10.0).collect();
+        let (mut a, mut b, mut scratch) = (vec![0.0; 192], vec![0.0; 192], vec![0.0; 192]);
+        for directional in [false, true] {
+            let huge = SmoothingKernel {
+                spatial_radius: u32::MAX,
+                directional,
+            };
+            let whole = SmoothingKernel {
+                spatial_radius: 3,
+                directional,
+            };
+            spatial_smoothing(&g, huge, &input, &mut a, &mut scratch).unwrap();
+            spatial_smoothing(&g, whole, &input, &mut b, &mut scratch).unwrap();
+            assert_eq!(a, b);
+        }
+    }
+
+    #[test]
+    fn huge_values_smooth_to_finite_values() {
+        let g = line(3);
+        let input = vec![f32::MAX; 24];
+        let (mut out, mut scratch) = (vec![0.0; 24], vec![0.0; 24]);
+        spatial_smoothing(&g, SmoothingKernel::ADGI, &input, &mut out, &mut scratch).unwrap();
+        assert!(out.iter().all(|&v| v == f32::MAX), "{out:?}");
+    }
+
+    #[test]
+    fn failed_detection_leaves_the_detector_unchanged() {
+        // Issue 14 row 18: a good f_v with a short f_r returned Err after the reference,
+        // trigger state and delta of f_v had already changed.
+        let g = line(2);
+        let mut d =
+            ChangeDetector::new(g, TemporalTrigger::new(0.5).unwrap(), SmoothingKernel::ADGI);
+        d.set_reference(&[0.3; 16], &[0.1; 16]).unwrap();
+        d.detect(&[0.5; 16], &[0.2; 16]).unwrap();
+        let snapshot = |d: &ChangeDetector| {
+            (
+                d.reference_v.clone(),
+                d.reference_r.clone(),
+                d.trigger_states().0.to_vec(),
+                d.trigger_states().1.to_vec(),
+                d.delta_visibility().to_vec(),
+                d.delta_radiance().to_vec(),
+            )
+        };
+        let before = snapshot(&d);
+        assert_eq!(
+            d.detect(&[0.9; 16], &[0.4; 15]),
+            Err(ProbeError::TableLengthMismatch)
+        );
+        assert_eq!(snapshot(&d), before);
+        assert!(d.detect(&[0.9; 17], &[0.4; 16]).is_err());
+        assert!(d.set_reference(&[0.9; 16], &[0.4; 3]).is_err());
+        assert_eq!(snapshot(&d), before);
+    }
+
+    #[test]
+    fn non_finite_frames_do_not_become_the_reference() {
+        // Issue 14 row 19: a NaN frame became the reference, and the next real 0 → 1 change
+        // reported 0.
+        let g = line(1);
+        let none = SmoothingKernel {
+            spatial_radius: 0,
+            directional: false,
+        };
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            let mut d = ChangeDetector::new(g, TemporalTrigger::new(0.5).unwrap(), none);
+            d.set_reference(&[0.0; 8], &[0.0; 8]).unwrap();
+            d.detect(&[bad; 8], &[bad; 8]).unwrap();
+            assert!(d.delta_visibility().iter().all(|&x| x == 0.0));
+            let (dv, dr) = d.detect(&[1.0; 8], &[1.0; 8]).unwrap();
+            assert!(dv.iter().chain(dr).all(|&x| x == 1.0), "{bad}: {dv:?}");
+            // The same through set_reference.
+            let mut d = ChangeDetector::new(g, TemporalTrigger::new(0.5).unwrap(), none);
+            d.set_reference(&[bad; 8], &[bad; 8]).unwrap();
+            let (dv, _) = d.detect(&[1.0; 8], &[1.0; 8]).unwrap();
+            assert!(dv.iter().all(|&x| x == 1.0), "{bad}: {dv:?}");
+        }
     }
 
     #[test]

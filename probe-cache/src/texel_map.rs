@@ -162,24 +162,42 @@ impl TexelMap {
             .as_uvec2()
     }
 
-    /// Row-major index `y · side + x` of stored texel `t`.
+    /// Stored texel `t` with each coordinate clamped to `side − 1`: how the functions that take
+    /// a texel treat coordinates outside the map (the nearest stored texel, never an index
+    /// past [`Self::texel_count`]).
+    #[inline]
+    #[must_use]
+    pub const fn clamp_texel(&self, t: UVec2) -> UVec2 {
+        let last = self.side - 1;
+        UVec2::new(
+            if t.x < last { t.x } else { last },
+            if t.y < last { t.y } else { last },
+        )
+    }
+
+    /// Row-major index `y · side + x` of stored texel `t` (coordinates outside the map are
+    /// clamped, [`Self::clamp_texel`]), always below [`Self::texel_count`].
     #[inline]
     #[must_use]
     pub const fn index(&self, t: UVec2) -> usize {
+        let t = self.clamp_texel(t);
         (t.y * self.side + t.x) as usize
     }
 
-    /// Stored texel of row-major index `index` (the inverse of [`Self::index`]).
+    /// Stored texel of row-major index `index` (the inverse of [`Self::index`]; an index at
+    /// or past [`Self::texel_count`] gives coordinates outside the map).
     #[inline]
     #[must_use]
     pub const fn coords(&self, index: usize) -> UVec2 {
         UVec2::new(index as u32 % self.side, index as u32 / self.side)
     }
 
-    /// Whether stored texel `t` is on the border ring.
+    /// Whether stored texel `t` is on the border ring (coordinates outside the map are
+    /// clamped, [`Self::clamp_texel`]).
     #[inline]
     #[must_use]
     pub const fn is_border(&self, t: UVec2) -> bool {
+        let t = self.clamp_texel(t);
         self.border == 1 && (t.x == 0 || t.y == 0 || t.x == self.side - 1 || t.y == self.side - 1)
     }
 
@@ -202,14 +220,17 @@ impl TexelMap {
 
     /// The interior texel whose value stored texel `t` holds: `t` itself for an interior texel,
     /// the mirrored interior texel of the border rule for a border texel (module docs).
+    /// Coordinates outside the map are clamped first ([`Self::clamp_texel`]).
     #[inline]
     #[must_use]
     pub fn source(&self, t: UVec2) -> UVec2 {
+        let t = self.clamp_texel(t);
         let b = self.border as i32;
         self.fold(t.x as i32 - b, t.y as i32 - b) + UVec2::splat(self.border)
     }
 
-    /// Unit direction at the centre of stored texel `t` (a border texel gives its source's).
+    /// Unit direction at the centre of stored texel `t` (a border texel gives its source's;
+    /// coordinates outside the map are clamped, [`Self::clamp_texel`]).
     #[inline]
     #[must_use]
     pub fn direction(&self, t: UVec2) -> Vec3 {
@@ -220,9 +241,11 @@ impl TexelMap {
 
     /// Solid angle (sr) of stored texel `t`: 4π/n² for every interior texel of the equal-area
     /// map, the exact area of [`crate::octahedral_solid_angle`] for the octahedral map, and 0 for
-    /// a border texel (a copy covers nothing new). The interior values sum to 4π.
+    /// a border texel (a copy covers nothing new). The interior values sum to 4π. Coordinates
+    /// outside the map are clamped ([`Self::clamp_texel`]).
     #[must_use]
     pub fn solid_angle(&self, t: UVec2) -> f32 {
+        let t = self.clamp_texel(t);
         if self.is_border(t) {
             return 0.0;
         }
@@ -247,7 +270,9 @@ impl TexelMap {
         // ⌊c⌋ by truncating c + 1 ≥ ½ (NaN → 0 → −1): no libm `floorf` call on targets
         // without SSE4.1, the same result.
         let (x0, y0) = ((c.x + 1.0) as i32 - 1, (c.y + 1.0) as i32 - 1);
-        let w = c - Vec2::new(x0 as f32, y0 as f32);
+        // c + 1 can round up to the next integer for c just below one (|c − ⌊c⌋| < 2⁻²⁵), which
+        // would make w slightly negative: keep the weights in [0, 1] (no-op otherwise).
+        let w = (c - Vec2::new(x0 as f32, y0 as f32)).clamp(Vec2::ZERO, Vec2::ONE);
         let b = UVec2::splat(self.border);
         let tap = |dx: i32, dy: i32| self.index(self.fold(x0 + dx, y0 + dy) + b);
         [
@@ -426,6 +451,48 @@ mod tests {
     }
 
     #[test]
+    fn out_of_range_texels_are_clamped() {
+        // Issue 14 row 17: index/source/direction overflowed (debug panic) and returned an
+        // index ≥ texel_count() in release.
+        for map in maps() {
+            let last = map.side() - 1;
+            for t in [
+                UVec2::new(map.side(), 0),
+                UVec2::new(0, map.side()),
+                UVec2::new(u32::MAX, 3.min(last)),
+                UVec2::new(1 << 31, 1 << 31),
+                UVec2::splat(u32::MAX),
+            ] {
+                let c = map.clamp_texel(t);
+                assert!(c.x <= last && c.y <= last);
+                assert!(map.index(t) < map.texel_count(), "{map:?} {t}");
+                assert_eq!(map.index(t), map.index(c));
+                assert_eq!(map.source(t), map.source(c));
+                assert_eq!(map.direction(t), map.direction(c));
+                assert_eq!(map.is_border(t), map.is_border(c));
+                let a = map.solid_angle(t);
+                assert!(a.is_finite() && a >= 0.0, "{map:?} {t}: {a}");
+            }
+        }
+    }
+
+    #[test]
+    fn bilinear_weights_stay_in_the_unit_interval() {
+        // Found by scripts/fuzz: c + 1 rounded up for c = −ε, giving a weight of −ε.
+        for kind in [MapKind::Octahedral, MapKind::EqualArea] {
+            let map = TexelMap::new(kind, 3, true).unwrap();
+            for d in [Vec3::new(1.0, -0.0, -1e-7), Vec3::new(-1e-9, 1.0, 1e-8)] {
+                for (i, w) in map.bilinear(d) {
+                    assert!(
+                        i < map.texel_count() && (0.0..=1.0).contains(&w),
+                        "{kind:?} {d}: {i} {w}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
     fn bilinear_taps() {
         for m in maps() {
             // At a texel centre the full weight sits on that texel.
@@ -444,6 +511,8 @@ mod tests {
     }
 
     proptest! {
+        #![proptest_config(crate::proptest_support::proptest_config(256))]
+
         #[test]
         fn bilinear_weights_are_a_partition_and_taps_interior(
             x in -1.0f32..1.0, y in -1.0f32..1.0, z in -1.0f32..1.0, which in 0usize..10

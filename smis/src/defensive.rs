@@ -2,7 +2,7 @@
 //! set (MCMM Alg. 2 and appendix A; MCPG Alg. 2).
 
 use crate::SmisError;
-use crate::technique::{Technique, pdf_sum, ratio, select_uniform};
+use crate::technique::{Technique, pdf_sum, ratio, saturate, select_uniform};
 
 /// A classical technique (cosine, BSDF or uniform sampling) chosen with probability p, and
 /// otherwise one of n stochastic techniques chosen uniformly:
@@ -147,7 +147,7 @@ where
         } else {
             0.0
         };
-        classical + stochastic
+        saturate(classical + stochastic)
     }
 
     #[inline]

@@ -138,7 +138,30 @@ mod properties {
             .prop_map(|(a, w)| Boxcar { a, w })
     }
 
+    /// `cases` cases from the fixed seed 0x7E57_0008, so every run checks the same cases;
+    /// `PROPTEST_RNG_SEED` / `PROPTEST_CASES`, when set, override them (`scripts/fuzz`).
+    fn proptest_config(cases: u32) -> ProptestConfig {
+        let set = |name: &str| std::env::var_os(name).is_some();
+        let from_env = ProptestConfig::default();
+        ProptestConfig {
+            cases: if set("PROPTEST_CASES") {
+                from_env.cases
+            } else {
+                cases
+            },
+            rng_seed: if set("PROPTEST_RNG_SEED") {
+                from_env.rng_seed
+            } else {
+                proptest::test_runner::RngSeed::Fixed(0x7E57_0008)
+            },
+            failure_persistence: None,
+            ..from_env
+        }
+    }
+
     proptest! {
+        #![proptest_config(proptest_config(256))]
+
         /// The linear path form equals MMIS eq. 14 summed over every combination.
         #[test]
         fn path_linear_equals_naive(

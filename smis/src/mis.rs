@@ -1,6 +1,6 @@
 //! Classical multi-sample MIS with the balance heuristic: the estimator SMIS and MMIS approximate.
 
-use crate::technique::{Technique, finite_or_zero, ratio};
+use crate::technique::{Technique, finite_or_zero, ratio, saturate};
 
 /// The balance-heuristic denominator Σₖ nₖ pₖ(x) of techniques pₖ drawn nₖ times each
 /// (MMIS eq. 3-4, Veach and Guibas 1995). Accumulated in f32.
@@ -15,11 +15,13 @@ pub fn balance_denominator<T: Technique>(techniques: &[T], counts: &[u32], x: &T
         counts.len(),
         "one sample count per technique"
     );
-    techniques
-        .iter()
-        .zip(counts)
-        .map(|(t, &n)| n as f32 * t.pdf(x))
-        .sum()
+    saturate(
+        techniques
+            .iter()
+            .zip(counts)
+            .map(|(t, &n)| n as f32 * t.pdf(x))
+            .sum(),
+    )
 }
 
 /// Multi-sample MIS with the balance heuristic (MMIS eq. 1 with weights eq. 3, i.e. eq. 4):

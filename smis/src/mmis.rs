@@ -2,7 +2,7 @@
 //! sec. 3.1).
 
 use crate::SmisError;
-use crate::technique::{Technique, finite_or_zero, pdf_sum, ratio};
+use crate::technique::{Technique, finite_or_zero, pdf_sum, ratio, saturate};
 
 /// A marginal MIS estimator (West et al. 2022, eq. 6) over T technique spaces with nᵢ
 /// technique-sample pairs each, plus classical techniques drawn a fixed number of times:
@@ -126,12 +126,14 @@ where
             .zip(self.classical_counts)
             .map(|(c, &n)| n as f32 * c.pdf(x))
             .sum();
-        classical
-            + self
-                .spaces
-                .iter()
-                .map(|space| pdf_sum(space, x))
-                .sum::<f32>()
+        saturate(
+            saturate(classical)
+                + self
+                    .spaces
+                    .iter()
+                    .map(|space| pdf_sum(space, x))
+                    .fold(0.0, |a, s| saturate(a + s)),
+        )
     }
 
     /// The estimate Σ_s f(x_s) / D(x_s) (MMIS eq. 6) over all [`sample_count`](Self::sample_count)

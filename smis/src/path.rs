@@ -1,7 +1,7 @@
 //! The path form of SMIS/MMIS: a product over path vertices of a sum over each vertex's
 //! technique set (MCPG eq. 6, MMIS eq. 14), in time linear in the number of vertices.
 
-use crate::technique::{Technique, pdf_sum, ratio};
+use crate::technique::{Technique, pdf_sum, ratio, saturate};
 
 /// The most vertices [`path_pdf_naive`] enumerates (its combination counter lives on the stack).
 pub const MAX_NAIVE_PATH_VERTICES: usize = 16;
@@ -20,8 +20,8 @@ pub const MAX_NAIVE_PATH_VERTICES: usize = 16;
 /// uniformly — use [`path_mixture_pdf`]; MCPG's eq. 6 writes the sum without the 1/|S_v|
 /// factors, which only rescales the estimate by the constant Π_v |S_v|.
 ///
-/// The product is formed in f32: it overflows to +∞ only when the densities' product exceeds
-/// 3.4·10³⁸ (then [`path_estimate`] returns 0, not NaN). An empty path gives 1.
+/// The product is formed in f32 and saturates at `f32::MAX` where the densities' product
+/// exceeds 3.4·10³⁸ (so finite densities give a finite result). An empty path gives 1.
 ///
 /// # Panics
 /// If `vertex_sets` and `vertices` differ in length.
@@ -37,7 +37,7 @@ pub fn path_pdf<T: Technique>(vertex_sets: &[&[T]], vertices: &[T::Sample]) -> f
         .iter()
         .zip(vertices)
         .map(|(set, x)| pdf_sum(set, x))
-        .product()
+        .fold(1.0, |p, s| saturate(p * s))
 }
 
 /// Π_v (1/|S_v|) Σ_{s ∈ S_v} p(x_v | s): the density of a path whose vertex v was drawn from a
@@ -64,7 +64,7 @@ pub fn path_mixture_pdf<T: Technique>(vertex_sets: &[&[T]], vertices: &[T::Sampl
                 pdf_sum(set, x) / set.len() as f32
             }
         })
-        .product()
+        .fold(1.0, |p, s| saturate(p * s))
 }
 
 /// The one-sample path estimate f(x̄) / [`path_mixture_pdf`] (MCPG eq. 6 with uniform choice of
@@ -104,9 +104,9 @@ pub fn path_pdf_naive<T: Technique>(vertex_sets: &[&[T]], vertices: &[T::Sample]
     loop {
         let mut product = 1.0_f32;
         for v in 0..k {
-            product *= vertex_sets[v][choice[v]].pdf(&vertices[v]);
+            product = saturate(product * vertex_sets[v][choice[v]].pdf(&vertices[v]));
         }
-        sum += product;
+        sum = saturate(sum + product);
         // Advance the mixed-radix counter; stop after the last combination.
         let mut v = 0;
         loop {
@@ -164,11 +164,13 @@ mod tests {
         assert_eq!(path_pdf_naive(&vs, &[0.1, 0.1]), 0.0);
         assert_eq!(path_mixture_pdf(&vs, &[0.1, 0.1]), 0.0);
         assert_eq!(path_estimate(1.0, &vs, &[0.1, 0.1]), 0.0);
-        // Overflowing product: the estimate is 0, not NaN.
+        // Overflowing product: saturates at f32::MAX (was +∞), the estimate is ~0, not NaN.
         let tiny = [Boxcar { a: 0.0, w: 1e-30 }];
         let vs: [&[Boxcar]; 2] = [&tiny, &tiny];
-        assert_eq!(path_pdf(&vs, &[0.0, 0.0]), f32::INFINITY);
-        assert_eq!(path_estimate(1.0, &vs, &[0.0, 0.0]), 0.0);
+        assert_eq!(path_pdf(&vs, &[0.0, 0.0]), f32::MAX);
+        assert_eq!(path_pdf_naive(&vs, &[0.0, 0.0]), f32::MAX);
+        assert_eq!(path_mixture_pdf(&vs, &[0.0, 0.0]), f32::MAX);
+        assert_eq!(path_estimate(1.0, &vs, &[0.0, 0.0]), 1.0 / f32::MAX);
     }
 
     #[test]

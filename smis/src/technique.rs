@@ -73,11 +73,12 @@ impl<T: Technique + ?Sized> Technique for &T {
 /// Σⱼ p(x | tⱼ) over a set of conditional techniques, accumulated in f32 in slice order.
 ///
 /// This is the denominator of the n-sample SMIS estimator (MCMM eq. 8, MCPG eq. 7) and one
-/// factor of the path form (MCPG eq. 6). 0 for an empty set.
+/// factor of the path form (MCPG eq. 6). 0 for an empty set. A sum of finite densities that
+/// overflows saturates at `f32::MAX` (so finite densities give a finite sum).
 #[inline]
 #[must_use]
 pub fn pdf_sum<T: Technique>(techniques: &[T], x: &T::Sample) -> f32 {
-    techniques.iter().map(|t| t.pdf(x)).sum()
+    saturate(techniques.iter().map(|t| t.pdf(x)).sum())
 }
 
 /// (1/n) Σⱼ p(x | tⱼ): the density of x when one of the n techniques is chosen uniformly at
@@ -139,6 +140,13 @@ pub(crate) fn ratio(value: f32, denominator: f32) -> f32 {
     } else {
         0.0
     }
+}
+
+/// `x` with +∞ replaced by `f32::MAX` (NaN stays NaN): how sums and products of finite
+/// densities that overflow are kept finite.
+#[inline(always)]
+pub(crate) fn saturate(x: f32) -> f32 {
+    if x > f32::MAX { f32::MAX } else { x }
 }
 
 /// `sum` if finite, else 0: an estimate whose sum of (finite) terms overflows f32 is as

@@ -13,11 +13,17 @@ pub const MAX_TILE_SIZE: u32 = 32;
 /// rotates the last one back to the first).
 ///
 /// The unchecked building block of [`CyclicShift`] (for GPU twins and tight loops): the caller
-/// guarantees `0 < size` and `lane < size`; then the result is `< size`.
+/// guarantees `0 < size` (a zero `size` panics, as `% 0` does) and `lane < size`; then the
+/// result is `< size`. Any `lane` gives `(lane − shift) mod size`, with no overflow (the sum
+/// is formed in u64).
+///
+/// # Panics
+/// If `size == 0`.
 #[inline]
 #[must_use]
 pub const fn cyclic_source_lane(lane: u32, size: u32, shift: u32) -> u32 {
-    (lane + size - shift % size) % size
+    let size = size as u64;
+    ((lane as u64 % size + size - shift as u64 % size) % size) as u32
 }
 
 /// A cyclic shift of states within a tile of up to 32 lanes: the decorrelation of temporal SMIS

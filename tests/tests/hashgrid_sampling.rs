@@ -126,6 +126,9 @@ fn level_is_monotone_in_distance() {
         LevelParams {
             power: 3f32.sqrt(),
             steps: 1,
+            // √3 per level: the coarsest width stays finite up to level 168
+            // (`AdaptiveGrid::new` rejects more, `GridError::CoarsestWidthNotFinite`).
+            max_level: 160,
             ..LevelParams::MCPG
         },
         LevelParams {

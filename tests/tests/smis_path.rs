@@ -11,6 +11,8 @@ use mcg_tests::{SphereTechnique, seeded_rng, uniform2, vmf_pdf};
 use mcg_vmf::Vmf;
 use mcg_vmf::glam::{Vec2, Vec3};
 use proptest::prelude::*;
+
+mod support;
 use rand::RngExt;
 
 fn lobe(mu: Vec3, kappa: f32) -> SphereTechnique {
@@ -92,7 +94,7 @@ fn arb_set() -> impl Strategy<Value = Vec<SphereTechnique>> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(256))]
+    #![proptest_config(support::proptest_config(256, 0x7E57_0004))]
     #[test]
     fn linear_equals_naive_property(
         sets in proptest::collection::vec(arb_set(), 1..6),

@@ -1,22 +1,19 @@
 //! Property tests of `SufficientStats`: no sequence of updates, however bad its weights, leaves
 //! the statistics non-finite or out of range, and rejected samples change nothing.
 //!
-//! Deterministic: fixed case count and seed (see [`config`]), no regression files.
+//! Deterministic: 512 cases from the fixed seed 0x7E57_0002 (`support::proptest_config`), no
+//! regression files.
 
 use glam::Vec3;
 use mcg_vmf::{FitParams, KAPPA_MAX, MapPrior, MeanCosineUpdate, SufficientStats};
 use proptest::prelude::*;
-use proptest::test_runner::RngSeed;
+
+mod support;
 
 /// 512 cases per property (each a sequence of up to 64 updates) from the fixed seed
 /// 0x7E57_0002, no failure persistence.
 fn config() -> ProptestConfig {
-    ProptestConfig {
-        cases: 512,
-        rng_seed: RngSeed::Fixed(0x7E57_0002),
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    }
+    support::proptest_config(512, 0x7E57_0002)
 }
 
 /// Any weight: every f32 class (NaN, ±∞, ±0, subnormal, negative, up to f32::MAX), and

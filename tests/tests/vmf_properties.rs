@@ -2,8 +2,8 @@
 //! for every valid input, agreement of `sample_with_pdf` with `pdf`, the κ ↔ mean cosine round
 //! trip, and the error each invalid input gets.
 //!
-//! Deterministic: every property runs a fixed number of cases from a fixed seed (see
-//! [`config`]) and writes no regression files.
+//! Deterministic: every property runs 1024 cases from the fixed seed 0x7E57_0001
+//! (`support::proptest_config`) and writes no regression files.
 
 use glam::{Vec2, Vec3};
 use mcg_vmf::{
@@ -11,16 +11,12 @@ use mcg_vmf::{
     kappa_from_mean_cosine_exact, mean_cosine_from_kappa,
 };
 use proptest::prelude::*;
-use proptest::test_runner::RngSeed;
+
+mod support;
 
 /// 1024 cases per property from the fixed seed 0x7E57_0001, no failure persistence.
 fn config() -> ProptestConfig {
-    ProptestConfig {
-        cases: 1024,
-        rng_seed: RngSeed::Fixed(0x7E57_0001),
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    }
+    support::proptest_config(1024, 0x7E57_0001)
 }
 
 /// κ in [0, 10⁶]: exactly 0, log-uniform over [10⁻⁸, 10⁶), uniform over [0, 10⁶], or 10⁶.

@@ -53,6 +53,8 @@ pub fn sample_batch(lobes: &[Vmf], uniforms: &[Vec2], out: &mut [Vec3]) {
 /// The divisions by κ of the regimes share one division.
 #[inline(always)]
 fn cos_theta_minus_one_branch_free(kappa: f32, xi: f32) -> f32 {
+    // Out-of-range uniforms are clamped like the scalar path (NaN → 0).
+    let xi = crate::vmf::clamp_uniform(xi);
     // e^{−2κ} and expm1(−2κ). Above κ = 17 (`KAPPA_SAMPLE_SATURATED`) the scalar path
     // replaces them by 0 and −1; here that happens by itself: e^{−2κ} < 2⁻⁴⁹ makes
     // `e^{−2κ} − 1` round to −1 and vanishes next to 1 − ξ ≥ 2⁻²⁴ in the tail sum, so the

@@ -14,6 +14,8 @@ pub enum VmfError {
     KappaNotFinite,
     /// The concentration κ is negative.
     KappaNegative,
+    /// The concentration κ is above [`KAPPA_MAX`](crate::KAPPA_MAX) (10⁶).
+    KappaAboveMax,
 }
 
 impl fmt::Display for VmfError {
@@ -23,6 +25,7 @@ impl fmt::Display for VmfError {
             VmfError::MeanZeroLength => "mean direction has zero length",
             VmfError::KappaNotFinite => "concentration kappa is not finite",
             VmfError::KappaNegative => "concentration kappa is negative",
+            VmfError::KappaAboveMax => "concentration kappa is above KAPPA_MAX (1e6)",
         })
     }
 }

@@ -64,6 +64,42 @@ pub(crate) fn exp_m1(x: f32) -> f32 {
     (u - 1.0) * x / ln(u)
 }
 
+/// `v / |v|` that keeps full precision for every finite non-zero `v`, or `None` for zero and
+/// non-finite vectors.
+///
+/// Where |v|² is a normal f32 this is exactly `v.try_normalize()` (bit-identical); where it
+/// underflows into the subnormals (|v| < 1.1·10⁻¹⁹, where squaring loses bits and the result
+/// drifts off unit length) or overflows (|v| > 1.8·10¹⁹), `v` is first divided by its largest
+/// component magnitude.
+#[inline]
+pub(crate) fn normalize_robust(v: glam::Vec3) -> Option<glam::Vec3> {
+    let length_squared = v.length_squared();
+    if (f32::MIN_POSITIVE..=f32::MAX).contains(&length_squared) {
+        return v.try_normalize();
+    }
+    let largest = v.abs().max_element();
+    if !(largest > 0.0 && largest <= f32::MAX) {
+        return None;
+    }
+    (v / largest).try_normalize()
+}
+
+/// |v| without overflow: `v.length()` (bit-identical) where |v|² is finite, else the length of
+/// `v` scaled by its largest component magnitude, saturating at `f32::MAX` (NaN stays NaN).
+#[inline]
+pub(crate) fn length_robust(v: glam::Vec3) -> f32 {
+    let length_squared = v.length_squared();
+    if length_squared.is_finite() {
+        return sqrt(length_squared);
+    }
+    let largest = v.abs().max_element();
+    if !(largest <= f32::MAX) {
+        // ±∞ gives +∞ saturated, NaN stays NaN.
+        return if largest.is_nan() { f32::NAN } else { f32::MAX };
+    }
+    (largest * (v / largest).length()).min(f32::MAX)
+}
+
 /// (sin 2πt, cos 2πt) for a turn fraction `t` (usually a uniform in [0, 1)).
 ///
 /// Reduces exactly in turns (t·4 − round(t·4) is exact in f32, unlike 2πt), then evaluates

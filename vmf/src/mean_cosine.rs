@@ -13,7 +13,7 @@ use crate::constants::{
 use crate::math;
 
 /// Largest concentration returned by [`kappa_from_mean_cosine`] and
-/// [`kappa_from_mean_cosine_exact`]: 10⁶.
+/// [`kappa_from_mean_cosine_exact`], and accepted by [`Vmf::new`](crate::Vmf::new): 10⁶.
 ///
 /// This is the top of the range over which [`Vmf`](crate::Vmf)'s pdf and sampling are
 /// validated in f32 (a lobe of angular radius ≈ 1 mrad). A mean cosine of 1 − 10⁻⁶ already maps

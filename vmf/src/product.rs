@@ -26,6 +26,8 @@ impl Vmf {
     /// (ANCHORS "vMF lobes"; the exponent κ₀(μ₀·μ' − 1) + κ₁(μ₁·μ' − 1) simplifies to
     /// κ' − κ₀ − κ₁ ≤ 0, so the scale never overflows). `scale` is the integral of the product
     /// over the sphere. When the lobes cancel exactly (m = 0) the product is uniform with μ' = μ₀.
+    /// κ' ≤ κ₀ + κ₁, so the product of two lobes from [`Vmf::new`] (κ ≤
+    /// [`KAPPA_MAX`](crate::KAPPA_MAX)) has κ' ≤ 2·10⁶ and a finite `scale`.
     ///
     /// # Example
     /// ```
@@ -117,6 +119,29 @@ mod tests {
                     "{a:?} {b:?} {w}: {lhs} vs {rhs}"
                 );
             }
+        }
+    }
+
+    #[test]
+    fn products_of_lobes_at_kappa_max_are_finite() {
+        // Issue 14 row 2: κ = 10²⁰ was accepted and made the product κ infinite and its
+        // scale NaN; `new` now stops at KAPPA_MAX, where every product is finite.
+        let k = crate::KAPPA_MAX;
+        let big = Vmf::new(Vec3::Y, k).unwrap();
+        let pairs = [
+            (Vmf::uniform(), big),
+            (big, big),
+            (big, Vmf::new(-Vec3::Y, k).unwrap()),
+            (big, Vmf::new(Vec3::new(0.0, 1.0, 1e-3), k).unwrap()),
+            (big, Vmf::new(Vec3::X, k).unwrap()),
+        ];
+        for (a, b) in pairs {
+            let (c, scale) = a.product(&b);
+            assert!(c.kappa().is_finite() && c.kappa() <= 2.0 * k, "{c:?}");
+            assert!(c.mu().is_normalized(), "{c:?}");
+            assert!(scale.is_finite() && scale >= 0.0, "{a:?} {b:?}: {scale}");
+            let (w, p) = c.sample_with_pdf(glam::Vec2::new(0.3, 0.6));
+            assert!(w.is_finite() && p.is_finite());
         }
     }
 

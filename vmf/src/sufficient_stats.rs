@@ -116,12 +116,21 @@ impl MapPrior {
     /// MCPG's distance prior (sec. 4 "Step 2", Alg. 2 line 7): r_p = 0 and
     /// N_p = max(`min_weight`, `scale` / `distance`²), where `distance` = |ȳ − x| (see
     /// [`SufficientStats::target_distance`]). The paper uses `scale` = 1; the authors' engine
-    /// 0.2-0.3 with `min_weight` = 10⁻⁴. A zero distance gives an infinite weight, which
-    /// [`SufficientStats::posterior_mean_cosine`] treats as "prior only".
+    /// 0.2-0.3 with `min_weight` = 10⁻⁴. A zero distance (or one whose square underflows)
+    /// gives an infinite weight, which [`SufficientStats::posterior_mean_cosine`] treats as
+    /// "prior only"; any other finite input gives a finite weight (saturating at `f32::MAX`).
     #[inline]
     #[must_use]
     pub fn inverse_square_distance(scale: f32, min_weight: f32, distance: f32) -> Self {
-        Self::uninformed((scale / (distance * distance)).max(min_weight))
+        let squared = distance * distance;
+        let weight = scale / squared;
+        // Saturate an overflowing quotient, but keep 1/0 = ∞ ("prior only").
+        let weight = if squared != 0.0 && weight > f32::MAX {
+            f32::MAX
+        } else {
+            weight
+        };
+        Self::uninformed(weight.max(min_weight))
     }
 }
 
@@ -250,9 +259,9 @@ impl SufficientStats {
             return true;
         }
         let beta = (alpha * weight / weight_sum).min(1.0);
-        let direction = (y - x).normalize_or_zero();
+        let direction = math::normalize_robust(y - x).unwrap_or(Vec3::ZERO);
         let mean_direction = if self.weight_sum > 0.0 {
-            (self.mean_target - x).try_normalize().unwrap_or(direction)
+            math::normalize_robust(self.mean_target - x).unwrap_or(direction)
         } else {
             direction
         };
@@ -289,27 +298,31 @@ impl SufficientStats {
     }
 
     /// Mean direction μ = (ȳ − x)/|ȳ − x| from shading point `x` (MCMM Alg. 2 line 5), or
-    /// `None` when the statistics are empty or ȳ coincides with `x`.
+    /// `None` when the statistics are empty, ȳ coincides with `x` or `x` is not finite.
+    /// Unit length to f32 precision however close ȳ is to `x` (and however far).
     #[inline]
     #[must_use]
     pub fn mean_direction(&self, x: Vec3) -> Option<Vec3> {
         if !self.is_valid() {
             return None;
         }
-        (self.mean_target - x).try_normalize()
+        math::normalize_robust(self.mean_target - x)
     }
 
     /// Distance |ȳ − x| from shading point `x` to the mean target, the input of distance
-    /// priors such as [`MapPrior::inverse_square_distance`].
+    /// priors such as [`MapPrior::inverse_square_distance`]. Accurate however far apart the
+    /// points are (|ȳ − x|² is not formed where it would overflow) and saturating at
+    /// `f32::MAX`, so finite points give a finite distance.
     #[inline]
     #[must_use]
     pub fn target_distance(&self, x: Vec3) -> f32 {
-        (self.mean_target - x).length()
+        math::length_robust(self.mean_target - x)
     }
 
     /// The MAP mean cosine r = (N² r̄ + N_p r_p)/(N² + N_p) (MCMM Alg. 2 line 6, MCPG Alg. 2
-    /// line 7), or with N instead of N² for [`PriorDecay::Count`]. r̄ is clamped to [0, 1]
-    /// first. An infinite N_p gives r_p; N = N_p = 0 gives 0.
+    /// line 7), or with N instead of N² for [`PriorDecay::Count`]. r̄ and r_p are clamped to
+    /// [0, 1] first (a NaN r_p counts as 0), so the result is finite whenever N_p is not NaN.
+    /// An infinite N_p gives r_p; N = N_p = 0 gives 0.
     #[inline]
     #[must_use]
     pub fn posterior_mean_cosine(&self, prior: MapPrior) -> f32 {
@@ -326,7 +339,9 @@ impl SufficientStats {
             PriorDecay::Count => n,
         };
         let prior_weight = prior.weight.max(0.0);
-        let prior_complement = 1.0 - prior.mean_cosine;
+        // `max` maps NaN to 0 (`clamp` would keep it); in-range values pass unchanged.
+        #[allow(clippy::manual_clamp)]
+        let prior_complement = 1.0 - prior.mean_cosine.max(0.0).min(1.0);
         if prior_weight == f32::INFINITY {
             return prior_complement;
         }
@@ -448,6 +463,35 @@ mod tests {
                     && s.mean_cosine().is_finite()
             );
         }
+    }
+
+    #[test]
+    fn tiny_and_huge_offsets_give_unit_mean_directions() {
+        // Issue 14 row 3: x = 0 towards (3e-22, 4e-22, 0) gave |μ| = 1.0011 (|ȳ − x|² is
+        // subnormal); offsets beyond 1.8·10¹⁹ gave no direction at all.
+        for (y, want) in [
+            (Vec3::new(3e-22, 4e-22, 0.0), Vec3::new(0.6, 0.8, 0.0)),
+            (Vec3::new(0.0, 3e-38, -4e-38), Vec3::new(0.0, 0.6, -0.8)),
+            (Vec3::new(3e37, -4e37, 0.0), Vec3::new(0.6, -0.8, 0.0)),
+        ] {
+            let mut s = SufficientStats::EMPTY;
+            assert!(s.update(Vec3::ZERO, y, 1.0, &FitParams::MCMM));
+            assert!(s.update(Vec3::ZERO, y, 1.0, &FitParams::MCPG));
+            assert!(s.mean_cosine() > 0.999_99, "{s:?}");
+            let mu = s.mean_direction(Vec3::ZERO).unwrap();
+            assert!((mu.length() - 1.0).abs() < 1e-6, "{y}: {mu}");
+            assert!((mu - want).length() < 1e-6, "{y}: {mu}");
+            let lobe = s.to_vmf(Vec3::ZERO, MapPrior::uninformed(0.2)).unwrap();
+            assert!(lobe.mu().is_normalized(), "{y}: {lobe:?}");
+        }
+        let s = SufficientStats {
+            mean_target: Vec3::X,
+            weight_sum: 1.0,
+            one_minus_mean_cosine: 0.1,
+            sample_count: 3,
+        };
+        assert_eq!(s.mean_direction(Vec3::new(f32::NAN, 0.0, 0.0)), None);
+        assert_eq!(s.mean_direction(Vec3::new(f32::INFINITY, 0.0, 0.0)), None);
     }
 
     #[test]

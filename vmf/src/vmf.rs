@@ -56,9 +56,13 @@ impl Vmf {
     /// Creates a lobe with mean direction `mu` and concentration `kappa`.
     ///
     /// `mu` need not be unit length; any finite non-zero vector is normalised, however long or
-    /// short. Errors: [`VmfError::MeanNotFinite`],
-    /// [`VmfError::MeanZeroLength`], [`VmfError::KappaNotFinite`], [`VmfError::KappaNegative`].
-    /// κ = 0 is allowed and is the uniform distribution.
+    /// short. κ must lie in [0, [`KAPPA_MAX`](crate::KAPPA_MAX)] = [0, 10⁶] (a lobe about
+    /// 1 mrad wide, narrower than anything a guide fits); κ = 0 is the uniform distribution.
+    /// The bound keeps [`Vmf::product`] finite: its κ' ≤ κ₀ + κ₁ and its scale stay in f32 range.
+    ///
+    /// # Errors
+    /// [`VmfError::MeanNotFinite`], [`VmfError::MeanZeroLength`], [`VmfError::KappaNotFinite`],
+    /// [`VmfError::KappaNegative`], [`VmfError::KappaAboveMax`].
     pub fn new(mu: Vec3, kappa: f32) -> Result<Self, VmfError> {
         if !mu.is_finite() {
             return Err(VmfError::MeanNotFinite);
@@ -68,6 +72,9 @@ impl Vmf {
         }
         if kappa < 0.0 {
             return Err(VmfError::KappaNegative);
+        }
+        if kappa > crate::KAPPA_MAX {
+            return Err(VmfError::KappaAboveMax);
         }
         // Scale by the largest component first so that squaring the length can neither
         // overflow (|μ| > 1.8·10¹⁹) nor underflow (|μ| < 3.7·10⁻²³).
@@ -92,7 +99,8 @@ impl Vmf {
     }
 
     /// Builds a lobe from parts the caller has already validated: `mu` unit length, `kappa`
-    /// finite and in [0, [`KAPPA_MAX`](crate::KAPPA_MAX)]. Debug builds assert both.
+    /// finite and ≥ 0 (at most [`KAPPA_MAX`](crate::KAPPA_MAX), or 2·`KAPPA_MAX` for a
+    /// product). Debug builds assert both.
     #[inline]
     #[must_use]
     pub(crate) fn from_unit_mean(mu: Vec3, kappa: f32) -> Self {
@@ -133,19 +141,22 @@ impl Vmf {
     /// Density of direction `w` (unit length) in solid angle measure, in sr⁻¹.
     ///
     /// Finite and ≥ 0 for every unit `w` and every valid lobe; exactly 1/(4π) when κ = 0. A
-    /// non-unit `w` is not renormalised (its distance to μ is used as is); NaN in `w` gives NaN.
+    /// non-unit `w` is not renormalised (its distance to μ is used as is, and a finite `w` so
+    /// far away that the squared distance overflows gives 0, or 1/(4π) at κ = 0); NaN in `w`
+    /// gives NaN.
     #[inline]
     #[must_use]
     pub fn pdf(&self, w: Vec3) -> f32 {
-        let distance_squared = (w - self.mu).length_squared();
+        // `min` keeps κ = 0 from multiplying an overflowed distance (0 · ∞ = NaN).
+        let distance_squared = (w - self.mu).length_squared().min(f32::MAX);
         normalization(self.kappa) * math::exp(-0.5 * self.kappa * distance_squared)
     }
 
     /// Draws a direction from two uniforms `u` in [0, 1)².
     ///
     /// `u.x` sets the azimuth φ = 2π u.x around μ, `u.y` the polar angle by inverting the CDF
-    /// of cos θ. The result is unit length to f32 precision. Uniforms outside [0, 1) are not
-    /// rejected; `u.y` is effectively clamped so the result stays on the sphere.
+    /// of cos θ. The result is unit length to f32 precision. Uniforms outside [0, 1) are
+    /// clamped into [0, 1 − 2⁻²⁴] (NaN counts as 0), so every `u` gives a unit direction.
     #[inline]
     #[must_use]
     pub fn sample(&self, u: Vec2) -> Vec3 {
@@ -164,12 +175,13 @@ impl Vmf {
         (w, normalization(self.kappa) * math::exp(self.kappa * r))
     }
 
-    /// Direction at `cos θ = 1 + r` and azimuth `2π u_phi` around μ.
+    /// Direction at `cos θ = 1 + r` and azimuth `2π u_phi` around μ (`u_phi` clamped like
+    /// [`clamp_uniform`]).
     #[inline(always)]
     pub(crate) fn direction_from(&self, r: f32, u_phi: f32) -> Vec3 {
         let cos_theta = 1.0 + r;
         let sin_theta = math::sqrt((-r * (2.0 + r)).max(0.0));
-        let (sin_phi, cos_phi) = math::sin_cos_turns(u_phi);
+        let (sin_phi, cos_phi) = math::sin_cos_turns(clamp_uniform(u_phi));
         Frame::from_normal(self.mu).to_world(Vec3::new(
             cos_phi * sin_theta,
             sin_phi * sin_theta,
@@ -183,6 +195,17 @@ impl Default for Vmf {
     fn default() -> Self {
         Self::uniform()
     }
+}
+
+/// The largest f32 below 1, 1 − 2⁻²⁴.
+const ONE_MINUS_HALF_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+
+/// A uniform clamped into [0, 1 − 2⁻²⁴]; NaN gives 0 (`max` returns its non-NaN operand).
+/// Leaves every value in [0, 1) unchanged, so in-range results are bit-identical.
+#[inline(always)]
+#[allow(clippy::manual_clamp)] // `clamp` would keep NaN
+pub(crate) fn clamp_uniform(u: f32) -> f32 {
+    u.max(0.0).min(ONE_MINUS_HALF_EPSILON)
 }
 
 /// C(κ) = g(−2κ)/(4π) with g(x) = x/expm1(x), g(0) = 1; κ/(2π) once e^{−2κ} vanishes, which
@@ -210,8 +233,11 @@ pub(crate) fn normalization(kappa: f32) -> f32 {
 /// - in the tail (u < ½, only when ξ > ½), u = (1 − ξ) + ξ e^{−2κ}, where 1 − ξ is exact, so
 ///   that 1 + x does not cancel as ξ → 1;
 /// - above [`KAPPA_SAMPLE_SATURATED`], e^{−2κ} vanishes: expm1(−2κ) = −1 and no `exp` is needed.
+///
+/// ξ is clamped into [0, 1 − 2⁻²⁴] first ([`clamp_uniform`]; NaN → 0), so no ξ gives NaN.
 #[inline(always)]
 pub(crate) fn cos_theta_minus_one(kappa: f32, xi: f32) -> f32 {
+    let xi = clamp_uniform(xi);
     if kappa < KAPPA_TINY {
         return (-2.0 * xi).clamp(-2.0, 0.0);
     }
@@ -263,6 +289,10 @@ mod tests {
             Err(VmfError::KappaNotFinite)
         );
         assert_eq!(Vmf::new(Vec3::Z, -1e-30), Err(VmfError::KappaNegative));
+        assert!(Vmf::new(Vec3::Z, crate::KAPPA_MAX).is_ok());
+        for kappa in [1.000_001e6, 1e20, f32::MAX] {
+            assert_eq!(Vmf::new(Vec3::Z, kappa), Err(VmfError::KappaAboveMax));
+        }
         let v = Vmf::new(Vec3::new(3.0, 0.0, 4.0), 2.0).unwrap();
         assert!((v.mu() - Vec3::new(0.6, 0.0, 0.8)).length() < 1e-7);
         assert_eq!(v.kappa(), 2.0);
@@ -302,7 +332,7 @@ mod tests {
 
     #[test]
     fn extreme_kappa_is_finite() {
-        for kappa in [0.0, 1e-38, 1e-8, 1.0, 1e3, 1e6, 1e12, f32::MAX] {
+        for kappa in [0.0, 1e-38, 1e-8, 1.0, 1e3, 1e5, crate::KAPPA_MAX] {
             let v = Vmf::new(Vec3::new(0.3, -0.4, 0.5), kappa).unwrap();
             for u in [
                 Vec2::ZERO,
@@ -317,6 +347,45 @@ mod tests {
                 assert!(p.is_finite() && p >= 0.0, "{kappa} {u}: {p}");
                 let q = v.pdf(w);
                 assert!(q.is_finite() && q >= 0.0);
+            }
+        }
+    }
+
+    #[test]
+    fn out_of_range_uniforms_are_clamped() {
+        // Issue 14 row 1: u.y just above 1 gave NaN for κ ≥ 16, NaN/∞ in u.x gave NaN.
+        for kappa in [0.0, 1e-8, 0.1, 5.0, 16.0, 50.0, 1e4, crate::KAPPA_MAX] {
+            let v = Vmf::new(Vec3::new(0.2, 0.3, -0.9), kappa).unwrap();
+            for u in [
+                Vec2::new(0.3, 1.000_000_1),
+                Vec2::new(0.3, 1.0),
+                Vec2::new(0.3, 7.0),
+                Vec2::new(0.3, -0.5),
+                Vec2::new(0.3, f32::NAN),
+                Vec2::new(0.3, f32::INFINITY),
+                Vec2::new(0.3, f32::NEG_INFINITY),
+                Vec2::new(f32::NAN, 0.5),
+                Vec2::new(f32::INFINITY, 0.5),
+                Vec2::new(f32::NEG_INFINITY, 0.5),
+                Vec2::new(1e30, 0.5),
+                Vec2::new(-3.5, 0.5),
+                Vec2::splat(f32::NAN),
+            ] {
+                let (w, p) = v.sample_with_pdf(u);
+                assert!(
+                    w.is_finite() && (w.length() - 1.0).abs() < 1e-6,
+                    "κ {kappa} u {u}: {w}"
+                );
+                assert!(p.is_finite() && p >= 0.0, "κ {kappa} u {u}: {p}");
+                // Clamped to the nearest end of [0, 1 − 2⁻²⁴], NaN to 0.
+                let clamp = |x: f32| {
+                    if x.is_nan() {
+                        0.0
+                    } else {
+                        x.clamp(0.0, 1.0 - f32::EPSILON / 2.0)
+                    }
+                };
+                assert_eq!(v.sample(u), v.sample(Vec2::new(clamp(u.x), clamp(u.y))));
             }
         }
     }

@@ -4,6 +4,9 @@ use bytemuck::{Pod, Zeroable};
 use mcg_vmf::glam::Vec3;
 use mcg_vmf::{MapPrior, SufficientStats, Vmf};
 
+#[cfg(feature = "std")]
+use crate::BufferError;
+
 /// MCMM's Markov chain state S = (ȳ, r̄, w̄, N, f) of one pixel (Dittebrandt et al. 2023,
 /// Table 1): the sufficient statistics of the vMF fit and the score f, a one-sample estimate of
 /// the pixel's direct illumination used for acceptance and resampling.
@@ -80,16 +83,37 @@ pub struct PixelStateBuffers {
 
 #[cfg(feature = "std")]
 impl PixelStateBuffers {
-    /// Two buffers of empty states.
-    #[must_use]
-    pub fn new(width: u32, height: u32) -> Self {
-        let n = width as usize * height as usize;
-        Self {
+    /// Two buffers of empty states, 2 × 28 bytes per pixel.
+    ///
+    /// # Errors
+    /// [`BufferError::DimensionAboveMax`] when `width` or `height` exceeds `i32::MAX` (pixels
+    /// are addressed with `i32` coordinates) or the two buffers would exceed `isize::MAX` bytes;
+    /// [`BufferError::AllocationFailed`] when the allocator cannot provide them (instead of
+    /// aborting the process).
+    pub fn new(width: u32, height: u32) -> Result<Self, BufferError> {
+        if width > i32::MAX as u32 || height > i32::MAX as u32 {
+            return Err(BufferError::DimensionAboveMax);
+        }
+        let n = (width as usize)
+            .checked_mul(height as usize)
+            .filter(|&n| {
+                n.checked_mul(2 * core::mem::size_of::<PixelState>())
+                    .is_some_and(|bytes| bytes <= isize::MAX as usize)
+            })
+            .ok_or(BufferError::DimensionAboveMax)?;
+        let buffer = || {
+            let mut v = std::vec::Vec::new();
+            v.try_reserve_exact(n)
+                .map_err(|_| BufferError::AllocationFailed)?;
+            v.resize(n, PixelState::EMPTY);
+            Ok(v)
+        };
+        Ok(Self {
             width,
             height,
-            previous: std::vec![PixelState::EMPTY; n],
-            current: std::vec![PixelState::EMPTY; n],
-        }
+            previous: buffer()?,
+            current: buffer()?,
+        })
     }
 
     /// Image width in pixels.
@@ -199,7 +223,7 @@ mod tests {
     #[test]
     fn buffers_swap_and_clip() {
         use mcg_vmf::glam::Vec2;
-        let mut b = PixelStateBuffers::new(4, 3);
+        let mut b = PixelStateBuffers::new(4, 3).unwrap();
         let mut s = PixelState::EMPTY;
         s.score = 2.0;
         b.set_current(3, 2, s);
@@ -220,5 +244,26 @@ mod tests {
             bytemuck::cast_slice::<PixelState, u8>(b.previous_states()).len(),
             12 * 28
         );
+    }
+
+    #[cfg(feature = "std")]
+    #[test]
+    fn oversized_buffers_are_an_error() {
+        // Issue 14: `new(u32::MAX, 1)` aborted the process on a 120 GB allocation.
+        assert_eq!(
+            PixelStateBuffers::new(u32::MAX, 1),
+            Err(BufferError::DimensionAboveMax)
+        );
+        assert_eq!(
+            PixelStateBuffers::new(1, 1 << 31),
+            Err(BufferError::DimensionAboveMax)
+        );
+        // 2³¹ − 1 pixels square is 1.3·10²⁰ bytes: above isize::MAX on every target.
+        assert_eq!(
+            PixelStateBuffers::new(i32::MAX as u32, i32::MAX as u32),
+            Err(BufferError::DimensionAboveMax)
+        );
+        let b = PixelStateBuffers::new(0, 5).unwrap();
+        assert_eq!(b.previous(0, 0), None);
     }
 }

@@ -52,7 +52,7 @@ impl GridState {
     };
 
     /// A state from fit statistics, an update time and a velocity ([`GridState::set_velocity`]
-    /// rules apply). N is clamped to 65535.
+    /// rules apply). N is clamped to 65535; a NaN or infinite `time` stores 0.
     #[inline]
     #[must_use]
     pub fn from_stats(stats: &SufficientStats, time: f32, velocity: Vec3) -> Self {
@@ -60,7 +60,7 @@ impl GridState {
             mean_target: stats.mean_target,
             weight_sum: stats.weight_sum,
             one_minus_mean_cosine: stats.one_minus_mean_cosine,
-            time,
+            time: if time.is_finite() { time } else { 0.0 },
             velocity: [0; 3],
             sample_count: stats.sample_count.min(u16::MAX as u32) as u16,
         };

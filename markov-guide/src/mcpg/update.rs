@@ -69,9 +69,9 @@ pub fn update_from<const N: usize>(
 /// store ("grid.store", line 12) — at a freshly chosen level and corner — or `None` when the
 /// transition was rejected.
 ///
-/// Bad input never poisons a state: an estimate that is NaN, infinite or negative is never
-/// accepted; non-finite points leave the statistics unchanged; a zero or non-finite frame time
-/// stores v = 0.
+/// Bad input never poisons a state: an estimate that is NaN, infinite or negative, or a `now`
+/// that is NaN or infinite, is never accepted; non-finite points leave the statistics
+/// unchanged; a zero or non-finite frame time (or velocity) stores v = 0.
 #[inline]
 #[must_use]
 pub fn update(
@@ -82,7 +82,7 @@ pub fn update(
     params: &McpgParams,
 ) -> Option<GridState> {
     let f = observation.estimate;
-    if !(0.0..f32::INFINITY).contains(&f) {
+    if !(0.0..f32::INFINITY).contains(&f) || !observation.now.is_finite() {
         return None;
     }
     // u < f/(sum/N) ⇔ u·(sum/N) < f; an empty neighbourhood (mean 0) accepts any f > 0.
@@ -187,6 +187,13 @@ mod tests {
         o.next = Vec3::splat(f32::NAN);
         let new = update(&s, 1.0, &o, 0.0, &p).unwrap();
         assert!(new.mean_target.is_finite());
+        // Issue 14 row 9: a NaN or infinite `now` was stored as T.
+        for now in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            let mut o = observation(1.0);
+            o.now = now;
+            assert!(update(&s, 1.0, &o, 0.0, &p).is_none(), "{now}");
+            assert_eq!(GridState::from_stats(&s.stats(), now, Vec3::ZERO).time, 0.0);
+        }
     }
 
     #[test]

@@ -139,8 +139,9 @@ impl McmmToyRenderer {
     ///
     /// # Panics
     /// When the tile is empty or larger than 32 pixels, when SSMIS is asked for with a tile size
-    /// that is not a power of two, or when TSMIS is asked for with more steps than the tile has
-    /// pixels.
+    /// that is not a power of two, when TSMIS is asked for with more steps than the tile has
+    /// pixels, or when the image's state buffers cannot be allocated
+    /// ([`PixelStateBuffers::new`]).
     #[must_use]
     pub fn new(config: McmmToyConfig) -> Self {
         let size = config.tile_size();
@@ -157,7 +158,8 @@ impl McmmToyRenderer {
         let n = (size * config.tiles_x * config.tiles_y) as usize;
         Self {
             config,
-            buffers: PixelStateBuffers::new(config.width(), config.height()),
+            buffers: PixelStateBuffers::new(config.width(), config.height())
+                .expect("toy image too large for its state buffers"),
             chains: std::vec![Chain::default(); n],
         }
     }
