@@ -32,7 +32,7 @@
 //! a true average while the count N grows, then hysteresis (N_max − 1)/N_max; N_max = 63 static
 //! or 10 dynamic (Table 3). Re-encoding rounds with [`RoundingMode`]: stochastic by default
 //! (unbiased, no stall), ADGI's round-down as an option (App. B; it stalls below a rising
-//! target — see `mcg-color-codec`'s `MovingAverage` docs and ANCHORS).
+//! target — see `mcg-color-codec`'s `MovingAverage` docs).
 
 use core::sync::atomic::{AtomicU32, Ordering};
 
@@ -954,7 +954,7 @@ mod tests {
     /// 2.0. Stochastic rounding (the default) ends within 3 % of 2.0 (mean of the last 500
     /// words; observed 2.001, 1.999, 1.999); ADGI's round-down stalls where one step is below a
     /// quantum and never reaches it: observed 1.21 on the 9-bit R and G (1.65× too dark) and 0.86
-    /// on the 8-bit B (2.3×), as `mcg-color-codec`'s `MovingAverage` docs and ANCHORS predict.
+    /// on the 8-bit B (2.3×), as `mcg-color-codec`'s `MovingAverage` docs predict.
     #[test]
     fn stochastic_rounding_does_not_stall_round_down_does() {
         let target = Vec3::splat(2.0);

@@ -43,13 +43,13 @@ pub struct QueryConfig {
     /// `probeViewBias`, commonly 0.1; default 0.1).
     pub view_bias: f32,
     /// Wrap shading: weight each probe by `((n·d + 1)/2)² + 0.2`, `d` the unit direction from the
-    /// shading point to the probe (DDGI sec. 4.2 "backface", RTXGI; ANCHORS). Default on.
+    /// shading point to the probe (DDGI sec. 4.2 "backface"; the RTXGI DDGI SDK). Default on.
     pub wrap_shading: bool,
     /// Chebyshev visibility from the probe's distance moments (DDGI sec. 4.2): with `t̄, t̄²` the
     /// moments toward the point and `r` its distance, weight `(σ²/(σ² + (r − t̄)²))³` when
     /// `r > t̄`, `σ² = |t̄² − t̄²|`. Default on.
     pub visibility: bool,
-    /// Floor of the Chebyshev weight (RTXGI: 0.05; ANCHORS).
+    /// Floor of the Chebyshev weight (the RTXGI DDGI SDK uses 0.05).
     pub chebyshev_floor: f32,
     /// Weights below this are crushed by `w³/threshold²` (RTXGI: 0.2), which darkens leaks
     /// through nearly invisible probes without a discontinuity.

@@ -7,7 +7,7 @@ use crate::{Vmf, VmfError, kappa_from_mean_cosine_exact, math, mean_cosine_from_
 
 /// κ of the vMF lobe that approximates the clamped cosine max(0, n·ω) around a normal n.
 ///
-/// This is the value Open PGL ships (`ApplyCosineProduct`, ANCHORS "vMF lobes"). It is close to
+/// This is the value Open PGL ships (`ApplyCosineProduct`). It is close to
 /// the L² optimum over the sphere, min over (κ, a) of ∫ (max(0, cos θ) − a e^{κ(cos θ − 1)})² dω,
 /// which lies at κ ≈ 2.145 with a ≈ 1.18 (the L² error differs by 0.4 %). Moment matching instead
 /// (A₃(κ) = 2/3, the mean cosine of cos θ/π on the hemisphere) gives κ ≈ 2.95 and a lobe that
@@ -23,7 +23,7 @@ impl Vmf {
     /// scale = C(κ₀) C(κ₁) / C(κ') · e^{κ' − κ₀ − κ₁},   C(κ) = κ / (2π (1 − e^{−2κ}))
     /// ```
     ///
-    /// (ANCHORS "vMF lobes"; the exponent κ₀(μ₀·μ' − 1) + κ₁(μ₁·μ' − 1) simplifies to
+    /// (Jakob 2012; the exponent κ₀(μ₀·μ' − 1) + κ₁(μ₁·μ' − 1) simplifies to
     /// κ' − κ₀ − κ₁ ≤ 0, so the scale never overflows). `scale` is the integral of the product
     /// over the sphere. When the lobes cancel exactly (m = 0) the product is uniform with μ' = μ₀.
     /// κ' ≤ κ₀ + κ₁, so the product of two lobes from [`Vmf::new`] (κ ≤

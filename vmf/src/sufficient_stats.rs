@@ -44,7 +44,7 @@ impl FitParams {
         mean_cosine_update: MeanCosineUpdate::Resultant,
     };
 
-    /// The MCPG authors' engine values (ANCHORS "MCPG in practice"): N_max = 1024,
+    /// The MCPG authors' engine values (merian-quake, their open-source Quake renderer): N_max = 1024,
     /// α_min = 0.01, projected mean cosine as in MCPG Alg. 3 line 9.
     pub const MCPG: Self = Self {
         max_count: 1024,

@@ -20,7 +20,7 @@ pub const UNIFORM_SPHERE_PDF: f32 = 0.25 * FRAC_1_PI;
 ///             = g(−2κ)/(4π) · e^{−κ |ω − μ|² / 2},    g(x) = x / (eˣ − 1)
 /// ```
 ///
-/// The second form (ANCHORS "vMF lobes"; Jakob 2012, *Numerically stable sampling of the von
+/// The second form (Jakob 2012, *Numerically stable sampling of the von
 /// Mises-Fisher distribution on S²*) is what [`Vmf::pdf`] evaluates: `g` uses `expm1`, so the
 /// density is finite for every κ in [0, 10⁶] and more, tends to exactly 1/(4π) as κ → 0, and
 /// `|ω − μ|²` keeps full precision near the peak where `μ·ω − 1` would cancel. This is the
