@@ -79,6 +79,21 @@ impl ComputeKernel {
     }
 }
 
+/// `Ok` when `available` meets every limit of [`NEEDED_LIMITS`], else the first one it misses.
+fn check_limits(available: &wgpu::Limits) -> Result<(), GpuError> {
+    for (limit, get, required) in NEEDED_LIMITS {
+        let have = get(available);
+        if have < required {
+            return Err(GpuError::LimitTooLow {
+                limit,
+                required,
+                available: have,
+            });
+        }
+    }
+    Ok(())
+}
+
 impl GpuContext {
     /// Creates a headless instance, adapter, device and queue.
     ///
@@ -102,16 +117,7 @@ impl GpuContext {
             }
         })?;
         let available = adapter.limits();
-        for (limit, get, required) in NEEDED_LIMITS {
-            let have = get(&available);
-            if have < required {
-                return Err(GpuError::LimitTooLow {
-                    limit,
-                    required,
-                    available: have,
-                });
-            }
-        }
+        check_limits(&available)?;
         // WebGPU's default limits, lowered only where the adapter offers less (a software
         // or downlevel adapter), never raised: the kernels fit in what is checked above.
         let limits = wgpu::Limits::default().using_resolution(available.clone());
@@ -146,17 +152,7 @@ impl GpuContext {
     /// # Errors
     /// [`GpuError::LimitTooLow`] when the device's limits are below what the kernels need.
     pub fn from_device(device: wgpu::Device, queue: wgpu::Queue) -> Result<Self, GpuError> {
-        let available = device.limits();
-        for (limit, get, required) in NEEDED_LIMITS {
-            let have = get(&available);
-            if have < required {
-                return Err(GpuError::LimitTooLow {
-                    limit,
-                    required,
-                    available: have,
-                });
-            }
-        }
+        check_limits(&device.limits())?;
         Ok(Self {
             adapter: None,
             device,

@@ -268,10 +268,10 @@ impl<T: Pod> GpuHashTable<T> {
     /// # Errors
     /// [`GpuError::LengthMismatch`] unless `ages` has one word per slot.
     pub fn write_ages(&self, ctx: &GpuContext, ages: &[u32]) -> Result<(), GpuError> {
-        let capacity = self.params.capacity as usize;
-        GpuError::check_len(capacity, ages.len())?;
-        let mut words = self.read_checksums(ctx)?;
-        words.extend_from_slice(ages);
-        ctx.write(&self.words, &words)
+        GpuError::check_len(self.params.capacity as usize, ages.len())?;
+        let offset = u64::from(self.params.age_offset) * size_of::<u32>() as u64;
+        ctx.queue()
+            .write_buffer(self.words.raw(), offset, bytemuck::cast_slice(ages));
+        Ok(())
     }
 }
