@@ -701,12 +701,6 @@ impl<S: Scatter> GuidedVertex<'_, S> {
             (Hemisphere::CosineProduct, Some(n)) => Vmf::clamped_cosine(n).ok(),
             _ => None,
         };
-        // The product's lobe only (Vmf::product also integrates the product, which costs
-        // three normalisations we do not need): μ' ∝ κμ + κ_c n, κ' = |κμ + κ_c n|.
-        let times_cosine = |lobe: Vmf, c: &Vmf| -> Vmf {
-            let m = lobe.mu() * lobe.kappa() + c.mu() * c.kappa();
-            Vmf::new(m, m.length()).unwrap_or(lobe)
-        };
         for (k, s) in self.set.states().iter().enumerate() {
             let w = s.resampling_weight();
             if !(w > 0.0) {
@@ -715,8 +709,9 @@ impl<S: Scatter> GuidedVertex<'_, S> {
             let share = w / total;
             match s.lobe(x, distance_prior(s, x, params)) {
                 Some(lobe) => {
+                    // The product's lobe only, μ' ∝ κμ + κ_c n, κ' = |κμ + κ_c n|.
                     let lobe = match &cosine {
-                        Some(c) => times_cosine(lobe, c),
+                        Some(c) => lobe.product_lobe(c),
                         None => lobe,
                     };
                     self.lobes[k] = lobe;
