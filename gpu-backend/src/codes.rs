@@ -4,9 +4,9 @@
 
 use mcg_color_codec::Rounding;
 use mcg_hashgrid::{BucketHash, Insert};
-use mcg_markov_guide::mcpg::{DiscardRule, Hemisphere, Transition};
 #[cfg(doc)]
 use mcg_markov_guide::mcpg::Traced;
+use mcg_markov_guide::mcpg::{DiscardRule, Hemisphere, Transition};
 use mcg_vmf::{MeanCosineUpdate, PriorDecay};
 
 /// `HASHGRID_HASH_XOR_PRIMES`: [`BucketHash::XorPrimes`].
@@ -104,7 +104,10 @@ pub const WGSL_CODES: &[(&str, u32)] = &[
     ("MCPG_SCATTER_ISOTROPIC", MCPG_SCATTER_ISOTROPIC),
     ("MCPG_SCATTER_CUSTOM", MCPG_SCATTER_CUSTOM),
     ("MCPG_HEMISPHERE_SPHERE", MCPG_HEMISPHERE_SPHERE),
-    ("MCPG_HEMISPHERE_COSINE_PRODUCT", MCPG_HEMISPHERE_COSINE_PRODUCT),
+    (
+        "MCPG_HEMISPHERE_COSINE_PRODUCT",
+        MCPG_HEMISPHERE_COSINE_PRODUCT,
+    ),
     ("MCPG_DISCARD_PAPER", MCPG_DISCARD_PAPER),
     ("MCPG_DISCARD_ENGINE", MCPG_DISCARD_ENGINE),
     ("MCPG_TRACED_HIT", MCPG_TRACED_HIT),

@@ -782,7 +782,10 @@ fn hand_written_wgsl() -> Vec<(PathBuf, String)> {
     }
     let mut out = Vec::new();
     for dir in ["src/shaders", "src/guides"] {
-        walk(&PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(dir), &mut out);
+        walk(
+            &PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(dir),
+            &mut out,
+        );
     }
     out.sort();
     out

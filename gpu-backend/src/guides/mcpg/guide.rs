@@ -34,7 +34,8 @@ pub struct McpgReadBack {
     pub adaptive_checksums: Vec<u32>,
     /// The static grid's checksum words.
     pub static_checksums: Vec<u32>,
-    /// The adaptive grid's age words (the frame each slot was last used).
+    /// The adaptive grid's age words (the frame each slot was last used; empty without age
+    /// tracking).
     pub adaptive_ages: Vec<u32>,
     /// The static grid's age words.
     pub static_ages: Vec<u32>,
@@ -138,26 +139,24 @@ impl GpuMcpgGuide {
                     storage(Self::GUIDE_WORDS_BINDING),
                 ],
             });
-        let bind_group = ctx
-            .device()
-            .create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("mcg::mcpg"),
-                layout: &layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: Self::PARAMS_BINDING,
-                        resource: params_buffer.raw().as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: Self::TABLE_WORDS_BINDING,
-                        resource: table_words.raw().as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: Self::GUIDE_WORDS_BINDING,
-                        resource: guide_words.raw().as_entire_binding(),
-                    },
-                ],
-            });
+        let bind_group = ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("mcg::mcpg"),
+            layout: &layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: Self::PARAMS_BINDING,
+                    resource: params_buffer.raw().as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: Self::TABLE_WORDS_BINDING,
+                    resource: table_words.raw().as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: Self::GUIDE_WORDS_BINDING,
+                    resource: guide_words.raw().as_entire_binding(),
+                },
+            ],
+        });
         Ok(Self {
             config: *config,
             params,
@@ -217,8 +216,11 @@ impl GpuMcpgGuide {
     /// `queue.write_buffer`, so it applies to work submitted after this call.
     pub fn set_camera(&mut self, ctx: &GpuContext, camera: Vec3) {
         self.params.camera = camera;
-        ctx.queue()
-            .write_buffer(self.params_buffer.raw(), 0, bytemuck::bytes_of(&self.params));
+        ctx.queue().write_buffer(
+            self.params_buffer.raw(),
+            0,
+            bytemuck::bytes_of(&self.params),
+        );
     }
 
     fn maintenance(&self, ctx: &GpuContext) -> Result<&Maintenance, GpuError> {
@@ -353,14 +355,15 @@ impl GpuMcpgGuide {
         } else {
             0
         };
+        let aged = if p.age_tracking != 0 { 1 } else { 0 };
         Ok(McpgReadBack {
             frame: words[codes::MCPG_FRAME_WORD as usize],
             adaptive_states: states(p.adaptive_states, ca),
             static_states: states(p.static_states, cs),
             adaptive_checksums: table[range(p.adaptive_table.checksum_offset, ca)].to_vec(),
             static_checksums: table[range(p.static_table.checksum_offset, cs)].to_vec(),
-            adaptive_ages: table[range(p.adaptive_table.age_offset, ca)].to_vec(),
-            static_ages: table[range(p.static_table.age_offset, cs)].to_vec(),
+            adaptive_ages: table[range(p.adaptive_table.age_offset, aged * ca)].to_vec(),
+            static_ages: table[range(p.static_table.age_offset, aged * cs)].to_vec(),
             cache_cells: bytemuck::pod_collect_to_vec(&words[range(p.cache_cells, 4 * cc)]),
             cache_checksums: table[range(p.cache_table.checksum_offset, cc)].to_vec(),
         })
