@@ -325,6 +325,19 @@ impl GpuMcpgGuide {
         Ok(())
     }
 
+    /// Empties the grids and the cache and sets the time back to frame 0, keeping the buffers,
+    /// the bind group and the pipelines (a fresh guide without rebuilding the renderer's
+    /// pipelines). Recorded with `clear_buffer` into an encoder of its own and submitted.
+    pub fn reset(&mut self, ctx: &GpuContext) {
+        let mut encoder = ctx
+            .device()
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        encoder.clear_buffer(self.table_words.raw(), 0, None);
+        encoder.clear_buffer(self.guide_words.raw(), 0, None);
+        ctx.queue().submit([encoder.finish()]);
+        self.frame = 0;
+    }
+
     /// The hash words buffer (checksums and ages of the three tables).
     #[must_use]
     pub fn table_words(&self) -> &GpuBuffer<u32> {
