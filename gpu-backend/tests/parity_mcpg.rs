@@ -87,7 +87,13 @@ fn random_step(rng: &mut impl Rng) -> Step {
         Vec3::new(u(), u(), u()) * 2.0
     };
     let kind = u();
-    let light = Vec3::new(0.4 + 0.2 * u(), 0.4 + 0.2 * u(), 1.8);
+    // Hits on the lights above, or on the plane itself, where the cache holds what the
+    // plane's vertices added in earlier frames.
+    let (light, hit_normal) = if u() < 0.4 {
+        (Vec3::new(0.45 + 0.1 * u(), 0.45 + 0.1 * u(), 0.0), Vec3::Z)
+    } else {
+        (Vec3::new(0.4 + 0.2 * u(), 0.4 + 0.2 * u(), 1.8), -Vec3::Z)
+    };
     let observation = if kind < 0.15 {
         VertexObservation::escaped(Vec3::splat(u()), weight)
     } else {
@@ -101,7 +107,7 @@ fn random_step(rng: &mut impl Rng) -> Step {
         VertexObservation {
             traced: Traced::Hit {
                 position: light,
-                normal: -Vec3::Z,
+                normal: hit_normal,
                 emitted,
                 previous_position,
             },
@@ -291,6 +297,13 @@ fn serial_frames_match_the_cpu_guide() {
             gpu.end_frame(ctx).unwrap();
             compare_tables(&format!("{name} after frame {frame}"), &mut cpu, &gpu, ctx);
         }
+        if let Some(cache) = cpu.cache() {
+            let cached = cache.cells().iter().filter(|c| c.weight > 0.0).count();
+            assert!(
+                cached > 10,
+                "{name}: only {cached} cache cells hold radiance"
+            );
+        }
         eprintln!("{name}: transitions stored/dropped/rejected/discarded {seen:?}, lobes {lobes}");
         assert!(seen[Transition::Stored as usize] > 20, "{name}: {seen:?}");
         assert!(seen[Transition::Rejected as usize] > 10, "{name}: {seen:?}");
@@ -398,4 +411,54 @@ fn torn_states_are_detected_and_read_as_empty() {
     let loads = steps.run(ctx, &gpu, "mcpg_loads", &none, 4, 1);
     assert_eq!(loads[0].selected, 0, "a torn state must not load");
     assert_eq!(loads[0].weight_sum, 0.0);
+}
+
+/// Hypothesis: `mcpg_volume_vertex` puts the CPU's key direction into a volume vertex
+/// (`Vertex::volume`, MCPG sec. 4's jittered reverse view direction): 256 views and jitters,
+/// each within 4 ε of the CPU's (the cosine hemisphere's twin rounds the same operations; a
+/// compiler may fuse some of them).
+#[test]
+fn volume_vertices_take_the_cpus_key_direction() {
+    let Some((ctx, mut rng)) =
+        common::gpu_and_rng("volume_vertices_take_the_cpus_key_direction", 0x766f6c)
+    else {
+        return;
+    };
+    let (_, config) = configs()[0];
+    let gpu = GpuMcpgGuide::new(ctx, &config).unwrap();
+    let steps = Steps::new(ctx, &gpu, false);
+    let cases: Vec<(Vec3, Vec3, glam::Vec2)> = (0..256)
+        .map(|_| {
+            let view = common::random_unit(&mut rng);
+            let jitter = glam::Vec2::new(rng.random(), rng.random());
+            (
+                Vec3::new(rng.random(), rng.random(), rng.random()),
+                view,
+                jitter,
+            )
+        })
+        .collect();
+    let inputs: Vec<StepInput> = cases
+        .iter()
+        .map(|&(p, view, jitter)| {
+            let mut input = StepInput::default();
+            input.vertex.position = p;
+            input.vertex.normal = view;
+            input.sample = [0.0, jitter.x, jitter.y, 0.0];
+            input
+        })
+        .collect();
+    let outputs = steps.run(ctx, &gpu, "mcpg_volume_keys", &inputs, inputs.len(), 4);
+    for ((p, view, jitter), out) in cases.iter().zip(&outputs) {
+        let cpu = Vertex::volume(*p, *view, *jitter);
+        assert!(cpu.normal.is_none());
+        assert!(
+            (cpu.key_direction - out.direction).abs().max_element() <= 4.0 * f32::EPSILON,
+            "{view} {jitter}: {} vs {}",
+            cpu.key_direction,
+            out.direction
+        );
+        assert_eq!(out.selected, 0, "a volume vertex has no normal");
+        assert_eq!(out.lobe, codes::MCPG_SCATTER_ISOTROPIC);
+    }
 }

@@ -8,7 +8,7 @@
 #import mcg::mcpg::{
     McpgBeginUniforms, McpgFinishUniforms, McpgGuidedVertex, McpgObservation, McpgSampleUniforms,
     McpgVertex, mcpg_begin, mcpg_finish, mcpg_load_state, mcpg_pdf, mcpg_sample,
-    mcpg_store_state
+    mcpg_store_state, mcpg_volume_vertex
 }
 
 struct StepInput {
@@ -118,5 +118,19 @@ fn mcpg_loads() {
         let ok = mcpg_load_state(false, i, &s);
         outputs[i].selected = select(0u, 1u, ok);
         outputs[i].weight_sum = s.weight_sum;
+    }
+}
+
+// `mcpg_volume_vertex(position, view = vertex.normal, jitter = sample.yz)`: the key direction,
+// `has_normal` in `selected` and the scatter code in `lobe`.
+@compute @workgroup_size(MCG_WORKGROUP_SIZE)
+fn mcpg_volume_keys(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = mcg_invocation_index(id, groups);
+    if i < arrayLength(&inputs) {
+        let input = inputs[i];
+        let v = mcpg_volume_vertex(input.vertex.position, input.vertex.normal, input.sample.yz);
+        outputs[i].direction = v.key_direction;
+        outputs[i].selected = v.has_normal;
+        outputs[i].lobe = v.scatter;
     }
 }
