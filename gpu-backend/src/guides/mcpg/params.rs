@@ -218,3 +218,52 @@ impl McpgGpuParams {
         ))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mcg_markov_guide::mcpg::CacheConfig;
+
+    /// The README's memory figure: `GuideConfig::PAPER` (2²⁰ + 2¹⁶ grid slots at 44 bytes,
+    /// 2¹⁶ cache slots at 40, a 16-byte header) takes 51 642 384 bytes.
+    #[test]
+    fn paper_configuration_takes_the_documented_memory() {
+        let (_, sizes) = McpgGpuParams::new(&GuideConfig::PAPER).unwrap();
+        let bytes = 4 * (sizes.table_words + sizes.guide_words);
+        let slots = (1u64 << 20) + (1 << 16);
+        assert_eq!(bytes, 44 * slots + 40 * (1 << 16) + 16);
+        assert_eq!(bytes, 51_642_384);
+    }
+
+    #[test]
+    fn invalid_configurations_are_rejected_as_the_cpu_guide_rejects_them() {
+        let mut c = GuideConfig::PAPER;
+        c.static_capacity = 4;
+        assert_eq!(
+            McpgGpuParams::new(&c).unwrap_err(),
+            GuideError::Table(TableError::MaxProbesAboveCapacity)
+        );
+        let mut c = GuideConfig::PAPER;
+        c.environment_distance = f32::NAN;
+        assert_eq!(
+            McpgGpuParams::new(&c).unwrap_err(),
+            GuideError::EnvironmentDistanceNotPositive
+        );
+        let mut c = GuideConfig::PAPER;
+        c.cache = Some(CacheConfig {
+            accumulation: 0.0,
+            ..CacheConfig::DEFAULT
+        });
+        assert!(matches!(
+            McpgGpuParams::new(&c).unwrap_err(),
+            GuideError::Params(_)
+        ));
+        let mut c = GuideConfig::PAPER;
+        c.params.bsdf_probability = 2.0;
+        assert!(mcg_markov_guide::mcpg::Guide::new(c).is_err());
+        assert!(matches!(
+            McpgGpuParams::new(&c).unwrap_err(),
+            GuideError::Params(_)
+        ));
+    }
+}
