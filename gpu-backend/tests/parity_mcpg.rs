@@ -285,7 +285,7 @@ fn serial_frames_match_the_cpu_guide() {
             let batch: Vec<Step> = (0..STEPS_PER_FRAME)
                 .map(|_| random_step(&mut rng))
                 .collect();
-            let inputs: Vec<StepInput> = batch.iter().map(Step::to_gpu).collect();
+            let inputs: Vec<StepInput> = batch.iter().map(Step::gpu_input).collect();
             let outputs = steps.run(ctx, &gpu, "mcpg_steps_serial", &inputs, inputs.len(), 1);
             for (i, (step, out)) in batch.iter().zip(&outputs).enumerate() {
                 let label = format!("{name} frame {frame} step {i}");
@@ -335,7 +335,7 @@ fn parallel_vertices_match_the_cpu_guide() {
         let batch: Vec<Step> = (0..STEPS_PER_FRAME)
             .map(|_| random_step(&mut rng))
             .collect();
-        let inputs: Vec<StepInput> = batch.iter().map(Step::to_gpu).collect();
+        let inputs: Vec<StepInput> = batch.iter().map(Step::gpu_input).collect();
         let outputs = steps.run(ctx, &gpu, "mcpg_steps_serial", &inputs, inputs.len(), 1);
         for (step, out) in batch.iter().zip(&outputs) {
             compare_step(name, out, &cpu, step, true);
@@ -344,7 +344,7 @@ fn parallel_vertices_match_the_cpu_guide() {
         gpu.end_frame(ctx).unwrap();
     }
     let batch: Vec<Step> = (0..512).map(|_| random_step(&mut rng)).collect();
-    let inputs: Vec<StepInput> = batch.iter().map(Step::to_gpu).collect();
+    let inputs: Vec<StepInput> = batch.iter().map(Step::gpu_input).collect();
     let outputs = steps.run(ctx, &gpu, "mcpg_sample_only", &inputs, inputs.len(), 8);
     let mut guided = 0;
     for (i, (step, out)) in batch.iter().zip(&outputs).enumerate() {

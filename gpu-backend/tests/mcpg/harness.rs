@@ -93,7 +93,7 @@ pub struct Step {
 }
 
 impl Step {
-    pub fn to_gpu(&self) -> StepInput {
+    pub fn gpu_input(&self) -> StepInput {
         let v = &self.vertex;
         let vertex = VertexGpu {
             position: v.position,

@@ -100,7 +100,7 @@ impl GpuMcpgGuide {
     /// [`GpuError::GuideTooLarge`] when a buffer exceeds the device's binding size.
     pub fn new(ctx: &GpuContext, config: &GuideConfig) -> Result<Self, GpuError> {
         let (params, sizes) = McpgGpuParams::new(config).map_err(GpuError::Guide)?;
-        let maximum = u64::from(ctx.device().limits().max_storage_buffer_binding_size);
+        let maximum = ctx.device().limits().max_storage_buffer_binding_size;
         for words in [sizes.table_words, sizes.guide_words] {
             let bytes = 4 * words;
             if bytes > maximum {
