@@ -5,6 +5,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
+use common::{furnace, scenes_dir};
 use glam::Vec3;
 use mcg_demo::render::bvh::Hit;
 use mcg_demo::render::cpu::{
@@ -15,7 +16,6 @@ use mcg_demo::render::material::BsdfSample;
 use mcg_demo::render::scene::{SceneError, SceneFile, frame_time};
 use mcg_demo::render::scene_generator::{DOOR_OPENS_AT_FRAME, SCENE_NAMES, built_in_scenes};
 use mcg_demo::render::{Device, RenderArgs, render, write_outputs};
-use common::{furnace, scenes_dir};
 use mcg_tests::RunningStats;
 use statrs::distribution::{ContinuousCDF, Normal};
 

@@ -229,9 +229,11 @@ impl GpuTracer {
             required_limits: limits,
             ..Default::default()
         };
-        let (device, queue) = pollster::block_on(adapter.request_device(&descriptor))
-            .map_err(|e| GpuError::RequestDevice {
-                reason: e.to_string(),
+        let (device, queue) =
+            pollster::block_on(adapter.request_device(&descriptor)).map_err(|e| {
+                GpuError::RequestDevice {
+                    reason: e.to_string(),
+                }
             })?;
         Self::on(GpuContext::from_device(device, queue)?)
     }
@@ -391,24 +393,34 @@ impl GpuTracer {
             texture_count: scene.textures.len() as u32,
             ..GpuParams::default()
         };
-        let bind_group = self.bind_group(&self.render, &[
-            self.params.raw(),
-            scene.nodes.raw(),
-            scene.triangles.raw(),
-            scene.materials.raw(),
-            scene.emitters.raw(),
-            scene.uvs.raw(),
-            scene.textures.raw(),
-            scene.texels.raw(),
-            image.raw(),
-        ]);
+        let bind_group = self.bind_group(
+            &self.render,
+            &[
+                self.params.raw(),
+                scene.nodes.raw(),
+                scene.triangles.raw(),
+                scene.materials.raw(),
+                scene.emitters.raw(),
+                scene.uvs.raw(),
+                scene.textures.raw(),
+                scene.texels.raw(),
+                image.raw(),
+            ],
+        );
         let tiles: Vec<(u32, u32)> = (0..height.div_ceil(TILE))
             .flat_map(|ty| (0..width.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
             .collect();
-        let max_groups = self.ctx.device().limits().max_compute_workgroups_per_dimension;
+        let max_groups = self
+            .ctx
+            .device()
+            .limits()
+            .max_compute_workgroups_per_dimension;
         let groups = TILE.div_ceil(GROUP);
         if groups > max_groups {
-            return Err(format!("{groups} workgroups per dimension exceed this GPU's {max_groups}").into());
+            return Err(format!(
+                "{groups} workgroups per dimension exceed this GPU's {max_groups}"
+            )
+            .into());
         }
         let scope = self
             .ctx
@@ -460,7 +472,9 @@ impl GpuTracer {
             return Err(format!("the GPU tracer failed: {error}").into());
         }
         let seconds = match &self.timer {
-            Some(timer) if timed_tiles == tiles.len() as u32 => timer.read(&self.ctx, timed_tiles)?,
+            Some(timer) if timed_tiles == tiles.len() as u32 => {
+                timer.read(&self.ctx, timed_tiles)?
+            }
             _ => wall,
         };
         let texels = self.ctx.read_back(image)?;
@@ -479,18 +493,25 @@ impl GpuTracer {
     pub fn trace_rays(&self, rays: &[GpuRay]) -> Result<Vec<GpuHit>> {
         let scene = self.scene()?;
         let groups = (rays.len() as u32).div_ceil(RAY_GROUP).max(1);
-        let max_groups = self.ctx.device().limits().max_compute_workgroups_per_dimension;
+        let max_groups = self
+            .ctx
+            .device()
+            .limits()
+            .max_compute_workgroups_per_dimension;
         if groups > max_groups {
             return Err(format!("{} rays exceed one dispatch row", rays.len()).into());
         }
         let queries = self.ctx.storage_buffer("mcg-demo rays", rays);
         let hits: GpuBuffer<GpuHit> = self.ctx.zeroed_buffer("mcg-demo hits", rays.len());
-        let bind_group = self.bind_group(&self.rays, &[
-            scene.nodes.raw(),
-            scene.triangles.raw(),
-            queries.raw(),
-            hits.raw(),
-        ]);
+        let bind_group = self.bind_group(
+            &self.rays,
+            &[
+                scene.nodes.raw(),
+                scene.triangles.raw(),
+                queries.raw(),
+                hits.raw(),
+            ],
+        );
         let mut encoder = self
             .ctx
             .device()
@@ -599,5 +620,40 @@ impl Timer {
             .map(|p| p[1].saturating_sub(p[0]))
             .sum();
         Ok(total as f64 * self.period_ns * 1e-9)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The composed tracer parses and validates with naga under WebGPU's capabilities alone
+    /// (no adapter needed, so CI without a GPU still checks the shader), both entry points
+    /// exist, and the `render` kernel binds at most the 8 storage buffers WebGPU guarantees.
+    #[test]
+    fn shader_validates_without_an_adapter() {
+        let source = composed_shader().unwrap();
+        let module = naga::front::wgsl::parse_str(&source)
+            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
+        naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::empty(),
+        )
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
+        let names: Vec<&str> = module
+            .entry_points
+            .iter()
+            .map(|e| e.name.as_str())
+            .collect();
+        assert_eq!(names, ["render", "trace_rays"]);
+        let storage = module
+            .global_variables
+            .iter()
+            .filter(|(_, g)| matches!(g.space, naga::AddressSpace::Storage { .. }))
+            .filter(|(_, g)| g.binding.as_ref().is_some_and(|b| b.binding <= 8))
+            .count();
+        assert_eq!(storage, 8, "render binds 1–8 as storage");
+        assert_eq!(size_of::<GpuParams>(), 112);
     }
 }

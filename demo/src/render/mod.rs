@@ -234,8 +234,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             image
         } else {
             let started = Instant::now();
-            let image =
-                render_frame(&scene, &settings, frame, || BsdfSampler, || progress.inc(1));
+            let image = render_frame(&scene, &settings, frame, || BsdfSampler, || progress.inc(1));
             frame_times_s.push(started.elapsed().as_secs_f64());
             image
         };
