@@ -206,8 +206,9 @@ pub fn composed_shader() -> Result<String> {
 
 impl GpuTracer {
     /// A tracer on its own device, on the adapter [`GpuContext::new`] picks (honouring
-    /// `WGPU_BACKEND` and friends), with `TIMESTAMP_QUERY` when the adapter has it and the
-    /// adapter's largest storage buffers (so large scenes and images fit).
+    /// `WGPU_BACKEND` and friends), with `TIMESTAMP_QUERY` when the adapter has it, the
+    /// adapter's largest storage buffers (so large scenes and images fit) and its number of
+    /// storage buffers per stage.
     ///
     /// # Errors
     /// [`GpuError::NoAdapter`] when there is no adapter, other [`GpuError`]s when the device
@@ -223,6 +224,10 @@ impl GpuTracer {
             .using_alignment(available.clone());
         limits.max_storage_buffer_binding_size = available.max_storage_buffer_binding_size;
         limits.max_buffer_size = available.max_buffer_size;
+        // `render` binds 8 storage buffers, WebGPU's default maximum; a guide's tables need
+        // more, which every desktop adapter offers.
+        limits.max_storage_buffers_per_shader_stage =
+            available.max_storage_buffers_per_shader_stage;
         let descriptor = wgpu::DeviceDescriptor {
             label: Some("mcg-demo render"),
             required_features: adapter.features() & wgpu::Features::TIMESTAMP_QUERY,

@@ -363,6 +363,14 @@ fn vertex_pdf(v: Vertex, wi: vec3<f32>) -> f32 {
     return material_pdf(v.material, v.normal, v.wo, wi);
 }
 
+// A learning guide also needs `finish`: what arrived along each sampled direction once the path
+// is complete. The CPU (`cpu::trace_path`) keeps, per vertex, the path radiance before its
+// sample, the throughput after it and the share of the next hit's emission that the MIS weight
+// left out, and reports incident = (radiance_end − before + discarded) / throughput; a guided
+// method keeps the same record in `trace_path` below (after `vertex_sample`, and at each
+// emitter hit) and hands it to the guide's finish after the loop. `bsdf` and `nee` learn
+// nothing, so they keep no record.
+
 // ---------------------------------------------------------------------------------------------
 // The integrator (`cpu::trace_path`)
 
