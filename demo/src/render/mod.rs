@@ -1,6 +1,6 @@
 //! The renderer: glTF 2.0 scenes path traced with and without mcg's guides.
 //!
-//! `mcg-demo render --scene FILE --method bsdf|nee …` renders a scene and writes
+//! `mcg-demo render --scene FILE --method bsdf|nee|mcpg …` renders a scene and writes
 //! `<out>/<method>.exr` (the mean over all frames, linear RGB), `<out>/<method>.png`
 //! (sRGB-encoded, clipped) and `<out>/<method>.json` (settings, device, per-frame times and,
 //! with `--reference`, per-frame errors of the running mean). `mcg-demo scenes` rewrites the
@@ -12,6 +12,7 @@
 //! | [`bvh`] | the flattened `#[repr(C)]` BVH and triangle layout, built by `obvhs`, walked by the CPU tracer (and by a WGSL twin later) |
 //! | [`material`] | Lambertian + GGX conductor materials with emission |
 //! | [`cpu`] | the CPU path tracer (rayon), methods `bsdf` and `nee`, the per-vertex sampler seam of the guides |
+//! | [`guided`] | `mcpg` on the CPU: the MCPG guide behind the sampler seam |
 //! | [`output`] | EXR/PNG files, RMSE and relative MSE |
 //! | [`scene_generator`] | the built-in scenes |
 
@@ -20,19 +21,23 @@
 
 pub mod bvh;
 pub mod cpu;
+pub mod guided;
 pub mod material;
 pub mod output;
 pub mod scene;
 pub mod scene_generator;
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
+use mcg_markov_guide::mcpg::Guide;
 
 use crate::Result;
 use cpu::{BsdfSampler, Method, RenderSettings, render_frame};
+use guided::{McpgSampler, new_guide};
 use output::{Errors, RgbImage, errors};
 use scene::{SceneFile, frame_time};
 
@@ -149,6 +154,8 @@ pub struct Rendered {
     pub image: RgbImage,
     /// Settings and measurements.
     pub report: RenderReport,
+    /// The guide as the last frame left it (`mcpg` only).
+    pub guide: Option<Arc<Guide>>,
 }
 
 /// Renders as `args` say, without writing files.
@@ -185,6 +192,12 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     };
     let mut scene = file.build(frame_time(0))?;
     let warnings = scene.warnings.clone();
+    let mut guide = match args.method {
+        Method::Mcpg => Some(
+            new_guide(&scene, args.height).map_err(|e| format!("the MCPG guide: {e:?}"))?,
+        ),
+        Method::Bsdf | Method::Nee => None,
+    };
     let progress = if args.no_progress {
         ProgressBar::hidden()
     } else {
@@ -206,8 +219,23 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             scene = file.build(frame_time(frame))?;
         }
         let started = Instant::now();
-        let image = render_frame(&scene, &settings, frame, || BsdfSampler, || progress.inc(1));
+        let image = match &mut guide {
+            Some(g) => {
+                g.set_camera(scene.camera.position);
+                let image = render_frame(
+                    &scene,
+                    &settings,
+                    frame,
+                    || McpgSampler::new(g),
+                    || (),
+                );
+                g.end_frame();
+                image
+            }
+            None => render_frame(&scene, &settings, frame, || BsdfSampler, || ()),
+        };
         frame_times_s.push(started.elapsed().as_secs_f64());
+        progress.inc(1);
         for (s, p) in sum.iter_mut().zip(&image) {
             *s += *p;
         }
@@ -241,6 +269,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             errors: errs,
             warnings,
         },
+        guide: guide.map(Arc::new),
     })
 }
 
