@@ -143,6 +143,9 @@ pub struct RenderReport {
     pub reference: Option<PathBuf>,
     /// Errors of the running mean after each frame against the reference.
     pub errors: Vec<Errors>,
+    /// Errors of each frame's own image against the reference (what a real-time renderer
+    /// that shows every frame without accumulation would show).
+    pub frame_errors: Vec<Errors>,
     /// What the scene loader ignored.
     pub warnings: Vec<String>,
 }
@@ -214,6 +217,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     let mut sum = vec![Vec3::ZERO; (args.width * args.height) as usize];
     let mut frame_times_s = Vec::new();
     let mut errs = Vec::new();
+    let mut frame_errs = Vec::new();
     for frame in 0..args.frames {
         if frame > 0 && file.is_animated() {
             scene = file.build(frame_time(frame))?;
@@ -243,6 +247,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             let scale = 1.0 / (frame + 1) as f32;
             let mean: Vec<Vec3> = sum.iter().map(|s| *s * scale).collect();
             errs.extend(errors(&mean, &r.pixels));
+            frame_errs.extend(errors(&image, &r.pixels));
         }
     }
     progress.finish_and_clear();
@@ -267,6 +272,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             frame_times_s,
             reference: args.reference.clone(),
             errors: errs,
+            frame_errors: frame_errs,
             warnings,
         },
         guide: guide.map(Arc::new),
