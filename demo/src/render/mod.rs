@@ -1,6 +1,6 @@
 //! The renderer: glTF 2.0 scenes path traced with and without mcg's guides.
 //!
-//! `mcg-demo render --scene FILE --method bsdf|nee …` renders a scene and writes
+//! `mcg-demo render --scene FILE --method bsdf|nee|mcpg …` renders a scene and writes
 //! `<out>/<method>.exr` (the mean over all frames, linear RGB), `<out>/<method>.png`
 //! (sRGB-encoded, clipped) and `<out>/<method>.json` (settings, device, per-frame times and,
 //! with `--reference`, per-frame errors of the running mean). `mcg-demo scenes` rewrites the
@@ -13,6 +13,7 @@
 //! | [`material`] | Lambertian + GGX conductor materials with emission |
 //! | [`cpu`] | the CPU path tracer (rayon), methods `bsdf` and `nee`, the per-vertex sampler seam of the guides |
 //! | [`gpu`] | the WGSL twin of the CPU tracer on wgpu, over the same BVH, triangle and material buffers |
+//! | [`guided`] | `mcpg` on the CPU: the MCPG guide behind the sampler seam |
 //! | [`output`] | EXR/PNG files, RMSE and relative MSE |
 //! | [`scene_generator`] | the built-in scenes |
 
@@ -22,21 +23,24 @@
 pub mod bvh;
 pub mod cpu;
 pub mod gpu;
+pub mod guided;
 pub mod material;
 pub mod output;
 pub mod scene;
 pub mod scene_generator;
 
 use std::path::{Path, PathBuf};
-use std::sync::{Mutex, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Instant;
 
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
+use mcg_markov_guide::mcpg::Guide;
 
 use crate::Result;
 use cpu::{BsdfSampler, Method, RenderSettings, render_frame};
 use gpu::{GpuTiming, GpuTracer};
+use guided::{McpgSampler, new_guide};
 use output::{Errors, RgbImage, errors};
 use scene::{SceneFile, frame_time};
 
@@ -152,6 +156,9 @@ pub struct RenderReport {
     pub reference: Option<PathBuf>,
     /// Errors of the running mean after each frame against the reference.
     pub errors: Vec<Errors>,
+    /// Errors of each frame's own image against the reference (what a real-time renderer
+    /// that shows every frame without accumulation would show).
+    pub frame_errors: Vec<Errors>,
     /// What the scene loader ignored.
     pub warnings: Vec<String>,
 }
@@ -163,6 +170,8 @@ pub struct Rendered {
     pub image: RgbImage,
     /// Settings and measurements.
     pub report: RenderReport,
+    /// The guide as the last frame left it (`mcpg` only).
+    pub guide: Option<Arc<Guide>>,
 }
 
 /// Renders as `args` say, without writing files.
@@ -204,6 +213,12 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     if let Some(g) = gpu.as_deref_mut() {
         g.upload(&scene)?;
     }
+    let mut guide = match args.method {
+        Method::Mcpg => {
+            Some(new_guide(&scene, args.height).map_err(|e| format!("the MCPG guide: {e:?}"))?)
+        }
+        Method::Bsdf | Method::Nee => None,
+    };
     let progress = if args.no_progress {
         ProgressBar::hidden()
     } else {
@@ -220,6 +235,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     let mut sum = vec![Vec3::ZERO; (args.width * args.height) as usize];
     let mut frame_times_s = Vec::new();
     let mut errs = Vec::new();
+    let mut frame_errs = Vec::new();
     for frame in 0..args.frames {
         if frame > 0 && file.is_animated() {
             scene = file.build(frame_time(frame))?;
@@ -230,14 +246,23 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         let image = if let Some(g) = gpu.as_deref_mut() {
             let (image, seconds) = g.render_frame(&settings, frame)?;
             frame_times_s.push(seconds);
-            progress.inc(1);
             image
         } else {
             let started = Instant::now();
-            let image = render_frame(&scene, &settings, frame, || BsdfSampler, || progress.inc(1));
+            let image = match &mut guide {
+                Some(g) => {
+                    g.set_camera(scene.camera.position);
+                    let image =
+                        render_frame(&scene, &settings, frame, || McpgSampler::new(g), || ());
+                    g.end_frame();
+                    image
+                }
+                None => render_frame(&scene, &settings, frame, || BsdfSampler, || ()),
+            };
             frame_times_s.push(started.elapsed().as_secs_f64());
             image
         };
+        progress.inc(1);
         for (s, p) in sum.iter_mut().zip(&image) {
             *s += *p;
         }
@@ -245,6 +270,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             let scale = 1.0 / (frame + 1) as f32;
             let mean: Vec<Vec3> = sum.iter().map(|s| *s * scale).collect();
             errs.extend(errors(&mean, &r.pixels));
+            frame_errs.extend(errors(&image, &r.pixels));
         }
     }
     progress.finish_and_clear();
@@ -271,8 +297,10 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             frame_times_s,
             reference: args.reference.clone(),
             errors: errs,
+            frame_errors: frame_errs,
             warnings,
         },
+        guide: guide.map(Arc::new),
     })
 }
 
