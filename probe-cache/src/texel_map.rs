@@ -431,12 +431,12 @@ mod tests {
         assert_eq!(m.solid_angle(UVec2::new(3, 9)), 4.0 * PI / 196.0);
     }
 
-    /// ANCHORS ("Probe storage") quotes max/min 2.78 for an 8 × 8 and 3.90 for a 16 × 16
-    /// octahedral map covering the sphere (no border). The exact areas give 2.728 and 3.885
-    /// (f64 Jacobian integration agrees, see `octahedral`); ANCHORS' figures are within 2 %,
+    /// The commonly quoted max/min texel solid angle of an octahedral map covering the sphere
+    /// (no border) is 2.78 for 8 × 8 and 3.90 for 16 × 16. The exact areas give 2.728 and 3.885
+    /// (f64 Jacobian integration agrees, see `octahedral`); the quoted figures are within 2 %,
     /// presumably from an approximate per-texel area. RTXGI's bordered 8 × 8 (6 × 6) gives 1.853.
     #[test]
-    fn octahedral_ratio_matches_anchors() {
+    fn octahedral_ratio_matches_quoted_figures() {
         let r8 = TexelMap::new(MapKind::Octahedral, 8, false)
             .unwrap()
             .solid_angle_ratio();
