@@ -8,8 +8,8 @@
 //! | item | what it is | paper |
 //! |---|---|---|
 //! | [`ProbeGrid`], [`ProbeCell`] | probe lattice: origin, spacing, counts; trilinear cell lookup | DDGI; ADGI sec. 3.1 |
-//! | [`scene`]: [`Scene`], [`DynamicScene`] | CPU test scene: boxes, spheres, a rectangular light, one-bounce probe rays, a door that opens | ADGI sec. 5 (Fig. 1, 8) |
-//! | [`reference`](mod@reference): [`reference_irradiance`], [`reference_texel_irradiance`] | reference probe irradiance, many stratified rays per texel direction (or per texel of a map) | ADGI sec. 5, "Reference" |
+//! | `scene` (feature `scene`): `Scene`, `DynamicScene` | CPU test fixture: boxes, spheres, a rectangular light, one-bounce probe rays, a door that opens | ADGI sec. 5 (Fig. 1, 8) |
+//! | `reference` (feature `scene`): `reference_irradiance`, `reference_texel_irradiance` | reference probe irradiance, many stratified rays per texel direction (or per texel of a map) | ADGI sec. 5, "Reference" |
 //! | [`heuristics`], [`HeuristicParams`] | f_c, f_v, f_r; f_s, f_d; the 6-10-10 heuristics word | ADGI eq. 10-12, 19-20, sec. 4.3 |
 //! | [`GuidingFunction`], [`GuideParams`], [`Guide`], [`guiding_function::octant_feedback`] | h(p, ω) = exp(α ĝ/f)·f per probe octant; static and dynamic forms; the feedback ĝ | ADGI eq. 2, sec. 4.8, 4.9 |
 //! | [`ProxyGrid`] | probes grouped into 3×3×3 virtual proxies, max-pooled octants | ADGI sec. 4.9 |
@@ -34,6 +34,16 @@
 //! - Irradiance texels hold `E/π` (DDGI's blend) or radiance (ADGI's per-sample update; see
 //!   [`TexelContent`]); queries return irradiance `E` (π·L for a constant environment L).
 //!   Visibility texels hold distances in cell diagonals ([`ProbeGrid::cell_diagonal`]).
+//!
+//! ## Features
+//! - `scene`: the CPU fixture that the tests, examples and demo render with — a mini ray tracer
+//!   ([`scene`]) and reference probe irradiance ([`reference`](mod@reference)). A renderer that
+//!   only stores and queries probes does not need it.
+//!
+//! ## Dependencies
+//! The crate depends on `mcg-markov-guide` only for the Metropolis random walk of
+//! [`ProbeChains`] (ADGI Alg. 1, 5); that pulls in `mcg-vmf`, `mcg-smis` and `mcg-hashgrid`
+//! as well, which a DDGI-only user compiles but does not call.
 //!
 //! ## Example
 //! ```
@@ -69,7 +79,11 @@ mod probe_texels;
 mod proptest_support;
 pub mod proxies;
 mod query;
+#[cfg(feature = "scene")]
+#[cfg_attr(docsrs, doc(cfg(feature = "scene")))]
 pub mod reference;
+#[cfg(feature = "scene")]
+#[cfg_attr(docsrs, doc(cfg(feature = "scene")))]
 pub mod scene;
 pub mod temporal_gradient;
 #[cfg(test)]
@@ -93,7 +107,9 @@ pub use probe_chains::{
 pub use probe_texels::{ProbeTexels, RoundingMode, TexelConfig};
 pub use proxies::ProxyGrid;
 pub use query::{QueryConfig, TexelContent};
+#[cfg(feature = "scene")]
 pub use reference::{reference_irradiance, reference_texel_irradiance};
+#[cfg(feature = "scene")]
 pub use scene::{DynamicScene, ProbeRay, Scene, SceneEvent};
 pub use temporal_gradient::{ChangeDetector, SmoothingKernel, TemporalTrigger};
 pub use texel_map::{MAX_MAP_SIDE, MapKind, TexelMap};
