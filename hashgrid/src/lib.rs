@@ -102,13 +102,9 @@
 //! # Ok::<(), mcg_hashgrid::TableError>(())
 //! ```
 #![no_std]
-#![deny(missing_docs)]
 // Two `unsafe` blocks: `ConcurrentTable::checksums` views `&[AtomicU32]` as `&[u32]` for upload
 // (documented there), and `probe::group_masks` calls SSE2 compare intrinsics (no pointers);
-// everything else is safe code.
-#![deny(unsafe_code)]
-// `!(x > 0.0)` is how this crate rejects NaN together with the out-of-range values.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
+// everything else is safe code. Hence `unsafe_code = "deny"` (not "forbid") in Cargo.toml.
 #![cfg_attr(docsrs, feature(doc_cfg))]
 
 #[cfg(feature = "alloc")]

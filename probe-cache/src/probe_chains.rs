@@ -53,6 +53,7 @@
 use core::f32::consts::TAU;
 
 use glam::{UVec3, Vec3};
+use mcg_markov_guide::mcg_smis::finite_non_negative_or_zero;
 use mcg_markov_guide::{
     ADGI_DIRECTION_STEP, FrameSchedule, MetropolisChain, RandomWalk, StepUniforms,
 };
@@ -418,7 +419,7 @@ impl ProbeChains {
         if at.probe.is_none() {
             return 0.0;
         }
-        finite_or_zero(guide.h(at.position, at.direction))
+        finite_non_negative_or_zero(guide.h(at.position, at.direction))
     }
 
     /// Runs one frame of every chain (Alg. 1) against `guide` and returns the emitted samples
@@ -641,11 +642,6 @@ struct Located {
     probe: Option<UVec3>,
     folded: [f32; 2],
     direction: Vec3,
-}
-
-#[inline]
-fn finite_or_zero(h: f32) -> f32 {
-    if h >= 0.0 && h.is_finite() { h } else { 0.0 }
 }
 
 #[cfg(test)]

@@ -510,7 +510,7 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(crate::proptest_support::proptest_config(256))]
+        #![proptest_config(mcg_test_support::proptest_config(256, 0x7E57_0007))]
 
         /// Adversarial inputs never give NaN or negative values.
         #[test]

@@ -511,7 +511,7 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(crate::proptest_support::proptest_config(256))]
+        #![proptest_config(mcg_test_support::proptest_config(256, 0x7E57_0007))]
 
         #[test]
         fn bilinear_weights_are_a_partition_and_taps_interior(

@@ -10,8 +10,6 @@ use mcg_probe_cache::probe_chains::{direction_from_chain, fold_direction};
 use mcg_probe_cache::{GuideParams, GuidingFunction, ProbeGrid, ProxyGrid};
 use proptest::prelude::*;
 
-mod support;
-
 /// Any f32, special values included.
 fn any_f32() -> impl Strategy<Value = f32> {
     prop_oneof![
@@ -36,7 +34,7 @@ fn unit_interval(x: f32) -> bool {
 }
 
 proptest! {
-    #![proptest_config(support::proptest_config(256))]
+    #![proptest_config(mcg_test_support::proptest_config(256, 0x7E57_0007))]
 
     #[test]
     fn h_is_non_negative_and_finite(

@@ -103,16 +103,11 @@ fn legendre(n: usize, x: f64) -> (f64, f64) {
 }
 
 /// Two unit vectors that complete the unit `axis` to a right-handed orthonormal basis
-/// `(tangent, bitangent, axis)`, in f64 (Duff et al. 2017, the same construction as
-/// [`mcg_vmf::Frame`]).
+/// `(tangent, bitangent, axis)`, in f64: glam's [`DVec3::any_orthonormal_pair`] (Duff et al.
+/// 2017), the construction [`mcg_vmf::Frame`] uses in f32.
 #[must_use]
 pub fn orthonormal_basis(axis: DVec3) -> (DVec3, DVec3) {
-    let sign = 1.0_f64.copysign(axis.z);
-    let a = -1.0 / (sign + axis.z);
-    let b = axis.x * axis.y * a;
-    let tangent = DVec3::new(1.0 + sign * axis.x * axis.x * a, sign * b, -sign * axis.x);
-    let bitangent = DVec3::new(b, sign + axis.y * axis.y * a, -axis.y);
-    (tangent, bitangent)
+    axis.any_orthonormal_pair()
 }
 
 /// Polar-angle breakpoints for [`integrate_sphere`] graded around a peak of angular `width`

@@ -20,7 +20,7 @@ use std::f64::consts::PI;
 
 use glam::{DVec3, Vec2, Vec3};
 use mcg_smis::{CyclicShift, Technique, XorPermutation, smis, smis_one_sample};
-use mcg_vmf::{Frame, Vmf};
+use mcg_vmf::{Frame, UNIFORM_SPHERE_PDF, Vmf, uniform_sphere};
 use rand::{Rng, RngExt};
 
 // ---------------------------------------------------------------------------------------------
@@ -155,24 +155,16 @@ pub enum SphereTechnique {
     },
 }
 
-const INV_4PI: f32 = 0.25 / std::f32::consts::PI;
-
-/// Uniform direction on the sphere from two uniforms.
-fn uniform_sphere_f32(u: Vec2) -> Vec3 {
-    let z = 1.0 - 2.0 * u.y;
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let (s, c) = (std::f32::consts::TAU * u.x).sin_cos();
-    Vec3::new(r * c, r * s, z)
-}
-
 impl Technique for SphereTechnique {
     type Sample = Vec3;
     type Uniform = Vec2;
 
     fn pdf(&self, w: &Vec3) -> f32 {
         match *self {
-            SphereTechnique::Uniform => INV_4PI,
-            SphereTechnique::Lobe { vmf, eps } => eps * INV_4PI + (1.0 - eps) * vmf.pdf(*w),
+            SphereTechnique::Uniform => UNIFORM_SPHERE_PDF,
+            SphereTechnique::Lobe { vmf, eps } => {
+                eps * UNIFORM_SPHERE_PDF + (1.0 - eps) * vmf.pdf(*w)
+            }
             SphereTechnique::Cap { axis, cos_max } => {
                 if w.dot(axis) >= cos_max {
                     1.0 / (std::f32::consts::TAU * (1.0 - cos_max))
@@ -185,10 +177,10 @@ impl Technique for SphereTechnique {
 
     fn sample(&self, u: Vec2) -> Vec3 {
         match *self {
-            SphereTechnique::Uniform => uniform_sphere_f32(u),
+            SphereTechnique::Uniform => uniform_sphere(u),
             SphereTechnique::Lobe { vmf, eps } => {
                 if u.x < eps {
-                    uniform_sphere_f32(Vec2::new(u.x / eps, u.y))
+                    uniform_sphere(Vec2::new(u.x / eps, u.y))
                 } else {
                     vmf.sample(Vec2::new((u.x - eps) / (1.0 - eps), u.y))
                 }
@@ -455,7 +447,7 @@ pub fn draw_sphere_lobe<R: Rng + ?Sized>(rng: &mut R, features: &[[f64; 3]]) -> 
         let f = dir(features[k]).as_vec3();
         Vmf::new(f, 50.0).expect("valid lobe").sample(u)
     } else {
-        uniform_sphere_f32(u)
+        uniform_sphere(u)
     };
     let kappa = 500.0_f32.powf(rng.random::<f32>());
     SphereTechnique::Lobe {
@@ -466,7 +458,7 @@ pub fn draw_sphere_lobe<R: Rng + ?Sized>(rng: &mut R, features: &[[f64; 3]]) -> 
 
 /// Draws a cap of half-angle between 40° and 100° around a uniform axis (compact support).
 pub fn draw_sphere_cap<R: Rng + ?Sized>(rng: &mut R) -> SphereTechnique {
-    let axis = uniform_sphere_f32(Vec2::new(rng.random(), rng.random()));
+    let axis = uniform_sphere(Vec2::new(rng.random(), rng.random()));
     let angle = (40.0 + 60.0 * rng.random::<f32>()).to_radians();
     SphereTechnique::Cap {
         axis,

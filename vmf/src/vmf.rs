@@ -6,10 +6,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 
 use crate::constants::{KAPPA_DIRECT_EXPM1, KAPPA_SAMPLE_SATURATED, KAPPA_SATURATED, KAPPA_TINY};
-use crate::{Frame, VmfError, math};
-
-/// 1/(4π), the density of the uniform distribution on S².
-pub const UNIFORM_SPHERE_PDF: f32 = 0.25 * FRAC_1_PI;
+use crate::{Frame, UNIFORM_SPHERE_PDF, VmfError, math};
 
 /// A von Mises-Fisher lobe on S²: mean direction μ (unit length) and concentration κ ≥ 0.
 ///

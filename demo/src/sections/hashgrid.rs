@@ -12,6 +12,7 @@ use std::collections::HashSet;
 use mcg_hashgrid::constants::DEFAULT_MAX_PROBES;
 use mcg_hashgrid::glam::{Vec2, Vec3};
 use mcg_hashgrid::{AdaptiveGrid, BucketHash, CellKey, HashTable, Insert, next_prime};
+use mcg_tests::hit_room;
 use plotters::style::RGBColor;
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64Mcg;
@@ -68,26 +69,6 @@ pub struct LoadPoint {
     pub mean_probe: f64,
     /// Failed inserts / insert attempts of new keys since the previous load point.
     pub failed_rate: f64,
-}
-
-/// Hit point and normal of the ray from `camera` along `dir` inside the box room
-/// [−20, 20] × [0, 10] × [−20, 20].
-fn hit_room(camera: Vec3, dir: Vec3) -> (Vec3, Vec3) {
-    let lo = Vec3::new(-20.0, 0.0, -20.0);
-    let hi = Vec3::new(20.0, 10.0, 20.0);
-    let inv = dir.recip();
-    let t_exit = ((lo - camera) * inv).max((hi - camera) * inv);
-    let t = t_exit.min_element();
-    let axis = if t == t_exit.x {
-        0
-    } else if t == t_exit.y {
-        1
-    } else {
-        2
-    };
-    let mut n = Vec3::ZERO;
-    n[axis] = -dir[axis].signum();
-    (camera + dir * t, n)
 }
 
 /// At least `count` distinct adaptive-grid keys (MCPG defaults) from frames of a `width²`
