@@ -107,9 +107,9 @@ mod tests {
                 for j in 0..64 {
                     let u = Vec2::new((i as f32 + 0.5) / 64.0, (j as f32 + 0.5) / 64.0);
                     let (w, pdf) = sample(n, u);
-                    assert!((w.length() - 1.0).abs() < 1e-5);
+                    mcg_test_support::assert_close!(w.length(), 1.0, 1e-5);
                     assert!(w.dot(n) >= -1e-6);
-                    assert!((pdf - cosine_hemisphere_pdf(n, w)).abs() < 1e-5);
+                    mcg_test_support::assert_close!(pdf, cosine_hemisphere_pdf(n, w), 1e-5);
                 }
             }
         }

@@ -321,19 +321,19 @@ mod tests {
     fn eq2_by_hand() {
         let s = GuideParams::STATIC;
         // f = 0.4, ĝ = 0.1: exp(0.25)·0.4 = 1.2840254·0.4 = 0.51361016.
-        assert!((s.h(0.4, 0.1) - 0.513_610_2).abs() < 1e-6);
+        mcg_test_support::assert_close!(s.h(0.4, 0.1), 0.513_610_2, 1e-6);
         // ĝ/f = 3 > 1 → capped: e·0.4 = 1.0873127.
-        assert!((s.h(0.4, 1.2) - 1.087_312_7).abs() < 1e-6);
+        mcg_test_support::assert_close!(s.h(0.4, 1.2), 1.087_312_7, 1e-6);
         // Eq. 2 with α = 2, cap 10: f = 0.5, ĝ = 0.75: exp(2·0.75/0.5) · 0.5 = e³/2 = 10.042768.
         let p = GuideParams::new(2.0, 10.0).unwrap();
-        assert!((p.h(0.5, 0.75) - 10.042_768).abs() < 1e-4);
+        mcg_test_support::assert_close!(p.h(0.5, 0.75), 10.042_768, 1e-4);
         // Tiny f with ĝ > 0 hits the cap: e^10 · 1e-30, finite.
-        assert!((p.h(1e-30, 1.0) - 1e-30 * 10.0f32.exp()).abs() < 1e-33);
+        mcg_test_support::assert_close!(p.h(1e-30, 1.0), 1e-30 * 10.0f32.exp(), 1e-33);
         assert_eq!(p.h(0.0, 1.0), 0.0);
         assert_eq!(p.h(f32::NAN, 1.0), 0.0);
         assert_eq!(p.h(-1.0, 1.0), 0.0);
         assert_eq!(p.h(0.5, f32::NAN), 0.5);
-        assert!((p.h(0.5, f32::INFINITY) - 0.5 * 10.0f32.exp()).abs() < 1e-2);
+        mcg_test_support::assert_close!(p.h(0.5, f32::INFINITY), 0.5 * 10.0f32.exp(), 1e-2);
         // f above 1 saturates.
         assert_eq!(GuideParams::DYNAMIC.h(7.0, 1.0), 1.0);
         assert_eq!(GuideParams::DYNAMIC.h(0.3, f32::INFINITY), 0.3);
@@ -381,7 +381,7 @@ mod tests {
         // f = 0.5 + 0.05 = 0.55; h = exp(0.05/0.55)·0.55 = e^0.090909·0.55 = 1.0951705·0.55
         // = 0.6023438.
         let v = guide.h(Vec3::new(3.4, 2.9, 0.3), Vec3::new(-1.0, 2.0, -3.0));
-        assert!((v - 0.602_343_8).abs() < 1e-6, "{v}");
+        mcg_test_support::assert_close!(v, 0.602_343_8, 1e-6, "{v}");
         assert_eq!(v, guide.value(4, 5));
         assert_eq!(guide.value(6, 0), 0.0);
         assert_eq!(guide.h(Vec3::new(3.4, 2.9, 0.3), Vec3::NAN), 0.0);
@@ -390,7 +390,7 @@ mod tests {
         assert_eq!(guide.params(), GuideParams::STATIC);
         // Without feedback h = f.
         let plain = GuidingFunction::new(cells, &f, None, GuideParams::STATIC).unwrap();
-        assert!((plain.value(4, 5) - 0.55).abs() < 1e-7);
+        mcg_test_support::assert_close!(plain.value(4, 5), 0.55, 1e-7);
         assert_eq!(
             GuidingFunction::new(cells, &f[1..], None, GuideParams::STATIC).err(),
             Some(ProbeError::TableLengthMismatch)
@@ -439,7 +439,7 @@ mod tests {
         let values = [Vec3::X, Vec3::Y, Vec3::NAN];
         let mut g = [9.0; 8];
         octant_feedback(&dirs, |t| values[t], &mut g);
-        assert!((g[3] - 0.4639).abs() < 1e-6, "{g:?}");
+        mcg_test_support::assert_close!(g[3], 0.4639, 1e-6, "{g:?}");
         assert_eq!(g[4], 0.0);
         assert!(g.iter().enumerate().all(|(o, &v)| o == 3 || v == 0.0));
     }

@@ -360,14 +360,14 @@ mod tests {
         assert_eq!(camera_distance(Vec3::new(4.0, 6.0, 3.0), c, 6.0), 1.0);
         // Distance 5, k = 2 → e^{−3} = 0.049787068.
         let f = camera_distance(Vec3::new(4.0, 6.0, 3.0), c, 2.0);
-        assert!((f - 0.049_787_07).abs() < 1e-7, "{f}");
+        mcg_test_support::assert_close!(f, 0.049_787_07, 1e-7, "{f}");
         // Exactly at k: e^0 = 1 (continuous).
         assert_eq!(camera_distance(Vec3::new(4.0, 6.0, 3.0), c, 5.0), 1.0);
         assert_eq!(camera_distance(Vec3::NAN, c, 1.0), 0.0);
         assert_eq!(camera_distance(Vec3::INFINITY, c, 1.0), 0.0);
         // NaN k → 0: distance 5 → e^{−5}.
         let f = camera_distance(Vec3::new(4.0, 6.0, 3.0), c, f32::NAN);
-        assert!((f - (-5.0f32).exp()).abs() < 1e-8);
+        mcg_test_support::assert_close!(f, (-5.0f32).exp(), 1e-8);
         assert_eq!(
             camera_distance(Vec3::new(4.0, 6.0, 3.0), c, f32::INFINITY),
             1.0
@@ -380,9 +380,9 @@ mod tests {
     fn probe_visibility_by_hand() {
         // s = √3 (unit voxel diagonal), t = 0.25: e^{−0.5/√3} = e^{−0.288675} = 0.749256.
         let f = probe_visibility(0.25, 3.0f32.sqrt());
-        assert!((f - 0.749_255_6).abs() < 1e-6, "{f}");
+        mcg_test_support::assert_close!(f, 0.749_255_6, 1e-6, "{f}");
         // t = s: e^{−2} = 0.135335.
-        assert!((probe_visibility(2.0, 2.0) - 0.135_335_28).abs() < 1e-7);
+        mcg_test_support::assert_close!(probe_visibility(2.0, 2.0), 0.135_335_28, 1e-7);
         assert_eq!(probe_visibility(0.0, 1.0), 1.0);
         assert_eq!(probe_visibility(-3.0, 1.0), 1.0);
         assert_eq!(probe_visibility(f32::INFINITY, 1.0), 0.0);
@@ -412,8 +412,8 @@ mod tests {
         // f_c = 0.5, f_v = 0.8: f_s = 0.4; f_d = 0.4·(0.25 + 2·0.5)/3 = 0.4·1.25/3 = 0.1666…
         let h = p.compose(0.5, 0.8, 0.25, 0.5, 3);
         assert_eq!(h.f_v, 0.8);
-        assert!((h.f_s - 0.4).abs() < 1e-7);
-        assert!((h.f_d - 0.166_666_67).abs() < 1e-7, "{}", h.f_d);
+        mcg_test_support::assert_close!(h.f_s, 0.4, 1e-7);
+        mcg_test_support::assert_close!(h.f_d, 0.166_666_67, 1e-7, "{}", h.f_d);
         assert_eq!(h.flags, 3);
         // Saturated changes reach the bound 1 exactly when f_c = f_v = 1.
         assert_eq!(p.compose(1.0, 1.0, 1.0, 1.0, 0).f_d, 1.0);
@@ -459,9 +459,9 @@ mod tests {
         let p = HeuristicParams::new(4.0, 1.0).unwrap();
         let h = p.compose(0.9, 0.7, 0.3, 0.1, 0b10_1010);
         let back = decode(encode(h));
-        assert!((back.f_v - h.f_v).abs() <= 0.5 / 63.0);
-        assert!((back.f_s - h.f_s).abs() <= 0.5 / 1023.0);
-        assert!((back.f_d - h.f_d).abs() <= 0.5 / 1023.0);
+        mcg_test_support::assert_close!(back.f_v, h.f_v, 0.5 / 63.0);
+        mcg_test_support::assert_close!(back.f_s, h.f_s, 0.5 / 1023.0);
+        mcg_test_support::assert_close!(back.f_d, h.f_d, 0.5 / 1023.0);
         assert_eq!(back.flags, h.flags);
     }
 
@@ -481,8 +481,8 @@ mod tests {
         let h0 = decode(out[0]);
         assert!((h0.f_s - 0.5).abs() < 1e-3 && h0.f_d == 0.0);
         let h9 = decode(out[9]);
-        assert!((h9.f_s - 0.303_27).abs() < 1e-3, "{h9:?}");
-        assert!((h9.f_d - 0.101_09).abs() < 1e-3, "{h9:?}");
+        mcg_test_support::assert_close!(h9.f_s, 0.303_27, 1e-3, "{h9:?}");
+        mcg_test_support::assert_close!(h9.f_d, 0.101_09, 1e-3, "{h9:?}");
         assert_eq!(h9.flags, 5);
         assert!(compose_grid(&grid, &p, Vec3::ZERO, &f_v[1..], &dv, &dr, &mut out).is_err());
     }

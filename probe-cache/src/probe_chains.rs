@@ -669,7 +669,7 @@ mod tests {
     fn direction_coordinates_round_trip_and_fold() {
         for &(z, phi) in &[(0.3f32, 1.0f32), (-0.9, 5.5), (1.0, 0.0), (0.0, 3.0)] {
             let d = direction_from_chain(z, phi);
-            assert!((d.length() - 1.0).abs() < 1e-6);
+            mcg_test_support::assert_close!(d.length(), 1.0, 1e-6);
             let [z2, phi2] = chain_from_direction(d);
             assert!(
                 (z2 - z).abs() < 1e-6 && (z == 1.0 || (phi2 - phi).abs() < 1e-5),
@@ -681,7 +681,7 @@ mod tests {
         assert_eq!(fold_direction(-1.5, 0.0), [-0.5, 0.0]);
         assert_eq!(fold_direction(4.5, 0.0), [0.5, 0.0]);
         let [_, p] = fold_direction(0.0, -0.5);
-        assert!((p - (TAU - 0.5)).abs() < 1e-6);
+        mcg_test_support::assert_close!(p, (TAU - 0.5), 1e-6);
         assert_eq!(fold_direction(0.0, -1e-9)[1], 0.0);
         assert_eq!(fold_direction(f32::NAN, 1.0), [1.0, 0.0]);
         assert_eq!(chain_from_direction(Vec3::ZERO), [1.0, 0.0]);
@@ -701,7 +701,7 @@ mod tests {
         let d = ChainKind::Dynamic.walk(&grid).unwrap().step_sizes();
         let want = RandomWalk::adgi_dynamic(0.5).unwrap().step_sizes();
         for i in 0..5 {
-            assert!((d[i] - want[i]).abs() < 1e-6);
+            mcg_test_support::assert_close!(d[i], want[i], 1e-6);
         }
         let aniso = ProbeGrid::new(Vec3::ZERO, Vec3::new(1.0, 2.0, 0.25), UVec3::splat(2)).unwrap();
         let s = ChainKind::Static.walk(&aniso).unwrap().step_sizes();

@@ -758,11 +758,7 @@ mod tests {
         assert_eq!(t.bytes_per_probe(), 1280);
         assert_eq!(t.irradiance_offset(2, 9), 2 * 64 + 9);
         assert_eq!(t.visibility_offset(3, 17), 3 * 256 + 17);
-        assert!(
-            (t.max_distance() - 9.827_075).abs() < 1e-3,
-            "{}",
-            t.max_distance()
-        );
+        mcg_test_support::assert_close!(t.max_distance(), 9.827_075, 1e-3, "{}", t.max_distance());
     }
 
     #[test]

@@ -506,7 +506,7 @@ mod tests {
             ..q
         };
         let e = t.irradiance_at(x, Vec3::Y, Vec3::ZERO, &no_vis);
-        assert!((e.x - PI * 0.25).abs() < 0.05, "{e}"); // (√1·½ + 0·½)² = ¼
+        mcg_test_support::assert_close!(e.x, PI * 0.25, 0.05, "{e}"); // (√1·½ + 0·½)² = ¼
     }
 
     proptest! {

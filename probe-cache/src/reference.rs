@@ -169,7 +169,7 @@ mod tests {
         }
         for b in bins {
             // 5σ of a binomial(10⁵, 0.1): σ ≈ 95.
-            assert!((b as i32 - 10_000).abs() < 475, "{bins:?}");
+            mcg_test_support::assert_close!(b as i32, 10_000, 475, "{bins:?}");
         }
     }
 
@@ -183,7 +183,7 @@ mod tests {
             for j in 0..m {
                 let u = Vec2::new((i as f32 + 0.5) / m as f32, (j as f32 + 0.5) / m as f32);
                 let w = cosine_direction(n, u);
-                assert!((w.length() - 1.0).abs() < 1e-5);
+                mcg_test_support::assert_close!(w.length(), 1.0, 1e-5);
                 let c = f64::from(n.dot(w));
                 assert!(c >= -1e-6);
                 m1 += c;
@@ -191,8 +191,8 @@ mod tests {
             }
         }
         let k = f64::from(m * m);
-        assert!((m1 / k - 2.0 / 3.0).abs() < 2e-3, "{}", m1 / k);
-        assert!((m2 / k - 0.5).abs() < 2e-3, "{}", m2 / k);
+        mcg_test_support::assert_close!(m1 / k, 2.0 / 3.0, 2e-3, "{}", m1 / k);
+        mcg_test_support::assert_close!(m2 / k, 0.5, 2e-3, "{}", m2 / k);
     }
 
     /// With no objects, the reference is the light's irradiance alone, which Lambert's formula
@@ -225,7 +225,7 @@ mod tests {
             }
             let exact = 2.0 * 0.5 * sum.abs();
             let e = reference_irradiance(&scene, Vec3::ZERO, &[n], 16, 1)[0];
-            assert!((e.x / exact - 1.0).abs() < 5e-3, "{e} vs {exact}");
+            mcg_test_support::assert_close!(e.x / exact, 1.0, 5e-3, "{e} vs {exact}");
         }
         let e = reference_irradiance(&scene, Vec3::ZERO, &[-Vec3::Y], 16, 1)[0];
         assert_eq!(e, Vec3::ZERO);

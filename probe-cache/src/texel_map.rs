@@ -420,7 +420,7 @@ mod tests {
                 .map(|i| f64::from(m.solid_angle(m.coords(i))))
                 .sum();
             let four_pi = 4.0 * core::f64::consts::PI;
-            assert!((sum - four_pi).abs() < 3e-5 * four_pi, "{m:?}: {sum}");
+            mcg_test_support::assert_close!(sum, four_pi, 3e-5 * four_pi, "{m:?}: {sum}");
         }
     }
 
@@ -443,11 +443,11 @@ mod tests {
         let r16 = TexelMap::new(MapKind::Octahedral, 16, false)
             .unwrap()
             .solid_angle_ratio();
-        assert!((r8 - 2.7276).abs() < 2e-3, "{r8}");
-        assert!((r16 - 3.8852).abs() < 3e-3, "{r16}");
+        mcg_test_support::assert_close!(r8, 2.7276, 2e-3, "{r8}");
+        mcg_test_support::assert_close!(r16, 3.8852, 3e-3, "{r16}");
         assert!((r8 / 2.78 - 1.0).abs() < 0.02 && (r16 / 3.90 - 1.0).abs() < 0.02);
         let r6 = TexelMap::ADGI_IRRADIANCE.solid_angle_ratio();
-        assert!((r6 - 1.8533).abs() < 2e-3, "{r6}");
+        mcg_test_support::assert_close!(r6, 1.8533, 2e-3, "{r6}");
     }
 
     #[test]
@@ -503,7 +503,7 @@ mod tests {
                 }
                 let taps = m.bilinear(m.direction(t));
                 let w: f32 = taps.iter().map(|&(_, w)| w).sum();
-                assert!((w - 1.0).abs() < 1e-6);
+                mcg_test_support::assert_close!(w, 1.0, 1e-6);
                 let on: f32 = taps.iter().filter(|&&(j, _)| j == i).map(|&(_, w)| w).sum();
                 assert!(on > 0.999, "{m:?} {t}: {taps:?}");
             }

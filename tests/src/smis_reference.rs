@@ -962,7 +962,7 @@ mod tests {
                     rule.integrate(a, b, |x| f64::from(t.pdf(&(x as f32))))
                 })
                 .sum();
-            assert!((total - 1.0).abs() < 2e-3, "{t:?}: {total}");
+            mcg_test_support::assert_close!(total, 1.0, 2e-3, "{t:?}: {total}");
             // Inverse-CDF check: the fraction of samples below q matches the CDF.
             let mut rng = seeded_rng(0x5315_0001);
             let n = 100_000;
@@ -973,7 +973,11 @@ mod tests {
                     rule.integrate(a, b, |x| f64::from(t.pdf(&(x as f32))))
                 })
                 .sum();
-            assert!((below - cdf).abs() < 5.0 * (cdf * (1.0 - cdf) / n as f64).sqrt() + 1e-3);
+            mcg_test_support::assert_close!(
+                below,
+                cdf,
+                5.0 * (cdf * (1.0 - cdf) / n as f64).sqrt() + 1e-3
+            );
         }
     }
 
@@ -1008,9 +1012,9 @@ mod tests {
     fn variance_with_error_of_known_values() {
         // 1, 2, 3, 4: mean 2.5, m2 = 1.25, s² = 5/3, m4 = 2.5625.
         let (s2, se) = variance_with_error(&[1.0, 2.0, 3.0, 4.0]);
-        assert!((s2 - 5.0 / 3.0).abs() < 1e-12);
+        mcg_test_support::assert_close!(s2, 5.0 / 3.0, 1e-12);
         let expected = ((2.5625 - s2 * s2 * (1.0 / 3.0)) / 4.0_f64).sqrt();
-        assert!((se - expected).abs() < 1e-12);
+        mcg_test_support::assert_close!(se, expected, 1e-12);
     }
 
     #[test]
@@ -1023,11 +1027,7 @@ mod tests {
                     rule.integrate(a, b, g.f)
                 })
                 .sum();
-            assert!(
-                (q - g.integral).abs() < 1e-6 * g.integral.max(1.0),
-                "{}",
-                g.name
-            );
+            mcg_test_support::assert_close!(q, g.integral, 1e-6 * g.integral.max(1.0), "{}", g.name);
         }
         for lane in 0..TILE {
             let q: f64 = (0..2000)
@@ -1036,7 +1036,7 @@ mod tests {
                     rule.integrate(a, b, |x| lane_integrand(lane, x))
                 })
                 .sum();
-            assert!((q - lane_integral(lane)).abs() < 1e-9);
+            mcg_test_support::assert_close!(q, lane_integral(lane), 1e-9);
         }
         let q: f64 = (0..2000)
             .map(|k| {
@@ -1044,7 +1044,7 @@ mod tests {
                 rule.integrate(a, b, fig1_integrand)
             })
             .sum();
-        assert!((q - FIG1_INTEGRAL).abs() < 1e-9);
+        mcg_test_support::assert_close!(q, FIG1_INTEGRAL, 1e-9);
         for tech in FIG1_TECHNIQUES {
             let m: f64 = (0..2000)
                 .map(|k| {
@@ -1052,7 +1052,7 @@ mod tests {
                     rule.integrate(a, b, |x| tech.marginal_pdf(x))
                 })
                 .sum();
-            assert!((m - 1.0).abs() < 1e-9, "{tech:?}");
+            mcg_test_support::assert_close!(m, 1.0, 1e-9, "{tech:?}");
         }
         for g in sphere_integrands() {
             // Panels graded towards the first feature, uniform panels beyond, and the cap edge.
@@ -1062,11 +1062,7 @@ mod tests {
             breaks.sort_by(f64::total_cmp);
             breaks.dedup();
             let q = crate::integrate_sphere(dir(g.features[0]), &breaks, 512, g.f);
-            assert!(
-                (q - g.integral).abs() < 1e-4 * g.integral,
-                "{}: {q}",
-                g.name
-            );
+            mcg_test_support::assert_close!(q, g.integral, 1e-4 * g.integral, "{}: {q}", g.name);
         }
     }
 }

@@ -135,7 +135,7 @@ fn stochastic_rounding_reaches_the_target_on_average() {
                 (r.mean - f64::from(s)) / quantum,
                 r.z
             );
-            assert!((r.mean - f64::from(s)).abs() < quantum);
+            mcg_tests::assert_close!(r.mean, f64::from(s), quantum);
         }
     }
 }

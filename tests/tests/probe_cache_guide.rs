@@ -241,7 +241,7 @@ fn guide_from_heuristics_words_matches_table() {
         for o in 0..8 {
             let d = heuristics::octant_signs(o);
             let h = guide.h(p, d);
-            assert!((h - f[probe * 8 + o]).abs() <= 0.5 / 1023.0 + 1e-6);
+            mcg_tests::assert_close!(h, f[probe * 8 + o], 0.5 / 1023.0 + 1e-6);
         }
     }
 }

@@ -89,7 +89,7 @@ mod tests {
             };
             let f = Frame::from_normal(n);
             for v in [f.tangent, f.bitangent, f.normal] {
-                assert!((v.length() - 1.0).abs() < 1e-6, "{n}: {v}");
+                mcg_test_support::assert_close!(v.length(), 1.0, 1e-6, "{n}: {v}");
             }
             assert!(f.tangent.dot(f.bitangent).abs() < 1e-6);
             assert!(f.tangent.dot(f.normal).abs() < 1e-6);
