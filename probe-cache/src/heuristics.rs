@@ -254,25 +254,49 @@ impl HeuristicParams {
         self.lighting_weight
     }
 
-    /// f_c for a probe at `probe` seen from `camera` (eq. 10).
+    /// The camera-distance heuristic f_c for a probe at `probe` seen from `camera` (eq. 10).
     #[inline]
     #[must_use]
-    pub fn f_c(&self, probe: Vec3, camera: Vec3) -> f32 {
+    pub fn camera_distance(&self, probe: Vec3, camera: Vec3) -> f32 {
         camera_distance(probe, camera, self.camera_threshold)
     }
 
-    /// f_v for a hit at distance `t` along −ω (eq. 11).
+    /// The probe-visibility heuristic f_v for a hit at distance `t` along −ω (eq. 11).
     #[inline]
     #[must_use]
-    pub fn f_v(&self, t: f32) -> f32 {
+    pub fn probe_visibility(&self, t: f32) -> f32 {
         probe_visibility(t, self.voxel_diagonal)
     }
 
-    /// f_r for luminance `r` arriving along ω (eq. 12).
+    /// The incoming-radiance heuristic f_r for luminance `r` arriving along ω (eq. 12).
+    #[inline]
+    #[must_use]
+    pub fn incoming_radiance(&self, r: f32) -> f32 {
+        incoming_radiance(r, self.radiance_range)
+    }
+
+    /// f_c: the old name of [`HeuristicParams::camera_distance`].
+    #[deprecated(note = "renamed to `camera_distance`")]
+    #[inline]
+    #[must_use]
+    pub fn f_c(&self, probe: Vec3, camera: Vec3) -> f32 {
+        self.camera_distance(probe, camera)
+    }
+
+    /// f_v: the old name of [`HeuristicParams::probe_visibility`].
+    #[deprecated(note = "renamed to `probe_visibility`")]
+    #[inline]
+    #[must_use]
+    pub fn f_v(&self, t: f32) -> f32 {
+        self.probe_visibility(t)
+    }
+
+    /// f_r: the old name of [`HeuristicParams::incoming_radiance`].
+    #[deprecated(note = "renamed to `incoming_radiance`")]
     #[inline]
     #[must_use]
     pub fn f_r(&self, r: f32) -> f32 {
-        incoming_radiance(r, self.radiance_range)
+        self.incoming_radiance(r)
     }
 
     /// The stored heuristics of one probe octant (sec. 4.3): f_v, f_s = f_c f_v (eq. 19) and
@@ -312,7 +336,7 @@ pub fn compose_grid(
     }
     let layout = HeuristicsLayout::ADGI;
     for probe in 0..grid.probe_count() {
-        let f_c = params.f_c(grid.probe_position(grid.probe_coords(probe)), camera);
+        let f_c = params.camera_distance(grid.probe_position(grid.probe_coords(probe)), camera);
         for o in 0..OCTANTS {
             let i = probe * OCTANTS + o;
             let flags = layout.flags(out[i]);
@@ -449,9 +473,9 @@ mod tests {
             ),
             (1.0, 2.0, 4.0, 3.0)
         );
-        assert_eq!(p.f_r(2.0), 0.5);
-        assert_eq!(p.f_v(0.0), 1.0);
-        assert_eq!(p.f_c(Vec3::ZERO, Vec3::X), 1.0);
+        assert_eq!(p.incoming_radiance(2.0), 0.5);
+        assert_eq!(p.probe_visibility(0.0), 1.0);
+        assert_eq!(p.camera_distance(Vec3::ZERO, Vec3::X), 1.0);
     }
 
     #[test]
@@ -491,8 +515,8 @@ mod tests {
     fn value_stability() {
         let p = HeuristicParams::new(2.0, 0.866_025_4).unwrap();
         let probe = Vec3::new(1.0, 2.0, 3.0);
-        let f_c = p.f_c(probe, Vec3::new(0.0, 0.0, 0.5));
-        let f_v = p.f_v(0.3);
+        let f_c = p.camera_distance(probe, Vec3::new(0.0, 0.0, 0.5));
+        let f_v = p.probe_visibility(0.3);
         // f_c = e^{−(√11.25 − 2)} = 0.25818, f_v = e^{−0.6/0.866} = 0.50016,
         // f_s = 0.12913, f_d = 0.12913 · (0.2 + 2 · 0.6)/3 = 0.060261.
         let h = p.compose(f_c, f_v, 0.2, 0.6, 1);

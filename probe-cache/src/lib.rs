@@ -10,7 +10,7 @@
 //! | [`ProbeGrid`], [`ProbeCell`] | probe lattice: origin, spacing, counts; trilinear cell lookup | DDGI; ADGI sec. 3.1 |
 //! | `scene` (feature `scene`): `Scene`, `DynamicScene` | CPU test fixture: boxes, spheres, a rectangular light, one-bounce probe rays, a door that opens | ADGI sec. 5 (Fig. 1, 8) |
 //! | `reference` (feature `scene`): `reference_irradiance`, `reference_texel_irradiance` | reference probe irradiance, many stratified rays per texel direction (or per texel of a map) | ADGI sec. 5, "Reference" |
-//! | [`heuristics`], [`HeuristicParams`] | f_c, f_v, f_r; f_s, f_d; the 6-10-10 heuristics word | ADGI eq. 10-12, 19-20, sec. 4.3 |
+//! | [`heuristics`], [`HeuristicParams`] | camera distance f_c, probe visibility f_v, incoming radiance f_r; f_s, f_d; the 6-10-10 heuristics word | ADGI eq. 10-12, 19-20, sec. 4.3 |
 //! | [`GuidingFunction`], [`GuideParams`], [`Guide`], [`guiding_function::octant_feedback`] | h(p, ω) = exp(α ĝ/f)·f per probe octant; static and dynamic forms; the feedback ĝ | ADGI eq. 2, sec. 4.8, 4.9 |
 //! | [`ProxyGrid`] | probes grouped into 3×3×3 virtual proxies, max-pooled octants | ADGI sec. 4.9 |
 //! | [`temporal_gradient`], [`ChangeDetector`], [`TemporalTrigger`], [`SmoothingKernel`] | temporal gradients of f_v, f_r, trigger, 5×5×5 × octant smoothing | ADGI eq. 13-18, Fig. 6a |
@@ -66,12 +66,12 @@ mod error;
 mod grid;
 pub mod guiding_function;
 pub mod heuristics;
+mod irradiance_query;
 mod octahedral;
 pub mod pilot_rays;
 pub mod probe_chains;
 mod probe_texels;
 pub mod proxies;
-mod query;
 #[cfg(feature = "scene")]
 #[cfg_attr(docsrs, doc(cfg(feature = "scene")))]
 pub mod reference;
@@ -82,7 +82,7 @@ pub mod temporal_gradient;
 #[cfg(test)]
 mod test_support;
 mod texel_map;
-mod update;
+mod texel_update;
 
 pub use clip_volume::{ClipRegion, ClipVolume, ClipVolumes, Frustum};
 pub use equal_area::{equal_area_decode, equal_area_encode, equal_area_solid_angle};
@@ -90,6 +90,7 @@ pub use error::ProbeError;
 pub use grid::{ProbeCell, ProbeGrid};
 pub use guiding_function::{Guide, GuideParams, GuidingFunction, HeuristicField};
 pub use heuristics::HeuristicParams;
+pub use irradiance_query::{QueryConfig, TexelContent};
 pub use octahedral::{
     octahedral_decode, octahedral_encode, octahedral_solid_angle, octahedron_point,
 };
@@ -99,14 +100,13 @@ pub use probe_chains::{
 };
 pub use probe_texels::{ProbeTexels, RoundingMode, TexelConfig};
 pub use proxies::ProxyGrid;
-pub use query::{QueryConfig, TexelContent};
 #[cfg(feature = "scene")]
 pub use reference::{reference_irradiance, reference_texel_irradiance};
 #[cfg(feature = "scene")]
 pub use scene::{DynamicScene, ProbeRay, Scene, SceneEvent};
 pub use temporal_gradient::{ChangeDetector, SmoothingKernel, TemporalTrigger};
 pub use texel_map::{MAX_MAP_SIDE, MapKind, TexelMap};
-pub use update::{BlendWeights, RaySample};
+pub use texel_update::{BlendWeights, RaySample};
 
 /// The README's example, compiled and run as a doctest.
 #[cfg(doctest)]

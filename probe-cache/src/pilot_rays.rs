@@ -221,8 +221,8 @@ pub fn octant_heuristics(
     hits: &[PilotHit; OCTANTS],
     params: &HeuristicParams,
 ) -> ([f32; OCTANTS], [f32; OCTANTS]) {
-    let f_v = core::array::from_fn(|o| params.f_v(hits[o ^ 7].distance));
-    let f_r = core::array::from_fn(|o| params.f_r(hits[o].luminance));
+    let f_v = core::array::from_fn(|o| params.probe_visibility(hits[o ^ 7].distance));
+    let f_r = core::array::from_fn(|o| params.incoming_radiance(hits[o].luminance));
     (f_v, f_r)
 }
 

@@ -160,12 +160,14 @@ impl ChainKind {
     /// position and k_ω · √(π/256) for both z and φ, with (k_p, k_ω) = [`Self::step_scale`].
     ///
     /// # Errors
-    /// [`ProbeError::StepNotFinite`] if a scaled spacing overflows.
+    /// [`ProbeError::ChainStep`] with the walk's [`WalkError`](mcg_markov_guide::WalkError)
+    /// if a scaled spacing is not a valid step (it overflows, or exceeds
+    /// [`RandomWalk::STEP_MAX`]).
     pub fn walk(self, grid: &ProbeGrid) -> Result<RandomWalk<CHAIN_DIMENSIONS>, ProbeError> {
         let (kp, kd) = self.step_scale();
         let s = grid.spacing() * kp;
         let a = ADGI_DIRECTION_STEP * kd;
-        RandomWalk::new([s.x, s.y, s.z, a, a]).map_err(|_| ProbeError::StepNotFinite)
+        RandomWalk::new([s.x, s.y, s.z, a, a]).map_err(ProbeError::ChainStep)
     }
 }
 
@@ -184,8 +186,8 @@ pub struct ProbeSample {
     /// The sampled unit direction ω. Trace from the probe along ω for irradiance and along −ω
     /// for visibility (sec. 4.8); map ω to a texel with the probe's texel map.
     pub direction: Vec3,
-    /// h at the sample.
-    pub h: f32,
+    /// The guiding function's value h(p, ω) (ADGI eq. 2) at the sample.
+    pub guiding_value: f32,
 }
 
 /// Counters of the last [`ProbeChains::step_frame`] or [`ProbeChains::step_frame_parallel`].
@@ -232,7 +234,7 @@ pub struct FrameStats {
 /// for _frame in 0..4 {
 ///     for s in chains.step_frame(&guide, &mut uniforms) {
 ///         // Trace from grid.probe_position(s.probe) along s.direction, update its texel.
-///         assert!(s.probe.x < 2 && s.direction.z >= 0.0 && s.h > 0.0);
+///         assert!(s.probe.x < 2 && s.direction.z >= 0.0 && s.guiding_value > 0.0);
 ///     }
 /// }
 /// # Ok::<(), mcg_probe_cache::ProbeError>(())
@@ -257,7 +259,7 @@ impl ProbeChains {
     /// uniform on the sphere), running `schedule` per frame.
     ///
     /// # Errors
-    /// [`ProbeError::NoChains`] for `count = 0`; [`ProbeError::StepNotFinite`] as
+    /// [`ProbeError::NoChains`] for `count = 0`; [`ProbeError::ChainStep`] as
     /// [`ChainKind::walk`].
     pub fn new(
         cells: ProxyGrid,
@@ -419,7 +421,7 @@ impl ProbeChains {
         if at.probe.is_none() {
             return 0.0;
         }
-        finite_non_negative_or_zero(guide.h(at.position, at.direction))
+        finite_non_negative_or_zero(guide.guiding_value(at.position, at.direction))
     }
 
     /// Runs one frame of every chain (Alg. 1) against `guide` and returns the emitted samples
@@ -619,7 +621,7 @@ impl ChainRunner {
                 octant: octant(current.direction) as u8,
                 position: current.position,
                 direction: current.direction,
-                h: chain.target,
+                guiding_value: chain.target,
             });
             stats.emitted += 1;
         }
@@ -648,6 +650,23 @@ struct Located {
 mod tests {
     use super::*;
     use crate::{GuideParams, GuidingFunction};
+
+    #[test]
+    fn rejected_steps_keep_the_walks_cause() {
+        use core::error::Error;
+        use mcg_markov_guide::WalkError;
+        let grid = |s: f32| ProbeGrid::new(Vec3::ZERO, Vec3::splat(s), UVec3::splat(2)).unwrap();
+        // 3 · 10³⁰ is above the walk's maximum step; 3 · f32::MAX overflows.
+        let err = ChainKind::Dynamic.walk(&grid(1e30)).unwrap_err();
+        assert_eq!(err, ProbeError::ChainStep(WalkError::StepAboveMax));
+        assert!(
+            err.source()
+                .is_some_and(|c| c.to_string().contains("above"))
+        );
+        let err = ChainKind::Dynamic.walk(&grid(f32::MAX)).unwrap_err();
+        assert_eq!(err, ProbeError::ChainStep(WalkError::StepNotFinite));
+        assert!(ChainKind::Static.walk(&grid(1.0)).is_ok());
+    }
 
     fn lcg(seed: u32) -> impl FnMut() -> f32 {
         let mut s = seed;
@@ -734,7 +753,7 @@ mod tests {
             for s in chains.step_frame(&guide, &mut su) {
                 assert_eq!(s.cell as usize, hot);
                 assert_eq!(s.octant, 6);
-                assert_eq!(s.h, 0.7);
+                assert_eq!(s.guiding_value, 0.7);
                 assert!(s.direction.y < 0.0 && s.direction.z < 0.0);
                 total += 1;
             }

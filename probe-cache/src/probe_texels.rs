@@ -2,6 +2,11 @@
 //! irradiance map and one visibility map per probe, updated by ADGI's moving average with
 //! compare-and-swap, in a memory layout that uploads to the GPU as it is.
 //!
+//! This file holds the storage and its accessors; `texel_update.rs` holds the methods that
+//! write texels from rays ([`ProbeTexels::update_sample`], [`ProbeTexels::blend_rays`]) and
+//! `irradiance_query.rs` those that read irradiance back ([`ProbeTexels::irradiance_at`],
+//! [`ProbeTexels::convolved`]).
+//!
 //! # Memory layout
 //! Two flat `u32` arrays, each **probe-major, then row-major texels, border included**:
 //!

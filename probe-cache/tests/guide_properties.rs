@@ -44,7 +44,7 @@ proptest! {
         cap in 0.0f32..=64.0,
     ) {
         for params in [GuideParams::STATIC, GuideParams::DYNAMIC, GuideParams::new(alpha, cap).unwrap()] {
-            let h = params.h(f, g);
+            let h = params.guiding_value(f, g);
             prop_assert!(h >= 0.0 && h.is_finite(), "h({f}, {g}) = {h} with {params:?}");
             // f is clamped to [0, 1], so h ≤ e^cap.
             prop_assert!(h <= params.exponent_cap().exp() * (1.0 + 1e-6));
@@ -60,7 +60,7 @@ proptest! {
     ) {
         let grid = ProbeGrid::new(Vec3::ZERO, Vec3::ONE, UVec3::new(2, 1, 1)).unwrap();
         let guide = GuidingFunction::new(ProxyGrid::probes(grid), &table, Some(&feedback), GuideParams::STATIC).unwrap();
-        let h = guide.h(p, d);
+        let h = guide.guiding_value(p, d);
         prop_assert!(h >= 0.0 && h.is_finite());
     }
 
