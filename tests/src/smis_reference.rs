@@ -1027,7 +1027,13 @@ mod tests {
                     rule.integrate(a, b, g.f)
                 })
                 .sum();
-            mcg_test_support::assert_close!(q, g.integral, 1e-6 * g.integral.max(1.0), "{}", g.name);
+            mcg_test_support::assert_close!(
+                q,
+                g.integral,
+                1e-6 * g.integral.max(1.0),
+                "{}",
+                g.name
+            );
         }
         for lane in 0..TILE {
             let q: f64 = (0..2000)

@@ -622,8 +622,17 @@ fn error_label(e: Option<f64>) -> String {
     }
 }
 
+/// The precision subsection: the sweep, one chart per angle, the table and the text.
 fn precision(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
     let sweeps = precision_sweep()?;
+    precision_charts(ctx, &sweeps)?;
+    let table = precision_table(&sweeps);
+    precision_text(section, &sweeps, table);
+    Ok(())
+}
+
+/// One log-log chart of the relative error per angle, every formula in it.
+fn precision_charts(ctx: &Context<'_>, sweeps: &[Sweep]) -> Result<()> {
     let bar = ctx.progress(Angle::ALL.len() as u64, "vMF: precision charts");
     for angle in Angle::ALL {
         let mut series = Vec::new();
@@ -669,22 +678,12 @@ fn precision(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
         bar.inc(1);
     }
     bar.finish_and_clear();
+    Ok(())
+}
 
-    // Summary numbers.
+/// The table: max error per formula and angle, and the κ ranges where each formula fails.
+fn precision_table(sweeps: &[Sweep]) -> Table {
     let find = |f: Formula, a: Angle| sweeps.iter().find(|s| s.formula == f && s.angle == a);
-    let textbook_peak_overflow = first_failure(1.0, 1000.0, |k| {
-        Vmf::new(mean_direction(), k).is_ok_and(|l| !Formula::Textbook.eval(&l, l.mu()).is_finite())
-    });
-    let ours_max_where = |angles: &[Angle]| {
-        sweeps
-            .iter()
-            .filter(|s| s.formula == Formula::Ours && angles.contains(&s.angle))
-            .filter_map(Sweep::max_error)
-            .fold(0.0, f64::max)
-    };
-    let ours_near = ours_max_where(&[Angle::Peak, Angle::LobeWidth]);
-    let ours_max = ours_max_where(&Angle::ALL);
-
     let mut table = Table::new(
         &format!(
             "Relative error |pdf_f32/pdf_f64 − 1| over {SWEEP_POINTS} κ log-spaced in [10⁻⁸, 10⁶] \
@@ -723,7 +722,23 @@ fn precision(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
         row.push(bad_ranges(&large));
         table.push_row(row);
     }
+    table
+}
 
+/// The text around the charts and the table, with the summary numbers.
+fn precision_text(section: &mut Section, sweeps: &[Sweep], table: Table) {
+    let textbook_peak_overflow = first_failure(1.0, 1000.0, |k| {
+        Vmf::new(mean_direction(), k).is_ok_and(|l| !Formula::Textbook.eval(&l, l.mu()).is_finite())
+    });
+    let ours_max_where = |angles: &[Angle]| {
+        sweeps
+            .iter()
+            .filter(|s| s.formula == Formula::Ours && angles.contains(&s.angle))
+            .filter_map(Sweep::max_error)
+            .fold(0.0, f64::max)
+    };
+    let ours_near = ours_max_where(&[Angle::Peak, Angle::LobeWidth]);
+    let ours_max = ours_max_where(&Angle::ALL);
     let overflow_text = textbook_peak_overflow
         .map(|k| format!("{k}"))
         .unwrap_or_else(|| "(no overflow found in [1, 1000])".to_owned());
@@ -785,7 +800,6 @@ fn precision(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
         ours_near / 2f64.powi(-24),
         error_label(Some(ours_max)),
     ));
-    Ok(())
 }
 
 #[cfg(test)]
