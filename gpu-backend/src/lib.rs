@@ -39,8 +39,6 @@
 //!   anyway, and its parity tests allow for fused operations.
 //!
 //! [wgpu]: https://wgpu.rs
-#![deny(missing_docs)]
-#![forbid(unsafe_code)]
 #![cfg_attr(docsrs, feature(doc_cfg))]
 
 pub use mcg_color_codec;
