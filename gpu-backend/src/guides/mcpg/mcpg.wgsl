@@ -416,8 +416,20 @@ fn mcpg_begin(vertex: McpgVertex, u: McpgBeginUniforms) -> McpgGuidedVertex {
     v.count = count;
     let now = f32(mcpg_frame());
     let touch = mcpg_params.age_tracking != 0u;
-    var candidates: array<MarkovGridState, 8>;
-    for (var k = 0u; k < count; k += 1u) {
+    var cosine = Vmf(vec3<f32>(0.0), 0.0);
+    var has_cosine = false;
+    if mcpg_params.hemisphere == MCPG_HEMISPHERE_COSINE_PRODUCT && vertex.has_normal != 0u {
+        has_cosine = mcpg_vmf_new(vertex.normal, VMF_CLAMPED_COSINE_KAPPA, &cosine);
+    }
+    // One pass over a fixed trip count (the compiler can unroll it and keep the per-candidate
+    // arrays in registers): load, prepare, offer to the reservoir, and build the lobe of every
+    // candidate with w̄ > 0 (a w̄ > 0 makes Σw̄ > 0, when the CPU builds them all); `shares`
+    // holds w̄ until Σw̄ is known, `lobeless` marks the candidates without a lobe at x.
+    var lobeless = 0u;
+    for (var k = 0u; k < MCPG_MAX_CANDIDATES; k += 1u) {
+        if k >= count {
+            continue;
+        }
         let c = u.candidates[k];
         let key = mcpg_key(x, v.normal_class, v.target_level, c.x, c.y, c.z);
         let slot = mcpg_find(mcpg_table(key.is_static), key.key, touch);
@@ -429,7 +441,6 @@ fn mcpg_begin(vertex: McpgVertex, u: McpgBeginUniforms) -> McpgGuidedVertex {
             v.static_mask |= select(0u, 1u << k, key.is_static);
         }
         let candidate = mcpg_prepare_candidate(state, collided, key.is_static, x, vertex, now);
-        candidates[k] = candidate;
         // `Reservoir::offer`: Σw̄ saturates at f32::MAX; weight 0 is never taken.
         let w = markov_grid_state_resampling_weight(candidate);
         v.weight_sum = min(v.weight_sum + w, MCG_F32_MAX);
@@ -437,25 +448,12 @@ fn mcpg_begin(vertex: McpgVertex, u: McpgBeginUniforms) -> McpgGuidedVertex {
             v.selected = k;
             v.chosen = candidate;
         }
-    }
-    let total = v.weight_sum;
-    if !(total > 0.0) {
-        return v;
-    }
-    var cosine = Vmf(vec3<f32>(0.0), 0.0);
-    var has_cosine = false;
-    if mcpg_params.hemisphere == MCPG_HEMISPHERE_COSINE_PRODUCT && vertex.has_normal != 0u {
-        has_cosine = mcpg_vmf_new(vertex.normal, VMF_CLAMPED_COSINE_KAPPA, &cosine);
-    }
-    for (var k = 0u; k < count; k += 1u) {
-        let s = candidates[k];
-        let w = markov_grid_state_resampling_weight(s);
         if !(w > 0.0) {
             continue;
         }
-        let share = w / total;
+        v.shares[k] = w;
         var lobe: Vmf;
-        if markov_grid_state_lobe(s, x, mcpg_distance_prior(s, x), &lobe) {
+        if markov_grid_state_lobe(candidate, x, mcpg_distance_prior(candidate, x), &lobe) {
             if has_cosine {
                 // The product's lobe (MCPG with the clamped-cosine vMF): μ' ∝ κμ + κ_c n, κ' = |κμ + κ_c n|.
                 let m = lobe.mu * lobe.kappa + cosine.mu * cosine.kappa;
@@ -466,9 +464,22 @@ fn mcpg_begin(vertex: McpgVertex, u: McpgBeginUniforms) -> McpgGuidedVertex {
             }
             v.lobes[k] = lobe;
             v.normalizations[k] = vmf_normalization(lobe.kappa);
-            v.shares[k] = share;
         } else {
+            lobeless |= 1u << k;
+        }
+    }
+    let total = v.weight_sum;
+    for (var k = 0u; k < MCPG_MAX_CANDIDATES; k += 1u) {
+        let w = v.shares[k];
+        if !(w > 0.0) {
+            continue;
+        }
+        let share = w / total;
+        if (lobeless & (1u << k)) != 0u {
             v.scatter_share += share;
+            v.shares[k] = 0.0;
+        } else {
+            v.shares[k] = share;
         }
     }
     return v;
@@ -514,7 +525,7 @@ fn mcpg_pdf_with(v: ptr<function, McpgGuidedVertex>, w: vec3<f32>, scatter_pdf: 
         return scatter_pdf;
     }
     var lobes = (*v).scatter_share * scatter_pdf;
-    for (var k = 0u; k < (*v).count; k += 1u) {
+    for (var k = 0u; k < MCPG_MAX_CANDIDATES; k += 1u) {
         let share = (*v).shares[k];
         if share > 0.0 {
             let lobe = (*v).lobes[k];
