@@ -1,24 +1,24 @@
 //! The renderer of `mcg-demo render`: built-in scenes, glTF errors, the furnace test, `bsdf`
 //! against `nee`, and the files the command writes.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
+use common::{furnace, scenes_dir};
 use glam::Vec3;
-use mcg_demo::render::bvh::{Hit, Triangle};
+use mcg_demo::render::bvh::Hit;
 use mcg_demo::render::cpu::{
     BsdfSampler, Method, Observation, RenderSettings, Vertex, VertexSampler, path_seed,
     render_frame, trace_path,
 };
-use mcg_demo::render::material::{BsdfSample, Material};
-use mcg_demo::render::scene::{Camera, Scene, SceneError, SceneFile, frame_time};
+use mcg_demo::render::guided::{McpgSampler, new_guide};
+use mcg_demo::render::material::BsdfSample;
+use mcg_demo::render::scene::{SceneError, SceneFile, frame_time};
 use mcg_demo::render::scene_generator::{DOOR_OPENS_AT_FRAME, SCENE_NAMES, built_in_scenes};
 use mcg_demo::render::{Device, RenderArgs, render, write_outputs};
 use mcg_tests::RunningStats;
 use statrs::distribution::{ContinuousCDF, Normal};
-
-fn scenes_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
-}
 
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("mcg-render-{name}-{}", std::process::id()));
@@ -222,69 +222,23 @@ fn gltf_errors_are_typed_and_name_the_file() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// A closed cube of side 2 m around the camera; every face Lambertian of albedo `rho` and
-/// emitting `le` from its inner (front) face.
-fn furnace(rho: Vec3, le: Vec3) -> Scene {
-    let mut tris = Vec::new();
-    let c = [
-        Vec3::new(-1.0, -1.0, -1.0),
-        Vec3::new(1.0, -1.0, -1.0),
-        Vec3::new(1.0, 1.0, -1.0),
-        Vec3::new(-1.0, 1.0, -1.0),
-        Vec3::new(-1.0, -1.0, 1.0),
-        Vec3::new(1.0, -1.0, 1.0),
-        Vec3::new(1.0, 1.0, 1.0),
-        Vec3::new(-1.0, 1.0, 1.0),
-    ];
-    // Faces listed counter-clockwise as seen from inside the cube.
-    for [a, b, cc, d] in [
-        [0, 1, 2, 3],
-        [4, 7, 6, 5],
-        [0, 4, 5, 1],
-        [3, 2, 6, 7],
-        [0, 3, 7, 4],
-        [1, 5, 6, 2],
-    ] {
-        tris.push(Triangle::new(c[a], c[b], c[cc], 0));
-        tris.push(Triangle::new(c[a], c[cc], c[d], 0));
-    }
-    for t in &tris {
-        assert!(
-            t.cross().dot(-Vec3::from(t.v0)) > 0.0,
-            "front faces point inwards"
-        );
-    }
-    let camera = Camera {
-        position: Vec3::new(0.1, -0.2, 0.3),
-        right: Vec3::X,
-        up: Vec3::Y,
-        forward: Vec3::NEG_Z,
-        yfov: 1.2,
-    };
-    Scene::new(
-        camera,
-        &tris,
-        vec![Material::lambertian(rho, le)],
-        Vec::new(),
-    )
-    .unwrap()
-}
-
 /// Furnace test. Hypothesis: in a closed room of one albedo ρ and one emission L_e on every
 /// inner face, every pixel's radiance with B scattering events is Σ_{k=0}^{B} ρ^k L_e
 /// (per channel). Sample: 16×16 pixels × 16 spp, B = 3, seed 7, ρ = (0.5, 0.3, 0.8),
 /// L_e = (1, 2, 0.5); the 256 pixel values are independent. Threshold: |z| < 5 on the pixel
-/// mean per channel and method (6 tests, α ≈ 3.4·10⁻⁶), with an absolute floor of 10⁻⁵·L for
+/// mean per channel and method (9 tests, α ≈ 5·10⁻⁶), with an absolute floor of 10⁻⁵·L for
 /// `bsdf`, whose estimate here has no variance (each bounce multiplies by exactly ρ). A
 /// missing MIS weight, a wrong light pdf or an extra bounce moves the mean by ≥ 5 %, hundreds
-/// of standard errors.
+/// of standard errors. `mcpg` is tested on its fourth frame, after three frames of learning
+/// (it must show spread, i.e. have sampled lobes); dividing its samples by the material's
+/// density instead of the guided mixture's fails it (checked once).
 #[test]
 fn furnace_matches_the_truncated_neumann_series() {
     let (rho, le) = (Vec3::new(0.5, 0.3, 0.8), Vec3::new(1.0, 2.0, 0.5));
     let scene = furnace(rho, le);
     let bounces = 3;
     let expected: Vec3 = (0..=bounces).map(|k| rho.powf(k as f32) * le).sum();
-    for method in [Method::Bsdf, Method::Nee] {
+    for method in [Method::Bsdf, Method::Nee, Method::Mcpg] {
         let settings = RenderSettings {
             width: 16,
             height: 16,
@@ -293,7 +247,26 @@ fn furnace_matches_the_truncated_neumann_series() {
             seed: 7,
             method,
         };
-        let image = render_frame(&scene, &settings, 0, || BsdfSampler, || ());
+        let image = if method == Method::Mcpg {
+            // Three frames of learning first, so that the tested frame samples the lobes.
+            let mut guide = new_guide(&scene, 16).unwrap();
+            for frame in 0..3 {
+                render_frame(&scene, &settings, frame, || McpgSampler::new(&guide), || ());
+                guide.end_frame();
+            }
+            let image = render_frame(&scene, &settings, 3, || McpgSampler::new(&guide), || ());
+            // BSDF sampling is exact here (each bounce multiplies by ρ): spread in the
+            // pixels shows that guided lobes were sampled.
+            let spread: RunningStats = image.iter().map(|p| f64::from(p.x)).collect();
+            assert!(
+                spread.variance().sqrt() > 1e-3 * f64::from(expected.x),
+                "mcpg sampled no lobe: {}",
+                spread.variance().sqrt()
+            );
+            image
+        } else {
+            render_frame(&scene, &settings, 0, || BsdfSampler, || ())
+        };
         for c in 0..3 {
             let stats: RunningStats = image.iter().map(|p| f64::from(p[c])).collect();
             let diff = stats.mean() - f64::from(expected[c]);
@@ -309,24 +282,42 @@ fn furnace_matches_the_truncated_neumann_series() {
     }
 }
 
+/// Asserts that two sets of [`common::tile_stats`] agree: per tile and channel |z| below the
+/// Bonferroni threshold Φ⁻¹(1 − α/(2·tests)) at family-wise `alpha`; returns the worst |z|.
+fn assert_tiles_agree(a: &[[(f64, f64); 3]], b: &[[(f64, f64); 3]], alpha: f64, what: &str) -> f64 {
+    let tests = (a.len() * 3) as f64;
+    let threshold = Normal::standard().inverse_cdf(1.0 - alpha / (2.0 * tests));
+    let mut worst: f64 = 0.0;
+    for (t, (ta, tb)) in a.iter().zip(b).enumerate() {
+        for c in 0..3 {
+            let z = (ta[c].0 - tb[c].0) / (ta[c].1 + tb[c].1).sqrt();
+            assert!(
+                z.abs() < threshold,
+                "{what}: tile {t} channel {c}: {} vs {} z = {z:.2} (threshold {threshold:.2})",
+                ta[c].0,
+                tb[c].0
+            );
+            worst = worst.max(z.abs());
+        }
+    }
+    assert!(a.iter().flatten().all(|m| m.0 > 0.0), "every tile is lit");
+    eprintln!("{what}: worst |z| = {worst:.2} of threshold {threshold:.2}");
+    worst
+}
+
 /// Hypothesis: `bsdf` and `nee` estimate the same image. Scene: the built-in many-lights room,
 /// 48×48 pixels (9 tiles of 16×16), B = 2, 64 independent frames of 4 spp per method (seed
 /// 11). Per tile and channel, the mean over its pixels and frames is compared between the two
-/// methods; its variance is Σ_pixels s²_pixel / (64·256²), with s² the sample variance of the
-/// pixel over the 64 frames (16 128 degrees of freedom per tile). Threshold: Bonferroni over the
-/// 27 tile-channel tests at a family-wise α = 10⁻⁴, |z| < Φ⁻¹(1 − α/54) ≈ 4.6. Dropping the
-/// MIS weight of emitter hits in `nee` (double counting, +26 % in the first tile) fails with
-/// |z| = 6.3 (checked once).
+/// methods ([`common::tile_stats`], 16 128 degrees of freedom per tile). Threshold: Bonferroni over
+/// the 27 tile-channel tests at a family-wise α = 10⁻⁴, |z| < Φ⁻¹(1 − α/54) ≈ 4.6. Dropping
+/// the MIS weight of emitter hits in `nee` (double counting, +26 % in the first tile) fails
+/// with |z| = 6.3 (checked once).
 #[test]
 fn bsdf_and_nee_agree_per_tile() {
     let file = SceneFile::open(scenes_dir().join("many_lights_room.gltf")).unwrap();
     let scene = file.build(0.0).unwrap();
-    let (w, h, frames, tile) = (48u32, 48u32, 64u32, 16u32);
-    let tiles = (w / tile) * (h / tile);
-    let alpha = 1e-4;
-    let threshold = Normal::standard().inverse_cdf(1.0 - alpha / (2.0 * f64::from(tiles * 3)));
-    // Per method: per tile and channel, (mean, variance of the mean).
-    let tile_stats = |method| {
+    let (w, h, frames) = (48u32, 48u32, 64u32);
+    let tiles = |method| {
         let settings = RenderSettings {
             width: w,
             height: h,
@@ -335,53 +326,58 @@ fn bsdf_and_nee_agree_per_tile() {
             seed: 11,
             method,
         };
-        let mut pixels = vec![
-            [
-                RunningStats::new(),
-                RunningStats::new(),
-                RunningStats::new()
-            ];
-            (w * h) as usize
-        ];
-        for f in 0..frames {
-            for (s, p) in
-                pixels
-                    .iter_mut()
-                    .zip(render_frame(&scene, &settings, f, || BsdfSampler, || ()))
-            {
-                for c in 0..3 {
-                    s[c].push(f64::from(p[c]));
-                }
-            }
-        }
-        let mut out = vec![[(0.0, 0.0); 3]; tiles as usize];
-        for (i, s) in pixels.iter().enumerate() {
-            let (x, y) = (i as u32 % w, i as u32 / w);
-            let t = ((y / tile) * (w / tile) + x / tile) as usize;
-            let n = f64::from(tile * tile);
-            for c in 0..3 {
-                out[t][c].0 += s[c].mean() / n;
-                out[t][c].1 += s[c].variance() / (f64::from(frames) * n * n);
-            }
-        }
-        out
+        common::tile_stats((w, h, 16, frames), |f| {
+            render_frame(&scene, &settings, f, || BsdfSampler, || ())
+        })
     };
-    let (a, b) = (tile_stats(Method::Bsdf), tile_stats(Method::Nee));
-    let mut worst: f64 = 0.0;
-    for t in 0..tiles as usize {
-        for c in 0..3 {
-            let z = (a[t][c].0 - b[t][c].0) / (a[t][c].1 + b[t][c].1).sqrt();
-            assert!(
-                z.abs() < threshold,
-                "tile {t} channel {c}: bsdf {} nee {} z = {z:.2} (threshold {threshold:.2})",
-                a[t][c].0,
-                b[t][c].0
-            );
-            worst = worst.max(z.abs());
+    assert_tiles_agree(
+        &tiles(Method::Bsdf),
+        &tiles(Method::Nee),
+        1e-4,
+        "bsdf vs nee",
+    );
+}
+
+/// Hypothesis: `mcpg` is unbiased — the mean of independent runs equals the `nee` image.
+/// Scene: the built-in hidden-light room, 32×32 pixels (4 tiles of 16×16), B = 3. `mcpg`:
+/// 32 independent runs (seeds 100–131), each a fresh guide learning over 4 frames of 4 spp;
+/// a run's sample is its mean image (the frames of one run share the guide and are not
+/// independent). `nee`: 128 independent frames of 4 spp (seed 12). Per tile and channel the
+/// means are compared with [`common::tile_stats`] (7 936 and 32 512 degrees of freedom); threshold:
+/// Bonferroni over the 12 tests at family-wise α = 10⁻⁴, |z| < Φ⁻¹(1 − α/24) ≈ 4.5. Dividing
+/// the guided samples by the material's density instead of the guided mixture's fails it
+/// (checked once).
+#[test]
+fn mcpg_agrees_with_nee_per_tile() {
+    let file = SceneFile::open(scenes_dir().join("hidden_light_room.gltf")).unwrap();
+    let scene = file.build(0.0).unwrap();
+    let (w, h) = (32u32, 32u32);
+    let settings = |method, seed| RenderSettings {
+        width: w,
+        height: h,
+        spp: 4,
+        bounces: 3,
+        seed,
+        method,
+    };
+    let nee = settings(Method::Nee, 12);
+    let reference = common::tile_stats((w, h, 16, 128), |f| {
+        render_frame(&scene, &nee, f, || BsdfSampler, || ())
+    });
+    let guided = common::tile_stats((w, h, 16, 32), |run| {
+        let s = settings(Method::Mcpg, 100 + run);
+        let mut guide = new_guide(&scene, h).unwrap();
+        let mut sum = vec![Vec3::ZERO; (w * h) as usize];
+        for f in 0..4 {
+            let image = render_frame(&scene, &s, f, || McpgSampler::new(&guide), || ());
+            guide.end_frame();
+            for (a, p) in sum.iter_mut().zip(image) {
+                *a += p / 4.0;
+            }
         }
-    }
-    assert!(a.iter().flatten().all(|m| m.0 > 0.0), "every tile is lit");
-    eprintln!("bsdf vs nee: worst |z| = {worst:.2} of threshold {threshold:.2}");
+        sum
+    });
+    assert_tiles_agree(&guided, &reference, 1e-4, "mcpg vs nee");
 }
 
 /// `render` + `write_outputs`: the three files exist, the JSON carries one time and one error

@@ -33,6 +33,9 @@ pub enum Method {
     Bsdf,
     /// BSDF sampling plus light sampling, combined by multiple importance sampling.
     Nee,
+    /// MCPG's guide (Alber et al. 2025) at every scattering vertex, no light sampling: the
+    /// guide learns where light comes from without being told where the lights are.
+    Mcpg,
 }
 
 impl Method {
@@ -42,6 +45,7 @@ impl Method {
         match self {
             Self::Bsdf => "bsdf",
             Self::Nee => "nee",
+            Self::Mcpg => "mcpg",
         }
     }
 }
@@ -90,6 +94,19 @@ pub struct Observation {
     pub sample: BsdfSample,
     /// Incident radiance along `sample.direction`, linear RGB.
     pub radiance: Vec3,
+    /// What the sampled ray hit; `None` when it left the scene.
+    pub next: Option<NextHit>,
+}
+
+/// The surface a sampled ray hit, as [`Observation::next`] reports it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NextHit {
+    /// The hit point.
+    pub position: Vec3,
+    /// The unit geometric normal, turned towards the ray's origin.
+    pub normal: Vec3,
+    /// The radiance the hit surface emits back along the ray (0 from a back face).
+    pub emitted: Vec3,
 }
 
 /// The per-vertex direction sampler of the path loop: MCPG's seam (begin with the vertex,
@@ -102,6 +119,12 @@ pub trait VertexSampler {
     fn pdf(&self, vertex: &Vertex, wi: Vec3) -> f32;
     /// Called once per sampled vertex when the path is complete, in path order.
     fn finish(&mut self, observation: &Observation);
+    /// Called when a path starts, with a seed derived from the path's random stream (for
+    /// samplers that draw uniforms of their own, as a guide's lookups and updates do). The
+    /// default ignores it.
+    fn begin_path(&mut self, seed: u32) {
+        let _ = seed;
+    }
 }
 
 /// Plain BSDF sampling ([`Material::sample`]); learns nothing.
@@ -141,7 +164,7 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
 
 /// Most scattering events a path records for [`VertexSampler::finish`]; deeper vertices are
 /// still traced but not reported.
-const MAX_RECORDED: usize = 16;
+pub(crate) const MAX_RECORDED: usize = 16;
 
 /// A vertex of the path as [`VertexSampler::finish`] will need it.
 #[derive(Clone, Copy)]
@@ -154,7 +177,13 @@ struct Recorded {
     throughput: Vec3,
     /// The share of the next hit's emission that its MIS weight left out.
     discarded: Vec3,
+    /// What the sampled ray hit.
+    next: Option<NextHit>,
 }
+
+/// The salt of [`VertexSampler::begin_path`]'s seed: the sampler's stream starts away from
+/// the path's.
+const SAMPLER_SALT: u32 = 0x5bd1_e995;
 
 /// Traces one path from the camera ray `(origin, direction)` and returns its radiance.
 pub fn trace_path<S: VertexSampler>(
@@ -166,6 +195,7 @@ pub fn trace_path<S: VertexSampler>(
     direction: Vec3,
     rng: &mut u32,
 ) -> Vec3 {
+    sampler.begin_path(pcg_hash(*rng ^ SAMPLER_SALT));
     let mut u = || next_uniform(rng);
     let mut radiance = Vec3::ZERO;
     let mut throughput = Vec3::ONE;
@@ -183,6 +213,20 @@ pub fn trace_path<S: VertexSampler>(
         let n_front = cross / (2.0 * area);
         let cos_front = -n_front.dot(d);
         let position = o + hit.t * d;
+        if let Some(Some(r)) = depth
+            .checked_sub(1)
+            .and_then(|d| recorded.get_mut(d as usize))
+        {
+            r.next = Some(NextHit {
+                position,
+                normal: if cos_front > 0.0 { n_front } else { -n_front },
+                emitted: if cos_front > 0.0 {
+                    material.emission()
+                } else {
+                    Vec3::ZERO
+                },
+            });
+        }
         if cos_front > 0.0 && material.is_emitter() {
             let weight = if method == Method::Nee && last_pdf > 0.0 {
                 let light_pdf = tri.emitter_pmf / area * hit.t * hit.t / cos_front;
@@ -232,6 +276,7 @@ pub fn trace_path<S: VertexSampler>(
                 before,
                 throughput,
                 discarded: Vec3::ZERO,
+                next: None,
             });
         }
         last_pdf = sample.pdf;
@@ -249,6 +294,7 @@ pub fn trace_path<S: VertexSampler>(
             before,
             throughput,
             discarded,
+            next,
         } = r;
         let gained = radiance - *before + *discarded;
         let incident = Vec3::select(
@@ -260,6 +306,7 @@ pub fn trace_path<S: VertexSampler>(
             vertex: *vertex,
             sample: *sample,
             radiance: incident,
+            next: *next,
         });
     }
     radiance

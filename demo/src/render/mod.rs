@@ -1,6 +1,6 @@
 //! The renderer: glTF 2.0 scenes path traced with and without mcg's guides.
 //!
-//! `mcg-demo render --scene FILE --method bsdf|nee …` renders a scene and writes
+//! `mcg-demo render --scene FILE --method bsdf|nee|mcpg …` renders a scene and writes
 //! `<out>/<method>.exr` (the mean over all frames, linear RGB), `<out>/<method>.png`
 //! (sRGB-encoded, clipped) and `<out>/<method>.json` (settings, device, per-frame times and,
 //! with `--reference`, per-frame errors of the running mean). `mcg-demo scenes` rewrites the
@@ -9,9 +9,11 @@
 //! | module | what it does |
 //! |---|---|
 //! | [`scene`] | glTF loading ([`scene::SceneFile`]), animation, camera, the traceable [`scene::Scene`] |
-//! | [`bvh`] | the flattened `#[repr(C)]` BVH and triangle layout, built by `obvhs`, walked by the CPU tracer (and by a WGSL twin later) |
+//! | [`bvh`] | the flattened `#[repr(C)]` BVH and triangle layout, built by `obvhs`, walked by the CPU tracer and its WGSL twin |
 //! | [`material`] | Lambertian + GGX conductor materials with emission |
 //! | [`cpu`] | the CPU path tracer (rayon), methods `bsdf` and `nee`, the per-vertex sampler seam of the guides |
+//! | [`gpu`] | the WGSL twin of the CPU tracer on wgpu, over the same BVH, triangle and material buffers |
+//! | [`guided`] | `mcpg` on the CPU: the MCPG guide behind the sampler seam |
 //! | [`output`] | EXR/PNG files, RMSE and relative MSE |
 //! | [`scene_generator`] | the built-in scenes |
 
@@ -20,19 +22,25 @@
 
 pub mod bvh;
 pub mod cpu;
+pub mod gpu;
+pub mod guided;
 pub mod material;
 pub mod output;
 pub mod scene;
 pub mod scene_generator;
 
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Instant;
 
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
+use mcg_markov_guide::mcpg::Guide;
 
 use crate::Result;
 use cpu::{BsdfSampler, Method, RenderSettings, render_frame};
+use gpu::{GpuTiming, GpuTracer};
+use guided::{McpgSampler, new_guide};
 use output::{Errors, RgbImage, errors};
 use scene::{SceneFile, frame_time};
 
@@ -40,11 +48,13 @@ use scene::{SceneFile, frame_time};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Device {
-    /// The GPU when a wgpu adapter exists, the CPU otherwise (today: always the CPU, as the
-    /// WGSL tracer is not written yet; a one-line message says so).
+    /// The GPU when a wgpu adapter exists and the method has a WGSL twin, the CPU otherwise
+    /// (with a one-line message saying why).
     Auto,
     /// The CPU tracer (rayon threads).
     Cpu,
+    /// The WGSL tracer ([`gpu`]); an error when there is no adapter.
+    Gpu,
 }
 
 /// The arguments of `mcg-demo render`.
@@ -132,12 +142,23 @@ pub struct RenderReport {
     pub bounces: u32,
     /// The seed as given.
     pub seed: u64,
-    /// Wall-clock seconds of each frame's tracing (scene building of animated frames excluded).
+    /// The GPU adapter (name and backend) when the GPU rendered.
+    pub adapter: Option<String>,
+    /// How GPU frame times were measured (timestamp queries or wall clock), when the GPU
+    /// rendered.
+    pub gpu_timing: Option<GpuTiming>,
+    /// Seconds of each frame's tracing (scene building and upload of animated frames
+    /// excluded): wall clock on the CPU; on the GPU the summed timestamp-query time of the
+    /// frame's passes when the adapter has timestamps, else the wall clock from the first
+    /// submission to the end of the wait (read-back excluded).
     pub frame_times_s: Vec<f64>,
     /// The reference, if any.
     pub reference: Option<PathBuf>,
     /// Errors of the running mean after each frame against the reference.
     pub errors: Vec<Errors>,
+    /// Errors of each frame's own image against the reference (what a real-time renderer
+    /// that shows every frame without accumulation would show).
+    pub frame_errors: Vec<Errors>,
     /// What the scene loader ignored.
     pub warnings: Vec<String>,
 }
@@ -149,6 +170,8 @@ pub struct Rendered {
     pub image: RgbImage,
     /// Settings and measurements.
     pub report: RenderReport,
+    /// The guide as the last frame left it (`mcpg` only).
+    pub guide: Option<Arc<Guide>>,
 }
 
 /// Renders as `args` say, without writing files.
@@ -185,6 +208,17 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     };
     let mut scene = file.build(frame_time(0))?;
     let warnings = scene.warnings.clone();
+    let gpu = gpu_tracer(args.device, args.method)?;
+    let mut gpu = gpu.map(|g| g.lock().unwrap_or_else(std::sync::PoisonError::into_inner));
+    if let Some(g) = gpu.as_deref_mut() {
+        g.upload(&scene)?;
+    }
+    let mut guide = match args.method {
+        Method::Mcpg => {
+            Some(new_guide(&scene, args.height).map_err(|e| format!("the MCPG guide: {e:?}"))?)
+        }
+        Method::Bsdf | Method::Nee => None,
+    };
     let progress = if args.no_progress {
         ProgressBar::hidden()
     } else {
@@ -201,13 +235,34 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     let mut sum = vec![Vec3::ZERO; (args.width * args.height) as usize];
     let mut frame_times_s = Vec::new();
     let mut errs = Vec::new();
+    let mut frame_errs = Vec::new();
     for frame in 0..args.frames {
         if frame > 0 && file.is_animated() {
             scene = file.build(frame_time(frame))?;
+            if let Some(g) = gpu.as_deref_mut() {
+                g.upload(&scene)?;
+            }
         }
-        let started = Instant::now();
-        let image = render_frame(&scene, &settings, frame, || BsdfSampler, || progress.inc(1));
-        frame_times_s.push(started.elapsed().as_secs_f64());
+        let image = if let Some(g) = gpu.as_deref_mut() {
+            let (image, seconds) = g.render_frame(&settings, frame)?;
+            frame_times_s.push(seconds);
+            image
+        } else {
+            let started = Instant::now();
+            let image = match &mut guide {
+                Some(g) => {
+                    g.set_camera(scene.camera.position);
+                    let image =
+                        render_frame(&scene, &settings, frame, || McpgSampler::new(g), || ());
+                    g.end_frame();
+                    image
+                }
+                None => render_frame(&scene, &settings, frame, || BsdfSampler, || ()),
+            };
+            frame_times_s.push(started.elapsed().as_secs_f64());
+            image
+        };
+        progress.inc(1);
         for (s, p) in sum.iter_mut().zip(&image) {
             *s += *p;
         }
@@ -215,6 +270,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             let scale = 1.0 / (frame + 1) as f32;
             let mean: Vec<Vec3> = sum.iter().map(|s| *s * scale).collect();
             errs.extend(errors(&mean, &r.pixels));
+            frame_errs.extend(errors(&image, &r.pixels));
         }
     }
     progress.finish_and_clear();
@@ -228,8 +284,10 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         report: RenderReport {
             scene: args.scene.clone(),
             method: args.method,
-            device: "cpu",
+            device: if gpu.is_some() { "gpu" } else { "cpu" },
             threads: rayon::current_num_threads(),
+            adapter: gpu.as_deref().map(GpuTracer::adapter_name),
+            gpu_timing: gpu.as_deref().map(GpuTracer::timing),
             width: args.width,
             height: args.height,
             spp: args.spp,
@@ -239,9 +297,47 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             frame_times_s,
             reference: args.reference.clone(),
             errors: errs,
+            frame_errors: frame_errs,
             warnings,
         },
+        guide: guide.map(Arc::new),
     })
+}
+
+/// The process-wide GPU tracer for `device` and `method`, created on first use (device
+/// creation and shader compilation cost about a second on a software adapter), or `None` for
+/// the CPU. `Auto` falls back to the CPU with a one-line message when there is no adapter or
+/// the method has no WGSL twin.
+///
+/// # Errors
+/// `--device gpu` without adapter, or with a method the GPU tracer does not have.
+fn gpu_tracer(device: Device, method: Method) -> Result<Option<&'static Mutex<GpuTracer>>> {
+    static TRACER: OnceLock<Result<Mutex<GpuTracer>, String>> = OnceLock::new();
+    if device == Device::Cpu {
+        return Ok(None);
+    }
+    if gpu::method_code(method).is_none() {
+        if device == Device::Gpu {
+            return Err(format!(
+                "--device gpu: the GPU tracer has no method {} yet (use --device cpu)",
+                method.name()
+            )
+            .into());
+        }
+        eprintln!(
+            "mcg-demo: the GPU tracer has no method {} yet — rendering on the CPU",
+            method.name()
+        );
+        return Ok(None);
+    }
+    match TRACER.get_or_init(|| GpuTracer::new().map(Mutex::new).map_err(|e| e.to_string())) {
+        Ok(tracer) => Ok(Some(tracer)),
+        Err(e) if device == Device::Gpu => Err(format!("--device gpu: {e}").into()),
+        Err(e) => {
+            eprintln!("mcg-demo: no GPU ({e}) — rendering on the CPU");
+            Ok(None)
+        }
+    }
 }
 
 /// `mcg-demo render`: renders and writes `<out>/<method>.{exr,png,json}`; returns the paths.
@@ -249,9 +345,6 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
 /// # Errors
 /// As [`render`], and when a file cannot be written.
 pub fn run_render(args: &RenderArgs) -> Result<Vec<PathBuf>> {
-    if args.device == Device::Auto {
-        eprintln!("mcg-demo: no GPU tracer yet — rendering on the CPU");
-    }
     let rendered = render(args)?;
     for w in &rendered.report.warnings {
         eprintln!("mcg-demo: {}: {w}", args.scene.display());

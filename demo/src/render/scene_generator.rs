@@ -6,8 +6,10 @@
 //! wall, a green right wall and two boxes. Each is a `.gltf` with its geometry in a `.bin`
 //! next to it (non-indexed triangles, counter-clockwise seen from the front).
 //!
-//! - `hidden_light_room`: one 0.3 m square light facing the ceiling, hidden under a 1.2 m
-//!   square panel hung at 2.2 m — the room is lit almost only indirectly (MCPG's case).
+//! - `hidden_light_room`: a 1.2 m square light lying in a 2.2 m square tray hung under the
+//!   ceiling, facing up; the tray's rim stops 0.25 m below the ceiling, so the light reaches
+//!   the room only through that slit, after bouncing off the ceiling above the tray — the
+//!   room is lit only indirectly and a light sample from it is occluded (MCPG's case).
 //! - `many_lights_room`: 24 small lights of different colours on the ceiling and the back
 //!   wall, a polished metal box (direct light from many sources, MCMM's case).
 //! - `dynamic_room`: the hidden light room with a doorway in the right wall to a small side
@@ -196,6 +198,71 @@ fn hidden_light() -> Vec<Part> {
     ]
 }
 
+/// The light of `hidden_light_room`: a [`COVE_LIGHT_HALF`]·2 m square light lying in a tray
+/// (a [`COVE_HALF`]·2 m square panel at height [`COVE_PANEL_Y`] with a rim) facing up. The
+/// rim stops [`COVE_SLIT`] below the ceiling: the light shines on the ceiling above the tray,
+/// and the room receives it only through the slit, after at least one bounce in the cove — a
+/// light sample from the room is occluded, and the light reaches the camera after two or more
+/// scattering events. The camera (at 1.5 m) sees the tray's underside, not into the cove.
+fn cove_light() -> Vec<Part> {
+    let (y_panel, thickness, half, z_centre) = (COVE_PANEL_Y, 0.05, COVE_HALF, -0.5);
+    let l = COVE_LIGHT_HALF;
+    let mut lamp = Vec::new();
+    quad(
+        &mut lamp,
+        Vec3::new(-l, y_panel + thickness + 0.001, z_centre - l),
+        Vec3::Z * 2.0 * l,
+        Vec3::X * 2.0 * l,
+    );
+    let mut panel = Vec::new();
+    cuboid(
+        &mut panel,
+        Vec3::new(-half, y_panel, z_centre - half),
+        Vec3::new(half, y_panel + thickness, z_centre + half),
+    );
+    // The rim: four walls on the panel's edges, up to COVE_SLIT under the ceiling.
+    let top = 3.0 - COVE_SLIT;
+    let (lo, hi) = (z_centre - half, z_centre + half);
+    for (a, b) in [
+        (
+            Vec3::new(-half, y_panel, lo),
+            Vec3::new(half, top, lo + thickness),
+        ),
+        (
+            Vec3::new(-half, y_panel, hi - thickness),
+            Vec3::new(half, top, hi),
+        ),
+        (
+            Vec3::new(-half, y_panel, lo),
+            Vec3::new(-half + thickness, top, hi),
+        ),
+        (
+            Vec3::new(half - thickness, y_panel, lo),
+            Vec3::new(half, top, hi),
+        ),
+    ] {
+        cuboid(&mut panel, a, b);
+    }
+    vec![
+        part(
+            light("hidden_light", [1.0, 0.95, 0.85], COVE_STRENGTH),
+            lamp,
+        ),
+        part(PANEL, panel),
+    ]
+}
+
+/// Height of the underside of the tray of `hidden_light_room` (the ceiling is at 3 m).
+const COVE_PANEL_Y: f32 = 2.55;
+/// Half the side of the tray.
+const COVE_HALF: f32 = 1.1;
+/// Half the side of the light in the tray.
+const COVE_LIGHT_HALF: f32 = 0.6;
+/// `KHR_materials_emissive_strength` of the light.
+const COVE_STRENGTH: f32 = 60.0;
+/// The gap between the tray's rim and the ceiling.
+const COVE_SLIT: f32 = 0.25;
+
 /// A node: the parts it carries and its translation; `animated` nodes get animation channels.
 struct Node {
     name: &'static str,
@@ -362,12 +429,12 @@ pub fn built_in_scenes() -> Vec<(&'static str, String, Vec<u8>)> {
 
     // (a) Hidden light.
     let mut parts = room(false);
-    parts.extend(hidden_light());
+    parts.extend(cove_light());
     let (a_json, a_bin) = write_gltf(
         SCENE_NAMES[0],
         &[static_node(parts)],
         &[],
-        json!({ "description": "a closed room lit by a small light hidden above a panel" }),
+        json!({ "description": "a closed room lit through a slit by a light hidden in a tray under the ceiling" }),
     );
 
     // (b) Many lights: 4×4 on the ceiling, 8 on the back wall, colours around the hue circle.

@@ -6,6 +6,7 @@
 
 pub mod color_codec;
 pub mod gpu_backend;
+pub mod guided_rendering;
 pub mod hashgrid;
 pub mod markov_guide;
 pub mod probe_cache;
@@ -25,6 +26,7 @@ pub type BuildFn = fn(&Context<'_>) -> Result<Section>;
 
 /// Every section of the report, in page order. Append new sections here.
 pub const ALL: &[BuildFn] = &[
+    guided_rendering::build,
     vmf::build,
     color_codec::build,
     smis::build,

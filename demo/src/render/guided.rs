@@ -1,0 +1,164 @@
+//! MCPG in the CPU tracer: [`McpgSampler`], the [`VertexSampler`] that draws each bounce from
+//! an [`mcpg::Guide`](Guide) shared by all rayon threads, and [`new_guide`], the guide's
+//! configuration for a scene and image.
+//!
+//! Per scattering vertex (MCPG, Alber et al. 2025, Alg. 1-3): [`Guide::begin`] loads the
+//! candidate chain states around the hit and picks one; [`GuidedVertex::sample`] draws the
+//! direction from its vMF lobe or, with probability p_bsdf, from the material; the path goes
+//! on, and when it is complete [`GuidedVertex::finish`] updates the chain with what the ray
+//! hit (position, normal, emission; the radiance reflected there comes from the guide's
+//! irradiance cache, MCPG sec. 4, so that training does not depend on the path length left).
+//! [`Guide::end_frame`] between frames folds the cache and ages the states.
+//!
+//! The material is the guide's fallback technique ([`MaterialScatter`]); lobes are multiplied
+//! by the clamped cosine ([`Hemisphere::CosineProduct`](mcg_markov_guide::mcpg::Hemisphere)).
+//! The guided estimator stays unbiased for any state of the guide: its density is the exact
+//! mixture of the lobes and the material (MCPG eq. 6-7), and the material's share p_bsdf > 0
+//! covers every direction the material scatters into.
+
+use glam::{Vec2, Vec3};
+use mcg_gpu_backend::sampling::next_uniform;
+use mcg_markov_guide::mcpg::{
+    BeginUniforms, FinishUniforms, Guide, GuideConfig, GuideError, GuidedSample, GuidedVertex,
+    SampleUniforms, Scatter, Vertex as GuideVertex, VertexObservation,
+};
+
+use super::cpu::{MAX_RECORDED, Observation, Vertex, VertexSampler};
+use super::material::{BsdfSample, Material};
+use super::scene::Scene;
+
+/// The material at a vertex as the guide's fallback technique: [`Material::sample`] with the
+/// lobe choice and the first direction uniform taken from one uniform (the part of `u.x` below
+/// `metallic` picks the GGX lobe and is stretched back to [0, 1)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MaterialScatter {
+    /// The material.
+    pub material: Material,
+    /// The unit normal, turned towards `wo`.
+    pub normal: Vec3,
+    /// The unit outgoing direction.
+    pub wo: Vec3,
+}
+
+impl Scatter for MaterialScatter {
+    fn sample(&self, u: Vec2) -> Vec3 {
+        let m = self.material.metallic;
+        let (lobe, x) = if u.x < m {
+            (0.0, u.x / m)
+        } else {
+            (1.0, (u.x - m) / (1.0 - m))
+        };
+        let x = x.clamp(0.0, 1.0 - f32::EPSILON);
+        self.material
+            .sample(self.normal, self.wo, Vec3::new(lobe, x, u.y))
+            // A direction the material cannot scatter into: its weight is 0 and ends the path.
+            .map_or(-self.normal, |s| s.direction)
+    }
+
+    fn pdf(&self, w: Vec3) -> f32 {
+        self.material.pdf(self.normal, self.wo, w)
+    }
+}
+
+/// The guide for `scene` rendered `height` pixels high: [`GuideConfig::for_scene`] over the
+/// scene's bounds and [`GuideConfig::for_camera`] for its field of view, the camera set.
+///
+/// # Errors
+/// [`GuideError`] when the configuration is invalid (it is not for a finite scene).
+pub fn new_guide(scene: &Scene, height: u32) -> Result<Guide, GuideError> {
+    let root = scene.bvh.nodes[0];
+    let config = GuideConfig::for_scene(Vec3::from(root.min), Vec3::from(root.max))
+        .for_camera(scene.camera.yfov, height);
+    let mut guide = Guide::new(config)?;
+    guide.set_camera(scene.camera.position);
+    Ok(guide)
+}
+
+/// An open guided vertex: the guide's state between `sample` and `finish`.
+type Open<'g> = (GuidedVertex<'g, MaterialScatter>, GuidedSample);
+
+/// MCPG as a [`VertexSampler`]: one per rayon task, all sharing one [`Guide`].
+///
+/// Its own uniforms (the candidates' lookups, 4 per candidate, and the update's 5) come from a
+/// stream seeded by [`VertexSampler::begin_path`]; the direction's three are the tracer's.
+/// [`VertexSampler::pdf`] answers the guided density of the vertex sampled last at that depth
+/// (the material's before): `mcpg` does no light sampling, so the tracer never asks before.
+pub struct McpgSampler<'g> {
+    guide: &'g Guide,
+    rng: u32,
+    open: [Option<Open<'g>>; MAX_RECORDED],
+}
+
+impl<'g> McpgSampler<'g> {
+    /// A sampler drawing from `guide`.
+    #[must_use]
+    pub fn new(guide: &'g Guide) -> Self {
+        Self {
+            guide,
+            rng: 0,
+            open: [const { None }; MAX_RECORDED],
+        }
+    }
+}
+
+impl VertexSampler for McpgSampler<'_> {
+    fn begin_path(&mut self, seed: u32) {
+        self.rng = seed;
+        self.open = [const { None }; MAX_RECORDED];
+    }
+
+    fn sample(&mut self, v: &Vertex, u: Vec3) -> Option<BsdfSample> {
+        let scatter = MaterialScatter {
+            material: v.material,
+            normal: v.normal,
+            wo: v.wo,
+        };
+        let rng = &mut self.rng;
+        let begin = BeginUniforms::from_fn(self.guide.params().candidates as usize, || {
+            next_uniform(rng)
+        });
+        let guided = self
+            .guide
+            .begin(GuideVertex::surface(v.position, v.normal), scatter, &begin);
+        let s = guided.sample(&SampleUniforms {
+            choice: u.x,
+            direction: Vec2::new(u.y, u.z),
+        });
+        if let Some(slot) = self.open.get_mut(v.depth as usize) {
+            *slot = Some((guided, s));
+        }
+        if !(s.pdf > 0.0) {
+            return None;
+        }
+        let f_cos = v.material.eval(v.normal, v.wo, s.direction);
+        Some(BsdfSample {
+            direction: s.direction,
+            pdf: s.pdf,
+            weight: f_cos / s.pdf,
+        })
+    }
+
+    fn pdf(&self, v: &Vertex, wi: Vec3) -> f32 {
+        match self.open.get(v.depth as usize) {
+            Some(Some((guided, _))) => guided.pdf(wi),
+            _ => v.material.pdf(v.normal, v.wo, wi),
+        }
+    }
+
+    fn finish(&mut self, o: &Observation) {
+        let Some((guided, s)) = self
+            .open
+            .get_mut(o.vertex.depth as usize)
+            .and_then(Option::take)
+        else {
+            return;
+        };
+        let weight = o.sample.weight;
+        let seen = match o.next {
+            Some(hit) => VertexObservation::hit(hit.position, hit.normal, hit.emitted, weight),
+            None => VertexObservation::escaped(Vec3::ZERO, weight),
+        };
+        let rng = &mut self.rng;
+        guided.finish(&s, &seen, &FinishUniforms::from_fn(|| next_uniform(rng)));
+    }
+}

@@ -1,0 +1,610 @@
+//! Section "Guided rendering": the built-in hidden-light room path traced with `bsdf`, `nee`
+//! and `mcpg`, at equal samples and at equal time, against a reference.
+//!
+//! Every render goes through [`render_on`], which takes the device: the CPU tracer today, the
+//! GPU tracer where one exists (the list [`DEVICES`] grows with it). What the section shows:
+//!
+//! 1. the images of the three methods after the same number of frames (equal samples), and of
+//!    `bsdf` and `nee` after as many frames as fit in the time `mcpg` took (equal time);
+//! 2. the relative MSE of the running mean after each frame against the frame count (the
+//!    learning curve, MCPG Fig. 5) and against the elapsed time;
+//! 3. a table of relMSE and frame time per method and device, with the ratios the issue's
+//!    targets name;
+//! 4. the guide after the last frame at each pixel's first hit: the mean direction of the
+//!    chosen chain state, its concentration κ and the adaptive grid's level (MCPG Fig. 3
+//!    right).
+//!
+//! The reference is `nee` with many samples per pixel, cached under
+//! `<out>/reference/` with its settings in the file name.
+//!
+//! FLIP is not shown: the `nv-flip` crate wraps NVIDIA's C++ implementation (`nv-flip-sys`
+//! builds it with a C++ compiler), which the report's "nothing to install" rule excludes.
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use mcg_hashgrid::AdaptiveGrid;
+use mcg_markov_guide::mcpg::{BeginUniforms, Guide, Vertex as GuideVertex};
+
+use super::Context;
+use crate::Result;
+use crate::plot::{self, Axis, LineChart, PALETTE, Series, SeriesLabelPosition};
+use crate::render::cpu::Method;
+use crate::render::guided::MaterialScatter;
+use crate::render::output::{Errors, RgbImage, srgb_encode};
+use crate::render::scene::{SceneFile, frame_time};
+use crate::render::{Device, RenderArgs, Rendered, render};
+use crate::report::{Section, Table};
+
+/// The scene of the section: a room lit through a slit around a panel (GI, MCPG's case).
+pub const SCENE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/hidden_light_room.gltf");
+
+/// The devices the section renders on.
+pub const DEVICES: [Device; 1] = [Device::Cpu];
+
+/// The methods compared, in display order.
+pub const METHODS: [Method; 3] = [Method::Bsdf, Method::Nee, Method::Mcpg];
+
+/// The sizes of one run of the section.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Settings {
+    /// Image width and height in pixels.
+    pub size: u32,
+    /// Samples per pixel per frame.
+    pub spp: u32,
+    /// Frames of the equal-samples renders.
+    pub frames: u32,
+    /// Scattering events per path.
+    pub bounces: u32,
+    /// Samples per pixel of the reference, per reference frame.
+    pub reference_spp: u32,
+    /// Frames of the reference.
+    pub reference_frames: u32,
+}
+
+impl Settings {
+    /// The full report: 128 × 128, 8 spp × 64 frames, 3 bounces; the reference 64 spp × 64
+    /// frames (4 096 spp, 8× the samples of a measured render).
+    pub const FULL: Self = Self {
+        size: 128,
+        spp: 8,
+        frames: 64,
+        bounces: 3,
+        reference_spp: 64,
+        reference_frames: 64,
+    };
+    /// `--quick`: 64 × 64, 16 frames.
+    pub const QUICK: Self = Self {
+        size: 64,
+        spp: 8,
+        frames: 16,
+        bounces: 3,
+        reference_spp: 64,
+        reference_frames: 32,
+    };
+    /// Fewer samples than `--quick` (the smoke test): 32 × 32, 4 frames of 2 spp.
+    pub const SMOKE: Self = Self {
+        size: 32,
+        spp: 2,
+        frames: 4,
+        bounces: 3,
+        reference_spp: 16,
+        reference_frames: 4,
+    };
+
+    /// The settings for a report of `samples` samples per experiment.
+    #[must_use]
+    pub fn for_samples(samples: usize) -> Self {
+        if samples >= crate::Config::DEFAULT_SAMPLES {
+            Self::FULL
+        } else if samples >= crate::Config::QUICK_SAMPLES {
+            Self::QUICK
+        } else {
+            Self::SMOKE
+        }
+    }
+}
+
+/// Renders `args` on `device` (the seam where the GPU tracer slots in).
+///
+/// # Errors
+/// As [`render`].
+pub fn render_on(device: Device, args: &RenderArgs) -> Result<Rendered> {
+    render(&RenderArgs {
+        device,
+        ..args.clone()
+    })
+}
+
+/// The arguments of one render of the section.
+fn args(
+    s: &Settings,
+    method: Method,
+    frames: u32,
+    seed: u64,
+    reference: Option<&Path>,
+) -> RenderArgs {
+    RenderArgs {
+        scene: PathBuf::from(SCENE),
+        method,
+        device: Device::Cpu,
+        width: s.size,
+        height: s.size,
+        spp: s.spp,
+        frames,
+        bounces: s.bounces,
+        seed,
+        out: PathBuf::new(),
+        reference: reference.map(Path::to_path_buf),
+        no_progress: true,
+    }
+}
+
+/// The cached reference of `s`, rendered when missing; returns its path.
+fn reference(ctx: &Context<'_>, s: &Settings, seed: u64) -> Result<PathBuf> {
+    let dir = ctx.out_dir().join("reference");
+    let path = dir.join(format!(
+        "hidden_light_room_{0}x{0}_b{1}_nee_{2}spp_seed{3:x}.exr",
+        s.size,
+        s.bounces,
+        s.reference_spp * s.reference_frames,
+        seed
+    ));
+    if path.exists() {
+        return Ok(path);
+    }
+    std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let bar = ctx.progress(1, "guided rendering: reference");
+    let mut a = args(s, Method::Nee, s.reference_frames, seed, None);
+    a.spp = s.reference_spp;
+    let r = render_on(Device::Cpu, &a)?;
+    r.image.write_exr(&path)?;
+    bar.finish_and_clear();
+    Ok(path)
+}
+
+/// One method's renders on one device.
+struct Runs {
+    method: Method,
+    /// `frames` frames.
+    equal_samples: Rendered,
+    /// As many frames as fit in the time of the slowest method (`None` for that method).
+    equal_time: Option<Rendered>,
+}
+
+fn cumulative_seconds(r: &Rendered) -> Vec<f64> {
+    r.report
+        .frame_times_s
+        .iter()
+        .scan(0.0, |t, s| {
+            *t += s;
+            Some(*t)
+        })
+        .collect()
+}
+
+fn seconds_per_frame(r: &Rendered) -> f64 {
+    let t = &r.report.frame_times_s;
+    t.iter().sum::<f64>() / t.len() as f64
+}
+
+/// The equal-time render of a method (the equal-samples one for the slowest).
+fn equal_time_image(r: &Runs) -> &Rendered {
+    r.equal_time.as_ref().unwrap_or(&r.equal_samples)
+}
+
+fn last_error(r: &Rendered) -> Errors {
+    *r.report
+        .errors
+        .last()
+        .expect("renders with a reference have errors")
+}
+
+/// Images side by side, each scaled up `zoom`× (nearest), sRGB-encoded and clipped.
+fn image_strip(path: &Path, images: &[&RgbImage], zoom: u32) -> Result<()> {
+    let (w, h) = (images[0].width * zoom, images[0].height * zoom);
+    let gap = 4;
+    let total_w = images.len() as u32 * (w + gap) - gap;
+    let mut buffer = vec![255u8; (total_w * h * 3) as usize];
+    for (k, image) in images.iter().enumerate() {
+        let x0 = k as u32 * (w + gap);
+        for y in 0..h {
+            for x in 0..w {
+                let p = image.pixels[((y / zoom) * image.width + x / zoom) as usize];
+                let o = ((y * total_w + x0 + x) * 3) as usize;
+                for c in 0..3 {
+                    buffer[o + c] = (srgb_encode(p[c]) * 255.0 + 0.5) as u8;
+                }
+            }
+        }
+    }
+    plot::write_rgb_png(path, &buffer, total_w, h)
+}
+
+/// The guide at each pixel's first hit (pixel centres): the chosen state's mean direction,
+/// its κ and the adaptive grid's target level; `None` where the pixel sees nothing or no
+/// state is stored.
+fn guide_picture(guide: &Guide, s: &Settings) -> Result<Vec<Option<(Vec3, f32, u32)>>> {
+    let scene = SceneFile::open(SCENE)?.build(frame_time(0))?;
+    let grid = AdaptiveGrid::new(guide.config().adaptive).map_err(|e| format!("{e:?}"))?;
+    let candidates = guide.params().candidates as usize;
+    let mut out = Vec::with_capacity((s.size * s.size) as usize);
+    for y in 0..s.size {
+        for x in 0..s.size {
+            let d = scene
+                .camera
+                .direction(x as f32 + 0.5, y as f32 + 0.5, s.size, s.size);
+            let o = scene.camera.position;
+            let Some(hit) = scene.bvh.intersect(o, d, 0.0, f32::INFINITY) else {
+                out.push(None);
+                continue;
+            };
+            let tri = scene.bvh.triangles[hit.triangle as usize];
+            let n = tri.cross().normalize();
+            let n = if n.dot(d) < 0.0 { n } else { -n };
+            let p = o + hit.t * d;
+            let scatter = MaterialScatter {
+                material: scene.material_at(&hit),
+                normal: n,
+                wo: -d,
+            };
+            // Fixed uniforms: the candidates of the pixel centre's cell, the adaptive grid at
+            // the target level (grid < p_adaptive), the reservoir's ξ in the middle.
+            let mut k = 0u32;
+            let u = BeginUniforms::from_fn(candidates, || {
+                k += 1;
+                match k % 4 {
+                    1 => 0.0,
+                    2 => 0.0,
+                    3 => (k / 4) as f32 / candidates as f32,
+                    _ => 0.5,
+                }
+            });
+            let v = guide.begin(GuideVertex::surface(p, n), scatter, &u);
+            let state = v.selected().map(|i| v.candidates()[i]);
+            out.push(state.and_then(|st| {
+                let dir = (st.mean_target - p).try_normalize()?;
+                let r = (1.0 - st.one_minus_mean_cosine).clamp(0.0, 0.9999);
+                // Banerjee et al. 2005, eq. 4.4: κ ≈ r̄(3 − r̄²)/(1 − r̄²) for vMF on S².
+                let kappa = r * (3.0 - r * r) / (1.0 - r * r);
+                Some((dir, kappa, grid.target_level(o.distance(p))))
+            }));
+        }
+    }
+    Ok(out)
+}
+
+/// A false-colour ramp (dark blue → yellow) of t ∈ [0, 1].
+fn ramp(t: f32) -> Vec3 {
+    let t = t.clamp(0.0, 1.0);
+    Vec3::new(0.05, 0.05, 0.35).lerp(Vec3::new(0.1, 0.7, 0.6), (2.0 * t).min(1.0))
+        + Vec3::new(0.9, 0.25, -0.5) * (2.0 * t - 1.0).max(0.0)
+}
+
+/// Draws the three guide panels into one strip (linear RGB images, then [`image_strip`]).
+fn write_guide_picture(
+    path: &Path,
+    picture: &[Option<(Vec3, f32, u32)>],
+    size: u32,
+) -> Result<(f32, f32, u32, u32)> {
+    let none = Vec3::splat(0.02);
+    let (mut k_lo, mut k_hi, mut l_lo, mut l_hi) = (f32::MAX, 0.0f32, u32::MAX, 0u32);
+    for (_, k, l) in picture.iter().flatten() {
+        k_lo = k_lo.min(k.max(1e-3));
+        k_hi = k_hi.max(*k);
+        l_lo = l_lo.min(*l);
+        l_hi = l_hi.max(*l);
+    }
+    // Colours are given linear and sRGB-encoded by image_strip: decode the ramp first.
+    let decode = |c: Vec3| c.powf(2.2);
+    let panel = |f: &dyn Fn(&(Vec3, f32, u32)) -> Vec3| RgbImage {
+        width: size,
+        height: size,
+        pixels: picture
+            .iter()
+            .map(|p| p.as_ref().map_or(none, |p| decode(f(p))))
+            .collect(),
+    };
+    let direction = panel(&|(d, _, _)| *d * 0.5 + Vec3::splat(0.5));
+    let (lk_lo, lk_hi) = (k_lo.ln(), k_hi.max(k_lo * 1.01).ln());
+    let kappa = panel(&|(_, k, _)| ramp((k.max(1e-3).ln() - lk_lo) / (lk_hi - lk_lo)));
+    let span = (l_hi.saturating_sub(l_lo)).max(1) as f32;
+    let level = panel(&|(_, _, l)| ramp((l - l_lo) as f32 / span));
+    image_strip(path, &[&direction, &kappa, &level], 2)?;
+    Ok((k_lo, k_hi, l_lo, l_hi))
+}
+
+fn format_ratio(x: f64) -> String {
+    if x >= 10.0 {
+        format!("{x:.0}")
+    } else {
+        format!("{x:.2}")
+    }
+}
+
+/// Builds the section.
+///
+/// # Errors
+/// When the scene cannot be loaded, a render fails or a file cannot be written.
+pub fn build(ctx: &Context<'_>) -> Result<Section> {
+    let s = Settings::for_samples(ctx.config.samples);
+    let seed = ctx.config.seed;
+    let reference_path = reference(ctx, &s, seed ^ 0x5eed_0f_7e_f)?;
+    let reference = RgbImage::read_exr(&reference_path)?;
+    let mut section = Section::new("guided-rendering", "Guided rendering");
+    let mut summary = serde_json::Map::new();
+    for device in DEVICES {
+        let bar = ctx.progress(5, "guided rendering");
+        let mut runs: Vec<Runs> = Vec::new();
+        for method in METHODS {
+            let r = render_on(
+                device,
+                &args(&s, method, s.frames, seed, Some(&reference_path)),
+            )?;
+            bar.inc(1);
+            runs.push(Runs {
+                method,
+                equal_samples: r,
+                equal_time: None,
+            });
+        }
+        // Equal time: the budget is the slowest method's total time.
+        let budget = runs
+            .iter()
+            .map(|r| r.equal_samples.report.frame_times_s.iter().sum::<f64>())
+            .fold(0.0, f64::max);
+        let slowest = runs
+            .iter()
+            .max_by(|a, b| {
+                seconds_per_frame(&a.equal_samples).total_cmp(&seconds_per_frame(&b.equal_samples))
+            })
+            .map(|r| r.method)
+            .expect("three methods");
+        for run in &mut runs {
+            if run.method == slowest {
+                continue;
+            }
+            let frames = ((budget / seconds_per_frame(&run.equal_samples)).round() as u32).max(1);
+            run.equal_time = Some(render_on(
+                device,
+                &args(
+                    &s,
+                    run.method,
+                    frames,
+                    seed ^ 0xe0_7e,
+                    Some(&reference_path),
+                ),
+            )?);
+            bar.inc(1);
+        }
+        bar.finish_and_clear();
+        let device_name = runs[0].equal_samples.report.device;
+        let id = |name: &str| format!("guided-rendering-{device_name}-{name}.png");
+
+        // Images.
+        let mut images: Vec<&RgbImage> = runs.iter().map(|r| &r.equal_samples.image).collect();
+        images.push(&reference);
+        image_strip(&ctx.figure_path(&id("equal-samples")), &images, 2)?;
+        let mut images: Vec<&RgbImage> = runs.iter().map(|r| &equal_time_image(r).image).collect();
+        images.push(&reference);
+        image_strip(&ctx.figure_path(&id("equal-time")), &images, 2)?;
+
+        // Error curves.
+        let colour = |m: Method| match m {
+            Method::Bsdf => PALETTE[0],
+            Method::Nee => PALETTE[2],
+            Method::Mcpg => PALETTE[1],
+        };
+        let all_errors = runs
+            .iter()
+            .flat_map(|r| {
+                std::iter::once(&r.equal_samples)
+                    .chain(&r.equal_time)
+                    .flat_map(|x| x.report.errors.iter().map(|e| e.rel_mse))
+            })
+            .filter(|e| *e > 0.0 && e.is_finite());
+        let (lo, hi) = all_errors.fold((f64::MAX, 0.0f64), |(lo, hi), e| (lo.min(e), hi.max(e)));
+        let y = Axis::log10(
+            "relative MSE of the running mean",
+            10f64.powf(lo.log10().floor())..10f64.powf(hi.log10().ceil()),
+        );
+        let per_frame = LineChart {
+            title: format!("Learning curve ({device_name}, {} spp per frame)", s.spp),
+            x: Axis::linear("frame", 1.0..f64::from(s.frames)),
+            y: y.clone(),
+            series: runs
+                .iter()
+                .map(|r| {
+                    Series::line(
+                        r.method.name(),
+                        colour(r.method),
+                        r.equal_samples
+                            .report
+                            .errors
+                            .iter()
+                            .enumerate()
+                            .map(|(i, e)| ((i + 1) as f64, e.rel_mse))
+                            .collect(),
+                    )
+                })
+                .collect(),
+            legend: SeriesLabelPosition::UpperRight,
+        };
+        plot::line_chart(&ctx.figure_path(&id("per-frame")), (720, 420), &per_frame)?;
+        let per_time = LineChart {
+            title: format!("Error against time ({device_name})"),
+            x: Axis::log10("seconds", {
+                let first = runs
+                    .iter()
+                    .map(|r| r.equal_samples.report.frame_times_s[0])
+                    .fold(f64::MAX, f64::min);
+                10f64.powf(first.log10().floor())..10f64.powf(budget.log10().ceil())
+            }),
+            y,
+            series: runs
+                .iter()
+                .map(|r| {
+                    let longest = equal_time_image(r);
+                    Series::line(
+                        r.method.name(),
+                        colour(r.method),
+                        cumulative_seconds(longest)
+                            .into_iter()
+                            .zip(longest.report.errors.iter().map(|e| e.rel_mse))
+                            .collect(),
+                    )
+                })
+                .collect(),
+            legend: SeriesLabelPosition::UpperRight,
+        };
+        plot::line_chart(&ctx.figure_path(&id("per-time")), (720, 420), &per_time)?;
+
+        // Table and targets.
+        let mcpg = runs
+            .iter()
+            .find(|r| r.method == Method::Mcpg)
+            .expect("mcpg");
+        let mcpg_error = last_error(&mcpg.equal_samples).rel_mse;
+        let mut table = Table::new(
+            &format!(
+                "{device_name}, {0}×{0}, {1} bounces, {2} spp per frame; relMSE of the mean \
+                 against the reference; equal time = the {3:.1} s that {4} took for {5} frames",
+                s.size,
+                s.bounces,
+                s.spp,
+                budget,
+                slowest.name(),
+                s.frames
+            ),
+            [
+                "method",
+                "device",
+                "ms per frame",
+                "relMSE, equal samples",
+                "÷ mcpg",
+                "frames in equal time",
+                "relMSE, equal time",
+                "÷ mcpg",
+            ],
+        );
+        let mut device_summary = serde_json::Map::new();
+        for r in &runs {
+            let es = last_error(&r.equal_samples).rel_mse;
+            let et_run = equal_time_image(r);
+            let et = last_error(et_run).rel_mse;
+            table.push_row([
+                r.method.name().to_owned(),
+                device_name.to_owned(),
+                format!("{:.1}", 1e3 * seconds_per_frame(&r.equal_samples)),
+                format!("{es:.4}"),
+                format_ratio(es / mcpg_error),
+                et_run.report.frames.to_string(),
+                format!("{et:.4}"),
+                format_ratio(et / mcpg_error),
+            ]);
+            device_summary.insert(
+                r.method.name().to_owned(),
+                serde_json::json!({
+                    "seconds_per_frame": seconds_per_frame(&r.equal_samples),
+                    "rel_mse_equal_samples": es,
+                    "rmse_equal_samples": last_error(&r.equal_samples).rmse,
+                    "frames_equal_time": et_run.report.frames,
+                    "rel_mse_equal_time": et,
+                }),
+            );
+        }
+        let err = |m: Method, equal_time: bool| {
+            let r = runs.iter().find(|r| r.method == m).expect("method");
+            last_error(if equal_time {
+                equal_time_image(r)
+            } else {
+                &r.equal_samples
+            })
+            .rel_mse
+        };
+        let ratio_samples = mcpg_error / err(Method::Bsdf, false);
+        let (vs_bsdf, vs_nee) = (
+            mcpg_error / err(Method::Bsdf, true),
+            mcpg_error / err(Method::Nee, true),
+        );
+        device_summary.insert(
+            "targets".to_owned(),
+            serde_json::json!({
+                "mcpg_over_bsdf_equal_samples": ratio_samples,
+                "mcpg_over_bsdf_equal_time": vs_bsdf,
+                "mcpg_over_nee_equal_time": vs_nee,
+            }),
+        );
+        summary.insert(device_name.to_owned(), device_summary.into());
+
+        section.heading(&format!("Hidden light room on the {device_name}"));
+        section.figure(
+            &id("equal-samples"),
+            &format!(
+                "Equal samples ({} frames × {} spp): bsdf, nee, mcpg, and the reference ({} spp \
+                 of nee), left to right. sRGB, clipped at 1.",
+                s.frames,
+                s.spp,
+                s.reference_spp * s.reference_frames
+            ),
+        );
+        section.figure(
+            &id("equal-time"),
+            &format!(
+                "Equal time ({budget:.1} s each): bsdf, nee, mcpg, and the reference, left to right."
+            ),
+        );
+        section.figure(
+            &id("per-frame"),
+            "Relative MSE of the running mean after each frame (the learning curve of MCPG \
+             Fig. 5). mcpg starts as plain BSDF sampling — the guide is empty — and pulls away \
+             as its chains find the light.",
+        );
+        section.figure(
+            &id("per-time"),
+            "The same errors against the elapsed tracing time.",
+        );
+        section.table(table);
+        section.paragraph(&format!(
+            "Targets (issue: mcpg relMSE ≤ ¼ of bsdf at equal samples, below both at equal \
+             time): mcpg ÷ bsdf at equal samples = {ratio_samples:.3}; at equal time mcpg ÷ \
+             bsdf = {vs_bsdf:.3}, mcpg ÷ nee = {vs_nee:.3}."
+        ));
+        if let Some(guide) = &mcpg.equal_samples.guide {
+            let picture = guide_picture(guide, &s)?;
+            let (k_lo, k_hi, l_lo, l_hi) =
+                write_guide_picture(&ctx.figure_path(&id("guide")), &picture, s.size)?;
+            section.figure(
+                &id("guide"),
+                &format!(
+                    "The guide after the last frame, at each pixel's first hit (MCPG Fig. 3 \
+                     right): the chosen chain state's mean direction (RGB = ½ + ½·xyz), its \
+                     concentration κ (log scale, {k_lo:.2} dark to {k_hi:.0} yellow) and the \
+                     adaptive grid's level ({l_lo} dark to {l_hi} yellow). Dark grey: no state \
+                     stored there."
+                ),
+            );
+        }
+    }
+    section.paragraph(&format!(
+        "The scene (demo/scenes/hidden_light_room.gltf): a closed room whose only light, 1.2 m \
+         square, lies in a 2.2 m tray hung under the ceiling and shines up at it; the tray's rim \
+         stops 0.25 m below the ceiling, so the room receives the light only through that slit, \
+         after it bounced off the ceiling above the tray. A light sample (nee) from the floor or \
+         the walls is occluded; what reaches the camera has scattered at least twice. \
+         Paths of {} scattering events, no Russian roulette, no light information for mcpg. \
+         FLIP is not computed: the nv-flip crate builds NVIDIA's C++ code, and the report \
+         installs nothing. The reference is cached in {}.",
+        s.bounces,
+        reference_path
+            .strip_prefix(ctx.out_dir())
+            .unwrap_or(&reference_path)
+            .display()
+    ));
+    std::fs::write(
+        ctx.figure_path("guided-rendering.json"),
+        serde_json::to_string_pretty(&serde_json::Value::Object(summary))? + "\n",
+    )
+    .map_err(|e| format!("cannot write guided-rendering.json: {e}"))?;
+    Ok(section)
+}
