@@ -396,6 +396,22 @@ fn mcpg_vmf_new(m: vec3<f32>, kappa: f32, out: ptr<function, Vmf>) -> bool {
     return true;
 }
 
+// `Vmf::product_lobe`: the lobe of the product with the clamped-cosine vMF (its scale is not
+// needed): μ' ∝ κμ + κ_c n, κ' = |κμ + κ_c n|, μ kept when the sum vanishes.
+fn mcpg_product_lobe(a: Vmf, b: Vmf) -> Vmf {
+    let m = a.mu * a.kappa + b.mu * b.kappa;
+    let kappa = sqrt(dot(m, m));
+    var mu = a.mu;
+    if kappa > 0.0 {
+        mu = m / kappa;
+    }
+    var unit: vec3<f32>;
+    if !vmf_try_normalize(mu, &unit) {
+        unit = a.mu;
+    }
+    return Vmf(unit, kappa);
+}
+
 // MCPG Alg. 1 at `vertex` (`Guide::begin`): N_mc candidates from the grids, predicted (eq. 10),
 // collisions and static-grid normal mismatches rejected, one chosen by reservoir sampling on w̄,
 // every candidate's lobe built once. A non-finite position loads nothing.
@@ -455,12 +471,7 @@ fn mcpg_begin(vertex: McpgVertex, u: McpgBeginUniforms) -> McpgGuidedVertex {
         var lobe: Vmf;
         if markov_grid_state_lobe(candidate, x, mcpg_distance_prior(candidate, x), &lobe) {
             if has_cosine {
-                // The product's lobe (MCPG with the clamped-cosine vMF): μ' ∝ κμ + κ_c n, κ' = |κμ + κ_c n|.
-                let m = lobe.mu * lobe.kappa + cosine.mu * cosine.kappa;
-                var product: Vmf;
-                if mcpg_vmf_new(m, length(m), &product) {
-                    lobe = product;
-                }
+                lobe = mcpg_product_lobe(lobe, cosine);
             }
             v.lobes[k] = lobe;
             v.normalizations[k] = vmf_normalization(lobe.kappa);
