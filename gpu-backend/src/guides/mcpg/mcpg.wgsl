@@ -396,6 +396,22 @@ fn mcpg_vmf_new(m: vec3<f32>, kappa: f32, out: ptr<function, Vmf>) -> bool {
     return true;
 }
 
+// `Vmf::product_lobe`: the lobe of the product with the clamped-cosine vMF (its scale is not
+// needed): μ' ∝ κμ + κ_c n, κ' = |κμ + κ_c n|, μ kept when the sum vanishes.
+fn mcpg_product_lobe(a: Vmf, b: Vmf) -> Vmf {
+    let m = a.mu * a.kappa + b.mu * b.kappa;
+    let kappa = sqrt(dot(m, m));
+    var mu = a.mu;
+    if kappa > 0.0 {
+        mu = m / kappa;
+    }
+    var unit: vec3<f32>;
+    if !vmf_try_normalize(mu, &unit) {
+        unit = a.mu;
+    }
+    return Vmf(unit, kappa);
+}
+
 // MCPG Alg. 1 at `vertex` (`Guide::begin`): N_mc candidates from the grids, predicted (eq. 10),
 // collisions and static-grid normal mismatches rejected, one chosen by reservoir sampling on w̄,
 // every candidate's lobe built once. A non-finite position loads nothing.
@@ -416,8 +432,20 @@ fn mcpg_begin(vertex: McpgVertex, u: McpgBeginUniforms) -> McpgGuidedVertex {
     v.count = count;
     let now = f32(mcpg_frame());
     let touch = mcpg_params.age_tracking != 0u;
-    var candidates: array<MarkovGridState, 8>;
-    for (var k = 0u; k < count; k += 1u) {
+    var cosine = Vmf(vec3<f32>(0.0), 0.0);
+    var has_cosine = false;
+    if mcpg_params.hemisphere == MCPG_HEMISPHERE_COSINE_PRODUCT && vertex.has_normal != 0u {
+        has_cosine = mcpg_vmf_new(vertex.normal, VMF_CLAMPED_COSINE_KAPPA, &cosine);
+    }
+    // One pass over a fixed trip count (the compiler can unroll it and keep the per-candidate
+    // arrays in registers): load, prepare, offer to the reservoir, and build the lobe of every
+    // candidate with w̄ > 0 (a w̄ > 0 makes Σw̄ > 0, when the CPU builds them all); `shares`
+    // holds w̄ until Σw̄ is known, `lobeless` marks the candidates without a lobe at x.
+    var lobeless = 0u;
+    for (var k = 0u; k < MCPG_MAX_CANDIDATES; k += 1u) {
+        if k >= count {
+            continue;
+        }
         let c = u.candidates[k];
         let key = mcpg_key(x, v.normal_class, v.target_level, c.x, c.y, c.z);
         let slot = mcpg_find(mcpg_table(key.is_static), key.key, touch);
@@ -429,7 +457,6 @@ fn mcpg_begin(vertex: McpgVertex, u: McpgBeginUniforms) -> McpgGuidedVertex {
             v.static_mask |= select(0u, 1u << k, key.is_static);
         }
         let candidate = mcpg_prepare_candidate(state, collided, key.is_static, x, vertex, now);
-        candidates[k] = candidate;
         // `Reservoir::offer`: Σw̄ saturates at f32::MAX; weight 0 is never taken.
         let w = markov_grid_state_resampling_weight(candidate);
         v.weight_sum = min(v.weight_sum + w, MCG_F32_MAX);
@@ -437,38 +464,33 @@ fn mcpg_begin(vertex: McpgVertex, u: McpgBeginUniforms) -> McpgGuidedVertex {
             v.selected = k;
             v.chosen = candidate;
         }
+        if !(w > 0.0) {
+            continue;
+        }
+        v.shares[k] = w;
+        var lobe: Vmf;
+        if markov_grid_state_lobe(candidate, x, mcpg_distance_prior(candidate, x), &lobe) {
+            if has_cosine {
+                lobe = mcpg_product_lobe(lobe, cosine);
+            }
+            v.lobes[k] = lobe;
+            v.normalizations[k] = vmf_normalization(lobe.kappa);
+        } else {
+            lobeless |= 1u << k;
+        }
     }
     let total = v.weight_sum;
-    if !(total > 0.0) {
-        return v;
-    }
-    var cosine = Vmf(vec3<f32>(0.0), 0.0);
-    var has_cosine = false;
-    if mcpg_params.hemisphere == MCPG_HEMISPHERE_COSINE_PRODUCT && vertex.has_normal != 0u {
-        has_cosine = mcpg_vmf_new(vertex.normal, VMF_CLAMPED_COSINE_KAPPA, &cosine);
-    }
-    for (var k = 0u; k < count; k += 1u) {
-        let s = candidates[k];
-        let w = markov_grid_state_resampling_weight(s);
+    for (var k = 0u; k < MCPG_MAX_CANDIDATES; k += 1u) {
+        let w = v.shares[k];
         if !(w > 0.0) {
             continue;
         }
         let share = w / total;
-        var lobe: Vmf;
-        if markov_grid_state_lobe(s, x, mcpg_distance_prior(s, x), &lobe) {
-            if has_cosine {
-                // The product's lobe (MCPG with the clamped-cosine vMF): μ' ∝ κμ + κ_c n, κ' = |κμ + κ_c n|.
-                let m = lobe.mu * lobe.kappa + cosine.mu * cosine.kappa;
-                var product: Vmf;
-                if mcpg_vmf_new(m, length(m), &product) {
-                    lobe = product;
-                }
-            }
-            v.lobes[k] = lobe;
-            v.normalizations[k] = vmf_normalization(lobe.kappa);
-            v.shares[k] = share;
-        } else {
+        if (lobeless & (1u << k)) != 0u {
             v.scatter_share += share;
+            v.shares[k] = 0.0;
+        } else {
+            v.shares[k] = share;
         }
     }
     return v;
@@ -514,7 +536,7 @@ fn mcpg_pdf_with(v: ptr<function, McpgGuidedVertex>, w: vec3<f32>, scatter_pdf: 
         return scatter_pdf;
     }
     var lobes = (*v).scatter_share * scatter_pdf;
-    for (var k = 0u; k < (*v).count; k += 1u) {
+    for (var k = 0u; k < MCPG_MAX_CANDIDATES; k += 1u) {
         let share = (*v).shares[k];
         if share > 0.0 {
             let lobe = (*v).lobes[k];
