@@ -24,7 +24,9 @@ fn main() -> mcg_demo::Result<()> {
         None => Config::DEFAULT_SAMPLES,
     };
     let config = Config {
-        out_dir: args.next().map_or_else(|| PathBuf::from("out/guided-rendering"), PathBuf::from),
+        out_dir: args
+            .next()
+            .map_or_else(|| PathBuf::from("out/guided-rendering"), PathBuf::from),
         samples,
         ..Config::default()
     };

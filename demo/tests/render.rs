@@ -414,7 +414,12 @@ fn bsdf_and_nee_agree_per_tile() {
             (0..frames).map(|f| render_frame(&scene, &settings, f, || BsdfSampler, || ())),
         )
     };
-    assert_tiles_agree(&tiles(Method::Bsdf), &tiles(Method::Nee), 1e-4, "bsdf vs nee");
+    assert_tiles_agree(
+        &tiles(Method::Bsdf),
+        &tiles(Method::Nee),
+        1e-4,
+        "bsdf vs nee",
+    );
 }
 
 /// Hypothesis: `mcpg` is unbiased — the mean of independent runs equals the `nee` image.

@@ -137,8 +137,16 @@ pub struct RenderReport {
     pub bounces: u32,
     /// The seed as given.
     pub seed: u64,
-    /// Wall-clock seconds of each frame's tracing (scene building of animated frames excluded).
+    /// Wall-clock seconds of each frame's tracing (scene building of animated frames excluded;
+    /// the guide's end of frame included).
     pub frame_times_s: Vec<f64>,
+    /// CPU seconds (user + system, all threads) of this process during each frame, where the
+    /// system reports them (Linux `/proc/self/stat`; empty elsewhere). On a machine shared with
+    /// other work they measure a frame's cost better than the wall clock.
+    pub frame_cpu_times_s: Vec<f64>,
+    /// Of the wall-clock seconds, those of each frame's [`Guide::end_frame`] (`mcpg` only; empty for the
+    /// other methods).
+    pub end_frame_times_s: Vec<f64>,
     /// The reference, if any.
     pub reference: Option<PathBuf>,
     /// Errors of the running mean after each frame against the reference.
@@ -196,9 +204,9 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     let mut scene = file.build(frame_time(0))?;
     let warnings = scene.warnings.clone();
     let mut guide = match args.method {
-        Method::Mcpg => Some(
-            new_guide(&scene, args.height).map_err(|e| format!("the MCPG guide: {e:?}"))?,
-        ),
+        Method::Mcpg => {
+            Some(new_guide(&scene, args.height).map_err(|e| format!("the MCPG guide: {e:?}"))?)
+        }
         Method::Bsdf | Method::Nee => None,
     };
     let progress = if args.no_progress {
@@ -216,6 +224,8 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     };
     let mut sum = vec![Vec3::ZERO; (args.width * args.height) as usize];
     let mut frame_times_s = Vec::new();
+    let mut end_frame_times_s = Vec::new();
+    let mut frame_cpu_times_s = Vec::new();
     let mut errs = Vec::new();
     let mut frame_errs = Vec::new();
     for frame in 0..args.frames {
@@ -223,22 +233,22 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             scene = file.build(frame_time(frame))?;
         }
         let started = Instant::now();
+        let cpu_started = process_cpu_seconds();
         let image = match &mut guide {
             Some(g) => {
                 g.set_camera(scene.camera.position);
-                let image = render_frame(
-                    &scene,
-                    &settings,
-                    frame,
-                    || McpgSampler::new(g),
-                    || (),
-                );
+                let image = render_frame(&scene, &settings, frame, || McpgSampler::new(g), || ());
+                let ending = Instant::now();
                 g.end_frame();
+                end_frame_times_s.push(ending.elapsed().as_secs_f64());
                 image
             }
             None => render_frame(&scene, &settings, frame, || BsdfSampler, || ()),
         };
         frame_times_s.push(started.elapsed().as_secs_f64());
+        if let (Some(a), Some(b)) = (cpu_started, process_cpu_seconds()) {
+            frame_cpu_times_s.push(b - a);
+        }
         progress.inc(1);
         for (s, p) in sum.iter_mut().zip(&image) {
             *s += *p;
@@ -269,7 +279,13 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             frames: args.frames,
             bounces: args.bounces,
             seed: args.seed,
+            frame_cpu_times_s: if frame_cpu_times_s.len() == frame_times_s.len() {
+                frame_cpu_times_s
+            } else {
+                Vec::new()
+            },
             frame_times_s,
+            end_frame_times_s,
             reference: args.reference.clone(),
             errors: errs,
             frame_errors: frame_errs,
@@ -277,6 +293,18 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         },
         guide: guide.map(Arc::new),
     })
+}
+
+/// CPU seconds (user + system) this process has used, from `/proc/self/stat` (fields 14 and
+/// 15, in clock ticks of 1/100 s); `None` where that file does not exist.
+fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // The fields after the parenthesised command name start with field 3.
+    let rest = stat.get(stat.rfind(')')? + 2..)?;
+    let mut fields = rest.split_whitespace().skip(11);
+    let user: f64 = fields.next()?.parse().ok()?;
+    let system: f64 = fields.next()?.parse().ok()?;
+    Some((user + system) / 100.0)
 }
 
 /// `mcg-demo render`: renders and writes `<out>/<method>.{exr,png,json}`; returns the paths.

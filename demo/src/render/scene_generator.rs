@@ -224,15 +224,30 @@ fn cove_light() -> Vec<Part> {
     let top = 3.0 - COVE_SLIT;
     let (lo, hi) = (z_centre - half, z_centre + half);
     for (a, b) in [
-        (Vec3::new(-half, y_panel, lo), Vec3::new(half, top, lo + thickness)),
-        (Vec3::new(-half, y_panel, hi - thickness), Vec3::new(half, top, hi)),
-        (Vec3::new(-half, y_panel, lo), Vec3::new(-half + thickness, top, hi)),
-        (Vec3::new(half - thickness, y_panel, lo), Vec3::new(half, top, hi)),
+        (
+            Vec3::new(-half, y_panel, lo),
+            Vec3::new(half, top, lo + thickness),
+        ),
+        (
+            Vec3::new(-half, y_panel, hi - thickness),
+            Vec3::new(half, top, hi),
+        ),
+        (
+            Vec3::new(-half, y_panel, lo),
+            Vec3::new(-half + thickness, top, hi),
+        ),
+        (
+            Vec3::new(half - thickness, y_panel, lo),
+            Vec3::new(half, top, hi),
+        ),
     ] {
         cuboid(&mut panel, a, b);
     }
     vec![
-        part(light("hidden_light", [1.0, 0.95, 0.85], COVE_STRENGTH), lamp),
+        part(
+            light("hidden_light", [1.0, 0.95, 0.85], COVE_STRENGTH),
+            lamp,
+        ),
         part(PANEL, panel),
     ]
 }
