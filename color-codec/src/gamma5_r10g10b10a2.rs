@@ -107,7 +107,7 @@ mod tests {
                 assert_eq!(got, exact.round() as u32, "v = {v}");
                 checked += 1;
             } else {
-                assert!((got as f64 - exact).abs() <= 0.501);
+                mcg_test_support::assert_close!(got as f64, exact, 0.501);
                 ties += 1;
             }
             v *= 1.0007;

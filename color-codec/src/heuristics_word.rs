@@ -241,9 +241,9 @@ mod tests {
                 f_d: x,
                 flags: 1,
             }));
-            assert!((h.f_v - x).abs() <= 0.5 / 63.0 + 1e-6);
-            assert!((h.f_s - x).abs() <= 0.5 / 1023.0 + 1e-6);
-            assert!((h.f_d - x).abs() <= 0.5 / 1023.0 + 1e-6);
+            mcg_test_support::assert_close!(h.f_v, x, 0.5 / 63.0 + 1e-6);
+            mcg_test_support::assert_close!(h.f_s, x, 0.5 / 1023.0 + 1e-6);
+            mcg_test_support::assert_close!(h.f_d, x, 0.5 / 1023.0 + 1e-6);
         }
         for i in 0..3 {
             let p = l.places[i];

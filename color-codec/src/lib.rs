@@ -66,10 +66,6 @@
 //! assert!((c - Vec3::new(1.0, 0.6, 0.3)).abs().max_element() < 0.01);
 //! ```
 #![no_std]
-#![deny(missing_docs)]
-#![forbid(unsafe_code)]
-// `!(x > 0.0)` is how this crate rejects NaN together with the out-of-range values.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 #![cfg_attr(docsrs, feature(doc_cfg))]
 
 #[cfg(any(feature = "std", test))]

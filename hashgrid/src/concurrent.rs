@@ -167,10 +167,14 @@ impl ConcurrentTable {
         r
     }
 
-    /// Marks `slot` as used in the current frame (a relaxed store; no-op without ages).
+    /// Marks `slot` as used in the current frame (a relaxed store; no-op without ages). The
+    /// age is only written when it changes, so that threads reading the same slots in one
+    /// frame do not take the cache line from each other.
     #[inline]
     pub fn touch(&self, slot: u32) {
-        if let Some(age) = self.ages.get(slot as usize) {
+        if let Some(age) = self.ages.get(slot as usize)
+            && age.load(Ordering::Relaxed) != self.frame
+        {
             age.store(self.frame, Ordering::Relaxed);
         }
     }

@@ -34,46 +34,19 @@
 //! - [`CellKey`] is `#[repr(C)]` + [`bytemuck::Pod`] (16 bytes); tables store plain `u32`
 //!   checksums and `Pod` values that upload as they are.
 //!
-//! ## Design choices (measured in the `hashgrid` suites and the demo's section `hashgrid`)
-//! - **Bucket hash.** [`BucketHash::Fold`] (the default): two multiply–add folds of the key's
-//!   words, xor'ed, one multiply–xorshift finisher; the checksum comes from the same pass
-//!   ([`fold_and_checksum`], 5 multiplies). It passes the chi-square occupancy tests on planes,
-//!   lines, a voxelised sphere and a camera's multi-level key stream, like [`BucketHash::Mix`]
-//!   (word 3 of Jarzynski and Olano's [`pcg4d`], the previous default), in a third of the
-//!   instructions. MCPG's xor of primes is cheaper still and keeps x-neighbours in
-//!   neighbouring slots, but on the multi-level stream it is over-dispersed (X²/df ≈ 1.5) and
-//!   loses ~9 % of inserts at load 0.25 with 8 probes. [`BucketHash::MixCoherent`] keeps runs
-//!   of 4 along x together, at the price of more clustering.
-//! - **Capacity.** Any capacity works: the index is `h mod B` ([`SlotIndexer`], an exact fast
-//!   modulo on the CPU, `%` on the GPU) and a mask when `B` is a power of two. With `Fold` or
-//!   `Mix` both behave the same; a prime `B` helps weak hashes. (merian-quake's sizes
-//!   32 777 259 and 800 009 are odd but not prime.)
-//! - **Probing.** Linear, at most `max_probes` slots, wrapping from the last slot to slot 0;
-//!   [`Insert::Full`] beyond. Linear probing clusters: even ideal hashing fails ≈ 2.5 % of
-//!   inserts at load 0.5 with 8 probes, so size tables for a load ≲ 0.25 or raise the limit.
-//! - **Checksum.** [`checksum`]: the second fold plus the fold hash, all 32 bits kept in a
-//!   `u32` array beside the values, for every bucket hash: distinct keys share it with
-//!   probability 2⁻³² (the `hashgrid_checksum` suite counts it), and keys that share it never
-//!   share the fold hash (the pair is a bijection of the two folds), so two keys are confused
-//!   only if they also share a probe window.
-//! - **Concurrency.** [`ConcurrentTable`] claims slots by compare-and-swap on the checksum
-//!   word and owns no values; the thread that gets [`Insert::Inserted`] initialises the value in
-//!   the caller's own array (typically atomics). Evictions and the plain `&[u32]` upload view
-//!   need `&mut self`; the view is one of the crate's two `unsafe` blocks (an `&[AtomicU32]`
-//!   read as `&[u32]`, which std documents as having the same size and bit validity); the
-//!   other calls three SSE2 compare intrinsics.
+//! ## Design choices
+//! - [`BucketHash::Fold`] is the default bucket hash: it passes the chi-square occupancy tests
+//!   on a renderer's multi-level key stream in a third of [`BucketHash::Mix`]'s instructions;
+//!   MCPG's xor of primes is cheaper but over-dispersed there.
+//! - Any capacity works (`h mod B` by [`SlotIndexer`], a mask for powers of two).
+//! - Probing is linear and bounded by `max_probes` ([`Insert::Full`] beyond): size tables for
+//!   a load ≲ 0.25 or raise the limit.
+//! - [`ConcurrentTable`] claims slots by compare-and-swap on the checksum word; the caller owns
+//!   the values. The crate's two `unsafe` blocks: its `&[AtomicU32]` → `&[u32]` upload view and
+//!   three SSE2 compare intrinsics in the probe loop.
 //!
-//! ## Performance
-//! Against hashbrown with foldhash holding the same keys (2¹⁶–2²⁴ slots at load 1/4, fastest
-//! of many passes on a shared 2-vCPU VM, baseline x86-64): [`HashTable::get`] takes 1.3–2.2×
-//! hashbrown's time warm (the most on small tables), [`HashTable::find_many`] 1.4–1.9×, an
-//! insert 1.28–1.39×; 53 instructions per `get` against 34. [`ConcurrentTable`] inserts from
-//! 2 threads 3.1–6.2× faster than `DashMap` and 1.5–7.5× than `Mutex<FxHashMap>` (2¹⁹–2²²
-//! slots, criterion means);
-//! std's SipHash `HashMap` takes 2.2–2.4× the table's `get` time. Run `cargo bench -p
-//! mcg-hashgrid --bench peers` (criterion, every peer in the same group) and
-//! `scripts/hashgrid-instructions` (callgrind); the numbers, what limits them and the
-//! measurement diary are in `benches/README.md`.
+//! The measurements behind these choices, the peer benchmarks (hashbrown, `FxHashMap`,
+//! `DashMap`, std's `HashMap`) and how to run them are in `benches/README.md`.
 //!
 //! ## Features
 //! - `std` (default): float functions from the standard library; implies `alloc`.
@@ -102,13 +75,9 @@
 //! # Ok::<(), mcg_hashgrid::TableError>(())
 //! ```
 #![no_std]
-#![deny(missing_docs)]
 // Two `unsafe` blocks: `ConcurrentTable::checksums` views `&[AtomicU32]` as `&[u32]` for upload
 // (documented there), and `probe::group_masks` calls SSE2 compare intrinsics (no pointers);
-// everything else is safe code.
-#![deny(unsafe_code)]
-// `!(x > 0.0)` is how this crate rejects NaN together with the out-of-range values.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
+// everything else is safe code. Hence `unsafe_code = "deny"` (not "forbid") in Cargo.toml.
 #![cfg_attr(docsrs, feature(doc_cfg))]
 
 #[cfg(feature = "alloc")]

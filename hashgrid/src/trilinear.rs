@@ -139,9 +139,9 @@ mod tests {
     fn weights_sum_to_one_and_corners_are_the_nearest() {
         let f = Vec3::new(0.2, 0.7, 0.5);
         let w = trilinear_weights(f);
-        assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-6);
-        assert!((w[0] - 0.8 * 0.3 * 0.5).abs() < 1e-7);
-        assert!((w[7] - 0.2 * 0.7 * 0.5).abs() < 1e-7);
+        mcg_test_support::assert_close!(w.iter().sum::<f32>(), 1.0, 1e-6);
+        mcg_test_support::assert_close!(w[0], 0.8 * 0.3 * 0.5, 1e-7);
+        mcg_test_support::assert_close!(w[7], 0.2 * 0.7 * 0.5, 1e-7);
         // At a vertex the choice is that vertex, whatever u.
         for u in [0.0, 0.3, 0.999_999_9] {
             assert_eq!(

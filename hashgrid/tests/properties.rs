@@ -8,28 +8,6 @@ use mcg_hashgrid::{
     hash_xor_primes, jittered_vertex, mix_and_checksum, normal_class, pcg4d, stochastic_trilinear,
 };
 use proptest::prelude::*;
-use proptest::test_runner::RngSeed;
-
-/// `cases` cases from the fixed seed 0x7E57_0006, so every run checks the same cases;
-/// `PROPTEST_RNG_SEED` / `PROPTEST_CASES`, when set, override them (`scripts/fuzz`).
-fn proptest_config(cases: u32) -> ProptestConfig {
-    let set = |name: &str| std::env::var_os(name).is_some();
-    let from_env = ProptestConfig::default();
-    ProptestConfig {
-        cases: if set("PROPTEST_CASES") {
-            from_env.cases
-        } else {
-            cases
-        },
-        rng_seed: if set("PROPTEST_RNG_SEED") {
-            from_env.rng_seed
-        } else {
-            RngSeed::Fixed(0x7E57_0006)
-        },
-        failure_persistence: None,
-        ..from_env
-    }
-}
 
 fn any_key() -> impl Strategy<Value = CellKey> {
     (any::<[i32; 3]>(), any::<u8>(), any::<u8>(), any::<u16>()).prop_map(
@@ -46,7 +24,7 @@ fn small_key() -> impl Strategy<Value = CellKey> {
 }
 
 proptest! {
-    #![proptest_config(proptest_config(512))]
+    #![proptest_config(mcg_test_support::proptest_config(512, 0x7E57_0006))]
 
     #[test]
     fn words_round_trip(key in any_key()) {

@@ -11,7 +11,7 @@
 //! cargo run -p mcg-markov-guide --release --example guided_room -- [--size 96] [--frames 64]
 //!     [--spp 8] [--reference-spp 2048] [--threads 2] [--bounces 3] [--seed 1]
 //!     [--hemisphere sphere|product] [--bsdf-probability 0.1] [--no-cache]
-//!     [--cache-level-bias 2]
+//!     [--cache-level-bias 2] [--candidates 5] [--adaptive-capacity 1048576]
 //! ```
 //!
 //! The reference image is kept in the temporary directory between runs (keyed by size,
@@ -487,6 +487,8 @@ fn main() {
     let mut bsdf_probability = None;
     let mut cache = true;
     let mut level_bias = None;
+    let mut candidates = None;
+    let mut adaptive_capacity = None;
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
     while i < args.len() {
@@ -506,6 +508,10 @@ fn main() {
             }
             "--bsdf-probability" => {
                 bsdf_probability = Some(value().parse().expect("--bsdf-probability P"))
+            }
+            "--candidates" => candidates = Some(value().parse().expect("--candidates N")),
+            "--adaptive-capacity" => {
+                adaptive_capacity = Some(value().parse().expect("--adaptive-capacity N"))
             }
             "--hemisphere" => {
                 hemisphere = match value().as_str() {
@@ -566,6 +572,12 @@ fn main() {
     config.hemisphere = hemisphere;
     if let Some(p) = bsdf_probability {
         config.params.bsdf_probability = p;
+    }
+    if let Some(n) = candidates {
+        config.params.candidates = n;
+    }
+    if let Some(n) = adaptive_capacity {
+        config.adaptive_capacity = n;
     }
     if !cache {
         config.cache = None;

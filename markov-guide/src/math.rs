@@ -38,13 +38,6 @@ mod imp {
 #[cfg(any(feature = "std", feature = "libm"))]
 pub(crate) use imp::*;
 
-/// `x` when it is finite and non-negative, otherwise 0: how scores, weights and targets that
-/// are NaN, infinite or negative are kept out of chain states.
-#[inline(always)]
-pub(crate) fn finite_non_negative_or_zero(x: f32) -> f32 {
-    if (0.0..f32::INFINITY).contains(&x) {
-        x
-    } else {
-        0.0
-    }
-}
+/// How scores, weights and targets that are NaN, infinite or negative are kept out of chain
+/// states: one rule, shared with the estimators.
+pub(crate) use mcg_smis::finite_non_negative_or_zero;

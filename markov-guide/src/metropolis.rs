@@ -355,8 +355,10 @@ mod tests {
         ] {
             let got = standard_normal_from_uniform(u) as f64;
             let want = reference_quantile(u as f64);
-            assert!(
-                (got - want).abs() < 2e-5 * want.abs().max(1.0),
+            mcg_test_support::assert_close!(
+                got,
+                want,
+                2e-5 * want.abs().max(1.0),
                 "Φ⁻¹({u}) = {got}, want {want}"
             );
         }
@@ -392,8 +394,12 @@ mod tests {
         let d = RandomWalk::adgi_dynamic(0.5).unwrap().step_sizes();
         assert_eq!(s, [0.5, 0.5, 0.5, ADGI_DIRECTION_STEP, ADGI_DIRECTION_STEP]);
         assert_eq!(d[0], 1.5);
-        assert!((d[3] - 6.0 * ADGI_DIRECTION_STEP).abs() < 1e-7);
-        assert!((ADGI_DIRECTION_STEP as f64 - (core::f64::consts::PI / 256.0).sqrt()).abs() < 1e-7);
+        mcg_test_support::assert_close!(d[3], 6.0 * ADGI_DIRECTION_STEP, 1e-7);
+        mcg_test_support::assert_close!(
+            ADGI_DIRECTION_STEP as f64,
+            (core::f64::consts::PI / 256.0).sqrt(),
+            1e-7
+        );
     }
 
     #[test]
@@ -482,7 +488,7 @@ mod tests {
         let walk = RandomWalk::new([0.5, 2.0]).unwrap();
         let p = walk.propose(&[1.0, -1.0], &[0.8, 0.25]);
         // 1 + 0.5·Φ⁻¹(0.8), −1 + 2·Φ⁻¹(0.25).
-        assert!((p[0] - (1.0 + 0.5 * 0.841_621_2)).abs() < 2e-6, "{p:?}");
-        assert!((p[1] - (-1.0 + 2.0 * -0.674_489_75)).abs() < 4e-6, "{p:?}");
+        mcg_test_support::assert_close!(p[0], (1.0 + 0.5 * 0.841_621_2), 2e-6, "{p:?}");
+        mcg_test_support::assert_close!(p[1], (-1.0 + 2.0 * -0.674_489_75), 4e-6, "{p:?}");
     }
 }

@@ -108,7 +108,7 @@ mod tests {
         let total = (n * n * n) as f32;
         for i in 0..3 {
             let p = counts[i] as f32 / total;
-            assert!((p - weights[i] / 6.0).abs() < 0.01, "{i}: {p}");
+            mcg_test_support::assert_close!(p, weights[i] / 6.0, 0.01, "{i}: {p}");
         }
     }
 

@@ -371,7 +371,7 @@ mod tests {
         let scene = ToyScene::single_light();
         let hit = scene.trace(Vec3::ZERO, Vec3::Z);
         assert_eq!(hit.light, Some(0));
-        assert!((hit.point.z - 2.75).abs() < 1e-5);
+        mcg_test_support::assert_close!(hit.point.z, 2.75, 1e-5);
         let miss = scene.trace(Vec3::ZERO, Vec3::X);
         assert_eq!(miss.light, None);
         assert_eq!(miss.radiance, 0.0);

@@ -202,7 +202,7 @@ fn pdf_integrates_to_one() {
             .find(|v| v.candidates().iter().filter(|s| s.is_valid()).count() >= 2)
             .expect("a trained vertex");
         let total = integral(&v);
-        assert!((total - 1.0).abs() < 5e-3, "{hemisphere:?}: {total}");
+        mcg_test_support::assert_close!(total, 1.0, 5e-3, "{hemisphere:?}: {total}");
         let view = (x - Vec3::new(0.0, -2.5, 3.0)).normalize();
         let volume = guide.begin(
             Vertex::volume(x, view, Vec2::new(0.3, 0.6)),
@@ -210,7 +210,7 @@ fn pdf_integrates_to_one() {
             &BeginUniforms::from_fn(5, || rng.random()),
         );
         let total = integral(&volume);
-        assert!((total - 1.0).abs() < 5e-3, "volume: {total}");
+        mcg_test_support::assert_close!(total, 1.0, 5e-3, "volume: {total}");
     }
 }
 

@@ -140,7 +140,7 @@ fn guide_h(c: &mut Criterion) {
         b.iter(|| {
             let mut s = 0.0f32;
             for &(p, d) in &points {
-                s += guide.h(black_box(p), black_box(d));
+                s += guide.guiding_value(black_box(p), black_box(d));
             }
             black_box(s)
         })

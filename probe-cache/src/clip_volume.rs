@@ -333,7 +333,7 @@ mod tests {
         assert!(!g.contains(Vec3::new(6.45, 0.0, 5.0)));
         assert!(g.contains(Vec3::new(0.0, 0.0, 9.5))); // nearer than near, within the margin
         for p in f.planes() {
-            assert!((p.truncate().length() - 1.0).abs() < 1e-5);
+            mcg_test_support::assert_close!(p.truncate().length(), 1.0, 1e-5);
         }
         assert_eq!(
             Frustum::from_view_projection(Mat4::ZERO),

@@ -119,7 +119,7 @@ mod tests {
                 }
             }
             let want = f64::from(equal_area_solid_angle(n));
-            assert!((s - want).abs() < 2e-3 * want, "({x}, {y}): {s} vs {want}");
+            mcg_test_support::assert_close!(s, want, 2e-3 * want, "({x}, {y}): {s} vs {want}");
         }
     }
 

@@ -2,6 +2,8 @@
 
 use core::fmt;
 
+use mcg_markov_guide::WalkError;
+
 /// Why a constructor of this crate rejected its parameters.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[non_exhaustive]
@@ -25,7 +27,11 @@ pub enum ProbeError {
     /// A chain set was asked for zero chains.
     NoChains,
     /// A chain step size (the probe spacing times its scale) is not finite.
+    #[deprecated(note = "`ChainKind::walk` reports `ProbeError::ChainStep` with the walk's cause")]
     StepNotFinite,
+    /// A chain's random walk rejected its step sizes (the probe spacing times the chain
+    /// kind's scale); the walk's error says why (not finite, above `RandomWalk::STEP_MAX`, …).
+    ChainStep(WalkError),
     /// A texel map's side length leaves no interior texel or exceeds the maximum.
     MapSizeOutOfRange,
     /// A word slice handed to [`crate::ProbeTexels::from_words`] (or copied out) does not have
@@ -40,8 +46,12 @@ pub enum ProbeError {
 }
 
 impl fmt::Display for ProbeError {
+    #[allow(deprecated)] // `StepNotFinite` keeps its message while it exists
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
+            ProbeError::ChainStep(cause) => {
+                return write!(f, "chain step sizes rejected by the random walk: {cause}");
+            }
             ProbeError::OriginNotFinite => "probe grid origin is not finite",
             ProbeError::SpacingNotPositive => "probe spacing is not a positive finite vector",
             ProbeError::CountsOutOfRange => {
@@ -68,4 +78,11 @@ impl fmt::Display for ProbeError {
     }
 }
 
-impl core::error::Error for ProbeError {}
+impl core::error::Error for ProbeError {
+    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
+        match self {
+            ProbeError::ChainStep(cause) => Some(cause),
+            _ => None,
+        }
+    }
+}

@@ -252,7 +252,7 @@ mod tests {
                 sum += w;
                 interp += w * g.probe_position(coords);
             }
-            assert!((sum - 1.0).abs() < 1e-6);
+            mcg_test_support::assert_close!(sum, 1.0, 1e-6);
             let lo = g.origin();
             let hi = g.probe_position(g.counts() - UVec3::ONE);
             assert!(

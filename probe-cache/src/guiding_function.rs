@@ -91,12 +91,12 @@ impl GuideParams {
     /// ```
     /// use mcg_probe_cache::GuideParams;
     /// // Static form: f = 0.5, ĝ = 0.25: exp(min(0.5, 1)) · 0.5 = 0.824361.
-    /// assert!((GuideParams::STATIC.h(0.5, 0.25) - 0.824_361).abs() < 1e-6);
-    /// assert_eq!(GuideParams::DYNAMIC.h(0.5, 100.0), 0.5);
+    /// assert!((GuideParams::STATIC.guiding_value(0.5, 0.25) - 0.824_361).abs() < 1e-6);
+    /// assert_eq!(GuideParams::DYNAMIC.guiding_value(0.5, 100.0), 0.5);
     /// ```
     #[inline]
     #[must_use]
-    pub fn h(&self, f: f32, g_hat: f32) -> f32 {
+    pub fn guiding_value(&self, f: f32, g_hat: f32) -> f32 {
         let f = unit(f);
         if !(f > 0.0) {
             return 0.0;
@@ -109,6 +109,14 @@ impl GuideParams {
             0.0
         };
         exponent.exp() * f
+    }
+
+    /// h(f, ĝ) of ADGI eq. 2: the old name of [`GuideParams::guiding_value`].
+    #[deprecated(note = "renamed to `guiding_value`")]
+    #[inline]
+    #[must_use]
+    pub fn h(&self, f: f32, g_hat: f32) -> f32 {
+        self.guiding_value(f, g_hat)
     }
 }
 
@@ -123,13 +131,20 @@ impl Default for GuideParams {
 /// direction (not necessarily unit). Implemented by [`GuidingFunction`] and by closures
 /// `Fn(Vec3, Vec3) -> f32`. Values that are NaN, infinite or negative count as 0.
 pub trait Guide {
-    /// h(p, ω).
-    fn h(&self, position: Vec3, direction: Vec3) -> f32;
+    /// The guiding function's value h(p, ω) (ADGI eq. 2).
+    fn guiding_value(&self, position: Vec3, direction: Vec3) -> f32;
+
+    /// h(p, ω): the old name of [`Guide::guiding_value`] (implement that one).
+    #[deprecated(note = "renamed to `guiding_value`")]
+    #[inline]
+    fn h(&self, position: Vec3, direction: Vec3) -> f32 {
+        self.guiding_value(position, direction)
+    }
 }
 
 impl<F: Fn(Vec3, Vec3) -> f32> Guide for F {
     #[inline]
-    fn h(&self, position: Vec3, direction: Vec3) -> f32 {
+    fn guiding_value(&self, position: Vec3, direction: Vec3) -> f32 {
         self(position, direction)
     }
 }
@@ -152,10 +167,10 @@ impl<F: Fn(Vec3, Vec3) -> f32> Guide for F {
 /// let feedback = vec![0.1; 16];
 /// let h = GuidingFunction::new(ProxyGrid::probes(grid), &f_s, Some(&feedback), GuideParams::STATIC)?;
 /// // Probe 1, octant 0: exp(min(0.1/0.2, 1)) · 0.2 = e^0.5 · 0.2.
-/// let v = h.h(Vec3::new(1.2, 0.0, 0.1), Vec3::new(0.3, 0.5, 0.8));
+/// let v = h.guiding_value(Vec3::new(1.2, 0.0, 0.1), Vec3::new(0.3, 0.5, 0.8));
 /// assert!((v - 0.5f32.exp() * 0.2).abs() < 1e-6);
-/// assert_eq!(h.h(Vec3::new(1.2, 0.0, 0.1), Vec3::new(-0.3, 0.5, 0.8)), 0.0);
-/// assert_eq!(h.h(Vec3::new(9.0, 0.0, 0.0), Vec3::Z), 0.0); // outside the grid
+/// assert_eq!(h.guiding_value(Vec3::new(1.2, 0.0, 0.1), Vec3::new(-0.3, 0.5, 0.8)), 0.0);
+/// assert_eq!(h.guiding_value(Vec3::new(9.0, 0.0, 0.0), Vec3::Z), 0.0); // outside the grid
 /// # Ok::<(), mcg_probe_cache::ProbeError>(())
 /// ```
 #[derive(Clone, Copy, Debug)]
@@ -211,14 +226,14 @@ impl<'a> GuidingFunction<'a> {
         let i = cell * OCTANTS + (octant & 7);
         let Some(&f) = self.f.get(i) else { return 0.0 };
         let g = self.feedback.and_then(|g| g.get(i).copied()).unwrap_or(0.0);
-        self.params.h(f, g)
+        self.params.guiding_value(f, g)
     }
 
     /// h(p, ω): the cell owning `position` and the octant of `direction`; 0 outside the
     /// sampling domain ([`ProxyGrid::nearest_probe`]) or for a non-finite direction.
     #[inline]
     #[must_use]
-    pub fn h(&self, position: Vec3, direction: Vec3) -> f32 {
+    pub fn guiding_value(&self, position: Vec3, direction: Vec3) -> f32 {
         if !direction.is_finite() {
             return 0.0;
         }
@@ -227,12 +242,20 @@ impl<'a> GuidingFunction<'a> {
             None => 0.0,
         }
     }
+
+    /// h(p, ω): the old name of [`GuidingFunction::guiding_value`].
+    #[deprecated(note = "renamed to `guiding_value`")]
+    #[inline]
+    #[must_use]
+    pub fn h(&self, position: Vec3, direction: Vec3) -> f32 {
+        self.guiding_value(position, direction)
+    }
 }
 
 impl Guide for GuidingFunction<'_> {
     #[inline]
-    fn h(&self, position: Vec3, direction: Vec3) -> f32 {
-        GuidingFunction::h(self, position, direction)
+    fn guiding_value(&self, position: Vec3, direction: Vec3) -> f32 {
+        GuidingFunction::guiding_value(self, position, direction)
     }
 }
 
@@ -321,22 +344,26 @@ mod tests {
     fn eq2_by_hand() {
         let s = GuideParams::STATIC;
         // f = 0.4, ĝ = 0.1: exp(0.25)·0.4 = 1.2840254·0.4 = 0.51361016.
-        assert!((s.h(0.4, 0.1) - 0.513_610_2).abs() < 1e-6);
+        mcg_test_support::assert_close!(s.guiding_value(0.4, 0.1), 0.513_610_2, 1e-6);
         // ĝ/f = 3 > 1 → capped: e·0.4 = 1.0873127.
-        assert!((s.h(0.4, 1.2) - 1.087_312_7).abs() < 1e-6);
+        mcg_test_support::assert_close!(s.guiding_value(0.4, 1.2), 1.087_312_7, 1e-6);
         // Eq. 2 with α = 2, cap 10: f = 0.5, ĝ = 0.75: exp(2·0.75/0.5) · 0.5 = e³/2 = 10.042768.
         let p = GuideParams::new(2.0, 10.0).unwrap();
-        assert!((p.h(0.5, 0.75) - 10.042_768).abs() < 1e-4);
+        mcg_test_support::assert_close!(p.guiding_value(0.5, 0.75), 10.042_768, 1e-4);
         // Tiny f with ĝ > 0 hits the cap: e^10 · 1e-30, finite.
-        assert!((p.h(1e-30, 1.0) - 1e-30 * 10.0f32.exp()).abs() < 1e-33);
-        assert_eq!(p.h(0.0, 1.0), 0.0);
-        assert_eq!(p.h(f32::NAN, 1.0), 0.0);
-        assert_eq!(p.h(-1.0, 1.0), 0.0);
-        assert_eq!(p.h(0.5, f32::NAN), 0.5);
-        assert!((p.h(0.5, f32::INFINITY) - 0.5 * 10.0f32.exp()).abs() < 1e-2);
+        mcg_test_support::assert_close!(p.guiding_value(1e-30, 1.0), 1e-30 * 10.0f32.exp(), 1e-33);
+        assert_eq!(p.guiding_value(0.0, 1.0), 0.0);
+        assert_eq!(p.guiding_value(f32::NAN, 1.0), 0.0);
+        assert_eq!(p.guiding_value(-1.0, 1.0), 0.0);
+        assert_eq!(p.guiding_value(0.5, f32::NAN), 0.5);
+        mcg_test_support::assert_close!(
+            p.guiding_value(0.5, f32::INFINITY),
+            0.5 * 10.0f32.exp(),
+            1e-2
+        );
         // f above 1 saturates.
-        assert_eq!(GuideParams::DYNAMIC.h(7.0, 1.0), 1.0);
-        assert_eq!(GuideParams::DYNAMIC.h(0.3, f32::INFINITY), 0.3);
+        assert_eq!(GuideParams::DYNAMIC.guiding_value(7.0, 1.0), 1.0);
+        assert_eq!(GuideParams::DYNAMIC.guiding_value(0.3, f32::INFINITY), 0.3);
         assert_eq!(GuideParams::default(), GuideParams::STATIC);
     }
 
@@ -358,7 +385,7 @@ mod tests {
         }
         let p = GuideParams::new(0.5, MAX_EXPONENT).unwrap();
         assert_eq!((p.alpha(), p.exponent_cap()), (0.5, 64.0));
-        assert!(p.h(1.0, f32::INFINITY).is_finite());
+        assert!(p.guiding_value(1.0, f32::INFINITY).is_finite());
     }
 
     #[test]
@@ -380,17 +407,20 @@ mod tests {
         // (1, 1, 0) = index 4; direction (−1, 2, −3) → octant 0b101 = 5.
         // f = 0.5 + 0.05 = 0.55; h = exp(0.05/0.55)·0.55 = e^0.090909·0.55 = 1.0951705·0.55
         // = 0.6023438.
-        let v = guide.h(Vec3::new(3.4, 2.9, 0.3), Vec3::new(-1.0, 2.0, -3.0));
-        assert!((v - 0.602_343_8).abs() < 1e-6, "{v}");
+        let v = guide.guiding_value(Vec3::new(3.4, 2.9, 0.3), Vec3::new(-1.0, 2.0, -3.0));
+        mcg_test_support::assert_close!(v, 0.602_343_8, 1e-6, "{v}");
         assert_eq!(v, guide.value(4, 5));
         assert_eq!(guide.value(6, 0), 0.0);
-        assert_eq!(guide.h(Vec3::new(3.4, 2.9, 0.3), Vec3::NAN), 0.0);
-        assert_eq!(guide.h(Vec3::new(-0.1, 0.0, 0.0), Vec3::X), 0.0);
+        assert_eq!(
+            guide.guiding_value(Vec3::new(3.4, 2.9, 0.3), Vec3::NAN),
+            0.0
+        );
+        assert_eq!(guide.guiding_value(Vec3::new(-0.1, 0.0, 0.0), Vec3::X), 0.0);
         assert_eq!(guide.cells(), cells);
         assert_eq!(guide.params(), GuideParams::STATIC);
         // Without feedback h = f.
         let plain = GuidingFunction::new(cells, &f, None, GuideParams::STATIC).unwrap();
-        assert!((plain.value(4, 5) - 0.55).abs() < 1e-7);
+        mcg_test_support::assert_close!(plain.value(4, 5), 0.55, 1e-7);
         assert_eq!(
             GuidingFunction::new(cells, &f[1..], None, GuideParams::STATIC).err(),
             Some(ProbeError::TableLengthMismatch)
@@ -439,7 +469,7 @@ mod tests {
         let values = [Vec3::X, Vec3::Y, Vec3::NAN];
         let mut g = [9.0; 8];
         octant_feedback(&dirs, |t| values[t], &mut g);
-        assert!((g[3] - 0.4639).abs() < 1e-6, "{g:?}");
+        mcg_test_support::assert_close!(g[3], 0.4639, 1e-6, "{g:?}");
         assert_eq!(g[4], 0.0);
         assert!(g.iter().enumerate().all(|(o, &v)| o == 3 || v == 0.0));
     }
@@ -449,7 +479,7 @@ mod tests {
         let p = GuideParams::new(0.7, 3.0).unwrap();
         let got: Vec<u32> = [(0.3, 0.2), (0.05, 1.0), (1.0, 0.0), (0.8, 0.9)]
             .iter()
-            .map(|&(f, g)| p.h(f, g).to_bits())
+            .map(|&(f, g)| p.guiding_value(f, g).to_bits())
             .collect();
         // By hand: e^{0.7·0.2/0.3}·0.3 = 0.47840; cap 3: e³·0.05 = 1.00428; 1; e^{0.7875}·0.8 = 1.75836.
         assert_eq!(

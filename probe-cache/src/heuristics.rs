@@ -254,25 +254,49 @@ impl HeuristicParams {
         self.lighting_weight
     }
 
-    /// f_c for a probe at `probe` seen from `camera` (eq. 10).
+    /// The camera-distance heuristic f_c for a probe at `probe` seen from `camera` (eq. 10).
     #[inline]
     #[must_use]
-    pub fn f_c(&self, probe: Vec3, camera: Vec3) -> f32 {
+    pub fn camera_distance(&self, probe: Vec3, camera: Vec3) -> f32 {
         camera_distance(probe, camera, self.camera_threshold)
     }
 
-    /// f_v for a hit at distance `t` along −ω (eq. 11).
+    /// The probe-visibility heuristic f_v for a hit at distance `t` along −ω (eq. 11).
     #[inline]
     #[must_use]
-    pub fn f_v(&self, t: f32) -> f32 {
+    pub fn probe_visibility(&self, t: f32) -> f32 {
         probe_visibility(t, self.voxel_diagonal)
     }
 
-    /// f_r for luminance `r` arriving along ω (eq. 12).
+    /// The incoming-radiance heuristic f_r for luminance `r` arriving along ω (eq. 12).
+    #[inline]
+    #[must_use]
+    pub fn incoming_radiance(&self, r: f32) -> f32 {
+        incoming_radiance(r, self.radiance_range)
+    }
+
+    /// f_c: the old name of [`HeuristicParams::camera_distance`].
+    #[deprecated(note = "renamed to `camera_distance`")]
+    #[inline]
+    #[must_use]
+    pub fn f_c(&self, probe: Vec3, camera: Vec3) -> f32 {
+        self.camera_distance(probe, camera)
+    }
+
+    /// f_v: the old name of [`HeuristicParams::probe_visibility`].
+    #[deprecated(note = "renamed to `probe_visibility`")]
+    #[inline]
+    #[must_use]
+    pub fn f_v(&self, t: f32) -> f32 {
+        self.probe_visibility(t)
+    }
+
+    /// f_r: the old name of [`HeuristicParams::incoming_radiance`].
+    #[deprecated(note = "renamed to `incoming_radiance`")]
     #[inline]
     #[must_use]
     pub fn f_r(&self, r: f32) -> f32 {
-        incoming_radiance(r, self.radiance_range)
+        self.incoming_radiance(r)
     }
 
     /// The stored heuristics of one probe octant (sec. 4.3): f_v, f_s = f_c f_v (eq. 19) and
@@ -312,7 +336,7 @@ pub fn compose_grid(
     }
     let layout = HeuristicsLayout::ADGI;
     for probe in 0..grid.probe_count() {
-        let f_c = params.f_c(grid.probe_position(grid.probe_coords(probe)), camera);
+        let f_c = params.camera_distance(grid.probe_position(grid.probe_coords(probe)), camera);
         for o in 0..OCTANTS {
             let i = probe * OCTANTS + o;
             let flags = layout.flags(out[i]);
@@ -360,14 +384,14 @@ mod tests {
         assert_eq!(camera_distance(Vec3::new(4.0, 6.0, 3.0), c, 6.0), 1.0);
         // Distance 5, k = 2 → e^{−3} = 0.049787068.
         let f = camera_distance(Vec3::new(4.0, 6.0, 3.0), c, 2.0);
-        assert!((f - 0.049_787_07).abs() < 1e-7, "{f}");
+        mcg_test_support::assert_close!(f, 0.049_787_07, 1e-7, "{f}");
         // Exactly at k: e^0 = 1 (continuous).
         assert_eq!(camera_distance(Vec3::new(4.0, 6.0, 3.0), c, 5.0), 1.0);
         assert_eq!(camera_distance(Vec3::NAN, c, 1.0), 0.0);
         assert_eq!(camera_distance(Vec3::INFINITY, c, 1.0), 0.0);
         // NaN k → 0: distance 5 → e^{−5}.
         let f = camera_distance(Vec3::new(4.0, 6.0, 3.0), c, f32::NAN);
-        assert!((f - (-5.0f32).exp()).abs() < 1e-8);
+        mcg_test_support::assert_close!(f, (-5.0f32).exp(), 1e-8);
         assert_eq!(
             camera_distance(Vec3::new(4.0, 6.0, 3.0), c, f32::INFINITY),
             1.0
@@ -380,9 +404,9 @@ mod tests {
     fn probe_visibility_by_hand() {
         // s = √3 (unit voxel diagonal), t = 0.25: e^{−0.5/√3} = e^{−0.288675} = 0.749256.
         let f = probe_visibility(0.25, 3.0f32.sqrt());
-        assert!((f - 0.749_255_6).abs() < 1e-6, "{f}");
+        mcg_test_support::assert_close!(f, 0.749_255_6, 1e-6, "{f}");
         // t = s: e^{−2} = 0.135335.
-        assert!((probe_visibility(2.0, 2.0) - 0.135_335_28).abs() < 1e-7);
+        mcg_test_support::assert_close!(probe_visibility(2.0, 2.0), 0.135_335_28, 1e-7);
         assert_eq!(probe_visibility(0.0, 1.0), 1.0);
         assert_eq!(probe_visibility(-3.0, 1.0), 1.0);
         assert_eq!(probe_visibility(f32::INFINITY, 1.0), 0.0);
@@ -412,8 +436,8 @@ mod tests {
         // f_c = 0.5, f_v = 0.8: f_s = 0.4; f_d = 0.4·(0.25 + 2·0.5)/3 = 0.4·1.25/3 = 0.1666…
         let h = p.compose(0.5, 0.8, 0.25, 0.5, 3);
         assert_eq!(h.f_v, 0.8);
-        assert!((h.f_s - 0.4).abs() < 1e-7);
-        assert!((h.f_d - 0.166_666_67).abs() < 1e-7, "{}", h.f_d);
+        mcg_test_support::assert_close!(h.f_s, 0.4, 1e-7);
+        mcg_test_support::assert_close!(h.f_d, 0.166_666_67, 1e-7, "{}", h.f_d);
         assert_eq!(h.flags, 3);
         // Saturated changes reach the bound 1 exactly when f_c = f_v = 1.
         assert_eq!(p.compose(1.0, 1.0, 1.0, 1.0, 0).f_d, 1.0);
@@ -449,9 +473,9 @@ mod tests {
             ),
             (1.0, 2.0, 4.0, 3.0)
         );
-        assert_eq!(p.f_r(2.0), 0.5);
-        assert_eq!(p.f_v(0.0), 1.0);
-        assert_eq!(p.f_c(Vec3::ZERO, Vec3::X), 1.0);
+        assert_eq!(p.incoming_radiance(2.0), 0.5);
+        assert_eq!(p.probe_visibility(0.0), 1.0);
+        assert_eq!(p.camera_distance(Vec3::ZERO, Vec3::X), 1.0);
     }
 
     #[test]
@@ -459,9 +483,9 @@ mod tests {
         let p = HeuristicParams::new(4.0, 1.0).unwrap();
         let h = p.compose(0.9, 0.7, 0.3, 0.1, 0b10_1010);
         let back = decode(encode(h));
-        assert!((back.f_v - h.f_v).abs() <= 0.5 / 63.0);
-        assert!((back.f_s - h.f_s).abs() <= 0.5 / 1023.0);
-        assert!((back.f_d - h.f_d).abs() <= 0.5 / 1023.0);
+        mcg_test_support::assert_close!(back.f_v, h.f_v, 0.5 / 63.0);
+        mcg_test_support::assert_close!(back.f_s, h.f_s, 0.5 / 1023.0);
+        mcg_test_support::assert_close!(back.f_d, h.f_d, 0.5 / 1023.0);
         assert_eq!(back.flags, h.flags);
     }
 
@@ -481,8 +505,8 @@ mod tests {
         let h0 = decode(out[0]);
         assert!((h0.f_s - 0.5).abs() < 1e-3 && h0.f_d == 0.0);
         let h9 = decode(out[9]);
-        assert!((h9.f_s - 0.303_27).abs() < 1e-3, "{h9:?}");
-        assert!((h9.f_d - 0.101_09).abs() < 1e-3, "{h9:?}");
+        mcg_test_support::assert_close!(h9.f_s, 0.303_27, 1e-3, "{h9:?}");
+        mcg_test_support::assert_close!(h9.f_d, 0.101_09, 1e-3, "{h9:?}");
         assert_eq!(h9.flags, 5);
         assert!(compose_grid(&grid, &p, Vec3::ZERO, &f_v[1..], &dv, &dr, &mut out).is_err());
     }
@@ -491,8 +515,8 @@ mod tests {
     fn value_stability() {
         let p = HeuristicParams::new(2.0, 0.866_025_4).unwrap();
         let probe = Vec3::new(1.0, 2.0, 3.0);
-        let f_c = p.f_c(probe, Vec3::new(0.0, 0.0, 0.5));
-        let f_v = p.f_v(0.3);
+        let f_c = p.camera_distance(probe, Vec3::new(0.0, 0.0, 0.5));
+        let f_v = p.probe_visibility(0.3);
         // f_c = e^{−(√11.25 − 2)} = 0.25818, f_v = e^{−0.6/0.866} = 0.50016,
         // f_s = 0.12913, f_d = 0.12913 · (0.2 + 2 · 0.6)/3 = 0.060261.
         let h = p.compose(f_c, f_v, 0.2, 0.6, 1);

@@ -8,9 +8,9 @@
 //! | item | what it is | paper |
 //! |---|---|---|
 //! | [`ProbeGrid`], [`ProbeCell`] | probe lattice: origin, spacing, counts; trilinear cell lookup | DDGI; ADGI sec. 3.1 |
-//! | [`scene`]: [`Scene`], [`DynamicScene`] | CPU test scene: boxes, spheres, a rectangular light, one-bounce probe rays, a door that opens | ADGI sec. 5 (Fig. 1, 8) |
-//! | [`reference`](mod@reference): [`reference_irradiance`], [`reference_texel_irradiance`] | reference probe irradiance, many stratified rays per texel direction (or per texel of a map) | ADGI sec. 5, "Reference" |
-//! | [`heuristics`], [`HeuristicParams`] | f_c, f_v, f_r; f_s, f_d; the 6-10-10 heuristics word | ADGI eq. 10-12, 19-20, sec. 4.3 |
+//! | `scene` (feature `scene`): `Scene`, `DynamicScene` | CPU test fixture: boxes, spheres, a rectangular light, one-bounce probe rays, a door that opens | ADGI sec. 5 (Fig. 1, 8) |
+//! | `reference` (feature `scene`): `reference_irradiance`, `reference_texel_irradiance` | reference probe irradiance, many stratified rays per texel direction (or per texel of a map) | ADGI sec. 5, "Reference" |
+//! | [`heuristics`], [`HeuristicParams`] | camera distance f_c, probe visibility f_v, incoming radiance f_r; f_s, f_d; the 6-10-10 heuristics word | ADGI eq. 10-12, 19-20, sec. 4.3 |
 //! | [`GuidingFunction`], [`GuideParams`], [`Guide`], [`guiding_function::octant_feedback`] | h(p, ω) = exp(α ĝ/f)·f per probe octant; static and dynamic forms; the feedback ĝ | ADGI eq. 2, sec. 4.8, 4.9 |
 //! | [`ProxyGrid`] | probes grouped into 3×3×3 virtual proxies, max-pooled octants | ADGI sec. 4.9 |
 //! | [`temporal_gradient`], [`ChangeDetector`], [`TemporalTrigger`], [`SmoothingKernel`] | temporal gradients of f_v, f_r, trigger, 5×5×5 × octant smoothing | ADGI eq. 13-18, Fig. 6a |
@@ -35,6 +35,16 @@
 //!   [`TexelContent`]); queries return irradiance `E` (π·L for a constant environment L).
 //!   Visibility texels hold distances in cell diagonals ([`ProbeGrid::cell_diagonal`]).
 //!
+//! ## Features
+//! - `scene`: the CPU fixture that the tests, examples and demo render with — a mini ray tracer
+//!   ([`scene`]) and reference probe irradiance ([`reference`](mod@reference)). A renderer that
+//!   only stores and queries probes does not need it.
+//!
+//! ## Dependencies
+//! The crate depends on `mcg-markov-guide` only for the Metropolis random walk of
+//! [`ProbeChains`] (ADGI Alg. 1, 5); that pulls in `mcg-vmf`, `mcg-smis` and `mcg-hashgrid`
+//! as well, which a DDGI-only user compiles but does not call.
+//!
 //! ## Example
 //! ```
 //! use mcg_probe_cache::{ProbeGrid, glam::{UVec3, Vec3}};
@@ -45,10 +55,6 @@
 //! assert!((weights - 1.0).abs() < 1e-6);
 //! # Ok::<(), mcg_probe_cache::ProbeError>(())
 //! ```
-#![deny(missing_docs)]
-#![forbid(unsafe_code)]
-// `!(x > 0.0)` is how this crate rejects NaN together with the out-of-range values.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 #![cfg_attr(docsrs, feature(doc_cfg))]
 
 pub use glam;
@@ -60,22 +66,23 @@ mod error;
 mod grid;
 pub mod guiding_function;
 pub mod heuristics;
+mod irradiance_query;
 mod octahedral;
 pub mod pilot_rays;
 pub mod probe_chains;
 mod probe_texels;
-#[cfg(test)]
-#[path = "../tests/support/mod.rs"]
-mod proptest_support;
 pub mod proxies;
-mod query;
+#[cfg(feature = "scene")]
+#[cfg_attr(docsrs, doc(cfg(feature = "scene")))]
 pub mod reference;
+#[cfg(feature = "scene")]
+#[cfg_attr(docsrs, doc(cfg(feature = "scene")))]
 pub mod scene;
 pub mod temporal_gradient;
 #[cfg(test)]
 mod test_support;
 mod texel_map;
-mod update;
+mod texel_update;
 
 pub use clip_volume::{ClipRegion, ClipVolume, ClipVolumes, Frustum};
 pub use equal_area::{equal_area_decode, equal_area_encode, equal_area_solid_angle};
@@ -83,6 +90,7 @@ pub use error::ProbeError;
 pub use grid::{ProbeCell, ProbeGrid};
 pub use guiding_function::{Guide, GuideParams, GuidingFunction, HeuristicField};
 pub use heuristics::HeuristicParams;
+pub use irradiance_query::{QueryConfig, TexelContent};
 pub use octahedral::{
     octahedral_decode, octahedral_encode, octahedral_solid_angle, octahedron_point,
 };
@@ -92,12 +100,13 @@ pub use probe_chains::{
 };
 pub use probe_texels::{ProbeTexels, RoundingMode, TexelConfig};
 pub use proxies::ProxyGrid;
-pub use query::{QueryConfig, TexelContent};
+#[cfg(feature = "scene")]
 pub use reference::{reference_irradiance, reference_texel_irradiance};
+#[cfg(feature = "scene")]
 pub use scene::{DynamicScene, ProbeRay, Scene, SceneEvent};
 pub use temporal_gradient::{ChangeDetector, SmoothingKernel, TemporalTrigger};
 pub use texel_map::{MAX_MAP_SIDE, MapKind, TexelMap};
-pub use update::{BlendWeights, RaySample};
+pub use texel_update::{BlendWeights, RaySample};
 
 /// The README's example, compiled and run as a doctest.
 #[cfg(doctest)]

@@ -196,14 +196,16 @@ mod tests {
                     let exact = octahedral_solid_angle(n, x, y) as f64;
                     let reference =
                         (4.0 * reference_area(n, x, y, 64) - reference_area(n, x, y, 32)) / 3.0;
-                    assert!(
-                        (exact - reference).abs() < 1e-5 * reference,
+                    mcg_test_support::assert_close!(
+                        exact,
+                        reference,
+                        1e-5 * reference,
                         "n {n} ({x}, {y}): {exact} vs {reference}"
                     );
                     sum += exact;
                 }
             }
-            assert!((sum - 4.0 * PI).abs() < 2e-5 * 4.0 * PI, "n {n}: {sum}");
+            mcg_test_support::assert_close!(sum, 4.0 * PI, 2e-5 * 4.0 * PI, "n {n}: {sum}");
         }
     }
 
@@ -216,9 +218,9 @@ mod tests {
         // Centre texel vs corner texel of the 8 × 8 map.
         let centre = octahedral_solid_angle(8, 3, 3);
         let corner = octahedral_solid_angle(8, 0, 0);
-        assert!((centre - 0.140_693).abs() < 1e-5, "{centre}");
+        mcg_test_support::assert_close!(centre, 0.140_693, 1e-5, "{centre}");
         // The texels at the ±z vertices are congruent, and smaller than those at face centres.
-        assert!((corner - centre).abs() < 1e-6);
+        mcg_test_support::assert_close!(corner, centre, 1e-6);
         assert!(octahedral_solid_angle(8, 5, 5) > 2.0 * centre);
     }
 }

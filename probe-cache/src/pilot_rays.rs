@@ -221,8 +221,8 @@ pub fn octant_heuristics(
     hits: &[PilotHit; OCTANTS],
     params: &HeuristicParams,
 ) -> ([f32; OCTANTS], [f32; OCTANTS]) {
-    let f_v = core::array::from_fn(|o| params.f_v(hits[o ^ 7].distance));
-    let f_r = core::array::from_fn(|o| params.f_r(hits[o].luminance));
+    let f_v = core::array::from_fn(|o| params.probe_visibility(hits[o ^ 7].distance));
+    let f_r = core::array::from_fn(|o| params.incoming_radiance(hits[o].luminance));
     (f_v, f_r)
 }
 
@@ -266,7 +266,7 @@ mod tests {
             ] {
                 let d = pilot_direction(o, Vec2::new(a, b));
                 assert_eq!(octant(d), o, "{o} {a} {b} {d}");
-                assert!((d.length() - 1.0).abs() < 1e-6);
+                mcg_test_support::assert_close!(d.length(), 1.0, 1e-6);
             }
         }
         // u = (0.5, 0.5) in octant 0: z = 0.5, φ = π/4: (√0.75/√2, √0.75/√2, 0.5).
@@ -318,7 +318,7 @@ mod tests {
         for o in 0..8 {
             assert_eq!(f_r[o], if o == 3 { 0.5 } else { 0.0 });
             let want = if o == 4 { (-1.0f32).exp() } else { 0.0 };
-            assert!((f_v[o] - want).abs() < 1e-7);
+            mcg_test_support::assert_close!(f_v[o], want, 1e-7);
         }
     }
 

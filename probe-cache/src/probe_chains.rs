@@ -53,6 +53,7 @@
 use core::f32::consts::TAU;
 
 use glam::{UVec3, Vec3};
+use mcg_markov_guide::mcg_smis::finite_non_negative_or_zero;
 use mcg_markov_guide::{
     ADGI_DIRECTION_STEP, FrameSchedule, MetropolisChain, RandomWalk, StepUniforms,
 };
@@ -159,12 +160,14 @@ impl ChainKind {
     /// position and k_ω · √(π/256) for both z and φ, with (k_p, k_ω) = [`Self::step_scale`].
     ///
     /// # Errors
-    /// [`ProbeError::StepNotFinite`] if a scaled spacing overflows.
+    /// [`ProbeError::ChainStep`] with the walk's [`WalkError`](mcg_markov_guide::WalkError)
+    /// if a scaled spacing is not a valid step (it overflows, or exceeds
+    /// [`RandomWalk::STEP_MAX`]).
     pub fn walk(self, grid: &ProbeGrid) -> Result<RandomWalk<CHAIN_DIMENSIONS>, ProbeError> {
         let (kp, kd) = self.step_scale();
         let s = grid.spacing() * kp;
         let a = ADGI_DIRECTION_STEP * kd;
-        RandomWalk::new([s.x, s.y, s.z, a, a]).map_err(|_| ProbeError::StepNotFinite)
+        RandomWalk::new([s.x, s.y, s.z, a, a]).map_err(ProbeError::ChainStep)
     }
 }
 
@@ -183,8 +186,8 @@ pub struct ProbeSample {
     /// The sampled unit direction ω. Trace from the probe along ω for irradiance and along −ω
     /// for visibility (sec. 4.8); map ω to a texel with the probe's texel map.
     pub direction: Vec3,
-    /// h at the sample.
-    pub h: f32,
+    /// The guiding function's value h(p, ω) (ADGI eq. 2) at the sample.
+    pub guiding_value: f32,
 }
 
 /// Counters of the last [`ProbeChains::step_frame`] or [`ProbeChains::step_frame_parallel`].
@@ -231,7 +234,7 @@ pub struct FrameStats {
 /// for _frame in 0..4 {
 ///     for s in chains.step_frame(&guide, &mut uniforms) {
 ///         // Trace from grid.probe_position(s.probe) along s.direction, update its texel.
-///         assert!(s.probe.x < 2 && s.direction.z >= 0.0 && s.h > 0.0);
+///         assert!(s.probe.x < 2 && s.direction.z >= 0.0 && s.guiding_value > 0.0);
 ///     }
 /// }
 /// # Ok::<(), mcg_probe_cache::ProbeError>(())
@@ -256,7 +259,7 @@ impl ProbeChains {
     /// uniform on the sphere), running `schedule` per frame.
     ///
     /// # Errors
-    /// [`ProbeError::NoChains`] for `count = 0`; [`ProbeError::StepNotFinite`] as
+    /// [`ProbeError::NoChains`] for `count = 0`; [`ProbeError::ChainStep`] as
     /// [`ChainKind::walk`].
     pub fn new(
         cells: ProxyGrid,
@@ -418,7 +421,7 @@ impl ProbeChains {
         if at.probe.is_none() {
             return 0.0;
         }
-        finite_or_zero(guide.h(at.position, at.direction))
+        finite_non_negative_or_zero(guide.guiding_value(at.position, at.direction))
     }
 
     /// Runs one frame of every chain (Alg. 1) against `guide` and returns the emitted samples
@@ -618,7 +621,7 @@ impl ChainRunner {
                 octant: octant(current.direction) as u8,
                 position: current.position,
                 direction: current.direction,
-                h: chain.target,
+                guiding_value: chain.target,
             });
             stats.emitted += 1;
         }
@@ -643,15 +646,27 @@ struct Located {
     direction: Vec3,
 }
 
-#[inline]
-fn finite_or_zero(h: f32) -> f32 {
-    if h >= 0.0 && h.is_finite() { h } else { 0.0 }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::{GuideParams, GuidingFunction};
+
+    #[test]
+    fn rejected_steps_keep_the_walks_cause() {
+        use core::error::Error;
+        use mcg_markov_guide::WalkError;
+        let grid = |s: f32| ProbeGrid::new(Vec3::ZERO, Vec3::splat(s), UVec3::splat(2)).unwrap();
+        // 3 · 10³⁰ is above the walk's maximum step; 3 · f32::MAX overflows.
+        let err = ChainKind::Dynamic.walk(&grid(1e30)).unwrap_err();
+        assert_eq!(err, ProbeError::ChainStep(WalkError::StepAboveMax));
+        assert!(
+            err.source()
+                .is_some_and(|c| c.to_string().contains("above"))
+        );
+        let err = ChainKind::Dynamic.walk(&grid(f32::MAX)).unwrap_err();
+        assert_eq!(err, ProbeError::ChainStep(WalkError::StepNotFinite));
+        assert!(ChainKind::Static.walk(&grid(1.0)).is_ok());
+    }
 
     fn lcg(seed: u32) -> impl FnMut() -> f32 {
         let mut s = seed;
@@ -673,7 +688,7 @@ mod tests {
     fn direction_coordinates_round_trip_and_fold() {
         for &(z, phi) in &[(0.3f32, 1.0f32), (-0.9, 5.5), (1.0, 0.0), (0.0, 3.0)] {
             let d = direction_from_chain(z, phi);
-            assert!((d.length() - 1.0).abs() < 1e-6);
+            mcg_test_support::assert_close!(d.length(), 1.0, 1e-6);
             let [z2, phi2] = chain_from_direction(d);
             assert!(
                 (z2 - z).abs() < 1e-6 && (z == 1.0 || (phi2 - phi).abs() < 1e-5),
@@ -685,7 +700,7 @@ mod tests {
         assert_eq!(fold_direction(-1.5, 0.0), [-0.5, 0.0]);
         assert_eq!(fold_direction(4.5, 0.0), [0.5, 0.0]);
         let [_, p] = fold_direction(0.0, -0.5);
-        assert!((p - (TAU - 0.5)).abs() < 1e-6);
+        mcg_test_support::assert_close!(p, (TAU - 0.5), 1e-6);
         assert_eq!(fold_direction(0.0, -1e-9)[1], 0.0);
         assert_eq!(fold_direction(f32::NAN, 1.0), [1.0, 0.0]);
         assert_eq!(chain_from_direction(Vec3::ZERO), [1.0, 0.0]);
@@ -705,7 +720,7 @@ mod tests {
         let d = ChainKind::Dynamic.walk(&grid).unwrap().step_sizes();
         let want = RandomWalk::adgi_dynamic(0.5).unwrap().step_sizes();
         for i in 0..5 {
-            assert!((d[i] - want[i]).abs() < 1e-6);
+            mcg_test_support::assert_close!(d[i], want[i], 1e-6);
         }
         let aniso = ProbeGrid::new(Vec3::ZERO, Vec3::new(1.0, 2.0, 0.25), UVec3::splat(2)).unwrap();
         let s = ChainKind::Static.walk(&aniso).unwrap().step_sizes();
@@ -738,7 +753,7 @@ mod tests {
             for s in chains.step_frame(&guide, &mut su) {
                 assert_eq!(s.cell as usize, hot);
                 assert_eq!(s.octant, 6);
-                assert_eq!(s.h, 0.7);
+                assert_eq!(s.guiding_value, 0.7);
                 assert!(s.direction.y < 0.0 && s.direction.z < 0.0);
                 total += 1;
             }

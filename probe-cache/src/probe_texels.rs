@@ -2,6 +2,11 @@
 //! irradiance map and one visibility map per probe, updated by ADGI's moving average with
 //! compare-and-swap, in a memory layout that uploads to the GPU as it is.
 //!
+//! This file holds the storage and its accessors; `texel_update.rs` holds the methods that
+//! write texels from rays ([`ProbeTexels::update_sample`], [`ProbeTexels::blend_rays`]) and
+//! `irradiance_query.rs` those that read irradiance back ([`ProbeTexels::irradiance_at`],
+//! [`ProbeTexels::convolved`]).
+//!
 //! # Memory layout
 //! Two flat `u32` arrays, each **probe-major, then row-major texels, border included**:
 //!
@@ -758,11 +763,7 @@ mod tests {
         assert_eq!(t.bytes_per_probe(), 1280);
         assert_eq!(t.irradiance_offset(2, 9), 2 * 64 + 9);
         assert_eq!(t.visibility_offset(3, 17), 3 * 256 + 17);
-        assert!(
-            (t.max_distance() - 9.827_075).abs() < 1e-3,
-            "{}",
-            t.max_distance()
-        );
+        mcg_test_support::assert_close!(t.max_distance(), 9.827_075, 1e-3, "{}", t.max_distance());
     }
 
     #[test]

@@ -292,8 +292,8 @@ mod tests {
         p.max_pool(&table, &mut out).unwrap();
         // Proxy 0 = probes 0, 1, 2: max is probe 2 (2 + o/10); proxy 1 = probe 3 alone.
         for o in 0..8 {
-            assert!((out[o] - (2.0 + o as f32 / 10.0)).abs() < 1e-6);
-            assert!((out[8 + o] - (3.0 + o as f32 / 10.0)).abs() < 1e-6);
+            mcg_test_support::assert_close!(out[o], (2.0 + o as f32 / 10.0), 1e-6);
+            mcg_test_support::assert_close!(out[8 + o], (3.0 + o as f32 / 10.0), 1e-6);
         }
         assert_eq!(
             p.max_pool(&table[1..], &mut out),

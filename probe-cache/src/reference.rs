@@ -28,6 +28,7 @@
 use std::vec::Vec;
 
 use glam::{Vec2, Vec3};
+use mcg_markov_guide::cosine_hemisphere_concentric;
 
 use crate::TexelMap;
 use crate::scene::{MISS_DISTANCE, Scene, Surface};
@@ -42,43 +43,6 @@ pub fn hash_uniform(counter: u64) -> f32 {
     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
     z ^= z >> 31;
     (z >> 40) as f32 * (1.0 / 16_777_216.0)
-}
-
-/// An orthonormal basis (t, b, n) around the unit vector `n` (Duff et al. 2017, *Building an
-/// orthonormal basis, revisited*).
-#[inline]
-#[must_use]
-pub fn basis(n: Vec3) -> (Vec3, Vec3) {
-    let sign = 1.0_f32.copysign(n.z);
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    (
-        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-        Vec3::new(b, sign + n.y * n.y * a, -n.y),
-    )
-}
-
-/// The cosine-weighted direction around unit `n` at uniforms `u` ∈ [0, 1)²: Shirley–Chiu's
-/// concentric disk map lifted to the hemisphere (Malley's method), density (n·ω)/π.
-#[inline]
-#[must_use]
-pub fn cosine_hemisphere(n: Vec3, u: Vec2) -> Vec3 {
-    let a = 2.0 * u - Vec2::ONE;
-    let (r, phi) = if a == Vec2::ZERO {
-        (0.0, 0.0)
-    } else if a.x.abs() > a.y.abs() {
-        (a.x, core::f32::consts::FRAC_PI_4 * (a.y / a.x))
-    } else {
-        (
-            a.y,
-            core::f32::consts::FRAC_PI_2 - core::f32::consts::FRAC_PI_4 * (a.x / a.y),
-        )
-    };
-    let (s, c) = phi.sin_cos();
-    let d = Vec2::new(r * c, r * s);
-    let z = (1.0 - d.length_squared()).max(0.0).sqrt();
-    let (t, b) = basis(n);
-    (d.x * t + d.y * b + z * n).normalize()
 }
 
 /// Reference irradiance E(p, n) for each unit direction in `directions` at the probe position
@@ -121,6 +85,13 @@ pub fn reference_texel_irradiance(
     texels.iter().zip(e).map(|(t, e)| (t.0, e)).collect()
 }
 
+/// The cosine-weighted direction around unit `n` through the concentric map (it keeps the
+/// jittered grid stratified), renormalised.
+#[inline]
+fn cosine_direction(n: Vec3, u: Vec2) -> Vec3 {
+    cosine_hemisphere_concentric(n, u).0.normalize()
+}
+
 /// Light samples per bounce-ray hit in [`reference_irradiance`] (a 2 × 2 jittered grid).
 pub const LIGHT_SAMPLES_PER_HIT: u32 = 4;
 
@@ -156,7 +127,7 @@ fn irradiance_one(scene: &Scene, p: Vec3, n: Vec3, strata: u32, seed: u64, k: u6
                 }
             }
             // Bounce: one cosine-weighted ray per stratum.
-            let w = cosine_hemisphere(n, jitter(i, j, c + 2));
+            let w = cosine_direction(n, jitter(i, j, c + 2));
             let Some(hit) = scene.intersect(p, w, 0.0, MISS_DISTANCE) else {
                 continue;
             };
@@ -198,7 +169,7 @@ mod tests {
         }
         for b in bins {
             // 5σ of a binomial(10⁵, 0.1): σ ≈ 95.
-            assert!((b as i32 - 10_000).abs() < 475, "{bins:?}");
+            mcg_test_support::assert_close!(b as i32, 10_000, 475, "{bins:?}");
         }
     }
 
@@ -211,8 +182,8 @@ mod tests {
         for i in 0..m {
             for j in 0..m {
                 let u = Vec2::new((i as f32 + 0.5) / m as f32, (j as f32 + 0.5) / m as f32);
-                let w = cosine_hemisphere(n, u);
-                assert!((w.length() - 1.0).abs() < 1e-5);
+                let w = cosine_direction(n, u);
+                mcg_test_support::assert_close!(w.length(), 1.0, 1e-5);
                 let c = f64::from(n.dot(w));
                 assert!(c >= -1e-6);
                 m1 += c;
@@ -220,8 +191,8 @@ mod tests {
             }
         }
         let k = f64::from(m * m);
-        assert!((m1 / k - 2.0 / 3.0).abs() < 2e-3, "{}", m1 / k);
-        assert!((m2 / k - 0.5).abs() < 2e-3, "{}", m2 / k);
+        mcg_test_support::assert_close!(m1 / k, 2.0 / 3.0, 2e-3, "{}", m1 / k);
+        mcg_test_support::assert_close!(m2 / k, 0.5, 2e-3, "{}", m2 / k);
     }
 
     /// With no objects, the reference is the light's irradiance alone, which Lambert's formula
@@ -254,7 +225,7 @@ mod tests {
             }
             let exact = 2.0 * 0.5 * sum.abs();
             let e = reference_irradiance(&scene, Vec3::ZERO, &[n], 16, 1)[0];
-            assert!((e.x / exact - 1.0).abs() < 5e-3, "{e} vs {exact}");
+            mcg_test_support::assert_close!(e.x / exact, 1.0, 5e-3, "{e} vs {exact}");
         }
         let e = reference_irradiance(&scene, Vec3::ZERO, &[-Vec3::Y], 16, 1)[0];
         assert_eq!(e, Vec3::ZERO);

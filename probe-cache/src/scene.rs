@@ -866,7 +866,7 @@ mod tests {
             }
         }
         est /= (k * k) as f64;
-        assert!((est / exact - 1.0).abs() < 2e-3, "{est} vs {exact}");
+        mcg_test_support::assert_close!(est / exact, 1.0, 2e-3, "{est} vs {exact}");
         // Facing away, or the light off: nothing.
         assert_eq!(scene.direct_irradiance(x, -n, Vec2::splat(0.5)), Vec3::ZERO);
     }

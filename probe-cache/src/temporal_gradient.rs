@@ -434,14 +434,14 @@ mod tests {
         // probes {0, 1} → 1/8; probe 1 averages {0, 1, 2} → 1/12; probe 2 averages {1, 2} → 0.
         for o in 0..8 {
             let w = if [0, 1, 2, 4].contains(&o) { 1.0 } else { 0.0 };
-            assert!((out[o] - w / 8.0).abs() < 1e-7, "{o}");
-            assert!((out[8 + o] - w / 12.0).abs() < 1e-7, "{o}");
+            mcg_test_support::assert_close!(out[o], w / 8.0, 1e-7, "{o}");
+            mcg_test_support::assert_close!(out[8 + o], w / 12.0, 1e-7, "{o}");
             assert_eq!(out[16 + o], 0.0);
         }
         // ADGI's r = 2 covers the whole line from every probe: 1/4 · 1/3 each.
         spatial_smoothing(&g, SmoothingKernel::ADGI, &input, &mut out, &mut scratch).unwrap();
         for p in 0..3 {
-            assert!((out[p * 8 + 4] - 1.0 / 12.0).abs() < 1e-7);
+            mcg_test_support::assert_close!(out[p * 8 + 4], 1.0 / 12.0, 1e-7);
             assert_eq!(out[p * 8 + 3], 0.0);
         }
     }
@@ -462,9 +462,9 @@ mod tests {
             directional: false,
         };
         spatial_smoothing(&g, k, &input, &mut out, &mut scratch).unwrap();
-        assert!((out[5] - 27.0 / 8.0).abs() < 1e-6);
-        assert!((out[g.probe_index(UVec3::new(1, 1, 0)) * 8 + 5] - 1.5).abs() < 1e-6);
-        assert!((out[g.probe_index(UVec3::ONE) * 8 + 5] - 1.0).abs() < 1e-6);
+        mcg_test_support::assert_close!(out[5], 27.0 / 8.0, 1e-6);
+        mcg_test_support::assert_close!(out[g.probe_index(UVec3::new(1, 1, 0)) * 8 + 5], 1.5, 1e-6);
+        mcg_test_support::assert_close!(out[g.probe_index(UVec3::ONE) * 8 + 5], 1.0, 1e-6);
         assert!(out.iter().enumerate().all(|(i, &v)| i % 8 == 5 || v == 0.0));
         // A constant field stays constant (normalised).
         let ones = vec![0.6; 27 * 8];
@@ -493,13 +493,13 @@ mod tests {
         let mut v1 = v0.clone();
         v1[9] = 0.9; // probe 1, octant 1: a surface appears
         let (dv, dr) = d.detect(&v1, &r0).unwrap();
-        assert!((dv[9] - 0.6).abs() < 1e-6);
+        mcg_test_support::assert_close!(dv[9], 0.6, 1e-6);
         assert!(dv.iter().enumerate().all(|(i, &x)| i == 9 || x == 0.0));
         assert!(dr.iter().all(|&x| x == 0.0));
         // Next detection (the reference is now v1): no change → the trigger halves.
         d.detect(&v1, &r0).unwrap();
-        assert!((d.delta_visibility()[9] - 0.3).abs() < 1e-6);
-        assert!((d.trigger_states().0[9] - 0.3).abs() < 1e-6);
+        mcg_test_support::assert_close!(d.delta_visibility()[9], 0.3, 1e-6);
+        mcg_test_support::assert_close!(d.trigger_states().0[9], 0.3, 1e-6);
         assert!(d.delta_radiance().iter().all(|&x| x == 0.0));
         assert!(d.detect(&v1[1..], &r0).is_err());
     }

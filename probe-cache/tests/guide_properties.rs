@@ -10,8 +10,6 @@ use mcg_probe_cache::probe_chains::{direction_from_chain, fold_direction};
 use mcg_probe_cache::{GuideParams, GuidingFunction, ProbeGrid, ProxyGrid};
 use proptest::prelude::*;
 
-mod support;
-
 /// Any f32, special values included.
 fn any_f32() -> impl Strategy<Value = f32> {
     prop_oneof![
@@ -36,7 +34,7 @@ fn unit_interval(x: f32) -> bool {
 }
 
 proptest! {
-    #![proptest_config(support::proptest_config(256))]
+    #![proptest_config(mcg_test_support::proptest_config(256, 0x7E57_0007))]
 
     #[test]
     fn h_is_non_negative_and_finite(
@@ -46,7 +44,7 @@ proptest! {
         cap in 0.0f32..=64.0,
     ) {
         for params in [GuideParams::STATIC, GuideParams::DYNAMIC, GuideParams::new(alpha, cap).unwrap()] {
-            let h = params.h(f, g);
+            let h = params.guiding_value(f, g);
             prop_assert!(h >= 0.0 && h.is_finite(), "h({f}, {g}) = {h} with {params:?}");
             // f is clamped to [0, 1], so h ≤ e^cap.
             prop_assert!(h <= params.exponent_cap().exp() * (1.0 + 1e-6));
@@ -62,7 +60,7 @@ proptest! {
     ) {
         let grid = ProbeGrid::new(Vec3::ZERO, Vec3::ONE, UVec3::new(2, 1, 1)).unwrap();
         let guide = GuidingFunction::new(ProxyGrid::probes(grid), &table, Some(&feedback), GuideParams::STATIC).unwrap();
-        let h = guide.h(p, d);
+        let h = guide.guiding_value(p, d);
         prop_assert!(h >= 0.0 && h.is_finite());
     }
 

@@ -39,11 +39,9 @@ fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+/// `mcg_vmf::uniform_sphere` on the plain arrays this crate's techniques use.
 fn uniform_sphere(u: [f32; 2]) -> [f32; 3] {
-    let z = 1.0 - 2.0 * u[1];
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let (s, c) = (std::f32::consts::TAU * u[0]).sin_cos();
-    [r * c, r * s, z]
+    mcg_vmf::uniform_sphere(u.into()).to_array()
 }
 
 impl Technique for Lobe {

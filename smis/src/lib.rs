@@ -21,6 +21,7 @@
 //! | [`path_pdf`], [`path_mixture_pdf`], [`path_estimate`], [`path_pdf_naive`] | product over vertices of a sum over each vertex's set, linear in the vertex count (and the exponential reference) | MCPG eq. 6, MMIS eq. 14 |
 //! | [`CyclicShift`], [`cyclic_source_lane`] | TSMIS: cyclic shift of chain states within a tile of ≤ 32 lanes | MCMM sec. 4.2 |
 //! | [`XorPermutation`], [`xor_source_lane`] | SSMIS: xor-mask permutation within a power-of-two tile of ≤ 32 lanes | MCMM sec. 4.2 |
+//! | [`finite_or_zero`], [`finite_non_negative_or_zero`] | how estimates, scores and weights that are NaN, infinite (or negative) are dropped | — |
 //!
 //! ## When the estimators are unbiased (MCMM appendix A)
 //! 1. Given all auxiliary values t, the samples are independent and xᵢ ~ p(· | tᵢ); no t may
@@ -89,8 +90,6 @@
 //! # Ok::<(), mcg_smis::SmisError>(())
 //! ```
 #![no_std]
-#![deny(missing_docs)]
-#![forbid(unsafe_code)]
 #![cfg_attr(docsrs, feature(doc_cfg))]
 
 #[cfg(any(feature = "std", test))]
@@ -115,7 +114,10 @@ pub use path::{
 };
 pub use smis::{smis, smis_one_sample};
 pub use ssmis::{XorPermutation, xor_source_lane};
-pub use technique::{Technique, mixture_pdf, pdf_sum, sample_uniform_mixture, select_uniform};
+pub use technique::{
+    Technique, finite_non_negative_or_zero, finite_or_zero, mixture_pdf, pdf_sum,
+    sample_uniform_mixture, select_uniform,
+};
 pub use tsmis::{CyclicShift, MAX_TILE_SIZE, cyclic_source_lane};
 
 /// The README's example, compiled and run as a doctest.
@@ -138,29 +140,8 @@ mod properties {
             .prop_map(|(a, w)| Boxcar { a, w })
     }
 
-    /// `cases` cases from the fixed seed 0x7E57_0008, so every run checks the same cases;
-    /// `PROPTEST_RNG_SEED` / `PROPTEST_CASES`, when set, override them (`scripts/fuzz`).
-    fn proptest_config(cases: u32) -> ProptestConfig {
-        let set = |name: &str| std::env::var_os(name).is_some();
-        let from_env = ProptestConfig::default();
-        ProptestConfig {
-            cases: if set("PROPTEST_CASES") {
-                from_env.cases
-            } else {
-                cases
-            },
-            rng_seed: if set("PROPTEST_RNG_SEED") {
-                from_env.rng_seed
-            } else {
-                proptest::test_runner::RngSeed::Fixed(0x7E57_0008)
-            },
-            failure_persistence: None,
-            ..from_env
-        }
-    }
-
     proptest! {
-        #![proptest_config(proptest_config(256))]
+        #![proptest_config(mcg_test_support::proptest_config(256, 0x7E57_0008))]
 
         /// The linear path form equals MMIS eq. 14 summed over every combination.
         #[test]

@@ -92,7 +92,7 @@ mod tests {
                 .zip(counts)
                 .map(|(t, n)| n as f32 * t.pdf(&x) / d)
                 .sum();
-            assert!((w - 1.0).abs() < 1e-6);
+            mcg_test_support::assert_close!(w, 1.0, 1e-6);
         }
     }
 

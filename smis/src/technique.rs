@@ -150,10 +150,42 @@ pub(crate) fn saturate(x: f32) -> f32 {
 }
 
 /// `sum` if finite, else 0: an estimate whose sum of (finite) terms overflows f32 is as
-/// unrepresentable as one overflowing term, and is dropped the same way (see [`ratio`]).
+/// unrepresentable as one overflowing term, and is dropped the same way (see `ratio`).
+///
+/// See also [`finite_non_negative_or_zero`] for scores and weights.
+///
+/// # Example
+/// ```
+/// use mcg_smis::finite_or_zero;
+/// assert_eq!(finite_or_zero(-2.5), -2.5);
+/// assert_eq!(finite_or_zero(f32::MAX * 2.0), 0.0);
+/// ```
 #[inline(always)]
-pub(crate) fn finite_or_zero(sum: f32) -> f32 {
+#[must_use]
+pub fn finite_or_zero(sum: f32) -> f32 {
     if sum.is_finite() { sum } else { 0.0 }
+}
+
+/// `x` when it is finite and non-negative, otherwise 0: how the guiding crates keep scores,
+/// weights and targets that are NaN, infinite or negative out of their states (−0 passes).
+///
+/// See also [`finite_or_zero`] for signed estimates.
+///
+/// # Example
+/// ```
+/// use mcg_smis::finite_non_negative_or_zero;
+/// assert_eq!(finite_non_negative_or_zero(2.5), 2.5);
+/// assert_eq!(finite_non_negative_or_zero(-1.0), 0.0);
+/// assert_eq!(finite_non_negative_or_zero(f32::NAN), 0.0);
+/// ```
+#[inline(always)]
+#[must_use]
+pub fn finite_non_negative_or_zero(x: f32) -> f32 {
+    if (0.0..f32::INFINITY).contains(&x) {
+        x
+    } else {
+        0.0
+    }
 }
 
 #[cfg(test)]
@@ -228,5 +260,12 @@ pub(crate) mod tests {
         assert_eq!(ratio(f32::INFINITY, 1.0), 0.0);
         assert_eq!(finite_or_zero(f32::MAX + f32::MAX), 0.0);
         assert_eq!(finite_or_zero(2.5), 2.5);
+        assert_eq!(finite_or_zero(-2.5), -2.5);
+        assert_eq!(finite_or_zero(f32::NAN), 0.0);
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, -1e-30] {
+            assert_eq!(finite_non_negative_or_zero(bad), 0.0, "{bad}");
+        }
+        assert_eq!(finite_non_negative_or_zero(f32::MAX), f32::MAX);
+        assert_eq!(finite_non_negative_or_zero(0.25), 0.25);
     }
 }

@@ -180,7 +180,7 @@ mod tests {
             (0.001, 1.9495),
         ] {
             let got = kolmogorov_critical_value(alpha);
-            assert!((got - want).abs() < 2e-4, "c({alpha}) = {got}, want {want}");
+            mcg_test_support::assert_close!(got, want, 2e-4, "c({alpha}) = {got}, want {want}");
         }
     }
 
@@ -188,7 +188,7 @@ mod tests {
     fn survival_is_continuous_across_the_switch_and_monotone() {
         let below = kolmogorov_survival(1.18 - 1e-9);
         let above = kolmogorov_survival(1.18 + 1e-9);
-        assert!((below - above).abs() < 1e-8, "{below} vs {above}");
+        mcg_test_support::assert_close!(below, above, 1e-8, "{below} vs {above}");
         let mut last = 1.0;
         for i in 0..=400 {
             let q = kolmogorov_survival(f64::from(i) * 0.01);
@@ -218,7 +218,7 @@ mod tests {
         let mut x: Vec<f64> = (0..100_000).map(|_| rng.random::<f64>() + 0.01).collect();
         let result = ks_test(&mut x, |x| x.clamp(0.0, 1.0));
         assert!(result.rejects(0.001), "{result:?}");
-        assert!((result.statistic - 0.01).abs() < 0.003, "{result:?}");
+        mcg_test_support::assert_close!(result.statistic, 0.01, 0.003, "{result:?}");
     }
 
     #[test]
@@ -226,10 +226,10 @@ mod tests {
         // Samples 0.1 and 0.6 against U(0, 1): D = 0.4, reached at 0.1 (F_n = 0.5, F = 0.1) and at
         // 0.6 (F_n = 1, F = 0.6).
         let result = ks_test(&mut [0.6, 0.1], |x| x);
-        assert!((result.statistic - 0.4).abs() < 1e-15, "{result:?}");
+        mcg_test_support::assert_close!(result.statistic, 0.4, 1e-15, "{result:?}");
         // A tie: two samples at 0.5 jump the empirical CDF from 0 to 1 there.
         let result = ks_test(&mut [0.5, 0.5], |x| x);
-        assert!((result.statistic - 0.5).abs() < 1e-15, "{result:?}");
+        mcg_test_support::assert_close!(result.statistic, 0.5, 1e-15, "{result:?}");
         assert_eq!(ks_test(&mut [0.5, f64::NAN], |x| x).statistic, 1.0);
     }
 

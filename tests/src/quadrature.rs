@@ -103,16 +103,11 @@ fn legendre(n: usize, x: f64) -> (f64, f64) {
 }
 
 /// Two unit vectors that complete the unit `axis` to a right-handed orthonormal basis
-/// `(tangent, bitangent, axis)`, in f64 (Duff et al. 2017, the same construction as
-/// [`mcg_vmf::Frame`]).
+/// `(tangent, bitangent, axis)`, in f64: glam's [`DVec3::any_orthonormal_pair`] (Duff et al.
+/// 2017), the construction [`mcg_vmf::Frame`] uses in f32.
 #[must_use]
 pub fn orthonormal_basis(axis: DVec3) -> (DVec3, DVec3) {
-    let sign = 1.0_f64.copysign(axis.z);
-    let a = -1.0 / (sign + axis.z);
-    let b = axis.x * axis.y * a;
-    let tangent = DVec3::new(1.0 + sign * axis.x * axis.x * a, sign * b, -sign * axis.x);
-    let bitangent = DVec3::new(b, sign + axis.y * axis.y * a, -axis.y);
-    (tangent, bitangent)
+    axis.any_orthonormal_pair()
 }
 
 /// Polar-angle breakpoints for [`integrate_sphere`] graded around a peak of angular `width`
@@ -173,16 +168,20 @@ mod tests {
     fn rules_integrate_polynomials_exactly() {
         for order in [1, 2, 3, 5, 8, 16, 33] {
             let rule = GaussLegendre::new(order);
-            assert!(
-                (rule.weights().iter().sum::<f64>() - 2.0).abs() < 1e-13,
+            mcg_test_support::assert_close!(
+                rule.weights().iter().sum::<f64>(),
+                2.0,
+                1e-13,
                 "order {order}"
             );
             for degree in 0..(2 * order) {
                 let got = rule.integrate(-0.5, 1.5, |x| x.powi(degree as i32));
                 let want = (1.5_f64.powi(degree as i32 + 1) - (-0.5_f64).powi(degree as i32 + 1))
                     / (degree as f64 + 1.0);
-                assert!(
-                    (got - want).abs() < 1e-12 * want.abs().max(1.0),
+                mcg_test_support::assert_close!(
+                    got,
+                    want,
+                    1e-12 * want.abs().max(1.0),
                     "order {order} degree {degree}: {got} vs {want}"
                 );
             }
@@ -194,16 +193,16 @@ mod tests {
         let axis = DVec3::new(0.3, -0.5, 0.8).normalize();
         let breaks = graded_theta_breaks(0.1);
         let area = integrate_sphere(axis, &breaks, 8, |_| 1.0);
-        assert!((area - 4.0 * PI).abs() < 1e-12, "{area}");
+        mcg_test_support::assert_close!(area, 4.0 * PI, 1e-12, "{area}");
         // ∫ z² dω = 4π/3 for any axis: checks the azimuthal rule off-axis.
         let z2 = integrate_sphere(axis, &breaks, 16, |w| w.z * w.z);
-        assert!((z2 - 4.0 * PI / 3.0).abs() < 1e-12, "{z2}");
+        mcg_test_support::assert_close!(z2, 4.0 * PI / 3.0, 1e-12, "{z2}");
         // ∫ e^{κ(μ·ω − 1)} dω = 2π(1 − e^{−2κ})/κ, here κ = 10⁴ around its own axis.
         let kappa = 1e4_f64;
         let lobe = integrate_sphere(axis, &graded_theta_breaks(1.0 / kappa.sqrt()), 4, |w| {
             (kappa * (w.dot(axis) - 1.0)).exp()
         });
-        assert!((lobe * kappa / (2.0 * PI) - 1.0).abs() < 1e-10, "{lobe}");
+        mcg_test_support::assert_close!(lobe * kappa / (2.0 * PI), 1.0, 1e-10, "{lobe}");
         for axis in [DVec3::Z, -DVec3::Z, DVec3::X, axis] {
             let (t, b) = orthonormal_basis(axis);
             assert!((t.cross(b) - axis).length() < 1e-15 && t.dot(axis).abs() < 1e-15);

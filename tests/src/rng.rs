@@ -48,6 +48,6 @@ mod tests {
             uniform_vec2(&mut seeded_rng(8))
         );
         let w = uniform_sphere_direction(&mut a);
-        assert!((w.length() - 1.0).abs() < 1e-15);
+        mcg_test_support::assert_close!(w.length(), 1.0, 1e-15);
     }
 }

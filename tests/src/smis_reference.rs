@@ -20,7 +20,7 @@ use std::f64::consts::PI;
 
 use glam::{DVec3, Vec2, Vec3};
 use mcg_smis::{CyclicShift, Technique, XorPermutation, smis, smis_one_sample};
-use mcg_vmf::{Frame, Vmf};
+use mcg_vmf::{Frame, UNIFORM_SPHERE_PDF, Vmf, uniform_sphere};
 use rand::{Rng, RngExt};
 
 // ---------------------------------------------------------------------------------------------
@@ -155,24 +155,16 @@ pub enum SphereTechnique {
     },
 }
 
-const INV_4PI: f32 = 0.25 / std::f32::consts::PI;
-
-/// Uniform direction on the sphere from two uniforms.
-fn uniform_sphere_f32(u: Vec2) -> Vec3 {
-    let z = 1.0 - 2.0 * u.y;
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let (s, c) = (std::f32::consts::TAU * u.x).sin_cos();
-    Vec3::new(r * c, r * s, z)
-}
-
 impl Technique for SphereTechnique {
     type Sample = Vec3;
     type Uniform = Vec2;
 
     fn pdf(&self, w: &Vec3) -> f32 {
         match *self {
-            SphereTechnique::Uniform => INV_4PI,
-            SphereTechnique::Lobe { vmf, eps } => eps * INV_4PI + (1.0 - eps) * vmf.pdf(*w),
+            SphereTechnique::Uniform => UNIFORM_SPHERE_PDF,
+            SphereTechnique::Lobe { vmf, eps } => {
+                eps * UNIFORM_SPHERE_PDF + (1.0 - eps) * vmf.pdf(*w)
+            }
             SphereTechnique::Cap { axis, cos_max } => {
                 if w.dot(axis) >= cos_max {
                     1.0 / (std::f32::consts::TAU * (1.0 - cos_max))
@@ -185,10 +177,10 @@ impl Technique for SphereTechnique {
 
     fn sample(&self, u: Vec2) -> Vec3 {
         match *self {
-            SphereTechnique::Uniform => uniform_sphere_f32(u),
+            SphereTechnique::Uniform => uniform_sphere(u),
             SphereTechnique::Lobe { vmf, eps } => {
                 if u.x < eps {
-                    uniform_sphere_f32(Vec2::new(u.x / eps, u.y))
+                    uniform_sphere(Vec2::new(u.x / eps, u.y))
                 } else {
                     vmf.sample(Vec2::new((u.x - eps) / (1.0 - eps), u.y))
                 }
@@ -455,7 +447,7 @@ pub fn draw_sphere_lobe<R: Rng + ?Sized>(rng: &mut R, features: &[[f64; 3]]) -> 
         let f = dir(features[k]).as_vec3();
         Vmf::new(f, 50.0).expect("valid lobe").sample(u)
     } else {
-        uniform_sphere_f32(u)
+        uniform_sphere(u)
     };
     let kappa = 500.0_f32.powf(rng.random::<f32>());
     SphereTechnique::Lobe {
@@ -466,7 +458,7 @@ pub fn draw_sphere_lobe<R: Rng + ?Sized>(rng: &mut R, features: &[[f64; 3]]) -> 
 
 /// Draws a cap of half-angle between 40° and 100° around a uniform axis (compact support).
 pub fn draw_sphere_cap<R: Rng + ?Sized>(rng: &mut R) -> SphereTechnique {
-    let axis = uniform_sphere_f32(Vec2::new(rng.random(), rng.random()));
+    let axis = uniform_sphere(Vec2::new(rng.random(), rng.random()));
     let angle = (40.0 + 60.0 * rng.random::<f32>()).to_radians();
     SphereTechnique::Cap {
         axis,
@@ -970,7 +962,7 @@ mod tests {
                     rule.integrate(a, b, |x| f64::from(t.pdf(&(x as f32))))
                 })
                 .sum();
-            assert!((total - 1.0).abs() < 2e-3, "{t:?}: {total}");
+            mcg_test_support::assert_close!(total, 1.0, 2e-3, "{t:?}: {total}");
             // Inverse-CDF check: the fraction of samples below q matches the CDF.
             let mut rng = seeded_rng(0x5315_0001);
             let n = 100_000;
@@ -981,7 +973,11 @@ mod tests {
                     rule.integrate(a, b, |x| f64::from(t.pdf(&(x as f32))))
                 })
                 .sum();
-            assert!((below - cdf).abs() < 5.0 * (cdf * (1.0 - cdf) / n as f64).sqrt() + 1e-3);
+            mcg_test_support::assert_close!(
+                below,
+                cdf,
+                5.0 * (cdf * (1.0 - cdf) / n as f64).sqrt() + 1e-3
+            );
         }
     }
 
@@ -1016,9 +1012,9 @@ mod tests {
     fn variance_with_error_of_known_values() {
         // 1, 2, 3, 4: mean 2.5, m2 = 1.25, s² = 5/3, m4 = 2.5625.
         let (s2, se) = variance_with_error(&[1.0, 2.0, 3.0, 4.0]);
-        assert!((s2 - 5.0 / 3.0).abs() < 1e-12);
+        mcg_test_support::assert_close!(s2, 5.0 / 3.0, 1e-12);
         let expected = ((2.5625 - s2 * s2 * (1.0 / 3.0)) / 4.0_f64).sqrt();
-        assert!((se - expected).abs() < 1e-12);
+        mcg_test_support::assert_close!(se, expected, 1e-12);
     }
 
     #[test]
@@ -1031,8 +1027,10 @@ mod tests {
                     rule.integrate(a, b, g.f)
                 })
                 .sum();
-            assert!(
-                (q - g.integral).abs() < 1e-6 * g.integral.max(1.0),
+            mcg_test_support::assert_close!(
+                q,
+                g.integral,
+                1e-6 * g.integral.max(1.0),
                 "{}",
                 g.name
             );
@@ -1044,7 +1042,7 @@ mod tests {
                     rule.integrate(a, b, |x| lane_integrand(lane, x))
                 })
                 .sum();
-            assert!((q - lane_integral(lane)).abs() < 1e-9);
+            mcg_test_support::assert_close!(q, lane_integral(lane), 1e-9);
         }
         let q: f64 = (0..2000)
             .map(|k| {
@@ -1052,7 +1050,7 @@ mod tests {
                 rule.integrate(a, b, fig1_integrand)
             })
             .sum();
-        assert!((q - FIG1_INTEGRAL).abs() < 1e-9);
+        mcg_test_support::assert_close!(q, FIG1_INTEGRAL, 1e-9);
         for tech in FIG1_TECHNIQUES {
             let m: f64 = (0..2000)
                 .map(|k| {
@@ -1060,7 +1058,7 @@ mod tests {
                     rule.integrate(a, b, |x| tech.marginal_pdf(x))
                 })
                 .sum();
-            assert!((m - 1.0).abs() < 1e-9, "{tech:?}");
+            mcg_test_support::assert_close!(m, 1.0, 1e-9, "{tech:?}");
         }
         for g in sphere_integrands() {
             // Panels graded towards the first feature, uniform panels beyond, and the cap edge.
@@ -1070,11 +1068,7 @@ mod tests {
             breaks.sort_by(f64::total_cmp);
             breaks.dedup();
             let q = crate::integrate_sphere(dir(g.features[0]), &breaks, 512, g.f);
-            assert!(
-                (q - g.integral).abs() < 1e-4 * g.integral,
-                "{}: {q}",
-                g.name
-            );
+            mcg_test_support::assert_close!(q, g.integral, 1e-4 * g.integral, "{}: {q}", g.name);
         }
     }
 }

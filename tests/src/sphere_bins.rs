@@ -178,8 +178,10 @@ where
 {
     let probabilities = bins.probabilities(subdivisions, pdf);
     let total: f64 = probabilities.iter().sum();
-    assert!(
-        (total - 1.0).abs() < 1e-5,
+    mcg_test_support::assert_close!(
+        total,
+        1.0,
+        1e-5,
         "{label}: bin probabilities sum to {total}"
     );
     let observed = bins.histogram(directions);
@@ -200,7 +202,7 @@ mod tests {
         let p = bins.probabilities(2, |_| 0.25 / PI);
         assert_eq!(p.len(), 77);
         for &p in &p {
-            assert!((p - 1.0 / 77.0).abs() < 1e-13, "{p}");
+            mcg_test_support::assert_close!(p, 1.0 / 77.0, 1e-13, "{p}");
         }
         for index in 0..bins.bin_count() {
             let ([z0, z1], [phi0, phi1]) = bins.bounds(index);
@@ -215,7 +217,7 @@ mod tests {
         // At the poles the sector is arbitrary (atan2 of ±0); the band is not.
         assert_eq!(bins.index(-DVec3::Z) / 11, 0);
         assert_eq!(bins.index(DVec3::new(1.0, -1e-300, 0.0)), 3 * 11 + 10);
-        assert!((bins.bin_solid_angle() - 4.0 * PI / 77.0).abs() < 1e-15);
+        mcg_test_support::assert_close!(bins.bin_solid_angle(), 4.0 * PI / 77.0, 1e-15);
     }
 
     #[test]
@@ -228,7 +230,7 @@ mod tests {
             kappa / (TAU * (1.0 - (-2.0 * kappa).exp())) * (kappa * (w.dot(mu) - 1.0)).exp()
         });
         let sum: f64 = p.iter().sum();
-        assert!((sum - 1.0).abs() < 1e-10, "{sum}");
+        mcg_test_support::assert_close!(sum, 1.0, 1e-10, "{sum}");
         // The bin that holds μ holds the most.
         let top = bins.index(mu);
         assert!(p.iter().all(|&q| q <= p[top]));

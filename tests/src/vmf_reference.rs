@@ -126,22 +126,22 @@ mod tests {
                     t * w.x + mu * w.z
                 };
                 let textbook = kappa / (4.0 * PI * kappa.sinh()) * (kappa * c).exp();
-                assert!((vmf_pdf(mu, kappa, w) / textbook - 1.0).abs() < 1e-12);
+                mcg_test_support::assert_close!(vmf_pdf(mu, kappa, w) / textbook, 1.0, 1e-12);
                 let cdf = ((kappa * (c - 1.0)).exp() - (-2.0 * kappa).exp())
                     / (1.0 - (-2.0 * kappa).exp());
-                assert!((vmf_cos_theta_cdf(kappa, c) - cdf).abs() < 1e-14);
+                mcg_test_support::assert_close!(vmf_cos_theta_cdf(kappa, c), cdf, 1e-14);
             }
             let a = 1.0 / kappa.tanh() - 1.0 / kappa;
-            assert!((vmf_mean_cosine(kappa) - a).abs() < 1e-14);
+            mcg_test_support::assert_close!(vmf_mean_cosine(kappa), a, 1e-14);
             let h = 1e-5;
             let slope = (vmf_mean_cosine(kappa + h) - vmf_mean_cosine(kappa - h)) / (2.0 * h);
-            assert!((vmf_mean_cosine_derivative(kappa) - slope).abs() < 1e-8);
+            mcg_test_support::assert_close!(vmf_mean_cosine_derivative(kappa), slope, 1e-8);
         }
         assert_eq!(vmf_one_minus_cos_cdf(0.0, 1.0), 0.5);
-        assert!((vmf_one_minus_cos_cdf(1e-9, 1.0) - 0.5).abs() < 1e-9);
-        assert!((vmf_cos_theta_variance(1e4) * 1e8 - 1.0).abs() < 1e-3);
+        mcg_test_support::assert_close!(vmf_one_minus_cos_cdf(1e-9, 1.0), 0.5, 1e-9);
+        mcg_test_support::assert_close!(vmf_cos_theta_variance(1e4) * 1e8, 1.0, 1e-3);
         let t = 1e-12_f64;
         let w = DVec3::new((2.0 * t).sqrt(), 0.0, 1.0 - t);
-        assert!((one_minus_cos(DVec3::Z * 3.0, w * 2.0) / t - 1.0).abs() < 1e-6);
+        mcg_test_support::assert_close!(one_minus_cos(DVec3::Z * 3.0, w * 2.0) / t, 1.0, 1e-6);
     }
 }

@@ -163,9 +163,11 @@ mod tests {
         let mean = values.iter().sum::<f64>() / values.len() as f64;
         let var =
             values.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (values.len() - 1) as f64;
-        assert!((stats.mean() / mean - 1.0).abs() < 1e-13);
-        assert!(
-            (stats.variance() / var - 1.0).abs() < 1e-9,
+        mcg_test_support::assert_close!(stats.mean() / mean, 1.0, 1e-13);
+        mcg_test_support::assert_close!(
+            stats.variance() / var,
+            1.0,
+            1e-9,
             "{} vs {var}",
             stats.variance()
         );

@@ -59,8 +59,10 @@ fn no_update_is_lost_irradiance() {
             assert_eq!(v, expect, "round {round}, word {i}");
             for c in 0..3 {
                 let f = layout.channel(c);
-                assert!(
-                    (v[c] - sample[c]).abs() <= f.quantum_at(f.encode(sample[c], Rounding::Down))
+                mcg_tests::assert_close!(
+                    v[c],
+                    sample[c],
+                    f.quantum_at(f.encode(sample[c], Rounding::Down))
                 );
             }
         }

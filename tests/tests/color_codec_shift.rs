@@ -1,5 +1,5 @@
 //! Colour shift of ADGI's unequal 9/9/8 split against equal 10/10/10 log channels and
-//! R11G11B10 (ANCHORS "Probe storage": RTXGI moved to equal channels because unequal precision
+//! R11G11B10 (the RTXGI DDGI SDK moved to equal channels because unequal precision
 //! shifted colours), on a palette of saturated and dark colours.
 //!
 //! Metrics per colour: hue error = angle between the decoded and the true RGB vector (degrees),

@@ -102,7 +102,7 @@ fn stochastic_trilinear_matches_the_weights() {
     for f in POSITIONS {
         let (_, frac) = cell_and_fraction(Vec3::new(-3.0, 7.0, 1000.0) + Vec3::from_array(f));
         let w = trilinear_weights(frac);
-        assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-6);
+        mcg_tests::assert_close!(w.iter().sum::<f32>(), 1.0, 1e-6);
     }
 }
 

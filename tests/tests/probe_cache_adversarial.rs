@@ -184,7 +184,7 @@ proptest! {
     ) {
         let _ = f;
         let Ok(h) = HeuristicParams::new(k, s) else { return Ok(()) };
-        for x in [h.f_c(probe, camera), h.f_v(t), h.f_r(r)] {
+        for x in [h.camera_distance(probe, camera), h.probe_visibility(t), h.incoming_radiance(r)] {
             prop_assert!((0.0..=1.0).contains(&x), "{x}");
         }
     }

@@ -55,11 +55,8 @@ fn clamped_cosine_kappa_is_near_the_l2_optimum() {
     let kappa_opt = optimal_kappa();
     let (e_opt, a_opt) = best_error(kappa_opt);
     let (e_lib, _) = best_error(f64::from(CLAMPED_COSINE_KAPPA));
-    assert!(
-        (kappa_opt - 2.144).abs() < 5e-3,
-        "optimum at kappa {kappa_opt}"
-    );
-    assert!((a_opt - 1.18).abs() < 0.01, "optimal amplitude {a_opt}");
+    mcg_tests::assert_close!(kappa_opt, 2.144, 5e-3, "optimum at kappa {kappa_opt}");
+    mcg_tests::assert_close!(a_opt, 1.18, 0.01, "optimal amplitude {a_opt}");
     assert!(
         e_lib <= 1.01 * e_opt,
         "E*({CLAMPED_COSINE_KAPPA}) = {e_lib} is more than 1 % above the optimum {e_opt} at kappa {kappa_opt}"
@@ -89,8 +86,10 @@ fn clamped_cosine_lobe_end_to_end() {
     let pp = integrate_sphere(n, &breaks, 8, |w| p(w) * p(w));
     let error = hh - hp * hp / pp;
     let (want, _) = best_error(f64::from(CLAMPED_COSINE_KAPPA));
-    assert!(
-        (error / want - 1.0).abs() < 1e-5,
+    mcg_tests::assert_close!(
+        error / want,
+        1.0,
+        1e-5,
         "sphere E = {error}, 1-D E* = {want}"
     );
     assert!(Vmf::clamped_cosine(Vec3::ZERO).is_err());

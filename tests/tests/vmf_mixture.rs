@@ -81,6 +81,6 @@ fn selection_follows_the_weights() {
     }
     for (count, weight) in counts.iter().zip(mixture.weights()) {
         let share = f64::from(*count) / f64::from(steps + 1);
-        assert!((share - f64::from(*weight)).abs() < 1e-4, "{counts:?}");
+        mcg_tests::assert_close!(share, f64::from(*weight), 1e-4, "{counts:?}");
     }
 }

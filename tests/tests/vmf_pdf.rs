@@ -96,12 +96,11 @@ fn peak_value_is_the_normalization() {
         let lobe = lobe(kappa);
         let peak = f64::from(lobe.pdf(lobe.mu()));
         let want = vmf_normalization(f64::from(kappa));
-        assert!(
-            (peak / want - 1.0).abs() < 1e-6,
-            "kappa {kappa}: {peak} vs {want}"
-        );
-        assert!(
-            (f64::from(lobe.normalization()) / want - 1.0).abs() < 1e-6,
+        mcg_tests::assert_close!(peak / want, 1.0, 1e-6, "kappa {kappa}: {peak} vs {want}");
+        mcg_tests::assert_close!(
+            f64::from(lobe.normalization()) / want,
+            1.0,
+            1e-6,
             "kappa {kappa}"
         );
     }

@@ -135,10 +135,7 @@ fn product_identities() {
         (c.mu() - a.mu()).length() < 1e-6 && (c.kappa() - 40.0).abs() < 1e-4,
         "{c:?}"
     );
-    assert!(
-        (scale / mcg_vmf::UNIFORM_SPHERE_PDF - 1.0).abs() < 1e-5,
-        "{scale}"
-    );
+    mcg_tests::assert_close!(scale / mcg_vmf::UNIFORM_SPHERE_PDF, 1.0, 1e-5, "{scale}");
     let (c, _) = a.product(&a);
     assert!(
         (c.kappa() - 80.0).abs() < 1e-4 && (c.mu() - a.mu()).length() < 1e-6,

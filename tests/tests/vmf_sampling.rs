@@ -224,8 +224,10 @@ fn samples_are_unit_and_deterministic() {
         for _ in 0..100_000 {
             let u = uniform_vec2(&mut rng);
             let w = lobe.sample(u);
-            assert!(
-                (w.as_dvec3().length() - 1.0).abs() < 1e-5,
+            mcg_tests::assert_close!(
+                w.as_dvec3().length(),
+                1.0,
+                1e-5,
                 "kappa {kappa}, u {u}: {w}"
             );
             assert_eq!(w, lobe.sample(u));

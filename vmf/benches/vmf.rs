@@ -19,7 +19,7 @@ use core::iter::Sum;
 use criterion::measurement::WallTime;
 use criterion::{BenchmarkGroup, Criterion, Throughput, criterion_group, criterion_main};
 use mcg_vmf::glam::{Vec2, Vec3};
-use mcg_vmf::{Vmf, VmfMixture, sample_batch};
+use mcg_vmf::{Vmf, VmfMixture, sample_batch, uniform_sphere};
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
@@ -60,15 +60,6 @@ fn inputs() -> Inputs {
         directions,
         lobes,
     }
-}
-
-/// Baseline: uniform direction on S² from two uniforms (z = 1 − 2u, φ = 2πu).
-#[inline]
-fn uniform_sphere(u: Vec2) -> Vec3 {
-    let z = 1.0 - 2.0 * u.y;
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let (s, c) = (TAU * u.x).sin_cos();
-    Vec3::new(r * c, r * s, z)
 }
 
 /// Baseline: the textbook density κ/(4π sinh κ) e^{κ μ·ω} (overflows for κ > 88 in f32).

@@ -11,17 +11,9 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use mcg_vmf::glam::{Vec2, Vec3};
-use mcg_vmf::{Vmf, sample_batch};
+use mcg_vmf::{Vmf, sample_batch, uniform_sphere};
 
 const BATCH: usize = 1024;
-
-/// The baseline of the criterion group: z = 1 − 2u, φ = 2πu.
-fn uniform_sphere(u: Vec2) -> Vec3 {
-    let z = 1.0 - 2.0 * u.y;
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let (s, c) = (std::f32::consts::TAU * u.x).sin_cos();
-    Vec3::new(r * c, r * s, z)
-}
 
 /// Fastest of 3000 timings of `f`, in ns per direction.
 fn fastest(mut f: impl FnMut() -> Vec3) -> f64 {

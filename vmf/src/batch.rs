@@ -119,8 +119,10 @@ mod tests {
                         ("branch-free", cos_theta_minus_one_branch_free(kappa, xi)),
                         ("scalar", cos_theta_minus_one(kappa, xi)),
                     ] {
-                        assert!(
-                            (f64::from(r) - exact).abs() <= 4e-7 * exact.abs() + 1e-44,
+                        mcg_test_support::assert_close!(
+                            f64::from(r),
+                            exact,
+                            4e-7 * exact.abs() + 1e-44,
                             "{name}: kappa {kappa}, xi {xi}: {r} vs {exact}"
                         );
                     }
@@ -143,7 +145,7 @@ mod tests {
         sample_batch(&lobes, &uniforms, &mut out);
         for ((lobe, &u), &w) in lobes.iter().zip(&uniforms).zip(&out) {
             assert!((w - lobe.sample(u)).length() < 1e-6, "{lobe:?} {u}");
-            assert!((w.length() - 1.0).abs() < 1e-6);
+            mcg_test_support::assert_close!(w.length(), 1.0, 1e-6);
         }
     }
 

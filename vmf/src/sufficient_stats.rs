@@ -386,7 +386,7 @@ mod tests {
         assert_eq!(s.mean_cosine(), 1.0);
         let lobe = s.to_vmf(Vec3::ZERO, MapPrior::uninformed(1.0)).unwrap();
         // r = (1·1 + 1·0)/(1 + 1) = 0.5.
-        assert!((lobe.kappa() - crate::kappa_from_mean_cosine(0.5)).abs() < 1e-6);
+        mcg_test_support::assert_close!(lobe.kappa(), crate::kappa_from_mean_cosine(0.5), 1e-6);
         assert_eq!(lobe.mu(), Vec3::Z);
     }
 
@@ -421,13 +421,9 @@ mod tests {
             yb = (w * yb * (1.0 - a) + f * *y * a) / w_new;
             r = ((w * r * mu) * (1.0 - a) + f * (*y - x).normalize() * a).length() / w_new;
             w = w_new;
-            assert!((s.weight_sum - w).abs() < 1e-5);
+            mcg_test_support::assert_close!(s.weight_sum, w, 1e-5);
             assert!((s.mean_target - yb).length() < 1e-5);
-            assert!(
-                (s.mean_cosine() - r).abs() < 1e-5,
-                "{} vs {r}",
-                s.mean_cosine()
-            );
+            mcg_test_support::assert_close!(s.mean_cosine(), r, 1e-5, "{} vs {r}", s.mean_cosine());
         }
     }
 
@@ -479,7 +475,7 @@ mod tests {
             assert!(s.update(Vec3::ZERO, y, 1.0, &FitParams::MCPG));
             assert!(s.mean_cosine() > 0.999_99, "{s:?}");
             let mu = s.mean_direction(Vec3::ZERO).unwrap();
-            assert!((mu.length() - 1.0).abs() < 1e-6, "{y}: {mu}");
+            mcg_test_support::assert_close!(mu.length(), 1.0, 1e-6, "{y}: {mu}");
             assert!((mu - want).length() < 1e-6, "{y}: {mu}");
             let lobe = s.to_vmf(Vec3::ZERO, MapPrior::uninformed(0.2)).unwrap();
             assert!(lobe.mu().is_normalized(), "{y}: {lobe:?}");
@@ -507,13 +503,13 @@ mod tests {
             weight: 4.0,
             decay: PriorDecay::SquaredCount,
         });
-        assert!((sq - (4.0 * 0.8 + 4.0 * 0.2) / 8.0).abs() < 1e-6);
+        mcg_test_support::assert_close!(sq, (4.0 * 0.8 + 4.0 * 0.2) / 8.0, 1e-6);
         let lin = s.posterior_mean_cosine(MapPrior {
             mean_cosine: 0.2,
             weight: 4.0,
             decay: PriorDecay::Count,
         });
-        assert!((lin - (2.0 * 0.8 + 4.0 * 0.2) / 6.0).abs() < 1e-6);
+        mcg_test_support::assert_close!(lin, (2.0 * 0.8 + 4.0 * 0.2) / 6.0, 1e-6);
         let inf = MapPrior::inverse_square_distance(1.0, 1e-4, 0.0);
         assert_eq!(s.posterior_mean_cosine(inf), 0.0);
         assert_eq!(

@@ -12,6 +12,7 @@ use std::collections::HashSet;
 use mcg_hashgrid::constants::DEFAULT_MAX_PROBES;
 use mcg_hashgrid::glam::{Vec2, Vec3};
 use mcg_hashgrid::{AdaptiveGrid, BucketHash, CellKey, HashTable, Insert, next_prime};
+use mcg_tests::hit_room;
 use plotters::style::RGBColor;
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64Mcg;
@@ -68,26 +69,6 @@ pub struct LoadPoint {
     pub mean_probe: f64,
     /// Failed inserts / insert attempts of new keys since the previous load point.
     pub failed_rate: f64,
-}
-
-/// Hit point and normal of the ray from `camera` along `dir` inside the box room
-/// [−20, 20] × [0, 10] × [−20, 20].
-fn hit_room(camera: Vec3, dir: Vec3) -> (Vec3, Vec3) {
-    let lo = Vec3::new(-20.0, 0.0, -20.0);
-    let hi = Vec3::new(20.0, 10.0, 20.0);
-    let inv = dir.recip();
-    let t_exit = ((lo - camera) * inv).max((hi - camera) * inv);
-    let t = t_exit.min_element();
-    let axis = if t == t_exit.x {
-        0
-    } else if t == t_exit.y {
-        1
-    } else {
-        2
-    };
-    let mut n = Vec3::ZERO;
-    n[axis] = -dir[axis].signum();
-    (camera + dir * t, n)
 }
 
 /// At least `count` distinct adaptive-grid keys (MCPG defaults) from frames of a `width²`
@@ -183,7 +164,33 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
     Ok(section)
 }
 
+/// The load sweeps of every hash and capacity over one key stream, and the ideal-hashing
+/// reference.
+struct LoadSweeps {
+    /// Pixels per image side of the key stream.
+    width: u32,
+    /// Distinct keys inserted.
+    keys: usize,
+    /// The prime capacity.
+    prime: u32,
+    /// The power-of-two capacity.
+    pow2: u32,
+    /// One sweep per (hash, capacity).
+    results: Vec<(BucketHash, Capacity, Vec<LoadPoint>)>,
+    /// Keys with random coordinates, mix hash, prime capacity.
+    reference: Vec<LoadPoint>,
+}
+
+/// The load-sweep subsection: compute, charts, text and table.
 fn load_sweeps(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
+    let sweeps = compute_load_sweeps(ctx)?;
+    let (probe_file, rate_file) = load_sweep_charts(ctx, &sweeps)?;
+    load_sweep_text(section, &sweeps, probe_file, rate_file);
+    Ok(())
+}
+
+/// Runs the sweeps: room keys into every (hash, capacity), random keys as the reference.
+fn compute_load_sweeps(ctx: &Context<'_>) -> Result<LoadSweeps> {
     let full = ctx.config.samples >= Config::DEFAULT_SAMPLES;
     let pow2: u32 = if full { 1 << 16 } else { 1 << 13 };
     let prime = next_prime(pow2).ok_or("no prime")?;
@@ -210,7 +217,24 @@ fn load_sweeps(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
         .map(|_| CellKey::new(rng.random::<[i32; 3]>().into(), 0, 0))
         .collect();
     let reference = load_sweep(&random_keys, Capacity::Prime(prime), BucketHash::Mix)?;
+    Ok(LoadSweeps {
+        width,
+        keys: keys.len(),
+        prime,
+        pow2,
+        results,
+        reference,
+    })
+}
 
+/// The probe-length and failed-insert charts; returns their file names.
+fn load_sweep_charts(
+    ctx: &Context<'_>,
+    sweeps: &LoadSweeps,
+) -> Result<(&'static str, &'static str)> {
+    let LoadSweeps {
+        results, reference, ..
+    } = sweeps;
     let label = |h: BucketHash, c: Capacity| format!("{}, {}", h.name(), c.name());
     let probes = |points: &[LoadPoint]| -> Vec<(f64, f64)> {
         points.iter().map(|p| (p.load, p.mean_probe)).collect()
@@ -234,12 +258,12 @@ fn load_sweeps(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
     probe_series.push(Series::dots(
         "random keys (ideal hashing), same limit",
         REFERENCE_COLOR,
-        probes(&reference),
+        probes(reference),
     ));
     rate_series.push(Series::dots(
         "random keys (ideal hashing)",
         REFERENCE_COLOR,
-        rates(&reference),
+        rates(reference),
     ));
     probe_series.push(Series::dots(
         "Knuth ½(1 + 1/(1 − α)), no limit",
@@ -270,16 +294,28 @@ fn load_sweeps(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
             legend: SeriesLabelPosition::UpperLeft,
         },
     )?;
+    Ok((probe_file, rate_file))
+}
 
+/// The text, the figure captions, the table at three load factors and the summary.
+fn load_sweep_text(section: &mut Section, sweeps: &LoadSweeps, probe_file: &str, rate_file: &str) {
+    let LoadSweeps {
+        width,
+        keys,
+        prime,
+        pow2,
+        results,
+        reference,
+    } = sweeps;
     section.paragraph(&format!(
         "Key stream: a camera 1.7 units above the floor of a 40 × 40 × 10 room renders {width}² \
          pixels per frame and turns by 0.11 rad between frames; each hit gives MCPG's \
          adaptive-grid key (default 0.6° resolution, level jitter and stochastic trilinear \
          corner from seeded uniforms, normal class of the wall). The first {} distinct keys \
          are inserted in order of appearance into tables of {} (prime) and {} (2ⁿ) slots.",
-        group_thousands(keys.len()),
-        group_thousands(prime as usize),
-        group_thousands(pow2 as usize),
+        group_thousands(*keys),
+        group_thousands(*prime as usize),
+        group_thousands(*pow2 as usize),
     ));
     section.figure(
         probe_file,
@@ -302,8 +338,8 @@ fn load_sweeps(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
         .map(|(hash, cap, points)| (hash.name(), cap.name(), points))
         .chain([(
             "mix, random keys",
-            Capacity::Prime(prime).name(),
-            &reference,
+            Capacity::Prime(*prime).name(),
+            reference,
         )]);
     for (hash, cap, points) in rows {
         for target in [0.5, 0.75, 0.9] {
@@ -327,7 +363,7 @@ fn load_sweeps(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
     };
     let mut summary =
         String::from("Failed inserts in the window ending at α = 0.25 and at α = 0.5: ");
-    for (hash, cap, points) in &results {
+    for (hash, cap, points) in results {
         summary.push_str(&format!(
             "{}, {}: {:.1e} / {:.1e}; ",
             hash.name(),
@@ -342,11 +378,10 @@ fn load_sweeps(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
          the buffer for α ≲ 0.25, or raise the limit. The mean probe length stays below \
          Knuth's curve because keys that would need more than {DEFAULT_MAX_PROBES} slots are \
          rejected instead of stored far from home.",
-        rate_at(&reference, 0.25),
-        rate_at(&reference, 0.5),
+        rate_at(reference, 0.25),
+        rate_at(reference, 0.5),
     ));
     section.paragraph(&summary);
-    Ok(())
 }
 
 fn memory(section: &mut Section) {

@@ -63,26 +63,61 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
          and 8 in miniature). Rays see one bounce of light: the light itself, or a \
          surface's albedo/π times its direct irradiance.",
     );
-    let cfg = config(ctx);
-    let bar = ctx.progress(4, "Probe cache: experiments");
-    let exp = Experiment::new(cfg);
-    bar.inc(1);
-    let after = (cfg.event_frame + cfg.transition_frames + 2).min(cfg.frames - 1);
-    let before = cfg.event_frame - 1;
-    let snapshots = [before, after];
-    let runs: Vec<Run> = POLICIES
-        .iter()
-        .map(|&p| {
-            let r = exp.run(p, &snapshots);
-            bar.inc(1);
-            r
-        })
-        .collect();
-    bar.finish_and_clear();
+    let study = Study::run(ctx);
+    overview(&mut section, &study);
+    slices(ctx, &mut section, &study)?;
+    error_over_frames(ctx, &mut section, &study)?;
+    memory(&mut section, &study);
+    Ok(section)
+}
+
+/// The experiment of the section: every policy run on the door scene, with the frames whose
+/// probe maps the slice figure shows.
+struct Study {
+    cfg: ExperimentConfig,
+    exp: Experiment,
+    runs: Vec<Run>,
+    /// The last frame before the door moves.
+    before: u32,
+    /// A frame shortly after the door has opened.
+    after: u32,
+}
+
+impl Study {
+    /// Runs every policy (with a progress bar).
+    fn run(ctx: &Context<'_>) -> Self {
+        let cfg = config(ctx);
+        let bar = ctx.progress(4, "Probe cache: experiments");
+        let exp = Experiment::new(cfg);
+        bar.inc(1);
+        let after = (cfg.event_frame + cfg.transition_frames + 2).min(cfg.frames - 1);
+        let before = cfg.event_frame - 1;
+        let snapshots = [before, after];
+        let runs: Vec<Run> = POLICIES
+            .iter()
+            .map(|&p| {
+                let r = exp.run(p, &snapshots);
+                bar.inc(1);
+                r
+            })
+            .collect();
+        bar.finish_and_clear();
+        Self {
+            cfg,
+            exp,
+            runs,
+            before,
+            after,
+        }
+    }
+}
+
+/// The grid and budget paragraph.
+fn overview(section: &mut Section, study: &Study) {
+    let Study { cfg, exp, .. } = study;
     let grid = exp.scene.grid;
     let probes = grid.probe_count();
     let near = exp.near.len();
-
     section.paragraph(&format!(
         "{} probes ({}×{}×{}, spacing {}×{}×{} m), 8×8 octahedral irradiance texels with the \
          1-texel border (6×6 interior) per probe. Every policy traces at most {} probe rays per \
@@ -106,10 +141,22 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
         cfg.near_radius,
         cfg.reference_strata * cfg.reference_strata,
     ));
+}
 
-    // 1. Slices.
+/// The slice figure: one grid layer's probe maps before and after the door opens.
+fn slices(ctx: &Context<'_>, section: &mut Section, study: &Study) -> Result<()> {
+    let Study {
+        cfg,
+        exp,
+        runs,
+        before,
+        after,
+    } = study;
+    let (before, after) = (*before, *after);
+    let grid = exp.scene.grid;
+    let snapshots = [before, after];
     let file = "probe-cache-slices.png";
-    slice_figure(ctx, file, &exp, &runs, &snapshots)?;
+    slice_figure(ctx, file, exp, runs, &snapshots)?;
     section
         .heading("A slice through the probe grid")
         .paragraph(&format!(
@@ -129,8 +176,22 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
             file,
             "Probe irradiance maps of one grid layer before and after the door opens: reference, ADGI, ADGI with a constant guide, uniform DDGI.",
         );
+    Ok(())
+}
 
-    // 2. Error over frames.
+/// The error-over-frames chart, the table of frames to the threshold and the text.
+fn error_over_frames(ctx: &Context<'_>, section: &mut Section, study: &Study) -> Result<()> {
+    let Study {
+        cfg,
+        exp,
+        runs,
+        before,
+        ..
+    } = study;
+    let before = *before;
+    let grid = exp.scene.grid;
+    let probes = grid.probe_count();
+    let near = exp.near.len();
     let file = "probe-cache-error.png";
     let mut series = Vec::new();
     for (i, run) in runs.iter().enumerate() {
@@ -189,7 +250,7 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
     let tail = cfg.frames;
     let e = cfg.event_frame;
     let window = (e + 10).min(tail);
-    for run in &runs {
+    for run in runs {
         let fmt = |v: Option<u32>| v.map_or("never".to_owned(), |f| f.to_string());
         let rays: u64 = run.rays[e as usize..window as usize].iter().sum();
         let near_rays: u64 = run.rays_near[e as usize..window as usize].iter().sum();
@@ -232,8 +293,13 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
             "Relative RMS error per frame, near the event (lines) and over all probes (dots).",
         )
         .table(table);
+    Ok(())
+}
 
-    // 3. Memory.
+/// Bytes per probe of ADGI's words against plain float texels.
+fn memory(section: &mut Section, study: &Study) {
+    let grid = study.exp.scene.grid;
+    let probes = grid.probe_count();
     let texels = ProbeTexels::new(grid, TexelConfig::ADGI);
     let map = TexelConfig::ADGI.irradiance_map;
     let vis = TexelConfig::ADGI.visibility_map;
@@ -290,7 +356,6 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
             crate::group_thousands(adgi * probes)
         ))
         .table(table);
-    Ok(section)
 }
 
 /// Tone map for the slices: E / (E + k), gamma 2.2, per channel.

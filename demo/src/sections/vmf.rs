@@ -8,6 +8,7 @@
 
 use std::f64::consts::PI;
 
+use mcg_tests::{vmf_normalization, vmf_one_minus_cos_cdf, vmf_one_minus_mean_cosine};
 use mcg_vmf::glam::{Vec2, Vec3};
 use mcg_vmf::{Frame, Vmf};
 use rand::{RngExt, SeedableRng};
@@ -151,21 +152,15 @@ pub fn t_density(normalization: f32, kappa: f32, t: f64) -> f64 {
 }
 
 /// Exact probability that t = 1 − cos θ falls in [a, b] ⊂ [0, 2] (the integral of
-/// [`t_density`]), `e^{−κa}(1 − e^{−κ(b−a)}) / (1 − e^{−2κ})`, in f64 with `expm1`.
+/// [`t_density`]): the difference of mcg-tests' f64 CDF [`vmf_one_minus_cos_cdf`].
 pub fn t_probability(kappa: f64, a: f64, b: f64) -> f64 {
-    if kappa == 0.0 {
-        return (b - a) / 2.0;
-    }
-    (-kappa * a).exp() * (-kappa * (b - a)).exp_m1() / (-2.0 * kappa).exp_m1()
+    vmf_one_minus_cos_cdf(kappa, b) - vmf_one_minus_cos_cdf(kappa, a)
 }
 
-/// Exact mean of t = 1 − cos θ, `1 − A₃(κ) = 1 − coth κ + 1/κ`, in f64.
+/// Exact mean of t = 1 − cos θ, `1 − A₃(κ) = 1 − coth κ + 1/κ`, in f64 (mcg-tests'
+/// [`vmf_one_minus_mean_cosine`]).
 pub fn exact_mean_t(kappa: f64) -> f64 {
-    if kappa < 1e-4 {
-        // Series 1 − κ/3 + κ³/45 avoids the cancellation of coth κ − 1/κ.
-        return 1.0 - kappa / 3.0 + kappa.powi(3) / 45.0;
-    }
-    1.0 - (1.0 / kappa.tanh() - 1.0 / kappa)
+    vmf_one_minus_mean_cosine(kappa)
 }
 
 /// The t range a panel shows: [0, min(2, 8/κ)], which holds all but e⁻⁸ ≈ 0.03 % of the mass.
@@ -430,7 +425,8 @@ impl Formula {
     }
 }
 
-/// The reference density in f64: `C(κ) e^{−κ d²/2}` with `C(κ) = −2κ / expm1(−2κ) / (4π)` and
+/// The reference density in f64: `C(κ) e^{−κ d²/2}` with `C(κ) = −2κ / expm1(−2κ) / (4π)`
+/// (mcg-tests' [`vmf_normalization`]) and
 /// `d² = |ω − μ|²` computed in f64 from the f32 vectors, so that it is the exact density of the
 /// direction the f32 formulas see (1 − cos θ = d²/2).
 pub fn reference_pdf(kappa: f64, mu: Vec3, w: Vec3) -> f64 {
@@ -449,12 +445,7 @@ pub fn distance_squared_f64(a: Vec3, b: Vec3) -> f64 {
 }
 
 fn reference_pdf_at(kappa: f64, d2: f64) -> f64 {
-    let c = if kappa == 0.0 {
-        1.0
-    } else {
-        -2.0 * kappa / (-2.0 * kappa).exp_m1()
-    };
-    c / (4.0 * PI) * (-0.5 * kappa * d2).exp()
+    vmf_normalization(kappa) * (-0.5 * kappa * d2).exp()
 }
 
 /// Outcome of one f32 evaluation against the reference.
@@ -631,8 +622,17 @@ fn error_label(e: Option<f64>) -> String {
     }
 }
 
+/// The precision subsection: the sweep, one chart per angle, the table and the text.
 fn precision(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
     let sweeps = precision_sweep()?;
+    precision_charts(ctx, &sweeps)?;
+    let table = precision_table(&sweeps);
+    precision_text(section, &sweeps, table);
+    Ok(())
+}
+
+/// One log-log chart of the relative error per angle, every formula in it.
+fn precision_charts(ctx: &Context<'_>, sweeps: &[Sweep]) -> Result<()> {
     let bar = ctx.progress(Angle::ALL.len() as u64, "vMF: precision charts");
     for angle in Angle::ALL {
         let mut series = Vec::new();
@@ -678,22 +678,12 @@ fn precision(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
         bar.inc(1);
     }
     bar.finish_and_clear();
+    Ok(())
+}
 
-    // Summary numbers.
+/// The table: max error per formula and angle, and the κ ranges where each formula fails.
+fn precision_table(sweeps: &[Sweep]) -> Table {
     let find = |f: Formula, a: Angle| sweeps.iter().find(|s| s.formula == f && s.angle == a);
-    let textbook_peak_overflow = first_failure(1.0, 1000.0, |k| {
-        Vmf::new(mean_direction(), k).is_ok_and(|l| !Formula::Textbook.eval(&l, l.mu()).is_finite())
-    });
-    let ours_max_where = |angles: &[Angle]| {
-        sweeps
-            .iter()
-            .filter(|s| s.formula == Formula::Ours && angles.contains(&s.angle))
-            .filter_map(Sweep::max_error)
-            .fold(0.0, f64::max)
-    };
-    let ours_near = ours_max_where(&[Angle::Peak, Angle::LobeWidth]);
-    let ours_max = ours_max_where(&Angle::ALL);
-
     let mut table = Table::new(
         &format!(
             "Relative error |pdf_f32/pdf_f64 − 1| over {SWEEP_POINTS} κ log-spaced in [10⁻⁸, 10⁶] \
@@ -732,7 +722,23 @@ fn precision(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
         row.push(bad_ranges(&large));
         table.push_row(row);
     }
+    table
+}
 
+/// The text around the charts and the table, with the summary numbers.
+fn precision_text(section: &mut Section, sweeps: &[Sweep], table: Table) {
+    let textbook_peak_overflow = first_failure(1.0, 1000.0, |k| {
+        Vmf::new(mean_direction(), k).is_ok_and(|l| !Formula::Textbook.eval(&l, l.mu()).is_finite())
+    });
+    let ours_max_where = |angles: &[Angle]| {
+        sweeps
+            .iter()
+            .filter(|s| s.formula == Formula::Ours && angles.contains(&s.angle))
+            .filter_map(Sweep::max_error)
+            .fold(0.0, f64::max)
+    };
+    let ours_near = ours_max_where(&[Angle::Peak, Angle::LobeWidth]);
+    let ours_max = ours_max_where(&Angle::ALL);
     let overflow_text = textbook_peak_overflow
         .map(|k| format!("{k}"))
         .unwrap_or_else(|| "(no overflow found in [1, 1000])".to_owned());
@@ -794,7 +800,6 @@ fn precision(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
         ours_near / 2f64.powi(-24),
         error_label(Some(ours_max)),
     ));
-    Ok(())
 }
 
 #[cfg(test)]
@@ -820,8 +825,9 @@ mod tests {
 
     #[test]
     fn exact_mean_is_continuous_at_the_series_switch() {
-        let a = exact_mean_t(0.999_999e-4);
-        let b = exact_mean_t(1.000_001e-4);
+        // mcg-tests switches from the series to the closed form at κ = 10⁻³.
+        let a = exact_mean_t(0.999_999e-3);
+        let b = exact_mean_t(1.000_001e-3);
         assert!((a - b).abs() < 1e-9, "{a} {b}");
         assert_eq!(exact_mean_t(0.0), 1.0);
     }

@@ -17,6 +17,7 @@
 
 use mcg_hashgrid::glam::{Vec2, Vec3};
 use mcg_hashgrid::{AdaptiveGrid, BucketHash, CellKey, next_prime};
+use mcg_test_support::hit_room;
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
@@ -26,26 +27,6 @@ pub const WIDTH: u32 = 256;
 pub const FILL_FRAMES: usize = 8;
 /// Tile edge of the `tiles` order.
 pub const TILE: u32 = 8;
-
-/// Hit point and normal of the ray from `camera` along `dir` inside the box room
-/// [−20, 20] × [0, 10] × [−20, 20].
-fn hit_room(camera: Vec3, dir: Vec3) -> (Vec3, Vec3) {
-    let lo = Vec3::new(-20.0, 0.0, -20.0);
-    let hi = Vec3::new(20.0, 10.0, 20.0);
-    let inv = dir.recip();
-    let t_exit = ((lo - camera) * inv).max((hi - camera) * inv);
-    let t = t_exit.min_element();
-    let axis = if t == t_exit.x {
-        0
-    } else if t == t_exit.y {
-        1
-    } else {
-        2
-    };
-    let mut n = Vec3::ZERO;
-    n[axis] = -dir[axis].signum();
-    (camera + dir * t, n)
-}
 
 /// One frame's keys, indexed by pixel `j * WIDTH + i` (scanline order).
 fn frame_keys(grid: &AdaptiveGrid, frame: usize, rng: &mut Pcg64Mcg) -> Vec<CellKey> {

@@ -121,7 +121,7 @@ mod tests {
         }
         for (i, c) in counts.iter().enumerate() {
             let p = *c as f32 / (n * n) as f32;
-            assert!((p - (i as f32 + 1.0) / 6.0).abs() < 0.005, "{i}: {p}");
+            mcg_test_support::assert_close!(p, (i as f32 + 1.0) / 6.0, 0.005, "{i}: {p}");
         }
     }
 

@@ -170,12 +170,12 @@ mod tests {
         };
         assert_eq!(lobe.mu(), Vec3::Z);
         let pdf = technique_pdf(&s, Vec3::ZERO, Vec3::Z, 0.3, &p);
-        assert!((pdf - (0.2 * 0.3 + 0.8 * lobe.pdf(Vec3::Z))).abs() < 1e-4 * pdf);
+        mcg_test_support::assert_close!(pdf, (0.2 * 0.3 + 0.8 * lobe.pdf(Vec3::Z)), 1e-4 * pdf);
         // The smis technique agrees with technique_pdf for the cosine hemisphere.
         let t = CosineChainTechnique::new(&s, Vec3::ZERO, Vec3::Z, &p);
         let w = Vec3::new(0.2, 0.1, 0.9).normalize();
         let want = technique_pdf(&s, Vec3::ZERO, w, cosine_hemisphere_pdf(Vec3::Z, w), &p);
-        assert!((t.pdf(&w) - want).abs() < 1e-6 * want);
+        mcg_test_support::assert_close!(t.pdf(&w), want, 1e-6 * want);
         assert!(!t.sample_with_branch(0.5, Vec2::new(0.3, 0.3)).1);
         assert!(t.sample_with_branch(0.1, Vec2::new(0.3, 0.3)).1);
     }

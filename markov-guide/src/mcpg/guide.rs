@@ -1,14 +1,12 @@
 //! The MCPG guide a renderer calls per path vertex: `begin`, `sample`, `pdf`, `finish`, and
 //! `end_frame` per frame (MCPG Alg. 1-3, sec. 4-5).
 
-use std::boxed::Box;
-
 use mcg_hashgrid::{
-    AdaptiveGrid, CellKey, LevelParams, StaticGrid, geometric_jitter, normal_class,
-    stochastic_trilinear,
+    AdaptiveGrid, CellKey, LevelParams, StaticGrid, cell_and_fraction, geometric_jitter,
+    normal_class, stochastic_corner, stochastic_trilinear,
 };
 use mcg_vmf::Vmf;
-use mcg_vmf::glam::{Vec2, Vec3};
+use mcg_vmf::glam::{IVec3, Vec2, Vec3};
 
 use super::single_scattering::jittered_view_direction;
 use super::{
@@ -446,8 +444,6 @@ pub enum Transition {
 pub struct Guide {
     config: GuideConfig,
     adaptive: AdaptiveGrid,
-    /// `adaptive.width(level)` for every level (the same values, no `exp` per access).
-    widths: Box<[f32; 256]>,
     static_grid: StaticGrid,
     adaptive_states: SharedGrid,
     static_states: SharedGrid,
@@ -470,10 +466,6 @@ impl Guide {
         }
         let adaptive = AdaptiveGrid::new(config.adaptive).map_err(GuideError::Grid)?;
         let static_grid = StaticGrid::new(config.static_width).map_err(GuideError::Grid)?;
-        let mut widths = Box::new([0.0; 256]);
-        for (level, w) in widths.iter_mut().enumerate() {
-            *w = adaptive.width(level as u32);
-        }
         let aged = |g: SharedGrid| {
             if config.max_state_age.is_some() {
                 g.with_age_tracking()
@@ -488,7 +480,6 @@ impl Guide {
         Ok(Self {
             config,
             adaptive,
-            widths,
             static_grid,
             adaptive_states: aged(
                 SharedGrid::new(config.adaptive_capacity).map_err(GuideError::Table)?,
@@ -559,7 +550,7 @@ impl Guide {
     /// The adaptive key at `level` for the given position, class and corner.
     #[inline]
     fn adaptive_key(&self, position: Vec3, class: u8, level: u32, corner: f32) -> CellKey {
-        let vertex = stochastic_trilinear(position / self.widths[level as usize], corner);
+        let vertex = stochastic_trilinear(position / self.adaptive.width(level), corner);
         CellKey::new(vertex, level as u8, class)
     }
 
@@ -586,6 +577,54 @@ impl Guide {
                 self.static_grid.vertex_key(position, u.corner),
             )
         }
+    }
+
+    /// The candidates' keys of [`begin`](Self::begin): [`key`](Self::key) for each, with the
+    /// cell of `position` (`⌊q⌋` and the fraction, [`cell_and_fraction`]) computed once per
+    /// grid and level instead of once per candidate (most candidates share the static grid's
+    /// cell or the target level's). The same keys as [`key`](Self::key) bit for bit:
+    /// [`stochastic_trilinear`] is the lower corner plus the [`stochastic_corner`] offset.
+    fn candidate_keys(
+        &self,
+        position: Vec3,
+        class: u8,
+        target_level: u32,
+        u: &BeginUniforms,
+        count: usize,
+    ) -> [(GridKind, CellKey); MAX_CANDIDATES] {
+        let params = &self.config.params;
+        let max_level = self.adaptive.params().max_level;
+        let mut keys = [(GridKind::Static, CellKey::unclassed(IVec3::ZERO)); MAX_CANDIDATES];
+        // (grid, level) → cell; a handful of entries at most.
+        type Cell = (Option<(GridKind, u32)>, IVec3, Vec3);
+        let mut memo: [Cell; MAX_CANDIDATES] = [(None, IVec3::ZERO, Vec3::ZERO); MAX_CANDIDATES];
+        for (key, c) in keys.iter_mut().zip(&u.candidates).take(count) {
+            let (kind, level, width) = if c.grid < params.adaptive_probability {
+                let level = (target_level + geometric_jitter(c.level)).min(max_level);
+                (GridKind::Adaptive, level, self.adaptive.width(level))
+            } else {
+                (GridKind::Static, 0, self.static_grid.width())
+            };
+            let id = Some((kind, level));
+            let i = memo.iter().position(|m| m.0 == id || m.0.is_none());
+            let (base, f) = match i {
+                Some(i) if memo[i].0 == id => (memo[i].1, memo[i].2),
+                _ => {
+                    let (base, f) = cell_and_fraction(position / width);
+                    if let Some(i) = i {
+                        memo[i] = (id, base, f);
+                    }
+                    (base, f)
+                }
+            };
+            let corner = stochastic_corner(f, c.corner) as i32;
+            let vertex = base + IVec3::new(corner & 1, (corner >> 1) & 1, corner >> 2);
+            *key = match kind {
+                GridKind::Adaptive => (kind, CellKey::new(vertex, level as u8, class)),
+                GridKind::Static => (kind, CellKey::unclassed(vertex)),
+            };
+        }
+        keys
     }
 
     #[inline]
@@ -627,16 +666,7 @@ impl Guide {
         if !x.is_finite() {
             return v;
         }
-        let (class, target_level) = (v.class, v.target_level);
-        let mut keys = [(GridKind::Static, CellKey::unclassed(Default::default())); MAX_CANDIDATES];
-        for (key, c) in keys.iter_mut().zip(&u.candidates).take(count) {
-            let g = GridUniforms {
-                grid: c.grid,
-                level: c.level,
-                corner: c.corner,
-            };
-            *key = self.key(x, class, target_level, &g);
-        }
+        let keys = self.candidate_keys(x, v.class, v.target_level, u, count);
         // One batch: every lookup, then every state, so that the lookups' memory accesses
         // overlap instead of waiting on each other.
         for (slot, (kind, key)) in v.slots.iter_mut().zip(&keys).take(count) {
@@ -701,12 +731,6 @@ impl<S: Scatter> GuidedVertex<'_, S> {
             (Hemisphere::CosineProduct, Some(n)) => Vmf::clamped_cosine(n).ok(),
             _ => None,
         };
-        // The product's lobe only (Vmf::product also integrates the product, which costs
-        // three normalisations we do not need): μ' ∝ κμ + κ_c n, κ' = |κμ + κ_c n|.
-        let times_cosine = |lobe: Vmf, c: &Vmf| -> Vmf {
-            let m = lobe.mu() * lobe.kappa() + c.mu() * c.kappa();
-            Vmf::new(m, m.length()).unwrap_or(lobe)
-        };
         for (k, s) in self.set.states().iter().enumerate() {
             let w = s.resampling_weight();
             if !(w > 0.0) {
@@ -715,8 +739,9 @@ impl<S: Scatter> GuidedVertex<'_, S> {
             let share = w / total;
             match s.lobe(x, distance_prior(s, x, params)) {
                 Some(lobe) => {
+                    // The product's lobe only, μ' ∝ κμ + κ_c n, κ' = |κμ + κ_c n|.
                     let lobe = match &cosine {
-                        Some(c) => times_cosine(lobe, c),
+                        Some(c) => lobe.product_lobe(c),
                         None => lobe,
                     };
                     self.lobes[k] = lobe;
@@ -887,6 +912,57 @@ impl<S: Scatter> GuidedVertex<'_, S> {
                     return Transition::Discarded;
                 }
                 Transition::Rejected
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `candidate_keys` memoises cells per grid and level; it must give [`Guide::key`]'s
+    /// keys bit for bit, for every grid choice, level jitter and corner (here a 4096-vertex
+    /// sweep over points, camera distances and uniforms, uniforms at 0, near 1 and beyond).
+    #[test]
+    fn candidate_keys_equal_the_single_keys() {
+        let mut config = GuideConfig::for_scene(Vec3::ZERO, Vec3::splat(10.0));
+        config.cache = None;
+        let mut guide = Guide::new(config).unwrap();
+        guide.set_camera(Vec3::new(5.0, 5.0, 20.0));
+        let mut state = 0x1234_5678_u32;
+        let mut next = || {
+            state = state.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+            (state >> 8) as f32 / (1u32 << 24) as f32
+        };
+        let edge = [0.0, 0.999_999_94, 1.0, 0.5];
+        for i in 0..4096 {
+            let x = Vec3::new(
+                10.0 * next(),
+                10.0 * next(),
+                10.0 * next() - 0.05 * i as f32,
+            );
+            let u = if i % 64 == 0 {
+                BeginUniforms::from_fn(MAX_CANDIDATES, {
+                    let mut k = 0;
+                    move || {
+                        k += 1;
+                        edge[k % 4]
+                    }
+                })
+            } else {
+                BeginUniforms::from_fn(MAX_CANDIDATES, &mut next)
+            };
+            let class = normal_class(Vec3::Y);
+            let target = guide.adaptive.target_level(guide.camera.distance(x));
+            let keys = guide.candidate_keys(x, class, target, &u, MAX_CANDIDATES);
+            for (k, c) in u.candidates.iter().enumerate() {
+                let g = GridUniforms {
+                    grid: c.grid,
+                    level: c.level,
+                    corner: c.corner,
+                };
+                assert_eq!(keys[k], guide.key(x, class, target, &g), "vertex {i}, {k}");
             }
         }
     }

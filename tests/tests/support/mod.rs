@@ -4,32 +4,10 @@
 
 use glam::{Vec2, Vec3};
 use proptest::prelude::*;
-use proptest::test_runner::RngSeed;
 
-/// The configuration of every `proptest!` block of this folder: `cases` cases from the fixed
-/// seed `seed`, so CI checks the same cases on every run, and no regression files.
-///
-/// `PROPTEST_RNG_SEED` and `PROPTEST_CASES`, when set, override the seed and the case count:
-/// `scripts/fuzz` runs the same properties with fresh seeds that way.
-pub fn proptest_config(cases: u32, seed: u64) -> ProptestConfig {
-    let set = |name: &str| std::env::var_os(name).is_some();
-    // `default()` reads the PROPTEST_* environment variables.
-    let from_env = ProptestConfig::default();
-    ProptestConfig {
-        cases: if set("PROPTEST_CASES") {
-            from_env.cases
-        } else {
-            cases
-        },
-        rng_seed: if set("PROPTEST_RNG_SEED") {
-            from_env.rng_seed
-        } else {
-            RngSeed::Fixed(seed)
-        },
-        failure_persistence: None,
-        ..from_env
-    }
-}
+/// The configuration of every `proptest!` block of this folder (fixed seed, no regression
+/// files, `PROPTEST_*` overrides for `scripts/fuzz`).
+pub use mcg_test_support::proptest_config;
 
 /// Adversarial f32 values: NaN, ±∞, ±0, subnormals, the extremes of the finite range, values
 /// just outside [0, 1], and arbitrary bit patterns.

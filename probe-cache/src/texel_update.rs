@@ -242,7 +242,11 @@ mod tests {
     fn pow_weight_matches_powf() {
         for c in [0.01f32, 0.3, 0.9, 1.0] {
             for p in [1.0f32, 50.0, 3.5] {
-                assert!((pow_weight(c, p) - c.powf(p)).abs() <= 1e-5 * c.powf(p) + 1e-30);
+                mcg_test_support::assert_close!(
+                    pow_weight(c, p),
+                    c.powf(p),
+                    1e-5 * c.powf(p) + 1e-30
+                );
             }
         }
     }

@@ -506,11 +506,11 @@ mod tests {
             ..q
         };
         let e = t.irradiance_at(x, Vec3::Y, Vec3::ZERO, &no_vis);
-        assert!((e.x - PI * 0.25).abs() < 0.05, "{e}"); // (√1·½ + 0·½)² = ¼
+        mcg_test_support::assert_close!(e.x, PI * 0.25, 0.05, "{e}"); // (√1·½ + 0·½)² = ¼
     }
 
     proptest! {
-        #![proptest_config(crate::proptest_support::proptest_config(256))]
+        #![proptest_config(mcg_test_support::proptest_config(256, 0x7E57_0007))]
 
         /// Adversarial inputs never give NaN or negative values.
         #[test]

@@ -1,0 +1,7 @@
+//! The guides on the GPU: a WGSL module a renderer imports and a host object each.
+//!
+//! | guide | WGSL module | host object | CPU reference |
+//! |---|---|---|---|
+//! | MCPG (Alber et al. 2025) | `mcg::mcpg` ([`Module::Mcpg`](crate::shaders::Module::Mcpg)) | [`mcpg::GpuMcpgGuide`] (feature `runtime`) | `mcg_markov_guide::mcpg::Guide` |
+
+pub mod mcpg;

@@ -1,0 +1,3 @@
+//! Inputs shared by the benchmarks and the instruction-count example.
+
+pub mod vertices;
