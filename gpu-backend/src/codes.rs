@@ -37,6 +37,16 @@ pub const MEAN_COSINE_RESULTANT: u32 = 0;
 /// `VMF_MEAN_COSINE_PROJECTED`: [`MeanCosineUpdate::Projected`].
 pub const MEAN_COSINE_PROJECTED: u32 = 1;
 
+// MCMM (issue 19): score density and prior policy of `mcg::mcmm`.
+/// `MCMM_SCORE_TECHNIQUE`: [`ScoreDensity::Technique`](mcg_markov_guide::mcmm::ScoreDensity::Technique).
+pub const MCMM_SCORE_TECHNIQUE: u32 = 0;
+/// `MCMM_SCORE_TILE_MIXTURE`: [`ScoreDensity::TileMixture`](mcg_markov_guide::mcmm::ScoreDensity::TileMixture).
+pub const MCMM_SCORE_TILE_MIXTURE: u32 = 1;
+/// `MCMM_PRIOR_FIXED`: [`McmmPrior::Fixed`](mcg_markov_guide::mcmm::McmmPrior::Fixed).
+pub const MCMM_PRIOR_FIXED: u32 = 0;
+/// `MCMM_PRIOR_LIGHT_SIZE`: [`McmmPrior::LightSize`](mcg_markov_guide::mcmm::McmmPrior::LightSize).
+pub const MCMM_PRIOR_LIGHT_SIZE: u32 = 1;
+
 /// Every code with its WGSL name, for the constant generator.
 pub const WGSL_CODES: &[(&str, u32)] = &[
     ("HASHGRID_HASH_XOR_PRIMES", HASH_XOR_PRIMES),
@@ -54,6 +64,12 @@ pub const WGSL_CODES: &[(&str, u32)] = &[
     ("VMF_PRIOR_DECAY_COUNT", PRIOR_DECAY_COUNT),
     ("VMF_MEAN_COSINE_RESULTANT", MEAN_COSINE_RESULTANT),
     ("VMF_MEAN_COSINE_PROJECTED", MEAN_COSINE_PROJECTED),
+    // MCMM (issue 19)
+    ("MCMM_SCORE_TECHNIQUE", MCMM_SCORE_TECHNIQUE),
+    ("MCMM_SCORE_TILE_MIXTURE", MCMM_SCORE_TILE_MIXTURE),
+    ("MCMM_PRIOR_FIXED", MCMM_PRIOR_FIXED),
+    ("MCMM_PRIOR_LIGHT_SIZE", MCMM_PRIOR_LIGHT_SIZE),
+    ("MCMM_MAX_TILE_SIZE", mcg_smis::MAX_TILE_SIZE),
 ];
 
 /// The code of a bucket hash.

@@ -15,6 +15,7 @@
 //! | [`codes`] | the integer codes of Rust enums in WGSL, defined once |
 //! | [`sampling`] | the CPU twin of the GPU's random numbers |
 //! | [`GpuContext`] (feature `runtime`) | a headless context or one on your own device ([`GpuContext::from_device`]); pipelines, buffers, dispatch, read-back |
+//! | [`guides`] | the GPU guides: [`guides::mcmm`] (MCMM, `mcg::mcmm` + `GpuMcmmGuide`) |
 //! | host types (feature `runtime`) | [`VmfKernels`], [`VmfMixtureKernel`], [`HashgridKernels`], [`CodecKernels`], [`MarkovKernels`]: typed kernels, pipelines built on first use; [`GpuHashTable`], [`GpuTexels`]: GPU-resident tables and texels |
 //!
 //! # Features
@@ -52,6 +53,7 @@ pub use naga_oil;
 pub use wgpu;
 
 pub mod codes;
+pub mod guides;
 #[cfg(feature = "runtime")]
 mod runtime;
 pub mod sampling;
@@ -64,6 +66,9 @@ pub use runtime::{
     GpuTexels, GridStateQueryRead, GridStateRead, HashgridKernels, LogLuvRead, MarkovKernels,
     PixelStateRead, VmfKernels, VmfMixtureEval, VmfMixtureKernel, testing,
 };
+
+#[cfg(feature = "runtime")]
+pub use guides::mcmm::{GpuMcmmGuide, McmmGuideError};
 
 /// Invocations per workgroup of every kernel in this crate (WebGPU guarantees 256).
 pub const WORKGROUP_SIZE: u32 = 64;

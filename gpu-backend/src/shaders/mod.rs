@@ -25,6 +25,7 @@
 //! | `mcg::color_codec_logluv` | LogLuv32 on the table array `mcg_codec_logluv_tables` | `LogLuv32` |
 //! | `mcg::color_codec_texels` | the moving average as a compare-and-swap loop on `mcg_codec_texels` | `MovingAverage::update_atomic` |
 //! | `mcg::markov` | `MarkovGridState` (MCPG) and `MarkovPixelState` (MCMM): read, pack, validity, prediction (MCPG eq. 10), lobe | `mcg_markov_guide::{mcpg, mcmm}` |
+//! | `mcg::mcmm` | MCMM's pixel chains: `McmmParams` and the guide's bindings, Alg. 1 (B-spline offsets, motion, reservoir), Alg. 2 (technique, pdf, sample), Alg. 3 (`mcmm_update`), tile shuffles and the tile-mixture density through workgroup memory | `mcg_markov_guide::mcmm`, `mcg_smis::{CyclicShift, XorPermutation}` |
 //! | `mcg::dispatch` | `mcg_invocation_index` of a [`GpuContext::dispatch`](crate::GpuContext::dispatch) | — |
 //!
 //! # Names
@@ -82,6 +83,8 @@ pub mod defs {
     pub const CODEC_LOGLUV_BINDING: &str = "MCG_CODEC_LOGLUV_BINDING";
     /// K, the number of lobes of `VmfMixture` (`mcg::vmf_mixture`); 4 when not set.
     pub const VMF_MIXTURE_K: &str = "MCG_VMF_MIXTURE_K";
+    /// Bind group of the MCMM guide's parameters and state buffers (`mcg::mcmm`, bindings 0-2).
+    pub const MCMM_GROUP: &str = "MCG_MCMM_GROUP";
 }
 
 /// One module of the shader library.
@@ -112,11 +115,13 @@ pub enum Module {
     Markov,
     /// `mcg::dispatch`: the flat invocation index of this crate's dispatches.
     Dispatch,
+    /// `mcg::mcmm`: MCMM's screen-space chains (Alg. 1-3) and tile shuffles.
+    Mcmm,
 }
 
 impl Module {
     /// Every module, each after the modules it imports.
-    pub const ALL: [Module; 12] = [
+    pub const ALL: [Module; 13] = [
         Module::Constants,
         Module::Math,
         Module::Dispatch,
@@ -129,6 +134,7 @@ impl Module {
         Module::ColorCodecLogluv,
         Module::ColorCodecTexels,
         Module::Markov,
+        Module::Mcmm,
     ];
 
     /// The naga_oil import path, e.g. `"mcg::vmf"`.
@@ -147,6 +153,7 @@ impl Module {
             Module::ColorCodecTexels => "mcg::color_codec_texels",
             Module::Markov => "mcg::markov",
             Module::Dispatch => "mcg::dispatch",
+            Module::Mcmm => "mcg::mcmm",
         }
     }
 
@@ -166,6 +173,7 @@ impl Module {
             Module::ColorCodecTexels => "mcg/color_codec_texels.wgsl",
             Module::Markov => "mcg/markov.wgsl",
             Module::Dispatch => "mcg/dispatch.wgsl",
+            Module::Mcmm => "mcg/mcmm.wgsl",
         }
     }
 
@@ -185,6 +193,7 @@ impl Module {
             Module::ColorCodecTexels => include_str!("color_codec_texels.wgsl"),
             Module::Markov => include_str!("markov.wgsl"),
             Module::Dispatch => include_str!("dispatch.wgsl"),
+            Module::Mcmm => include_str!("mcmm.wgsl"),
         }
     }
 
@@ -196,6 +205,7 @@ impl Module {
             Module::ColorCodecTexels => &[defs::CODEC_TEXELS_GROUP, defs::CODEC_TEXELS_BINDING],
             Module::ColorCodecLogluv => &[defs::CODEC_LOGLUV_GROUP, defs::CODEC_LOGLUV_BINDING],
             Module::VmfMixture => &[defs::VMF_MIXTURE_K],
+            Module::Mcmm => &[defs::MCMM_GROUP],
             _ => &[],
         }
     }

@@ -1,0 +1,277 @@
+//! [`GpuMcmmGuide`]: the host side of `mcg::mcmm`.
+
+use core::fmt;
+
+use mcg_markov_guide::ParamsError;
+use mcg_markov_guide::mcmm::{McmmParams, PixelState};
+
+use super::GpuMcmmParams;
+use crate::shaders::defs;
+use crate::{GpuBuffer, GpuContext, GpuError};
+
+/// Why a [`GpuMcmmGuide`] could not be built or updated.
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum McmmGuideError {
+    /// The parameters do not validate ([`McmmParams::validate`]).
+    Params(ParamsError),
+    /// One state buffer of the image would exceed the device's storage binding size (or
+    /// `u64`): `pixels` pixels of 28 bytes against `max_pixels`.
+    ImageAboveBindingLimit {
+        /// Pixels asked for.
+        pixels: u64,
+        /// The most pixels one binding of the device holds.
+        max_pixels: u64,
+    },
+    /// A GPU operation failed (read-back, write length).
+    Gpu(GpuError),
+}
+
+impl fmt::Display for McmmGuideError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            McmmGuideError::Params(e) => write!(f, "MCMM parameters: {e}"),
+            McmmGuideError::ImageAboveBindingLimit { pixels, max_pixels } => write!(
+                f,
+                "{pixels} pixel states exceed the device's storage binding ({max_pixels} states)"
+            ),
+            McmmGuideError::Gpu(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for McmmGuideError {}
+
+impl From<GpuError> for McmmGuideError {
+    fn from(e: GpuError) -> Self {
+        McmmGuideError::Gpu(e)
+    }
+}
+
+/// The MCMM guide's GPU resources for a `width × height` image: the parameters as a uniform
+/// and two buffers of [`PixelState`]s (MCMM sec. 4.1: a pixel resamples the states its
+/// neighbours wrote in the previous frame and writes its own for the next), a bind group
+/// layout with the bindings of `mcg::mcmm` (0: parameters, 1: previous states, read;
+/// 2: current states, written; compute stage) and one bind group per frame parity.
+///
+/// The renderer composes its shader with [`GpuMcmmGuide::shader_defs`]`(group)` for the group
+/// index it chooses, puts [`bind_group_layout`](Self::bind_group_layout) at that index of its
+/// pipeline layout, sets [`bind_group`](Self::bind_group) there each frame and calls
+/// [`swap`](Self::swap) after the frame's passes: the states just written become the previous
+/// frame's. New buffers hold empty chains (all zeros).
+#[derive(Debug)]
+pub struct GpuMcmmGuide {
+    params: GpuMcmmParams,
+    params_buffer: GpuBuffer<GpuMcmmParams>,
+    states: [GpuBuffer<PixelState>; 2],
+    layout: wgpu::BindGroupLayout,
+    bind_groups: [wgpu::BindGroup; 2],
+    /// Index into `states` of the previous frame's buffer.
+    previous: usize,
+}
+
+impl GpuMcmmGuide {
+    /// Buffers of empty chains for a `width × height` image and the uniform of `params`.
+    ///
+    /// # Errors
+    /// [`McmmGuideError::Params`] when `params` do not validate;
+    /// [`McmmGuideError::ImageAboveBindingLimit`] when a state buffer would not fit one
+    /// storage binding of the device.
+    pub fn new(
+        ctx: &GpuContext,
+        width: u32,
+        height: u32,
+        params: &McmmParams,
+    ) -> Result<Self, McmmGuideError> {
+        params.validate().map_err(McmmGuideError::Params)?;
+        let pixels = u64::from(width) * u64::from(height);
+        let state_size = size_of::<PixelState>() as u64;
+        let limits = ctx.device().limits();
+        let max_bytes = u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
+        let max_pixels = max_bytes / state_size;
+        if pixels > max_pixels {
+            return Err(McmmGuideError::ImageAboveBindingLimit { pixels, max_pixels });
+        }
+        let gpu_params = GpuMcmmParams::new(params, width, height);
+        let params_buffer = ctx.uniform_buffer("mcmm params", &gpu_params);
+        let n = pixels as usize;
+        let states = [
+            ctx.zeroed_buffer::<PixelState>("mcmm states a", n),
+            ctx.zeroed_buffer::<PixelState>("mcmm states b", n),
+        ];
+        let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only },
+                has_dynamic_offset: false,
+                min_binding_size: wgpu::BufferSize::new(state_size),
+            },
+            count: None,
+        };
+        let layout = ctx
+            .device()
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("mcmm guide"),
+                entries: &[
+                    wgpu::BindGroupLayoutEntry {
+                        binding: 0,
+                        visibility: wgpu::ShaderStages::COMPUTE,
+                        ty: wgpu::BindingType::Buffer {
+                            ty: wgpu::BufferBindingType::Uniform,
+                            has_dynamic_offset: false,
+                            min_binding_size: wgpu::BufferSize::new(
+                                size_of::<GpuMcmmParams>() as u64,
+                            ),
+                        },
+                        count: None,
+                    },
+                    storage(1, true),
+                    storage(2, false),
+                ],
+            });
+        let bind_group = |previous: &GpuBuffer<PixelState>, current: &GpuBuffer<PixelState>| {
+            ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("mcmm guide"),
+                layout: &layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: params_buffer.raw().as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: previous.raw().as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: current.raw().as_entire_binding(),
+                    },
+                ],
+            })
+        };
+        let bind_groups = [
+            bind_group(&states[0], &states[1]),
+            bind_group(&states[1], &states[0]),
+        ];
+        Ok(Self {
+            params: gpu_params,
+            params_buffer,
+            states,
+            layout,
+            bind_groups,
+            previous: 0,
+        })
+    }
+
+    /// The shader defs that place `mcg::mcmm`'s bindings in bind group `group`: pass them to
+    /// [`shaders::compose`](crate::shaders::compose) or naga_oil's `shader_defs`.
+    #[must_use]
+    pub const fn shader_defs(group: u32) -> [(&'static str, u32); 1] {
+        [(defs::MCMM_GROUP, group)]
+    }
+
+    /// The layout of the guide's bind group (bindings 0-2 of `mcg::mcmm`).
+    #[must_use]
+    pub const fn bind_group_layout(&self) -> &wgpu::BindGroupLayout {
+        &self.layout
+    }
+
+    /// This frame's bind group: the previous frame's states at binding 1, this frame's at 2.
+    #[must_use]
+    pub fn bind_group(&self) -> &wgpu::BindGroup {
+        &self.bind_groups[self.previous]
+    }
+
+    /// Ends the frame: the states written this frame become the previous frame's.
+    pub fn swap(&mut self) {
+        self.previous ^= 1;
+    }
+
+    /// The uniform as uploaded.
+    #[must_use]
+    pub const fn params(&self) -> &GpuMcmmParams {
+        &self.params
+    }
+
+    /// Image width in pixels.
+    #[must_use]
+    pub const fn width(&self) -> u32 {
+        self.params.width
+    }
+
+    /// Image height in pixels.
+    #[must_use]
+    pub const fn height(&self) -> u32 {
+        self.params.height
+    }
+
+    /// Replaces the parameters (same image size).
+    ///
+    /// # Errors
+    /// [`McmmGuideError::Params`] when `params` do not validate.
+    pub fn set_params(
+        &mut self,
+        ctx: &GpuContext,
+        params: &McmmParams,
+    ) -> Result<(), McmmGuideError> {
+        params.validate().map_err(McmmGuideError::Params)?;
+        self.params = GpuMcmmParams::new(params, self.params.width, self.params.height);
+        ctx.write(&self.params_buffer, &[self.params])?;
+        Ok(())
+    }
+
+    /// The buffer bound at binding 1 this frame (the previous frame's states).
+    #[must_use]
+    pub fn previous_buffer(&self) -> &GpuBuffer<PixelState> {
+        &self.states[self.previous]
+    }
+
+    /// The buffer bound at binding 2 this frame (this frame's states).
+    #[must_use]
+    pub fn current_buffer(&self) -> &GpuBuffer<PixelState> {
+        &self.states[self.previous ^ 1]
+    }
+
+    /// Reads the previous frame's states back, row-major.
+    ///
+    /// # Errors
+    /// [`McmmGuideError::Gpu`] when the read-back fails.
+    pub fn read_previous(&self, ctx: &GpuContext) -> Result<Vec<PixelState>, McmmGuideError> {
+        Ok(ctx.read_back(self.previous_buffer())?)
+    }
+
+    /// Reads this frame's states back, row-major.
+    ///
+    /// # Errors
+    /// [`McmmGuideError::Gpu`] when the read-back fails.
+    pub fn read_current(&self, ctx: &GpuContext) -> Result<Vec<PixelState>, McmmGuideError> {
+        Ok(ctx.read_back(self.current_buffer())?)
+    }
+
+    /// Overwrites the previous frame's states (row-major, one per pixel), e.g. to restore or
+    /// to start from CPU states.
+    ///
+    /// # Errors
+    /// [`McmmGuideError::Gpu`] unless `states` has one state per pixel.
+    pub fn write_previous(
+        &self,
+        ctx: &GpuContext,
+        states: &[PixelState],
+    ) -> Result<(), McmmGuideError> {
+        Ok(ctx.write(self.previous_buffer(), states)?)
+    }
+
+    /// Empties every chain of both buffers (a camera cut).
+    ///
+    /// # Errors
+    /// [`McmmGuideError::Gpu`] never for a guide built by [`new`](Self::new); kept for the
+    /// write's length check.
+    pub fn clear(&self, ctx: &GpuContext) -> Result<(), McmmGuideError> {
+        let empty = vec![PixelState::EMPTY; self.states[0].len()];
+        for buffer in &self.states {
+            ctx.write(buffer, &empty)?;
+        }
+        Ok(())
+    }
+}
