@@ -260,7 +260,11 @@ fn check_frame(
                 x: Vec3::new((i as u32 % width) as f32, (i as u32 / width) as f32, 0.0) * 0.01,
                 seed: rng.random(),
                 normal,
-                value: if i % 5 == 0 { 0.0 } else { rng.random_range(0.1..4.0) },
+                value: if i % 5 == 0 {
+                    0.0
+                } else {
+                    rng.random_range(0.1..4.0)
+                },
                 hit: Vec3::new(0.0, 0.0, 4.0) + random_unit(rng) * 2.0,
                 motion: match i % 4 {
                     0 => Vec2::ZERO,
@@ -307,14 +311,19 @@ fn check_frame(
             _ => (cosine_hemisphere(input.normal, c.uniforms).0, 1e-5),
         };
         let err = f64::from((g.direction - w).length());
-        assert!(err <= dir_tol, "{i}: ω {} vs {w}, {err} > {dir_tol}", g.direction);
+        assert!(
+            err <= dir_tol,
+            "{i}: ω {} vs {w}, {err} > {dir_tol}",
+            g.direction
+        );
         // Density at the GPU's direction: the chain's technique, or the tile's mixture.
         let wg = g.direction;
         let tile = i / TILE as usize * TILE as usize;
-        let set: Vec<CosineChainTechnique> = if params.score_density == ScoreDensity::TileMixture
-        {
+        let set: Vec<CosineChainTechnique> = if params.score_density == ScoreDensity::TileMixture {
             (tile..tile + TILE as usize)
-                .map(|j| CosineChainTechnique::new(&cpu[j].discovered, input.x, input.normal, params))
+                .map(|j| {
+                    CosineChainTechnique::new(&cpu[j].discovered, input.x, input.normal, params)
+                })
                 .collect()
         } else {
             vec![c.technique]
@@ -344,7 +353,8 @@ fn check_frame(
         let f = smis_one_sample(&set, &wg, value);
         let rel = tol / pdf.max(f64::MIN_POSITIVE) + 4.0 * EPS;
         assert!(
-            (f64::from(g.score) - f64::from(f)).abs() <= rel * f64::from(f) + f64::from(f32::MIN_POSITIVE),
+            (f64::from(g.score) - f64::from(f)).abs()
+                <= rel * f64::from(f) + f64::from(f32::MIN_POSITIVE),
             "{i}: score {} vs {f}",
             g.score
         );
@@ -450,9 +460,14 @@ fn one_iteration_matches_the_cpu() {
         ("tile mixture", tile),
     ] {
         let [checked, lobes, accepted, ties] = check_frame(ctx, &mut rng, &params, 64, 32);
-        println!("{name}: {checked} pixels, {lobes} lobe samples, {accepted} accepted, {ties} ties");
+        println!(
+            "{name}: {checked} pixels, {lobes} lobe samples, {accepted} accepted, {ties} ties"
+        );
         assert!(ties * 100 <= 64 * 32, "{name}: {ties} ties");
-        assert!(lobes > 300 && accepted > 300, "{name}: the test exercises both branches");
+        assert!(
+            lobes > 300 && accepted > 300,
+            "{name}: the test exercises both branches"
+        );
     }
 }
 
@@ -462,8 +477,7 @@ fn one_iteration_matches_the_cpu() {
 /// their state).
 #[test]
 fn tile_shuffles_match_the_cpu_permutations() {
-    let Some((ctx, mut rng)) = gpu_and_rng("tile_shuffles_match_the_cpu_permutations", 1920)
-    else {
+    let Some((ctx, mut rng)) = gpu_and_rng("tile_shuffles_match_the_cpu_permutations", 1920) else {
         return;
     };
     let states: Vec<PixelState> = (0..TILE)

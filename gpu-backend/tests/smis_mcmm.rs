@@ -14,7 +14,8 @@
 //! over its 32 pixels and 12 measured frames after 8 warm-up frames) equals the tile's mean
 //! exact irradiance. Two-sided z-test, threshold 5σ, fixed seed per scheme. Unshuffled TSMIS
 //! (each pixel keeps its chain, whose lobe at step k + 1 sits on its sample of step k) must
-//! miss it by more than 5σ.
+//! miss it by more than 5σ; so must unshuffled SSMIS. The same holds with the tile = one
+//! subgroup and `subgroupShuffle` (`mcmm_subgroup_*`, wgpu's `SUBGROUP` feature).
 
 use glam::Vec3;
 use mcg_gpu_backend::guides::mcmm::GpuMcmmGuide;
@@ -74,13 +75,17 @@ fn exact(px: u32) -> f64 {
 
 /// The per-tile observations of one scheme: each tile's estimate averaged over its pixels
 /// and the measured frames.
-fn observations(ctx: &GpuContext, scheme: Scheme, seed: u32) -> Vec<f64> {
+fn observations(ctx: &GpuContext, scheme: Scheme, seed: u32, subgroups: bool) -> Vec<f64> {
     let device = ctx.device();
     let mut params = McmmParams::PAPER;
     params.window_half_width = 0.0;
     params.neighbour_candidates = 1;
     let mut guide = GpuMcmmGuide::new(ctx, TILE, TILES, &params).unwrap();
-    let source = shaders::compose(KERNEL, &GpuMcmmGuide::shader_defs(1)).unwrap();
+    let mut defs = GpuMcmmGuide::shader_defs(1).to_vec();
+    if subgroups {
+        defs.push((shaders::defs::MCMM_SUBGROUPS, 1));
+    }
+    let source = shaders::compose(KERNEL, &defs).unwrap();
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("mcmm smis"),
         source: wgpu::ShaderSource::Wgsl(source.into()),
@@ -168,15 +173,18 @@ fn observations(ctx: &GpuContext, scheme: Scheme, seed: u32) -> Vec<f64> {
 
 /// (mean, expected, z) of a scheme's observations; asserts that the test can see a bias of
 /// 2 % of the integral (σ of the mean below 0.4 % of it).
-fn z_test(ctx: &GpuContext, scheme: Scheme, seed: u32) -> (f64, f64, f64) {
-    let obs = observations(ctx, scheme, seed);
+fn z_test(ctx: &GpuContext, scheme: Scheme, seed: u32, subgroups: bool) -> (f64, f64, f64) {
+    let obs = observations(ctx, scheme, seed, subgroups);
     let k = obs.len() as f64;
     let mean = obs.iter().sum::<f64>() / k;
     let var = obs.iter().map(|o| (o - mean).powi(2)).sum::<f64>() / (k - 1.0);
     let expected = (0..TILE).map(exact).sum::<f64>() / f64::from(TILE);
     let z = (mean - expected) / (var / k).sqrt();
     let se = (var / k).sqrt();
-    println!("{scheme:?}: mean {mean:.5} expected {expected:.5} z {z:+.2} (σ of the mean {se:.5})");
+    let path = if subgroups { "subgroup" } else { "workgroup" };
+    println!(
+        "{scheme:?} ({path}): mean {mean:.5} expected {expected:.5} z {z:+.2} (σ of the mean {se:.5})"
+    );
     assert!(se < 0.004 * expected, "{scheme:?}: σ of the mean {se}");
     (mean, expected, z)
 }
@@ -186,8 +194,11 @@ fn shuffled_tsmis_and_ssmis_are_unbiased_on_the_gpu() {
     let Some(ctx) = gpu_or_skip("shuffled_tsmis_and_ssmis_are_unbiased_on_the_gpu") else {
         return;
     };
-    for (scheme, seed) in [(Scheme::TsmisShuffled, 0x16_01), (Scheme::SsmisShuffled, 0x16_02)] {
-        let (_, _, z) = z_test(ctx, scheme, seed);
+    for (scheme, seed) in [
+        (Scheme::TsmisShuffled, 0x16_01),
+        (Scheme::SsmisShuffled, 0x16_02),
+    ] {
+        let (_, _, z) = z_test(ctx, scheme, seed, false);
         assert!(z.abs() < 5.0, "{scheme:?}: z = {z}");
     }
 }
@@ -204,7 +215,67 @@ fn unshuffled_estimators_are_biased_on_the_gpu() {
         (Scheme::TsmisUnshuffled, 0x16_03),
         (Scheme::SsmisUnshuffled, 0x16_04),
     ] {
-        let (_, _, z) = z_test(ctx, scheme, seed);
+        let (_, _, z) = z_test(ctx, scheme, seed, false);
         assert!(z.abs() > 5.0, "{scheme:?}: no detectable bias, z = {z}");
+    }
+}
+
+/// A device with wgpu's `SUBGROUP` feature and subgroups of `STEPS..=32` lanes (TSMIS needs
+/// n ≤ tile size; a 32-lane workgroup holds whole subgroups), or `None` with the reason.
+fn subgroup_context() -> Result<GpuContext, String> {
+    let instance =
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let adapter = pollster::block_on(instance.request_adapter(&Default::default()))
+        .map_err(|e| e.to_string())?;
+    let info = adapter.get_info();
+    if !adapter.features().contains(wgpu::Features::SUBGROUP) {
+        return Err(format!("{} has no SUBGROUP feature", info.name));
+    }
+    if info.subgroup_min_size < STEPS || info.subgroup_max_size > TILE {
+        return Err(format!(
+            "subgroups of {}..={} lanes",
+            info.subgroup_min_size, info.subgroup_max_size
+        ));
+    }
+    println!(
+        "{}: subgroups of {}..={} lanes",
+        info.name, info.subgroup_min_size, info.subgroup_max_size
+    );
+    let descriptor = wgpu::DeviceDescriptor {
+        label: Some("mcmm subgroups"),
+        required_features: wgpu::Features::SUBGROUP,
+        required_limits: wgpu::Limits::default().using_resolution(adapter.limits()),
+        ..Default::default()
+    };
+    let (device, queue) =
+        pollster::block_on(adapter.request_device(&descriptor)).map_err(|e| e.to_string())?;
+    GpuContext::from_device(device, queue).map_err(|e| e.to_string())
+}
+
+/// The same four schemes with the tile = one subgroup and the shuffles done with
+/// `subgroupShuffle` (`mcmm_subgroup_exchange`, `mcmm_subgroup_mixture_pdf`): the same
+/// verdicts (shuffled |z| < 5, unshuffled |z| > 5) at the same sizes. Skips, printing why,
+/// when there is no adapter (fails with `MCG_REQUIRE_GPU=1`) or the adapter has no suitable
+/// subgroups.
+#[test]
+fn subgroup_shuffles_give_the_same_verdicts() {
+    if gpu_or_skip("subgroup_shuffles_give_the_same_verdicts").is_none() {
+        return;
+    }
+    let ctx = match subgroup_context() {
+        Ok(ctx) => ctx,
+        Err(why) => {
+            eprintln!("skipping subgroup_shuffles_give_the_same_verdicts: {why}");
+            return;
+        }
+    };
+    for (scheme, seed, biased) in [
+        (Scheme::TsmisShuffled, 0x16_11, false),
+        (Scheme::SsmisShuffled, 0x16_12, false),
+        (Scheme::TsmisUnshuffled, 0x16_13, true),
+        (Scheme::SsmisUnshuffled, 0x16_14, true),
+    ] {
+        let (_, _, z) = z_test(&ctx, scheme, seed, true);
+        assert_eq!(z.abs() > 5.0, biased, "{scheme:?} (subgroups): z = {z}");
     }
 }

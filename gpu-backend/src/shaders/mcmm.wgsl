@@ -324,3 +324,30 @@ fn mcmm_tile_mixture_pdf(first: u32, n: u32, x: vec3<f32>, normal: vec3<f32>, w:
     }
     return min(sum, MCG_F32_MAX) / f32(n);
 }
+
+#ifdef MCG_MCMM_SUBGROUPS
+// The subgroup path of the tile shuffles (MCMM sec. 4.2: the tile is one subgroup), compiled
+// only with the shader def MCG_MCMM_SUBGROUPS (the device needs wgpu's SUBGROUP feature).
+// Same permutations, same estimators: results identical in distribution to the workgroup
+// path. Every invocation of the subgroup must call these (subgroup-uniform control flow).
+
+// The state subgroup lane `source` holds (`mcmm_tile_exchange` without workgroup memory).
+fn mcmm_subgroup_exchange(source: u32, state: MarkovPixelState) -> MarkovPixelState {
+    let s = state.stats;
+    let a = subgroupShuffle(vec4<f32>(s.mean_target_x, s.mean_target_y, s.mean_target_z, s.weight_sum), source);
+    let b = subgroupShuffle(vec2<f32>(s.one_minus_mean_cosine, state.score), source);
+    let count = subgroupShuffle(s.sample_count, source);
+    return MarkovPixelState(VmfSufficientStats(a.x, a.y, a.z, a.w, b.x, count), b.y);
+}
+
+// `mcmm_tile_mixture_pdf` over the `size` lanes of the subgroup, each lane passing its own
+// `state`: (1/n) Σⱼ p(ω | tⱼ) at the caller's `x` (MCMM eq. 9).
+fn mcmm_subgroup_mixture_pdf(state: MarkovPixelState, size: u32, x: vec3<f32>, normal: vec3<f32>, w: vec3<f32>, params: McmmParams) -> f32 {
+    let hemisphere = mcg_cosine_hemisphere_pdf(normal, w);
+    var sum = 0.0;
+    for (var j = 0u; j < size; j++) {
+        sum += mcmm_technique_pdf(mcmm_subgroup_exchange(j, state), x, w, hemisphere, params);
+    }
+    return min(sum, MCG_F32_MAX) / f32(max(size, 1u));
+}
+#endif

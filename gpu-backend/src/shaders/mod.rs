@@ -85,6 +85,9 @@ pub mod defs {
     pub const VMF_MIXTURE_K: &str = "MCG_VMF_MIXTURE_K";
     /// Bind group of the MCMM guide's parameters and state buffers (`mcg::mcmm`, bindings 0-2).
     pub const MCMM_GROUP: &str = "MCG_MCMM_GROUP";
+    /// Set (any value) to compile `mcg::mcmm`'s subgroup shuffles (`mcmm_subgroup_*`; the
+    /// device needs wgpu's `SUBGROUP` feature).
+    pub const MCMM_SUBGROUPS: &str = "MCG_MCMM_SUBGROUPS";
 }
 
 /// One module of the shader library.
@@ -205,7 +208,7 @@ impl Module {
             Module::ColorCodecTexels => &[defs::CODEC_TEXELS_GROUP, defs::CODEC_TEXELS_BINDING],
             Module::ColorCodecLogluv => &[defs::CODEC_LOGLUV_GROUP, defs::CODEC_LOGLUV_BINDING],
             Module::VmfMixture => &[defs::VMF_MIXTURE_K],
-            Module::Mcmm => &[defs::MCMM_GROUP],
+            Module::Mcmm => &[defs::MCMM_GROUP, defs::MCMM_SUBGROUPS],
             _ => &[],
         }
     }

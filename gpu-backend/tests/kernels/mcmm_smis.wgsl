@@ -4,10 +4,14 @@
 // one-sample estimator over the tile's states at each step, eq. 9), with or without the
 // decorrelating permutation of sec. 4.2 done through workgroup memory. The guide's bindings
 // are in group 1; the window is 0, so Alg. 1 only re-offers the pixel's own previous state
-// and tiles (rows) are independent.
+// and tiles (rows) are independent. With the shader def MCG_MCMM_SUBGROUPS the tile is one
+// subgroup and the shuffles are subgroup shuffles (the rows stay the independent units).
 
 #import mcg::markov::MarkovPixelState
 #import mcg::sampling::{mcg_cosine_hemisphere_pdf, mcg_pcg_hash, mcg_rng_uniform, mcg_rng_uniform2, mcg_uniform_float}
+#ifdef MCG_MCMM_SUBGROUPS
+#import mcg::mcmm::{mcmm_subgroup_exchange, mcmm_subgroup_mixture_pdf}
+#endif
 #import mcg::mcmm::{
     mcg_mcmm_params, mcmm_collaborative_discovery, mcmm_cyclic_source_lane, mcmm_load_previous,
     mcmm_ratio, mcmm_sample_cosine, mcmm_select_uniform, mcmm_store_current, mcmm_technique_pdf,
@@ -51,8 +55,29 @@ fn trace(x: vec3<f32>, w: vec3<f32>, hit: ptr<function, vec3<f32>>) -> f32 {
     return frame.radiance;
 }
 
+// The tile's shuffle: workgroup memory, or the subgroup.
+fn exchange(lane: u32, source: u32, state: MarkovPixelState) -> MarkovPixelState {
+#ifdef MCG_MCMM_SUBGROUPS
+    return mcmm_subgroup_exchange(source, state);
+#else
+    return mcmm_tile_exchange(lane, source, state);
+#endif
+}
+
 @compute @workgroup_size(32)
-fn mcmm_smis_frame(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32, @builtin(workgroup_id) tile: vec3<u32>) {
+fn mcmm_smis_frame(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(workgroup_id) workgroup: vec3<u32>,
+#ifdef MCG_MCMM_SUBGROUPS
+    @builtin(subgroup_invocation_id) lane: u32,
+    @builtin(subgroup_size) tile_size: u32,
+#else
+    @builtin(local_invocation_index) lane: u32,
+#endif
+) {
+#ifndef MCG_MCMM_SUBGROUPS
+    let tile_size = TILE;
+#endif
     let params = mcg_mcmm_params;
     let i = id.x;
     let pixel = vec2<i32>(i32(i % params.width), i32(i / params.width));
@@ -72,18 +97,19 @@ fn mcmm_smis_frame(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_
     for (var step = 0u; step < steps; step++) {
         if temporal && shuffled {
             // TSMIS: shift the chains (S and S_c) by one lane (Alg. 1 line 1).
-            let source = mcmm_cyclic_source_lane(lane, TILE, 1u);
-            tentative = mcmm_tile_exchange(lane, source, tentative);
-            current = mcmm_tile_exchange(lane, source, current);
+            let source = mcmm_cyclic_source_lane(lane, tile_size, 1u);
+            tentative = exchange(lane, source, tentative);
+            current = exchange(lane, source, current);
         }
         var taken = 0u;
         tentative = mcmm_collaborative_discovery(tentative, pixel, vec2<f32>(0.0), params, &rng, &taken);
         if !temporal && shuffled {
             // SSMIS: a random xor mask, the same for the whole tile.
-            let u_mask = mcg_uniform_float(mcg_pcg_hash(tile.x ^ mcg_pcg_hash(frame.seed + 0x9e3779b9u * (step + 1u))));
-            let source = mcmm_xor_source_lane(lane, mcmm_select_uniform(TILE, u_mask));
-            tentative = mcmm_tile_exchange(lane, source, tentative);
-            current = mcmm_tile_exchange(lane, source, current);
+            // (Per workgroup, so also the same for every lane of a subgroup.)
+            let u_mask = mcg_uniform_float(mcg_pcg_hash(workgroup.x ^ mcg_pcg_hash(frame.seed + 0x9e3779b9u * (step + 1u))));
+            let source = mcmm_xor_source_lane(lane, mcmm_select_uniform(tile_size, u_mask));
+            tentative = exchange(lane, source, tentative);
+            current = exchange(lane, source, current);
         }
         let u_select = mcg_rng_uniform(&rng);
         let s = mcmm_sample_cosine(tentative, x, normal, u_select, mcg_rng_uniform2(&rng), params);
@@ -95,8 +121,13 @@ fn mcmm_smis_frame(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_
             directions[step] = s.direction;
             values[step] = value;
         } else {
+#ifdef MCG_MCMM_SUBGROUPS
+            let mixture = mcmm_subgroup_mixture_pdf(tentative, tile_size, x, normal, s.direction, params);
+#else
             mcmm_tile_publish(lane, tentative);
-            estimate += mcmm_ratio(value, mcmm_tile_mixture_pdf(0u, TILE, x, normal, s.direction, params)) / f32(steps);
+            let mixture = mcmm_tile_mixture_pdf(0u, TILE, x, normal, s.direction, params);
+#endif
+            estimate += mcmm_ratio(value, mixture) / f32(steps);
         }
         mcmm_update(&tentative, &current, x, hit, mcmm_ratio(value, p), s.from_hemisphere, mcg_rng_uniform(&rng), params);
     }

@@ -116,7 +116,12 @@ mod tests {
         p.score_density = ScoreDensity::TileMixture;
         let g = GpuMcmmParams::new(&p, 1, 1);
         assert_eq!(
-            (g.prior_kind, g.prior_radius, g.prior_weight, g.score_density),
+            (
+                g.prior_kind,
+                g.prior_radius,
+                g.prior_weight,
+                g.score_density
+            ),
             (
                 codes::MCMM_PRIOR_LIGHT_SIZE,
                 0.5,
