@@ -29,7 +29,7 @@
 //! | `mcg::dispatch` | `mcg_invocation_index` of a [`GpuContext::dispatch`](crate::GpuContext::dispatch) | — |
 //!
 //! # Names
-//! Every module-scope name starts with `mcg`, `vmf`, `hashgrid`, `codec` or `markov` (in the
+//! Every module-scope name starts with `mcg`, `vmf`, `hashgrid`, `codec`, `markov` or `mcmm` (in the
 //! case of its kind: `vmf_pdf`, `Vmf`, `VMF_KAPPA_MAX`), so the library never clashes with
 //! your code in plain WGSL either (a test scans every module).
 //!
@@ -39,7 +39,10 @@
 //! [`defs::HASHGRID_GROUP`], [`defs::HASHGRID_BINDING`]), `mcg::color_codec_texels` and
 //! `mcg::color_codec_logluv`. All hash tables of a shader share the one `mcg_hashgrid_words`
 //! array; a `HashgridTable` descriptor (offset and capacity) picks the table, so an adaptive
-//! grid, a static grid and an irradiance cache sit side by side in one buffer.
+//! grid, a static grid and an irradiance cache sit side by side in one buffer. `mcg::mcmm`
+//! declares the MCMM guide's three bindings (parameters, previous and current states) at
+//! bindings 0-2 of the group [`defs::MCMM_GROUP`] names (`GpuMcmmGuide` builds the matching
+//! layout), and a workgroup array for its tile shuffles.
 //!
 //! # Example
 //! ```

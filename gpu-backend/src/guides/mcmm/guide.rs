@@ -87,8 +87,9 @@ impl GpuMcmmGuide {
         let pixels = u64::from(width) * u64::from(height);
         let state_size = size_of::<PixelState>() as u64;
         let limits = ctx.device().limits();
-        let max_bytes =
-            u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
+        let max_bytes = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
         let max_pixels = max_bytes / state_size;
         if pixels > max_pixels {
             return Err(McmmGuideError::ImageAboveBindingLimit { pixels, max_pixels });
