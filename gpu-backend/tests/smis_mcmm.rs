@@ -279,3 +279,26 @@ fn subgroup_shuffles_give_the_same_verdicts() {
         assert_eq!(z.abs() > 5.0, biased, "{scheme:?} (subgroups): z = {z}");
     }
 }
+
+/// Without a GPU: the Fig. 16 kernel composes and validates with naga both ways — the
+/// workgroup path with no capability at all, the subgroup path (`MCG_MCMM_SUBGROUPS`) with
+/// naga's `SUBGROUP` capability and not without it, so the default build of `mcg::mcmm` never
+/// needs the feature.
+#[test]
+fn both_shuffle_paths_validate_with_naga() {
+    use naga::valid::{Capabilities, ValidationFlags, Validator};
+    let validate = |subgroups: bool, capabilities: Capabilities| {
+        let mut defs = GpuMcmmGuide::shader_defs(1).to_vec();
+        if subgroups {
+            defs.push((shaders::defs::MCMM_SUBGROUPS, 1));
+        }
+        let source = shaders::compose(KERNEL, &defs).unwrap();
+        let module = naga::front::wgsl::parse_str(&source).unwrap();
+        Validator::new(ValidationFlags::all(), capabilities)
+            .validate(&module)
+            .is_ok()
+    };
+    assert!(validate(false, Capabilities::empty()));
+    assert!(validate(true, Capabilities::SUBGROUP));
+    assert!(!validate(true, Capabilities::empty()));
+}
