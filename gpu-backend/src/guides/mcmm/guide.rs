@@ -59,6 +59,42 @@ impl From<GpuError> for McmmGuideError {
 /// pipeline layout, sets [`bind_group`](Self::bind_group) there each frame and calls
 /// [`swap`](Self::swap) after the frame's passes: the states just written become the previous
 /// frame's. New buffers hold empty chains (all zeros).
+///
+/// # Example
+/// ```no_run
+/// use mcg_gpu_backend::{GpuContext, GpuMcmmGuide, shaders, wgpu};
+/// use mcg_markov_guide::mcmm::McmmParams;
+///
+/// let ctx = GpuContext::new()?;
+/// let mut guide = GpuMcmmGuide::new(&ctx, 1920, 1080, &McmmParams::PAPER)?;
+/// // The renderer's shader imports mcg::mcmm; the guide's bindings go to group 1.
+/// let my_shader = "\
+/// #import mcg::mcmm::{mcg_mcmm_params, mcmm_load_previous, mcmm_store_current}
+/// @compute @workgroup_size(32)
+/// fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+///     mcmm_store_current(id.x, mcmm_load_previous(id.x));
+/// }
+/// ";
+/// let wgsl = shaders::compose(my_shader, &GpuMcmmGuide::shader_defs(1))?;
+/// let device = ctx.device();
+/// let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+///     label: None,
+///     source: wgpu::ShaderSource::Wgsl(wgsl.into()),
+/// });
+/// let own = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+///     label: None,
+///     entries: &[],
+/// });
+/// let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+///     label: None,
+///     bind_group_layouts: &[Some(&own), Some(guide.bind_group_layout())],
+///     immediate_size: 0,
+/// });
+/// # let _ = (module, layout);
+/// // Each frame: `pass.set_bind_group(1, guide.bind_group(), &[])`, dispatch, then:
+/// guide.swap();
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Debug)]
 pub struct GpuMcmmGuide {
     params: GpuMcmmParams,
