@@ -37,7 +37,7 @@ pub const MEAN_COSINE_RESULTANT: u32 = 0;
 /// `VMF_MEAN_COSINE_PROJECTED`: [`MeanCosineUpdate::Projected`].
 pub const MEAN_COSINE_PROJECTED: u32 = 1;
 
-// MCMM (issue 19): score density and prior policy of `mcg::mcmm`.
+// MCMM: score density and prior policy of `mcg::mcmm`, and its largest tile.
 /// `MCMM_SCORE_TECHNIQUE`: [`ScoreDensity::Technique`](mcg_markov_guide::mcmm::ScoreDensity::Technique).
 pub const MCMM_SCORE_TECHNIQUE: u32 = 0;
 /// `MCMM_SCORE_TILE_MIXTURE`: [`ScoreDensity::TileMixture`](mcg_markov_guide::mcmm::ScoreDensity::TileMixture).
@@ -64,7 +64,7 @@ pub const WGSL_CODES: &[(&str, u32)] = &[
     ("VMF_PRIOR_DECAY_COUNT", PRIOR_DECAY_COUNT),
     ("VMF_MEAN_COSINE_RESULTANT", MEAN_COSINE_RESULTANT),
     ("VMF_MEAN_COSINE_PROJECTED", MEAN_COSINE_PROJECTED),
-    // MCMM (issue 19)
+    // MCMM
     ("MCMM_SCORE_TECHNIQUE", MCMM_SCORE_TECHNIQUE),
     ("MCMM_SCORE_TILE_MIXTURE", MCMM_SCORE_TILE_MIXTURE),
     ("MCMM_PRIOR_FIXED", MCMM_PRIOR_FIXED),
