@@ -1,24 +1,23 @@
 //! The renderer of `mcg-demo render`: built-in scenes, glTF errors, the furnace test, `bsdf`
 //! against `nee`, and the files the command writes.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
+use common::{furnace, scenes_dir};
 use glam::Vec3;
-use mcg_demo::render::bvh::{Hit, Triangle};
+use mcg_demo::render::bvh::Hit;
 use mcg_demo::render::cpu::{
     BsdfSampler, Method, Observation, RenderSettings, Vertex, VertexSampler, path_seed,
     render_frame, trace_path,
 };
-use mcg_demo::render::material::{BsdfSample, Material};
-use mcg_demo::render::scene::{Camera, Scene, SceneError, SceneFile, frame_time};
+use mcg_demo::render::material::BsdfSample;
+use mcg_demo::render::scene::{SceneError, SceneFile, frame_time};
 use mcg_demo::render::scene_generator::{DOOR_OPENS_AT_FRAME, SCENE_NAMES, built_in_scenes};
 use mcg_demo::render::{Device, RenderArgs, render, write_outputs};
 use mcg_tests::RunningStats;
 use statrs::distribution::{ContinuousCDF, Normal};
-
-fn scenes_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
-}
 
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("mcg-render-{name}-{}", std::process::id()));
@@ -222,54 +221,6 @@ fn gltf_errors_are_typed_and_name_the_file() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// A closed cube of side 2 m around the camera; every face Lambertian of albedo `rho` and
-/// emitting `le` from its inner (front) face.
-fn furnace(rho: Vec3, le: Vec3) -> Scene {
-    let mut tris = Vec::new();
-    let c = [
-        Vec3::new(-1.0, -1.0, -1.0),
-        Vec3::new(1.0, -1.0, -1.0),
-        Vec3::new(1.0, 1.0, -1.0),
-        Vec3::new(-1.0, 1.0, -1.0),
-        Vec3::new(-1.0, -1.0, 1.0),
-        Vec3::new(1.0, -1.0, 1.0),
-        Vec3::new(1.0, 1.0, 1.0),
-        Vec3::new(-1.0, 1.0, 1.0),
-    ];
-    // Faces listed counter-clockwise as seen from inside the cube.
-    for [a, b, cc, d] in [
-        [0, 1, 2, 3],
-        [4, 7, 6, 5],
-        [0, 4, 5, 1],
-        [3, 2, 6, 7],
-        [0, 3, 7, 4],
-        [1, 5, 6, 2],
-    ] {
-        tris.push(Triangle::new(c[a], c[b], c[cc], 0));
-        tris.push(Triangle::new(c[a], c[cc], c[d], 0));
-    }
-    for t in &tris {
-        assert!(
-            t.cross().dot(-Vec3::from(t.v0)) > 0.0,
-            "front faces point inwards"
-        );
-    }
-    let camera = Camera {
-        position: Vec3::new(0.1, -0.2, 0.3),
-        right: Vec3::X,
-        up: Vec3::Y,
-        forward: Vec3::NEG_Z,
-        yfov: 1.2,
-    };
-    Scene::new(
-        camera,
-        &tris,
-        vec![Material::lambertian(rho, le)],
-        Vec::new(),
-    )
-    .unwrap()
-}
-
 /// Furnace test. Hypothesis: in a closed room of one albedo ρ and one emission L_e on every
 /// inner face, every pixel's radiance with B scattering events is Σ_{k=0}^{B} ρ^k L_e
 /// (per channel). Sample: 16×16 pixels × 16 spp, B = 3, seed 7, ρ = (0.5, 0.3, 0.8),
@@ -325,7 +276,6 @@ fn bsdf_and_nee_agree_per_tile() {
     let tiles = (w / tile) * (h / tile);
     let alpha = 1e-4;
     let threshold = Normal::standard().inverse_cdf(1.0 - alpha / (2.0 * f64::from(tiles * 3)));
-    // Per method: per tile and channel, (mean, variance of the mean).
     let tile_stats = |method| {
         let settings = RenderSettings {
             width: w,
@@ -335,36 +285,9 @@ fn bsdf_and_nee_agree_per_tile() {
             seed: 11,
             method,
         };
-        let mut pixels = vec![
-            [
-                RunningStats::new(),
-                RunningStats::new(),
-                RunningStats::new()
-            ];
-            (w * h) as usize
-        ];
-        for f in 0..frames {
-            for (s, p) in
-                pixels
-                    .iter_mut()
-                    .zip(render_frame(&scene, &settings, f, || BsdfSampler, || ()))
-            {
-                for c in 0..3 {
-                    s[c].push(f64::from(p[c]));
-                }
-            }
-        }
-        let mut out = vec![[(0.0, 0.0); 3]; tiles as usize];
-        for (i, s) in pixels.iter().enumerate() {
-            let (x, y) = (i as u32 % w, i as u32 / w);
-            let t = ((y / tile) * (w / tile) + x / tile) as usize;
-            let n = f64::from(tile * tile);
-            for c in 0..3 {
-                out[t][c].0 += s[c].mean() / n;
-                out[t][c].1 += s[c].variance() / (f64::from(frames) * n * n);
-            }
-        }
-        out
+        common::tile_stats((w, h, tile, frames), |f| {
+            render_frame(&scene, &settings, f, || BsdfSampler, || ())
+        })
     };
     let (a, b) = (tile_stats(Method::Bsdf), tile_stats(Method::Nee));
     let mut worst: f64 = 0.0;

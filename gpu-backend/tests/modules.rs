@@ -51,16 +51,18 @@ fn parse_and_validate(name: &str, source: &str) -> naga::Module {
     module
 }
 
-/// Group 0, bindings 1, 2 and 3 for the three storage arrays of the library; group 1 for MCMM.
+/// Group 0, bindings 1, 2 and 3 for the three storage arrays of the library; the MCPG guide's
+/// group is 1, the MCMM guide's 2.
 const DEFS: &[(&str, u32)] = &[
+    (defs::MCPG_GROUP, 1),
     (defs::HASHGRID_GROUP, 0),
     (defs::HASHGRID_BINDING, 1),
     (defs::CODEC_TEXELS_GROUP, 0),
     (defs::CODEC_TEXELS_BINDING, 2),
     (defs::CODEC_LOGLUV_GROUP, 0),
     (defs::CODEC_LOGLUV_BINDING, 3),
-    // The MCMM guide's group (bindings 0-2 of group 1).
-    (defs::MCMM_GROUP, 1),
+    // The MCMM guide's group (bindings 0-2 of group 2).
+    (defs::MCMM_GROUP, 2),
 ];
 
 fn naga_oil_defs(defs: &[(&str, u32)]) -> HashMap<String, ShaderDefValue> {
@@ -416,6 +418,23 @@ fn wgsl_structs_match_the_rust_pod_types() {
         ];
         fields.extend_from_slice(fields!(GridState: weight_sum, one_minus_mean_cosine, time));
         check(&m, "MarkovGridState", size_of::<GridState>(), &fields);
+    }
+    // The MCPG guide's parameters (a uniform: its layout rules put every struct member at a
+    // multiple of 16, which the Rust field order keeps).
+    {
+        use mcg_gpu_backend::guides::mcpg::McpgGpuParams;
+        check(
+            &m,
+            "McpgParams",
+            size_of::<McpgGpuParams>(),
+            fields!(McpgGpuParams: candidates, adaptive_probability, bsdf_probability,
+                prior_scale, prior_min_weight, static_normal_threshold, discard_rule,
+                discard_ratio, fit, hemisphere, environment_distance, static_width, age_tracking,
+                camera, max_state_age, levels, adaptive_table, static_table, cache_table,
+                cache_enabled, cache_accumulation, cache_coarser_levels, cache_level_bias,
+                cache_max_age, cache_max_weight, adaptive_states, static_states, adaptive_guards,
+                static_guards, cache_cells, cache_sums, widths),
+        );
     }
     // PixelState: the statistics nested, then the score.
     {
@@ -773,10 +792,12 @@ fn hand_written_wgsl() -> Vec<(PathBuf, String)> {
         }
     }
     let mut out = Vec::new();
-    walk(
-        &PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src/shaders"),
-        &mut out,
-    );
+    for dir in ["src/shaders", "src/guides"] {
+        walk(
+            &PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(dir),
+            &mut out,
+        );
+    }
     out.sort();
     out
 }

@@ -524,3 +524,41 @@ fn tile_shuffles_match_the_cpu_permutations() {
     }
     println!("{cases} shuffles");
 }
+
+/// `GpuMcmmGuide::new` rejects what the CPU rejects (a NaN hemisphere probability, zero
+/// candidates) and images whose state buffer exceeds one storage binding (also when
+/// width · height · 28 overflows u64), and accepts an empty image.
+#[test]
+fn guide_validates_its_inputs() {
+    use mcg_gpu_backend::GpuError;
+    use mcg_markov_guide::{GuideError, ParamsError};
+    let Some((ctx, _)) = gpu_and_rng("guide_validates_its_inputs", 0) else {
+        return;
+    };
+    let mut p = McmmParams::PAPER;
+    p.hemisphere_probability = f32::NAN;
+    assert!(matches!(
+        GpuMcmmGuide::new(ctx, 4, 4, &p),
+        Err(GpuError::Guide(GuideError::Params(
+            ParamsError::ProbabilityOutOfRange
+        )))
+    ));
+    let mut p = McmmParams::PAPER;
+    p.neighbour_candidates = 0;
+    let mut guide = GpuMcmmGuide::new(ctx, 4, 4, &McmmParams::PAPER).unwrap();
+    assert!(matches!(
+        guide.set_params(ctx, &p),
+        Err(GpuError::Guide(GuideError::Params(
+            ParamsError::NoCandidates
+        )))
+    ));
+    for (w, h) in [(1 << 20, 1 << 20), (u32::MAX, u32::MAX)] {
+        assert!(matches!(
+            GpuMcmmGuide::new(ctx, w, h, &McmmParams::PAPER),
+            Err(GpuError::GuideTooLarge { .. })
+        ));
+    }
+    let empty = GpuMcmmGuide::new(ctx, 0, 7, &McmmParams::PAPER).unwrap();
+    assert!(empty.read_previous(ctx).unwrap().is_empty());
+    empty.clear(ctx).unwrap();
+}

@@ -62,13 +62,26 @@ impl Default for LevelParams {
 ///
 /// clamped to `max_level`. `⌊−log₂(1 − ξ)⌋` for a uniform ξ is k with probability 2^−(k+1)
 /// ([`geometric_jitter`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
+///
+/// The widths of all levels are tabulated once in [`new`](Self::new) (1 KiB), so that
+/// [`width`](Self::width) and [`vertex_key`](Self::vertex_key) cost a load, not an `exp`.
+#[derive(Clone, Copy, PartialEq)]
 pub struct AdaptiveGrid {
     params: LevelParams,
     /// STEPS / ln POWER.
     levels_per_ln: f32,
-    /// ln POWER / STEPS.
-    ln_per_level: f32,
+    /// `w_min · exp(level · ln POWER / STEPS)` for every level up to [`MAX_LEVEL`]; levels
+    /// above `max_level` hold `max_level`'s width.
+    widths: [f32; MAX_LEVEL as usize + 1],
+}
+
+impl core::fmt::Debug for AdaptiveGrid {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        // The width table is a function of the parameters.
+        f.debug_struct("AdaptiveGrid")
+            .field("params", &self.params)
+            .finish_non_exhaustive()
+    }
 }
 
 impl AdaptiveGrid {
@@ -105,10 +118,16 @@ impl AdaptiveGrid {
         if !(ln_ratio < LN_WIDTH_MAX && ln_coarsest < LN_WIDTH_MAX) {
             return Err(GridError::CoarsestWidthNotFinite);
         }
+        let ln_per_level = ln_power / params.steps as f32;
+        let mut widths = [0.0; MAX_LEVEL as usize + 1];
+        for (level, w) in widths.iter_mut().enumerate() {
+            let level = (level as u32).min(params.max_level);
+            *w = params.min_width * math::exp(level as f32 * ln_per_level);
+        }
         Ok(Self {
             params,
             levels_per_ln: params.steps as f32 / ln_power,
-            ln_per_level: ln_power / params.steps as f32,
+            widths,
         })
     }
 
@@ -155,13 +174,14 @@ impl AdaptiveGrid {
         (self.target_level(distance) + geometric_jitter(xi)).min(self.params.max_level)
     }
 
-    /// Cell width of `level`: `w_min · POWER^(level/STEPS)`. Levels above `max_level` are
-    /// treated as `max_level`, so the width is always finite.
+    /// Cell width of `level`: `w_min · POWER^(level/STEPS)` (evaluated as
+    /// `w_min · exp(level · ln POWER / STEPS)` once per level in [`new`](Self::new), then
+    /// read from a table). Levels above `max_level` are treated as `max_level`, so the width
+    /// is always finite.
     #[inline]
     #[must_use]
     pub fn width(&self, level: u32) -> f32 {
-        let level = level.min(self.params.max_level);
-        self.params.min_width * math::exp(level as f32 * self.ln_per_level)
+        self.widths[level.min(self.params.max_level) as usize]
     }
 
     /// The key of a grid vertex near `position` for a surface with normal `normal` seen from

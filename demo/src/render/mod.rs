@@ -9,9 +9,10 @@
 //! | module | what it does |
 //! |---|---|
 //! | [`scene`] | glTF loading ([`scene::SceneFile`]), animation, camera, the traceable [`scene::Scene`] |
-//! | [`bvh`] | the flattened `#[repr(C)]` BVH and triangle layout, built by `obvhs`, walked by the CPU tracer (and by a WGSL twin later) |
+//! | [`bvh`] | the flattened `#[repr(C)]` BVH and triangle layout, built by `obvhs`, walked by the CPU tracer and its WGSL twin |
 //! | [`material`] | Lambertian + GGX conductor materials with emission |
 //! | [`cpu`] | the CPU path tracer (rayon), methods `bsdf` and `nee`, the per-vertex sampler seam of the guides |
+//! | [`gpu`] | the WGSL twin of the CPU tracer on wgpu, over the same BVH, triangle and material buffers |
 //! | [`output`] | EXR/PNG files, RMSE and relative MSE |
 //! | [`scene_generator`] | the built-in scenes |
 
@@ -20,12 +21,14 @@
 
 pub mod bvh;
 pub mod cpu;
+pub mod gpu;
 pub mod material;
 pub mod output;
 pub mod scene;
 pub mod scene_generator;
 
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, OnceLock};
 use std::time::Instant;
 
 use glam::Vec3;
@@ -33,6 +36,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::Result;
 use cpu::{BsdfSampler, Method, RenderSettings, render_frame};
+use gpu::{GpuTiming, GpuTracer};
 use output::{Errors, RgbImage, errors};
 use scene::{SceneFile, frame_time};
 
@@ -40,11 +44,13 @@ use scene::{SceneFile, frame_time};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Device {
-    /// The GPU when a wgpu adapter exists, the CPU otherwise (today: always the CPU, as the
-    /// WGSL tracer is not written yet; a one-line message says so).
+    /// The GPU when a wgpu adapter exists and the method has a WGSL twin, the CPU otherwise
+    /// (with a one-line message saying why).
     Auto,
     /// The CPU tracer (rayon threads).
     Cpu,
+    /// The WGSL tracer ([`gpu`]); an error when there is no adapter.
+    Gpu,
 }
 
 /// The arguments of `mcg-demo render`.
@@ -132,7 +138,15 @@ pub struct RenderReport {
     pub bounces: u32,
     /// The seed as given.
     pub seed: u64,
-    /// Wall-clock seconds of each frame's tracing (scene building of animated frames excluded).
+    /// The GPU adapter (name and backend) when the GPU rendered.
+    pub adapter: Option<String>,
+    /// How GPU frame times were measured (timestamp queries or wall clock), when the GPU
+    /// rendered.
+    pub gpu_timing: Option<GpuTiming>,
+    /// Seconds of each frame's tracing (scene building and upload of animated frames
+    /// excluded): wall clock on the CPU; on the GPU the summed timestamp-query time of the
+    /// frame's passes when the adapter has timestamps, else the wall clock from the first
+    /// submission to the end of the wait (read-back excluded).
     pub frame_times_s: Vec<f64>,
     /// The reference, if any.
     pub reference: Option<PathBuf>,
@@ -185,6 +199,11 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     };
     let mut scene = file.build(frame_time(0))?;
     let warnings = scene.warnings.clone();
+    let gpu = gpu_tracer(args.device, args.method)?;
+    let mut gpu = gpu.map(|g| g.lock().unwrap_or_else(std::sync::PoisonError::into_inner));
+    if let Some(g) = gpu.as_deref_mut() {
+        g.upload(&scene)?;
+    }
     let progress = if args.no_progress {
         ProgressBar::hidden()
     } else {
@@ -204,10 +223,21 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     for frame in 0..args.frames {
         if frame > 0 && file.is_animated() {
             scene = file.build(frame_time(frame))?;
+            if let Some(g) = gpu.as_deref_mut() {
+                g.upload(&scene)?;
+            }
         }
-        let started = Instant::now();
-        let image = render_frame(&scene, &settings, frame, || BsdfSampler, || progress.inc(1));
-        frame_times_s.push(started.elapsed().as_secs_f64());
+        let image = if let Some(g) = gpu.as_deref_mut() {
+            let (image, seconds) = g.render_frame(&settings, frame)?;
+            frame_times_s.push(seconds);
+            progress.inc(1);
+            image
+        } else {
+            let started = Instant::now();
+            let image = render_frame(&scene, &settings, frame, || BsdfSampler, || progress.inc(1));
+            frame_times_s.push(started.elapsed().as_secs_f64());
+            image
+        };
         for (s, p) in sum.iter_mut().zip(&image) {
             *s += *p;
         }
@@ -228,8 +258,10 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         report: RenderReport {
             scene: args.scene.clone(),
             method: args.method,
-            device: "cpu",
+            device: if gpu.is_some() { "gpu" } else { "cpu" },
             threads: rayon::current_num_threads(),
+            adapter: gpu.as_deref().map(GpuTracer::adapter_name),
+            gpu_timing: gpu.as_deref().map(GpuTracer::timing),
             width: args.width,
             height: args.height,
             spp: args.spp,
@@ -244,14 +276,47 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     })
 }
 
+/// The process-wide GPU tracer for `device` and `method`, created on first use (device
+/// creation and shader compilation cost about a second on a software adapter), or `None` for
+/// the CPU. `Auto` falls back to the CPU with a one-line message when there is no adapter or
+/// the method has no WGSL twin.
+///
+/// # Errors
+/// `--device gpu` without adapter, or with a method the GPU tracer does not have.
+fn gpu_tracer(device: Device, method: Method) -> Result<Option<&'static Mutex<GpuTracer>>> {
+    static TRACER: OnceLock<Result<Mutex<GpuTracer>, String>> = OnceLock::new();
+    if device == Device::Cpu {
+        return Ok(None);
+    }
+    if gpu::method_code(method).is_none() {
+        if device == Device::Gpu {
+            return Err(format!(
+                "--device gpu: the GPU tracer has no method {} yet (use --device cpu)",
+                method.name()
+            )
+            .into());
+        }
+        eprintln!(
+            "mcg-demo: the GPU tracer has no method {} yet — rendering on the CPU",
+            method.name()
+        );
+        return Ok(None);
+    }
+    match TRACER.get_or_init(|| GpuTracer::new().map(Mutex::new).map_err(|e| e.to_string())) {
+        Ok(tracer) => Ok(Some(tracer)),
+        Err(e) if device == Device::Gpu => Err(format!("--device gpu: {e}").into()),
+        Err(e) => {
+            eprintln!("mcg-demo: no GPU ({e}) — rendering on the CPU");
+            Ok(None)
+        }
+    }
+}
+
 /// `mcg-demo render`: renders and writes `<out>/<method>.{exr,png,json}`; returns the paths.
 ///
 /// # Errors
 /// As [`render`], and when a file cannot be written.
 pub fn run_render(args: &RenderArgs) -> Result<Vec<PathBuf>> {
-    if args.device == Device::Auto {
-        eprintln!("mcg-demo: no GPU tracer yet — rendering on the CPU");
-    }
     let rendered = render(args)?;
     for w in &rendered.report.warnings {
         eprintln!("mcg-demo: {}: {w}", args.scene.display());

@@ -1,4 +1,9 @@
-//! The GPU guides: a WGSL module of the shader library and a host object each (buffers, bind
-//! group layout, per-frame bind group).
+//! The guides on the GPU: a WGSL module a renderer imports and a host object each.
+//!
+//! | guide | WGSL module | host object | CPU reference |
+//! |---|---|---|---|
+//! | MCPG (Alber et al. 2025) | `mcg::mcpg` ([`Module::Mcpg`](crate::shaders::Module::Mcpg)) | [`mcpg::GpuMcpgGuide`] (feature `runtime`) | `mcg_markov_guide::mcpg::Guide` |
+//! | MCMM (Dittebrandt et al. 2023) | `mcg::mcmm` ([`Module::Mcmm`](crate::shaders::Module::Mcmm)) | [`mcmm::GpuMcmmGuide`] (feature `runtime`) | `mcg_markov_guide::mcmm` |
 
 pub mod mcmm;
+pub mod mcpg;

@@ -57,6 +57,15 @@ pub enum GpuError {
         /// wgpu's description of the failure.
         reason: String,
     },
+    /// A GPU guide's configuration is invalid (the CPU guide would reject it too).
+    Guide(mcg_markov_guide::mcpg::GuideError),
+    /// A GPU guide's buffer would exceed what one binding or one `u32` index can address.
+    GuideTooLarge {
+        /// Bytes the buffer would need.
+        bytes: u64,
+        /// The most one binding may hold on this device.
+        maximum: u64,
+    },
 }
 
 impl fmt::Display for GpuError {
@@ -93,6 +102,11 @@ impl fmt::Display for GpuError {
             GpuError::Map { reason } => {
                 write!(f, "mapping a buffer for read-back failed: {reason}")
             }
+            GpuError::Guide(e) => write!(f, "invalid guide configuration: {e}"),
+            GpuError::GuideTooLarge { bytes, maximum } => write!(
+                f,
+                "a guide buffer of {bytes} bytes exceeds the binding maximum of {maximum}"
+            ),
         }
     }
 }

@@ -19,7 +19,7 @@ use mcg_color_codec::{
     RTXGI_IRRADIANCE_GAMMA, VisibilityLayout,
 };
 
-use mcg_markov_guide::mcpg::{DiscardRule, McpgParams};
+use mcg_markov_guide::mcpg::{DiscardRule, McpgParams, luminance};
 
 use crate::WORKGROUP_SIZE;
 use crate::sampling;
@@ -200,6 +200,13 @@ fn push_mcpg_params(out: &mut String, p: &McpgParams) {
     );
     let (DiscardRule::Paper { ratio } | DiscardRule::Engine { ratio }) = p.discard;
     push_f32(out, "MCPG_DISCARD_RATIO", ratio);
+    // The weights of `mcpg::luminance` (Rec. 709), read off the CPU function itself.
+    push_f32(out, "MCPG_LUMINANCE_R", luminance(Vec3::X));
+    push_f32(out, "MCPG_LUMINANCE_G", luminance(Vec3::Y));
+    push_f32(out, "MCPG_LUMINANCE_B", luminance(Vec3::Z));
+    // `DiscardRule::Engine`'s direction test ω·μ ≥ 0.9 + 0.1·r̄ (merian-quake).
+    push_f32(out, "MCPG_ENGINE_DISCARD_BASE", 0.9);
+    push_f32(out, "MCPG_ENGINE_DISCARD_SLOPE", 0.1);
 }
 
 /// The derived constants of one log-coded field, read from `LogField`'s accessors (the

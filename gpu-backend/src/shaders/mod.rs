@@ -25,6 +25,7 @@
 //! | `mcg::color_codec_logluv` | LogLuv32 on the table array `mcg_codec_logluv_tables` | `LogLuv32` |
 //! | `mcg::color_codec_texels` | the moving average as a compare-and-swap loop on `mcg_codec_texels` | `MovingAverage::update_atomic` |
 //! | `mcg::markov` | `MarkovGridState` (MCPG) and `MarkovPixelState` (MCMM): read, pack, validity, prediction (MCPG eq. 10), lobe | `mcg_markov_guide::{mcpg, mcmm}` |
+//! | `mcg::mcpg` | the whole MCPG guide: `mcpg_begin`, `mcpg_sample`, `mcpg_pdf`, `mcpg_finish`, the irradiance cache, the per-frame pass, on the group of [`defs::MCPG_GROUP`] (host: `GpuMcpgGuide`) | `mcg_markov_guide::mcpg::Guide` |
 //! | `mcg::mcmm` | MCMM's pixel chains: `McmmParams` and the guide's bindings, Alg. 1 (B-spline offsets, motion, reservoir), Alg. 2 (technique, pdf, sample), Alg. 3 (`mcmm_update`), tile shuffles and the tile-mixture density through workgroup memory | `mcg_markov_guide::mcmm`, `mcg_smis::{CyclicShift, XorPermutation}` |
 //! | `mcg::dispatch` | `mcg_invocation_index` of a [`GpuContext::dispatch`](crate::GpuContext::dispatch) | — |
 //!
@@ -84,6 +85,10 @@ pub mod defs {
     pub const CODEC_LOGLUV_GROUP: &str = "MCG_CODEC_LOGLUV_GROUP";
     /// Binding of `mcg_codec_logluv_tables` (`mcg::color_codec_logluv`).
     pub const CODEC_LOGLUV_BINDING: &str = "MCG_CODEC_LOGLUV_BINDING";
+    /// Bind group of the MCPG guide (`mcg::mcpg`: parameters at binding 0, the hash words at
+    /// binding 1 with [`HASHGRID_GROUP`] set to the same group and [`HASHGRID_BINDING`] to 1,
+    /// the guide's words at binding 2). `GpuMcpgGuide::shader_defs` gives all three.
+    pub const MCPG_GROUP: &str = "MCG_MCPG_GROUP";
     /// K, the number of lobes of `VmfMixture` (`mcg::vmf_mixture`); 4 when not set.
     pub const VMF_MIXTURE_K: &str = "MCG_VMF_MIXTURE_K";
     /// Bind group of the MCMM guide's parameters and state buffers (`mcg::mcmm`, bindings 0-2).
@@ -121,13 +126,15 @@ pub enum Module {
     Markov,
     /// `mcg::dispatch`: the flat invocation index of this crate's dispatches.
     Dispatch,
+    /// `mcg::mcpg`: the MCPG guide (MCPG Alg. 1-3, the irradiance cache, the per-frame pass).
+    Mcpg,
     /// `mcg::mcmm`: MCMM's screen-space chains (Alg. 1-3) and tile shuffles.
     Mcmm,
 }
 
 impl Module {
     /// Every module, each after the modules it imports.
-    pub const ALL: [Module; 13] = [
+    pub const ALL: [Module; 14] = [
         Module::Constants,
         Module::Math,
         Module::Dispatch,
@@ -140,6 +147,7 @@ impl Module {
         Module::ColorCodecLogluv,
         Module::ColorCodecTexels,
         Module::Markov,
+        Module::Mcpg,
         Module::Mcmm,
     ];
 
@@ -159,6 +167,7 @@ impl Module {
             Module::ColorCodecTexels => "mcg::color_codec_texels",
             Module::Markov => "mcg::markov",
             Module::Dispatch => "mcg::dispatch",
+            Module::Mcpg => "mcg::mcpg",
             Module::Mcmm => "mcg::mcmm",
         }
     }
@@ -179,6 +188,7 @@ impl Module {
             Module::ColorCodecTexels => "mcg/color_codec_texels.wgsl",
             Module::Markov => "mcg/markov.wgsl",
             Module::Dispatch => "mcg/dispatch.wgsl",
+            Module::Mcpg => "mcg/mcpg.wgsl",
             Module::Mcmm => "mcg/mcmm.wgsl",
         }
     }
@@ -199,7 +209,8 @@ impl Module {
             Module::ColorCodecTexels => include_str!("color_codec_texels.wgsl"),
             Module::Markov => include_str!("markov.wgsl"),
             Module::Dispatch => include_str!("dispatch.wgsl"),
-            Module::Mcmm => include_str!("mcmm.wgsl"),
+            Module::Mcpg => include_str!("../guides/mcpg/mcpg.wgsl"),
+            Module::Mcmm => include_str!("../guides/mcmm/mcmm.wgsl"),
         }
     }
 
@@ -211,6 +222,7 @@ impl Module {
             Module::ColorCodecTexels => &[defs::CODEC_TEXELS_GROUP, defs::CODEC_TEXELS_BINDING],
             Module::ColorCodecLogluv => &[defs::CODEC_LOGLUV_GROUP, defs::CODEC_LOGLUV_BINDING],
             Module::VmfMixture => &[defs::VMF_MIXTURE_K],
+            Module::Mcpg => &[defs::MCPG_GROUP],
             Module::Mcmm => &[defs::MCMM_GROUP, defs::MCMM_SUBGROUPS],
             _ => &[],
         }
@@ -298,6 +310,7 @@ pub mod kernels {
         (super::defs::CODEC_TEXELS_BINDING, 0),
         (super::defs::CODEC_LOGLUV_GROUP, 0),
         (super::defs::CODEC_LOGLUV_BINDING, 3),
+        (super::defs::MCPG_GROUP, 0),
     ];
     /// Entry point `vmf_pdf_and_sample`: bindings `lobes`, `queries`, `pdfs`, `samples`.
     pub const VMF: &str = include_str!("kernels/vmf.wgsl");
@@ -338,6 +351,11 @@ pub mod kernels {
     /// Entry point `markov_grid_queries`: bindings `states`, `query`, `results`, `predicted`,
     /// `lobes`.
     pub const MARKOV_GRID_QUERY: &str = include_str!("kernels/markov_grid_query.wgsl");
+
+    /// Entry points `mcpg_fold_cache`, `mcpg_evict`, `mcpg_trim`, `mcpg_next_frame`: the GPU
+    /// MCPG guide's per-frame pass, the guide's group at group 0 (run by `GpuMcpgGuide` with
+    /// the guide's own layout, so not in [`ALL`], whose kernels `GpuContext::dispatch` runs).
+    pub const MCPG_MAINTENANCE: &str = include_str!("../guides/mcpg/maintenance.wgsl");
 
     /// Every kernel with its name and entry points, for validation loops.
     pub const ALL: &[(&str, &str, &[&str])] = &[

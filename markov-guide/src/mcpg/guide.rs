@@ -1,8 +1,6 @@
 //! The MCPG guide a renderer calls per path vertex: `begin`, `sample`, `pdf`, `finish`, and
 //! `end_frame` per frame (MCPG Alg. 1-3, sec. 4-5).
 
-use std::boxed::Box;
-
 use mcg_hashgrid::{
     AdaptiveGrid, CellKey, LevelParams, StaticGrid, cell_and_fraction, geometric_jitter,
     normal_class, stochastic_corner, stochastic_trilinear,
@@ -446,8 +444,6 @@ pub enum Transition {
 pub struct Guide {
     config: GuideConfig,
     adaptive: AdaptiveGrid,
-    /// `adaptive.width(level)` for every level (the same values, no `exp` per access).
-    widths: Box<[f32; 256]>,
     static_grid: StaticGrid,
     adaptive_states: SharedGrid,
     static_states: SharedGrid,
@@ -470,10 +466,6 @@ impl Guide {
         }
         let adaptive = AdaptiveGrid::new(config.adaptive).map_err(GuideError::Grid)?;
         let static_grid = StaticGrid::new(config.static_width).map_err(GuideError::Grid)?;
-        let mut widths = Box::new([0.0; 256]);
-        for (level, w) in widths.iter_mut().enumerate() {
-            *w = adaptive.width(level as u32);
-        }
         let aged = |g: SharedGrid| {
             if config.max_state_age.is_some() {
                 g.with_age_tracking()
@@ -488,7 +480,6 @@ impl Guide {
         Ok(Self {
             config,
             adaptive,
-            widths,
             static_grid,
             adaptive_states: aged(
                 SharedGrid::new(config.adaptive_capacity).map_err(GuideError::Table)?,
@@ -559,7 +550,7 @@ impl Guide {
     /// The adaptive key at `level` for the given position, class and corner.
     #[inline]
     fn adaptive_key(&self, position: Vec3, class: u8, level: u32, corner: f32) -> CellKey {
-        let vertex = stochastic_trilinear(position / self.widths[level as usize], corner);
+        let vertex = stochastic_trilinear(position / self.adaptive.width(level), corner);
         CellKey::new(vertex, level as u8, class)
     }
 
@@ -610,7 +601,7 @@ impl Guide {
         for (key, c) in keys.iter_mut().zip(&u.candidates).take(count) {
             let (kind, level, width) = if c.grid < params.adaptive_probability {
                 let level = (target_level + geometric_jitter(c.level)).min(max_level);
-                (GridKind::Adaptive, level, self.widths[level as usize])
+                (GridKind::Adaptive, level, self.adaptive.width(level))
             } else {
                 (GridKind::Static, 0, self.static_grid.width())
             };

@@ -93,8 +93,6 @@ impl Default for CacheConfig {
 #[derive(Debug)]
 pub struct IrradianceCache {
     grid: AdaptiveGrid,
-    /// `grid.width(level)` for every level.
-    widths: Box<[f32; 256]>,
     table: ConcurrentTable,
     cells: Vec<CacheCell>,
     /// Per slot: R, G, B sums (f32 bits) and the sample count of the current frame.
@@ -113,13 +111,8 @@ impl IrradianceCache {
         let table = ConcurrentTable::new(config.capacity, 8, BucketHash::default())
             .map_err(GuideError::Table)?
             .with_age_tracking();
-        let mut widths = Box::new([0.0; 256]);
-        for (level, w) in widths.iter_mut().enumerate() {
-            *w = grid.width(level as u32);
-        }
         Ok(Self {
             grid,
-            widths,
             table,
             cells: std::vec![CacheCell::default(); config.capacity as usize],
             accumulators: (0..config.capacity)
@@ -154,7 +147,7 @@ impl IrradianceCache {
 
     #[inline]
     fn key(&self, position: Vec3, normal: Vec3, level: u32, corner: f32) -> CellKey {
-        let width = self.widths[level as usize];
+        let width = self.grid.width(level);
         let vertex = mcg_hashgrid::stochastic_trilinear(position / width, corner);
         CellKey::new(vertex, level as u8, normal_class(normal))
     }

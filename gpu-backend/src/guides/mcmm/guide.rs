@@ -1,52 +1,11 @@
 //! [`GpuMcmmGuide`]: the host side of `mcg::mcmm`.
 
-use core::fmt;
-
-use mcg_markov_guide::ParamsError;
+use mcg_markov_guide::GuideError;
 use mcg_markov_guide::mcmm::{McmmParams, PixelState};
 
 use super::GpuMcmmParams;
 use crate::shaders::defs;
 use crate::{GpuBuffer, GpuContext, GpuError};
-
-/// Why a [`GpuMcmmGuide`] could not be built or updated.
-#[derive(Debug)]
-#[non_exhaustive]
-pub enum McmmGuideError {
-    /// The parameters do not validate ([`McmmParams::validate`]).
-    Params(ParamsError),
-    /// One state buffer of the image would exceed the device's storage binding size (or
-    /// `u64`): `pixels` pixels of 28 bytes against `max_pixels`.
-    ImageAboveBindingLimit {
-        /// Pixels asked for.
-        pixels: u64,
-        /// The most pixels one binding of the device holds.
-        max_pixels: u64,
-    },
-    /// A GPU operation failed (read-back, write length).
-    Gpu(GpuError),
-}
-
-impl fmt::Display for McmmGuideError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            McmmGuideError::Params(e) => write!(f, "MCMM parameters: {e}"),
-            McmmGuideError::ImageAboveBindingLimit { pixels, max_pixels } => write!(
-                f,
-                "{pixels} pixel states exceed the device's storage binding ({max_pixels} states)"
-            ),
-            McmmGuideError::Gpu(e) => write!(f, "{e}"),
-        }
-    }
-}
-
-impl std::error::Error for McmmGuideError {}
-
-impl From<GpuError> for McmmGuideError {
-    fn from(e: GpuError) -> Self {
-        McmmGuideError::Gpu(e)
-    }
-}
 
 /// The MCMM guide's GPU resources for a `width × height` image: the parameters as a uniform
 /// and two buffers of [`PixelState`]s (MCMM sec. 4.1: a pixel resamples the states its
@@ -62,7 +21,8 @@ impl From<GpuError> for McmmGuideError {
 ///
 /// # Example
 /// ```no_run
-/// use mcg_gpu_backend::{GpuContext, GpuMcmmGuide, shaders, wgpu};
+/// use mcg_gpu_backend::guides::mcmm::GpuMcmmGuide;
+/// use mcg_gpu_backend::{GpuContext, shaders, wgpu};
 /// use mcg_markov_guide::mcmm::McmmParams;
 ///
 /// let ctx = GpuContext::new()?;
@@ -110,25 +70,30 @@ impl GpuMcmmGuide {
     /// Buffers of empty chains for a `width × height` image and the uniform of `params`.
     ///
     /// # Errors
-    /// [`McmmGuideError::Params`] when `params` do not validate;
-    /// [`McmmGuideError::ImageAboveBindingLimit`] when a state buffer would not fit one
-    /// storage binding of the device.
+    /// [`GpuError::Guide`] (with [`GuideError::Params`]) when `params` do not validate;
+    /// [`GpuError::GuideTooLarge`] when a state buffer would not fit one storage binding of
+    /// the device.
     pub fn new(
         ctx: &GpuContext,
         width: u32,
         height: u32,
         params: &McmmParams,
-    ) -> Result<Self, McmmGuideError> {
-        params.validate().map_err(McmmGuideError::Params)?;
+    ) -> Result<Self, GpuError> {
+        params
+            .validate()
+            .map_err(|e| GpuError::Guide(GuideError::Params(e)))?;
         let pixels = u64::from(width) * u64::from(height);
         let state_size = size_of::<PixelState>() as u64;
         let limits = ctx.device().limits();
         let max_bytes = limits
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size);
-        let max_pixels = max_bytes / state_size;
-        if pixels > max_pixels {
-            return Err(McmmGuideError::ImageAboveBindingLimit { pixels, max_pixels });
+        let bytes = pixels.checked_mul(state_size).unwrap_or(u64::MAX);
+        if bytes > max_bytes {
+            return Err(GpuError::GuideTooLarge {
+                bytes,
+                maximum: max_bytes,
+            });
         }
         let gpu_params = GpuMcmmParams::new(params, width, height);
         let params_buffer = ctx.uniform_buffer("mcmm params", &gpu_params);
@@ -247,13 +212,11 @@ impl GpuMcmmGuide {
     /// Replaces the parameters (same image size).
     ///
     /// # Errors
-    /// [`McmmGuideError::Params`] when `params` do not validate.
-    pub fn set_params(
-        &mut self,
-        ctx: &GpuContext,
-        params: &McmmParams,
-    ) -> Result<(), McmmGuideError> {
-        params.validate().map_err(McmmGuideError::Params)?;
+    /// [`GpuError::Guide`] (with [`GuideError::Params`]) when `params` do not validate.
+    pub fn set_params(&mut self, ctx: &GpuContext, params: &McmmParams) -> Result<(), GpuError> {
+        params
+            .validate()
+            .map_err(|e| GpuError::Guide(GuideError::Params(e)))?;
         self.params = GpuMcmmParams::new(params, self.params.width, self.params.height);
         ctx.write(&self.params_buffer, &[self.params])?;
         Ok(())
@@ -274,38 +237,34 @@ impl GpuMcmmGuide {
     /// Reads the previous frame's states back, row-major.
     ///
     /// # Errors
-    /// [`McmmGuideError::Gpu`] when the read-back fails.
-    pub fn read_previous(&self, ctx: &GpuContext) -> Result<Vec<PixelState>, McmmGuideError> {
-        Ok(ctx.read_back(self.previous_buffer())?)
+    /// [`GpuError`] when the read-back fails.
+    pub fn read_previous(&self, ctx: &GpuContext) -> Result<Vec<PixelState>, GpuError> {
+        ctx.read_back(self.previous_buffer())
     }
 
     /// Reads this frame's states back, row-major.
     ///
     /// # Errors
-    /// [`McmmGuideError::Gpu`] when the read-back fails.
-    pub fn read_current(&self, ctx: &GpuContext) -> Result<Vec<PixelState>, McmmGuideError> {
-        Ok(ctx.read_back(self.current_buffer())?)
+    /// [`GpuError`] when the read-back fails.
+    pub fn read_current(&self, ctx: &GpuContext) -> Result<Vec<PixelState>, GpuError> {
+        ctx.read_back(self.current_buffer())
     }
 
     /// Overwrites the previous frame's states (row-major, one per pixel), e.g. to restore or
     /// to start from CPU states.
     ///
     /// # Errors
-    /// [`McmmGuideError::Gpu`] unless `states` has one state per pixel.
-    pub fn write_previous(
-        &self,
-        ctx: &GpuContext,
-        states: &[PixelState],
-    ) -> Result<(), McmmGuideError> {
-        Ok(ctx.write(self.previous_buffer(), states)?)
+    /// [`GpuError`] unless `states` has one state per pixel.
+    pub fn write_previous(&self, ctx: &GpuContext, states: &[PixelState]) -> Result<(), GpuError> {
+        ctx.write(self.previous_buffer(), states)
     }
 
     /// Empties every chain of both buffers (a camera cut).
     ///
     /// # Errors
-    /// [`McmmGuideError::Gpu`] never for a guide built by [`new`](Self::new); kept for the
+    /// [`GpuError`] never for a guide built by [`new`](Self::new); kept for the
     /// write's length check.
-    pub fn clear(&self, ctx: &GpuContext) -> Result<(), McmmGuideError> {
+    pub fn clear(&self, ctx: &GpuContext) -> Result<(), GpuError> {
         let empty = vec![PixelState::EMPTY; self.states[0].len()];
         for buffer in &self.states {
             ctx.write(buffer, &empty)?;

@@ -13,7 +13,7 @@ use crate::types::VmfFitParamsGpu;
 #[cfg(feature = "runtime")]
 mod guide;
 #[cfg(feature = "runtime")]
-pub use guide::{GpuMcmmGuide, McmmGuideError};
+pub use guide::GpuMcmmGuide;
 
 /// [`McmmParams`] and the image size as the WGSL uniform `McmmParams` of `mcg::mcmm`
 /// (64 bytes).

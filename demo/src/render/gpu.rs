@@ -1,0 +1,664 @@
+//! The GPU path tracer: the WGSL twin of [`super::cpu`] (`shaders/path_tracer.wgsl`, composed
+//! with mcg's shader library — `mcg::sampling` for the random stream and the cosine-weighted
+//! hemisphere, `mcg::constants`), run as a wgpu compute shader.
+//!
+//! The scene is uploaded as the CPU tracer holds it: the flat [`BvhNode`] and [`Triangle`]
+//! arrays of [`super::bvh`], the [`Material`]s, the emitter table, texture coordinates and
+//! texels — no conversion, so both devices walk the same tree. The conventions are the CPU's
+//! (see [`super::cpu`]): `bounces` counts scattering events, no Russian roulette, box filter,
+//! methods `bsdf` and `nee` with the same light selection and MIS, and every path seeded by
+//! [`super::cpu::path_seed`] and drawing its uniforms in the same order, so the two devices
+//! trace the same paths up to floating-point rounding.
+//!
+//! A frame is dispatched in square tiles of [`TILE`] pixels (one submission each, workgroups of
+//! 8 × 8 invocations, far below the 65 535 workgroups per dimension of WebGPU), so a large image
+//! never becomes one long-running submission. Frame times come from timestamp queries around
+//! each tile's pass when the adapter has `TIMESTAMP_QUERY`, else from the wall clock around
+//! the submissions and the wait for them.
+
+use std::time::Instant;
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use mcg_gpu_backend::{ComputeKernel, GpuBuffer, GpuContext, GpuError, shaders, wgpu};
+
+use super::bvh::{BvhNode, Triangle};
+use super::cpu::{Method, RenderSettings};
+use super::material::Material;
+use super::scene::{Camera, Scene, TextureInfo, TriangleUv};
+use crate::Result;
+
+/// The WGSL source of the tracer, before composition with mcg's modules.
+pub const SHADER: &str = include_str!("shaders/path_tracer.wgsl");
+
+/// Side of the square pixel tiles a frame is dispatched in (one submission per tile).
+pub const TILE: u32 = 512;
+
+/// Invocations per workgroup side of the `render` kernel (`@workgroup_size(8, 8)`).
+const GROUP: u32 = 8;
+
+/// Invocations per workgroup of the `trace_rays` kernel.
+const RAY_GROUP: u32 = 64;
+
+/// The method's code in the shader (`METHOD_*`), or `None` when the GPU tracer does not have
+/// the method yet.
+#[must_use]
+pub fn method_code(method: Method) -> Option<u32> {
+    #[allow(unreachable_patterns)] // methods added to the CPU tracer before their WGSL twin
+    match method {
+        Method::Bsdf => Some(0),
+        Method::Nee => Some(1),
+        _ => None,
+    }
+}
+
+/// The uniform block of the `render` kernel (`Params` in WGSL): the camera, the frame's
+/// settings and the tile of one dispatch. 112 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuParams {
+    /// Eye position.
+    pub camera_position: [f32; 3],
+    /// `tan(yfov/2)·width/height`.
+    pub tan_x: f32,
+    /// Unit vector to the image's right.
+    pub camera_right: [f32; 3],
+    /// `tan(yfov/2)`.
+    pub tan_y: f32,
+    /// Unit vector to the image's top.
+    pub camera_up: [f32; 3],
+    /// Image width.
+    pub width: u32,
+    /// Unit viewing direction.
+    pub camera_forward: [f32; 3],
+    /// Image height.
+    pub height: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Scattering events per path.
+    pub bounces: u32,
+    /// Seed of the random stream.
+    pub seed: u32,
+    /// Frame index (part of the path seed).
+    pub frame: u32,
+    /// [`method_code`] of the method.
+    pub method: u32,
+    /// Entries of the emitter table.
+    pub emitter_count: u32,
+    /// Left column of the tile.
+    pub tile_x: u32,
+    /// Top row of the tile.
+    pub tile_y: u32,
+    /// Tile width.
+    pub tile_width: u32,
+    /// Tile height.
+    pub tile_height: u32,
+    /// Entries of the texture-coordinate array (0 when the scene has none).
+    pub uv_count: u32,
+    /// Number of textures.
+    pub texture_count: u32,
+}
+
+/// One entry of the emitter table as the shader reads it: [`Scene::emitters`] and
+/// [`Scene::emitter_cdf`] side by side.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuEmitter {
+    /// Index of the triangle (leaf order).
+    pub triangle: u32,
+    /// Inclusive cumulative probability.
+    pub cdf: f32,
+}
+
+/// A BVH query of [`GpuTracer::trace_rays`]: the ray `origin + t·direction`, `t ∈ (0, t_max)`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuRay {
+    /// Origin.
+    pub origin: [f32; 3],
+    /// Upper end of the ray's interval.
+    pub t_max: f32,
+    /// Unit direction.
+    pub direction: [f32; 3],
+    /// 1: any hit (a shadow ray, [`super::bvh::Bvh::occluded`]); 0: the closest hit
+    /// ([`super::bvh::Bvh::intersect`]).
+    pub any_hit: u32,
+}
+
+/// The answer to a [`GpuRay`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuHit {
+    /// Distance of the hit (`t_max` on a miss).
+    pub t: f32,
+    /// Index of the triangle, [`GpuHit::MISS`] when nothing was hit.
+    pub triangle: u32,
+    /// Barycentric weight of `v1`.
+    pub b1: f32,
+    /// Barycentric weight of `v2`.
+    pub b2: f32,
+}
+
+impl GpuHit {
+    /// [`GpuHit::triangle`] of a miss.
+    pub const MISS: u32 = u32::MAX;
+}
+
+/// The scene's buffers on the device.
+struct SceneBuffers {
+    camera: Camera,
+    nodes: GpuBuffer<BvhNode>,
+    triangles: GpuBuffer<Triangle>,
+    materials: GpuBuffer<Material>,
+    emitters: GpuBuffer<GpuEmitter>,
+    uvs: GpuBuffer<TriangleUv>,
+    textures: GpuBuffer<TextureInfo>,
+    texels: GpuBuffer<[f32; 4]>,
+}
+
+/// Timestamp queries around each tile's pass.
+struct Timer {
+    queries: wgpu::QuerySet,
+    resolve: wgpu::Buffer,
+    staging: wgpu::Buffer,
+    /// Nanoseconds per timestamp tick.
+    period_ns: f64,
+    /// Query pairs the set holds.
+    pairs: u32,
+}
+
+/// How [`GpuTracer`] measures frame times.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum GpuTiming {
+    /// Timestamp queries at the beginning and end of every pass (GPU time only).
+    Timestamps,
+    /// Wall-clock time from the first submission to the end of the wait for the last.
+    Wall,
+}
+
+/// The GPU path tracer: a device, the compiled kernels and the uploaded scene.
+pub struct GpuTracer {
+    ctx: GpuContext,
+    render: ComputeKernel,
+    rays: ComputeKernel,
+    params: GpuBuffer<GpuParams>,
+    scene: Option<SceneBuffers>,
+    image: Option<GpuBuffer<[f32; 4]>>,
+    timer: Option<Timer>,
+}
+
+impl std::fmt::Debug for GpuTracer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GpuTracer")
+            .field("adapter", &self.ctx.adapter_info().name)
+            .finish_non_exhaustive()
+    }
+}
+
+/// The tracer's WGSL, composed with the modules of [`mcg_gpu_backend::shaders`] it imports.
+///
+/// # Errors
+/// When composition fails (an unknown import).
+pub fn composed_shader() -> Result<String> {
+    Ok(shaders::compose(SHADER, &[])?)
+}
+
+impl GpuTracer {
+    /// A tracer on its own device, on the adapter [`GpuContext::new`] picks (honouring
+    /// `WGPU_BACKEND` and friends), with `TIMESTAMP_QUERY` when the adapter has it, the
+    /// adapter's largest storage buffers (so large scenes and images fit) and its number of
+    /// storage buffers per stage.
+    ///
+    /// # Errors
+    /// [`GpuError::NoAdapter`] when there is no adapter, other [`GpuError`]s when the device
+    /// cannot be created or the shader does not compile.
+    pub fn new() -> Result<Self> {
+        let adapter = GpuContext::new()?
+            .adapter()
+            .cloned()
+            .ok_or("GpuContext::new returned no adapter")?;
+        let available = adapter.limits();
+        let mut limits = wgpu::Limits::default()
+            .using_resolution(available.clone())
+            .using_alignment(available.clone());
+        limits.max_storage_buffer_binding_size = available.max_storage_buffer_binding_size;
+        limits.max_buffer_size = available.max_buffer_size;
+        // `render` binds 8 storage buffers, WebGPU's default maximum; a guide's tables need
+        // more, which every desktop adapter offers.
+        limits.max_storage_buffers_per_shader_stage =
+            available.max_storage_buffers_per_shader_stage;
+        let descriptor = wgpu::DeviceDescriptor {
+            label: Some("mcg-demo render"),
+            required_features: adapter.features() & wgpu::Features::TIMESTAMP_QUERY,
+            required_limits: limits,
+            ..Default::default()
+        };
+        let (device, queue) =
+            pollster::block_on(adapter.request_device(&descriptor)).map_err(|e| {
+                GpuError::RequestDevice {
+                    reason: e.to_string(),
+                }
+            })?;
+        Self::on(GpuContext::from_device(device, queue)?)
+    }
+
+    /// A tracer on `ctx`'s device (e.g. [`GpuContext::shared`] in tests); timestamps when the
+    /// device was created with `TIMESTAMP_QUERY`.
+    ///
+    /// # Errors
+    /// When the shader does not compile.
+    pub fn on(ctx: GpuContext) -> Result<Self> {
+        let source = composed_shader()?;
+        let render = ctx.compute_kernel(&source, "render")?;
+        let rays = ctx.compute_kernel(&source, "trace_rays")?;
+        let params = ctx.uniform_buffer("mcg-demo params", &GpuParams::default());
+        let timer = ctx
+            .device()
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
+            .then(|| Timer::new(&ctx));
+        Ok(Self {
+            ctx,
+            render,
+            rays,
+            params,
+            scene: None,
+            image: None,
+            timer,
+        })
+    }
+
+    /// A tracer on the device of `ctx`, sharing it (wgpu handles are reference-counted).
+    ///
+    /// # Errors
+    /// As [`GpuTracer::on`].
+    pub fn on_shared(ctx: &GpuContext) -> Result<Self> {
+        Self::on(GpuContext::from_device(
+            ctx.device().clone(),
+            ctx.queue().clone(),
+        )?)
+    }
+
+    /// Name and backend of the adapter, e.g. `"llvmpipe (LLVM 15.0.7, 256 bits) (Vulkan)"`.
+    #[must_use]
+    pub fn adapter_name(&self) -> String {
+        let info = self.ctx.adapter_info();
+        format!("{} ({:?})", info.name, info.backend)
+    }
+
+    /// How frame times are measured on this device.
+    #[must_use]
+    pub fn timing(&self) -> GpuTiming {
+        if self.timer.is_some() {
+            GpuTiming::Timestamps
+        } else {
+            GpuTiming::Wall
+        }
+    }
+
+    /// Uploads `scene` (replacing the previous one): its BVH nodes, triangles and materials
+    /// as they are, the emitter table, texture coordinates and texels.
+    ///
+    /// # Errors
+    /// When a buffer exceeds the device's largest storage binding.
+    pub fn upload(&mut self, scene: &Scene) -> Result<()> {
+        let emitters: Vec<GpuEmitter> = scene
+            .emitters
+            .iter()
+            .zip(&scene.emitter_cdf)
+            .map(|(&triangle, &cdf)| GpuEmitter { triangle, cdf })
+            .collect();
+        let max = self.ctx.device().limits().max_storage_buffer_binding_size;
+        let largest = [
+            size_of_val(scene.bvh.nodes.as_slice()),
+            size_of_val(scene.bvh.triangles.as_slice()),
+            size_of_val(scene.texels.as_slice()),
+        ]
+        .into_iter()
+        .max()
+        .unwrap_or(0) as u64;
+        if largest > max {
+            return Err(format!(
+                "the scene needs a {largest}-byte storage buffer; this GPU binds at most {max}"
+            )
+            .into());
+        }
+        let ctx = &self.ctx;
+        self.scene = Some(SceneBuffers {
+            camera: scene.camera,
+            nodes: ctx.storage_buffer("mcg-demo nodes", &scene.bvh.nodes),
+            triangles: ctx.storage_buffer("mcg-demo triangles", &scene.bvh.triangles),
+            materials: ctx.storage_buffer("mcg-demo materials", &scene.materials),
+            emitters: ctx.storage_buffer("mcg-demo emitters", &emitters),
+            uvs: ctx.storage_buffer("mcg-demo uvs", &scene.uvs),
+            textures: ctx.storage_buffer("mcg-demo textures", &scene.textures),
+            texels: ctx.storage_buffer("mcg-demo texels", &scene.texels),
+        });
+        Ok(())
+    }
+
+    fn scene(&self) -> Result<&SceneBuffers> {
+        self.scene
+            .as_ref()
+            .ok_or_else(|| "GpuTracer: no scene uploaded".into())
+    }
+
+    /// Renders one frame of the uploaded scene: `spp` paths per pixel; returns the per-pixel
+    /// mean radiance (row-major from the top-left, as [`super::cpu::render_frame`]) and the
+    /// frame's time in seconds (see [`GpuTracer::timing`]).
+    ///
+    /// # Errors
+    /// No scene uploaded, a method without WGSL twin, an image larger than the device's
+    /// largest storage binding, or a device error.
+    pub fn render_frame(
+        &mut self,
+        settings: &RenderSettings,
+        frame: u32,
+    ) -> Result<(Vec<Vec3>, f64)> {
+        let method = method_code(settings.method).ok_or_else(|| {
+            format!(
+                "the GPU tracer has no method {} yet (use --device cpu)",
+                settings.method.name()
+            )
+        })?;
+        let (width, height) = (settings.width, settings.height);
+        let pixels = width as usize * height as usize;
+        let bytes = (pixels * size_of::<[f32; 4]>()) as u64;
+        let max = self.ctx.device().limits().max_storage_buffer_binding_size;
+        if bytes > max {
+            return Err(format!(
+                "a {width}×{height} image needs {bytes} bytes; this GPU binds at most {max}"
+            )
+            .into());
+        }
+        if self.image.as_ref().is_none_or(|b| b.len() != pixels) {
+            self.image = Some(self.ctx.zeroed_buffer("mcg-demo image", pixels));
+        }
+        let scene = self.scene()?;
+        let image = self.image.as_ref().expect("allocated above");
+        let camera = scene.camera;
+        let tan_y = (0.5 * camera.yfov).tan();
+        let base = GpuParams {
+            camera_position: camera.position.to_array(),
+            tan_x: tan_y * width as f32 / height as f32,
+            camera_right: camera.right.to_array(),
+            tan_y,
+            camera_up: camera.up.to_array(),
+            width,
+            camera_forward: camera.forward.to_array(),
+            height,
+            spp: settings.spp,
+            bounces: settings.bounces,
+            seed: settings.seed,
+            frame,
+            method,
+            emitter_count: scene.emitters.len() as u32,
+            uv_count: scene.uvs.len() as u32,
+            texture_count: scene.textures.len() as u32,
+            ..GpuParams::default()
+        };
+        let bind_group = self.bind_group(
+            &self.render,
+            &[
+                self.params.raw(),
+                scene.nodes.raw(),
+                scene.triangles.raw(),
+                scene.materials.raw(),
+                scene.emitters.raw(),
+                scene.uvs.raw(),
+                scene.textures.raw(),
+                scene.texels.raw(),
+                image.raw(),
+            ],
+        );
+        let tiles: Vec<(u32, u32)> = (0..height.div_ceil(TILE))
+            .flat_map(|ty| (0..width.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
+            .collect();
+        let max_groups = self
+            .ctx
+            .device()
+            .limits()
+            .max_compute_workgroups_per_dimension;
+        let groups = TILE.div_ceil(GROUP);
+        if groups > max_groups {
+            return Err(format!(
+                "{groups} workgroups per dimension exceed this GPU's {max_groups}"
+            )
+            .into());
+        }
+        let scope = self
+            .ctx
+            .device()
+            .push_error_scope(wgpu::ErrorFilter::Validation);
+        let started = Instant::now();
+        let mut timed_tiles = 0u32;
+        for (i, &(x, y)) in tiles.iter().enumerate() {
+            let params = GpuParams {
+                tile_x: x,
+                tile_y: y,
+                tile_width: TILE.min(width - x),
+                tile_height: TILE.min(height - y),
+                ..base
+            };
+            // Ordered before the next submission (queue writes land before later submits).
+            self.ctx.write(&self.params, &[params])?;
+            let mut encoder = self
+                .ctx
+                .device()
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+            let timestamp_writes = self.timer.as_ref().and_then(|t| {
+                let slot = i as u32;
+                (slot < t.pairs).then(|| wgpu::ComputePassTimestampWrites {
+                    query_set: &t.queries,
+                    beginning_of_pass_write_index: Some(2 * slot),
+                    end_of_pass_write_index: Some(2 * slot + 1),
+                })
+            });
+            timed_tiles += u32::from(timestamp_writes.is_some());
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("mcg-demo render"),
+                    timestamp_writes,
+                });
+                pass.set_pipeline(self.render.pipeline());
+                pass.set_bind_group(0, &bind_group, &[]);
+                pass.dispatch_workgroups(
+                    params.tile_width.div_ceil(GROUP),
+                    params.tile_height.div_ceil(GROUP),
+                    1,
+                );
+            }
+            self.ctx.queue().submit([encoder.finish()]);
+        }
+        self.wait()?;
+        let wall = started.elapsed().as_secs_f64();
+        if let Some(error) = pollster::block_on(scope.pop()) {
+            return Err(format!("the GPU tracer failed: {error}").into());
+        }
+        let seconds = match &self.timer {
+            Some(timer) if timed_tiles == tiles.len() as u32 => {
+                timer.read(&self.ctx, timed_tiles)?
+            }
+            _ => wall,
+        };
+        let texels = self.ctx.read_back(image)?;
+        Ok((
+            texels.iter().map(|t| Vec3::new(t[0], t[1], t[2])).collect(),
+            seconds,
+        ))
+    }
+
+    /// Walks the uploaded scene's BVH for each ray on the GPU (the WGSL `bvh_walk` that the
+    /// tracer uses), for comparing with [`super::bvh::Bvh::intersect`] and
+    /// [`super::bvh::Bvh::occluded`].
+    ///
+    /// # Errors
+    /// No scene uploaded, more rays than one dispatch row holds, or a device error.
+    pub fn trace_rays(&self, rays: &[GpuRay]) -> Result<Vec<GpuHit>> {
+        let scene = self.scene()?;
+        let groups = (rays.len() as u32).div_ceil(RAY_GROUP).max(1);
+        let max_groups = self
+            .ctx
+            .device()
+            .limits()
+            .max_compute_workgroups_per_dimension;
+        if groups > max_groups {
+            return Err(format!("{} rays exceed one dispatch row", rays.len()).into());
+        }
+        let queries = self.ctx.storage_buffer("mcg-demo rays", rays);
+        let hits: GpuBuffer<GpuHit> = self.ctx.zeroed_buffer("mcg-demo hits", rays.len());
+        let bind_group = self.bind_group(
+            &self.rays,
+            &[
+                scene.nodes.raw(),
+                scene.triangles.raw(),
+                queries.raw(),
+                hits.raw(),
+            ],
+        );
+        let mut encoder = self
+            .ctx
+            .device()
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
+            pass.set_pipeline(self.rays.pipeline());
+            pass.set_bind_group(0, &bind_group, &[]);
+            pass.dispatch_workgroups(groups, 1, 1);
+        }
+        self.ctx.queue().submit([encoder.finish()]);
+        self.wait()?;
+        Ok(self.ctx.read_back(&hits)?)
+    }
+
+    /// A bind group of `kernel`'s group 0 from the WGSL bindings its entry point uses, in
+    /// binding order: `render` uses 0–8, `trace_rays` 1, 2, 9 and 10.
+    fn bind_group(&self, kernel: &ComputeKernel, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+        let bindings: &[u32] = if kernel.entry_point() == "render" {
+            &[0, 1, 2, 3, 4, 5, 6, 7, 8]
+        } else {
+            &[1, 2, 9, 10]
+        };
+        let entries: Vec<wgpu::BindGroupEntry<'_>> = bindings
+            .iter()
+            .zip(buffers)
+            .map(|(&binding, b)| wgpu::BindGroupEntry {
+                binding,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        self.ctx
+            .device()
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(kernel.entry_point()),
+                layout: kernel.bind_group_layout(),
+                entries: &entries,
+            })
+    }
+
+    fn wait(&self) -> Result<()> {
+        self.ctx
+            .device()
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| format!("GPU wait failed: {e}"))?;
+        Ok(())
+    }
+}
+
+impl Timer {
+    /// Query pairs per frame: one per tile, enough for a 16384 × 16384 image in tiles of
+    /// [`TILE`] (wgpu allows 4096 queries per set).
+    const PAIRS: u32 = 1024;
+
+    fn new(ctx: &GpuContext) -> Self {
+        let device = ctx.device();
+        let bytes = u64::from(2 * Self::PAIRS) * u64::from(wgpu::QUERY_SIZE);
+        Self {
+            queries: device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("mcg-demo timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2 * Self::PAIRS,
+            }),
+            resolve: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("mcg-demo timestamps resolve"),
+                size: bytes,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+            staging: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("mcg-demo timestamps read-back"),
+                size: bytes,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            period_ns: f64::from(ctx.queue().get_timestamp_period()),
+            pairs: Self::PAIRS,
+        }
+    }
+
+    /// The summed GPU time of the first `pairs` query pairs, in seconds.
+    fn read(&self, ctx: &GpuContext, pairs: u32) -> Result<f64> {
+        let bytes = u64::from(2 * pairs) * u64::from(wgpu::QUERY_SIZE);
+        let mut encoder = ctx
+            .device()
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        encoder.resolve_query_set(&self.queries, 0..2 * pairs, &self.resolve, 0);
+        encoder.copy_buffer_to_buffer(&self.resolve, 0, &self.staging, 0, bytes);
+        ctx.queue().submit([encoder.finish()]);
+        let slice = self.staging.slice(..bytes);
+        let (sender, receiver) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = sender.send(r);
+        });
+        ctx.device()
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| format!("GPU wait failed: {e}"))?;
+        receiver.recv()??;
+        let ticks: Vec<u64> = {
+            let view = slice.get_mapped_range()?;
+            bytemuck::pod_collect_to_vec(&view[..])
+        };
+        self.staging.unmap();
+        let total: u64 = ticks
+            .chunks_exact(2)
+            .map(|p| p[1].saturating_sub(p[0]))
+            .sum();
+        Ok(total as f64 * self.period_ns * 1e-9)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The composed tracer parses and validates with naga under WebGPU's capabilities alone
+    /// (no adapter needed, so CI without a GPU still checks the shader), both entry points
+    /// exist, and the `render` kernel binds at most the 8 storage buffers WebGPU guarantees.
+    #[test]
+    fn shader_validates_without_an_adapter() {
+        let source = composed_shader().unwrap();
+        let module = naga::front::wgsl::parse_str(&source)
+            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
+        naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::empty(),
+        )
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
+        let names: Vec<&str> = module
+            .entry_points
+            .iter()
+            .map(|e| e.name.as_str())
+            .collect();
+        assert_eq!(names, ["render", "trace_rays"]);
+        let storage = module
+            .global_variables
+            .iter()
+            .filter(|(_, g)| matches!(g.space, naga::AddressSpace::Storage { .. }))
+            .filter(|(_, g)| g.binding.as_ref().is_some_and(|b| b.binding <= 8))
+            .count();
+        assert_eq!(storage, 8, "render binds 1–8 as storage");
+        assert_eq!(size_of::<GpuParams>(), 112);
+    }
+}

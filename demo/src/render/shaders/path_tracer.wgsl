@@ -1,0 +1,538 @@
+// The WGSL path tracer of `mcg-demo render --device gpu`: a line-by-line twin of the CPU tracer
+// (`demo/src/render/{cpu,bvh,material}.rs`) over the same flat buffers — BVH nodes (32 bytes),
+// triangles in leaf order (48 bytes), materials (48 bytes) — uploaded as the CPU holds them.
+//
+// Conventions (as on the CPU): `bounces` counts scattering events; no Russian roulette; a box
+// pixel filter; no environment light; emission from front faces only; both faces scatter. The
+// random stream of a path is seeded by `path_seed` and drawn in the same order as on the CPU,
+// so both devices trace the same paths up to floating-point rounding.
+//
+// Methods: 0 = `bsdf` (BSDF sampling, lights found by chance), 1 = `nee` (BSDF sampling plus one
+// light sample per scattering event, power-heuristic MIS, Veach and Guibas 1995, eq. 9, β = 2).
+// A path guide (MCPG's begin / sample / pdf / finish) replaces `vertex_sample` and `vertex_pdf`
+// below; nothing else in the loop changes.
+
+#import mcg::constants::{MCG_F32_MAX, MCG_FRAC_1_PI, MCG_PI}
+#import mcg::sampling::{
+    mcg_cosine_hemisphere_pdf, mcg_cosine_hemisphere_sample, mcg_frame_to_world, mcg_pcg_hash,
+    mcg_rng_uniform
+}
+
+// `bvh::BvhNode`: inner node (count 0) with children index, index + 1; or a leaf over
+// triangles[index .. index + count].
+struct BvhNode {
+    lo: vec3<f32>,
+    index: u32,
+    hi: vec3<f32>,
+    count: u32,
+}
+
+// `bvh::Triangle`: v0, the edges v1 − v0 and v2 − v0, material and light-sampling probability.
+struct Triangle {
+    v0: vec3<f32>,
+    material: u32,
+    e1: vec3<f32>,
+    emitter_pmf: f32,
+    e2: vec3<f32>,
+    pad: u32,
+}
+
+// `material::Material`.
+struct Material {
+    base_color: vec3<f32>,
+    metallic: f32,
+    emission: vec3<f32>,
+    roughness: f32,
+    base_color_texture: u32,
+    pad_a: u32,
+    pad_b: u32,
+    pad_c: u32,
+}
+
+// One entry of the emitter table: the triangle and the inclusive cumulative probability
+// (`Scene::emitters`, `Scene::emitter_cdf`).
+struct Emitter {
+    triangle: u32,
+    cdf: f32,
+}
+
+// `scene::TriangleUv`.
+struct TriangleUv {
+    uv_a: vec2<f32>,
+    uv_b: vec2<f32>,
+    uv_c: vec2<f32>,
+    pad: vec2<f32>,
+}
+
+// `scene::TextureInfo`.
+struct TextureInfo {
+    offset: u32,
+    width: u32,
+    height: u32,
+    pad: u32,
+}
+
+// `gpu::GpuParams`: the camera, the settings of the frame, and the tile of this dispatch.
+struct Params {
+    camera_position: vec3<f32>,
+    tan_x: f32,
+    camera_right: vec3<f32>,
+    tan_y: f32,
+    camera_up: vec3<f32>,
+    width: u32,
+    camera_forward: vec3<f32>,
+    height: u32,
+    spp: u32,
+    bounces: u32,
+    seed: u32,
+    frame: u32,
+    method: u32,
+    emitter_count: u32,
+    tile_x: u32,
+    tile_y: u32,
+    tile_width: u32,
+    tile_height: u32,
+    uv_count: u32,
+    texture_count: u32,
+}
+
+// `gpu::GpuRay`: a query of the `trace_rays` kernel (closest hit, or any hit when `any_hit`).
+struct Ray {
+    origin: vec3<f32>,
+    t_max: f32,
+    direction: vec3<f32>,
+    any_hit: u32,
+}
+
+// `gpu::GpuHit`: the answer to a `Ray`; `triangle` is 0xffffffff for a miss.
+struct RayHit {
+    t: f32,
+    triangle: u32,
+    b1: f32,
+    b2: f32,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
+@group(0) @binding(2) var<storage, read> triangles: array<Triangle>;
+@group(0) @binding(3) var<storage, read> materials: array<Material>;
+@group(0) @binding(4) var<storage, read> emitters: array<Emitter>;
+@group(0) @binding(5) var<storage, read> uvs: array<TriangleUv>;
+@group(0) @binding(6) var<storage, read> textures: array<TextureInfo>;
+@group(0) @binding(7) var<storage, read> texels: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read_write> image: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read> rays: array<Ray>;
+@group(0) @binding(10) var<storage, read_write> ray_hits: array<RayHit>;
+
+const METHOD_NEE: u32 = 1u;
+// `bvh::STACK_SIZE`.
+const STACK_SIZE: u32 = 64u;
+const NO_HIT: u32 = 0xffffffffu;
+// `material::NO_TEXTURE`.
+const NO_TEXTURE: u32 = 0xffffffffu;
+// `material::MIN_ALPHA`.
+const MIN_ALPHA: f32 = 1e-3;
+// `cpu::RAY_OFFSET`.
+const RAY_OFFSET: f32 = 1e-4;
+// +∞ of the CPU (no infinity literal in WGSL): the distance of a miss.
+const FAR: f32 = MCG_F32_MAX;
+
+// ---------------------------------------------------------------------------------------------
+// BVH traversal (`bvh::Bvh::walk`)
+
+// `Triangle::intersect`: Möller and Trumbore 1997; (t, b1, b2) in .xyz, .w = 1 on a hit.
+fn triangle_intersect(tri: Triangle, origin: vec3<f32>, direction: vec3<f32>, t_min: f32,
+                      t_max: f32) -> vec4<f32> {
+    let p = cross(direction, tri.e2);
+    let det = dot(tri.e1, p);
+    if abs(det) < 1e-12 {
+        return vec4<f32>(0.0);
+    }
+    let inv = 1.0 / det;
+    let s = origin - tri.v0;
+    let b1 = dot(s, p) * inv;
+    if !(b1 >= 0.0 && b1 <= 1.0) {
+        return vec4<f32>(0.0);
+    }
+    let q = cross(s, tri.e1);
+    let b2 = dot(direction, q) * inv;
+    if b2 < 0.0 || b1 + b2 > 1.0 {
+        return vec4<f32>(0.0);
+    }
+    let t = dot(tri.e2, q) * inv;
+    if t > t_min && t < t_max {
+        return vec4<f32>(t, b1, b2, 1.0);
+    }
+    return vec4<f32>(0.0);
+}
+
+// `box_entry`: the slab test's entry distance, FAR on a miss.
+fn box_entry(node: BvhNode, origin: vec3<f32>, inv: vec3<f32>, t_min: f32, t_max: f32) -> f32 {
+    let t0 = (node.lo - origin) * inv;
+    let t1 = (node.hi - origin) * inv;
+    let near = min(t0, t1);
+    let far = max(t0, t1);
+    let enter = max(max(max(near.x, near.y), near.z), t_min);
+    let exit = min(min(min(far.x, far.y), far.z), t_max);
+    return select(FAR, enter, enter <= exit);
+}
+
+// The closest hit within (t_min, t_max) or, with `any_hit`, the first one found (shadow rays).
+// `triangle` is NO_HIT on a miss.
+fn bvh_walk(origin: vec3<f32>, direction: vec3<f32>, t_min: f32, t_max: f32,
+            any_hit: bool) -> RayHit {
+    var best = RayHit(t_max, NO_HIT, 0.0, 0.0);
+    // 1/d with zero components replaced by a tiny signed value: the CPU's ±∞ times a zero
+    // slab distance is NaN, which GPUs compare inconsistently.
+    let tiny = vec3<f32>(1e-30);
+    let safe = select(direction, select(tiny, -tiny, direction < vec3<f32>(0.0)),
+                      abs(direction) < tiny);
+    let inv = 1.0 / safe;
+    var stack: array<u32, STACK_SIZE>;
+    stack[0] = 0u;
+    var top = 1u;
+    while top > 0u {
+        top -= 1u;
+        let node = nodes[stack[top]];
+        if node.count > 0u {
+            for (var i = node.index; i < node.index + node.count; i++) {
+                let h = triangle_intersect(triangles[i], origin, direction, t_min, best.t);
+                if h.w > 0.0 {
+                    best = RayHit(h.x, i, h.y, h.z);
+                    if any_hit {
+                        return best;
+                    }
+                }
+            }
+            continue;
+        }
+        let a = node.index;
+        let ta = box_entry(nodes[a], origin, inv, t_min, best.t);
+        let tb = box_entry(nodes[a + 1u], origin, inv, t_min, best.t);
+        // The farther child goes first, so the nearer one is popped next.
+        let a_first = ta <= tb;
+        let near = select(a + 1u, a, a_first);
+        let far = select(a, a + 1u, a_first);
+        let t_near = min(ta, tb);
+        let t_far = max(ta, tb);
+        if t_far < FAR && top < STACK_SIZE {
+            stack[top] = far;
+            top += 1u;
+        }
+        if t_near < FAR && top < STACK_SIZE {
+            stack[top] = near;
+            top += 1u;
+        }
+    }
+    return best;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Materials (`material::Material`): Lambert + GGX conductor blended by `metallic`.
+
+// A sampled direction, its density and `f·cos/pdf`; `valid` is false when the sample ends the
+// path (`None` on the CPU).
+struct BsdfSample {
+    direction: vec3<f32>,
+    pdf: f32,
+    weight: vec3<f32>,
+    valid: bool,
+}
+
+fn material_alpha(m: Material) -> f32 {
+    return max(m.roughness * m.roughness, MIN_ALPHA);
+}
+
+// GGX D (Walter et al. 2007, eq. 33).
+fn ggx_d(cos_h: f32, a2: f32) -> f32 {
+    if cos_h <= 0.0 {
+        return 0.0;
+    }
+    let k = cos_h * cos_h * (a2 - 1.0) + 1.0;
+    return a2 / (MCG_PI * k * k);
+}
+
+// Smith G₁ for GGX (Walter et al. 2007, eq. 34).
+fn smith_g1(c: f32, a2: f32) -> f32 {
+    return 2.0 * c / (c + sqrt(a2 + (1.0 - a2) * c * c));
+}
+
+// Schlick 1994, eq. 24.
+fn schlick(f0: vec3<f32>, c: f32) -> vec3<f32> {
+    let k = pow(1.0 - clamp(c, 0.0, 1.0), 5.0);
+    return f0 + (vec3<f32>(1.0) - f0) * k;
+}
+
+// `Material::eval`: f(ωo, ωi)·(n·ωi).
+fn material_eval(m: Material, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    let cos_i = dot(n, wi);
+    let cos_o = dot(n, wo);
+    if cos_i <= 0.0 || cos_o <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    var f = (1.0 - m.metallic) * m.base_color * MCG_FRAC_1_PI;
+    if m.metallic > 0.0 {
+        let h = normalize(wo + wi);
+        let alpha = material_alpha(m);
+        let a2 = alpha * alpha;
+        let d = ggx_d(dot(n, h), a2);
+        let g = smith_g1(cos_o, a2) * smith_g1(cos_i, a2);
+        let fresnel = schlick(m.base_color, dot(wo, h));
+        f += m.metallic * fresnel * (d * g / (4.0 * cos_o * cos_i));
+    }
+    return f * cos_i;
+}
+
+// `Material::pdf`: m·p_GGX + (1 − m)·cos θ/π (Walter et al. 2007, eq. 14 and 38).
+fn material_pdf(m: Material, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    if dot(n, wi) <= 0.0 || dot(n, wo) <= 0.0 {
+        return 0.0;
+    }
+    var pdf = (1.0 - m.metallic) * mcg_cosine_hemisphere_pdf(n, wi);
+    if m.metallic > 0.0 {
+        let h = normalize(wo + wi);
+        let alpha = material_alpha(m);
+        let a2 = alpha * alpha;
+        pdf += m.metallic * ggx_d(dot(n, h), a2) * dot(n, h) / (4.0 * abs(dot(wo, h)));
+    }
+    return pdf;
+}
+
+// `Material::sample`: u.x picks the lobe, u.yz sample it (Walter et al. 2007, eq. 35–36).
+fn material_sample(m: Material, n: vec3<f32>, wo: vec3<f32>, u: vec3<f32>) -> BsdfSample {
+    var wi: vec3<f32>;
+    if u.x < m.metallic {
+        let alpha = material_alpha(m);
+        let a2 = alpha * alpha;
+        let cos2 = (1.0 - u.y) / (1.0 + u.y * (a2 - 1.0));
+        let cos_h = sqrt(max(cos2, 0.0));
+        let sin_h = sqrt(max(1.0 - cos2, 0.0));
+        let phi = 2.0 * MCG_PI * u.z;
+        let h = mcg_frame_to_world(n, vec3<f32>(sin_h * cos(phi), sin_h * sin(phi), cos_h));
+        wi = 2.0 * dot(wo, h) * h - wo;
+    } else {
+        wi = mcg_cosine_hemisphere_sample(n, clamp(u.yz, vec2<f32>(0.0), vec2<f32>(1.0))).direction;
+    }
+    let pdf = material_pdf(m, n, wo, wi);
+    if !(pdf > 0.0) {
+        return BsdfSample(wi, 0.0, vec3<f32>(0.0), false);
+    }
+    return BsdfSample(wi, pdf, material_eval(m, n, wo, wi) / pdf, true);
+}
+
+// `Scene::material_at`: the triangle's material with its base-colour texture (nearest texel,
+// REPEAT wrapping) multiplied in.
+fn material_at(hit: RayHit) -> Material {
+    var m = materials[triangles[hit.triangle].material];
+    if m.base_color_texture == NO_TEXTURE || hit.triangle >= params.uv_count
+        || m.base_color_texture >= params.texture_count {
+        return m;
+    }
+    let uv = uvs[hit.triangle];
+    let tex = textures[m.base_color_texture];
+    let b0 = 1.0 - hit.b1 - hit.b2;
+    let c = b0 * uv.uv_a + hit.b1 * uv.uv_b + hit.b2 * uv.uv_c;
+    let x = u32((c.x - floor(c.x)) * f32(tex.width));
+    let y = u32((c.y - floor(c.y)) * f32(tex.height));
+    let texel = texels[tex.offset + min(y, tex.height - 1u) * tex.width + min(x, tex.width - 1u)];
+    m.base_color *= texel.rgb;
+    return m;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The vertex sampler: the guide's seam (`cpu::VertexSampler`).
+
+// A scattering vertex as the sampler sees it (`cpu::Vertex`).
+struct Vertex {
+    position: vec3<f32>,
+    // Unit geometric normal, turned towards `wo`.
+    normal: vec3<f32>,
+    wo: vec3<f32>,
+    material: Material,
+    depth: u32,
+}
+
+// The next direction at `v` from three uniforms: BSDF sampling for `bsdf` and `nee`. A guided
+// method (issue 17's `mcg::mcpg` begin / sample) branches here on `params.method`.
+fn vertex_sample(v: Vertex, u: vec3<f32>) -> BsdfSample {
+    return material_sample(v.material, v.normal, v.wo, u);
+}
+
+// The density with which `vertex_sample` picks `wi` at `v` (the MIS weights need it).
+fn vertex_pdf(v: Vertex, wi: vec3<f32>) -> f32 {
+    return material_pdf(v.material, v.normal, v.wo, wi);
+}
+
+// A learning guide also needs `finish`: what arrived along each sampled direction once the path
+// is complete. The CPU (`cpu::trace_path`) keeps, per vertex, the path radiance before its
+// sample, the throughput after it and the share of the next hit's emission that the MIS weight
+// left out, and reports incident = (radiance_end − before + discarded) / throughput; a guided
+// method keeps the same record in `trace_path` below (after `vertex_sample`, and at each
+// emitter hit) and hands it to the guide's finish after the loop. `bsdf` and `nee` learn
+// nothing, so they keep no record.
+
+// ---------------------------------------------------------------------------------------------
+// The integrator (`cpu::trace_path`)
+
+// `cpu::path_seed`.
+fn path_seed(seed: u32, frame: u32, pixel: u32, sample: u32) -> u32 {
+    return mcg_pcg_hash(seed ^ mcg_pcg_hash(pixel ^ mcg_pcg_hash((frame * 0x9e3779b9u)
+        ^ mcg_pcg_hash(sample))));
+}
+
+// Power heuristic a²/(a² + b²) (Veach and Guibas 1995, eq. 9, β = 2).
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    let a2 = a * a;
+    let b2 = b * b;
+    return select(0.0, a2 / (a2 + b2), a2 + b2 > 0.0);
+}
+
+// `cpu::offset`: p moved off its surface along n.
+fn offset_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let a = abs(p);
+    return p + n * (RAY_OFFSET * max(max(max(a.x, a.y), a.z), 1.0));
+}
+
+// `Scene::pick_emitter`: the first entry whose cumulative probability exceeds u.
+fn pick_emitter(u: f32) -> u32 {
+    var lo = 0u;
+    var hi = params.emitter_count;
+    while lo < hi {
+        let mid = (lo + hi) / 2u;
+        if emitters[mid].cdf <= u {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
+    }
+    return emitters[min(lo, params.emitter_count - 1u)].triangle;
+}
+
+// `cpu::light_sample`: one light sample at `v` with its MIS weight, f·cos·L_e·w / p_light.
+fn light_sample(v: Vertex, origin: vec3<f32>, u: vec3<f32>) -> vec3<f32> {
+    let t = pick_emitter(u.x);
+    let tri = triangles[t];
+    let su = sqrt(u.y);
+    let y = tri.v0 + (su * (1.0 - u.z)) * tri.e1 + (su * u.z) * tri.e2;
+    let to_light = y - origin;
+    let dist2 = dot(to_light, to_light);
+    let dist = sqrt(dist2);
+    let wi = to_light / dist;
+    let c = cross(tri.e1, tri.e2);
+    let area = 0.5 * length(c);
+    let cos_light = -dot(c / (2.0 * area), wi);
+    if !(cos_light > 0.0) || dot(v.normal, wi) <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let f_cos = material_eval(v.material, v.normal, v.wo, wi);
+    if all(f_cos == vec3<f32>(0.0)) {
+        return vec3<f32>(0.0);
+    }
+    if bvh_walk(origin, wi, 0.0, dist * (1.0 - 1e-4), true).triangle != NO_HIT {
+        return vec3<f32>(0.0);
+    }
+    let light_pdf = tri.emitter_pmf / area * dist2 / cos_light;
+    let w = power_heuristic(light_pdf, vertex_pdf(v, wi));
+    return f_cos * materials[tri.material].emission * (w / light_pdf);
+}
+
+// One path from the camera ray (origin, direction); its radiance.
+fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
+    var radiance = vec3<f32>(0.0);
+    var throughput = vec3<f32>(1.0);
+    var o = origin;
+    var d = direction;
+    // Density of the direction that produced the ray (0 for the camera ray: no MIS weight).
+    var last_pdf = 0.0;
+    var depth = 0u;
+    loop {
+        let hit = bvh_walk(o, d, 0.0, FAR, false);
+        if hit.triangle == NO_HIT {
+            break;
+        }
+        let tri = triangles[hit.triangle];
+        let material = material_at(hit);
+        let c = cross(tri.e1, tri.e2);
+        let area = 0.5 * length(c);
+        let n_front = c / (2.0 * area);
+        let cos_front = -dot(n_front, d);
+        let position = o + hit.t * d;
+        if cos_front > 0.0 && any(material.emission > vec3<f32>(0.0)) {
+            var weight = 1.0;
+            if params.method == METHOD_NEE && last_pdf > 0.0 {
+                let light_pdf = tri.emitter_pmf / area * hit.t * hit.t / cos_front;
+                weight = power_heuristic(last_pdf, light_pdf);
+            }
+            radiance += throughput * material.emission * weight;
+        }
+        if depth == params.bounces {
+            break;
+        }
+        let normal = select(-n_front, n_front, cos_front > 0.0);
+        let vertex = Vertex(position, normal, -d, material, depth);
+        let origin_next = offset_origin(position, normal);
+        // Three light-sampling uniforms for every method, as on the CPU.
+        let ul = mcg_rng_uniform(rng);
+        let u1 = mcg_rng_uniform(rng);
+        let u2 = mcg_rng_uniform(rng);
+        if params.method == METHOD_NEE {
+            radiance += throughput * light_sample(vertex, origin_next, vec3<f32>(ul, u1, u2));
+        }
+        let ux = mcg_rng_uniform(rng);
+        let uy = mcg_rng_uniform(rng);
+        let uz = mcg_rng_uniform(rng);
+        let s = vertex_sample(vertex, vec3<f32>(ux, uy, uz));
+        if !s.valid {
+            break;
+        }
+        throughput *= s.weight;
+        last_pdf = s.pdf;
+        o = origin_next;
+        d = s.direction;
+        depth += 1u;
+        if all(throughput == vec3<f32>(0.0)) {
+            break;
+        }
+    }
+    return radiance;
+}
+
+// `Camera::direction` through the image point (x, y) in pixels.
+fn camera_direction(x: f32, y: f32) -> vec3<f32> {
+    let sx = (2.0 * x / f32(params.width) - 1.0) * params.tan_x;
+    let sy = (1.0 - 2.0 * y / f32(params.height)) * params.tan_y;
+    return normalize(params.camera_forward + sx * params.camera_right + sy * params.camera_up);
+}
+
+// One invocation per pixel of the tile: `spp` paths, the mean into `image` (row-major).
+@compute @workgroup_size(8, 8)
+fn render(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= params.tile_width || id.y >= params.tile_height {
+        return;
+    }
+    let x = params.tile_x + id.x;
+    let y = params.tile_y + id.y;
+    if x >= params.width || y >= params.height {
+        return;
+    }
+    let index = y * params.width + x;
+    var sum = vec3<f32>(0.0);
+    for (var s = 0u; s < params.spp; s++) {
+        var rng = path_seed(params.seed, params.frame, index, s);
+        let jx = mcg_rng_uniform(&rng);
+        let jy = mcg_rng_uniform(&rng);
+        let d = camera_direction(f32(x) + jx, f32(y) + jy);
+        sum += trace_path(params.camera_position, d, &rng);
+    }
+    image[index] = vec4<f32>(sum / f32(params.spp), 1.0);
+}
+
+// One invocation per ray of `rays`: the BVH query of `bvh_walk`, for the CPU/GPU agreement test.
+@compute @workgroup_size(64)
+fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= arrayLength(&rays) {
+        return;
+    }
+    let r = rays[id.x];
+    ray_hits[id.x] = bvh_walk(r.origin, r.direction, 0.0, r.t_max, r.any_hit != 0u);
+}

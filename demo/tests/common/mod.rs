@@ -1,0 +1,101 @@
+//! Shared by the renderer's test files: the built-in scenes' folder, the furnace scene and the
+//! per-tile statistics of the expectation tests.
+#![allow(dead_code)] // each test file uses a part
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use mcg_demo::render::bvh::Triangle;
+use mcg_demo::render::material::Material;
+use mcg_demo::render::scene::{Camera, Scene};
+use mcg_tests::RunningStats;
+
+/// `demo/scenes/`.
+pub fn scenes_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
+}
+
+/// A closed cube of side 2 m around the camera; every face Lambertian of albedo `rho` and
+/// emitting `le` from its inner (front) face.
+pub fn furnace(rho: Vec3, le: Vec3) -> Scene {
+    let mut tris = Vec::new();
+    let c = [
+        Vec3::new(-1.0, -1.0, -1.0),
+        Vec3::new(1.0, -1.0, -1.0),
+        Vec3::new(1.0, 1.0, -1.0),
+        Vec3::new(-1.0, 1.0, -1.0),
+        Vec3::new(-1.0, -1.0, 1.0),
+        Vec3::new(1.0, -1.0, 1.0),
+        Vec3::new(1.0, 1.0, 1.0),
+        Vec3::new(-1.0, 1.0, 1.0),
+    ];
+    // Faces listed counter-clockwise as seen from inside the cube.
+    for [a, b, cc, d] in [
+        [0, 1, 2, 3],
+        [4, 7, 6, 5],
+        [0, 4, 5, 1],
+        [3, 2, 6, 7],
+        [0, 3, 7, 4],
+        [1, 5, 6, 2],
+    ] {
+        tris.push(Triangle::new(c[a], c[b], c[cc], 0));
+        tris.push(Triangle::new(c[a], c[cc], c[d], 0));
+    }
+    for t in &tris {
+        assert!(
+            t.cross().dot(-Vec3::from(t.v0)) > 0.0,
+            "front faces point inwards"
+        );
+    }
+    let camera = Camera {
+        position: Vec3::new(0.1, -0.2, 0.3),
+        right: Vec3::X,
+        up: Vec3::Y,
+        forward: Vec3::NEG_Z,
+        yfov: 1.2,
+    };
+    Scene::new(
+        camera,
+        &tris,
+        vec![Material::lambertian(rho, le)],
+        Vec::new(),
+    )
+    .unwrap()
+}
+
+/// Per `tile × tile` tile (row-major) and channel of a `w × h` image: the mean over the tile's
+/// pixels and `frames` independent frames, and the variance of that mean, Σ_pixels s²_pixel /
+/// (frames · n²) with s² the pixel's sample variance over the frames and n the tile's pixel
+/// count. `frame(f)` renders frame `f`.
+pub fn tile_stats(
+    (w, h, tile, frames): (u32, u32, u32, u32),
+    mut frame: impl FnMut(u32) -> Vec<Vec3>,
+) -> Vec<[(f64, f64); 3]> {
+    let mut pixels = vec![
+        [
+            RunningStats::new(),
+            RunningStats::new(),
+            RunningStats::new()
+        ];
+        (w * h) as usize
+    ];
+    for f in 0..frames {
+        for (s, p) in pixels.iter_mut().zip(frame(f)) {
+            for c in 0..3 {
+                s[c].push(f64::from(p[c]));
+            }
+        }
+    }
+    let tiles = (w / tile) * (h / tile);
+    let mut out = vec![[(0.0, 0.0); 3]; tiles as usize];
+    for (i, s) in pixels.iter().enumerate() {
+        let (x, y) = (i as u32 % w, i as u32 / w);
+        let t = ((y / tile) * (w / tile) + x / tile) as usize;
+        let n = f64::from(tile * tile);
+        for c in 0..3 {
+            out[t][c].0 += s[c].mean() / n;
+            out[t][c].1 += s[c].variance() / (f64::from(frames) * n * n);
+        }
+    }
+    out
+}

@@ -1,0 +1,118 @@
+//! The GPU MCPG guide's cost (group `mcpg_vertex`): 65 536 invocations, one path vertex each
+//! (a shading point on a plane under one sphere light), guided by `mcg::mcpg` (begin, sample
+//! with the exact pdf, an analytic trace, finish) against the same kernel with cosine
+//! sampling; and the per-frame pass alone (`end_frame`: cache fold, eviction of both grids
+//! and the cache, frame advance) on the guide's tables (2¹⁶ adaptive, 2¹² static, 2¹² cache
+//! slots). The guide is trained for 8 frames first, and keeps training: the steady state of
+//! a renderer. Each iteration is one submission and the wait for it; on lavapipe read the
+//! ratios. Without an adapter the bench prints why and does nothing.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use glam::Vec3;
+use mcg_gpu_backend::guides::mcpg::GpuMcpgGuide;
+use mcg_gpu_backend::{GpuBuffer, GpuContext, shaders, wgpu};
+use mcg_markov_guide::mcpg::GuideConfig;
+
+const KERNEL: &str = include_str!("mcpg_vertex.wgsl");
+const VERTICES: u32 = 1 << 16;
+
+fn config() -> GuideConfig {
+    let mut c = GuideConfig::for_scene(Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 3.5))
+        .for_camera(60f32.to_radians(), 256);
+    c.adaptive_capacity = 1 << 16;
+    c.static_capacity = 1 << 12;
+    if let Some(cache) = &mut c.cache {
+        cache.capacity = 1 << 12;
+    }
+    c
+}
+
+fn benches(c: &mut Criterion) {
+    let ctx = match GpuContext::new() {
+        Ok(ctx) => ctx,
+        Err(e) => {
+            eprintln!("skipping the MCPG benches: {e}");
+            return;
+        }
+    };
+    let ctx = &ctx;
+    eprintln!("adapter: {:?}", ctx.adapter_info());
+    let mut guide = GpuMcpgGuide::new(ctx, &config()).unwrap();
+    guide.set_camera(ctx, Vec3::new(0.0, -2.0, 3.0));
+    let memory = guide.memory();
+    eprintln!("memory: {memory:?}");
+    let device = ctx.device();
+    let source = shaders::compose(KERNEL, &GpuMcpgGuide::shader_defs(1)).unwrap();
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("mcpg vertex"),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    let io_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("estimates"),
+        entries: &[wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: false },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        }],
+    });
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("mcpg vertex"),
+        bind_group_layouts: &[Some(&io_layout), Some(guide.bind_group_layout())],
+        immediate_size: 0,
+    });
+    let pipeline = |entry: &str| {
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: Some(&layout),
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        })
+    };
+    let (guided, cosine) = (pipeline("guided_vertex"), pipeline("cosine_vertex"));
+    let estimates: GpuBuffer<f32> = ctx.zeroed_buffer("estimates", VERTICES as usize);
+    let io = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("estimates"),
+        layout: &io_layout,
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: estimates.raw().as_entire_binding(),
+        }],
+    });
+    let run = |pipeline: &wgpu::ComputePipeline, guide: &GpuMcpgGuide| {
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &io, &[]);
+            pass.set_bind_group(1, guide.bind_group(), &[]);
+            pass.dispatch_workgroups(VERTICES / 64, 1, 1);
+        }
+        ctx.queue().submit([encoder.finish()]);
+        device.poll(wgpu::PollType::wait_indefinitely()).unwrap();
+    };
+    for _ in 0..8 {
+        run(&guided, &guide);
+        guide.end_frame(ctx).unwrap();
+    }
+    let mut g = c.benchmark_group("mcpg_vertex");
+    g.sample_size(20);
+    g.bench_function("guided", |b| b.iter(|| run(&guided, &guide)));
+    g.bench_function("cosine", |b| b.iter(|| run(&cosine, &guide)));
+    g.bench_function("end_frame", |b| {
+        b.iter(|| {
+            guide.end_frame(ctx).unwrap();
+            device.poll(wgpu::PollType::wait_indefinitely()).unwrap();
+        });
+    });
+    g.finish();
+}
+
+criterion_group!(mcpg, benches);
+criterion_main!(mcpg);

@@ -1,0 +1,32 @@
+//! MCPG on the GPU: `mcg::mcpg`, the whole guide as one WGSL module, and its host object.
+//!
+//! A renderer's WGSL path tracer imports the guide and binds one group:
+//!
+//! ```wgsl
+//! #import mcg::mcpg::{McpgBeginUniforms, McpgFinishUniforms, McpgSampleUniforms,
+//!     mcpg_begin, mcpg_finish, mcpg_observation_hit, mcpg_sample, mcpg_surface_vertex}
+//!
+//! var v = mcpg_begin(mcpg_surface_vertex(x, n), begin_uniforms);  // MCPG Alg. 1
+//! let s = mcpg_sample(&v, sample_uniforms);                        // Alg. 2, s.pdf exact
+//! // trace s.direction; weight = f·cos/s.pdf
+//! mcpg_finish(&v, s, mcpg_observation_hit(y, n_y, emitted, weight), finish_uniforms); // Alg. 3
+//! ```
+//!
+//! composed with [`GpuMcpgGuide::shader_defs`]`(group)`, its pipeline layout holding
+//! [`GpuMcpgGuide::bind_group_layout`] at `group`, and [`GpuMcpgGuide::bind_group`] set there.
+//! After the frame's dispatches, [`GpuMcpgGuide::record_end_frame`] records the cache's fold,
+//! the eviction of idle states and cells, and the frame advance into the same encoder.
+//!
+//! The functions mirror `mcg_markov_guide::mcpg::Guide`'s vertex API call for call
+//! (`Vertex::surface`/`volume` → `mcpg_surface_vertex`/`mcpg_volume_vertex`, `begin`, `sample`,
+//! `pdf`, `finish`, `end_frame`); for the same states, inputs and uniforms they make the same
+//! choices (the parity tests hold them to it). States stay the CPU's 32-byte `GridState`; each
+//! slot adds a guard word that makes racing stores safe (see the module's header).
+
+#[cfg(feature = "runtime")]
+mod guide;
+mod params;
+
+#[cfg(feature = "runtime")]
+pub use guide::{GpuMcpgGuide, McpgMemory, McpgReadBack};
+pub use params::{MCPG_MAX_PROBES, McpgBufferWords, McpgGpuParams};
