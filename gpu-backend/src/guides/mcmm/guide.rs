@@ -88,7 +88,7 @@ impl GpuMcmmGuide {
         let max_bytes = limits
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size);
-        let bytes = pixels.checked_mul(state_size).unwrap_or(u64::MAX);
+        let bytes = pixels.saturating_mul(state_size);
         if bytes > max_bytes {
             return Err(GpuError::GuideTooLarge {
                 bytes,
