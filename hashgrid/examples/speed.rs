@@ -127,11 +127,6 @@ fn main() {
     let filter = std::env::args().nth(2).unwrap_or_default();
     let only = |section: &str| section.contains(filter.as_str());
     let inp = stream::inputs();
-    let map: HashMap<u64, State> = inp
-        .fill
-        .iter()
-        .map(|k| (stream::pack(k), [1.0; 8]))
-        .collect();
     println!(
         "{} keys, {} queries; capacities {} / {}",
         inp.fill.len(),
@@ -139,253 +134,310 @@ fn main() {
         inp.pow2,
         inp.prime
     );
-    let keys = &inp.fill;
-    let (hmin, _) = {
-        let n = keys.len();
-        time(n, budget, || {
-            black_box(
-                keys.iter()
-                    .map(|k| checksum(k) ^ mcg_hashgrid::hash_mix(k))
-                    .fold(0, |a, b| a ^ b),
-            );
-        })
-    };
-    println!("hash           mix+checksum                 min {hmin:7.2} ns");
+    hash_throughput(&inp.fill, budget);
     if only("lookup") {
-        let tables = [
-            ("mix_pow2", table(inp.pow2, BucketHash::Mix, keys)),
-            ("mix_prime", table(inp.prime, BucketHash::Mix, keys)),
-            (
-                "coherent_pow2",
-                table(inp.pow2, BucketHash::MixCoherent, keys),
-            ),
-            (
-                "coherent_prime",
-                table(inp.prime, BucketHash::MixCoherent, keys),
-            ),
-            ("mix_pow2_dense", table(inp.pow2 / 2, BucketHash::Mix, keys)),
-            (
-                "coherent_pow2_dense",
-                table(inp.pow2 / 2, BucketHash::MixCoherent, keys),
-            ),
-        ];
-        {
-            let q = &inp.scanline;
-            let distinct: std::collections::HashSet<_> = q.iter().collect();
-            let same = q.windows(2).filter(|w| w[0] == w[1]).count();
-            println!(
-                "scanline: {} distinct keys, {:.1} % equal to the previous",
-                distinct.len(),
-                100.0 * same as f64 / q.len() as f64
-            );
-            let t = &tables[0].1;
-            report(
-                "diag",
-                "find_only mix_pow2",
-                None,
-                time(q.len(), budget, || {
-                    black_box(
-                        black_box(q)
-                            .iter()
-                            .map(|k| t.find(k).unwrap_or(0))
-                            .fold(0, |a, b| a ^ b),
-                    );
-                }),
-            );
-            let t = &tables[2].1;
-            report(
-                "diag",
-                "find_only coherent_pow2",
-                None,
-                time(q.len(), budget, || {
-                    black_box(
-                        black_box(q)
-                            .iter()
-                            .map(|k| t.find(k).unwrap_or(0))
-                            .fold(0, |a, b| a ^ b),
-                    );
-                }),
-            );
-            report(
-                "diag",
-                "home+checksum only",
-                None,
-                time(q.len(), budget, || {
-                    black_box(
-                        black_box(q)
-                            .iter()
-                            .map(|k| t.home_slot(k) ^ checksum(k))
-                            .fold(0, |a, b| a ^ b),
-                    );
-                }),
-            );
-            let small = table(32768, BucketHash::Mix, &keys[..8192]);
-            let sq: Vec<CellKey> = keys[..8192].to_vec();
-            report(
-                "diag",
-                "get in-cache (8192 in 32768)",
-                None,
-                time(sq.len(), budget, || {
-                    black_box(get_pass(&small, &sq));
-                }),
-            );
-            let mut sslots = vec![None; sq.len()];
-            report(
-                "diag",
-                "find_many+values in-cache",
-                None,
-                time(sq.len(), budget, || {
-                    black_box(find_many_pass(&small, &sq, &mut sslots));
-                }),
-            );
-            // Memory floor of the big table: slots known, only the checksum word and the value read.
-            let t = &tables[0].1;
-            let found: Vec<u32> = q.iter().map(|k| t.find(k).unwrap()).collect();
-            report(
-                "diag",
-                "floor: checksum+value reads",
-                None,
-                time(q.len(), budget, || {
-                    black_box(
-                        black_box(&found)
-                            .iter()
-                            .map(|&s| t.checksums()[s as usize] as f32 + t.values()[s as usize][0])
-                            .sum::<f32>(),
-                    );
-                }),
-            );
-            let smap: HashMap<u64, State> = keys[..8192]
-                .iter()
-                .map(|k| (stream::pack(k), [1.0; 8]))
-                .collect();
-            let sp: Vec<u64> = sq.iter().map(stream::pack).collect();
-            report(
-                "diag",
-                "hashmap in-cache (8192)",
-                None,
-                time(sq.len(), budget, || {
-                    black_box(hashmap_pass(&smap, &sp));
-                }),
-            );
-        }
-        {
-            // Cold caches: before every pass (untimed) a write to each cache line of a 64 MiB
-            // buffer (twice the L3), so the table's lines come from memory.
-            let q = &inp.scanline;
-            let packed: Vec<u64> = q.iter().map(stream::pack).collect();
-            let mut evict = vec![0_u8; 64 << 20];
-            let mut evict_all = || {
-                for b in evict.iter_mut().step_by(64) {
-                    *b = b.wrapping_add(1);
-                }
-                black_box(&mut evict);
-            };
-            let t = &tables[0].1;
-            let mut slots = vec![None; q.len()];
-            let mut cases: Vec<Case<'_>> = vec![
-                (
-                    "hashmap_siphash".into(),
-                    Box::new(|| {
-                        black_box(hashmap_pass(&map, &packed));
-                    }),
-                ),
-                (
-                    "mix_pow2".into(),
-                    Box::new(|| {
-                        black_box(get_pass(t, q));
-                    }),
-                ),
-                (
-                    "mix_pow2_find_many".into(),
-                    Box::new(|| {
-                        black_box(find_many_pass(t, q, &mut slots));
-                    }),
-                ),
-            ];
-            interleaved(
-                "lookup_cold",
-                q.len(),
-                budget,
-                &mut cases,
-                Some(&mut evict_all),
-            );
-        }
-        for (order, queries) in [
-            ("scanline", &inp.scanline),
-            ("tiles", &inp.tiles),
-            ("random", &inp.random),
-        ] {
-            let packed: Vec<u64> = queries.iter().map(stream::pack).collect();
-            let map = &map;
-            let mut cases: Vec<Case<'_>> = vec![(
-                "hashmap_siphash".into(),
-                Box::new(|| {
-                    black_box(hashmap_pass(map, &packed));
-                }),
-            )];
-            for (name, t) in &tables[..2] {
-                let mut slots = vec![None; queries.len()];
-                cases.push((
-                    format!("{name}_find_many"),
-                    Box::new(move || {
-                        black_box(find_many_pass(t, queries, &mut slots));
-                    }),
-                ));
-            }
-            for (name, t) in &tables {
-                cases.push((
-                    name.to_string(),
-                    Box::new(move || {
-                        black_box(get_pass(t, queries));
-                    }),
-                ));
-            }
-            interleaved(
-                &format!("lookup/{order}"),
-                queries.len(),
-                budget,
-                &mut cases,
-                None,
-            );
-        }
+        let map: HashMap<u64, State> = inp
+            .fill
+            .iter()
+            .map(|k| (stream::pack(k), [1.0; 8]))
+            .collect();
+        let tables = lookup_tables(&inp);
+        lookup_diagnostics(&inp, &tables, budget);
+        lookup_cold(&inp, &map, &tables[0].1, budget);
+        lookup_orders(&inp, &map, &tables, budget);
     }
     if only("insert") {
-        // Inserts of the fill stream into an emptied table / map.
-        let packed: Vec<u64> = keys.iter().map(stream::pack).collect();
-        let mut m: HashMap<u64, State> = HashMap::with_capacity(keys.len());
-        let base = report(
-            "insert",
-            "hashmap_siphash",
-            None,
-            time(keys.len(), budget, || {
-                m.clear();
-                for &k in black_box(&packed) {
-                    m.entry(k).or_insert([0.0; 8])[0] += 1.0;
-                }
-            }),
-        );
-        for (name, cap, hash) in [
-            ("mix_pow2", inp.pow2, BucketHash::Mix),
-            ("coherent_pow2", inp.pow2, BucketHash::MixCoherent),
-        ] {
-            let mut t = HashTable::<State>::new(cap, MAX_PROBES, hash).unwrap();
-            report(
-                "insert",
-                name,
-                Some(base),
-                time(keys.len(), budget, || {
-                    t.clear();
-                    for k in black_box(keys) {
-                        if let Some((s, _)) = t.entry(k) {
-                            s[0] += 1.0;
-                        }
-                    }
-                }),
-            );
-        }
+        insert(&inp, budget);
     }
     if only("concurrent") {
         concurrent(&inp, budget);
+    }
+}
+
+/// The bucket hash and checksum of every fill key, nothing else: the arithmetic floor.
+fn hash_throughput(keys: &[CellKey], budget: Duration) {
+    let (hmin, _) = time(keys.len(), budget, || {
+        black_box(
+            keys.iter()
+                .map(|k| checksum(k) ^ mcg_hashgrid::hash_mix(k))
+                .fold(0, |a, b| a ^ b),
+        );
+    });
+    println!("hash           mix+checksum                 min {hmin:7.2} ns");
+}
+
+/// The filled tables of the lookup groups: `Mix` and `MixCoherent` at the power-of-two and the
+/// prime capacity, and both hashes at half the power-of-two capacity (dense).
+fn lookup_tables(inp: &stream::Inputs) -> [(&'static str, HashTable<State>); 6] {
+    let keys = &inp.fill;
+    [
+        ("mix_pow2", table(inp.pow2, BucketHash::Mix, keys)),
+        ("mix_prime", table(inp.prime, BucketHash::Mix, keys)),
+        (
+            "coherent_pow2",
+            table(inp.pow2, BucketHash::MixCoherent, keys),
+        ),
+        (
+            "coherent_prime",
+            table(inp.prime, BucketHash::MixCoherent, keys),
+        ),
+        ("mix_pow2_dense", table(inp.pow2 / 2, BucketHash::Mix, keys)),
+        (
+            "coherent_pow2_dense",
+            table(inp.pow2 / 2, BucketHash::MixCoherent, keys),
+        ),
+    ]
+}
+
+/// Group `diag`: the parts of a scanline lookup (`find` alone, hashing alone, a cache-resident
+/// table, the memory reads with the slots known) to see where the time goes.
+fn lookup_diagnostics(
+    inp: &stream::Inputs,
+    tables: &[(&'static str, HashTable<State>)],
+    budget: Duration,
+) {
+    let q = &inp.scanline;
+    let distinct: std::collections::HashSet<_> = q.iter().collect();
+    let same = q.windows(2).filter(|w| w[0] == w[1]).count();
+    println!(
+        "scanline: {} distinct keys, {:.1} % equal to the previous",
+        distinct.len(),
+        100.0 * same as f64 / q.len() as f64
+    );
+    find_and_hash_only(q, tables, budget);
+    in_cache_tables(&inp.fill, budget);
+    memory_floor(q, &tables[0].1, budget);
+    in_cache_hashmap(&inp.fill, budget);
+}
+
+/// Memory floor of the big table: slots known, only the checksum word and the value read.
+fn memory_floor(q: &[CellKey], t: &HashTable<State>, budget: Duration) {
+    let found: Vec<u32> = q.iter().map(|k| t.find(k).unwrap()).collect();
+    report(
+        "diag",
+        "floor: checksum+value reads",
+        None,
+        time(q.len(), budget, || {
+            black_box(
+                black_box(&found)
+                    .iter()
+                    .map(|&s| t.checksums()[s as usize] as f32 + t.values()[s as usize][0])
+                    .sum::<f32>(),
+            );
+        }),
+    );
+}
+
+/// `find` alone in the `mix_pow2` and `coherent_pow2` tables, and the home slot and checksum
+/// alone (no memory reads).
+fn find_and_hash_only(
+    q: &[CellKey],
+    tables: &[(&'static str, HashTable<State>)],
+    budget: Duration,
+) {
+    for (label, t) in [
+        ("find_only mix_pow2", &tables[0].1),
+        ("find_only coherent_pow2", &tables[2].1),
+    ] {
+        report(
+            "diag",
+            label,
+            None,
+            time(q.len(), budget, || {
+                black_box(
+                    black_box(q)
+                        .iter()
+                        .map(|k| t.find(k).unwrap_or(0))
+                        .fold(0, |a, b| a ^ b),
+                );
+            }),
+        );
+    }
+    let t = &tables[2].1;
+    report(
+        "diag",
+        "home+checksum only",
+        None,
+        time(q.len(), budget, || {
+            black_box(
+                black_box(q)
+                    .iter()
+                    .map(|k| t.home_slot(k) ^ checksum(k))
+                    .fold(0, |a, b| a ^ b),
+            );
+        }),
+    );
+}
+
+/// `get` and `find_many` of 8192 keys in a table small enough to stay in the caches.
+fn in_cache_tables(keys: &[CellKey], budget: Duration) {
+    let small = table(32768, BucketHash::Mix, &keys[..8192]);
+    let sq: Vec<CellKey> = keys[..8192].to_vec();
+    report(
+        "diag",
+        "get in-cache (8192 in 32768)",
+        None,
+        time(sq.len(), budget, || {
+            black_box(get_pass(&small, &sq));
+        }),
+    );
+    let mut sslots = vec![None; sq.len()];
+    report(
+        "diag",
+        "find_many+values in-cache",
+        None,
+        time(sq.len(), budget, || {
+            black_box(find_many_pass(&small, &sq, &mut sslots));
+        }),
+    );
+}
+
+/// The `HashMap` baseline of [`in_cache_tables`]: 8192 keys in a map that stays in the caches.
+fn in_cache_hashmap(keys: &[CellKey], budget: Duration) {
+    let sq = &keys[..8192];
+    let smap: HashMap<u64, State> = keys[..8192]
+        .iter()
+        .map(|k| (stream::pack(k), [1.0; 8]))
+        .collect();
+    let sp: Vec<u64> = sq.iter().map(stream::pack).collect();
+    report(
+        "diag",
+        "hashmap in-cache (8192)",
+        None,
+        time(sq.len(), budget, || {
+            black_box(hashmap_pass(&smap, &sp));
+        }),
+    );
+}
+
+/// Group `lookup_cold`: scanline lookups with cold caches. Before every pass (untimed) a write
+/// to each cache line of a 64 MiB buffer (twice the L3), so the table's lines come from memory.
+fn lookup_cold(
+    inp: &stream::Inputs,
+    map: &HashMap<u64, State>,
+    t: &HashTable<State>,
+    budget: Duration,
+) {
+    let q = &inp.scanline;
+    let packed: Vec<u64> = q.iter().map(stream::pack).collect();
+    let mut evict = vec![0_u8; 64 << 20];
+    let mut evict_all = || {
+        for b in evict.iter_mut().step_by(64) {
+            *b = b.wrapping_add(1);
+        }
+        black_box(&mut evict);
+    };
+    let mut slots = vec![None; q.len()];
+    let mut cases: Vec<Case<'_>> = vec![
+        (
+            "hashmap_siphash".into(),
+            Box::new(|| {
+                black_box(hashmap_pass(map, &packed));
+            }),
+        ),
+        (
+            "mix_pow2".into(),
+            Box::new(|| {
+                black_box(get_pass(t, q));
+            }),
+        ),
+        (
+            "mix_pow2_find_many".into(),
+            Box::new(|| {
+                black_box(find_many_pass(t, q, &mut slots));
+            }),
+        ),
+    ];
+    interleaved(
+        "lookup_cold",
+        q.len(),
+        budget,
+        &mut cases,
+        Some(&mut evict_all),
+    );
+}
+
+/// Groups `lookup/{scanline,tiles,random}`: the `HashMap` baseline, `find_many` in the first
+/// two tables and `get` in every table, for each query order.
+fn lookup_orders(
+    inp: &stream::Inputs,
+    map: &HashMap<u64, State>,
+    tables: &[(&'static str, HashTable<State>)],
+    budget: Duration,
+) {
+    for (order, queries) in [
+        ("scanline", &inp.scanline),
+        ("tiles", &inp.tiles),
+        ("random", &inp.random),
+    ] {
+        let packed: Vec<u64> = queries.iter().map(stream::pack).collect();
+        let mut cases: Vec<Case<'_>> = vec![(
+            "hashmap_siphash".into(),
+            Box::new(|| {
+                black_box(hashmap_pass(map, &packed));
+            }),
+        )];
+        for (name, t) in &tables[..2] {
+            let mut slots = vec![None; queries.len()];
+            cases.push((
+                format!("{name}_find_many"),
+                Box::new(move || {
+                    black_box(find_many_pass(t, queries, &mut slots));
+                }),
+            ));
+        }
+        for (name, t) in tables {
+            cases.push((
+                name.to_string(),
+                Box::new(move || {
+                    black_box(get_pass(t, queries));
+                }),
+            ));
+        }
+        interleaved(
+            &format!("lookup/{order}"),
+            queries.len(),
+            budget,
+            &mut cases,
+            None,
+        );
+    }
+}
+
+/// Group `insert`: the distinct fill keys into an emptied `HashMap` (baseline) and tables.
+fn insert(inp: &stream::Inputs, budget: Duration) {
+    let keys = &inp.fill;
+    let packed: Vec<u64> = keys.iter().map(stream::pack).collect();
+    let mut m: HashMap<u64, State> = HashMap::with_capacity(keys.len());
+    let base = report(
+        "insert",
+        "hashmap_siphash",
+        None,
+        time(keys.len(), budget, || {
+            m.clear();
+            for &k in black_box(&packed) {
+                m.entry(k).or_insert([0.0; 8])[0] += 1.0;
+            }
+        }),
+    );
+    for (name, cap, hash) in [
+        ("mix_pow2", inp.pow2, BucketHash::Mix),
+        ("coherent_pow2", inp.pow2, BucketHash::MixCoherent),
+    ] {
+        let mut t = HashTable::<State>::new(cap, MAX_PROBES, hash).unwrap();
+        report(
+            "insert",
+            name,
+            Some(base),
+            time(keys.len(), budget, || {
+                t.clear();
+                for k in black_box(keys) {
+                    if let Some((s, _)) = t.entry(k) {
+                        s[0] += 1.0;
+                    }
+                }
+            }),
+        );
     }
 }
 

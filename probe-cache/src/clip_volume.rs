@@ -20,7 +20,7 @@ use core::sync::atomic::{AtomicU32, Ordering};
 use glam::{Mat4, Vec3, Vec4};
 use mcg_color_codec::{IrradianceLayout, IrradianceWord, VisibilityLayout, VisibilityWord};
 
-use crate::{ProbeError, ProbeGrid};
+use crate::{ControlError, LayoutError, ProbeGrid};
 
 /// The count N that sec. 4.8 sets in the shell V_out − V_in.
 pub const SHELL_COUNT: u32 = 16;
@@ -35,14 +35,14 @@ impl Frustum {
     /// The six planes `(n, d)` with `n · p + d ≥ 0` inside; each is normalised.
     ///
     /// # Errors
-    /// [`ProbeError::ClipVolumeInvalid`] for a plane with a NaN or infinite component or a zero
+    /// [`ControlError::ClipVolumeInvalid`] for a plane with a NaN or infinite component or a zero
     /// normal.
-    pub fn from_planes(planes: [Vec4; 6]) -> Result<Self, ProbeError> {
+    pub fn from_planes(planes: [Vec4; 6]) -> Result<Self, ControlError> {
         let mut out = [Vec4::ZERO; 6];
         for (o, p) in out.iter_mut().zip(planes) {
             let len = p.truncate().length();
             if !p.is_finite() || !(len > 0.0) || !len.is_finite() {
-                return Err(ProbeError::ClipVolumeInvalid);
+                return Err(ControlError::ClipVolumeInvalid);
             }
             *o = p / len;
         }
@@ -55,7 +55,7 @@ impl Frustum {
     ///
     /// # Errors
     /// As [`Self::from_planes`] (a singular or non-finite matrix).
-    pub fn from_view_projection(m: Mat4) -> Result<Self, ProbeError> {
+    pub fn from_view_projection(m: Mat4) -> Result<Self, ControlError> {
         let r = |i: usize| m.row(i);
         Self::from_planes([
             r(3) + r(0),
@@ -108,11 +108,11 @@ impl ClipVolume {
     /// `frustum ∩ [min, max]`.
     ///
     /// # Errors
-    /// [`ProbeError::ClipVolumeInvalid`] if a bound is NaN or `min > max` on an axis (infinite
+    /// [`ControlError::ClipVolumeInvalid`] if a bound is NaN or `min > max` on an axis (infinite
     /// bounds are allowed: an unbounded box).
-    pub fn new(frustum: Frustum, min: Vec3, max: Vec3) -> Result<Self, ProbeError> {
+    pub fn new(frustum: Frustum, min: Vec3, max: Vec3) -> Result<Self, ControlError> {
         if !(min.cmple(max).all()) {
-            return Err(ProbeError::ClipVolumeInvalid);
+            return Err(ControlError::ClipVolumeInvalid);
         }
         Ok(Self { frustum, min, max })
     }
@@ -186,14 +186,14 @@ impl ClipVolumes {
     /// `outer_bounds`.
     ///
     /// # Errors
-    /// [`ProbeError::ClipVolumeInvalid`] as [`Frustum::from_view_projection`] and
+    /// [`ControlError::ClipVolumeInvalid`] as [`Frustum::from_view_projection`] and
     /// [`ClipVolume::new`].
     pub fn from_camera(
         view_projection: Mat4,
         inner_bounds: (Vec3, Vec3),
         margin: f32,
         outer_bounds: (Vec3, Vec3),
-    ) -> Result<Self, ProbeError> {
+    ) -> Result<Self, ControlError> {
         let f = Frustum::from_view_projection(view_projection)?;
         Ok(Self {
             inner: ClipVolume::new(f, inner_bounds.0, inner_bounds.1)?,
@@ -238,14 +238,14 @@ impl ClipVolumes {
     /// The region of every probe of `grid`, by linear index, into `out`.
     ///
     /// # Errors
-    /// [`ProbeError::TableLengthMismatch`] unless `out.len() == grid.probe_count()`.
+    /// [`LayoutError::TableLengthMismatch`] unless `out.len() == grid.probe_count()`.
     pub fn classify_grid(
         &self,
         grid: &ProbeGrid,
         out: &mut [ClipRegion],
-    ) -> Result<(), ProbeError> {
+    ) -> Result<(), LayoutError> {
         if out.len() != grid.probe_count() {
-            return Err(ProbeError::TableLengthMismatch);
+            return Err(LayoutError::TableLengthMismatch);
         }
         for (i, o) in out.iter_mut().enumerate() {
             *o = self.classify(grid.probe_position(grid.probe_coords(i)));
@@ -337,7 +337,7 @@ mod tests {
         }
         assert_eq!(
             Frustum::from_view_projection(Mat4::ZERO),
-            Err(ProbeError::ClipVolumeInvalid)
+            Err(ControlError::ClipVolumeInvalid)
         );
         assert_eq!(f.expanded(f32::NAN), f);
     }

@@ -7,7 +7,7 @@
 
 use glam::{UVec3, Vec3};
 
-use crate::ProbeError;
+use crate::GridError;
 
 /// A regular 3-D lattice of probes: origin, spacing and counts per axis.
 ///
@@ -32,20 +32,20 @@ impl ProbeGrid {
     /// A grid of `counts` probes per axis, the first at `origin`, `spacing` apart.
     ///
     /// # Errors
-    /// [`ProbeError::OriginNotFinite`] for a NaN or infinite origin,
-    /// [`ProbeError::SpacingNotPositive`] unless every spacing component is positive and finite,
-    /// [`ProbeError::CountsOutOfRange`] for a zero count or more than `u32::MAX` probes.
-    pub fn new(origin: Vec3, spacing: Vec3, counts: UVec3) -> Result<Self, ProbeError> {
+    /// [`GridError::OriginNotFinite`] for a NaN or infinite origin,
+    /// [`GridError::SpacingNotPositive`] unless every spacing component is positive and finite,
+    /// [`GridError::CountsOutOfRange`] for a zero count or more than `u32::MAX` probes.
+    pub fn new(origin: Vec3, spacing: Vec3, counts: UVec3) -> Result<Self, GridError> {
         if !origin.is_finite() {
-            return Err(ProbeError::OriginNotFinite);
+            return Err(GridError::OriginNotFinite);
         }
         if !(spacing.min_element() > 0.0) || !spacing.is_finite() {
-            return Err(ProbeError::SpacingNotPositive);
+            return Err(GridError::SpacingNotPositive);
         }
         // In u128: three u32 factors cannot overflow it (u64 could: 2³¹ · 2³¹ · 4 = 2⁶⁴).
         let total = u128::from(counts.x) * u128::from(counts.y) * u128::from(counts.z);
         if counts.min_element() == 0 || total > u128::from(u32::MAX) {
-            return Err(ProbeError::CountsOutOfRange);
+            return Err(GridError::CountsOutOfRange);
         }
         Ok(Self {
             origin,
@@ -182,27 +182,27 @@ mod tests {
         let c = UVec3::splat(2);
         assert_eq!(
             ProbeGrid::new(Vec3::NAN, s, c),
-            Err(ProbeError::OriginNotFinite)
+            Err(GridError::OriginNotFinite)
         );
         assert_eq!(
             ProbeGrid::new(Vec3::ZERO, Vec3::new(1.0, 0.0, 1.0), c),
-            Err(ProbeError::SpacingNotPositive)
+            Err(GridError::SpacingNotPositive)
         );
         assert_eq!(
             ProbeGrid::new(Vec3::ZERO, Vec3::splat(f32::NAN), c),
-            Err(ProbeError::SpacingNotPositive)
+            Err(GridError::SpacingNotPositive)
         );
         assert_eq!(
             ProbeGrid::new(Vec3::ZERO, Vec3::splat(f32::INFINITY), c),
-            Err(ProbeError::SpacingNotPositive)
+            Err(GridError::SpacingNotPositive)
         );
         assert_eq!(
             ProbeGrid::new(Vec3::ZERO, s, UVec3::new(2, 0, 2)),
-            Err(ProbeError::CountsOutOfRange)
+            Err(GridError::CountsOutOfRange)
         );
         assert_eq!(
             ProbeGrid::new(Vec3::ZERO, s, UVec3::splat(2048)),
-            Err(ProbeError::CountsOutOfRange)
+            Err(GridError::CountsOutOfRange)
         );
         // Issue 14 row 13: 2³¹ · 2³¹ · 4 = 2⁶⁴ overflowed the u64 product (debug panic;
         // release accepted the grid with probe_count() == 0).
@@ -213,7 +213,7 @@ mod tests {
         ] {
             assert_eq!(
                 ProbeGrid::new(Vec3::ZERO, s, counts),
-                Err(ProbeError::CountsOutOfRange),
+                Err(GridError::CountsOutOfRange),
                 "{counts}"
             );
         }

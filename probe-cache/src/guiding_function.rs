@@ -22,9 +22,9 @@
 use glam::Vec3;
 use mcg_color_codec::HeuristicsWord;
 
-use crate::ProbeError;
 use crate::heuristics::{OCTANTS, decode, octant, unit};
 use crate::proxies::ProxyGrid;
+use crate::{LayoutError, ParameterError};
 
 /// The largest exponent cap [`GuideParams::new`] accepts: e⁶⁴ ≈ 6·10²⁷, so h ≤ e⁶⁴ stays far
 /// from f32 overflow.
@@ -56,11 +56,11 @@ impl GuideParams {
     /// Eq. 2 with confidence `alpha` and the exponent α ĝ / f capped at `exponent_cap`.
     ///
     /// # Errors
-    /// [`ProbeError::GuideParameterOutOfRange`] unless `alpha` is finite and ≥ 0 and
+    /// [`ParameterError::GuideOutOfRange`] unless `alpha` is finite and ≥ 0 and
     /// `exponent_cap` is in [0, [`MAX_EXPONENT`]].
-    pub fn new(alpha: f32, exponent_cap: f32) -> Result<Self, ProbeError> {
+    pub fn new(alpha: f32, exponent_cap: f32) -> Result<Self, ParameterError> {
         if !(alpha >= 0.0) || !alpha.is_finite() || !(0.0..=MAX_EXPONENT).contains(&exponent_cap) {
-            return Err(ProbeError::GuideParameterOutOfRange);
+            return Err(ParameterError::GuideOutOfRange);
         }
         Ok(Self {
             alpha,
@@ -186,16 +186,16 @@ impl<'a> GuidingFunction<'a> {
     /// ĝ = 0, so h = f).
     ///
     /// # Errors
-    /// [`ProbeError::TableLengthMismatch`] unless each table has `cells.table_len()` entries.
+    /// [`LayoutError::TableLengthMismatch`] unless each table has `cells.table_len()` entries.
     pub fn new(
         cells: ProxyGrid,
         f: &'a [f32],
         feedback: Option<&'a [f32]>,
         params: GuideParams,
-    ) -> Result<Self, ProbeError> {
+    ) -> Result<Self, LayoutError> {
         let n = cells.table_len();
         if f.len() != n || feedback.is_some_and(|g| g.len() != n) {
-            return Err(ProbeError::TableLengthMismatch);
+            return Err(LayoutError::TableLengthMismatch);
         }
         Ok(Self {
             cells,
@@ -312,14 +312,14 @@ pub enum HeuristicField {
 /// the static guide or f_d to [`max_pool`](ProxyGrid::max_pool) into the proxies.
 ///
 /// # Errors
-/// [`ProbeError::TableLengthMismatch`] when the slices differ in length.
+/// [`LayoutError::TableLengthMismatch`] when the slices differ in length.
 pub fn decode_field(
     words: &[HeuristicsWord],
     field: HeuristicField,
     out: &mut [f32],
-) -> Result<(), ProbeError> {
+) -> Result<(), LayoutError> {
     if words.len() != out.len() {
-        return Err(ProbeError::TableLengthMismatch);
+        return Err(LayoutError::TableLengthMismatch);
     }
     for (o, &w) in out.iter_mut().zip(words) {
         let h = decode(w);
@@ -379,7 +379,7 @@ mod tests {
         ] {
             assert_eq!(
                 GuideParams::new(a, c),
-                Err(ProbeError::GuideParameterOutOfRange),
+                Err(ParameterError::GuideOutOfRange),
                 "{a} {c}"
             );
         }
@@ -423,11 +423,11 @@ mod tests {
         mcg_test_support::assert_close!(plain.value(4, 5), 0.55, 1e-7);
         assert_eq!(
             GuidingFunction::new(cells, &f[1..], None, GuideParams::STATIC).err(),
-            Some(ProbeError::TableLengthMismatch)
+            Some(LayoutError::TableLengthMismatch)
         );
         assert_eq!(
             GuidingFunction::new(cells, &f, Some(&g[1..]), GuideParams::STATIC).err(),
-            Some(ProbeError::TableLengthMismatch)
+            Some(LayoutError::TableLengthMismatch)
         );
     }
 
@@ -453,7 +453,7 @@ mod tests {
         assert!((out[0] - 0.2).abs() < 1e-2 && out[1] == 1.0);
         assert_eq!(
             decode_field(&words, HeuristicField::Static, &mut [0.0; 3]),
-            Err(ProbeError::TableLengthMismatch)
+            Err(LayoutError::TableLengthMismatch)
         );
     }
 

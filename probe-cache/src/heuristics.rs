@@ -12,7 +12,7 @@
 use glam::Vec3;
 use mcg_color_codec::{Heuristics, HeuristicsLayout, HeuristicsWord};
 
-use crate::ProbeError;
+use crate::{LayoutError, ParameterError};
 
 /// Octants per probe: the heuristics LUT has one texel per octant (ADGI sec. 4.1, Fig. 5a).
 pub const OCTANTS: usize = 8;
@@ -181,9 +181,9 @@ impl HeuristicParams {
     /// Heuristics with camera threshold `k`, voxel diagonal `s`, and the paper's β = 5, μ = 2.
     ///
     /// # Errors
-    /// [`ProbeError::HeuristicParameterOutOfRange`] unless `k` is finite and ≥ 0 and `s` is
+    /// [`ParameterError::HeuristicOutOfRange`] unless `k` is finite and ≥ 0 and `s` is
     /// finite and > 0.
-    pub fn new(camera_threshold: f32, voxel_diagonal: f32) -> Result<Self, ProbeError> {
+    pub fn new(camera_threshold: f32, voxel_diagonal: f32) -> Result<Self, ParameterError> {
         Self::with_ranges(
             camera_threshold,
             voxel_diagonal,
@@ -195,14 +195,14 @@ impl HeuristicParams {
     /// Heuristics with every parameter given.
     ///
     /// # Errors
-    /// [`ProbeError::HeuristicParameterOutOfRange`] unless `k ≥ 0`, `s > 0`, `β > 0`, `μ ≥ 0`,
+    /// [`ParameterError::HeuristicOutOfRange`] unless `k ≥ 0`, `s > 0`, `β > 0`, `μ ≥ 0`,
     /// all finite.
     pub fn with_ranges(
         camera_threshold: f32,
         voxel_diagonal: f32,
         radiance_range: f32,
         lighting_weight: f32,
-    ) -> Result<Self, ProbeError> {
+    ) -> Result<Self, ParameterError> {
         let ok = camera_threshold >= 0.0
             && voxel_diagonal > 0.0
             && radiance_range > 0.0
@@ -216,7 +216,7 @@ impl HeuristicParams {
             .iter()
             .all(|x| x.is_finite());
         if !ok {
-            return Err(ProbeError::HeuristicParameterOutOfRange);
+            return Err(ParameterError::HeuristicOutOfRange);
         }
         Ok(Self {
             camera_threshold,
@@ -320,7 +320,7 @@ impl HeuristicParams {
 /// The flag bits already in `out` are kept. Tables are indexed `probe_index · 8 + octant`.
 ///
 /// # Errors
-/// [`ProbeError::TableLengthMismatch`] unless every table has `probe_count · 8` entries.
+/// [`LayoutError::TableLengthMismatch`] unless every table has `probe_count · 8` entries.
 pub fn compose_grid(
     grid: &crate::ProbeGrid,
     params: &HeuristicParams,
@@ -329,10 +329,10 @@ pub fn compose_grid(
     delta_v: &[f32],
     delta_r: &[f32],
     out: &mut [HeuristicsWord],
-) -> Result<(), ProbeError> {
+) -> Result<(), LayoutError> {
     let n = grid.probe_count() * OCTANTS;
     if f_v.len() != n || delta_v.len() != n || delta_r.len() != n || out.len() != n {
-        return Err(ProbeError::TableLengthMismatch);
+        return Err(LayoutError::TableLengthMismatch);
     }
     let layout = HeuristicsLayout::ADGI;
     for probe in 0..grid.probe_count() {
@@ -458,7 +458,7 @@ mod tests {
         ] {
             assert_eq!(
                 HeuristicParams::new(k, s),
-                Err(ProbeError::HeuristicParameterOutOfRange)
+                Err(ParameterError::HeuristicOutOfRange)
             );
         }
         assert!(HeuristicParams::with_ranges(1.0, 1.0, 0.0, 2.0).is_err());

@@ -86,7 +86,7 @@ mod texel_update;
 
 pub use clip_volume::{ClipRegion, ClipVolume, ClipVolumes, Frustum};
 pub use equal_area::{equal_area_decode, equal_area_encode, equal_area_solid_angle};
-pub use error::ProbeError;
+pub use error::{ChainError, ControlError, GridError, LayoutError, ParameterError, ProbeError};
 pub use grid::{ProbeCell, ProbeGrid};
 pub use guiding_function::{Guide, GuideParams, GuidingFunction, HeuristicField};
 pub use heuristics::HeuristicParams;

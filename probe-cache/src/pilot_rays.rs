@@ -27,7 +27,7 @@
 use glam::{Vec2, Vec3};
 
 use crate::heuristics::{HeuristicParams, OCTANTS, octant_signs};
-use crate::{ProbeError, ProbeGrid};
+use crate::{ControlError, ProbeGrid};
 
 /// The two frames of a pilot direction set (sec. 4.4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -54,11 +54,11 @@ impl PilotSchedule {
     /// the reference, the others detect changes against the frame before.
     ///
     /// # Errors
-    /// [`ProbeError::PilotHoldTooShort`] for `hold < 2` (a gradient needs two frames with the
+    /// [`ControlError::PilotHoldTooShort`] for `hold < 2` (a gradient needs two frames with the
     /// same rays).
-    pub const fn new(hold: u32) -> Result<Self, ProbeError> {
+    pub const fn new(hold: u32) -> Result<Self, ControlError> {
         if hold < 2 {
-            return Err(ProbeError::PilotHoldTooShort);
+            return Err(ControlError::PilotHoldTooShort);
         }
         Ok(Self { hold })
     }
@@ -250,7 +250,7 @@ mod tests {
         assert_eq!(phases, [false, true, true, true, false, true, true, true]);
         assert_eq!(s.frame(7).pattern, 1);
         assert_eq!(s.hold(), 4);
-        assert_eq!(PilotSchedule::new(1), Err(ProbeError::PilotHoldTooShort));
+        assert_eq!(PilotSchedule::new(1), Err(ControlError::PilotHoldTooShort));
         assert_eq!(PilotSchedule::default(), PilotSchedule::ADGI);
     }
 

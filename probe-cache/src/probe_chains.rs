@@ -61,7 +61,7 @@ use mcg_markov_guide::{
 use crate::guiding_function::Guide;
 use crate::heuristics::{OCTANTS, octant};
 use crate::proxies::ProxyGrid;
-use crate::{ProbeError, ProbeGrid};
+use crate::{ChainError, ProbeGrid};
 
 /// Dimension of a chain's state: 3 for the position, 2 for the direction (sec. 3.2: d = 5).
 pub const CHAIN_DIMENSIONS: usize = 5;
@@ -160,14 +160,14 @@ impl ChainKind {
     /// position and k_ω · √(π/256) for both z and φ, with (k_p, k_ω) = [`Self::step_scale`].
     ///
     /// # Errors
-    /// [`ProbeError::ChainStep`] with the walk's [`WalkError`](mcg_markov_guide::WalkError)
+    /// [`ChainError::ChainStep`] with the walk's [`WalkError`](mcg_markov_guide::WalkError)
     /// if a scaled spacing is not a valid step (it overflows, or exceeds
     /// [`RandomWalk::STEP_MAX`]).
-    pub fn walk(self, grid: &ProbeGrid) -> Result<RandomWalk<CHAIN_DIMENSIONS>, ProbeError> {
+    pub fn walk(self, grid: &ProbeGrid) -> Result<RandomWalk<CHAIN_DIMENSIONS>, ChainError> {
         let (kp, kd) = self.step_scale();
         let s = grid.spacing() * kp;
         let a = ADGI_DIRECTION_STEP * kd;
-        RandomWalk::new([s.x, s.y, s.z, a, a]).map_err(ProbeError::ChainStep)
+        RandomWalk::new([s.x, s.y, s.z, a, a]).map_err(ChainError::ChainStep)
     }
 }
 
@@ -259,7 +259,7 @@ impl ProbeChains {
     /// uniform on the sphere), running `schedule` per frame.
     ///
     /// # Errors
-    /// [`ProbeError::NoChains`] for `count = 0`; [`ProbeError::ChainStep`] as
+    /// [`ChainError::NoChains`] for `count = 0`; [`ChainError::ChainStep`] as
     /// [`ChainKind::walk`].
     pub fn new(
         cells: ProxyGrid,
@@ -267,9 +267,9 @@ impl ProbeChains {
         count: usize,
         schedule: FrameSchedule,
         mut init: impl FnMut() -> [f32; CHAIN_DIMENSIONS],
-    ) -> Result<Self, ProbeError> {
+    ) -> Result<Self, ChainError> {
         if count == 0 {
-            return Err(ProbeError::NoChains);
+            return Err(ChainError::NoChains);
         }
         let grid = cells.grid();
         let walk = kind.walk(&grid)?;
@@ -305,7 +305,7 @@ impl ProbeChains {
         grid: ProbeGrid,
         count: usize,
         init: impl FnMut() -> [f32; CHAIN_DIMENSIONS],
-    ) -> Result<Self, ProbeError> {
+    ) -> Result<Self, ChainError> {
         Self::new(
             ProxyGrid::probes(grid),
             ChainKind::Static,
@@ -323,7 +323,7 @@ impl ProbeChains {
         grid: ProbeGrid,
         count: usize,
         init: impl FnMut() -> [f32; CHAIN_DIMENSIONS],
-    ) -> Result<Self, ProbeError> {
+    ) -> Result<Self, ChainError> {
         Self::new(
             ProxyGrid::adgi(grid),
             ChainKind::Dynamic,
@@ -658,13 +658,13 @@ mod tests {
         let grid = |s: f32| ProbeGrid::new(Vec3::ZERO, Vec3::splat(s), UVec3::splat(2)).unwrap();
         // 3 · 10³⁰ is above the walk's maximum step; 3 · f32::MAX overflows.
         let err = ChainKind::Dynamic.walk(&grid(1e30)).unwrap_err();
-        assert_eq!(err, ProbeError::ChainStep(WalkError::StepAboveMax));
+        assert_eq!(err, ChainError::ChainStep(WalkError::StepAboveMax));
         assert!(
             err.source()
                 .is_some_and(|c| c.to_string().contains("above"))
         );
         let err = ChainKind::Dynamic.walk(&grid(f32::MAX)).unwrap_err();
-        assert_eq!(err, ProbeError::ChainStep(WalkError::StepNotFinite));
+        assert_eq!(err, ChainError::ChainStep(WalkError::StepNotFinite));
         assert!(ChainKind::Static.walk(&grid(1.0)).is_ok());
     }
 
@@ -732,7 +732,7 @@ mod tests {
         let grid = ProbeGrid::new(Vec3::ZERO, Vec3::ONE, UVec3::splat(2)).unwrap();
         assert_eq!(
             ProbeChains::new_static(grid, 0, || [0.5; 5]).err(),
-            Some(ProbeError::NoChains)
+            Some(ChainError::NoChains)
         );
     }
 

@@ -46,7 +46,7 @@ use mcg_color_codec::{
     IrradianceLayout, IrradianceWord, MovingAverage, Rounding, VisibilityLayout, VisibilityWord,
 };
 
-use crate::{ProbeError, ProbeGrid, TexelMap};
+use crate::{LayoutError, ProbeGrid, TexelMap};
 
 /// How the moving average rounds a re-encoded value (ADGI App. B).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -248,13 +248,13 @@ impl ProbeTexels {
     /// [`Self::visibility_words`] return them, e.g. downloaded from the GPU).
     ///
     /// # Errors
-    /// [`ProbeError::WordCountMismatch`] unless each slice has one word per stored texel.
+    /// [`LayoutError::WordCountMismatch`] unless each slice has one word per stored texel.
     pub fn from_words(
         grid: ProbeGrid,
         config: TexelConfig,
         irradiance: &[u32],
         visibility: &[u32],
-    ) -> Result<Self, ProbeError> {
+    ) -> Result<Self, LayoutError> {
         let texels = Self::new(grid, config);
         texels.load_words(irradiance, visibility)?;
         Ok(texels)
@@ -263,11 +263,11 @@ impl ProbeTexels {
     /// Overwrites every word with the given ones (layout as [`Self::irradiance_words`]).
     ///
     /// # Errors
-    /// [`ProbeError::WordCountMismatch`] unless each slice has one word per stored texel
+    /// [`LayoutError::WordCountMismatch`] unless each slice has one word per stored texel
     /// (nothing is written then).
-    pub fn load_words(&self, irradiance: &[u32], visibility: &[u32]) -> Result<(), ProbeError> {
+    pub fn load_words(&self, irradiance: &[u32], visibility: &[u32]) -> Result<(), LayoutError> {
         if irradiance.len() != self.irradiance.len() || visibility.len() != self.visibility.len() {
-            return Err(ProbeError::WordCountMismatch);
+            return Err(LayoutError::WordCountMismatch);
         }
         for (a, &w) in self.irradiance.iter().zip(irradiance) {
             a.store(w, Ordering::Relaxed);
@@ -375,16 +375,16 @@ impl ProbeTexels {
     /// Copies the irradiance words into `out` (e.g. a mapped staging buffer).
     ///
     /// # Errors
-    /// [`ProbeError::WordCountMismatch`] unless `out` has one word per stored texel.
-    pub fn copy_irradiance_words(&self, out: &mut [u32]) -> Result<(), ProbeError> {
+    /// [`LayoutError::WordCountMismatch`] unless `out` has one word per stored texel.
+    pub fn copy_irradiance_words(&self, out: &mut [u32]) -> Result<(), LayoutError> {
         copy_out(&self.irradiance, out)
     }
 
     /// Copies the visibility words into `out`.
     ///
     /// # Errors
-    /// [`ProbeError::WordCountMismatch`] unless `out` has one word per stored texel.
-    pub fn copy_visibility_words(&self, out: &mut [u32]) -> Result<(), ProbeError> {
+    /// [`LayoutError::WordCountMismatch`] unless `out` has one word per stored texel.
+    pub fn copy_visibility_words(&self, out: &mut [u32]) -> Result<(), LayoutError> {
         copy_out(&self.visibility, out)
     }
 
@@ -674,9 +674,9 @@ fn texel_offset(probe: usize, texel: usize, probe_count: usize, texel_count: usi
     probe * texel_count + texel
 }
 
-fn copy_out(words: &[AtomicU32], out: &mut [u32]) -> Result<(), ProbeError> {
+fn copy_out(words: &[AtomicU32], out: &mut [u32]) -> Result<(), LayoutError> {
     if out.len() != words.len() {
-        return Err(ProbeError::WordCountMismatch);
+        return Err(LayoutError::WordCountMismatch);
     }
     for (o, a) in out.iter_mut().zip(words) {
         *o = a.load(Ordering::Relaxed);
@@ -788,11 +788,11 @@ mod tests {
         assert_eq!(out, vis);
         assert_eq!(
             t.copy_irradiance_words(&mut [0; 3]),
-            Err(ProbeError::WordCountMismatch)
+            Err(LayoutError::WordCountMismatch)
         );
         assert_eq!(
             ProbeTexels::from_words(*t.grid(), *t.config(), &irr[1..], &vis).err(),
-            Some(ProbeError::WordCountMismatch)
+            Some(LayoutError::WordCountMismatch)
         );
     }
 

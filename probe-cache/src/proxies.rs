@@ -16,7 +16,7 @@
 use glam::{UVec3, Vec3};
 
 use crate::heuristics::OCTANTS;
-use crate::{ProbeError, ProbeGrid};
+use crate::{GridError, LayoutError, ProbeGrid};
 
 /// ADGI's proxy block: 3 × 3 × 3 probes (sec. 4.9).
 pub const ADGI_PROXY_BLOCK: u32 = 3;
@@ -53,10 +53,10 @@ impl ProxyGrid {
     /// Blocks of `block³` probes.
     ///
     /// # Errors
-    /// [`ProbeError::ProxyBlockZero`] for `block = 0`.
-    pub fn new(grid: ProbeGrid, block: u32) -> Result<Self, ProbeError> {
+    /// [`GridError::ProxyBlockZero`] for `block = 0`.
+    pub fn new(grid: ProbeGrid, block: u32) -> Result<Self, GridError> {
         if block == 0 {
-            return Err(ProbeError::ProxyBlockZero);
+            return Err(GridError::ProxyBlockZero);
         }
         Ok(Self::probes(grid).with_block(block))
     }
@@ -178,11 +178,11 @@ impl ProxyGrid {
     /// all NaN gets 0. Tables are indexed `probe_index · 8 + octant`.
     ///
     /// # Errors
-    /// [`ProbeError::TableLengthMismatch`] unless `per_probe.len() == probe_count · 8` and
+    /// [`LayoutError::TableLengthMismatch`] unless `per_probe.len() == probe_count · 8` and
     /// `out.len() == self.table_len()`.
-    pub fn max_pool(&self, per_probe: &[f32], out: &mut [f32]) -> Result<(), ProbeError> {
+    pub fn max_pool(&self, per_probe: &[f32], out: &mut [f32]) -> Result<(), LayoutError> {
         if per_probe.len() != self.grid.probe_count() * OCTANTS || out.len() != self.table_len() {
-            return Err(ProbeError::TableLengthMismatch);
+            return Err(LayoutError::TableLengthMismatch);
         }
         out.fill(0.0);
         for probe in 0..self.grid.probe_count() {
@@ -212,7 +212,7 @@ mod tests {
         assert_eq!(p.counts(), UVec3::new(3, 1, 2));
         assert_eq!(p.proxy_count(), 6);
         assert_eq!(p.block(), 3);
-        assert_eq!(ProxyGrid::new(grid(), 0), Err(ProbeError::ProxyBlockZero));
+        assert_eq!(ProxyGrid::new(grid(), 0), Err(GridError::ProxyBlockZero));
         let mut seen = vec![0u32; grid().probe_count()];
         for proxy in 0..p.proxy_count() {
             assert_eq!(p.proxy_index(p.proxy_coords(proxy)), proxy);
@@ -297,7 +297,7 @@ mod tests {
         }
         assert_eq!(
             p.max_pool(&table[1..], &mut out),
-            Err(ProbeError::TableLengthMismatch)
+            Err(LayoutError::TableLengthMismatch)
         );
     }
 

@@ -24,20 +24,20 @@
 //!   the directional kernel averages an octant with those three.
 
 use crate::heuristics::OCTANTS;
-use crate::{ProbeError, ProbeGrid};
+use crate::{ControlError, LayoutError, ProbeGrid};
 
 /// The temporal gradient of eq. 13 / 16: `out[i] = current[i] − previous[i]`. A NaN or
 /// infinite difference (from NaN or infinite inputs) is written as 0.
 ///
 /// # Errors
-/// [`ProbeError::TableLengthMismatch`] when the three slices differ in length.
+/// [`LayoutError::TableLengthMismatch`] when the three slices differ in length.
 pub fn temporal_gradient(
     current: &[f32],
     previous: &[f32],
     out: &mut [f32],
-) -> Result<(), ProbeError> {
+) -> Result<(), LayoutError> {
     if current.len() != previous.len() || current.len() != out.len() {
-        return Err(ProbeError::TableLengthMismatch);
+        return Err(LayoutError::TableLengthMismatch);
     }
     for ((o, &c), &p) in out.iter_mut().zip(current).zip(previous) {
         let d = c - p;
@@ -79,10 +79,10 @@ impl TemporalTrigger {
     /// A trigger decaying by `decay` = θ per detection.
     ///
     /// # Errors
-    /// [`ProbeError::TriggerDecayOutOfRange`] unless θ ∈ [0, 1).
-    pub fn new(decay: f32) -> Result<Self, ProbeError> {
+    /// [`ControlError::TriggerDecayOutOfRange`] unless θ ∈ [0, 1).
+    pub fn new(decay: f32) -> Result<Self, ControlError> {
         if !(0.0..1.0).contains(&decay) {
-            return Err(ProbeError::TriggerDecayOutOfRange);
+            return Err(ControlError::TriggerDecayOutOfRange);
         }
         Ok(Self { decay })
     }
@@ -115,10 +115,10 @@ impl TemporalTrigger {
     /// [`Self::apply`] over a table: `state[i] = max(|pulses[i]|, θ · state[i])`.
     ///
     /// # Errors
-    /// [`ProbeError::TableLengthMismatch`] when the slices differ in length.
-    pub fn apply_slice(&self, pulses: &[f32], state: &mut [f32]) -> Result<(), ProbeError> {
+    /// [`LayoutError::TableLengthMismatch`] when the slices differ in length.
+    pub fn apply_slice(&self, pulses: &[f32], state: &mut [f32]) -> Result<(), LayoutError> {
         if pulses.len() != state.len() {
-            return Err(ProbeError::TableLengthMismatch);
+            return Err(LayoutError::TableLengthMismatch);
         }
         for (s, &x) in state.iter_mut().zip(pulses) {
             *s = self.apply(x, *s);
@@ -170,17 +170,17 @@ impl Default for SmoothingKernel {
 /// costs `(3 · (2r + 1) + 4)` reads per entry.
 ///
 /// # Errors
-/// [`ProbeError::TableLengthMismatch`] unless all three slices have `probe_count · 8` entries.
+/// [`LayoutError::TableLengthMismatch`] unless all three slices have `probe_count · 8` entries.
 pub fn spatial_smoothing(
     grid: &ProbeGrid,
     kernel: SmoothingKernel,
     input: &[f32],
     out: &mut [f32],
     scratch: &mut [f32],
-) -> Result<(), ProbeError> {
+) -> Result<(), LayoutError> {
     let n = grid.probe_count() * OCTANTS;
     if input.len() != n || out.len() != n || scratch.len() != n {
-        return Err(ProbeError::TableLengthMismatch);
+        return Err(LayoutError::TableLengthMismatch);
     }
     let finite = |x: f32| if x.is_finite() { x } else { 0.0 };
     // Direction first (into `out`), then x → scratch, y → out, z → scratch, copy to out.
@@ -285,9 +285,9 @@ impl ChangeDetector {
     /// infinite entry is no measurement: the reference keeps its previous value there.
     ///
     /// # Errors
-    /// [`ProbeError::TableLengthMismatch`] unless both have `probe_count · 8` entries; the
+    /// [`LayoutError::TableLengthMismatch`] unless both have `probe_count · 8` entries; the
     /// detector is then unchanged.
-    pub fn set_reference(&mut self, f_v: &[f32], f_r: &[f32]) -> Result<(), ProbeError> {
+    pub fn set_reference(&mut self, f_v: &[f32], f_r: &[f32]) -> Result<(), LayoutError> {
         self.check_lengths(f_v, f_r)?;
         keep_finite(&mut self.reference_v, f_v);
         keep_finite(&mut self.reference_r, f_r);
@@ -295,9 +295,9 @@ impl ChangeDetector {
     }
 
     /// Both tables have `probe_count · 8` entries.
-    fn check_lengths(&self, f_v: &[f32], f_r: &[f32]) -> Result<(), ProbeError> {
+    fn check_lengths(&self, f_v: &[f32], f_r: &[f32]) -> Result<(), LayoutError> {
         if f_v.len() != self.reference_v.len() || f_r.len() != self.reference_r.len() {
-            return Err(ProbeError::TableLengthMismatch);
+            return Err(LayoutError::TableLengthMismatch);
         }
         Ok(())
     }
@@ -312,9 +312,9 @@ impl ChangeDetector {
     /// finite measurement is still compared with the last finite one.
     ///
     /// # Errors
-    /// [`ProbeError::TableLengthMismatch`] unless both have `probe_count · 8` entries; the
+    /// [`LayoutError::TableLengthMismatch`] unless both have `probe_count · 8` entries; the
     /// detector (reference, trigger states, outputs) is then unchanged.
-    pub fn detect(&mut self, f_v: &[f32], f_r: &[f32]) -> Result<(&[f32], &[f32]), ProbeError> {
+    pub fn detect(&mut self, f_v: &[f32], f_r: &[f32]) -> Result<(&[f32], &[f32]), LayoutError> {
         // Validate both tables before touching any state.
         self.check_lengths(f_v, f_r)?;
         for (current, reference, state, delta) in [
@@ -389,7 +389,7 @@ mod tests {
         assert_eq!(out, [0.25, -0.5, 0.0, 0.0]);
         assert_eq!(
             temporal_gradient(&[0.0], &[0.0, 1.0], &mut out),
-            Err(ProbeError::TableLengthMismatch)
+            Err(LayoutError::TableLengthMismatch)
         );
     }
 
@@ -472,7 +472,7 @@ mod tests {
         assert!(out.iter().all(|&v| (v - 0.6).abs() < 1e-6));
         assert_eq!(
             spatial_smoothing(&g, k, &ones[1..], &mut out, &mut scratch),
-            Err(ProbeError::TableLengthMismatch)
+            Err(LayoutError::TableLengthMismatch)
         );
     }
 
@@ -557,7 +557,7 @@ mod tests {
         let before = snapshot(&d);
         assert_eq!(
             d.detect(&[0.9; 16], &[0.4; 15]),
-            Err(ProbeError::TableLengthMismatch)
+            Err(LayoutError::TableLengthMismatch)
         );
         assert_eq!(snapshot(&d), before);
         assert!(d.detect(&[0.9; 17], &[0.4; 16]).is_err());

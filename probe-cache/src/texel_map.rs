@@ -29,7 +29,7 @@ use core::f32::consts::PI;
 
 use glam::{UVec2, Vec2, Vec3};
 
-use crate::ProbeError;
+use crate::LayoutError;
 use crate::equal_area::{equal_area_decode, equal_area_encode, equal_area_solid_angle};
 use crate::octahedral::{octahedral_decode, octahedral_encode, octahedral_solid_angle};
 
@@ -72,12 +72,12 @@ impl TexelMap {
     /// A map of `side × side` stored texels, the outer ring a border copy if `border`.
     ///
     /// # Errors
-    /// [`ProbeError::MapSizeOutOfRange`] if the interior would be empty (`side` 0, or below 3
+    /// [`LayoutError::MapSizeOutOfRange`] if the interior would be empty (`side` 0, or below 3
     /// with a border) or `side` exceeds [`MAX_MAP_SIDE`].
-    pub const fn new(kind: MapKind, side: u32, border: bool) -> Result<Self, ProbeError> {
+    pub const fn new(kind: MapKind, side: u32, border: bool) -> Result<Self, LayoutError> {
         let border = border as u32;
         if side < 1 + 2 * border || side > MAX_MAP_SIDE {
-            return Err(ProbeError::MapSizeOutOfRange);
+            return Err(LayoutError::MapSizeOutOfRange);
         }
         Ok(Self { kind, side, border })
     }
@@ -333,15 +333,15 @@ mod tests {
     fn rejects_bad_sizes() {
         assert_eq!(
             TexelMap::new(MapKind::Octahedral, 2, true),
-            Err(ProbeError::MapSizeOutOfRange)
+            Err(LayoutError::MapSizeOutOfRange)
         );
         assert_eq!(
             TexelMap::new(MapKind::EqualArea, 0, false),
-            Err(ProbeError::MapSizeOutOfRange)
+            Err(LayoutError::MapSizeOutOfRange)
         );
         assert_eq!(
             TexelMap::new(MapKind::EqualArea, 2000, false),
-            Err(ProbeError::MapSizeOutOfRange)
+            Err(LayoutError::MapSizeOutOfRange)
         );
         assert_eq!(TexelMap::ADGI_IRRADIANCE.interior(), 6);
         assert_eq!(TexelMap::ADGI_VISIBILITY.interior(), 14);

@@ -14,9 +14,10 @@
 use glam::{UVec2, UVec3, Vec2, Vec3};
 use mcg_probe_cache::temporal_gradient::{spatial_smoothing, temporal_gradient};
 use mcg_probe_cache::{
-    ChangeDetector, HeuristicParams, MapKind, ProbeError, ProbeGrid, ProbeTexels, ProxyGrid,
-    SmoothingKernel, TemporalTrigger, TexelConfig, TexelMap, equal_area_decode, equal_area_encode,
-    equal_area_solid_angle, octahedral_decode, octahedral_encode, octahedral_solid_angle,
+    ChangeDetector, ControlError, GridError, HeuristicParams, MapKind, ProbeGrid, ProbeTexels,
+    ProxyGrid, SmoothingKernel, TemporalTrigger, TexelConfig, TexelMap, equal_area_decode,
+    equal_area_encode, equal_area_solid_angle, octahedral_decode, octahedral_encode,
+    octahedral_solid_angle,
 };
 use proptest::prelude::*;
 
@@ -62,9 +63,9 @@ proptest! {
             Err(e) => {
                 let total = u128::from(counts.x) * u128::from(counts.y) * u128::from(counts.z);
                 { let expected = match e {
-                    ProbeError::OriginNotFinite => !origin.is_finite(),
-                    ProbeError::SpacingNotPositive => !(spacing.min_element() > 0.0 && spacing.is_finite()),
-                    ProbeError::CountsOutOfRange => counts.min_element() == 0 || total > u128::from(u32::MAX),
+                    GridError::OriginNotFinite => !origin.is_finite(),
+                    GridError::SpacingNotPositive => !(spacing.min_element() > 0.0 && spacing.is_finite()),
+                    GridError::CountsOutOfRange => counts.min_element() == 0 || total > u128::from(u32::MAX),
                     _ => false,
                 }; prop_assert!(expected, "{e:?}"); };
                 return Ok(());
@@ -90,7 +91,7 @@ proptest! {
                     prop_assert!(probe.cmplt(grid.counts()).all());
                 }
             }
-            Err(e) => prop_assert!(block == 0 && e == ProbeError::ProxyBlockZero),
+            Err(e) => prop_assert!(block == 0 && e == GridError::ProxyBlockZero),
         }
     }
 
@@ -141,7 +142,7 @@ proptest! {
         let trigger = match TemporalTrigger::new(decay) {
             Ok(t) => t,
             Err(e) => {
-                prop_assert!(!(0.0..1.0).contains(&decay) && e == ProbeError::TriggerDecayOutOfRange);
+                prop_assert!(!(0.0..1.0).contains(&decay) && e == ControlError::TriggerDecayOutOfRange);
                 TemporalTrigger::DEFAULT
             }
         };
