@@ -322,7 +322,8 @@ impl GpuTracer {
     /// Starts `mcpg` with an empty guide of `config` (the CPU's
     /// [`super::guided::guide_config`] for the same scene and image): a guide equal in
     /// configuration to the current one is emptied ([`GpuMcpgGuide::reset`]), otherwise a new
-    /// one is made and the `mcpg` pipeline (compiled on the first call) is rebuilt around it.
+    /// one is made (its per-frame pass's pipelines built) and the `mcpg` pipeline (compiled
+    /// on the first call) is rebuilt around it.
     /// [`GpuTracer::render_frame`] with [`Method::Mcpg`] then learns from frame to frame.
     ///
     /// # Errors
@@ -344,7 +345,11 @@ impl GpuTracer {
             )
             .into());
         }
-        let guide = GpuMcpgGuide::new(&self.ctx, config)?;
+        let mut guide = GpuMcpgGuide::new(&self.ctx, config)?;
+        // Builds the per-frame pass's pipelines now (seconds on a software adapter), not in
+        // the first frame's time; `reset` then empties the guide again.
+        guide.end_frame(&self.ctx)?;
+        guide.reset(&self.ctx);
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         if self.guided_module.is_none() {
             let source = composed_mcpg_shader()?;
