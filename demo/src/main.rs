@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! cargo run --release -p mcg-demo [-- --out DIR] [--quick] [--samples N] [--seed N] [--no-progress]
-//! cargo run --release -p mcg-demo -- render --scene FILE --method bsdf|nee --device auto|cpu|gpu [OPTIONS]   (see render --help)
+//! cargo run --release -p mcg-demo -- render --scene FILE --method bsdf|nee|mcpg --device auto|cpu|gpu [OPTIONS]   (see render --help)
 //! cargo run --release -p mcg-demo -- scenes [--out demo/scenes]
 //! ```
 

@@ -81,6 +81,15 @@ pub const MCPG_FRAME_WORD: u32 = 0;
 pub const MCPG_HEADER_WORDS: u32 = 4;
 /// `MCPG_MAX_CANDIDATES`: [`mcg_markov_guide::mcpg::MAX_CANDIDATES`].
 pub const MCPG_MAX_CANDIDATES: u32 = mcg_markov_guide::mcpg::MAX_CANDIDATES as u32;
+// MCMM: score density and prior policy of `mcg::mcmm`, and its largest tile.
+/// `MCMM_SCORE_TECHNIQUE`: [`ScoreDensity::Technique`](mcg_markov_guide::mcmm::ScoreDensity::Technique).
+pub const MCMM_SCORE_TECHNIQUE: u32 = 0;
+/// `MCMM_SCORE_TILE_MIXTURE`: [`ScoreDensity::TileMixture`](mcg_markov_guide::mcmm::ScoreDensity::TileMixture).
+pub const MCMM_SCORE_TILE_MIXTURE: u32 = 1;
+/// `MCMM_PRIOR_FIXED`: [`McmmPrior::Fixed`](mcg_markov_guide::mcmm::McmmPrior::Fixed).
+pub const MCMM_PRIOR_FIXED: u32 = 0;
+/// `MCMM_PRIOR_LIGHT_SIZE`: [`McmmPrior::LightSize`](mcg_markov_guide::mcmm::McmmPrior::LightSize).
+pub const MCMM_PRIOR_LIGHT_SIZE: u32 = 1;
 
 /// Every code with its WGSL name, for the constant generator.
 pub const WGSL_CODES: &[(&str, u32)] = &[
@@ -121,6 +130,12 @@ pub const WGSL_CODES: &[(&str, u32)] = &[
     ("MCPG_FRAME_WORD", MCPG_FRAME_WORD),
     ("MCPG_HEADER_WORDS", MCPG_HEADER_WORDS),
     ("MCPG_MAX_CANDIDATES", MCPG_MAX_CANDIDATES),
+    // MCMM
+    ("MCMM_SCORE_TECHNIQUE", MCMM_SCORE_TECHNIQUE),
+    ("MCMM_SCORE_TILE_MIXTURE", MCMM_SCORE_TILE_MIXTURE),
+    ("MCMM_PRIOR_FIXED", MCMM_PRIOR_FIXED),
+    ("MCMM_PRIOR_LIGHT_SIZE", MCMM_PRIOR_LIGHT_SIZE),
+    ("MCMM_MAX_TILE_SIZE", mcg_smis::MAX_TILE_SIZE),
 ];
 
 /// The code of a bucket hash.

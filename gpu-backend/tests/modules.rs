@@ -52,7 +52,7 @@ fn parse_and_validate(name: &str, source: &str) -> naga::Module {
 }
 
 /// Group 0, bindings 1, 2 and 3 for the three storage arrays of the library; the MCPG guide's
-/// group is 1.
+/// group is 1, the MCMM guide's 2.
 const DEFS: &[(&str, u32)] = &[
     (defs::MCPG_GROUP, 1),
     (defs::HASHGRID_GROUP, 0),
@@ -61,6 +61,8 @@ const DEFS: &[(&str, u32)] = &[
     (defs::CODEC_TEXELS_BINDING, 2),
     (defs::CODEC_LOGLUV_GROUP, 0),
     (defs::CODEC_LOGLUV_BINDING, 3),
+    // The MCMM guide's group (bindings 0-2 of group 2).
+    (defs::MCMM_GROUP, 2),
 ];
 
 fn naga_oil_defs(defs: &[(&str, u32)]) -> HashMap<String, ShaderDefValue> {
@@ -167,7 +169,7 @@ fn own_names(module: Module) -> Vec<String> {
 /// The library's prefixes, in the case of each kind of name: `vmf_pdf`, `Vmf`,
 /// `VMF_KAPPA_MAX`, `mcg_rounded`, `McgDirectionSample`, `MCG_PI`.
 fn has_mcg_prefix(name: &str) -> bool {
-    ["mcg", "vmf", "hashgrid", "codec", "markov", "mcpg"]
+    ["mcg", "vmf", "hashgrid", "codec", "markov", "mcpg", "mcmm"]
         .iter()
         .any(|p| {
             let camel = format!("{}{}", p[..1].to_uppercase(), &p[1..]);
@@ -489,6 +491,15 @@ fn wgsl_structs_match_the_rust_pod_types() {
         size_of::<VmfFitParamsGpu>(),
         fields!(VmfFitParamsGpu: max_count, alpha_min, mean_cosine_update),
     );
+    {
+        use mcg_gpu_backend::guides::mcmm::GpuMcmmParams as P;
+        check(
+            &m,
+            "McmmParams",
+            size_of::<P>(),
+            fields!(P: fit, hemisphere_probability, prior_mean_cosine, prior_weight, prior_decay, prior_kind, prior_radius, neighbour_candidates, window_half_width, score_density, width, height),
+        );
+    }
 
     // Kernel-only structs.
     let kernel = |name| {

@@ -393,8 +393,8 @@ mod tests {
             );
         }
         assert_eq!(g.width(0), 0.01);
-        assert!((g.width(4) / 0.04 - 1.0).abs() < 1e-6);
-        assert!((g.width(8) / 0.16 - 1.0).abs() < 1e-6);
+        mcg_test_support::assert_close!(g.width(4) / 0.04, 1.0, 1e-6);
+        mcg_test_support::assert_close!(g.width(8) / 0.16, 1.0, 1e-6);
     }
 
     #[test]
@@ -412,7 +412,7 @@ mod tests {
         assert_eq!(geometric_jitter(f32::NAN), 0);
         assert_eq!(geometric_jitter(-1.0), 0);
         let total: f64 = (0..30).map(geometric_jitter_probability).sum();
-        assert!((total - 1.0).abs() < 1e-15);
+        mcg_test_support::assert_close!(total, 1.0, 1e-15);
         let g = AdaptiveGrid::mcpg();
         assert_eq!(g.level(f32::INFINITY, 0.99), 255);
         assert_eq!(g.level(10.0, 0.6), g.target_level(10.0) + 1);
@@ -449,7 +449,7 @@ mod tests {
             .iter()
             .zip([0.014_142_136_f32, 0.056_568_54, 3.620_387_3])
         {
-            assert!((w / want - 1.0).abs() < 4.0 * f32::EPSILON, "{w} vs {want}");
+            mcg_test_support::assert_close!(w / want, 1.0, 4.0 * f32::EPSILON);
         }
     }
 }

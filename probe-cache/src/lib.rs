@@ -37,8 +37,8 @@
 //!
 //! ## Features
 //! - `scene`: the CPU fixture that the tests, examples and demo render with — a mini ray tracer
-//!   ([`scene`]) and reference probe irradiance ([`reference`](mod@reference)). A renderer that
-//!   only stores and queries probes does not need it.
+//!   (module `scene`) and reference probe irradiance (module `reference`). A renderer that only
+//!   stores and queries probes does not need it.
 //!
 //! ## Dependencies
 //! The crate depends on `mcg-markov-guide` only for the Metropolis random walk of

@@ -45,11 +45,13 @@ mod tests {
             for j in 0..32 {
                 let u = Vec2::new((i as f32 + 0.5) / 32.0, (j as f32 + 0.5) / 32.0);
                 let w = uniform_sphere(u);
-                assert!((w.length() - 1.0).abs() < 1e-6, "{u}: {w}");
-                assert!((w.z - (1.0 - 2.0 * u.y)).abs() < 1e-6, "{u}: {w}");
+                mcg_test_support::assert_close!(w.length(), 1.0, 1e-6, "{u}: {w}");
+                mcg_test_support::assert_close!(w.z, (1.0 - 2.0 * u.y), 1e-6, "{u}: {w}");
                 let phi = w.y.atan2(w.x).rem_euclid(core::f32::consts::TAU);
-                assert!(
-                    (phi - core::f32::consts::TAU * u.x).abs() < 1e-4,
+                mcg_test_support::assert_close!(
+                    phi,
+                    core::f32::consts::TAU * u.x,
+                    1e-4,
                     "{u}: {w}"
                 );
             }

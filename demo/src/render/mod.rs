@@ -150,8 +150,16 @@ pub struct RenderReport {
     /// Seconds of each frame's tracing (scene building and upload of animated frames
     /// excluded): wall clock on the CPU; on the GPU the summed timestamp-query time of the
     /// frame's passes when the adapter has timestamps, else the wall clock from the first
-    /// submission to the end of the wait (read-back excluded).
+    /// submission to the end of the wait (read-back excluded). The guide's end of frame is
+    /// included.
     pub frame_times_s: Vec<f64>,
+    /// CPU seconds (user + system, all threads) of this process during each frame, where the
+    /// system reports them (Linux `/proc/self/stat`; empty elsewhere). On a machine shared with
+    /// other work they measure a frame's cost better than the wall clock.
+    pub frame_cpu_times_s: Vec<f64>,
+    /// Of the wall-clock seconds, those of each frame's [`Guide::end_frame`] (`mcpg` only; empty for the
+    /// other methods).
+    pub end_frame_times_s: Vec<f64>,
     /// The reference, if any.
     pub reference: Option<PathBuf>,
     /// Errors of the running mean after each frame against the reference.
@@ -243,6 +251,8 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     };
     let mut sum = vec![Vec3::ZERO; (args.width * args.height) as usize];
     let mut frame_times_s = Vec::new();
+    let mut end_frame_times_s = Vec::new();
+    let mut frame_cpu_times_s = Vec::new();
     let mut errs = Vec::new();
     let mut frame_errs = Vec::new();
     for frame in 0..args.frames {
@@ -258,17 +268,23 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             image
         } else {
             let started = Instant::now();
+            let cpu_started = process_cpu_seconds();
             let image = match &mut guide {
                 Some(g) => {
                     g.set_camera(scene.camera.position);
                     let image =
                         render_frame(&scene, &settings, frame, || McpgSampler::new(g), || ());
+                    let ending = Instant::now();
                     g.end_frame();
+                    end_frame_times_s.push(ending.elapsed().as_secs_f64());
                     image
                 }
                 None => render_frame(&scene, &settings, frame, || BsdfSampler, || ()),
             };
             frame_times_s.push(started.elapsed().as_secs_f64());
+            if let (Some(a), Some(b)) = (cpu_started, process_cpu_seconds()) {
+                frame_cpu_times_s.push(b - a);
+            }
             image
         };
         progress.inc(1);
@@ -303,7 +319,13 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             frames: args.frames,
             bounces: args.bounces,
             seed: args.seed,
+            frame_cpu_times_s: if frame_cpu_times_s.len() == frame_times_s.len() {
+                frame_cpu_times_s
+            } else {
+                Vec::new()
+            },
             frame_times_s,
+            end_frame_times_s,
             reference: args.reference.clone(),
             errors: errs,
             frame_errors: frame_errs,
@@ -311,6 +333,18 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         },
         guide: guide.map(Arc::new),
     })
+}
+
+/// CPU seconds (user + system) this process has used, from `/proc/self/stat` (fields 14 and
+/// 15, in clock ticks of 1/100 s); `None` where that file does not exist.
+fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // The fields after the parenthesised command name start with field 3.
+    let rest = stat.get(stat.rfind(')')? + 2..)?;
+    let mut fields = rest.split_whitespace().skip(11);
+    let user: f64 = fields.next()?.parse().ok()?;
+    let system: f64 = fields.next()?.parse().ok()?;
+    Some((user + system) / 100.0)
 }
 
 /// The process-wide GPU tracer for `device` and `method`, created on first use (device

@@ -239,7 +239,18 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
             INTENSITY_RANGE.0, INTENSITY_RANGE.1
         ));
 
-    // Per-codec errors.
+    codec_errors(ctx, &mut section, &slices, &codecs)?;
+    grid_search_subsection(ctx, &mut section, &slices)?;
+    Ok(section)
+}
+
+/// Every codec on the slices: the error table, the error maps and the error profile.
+fn codec_errors(
+    ctx: &Context<'_>,
+    section: &mut Section,
+    slices: &[Slice],
+    codecs: &[Box<dyn ColorCodec>],
+) -> Result<()> {
     let mut table = Table::new(
         "Reconstruction error against f32 over all three slices (per-slice values in the figure's error maps)",
         [
@@ -255,10 +266,10 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
         .iter()
         .flat_map(|s| s.pixels.iter().copied())
         .collect();
-    for codec in &codecs {
+    for codec in codecs {
         let mut decoded = Vec::new();
         let mut per_slice = Vec::new();
-        for s in &slices {
+        for s in slices {
             let (_, d) = evaluate(codec.as_ref(), s);
             decoded.extend_from_slice(&d);
             per_slice.push(d);
@@ -275,9 +286,9 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
     }
 
     let maps_file = "color-codec-error-maps.png";
-    error_maps(ctx, maps_file, &slices, &codecs, &decoded_all)?;
+    error_maps(ctx, maps_file, slices, codecs, &decoded_all)?;
     let profile_file = "color-codec-error-vs-intensity.png";
-    error_profile(ctx, profile_file, &slices[0], &codecs)?;
+    error_profile(ctx, profile_file, &slices[0], codecs)?;
 
     section
         .heading("Reconstruction error of each codec")
@@ -299,9 +310,16 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
              end, frequent in indirect light, to the bright end). The float formats keep a \
              constant relative error over the whole range; gamma-5 UNORM clips above 1.",
         );
+    Ok(())
+}
 
-    // Grid search.
-    let grid = grid_search(&slices)?;
+/// Appendix B's grid search over (β, γ): the chart, the best cells and where (5, 15) ranks.
+fn grid_search_subsection(
+    ctx: &Context<'_>,
+    section: &mut Section,
+    slices: &[Slice],
+) -> Result<()> {
+    let grid = grid_search(slices)?;
     let lum = |p: &GridPoint| p.errors.luminance_rms;
     let rel = |p: &GridPoint| p.errors.relative_luminance_rms;
     let corr = |p: &GridPoint| -p.errors.correlation;
@@ -317,10 +335,25 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
         .copied()
         .find(|p| p.beta == 5.0 && p.gamma == 15.0)
         .ok_or("(5, 15) not in grid")?;
-    let rank_by =
-        |f: &dyn Fn(&GridPoint) -> f64| grid.iter().filter(|p| f(p) < f(&paper)).count() + 1;
-    let (rank_lum, rank_rel, rank_corr) = (rank_by(&lum), rank_by(&rel), rank_by(&corr));
+    let grid_file = grid_chart(ctx, &grid, &paper, &best_lum)?;
+    grid_text(
+        section,
+        &grid,
+        grid_file,
+        &paper,
+        [best_lum, best_rel, best_corr],
+    );
+    Ok(())
+}
 
+/// Luminance RMS against γ, one line per β, the paper's (5, 15) marked; returns the file name.
+fn grid_chart(
+    ctx: &Context<'_>,
+    grid: &[GridPoint],
+    paper: &GridPoint,
+    best_lum: &GridPoint,
+) -> Result<&'static str> {
+    let lum = |p: &GridPoint| p.errors.luminance_rms;
     let grid_file = "color-codec-grid-search.png";
     let shown = [2.0, 3.0, 4.0, 5.0, 6.0, 8.0];
     let series = shown
@@ -341,7 +374,7 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
         .chain(std::iter::once(Series::triangles(
             "(5, 15)",
             PALETTE[5],
-            vec![(15.0, lum(&paper))],
+            vec![(15.0, lum(paper))],
         )))
         .collect();
     let max_y = grid
@@ -357,14 +390,32 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
             x: Axis::log10("γ", 0.4..1200.0),
             y: Axis::log10(
                 "luminance RMS (Ŷ − Y)",
-                (lum(&best_lum) * 0.8)..(max_y * 1.2),
+                (lum(best_lum) * 0.8)..(max_y * 1.2),
             ),
             series,
             legend: SeriesLabelPosition::UpperRight,
         },
     )?;
+    Ok(grid_file)
+}
 
-    let mut sorted = grid.clone();
+/// The grid-search text, the table of the best cells and the summary sentence; `best` holds
+/// the best cells by luminance RMS, relative luminance RMS and colour correlation.
+fn grid_text(
+    section: &mut Section,
+    grid: &[GridPoint],
+    grid_file: &str,
+    paper: &GridPoint,
+    best: [GridPoint; 3],
+) {
+    let [best_lum, best_rel, best_corr] = best;
+    let lum = |p: &GridPoint| p.errors.luminance_rms;
+    let rel = |p: &GridPoint| p.errors.relative_luminance_rms;
+    let corr = |p: &GridPoint| -p.errors.correlation;
+    let rank_by =
+        |f: &dyn Fn(&GridPoint) -> f64| grid.iter().filter(|p| f(p) < f(paper)).count() + 1;
+    let (rank_lum, rank_rel, rank_corr) = (rank_by(&lum), rank_by(&rel), rank_by(&corr));
+    let mut sorted = grid.to_vec();
     sorted.sort_by(|a, b| lum(a).total_cmp(&lum(b)));
     let mut gtable = Table::new(
         "Best (β, γ) by luminance RMS (the paper's metric), and the paper's choice",
@@ -381,7 +432,7 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
         gtable.push_row(grid_row(i + 1, p));
     }
     if rank_lum > 6 {
-        gtable.push_row(grid_row(rank_lum, &paper));
+        gtable.push_row(grid_row(rank_lum, paper));
     }
     let n = grid.len();
     let at = |p: &GridPoint| format!("({}, {})", p.beta, p.gamma);
@@ -402,8 +453,8 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
         },
         at(&best_lum),
         lum(&best_lum),
-        lum(&paper),
-        100.0 * (lum(&paper) / lum(&best_lum) - 1.0),
+        lum(paper),
+        100.0 * (lum(paper) / lum(&best_lum) - 1.0),
         at(&best_corr),
         at(&best_rel),
         INTENSITY_RANGE.0,
@@ -426,7 +477,6 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
         )
         .table(gtable)
         .paragraph(&sentence);
-    Ok(section)
 }
 
 fn grid_row(rank: usize, p: &GridPoint) -> [String; 6] {

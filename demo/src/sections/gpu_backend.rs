@@ -53,7 +53,28 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
         ],
     );
 
-    // vMF pdf.
+    table.push_row(vmf_pdf_row(&gpu, &mut rng, n)?);
+    for row in hashgrid_rows(&gpu, &mut rng, n)? {
+        table.push_row(row);
+    }
+    table.push_row(logluv_row(&gpu, &mut rng, n)?);
+    section.table(table);
+    section.paragraph(
+        "The full parity suites (`cargo test -p mcg-gpu-backend --test gpu --test twins`) add \
+         sampling, reconstruction from sufficient statistics, products, convolutions and \
+         mixtures, all bucket hashes, static-grid keys and jittered vertices, table outcomes \
+         one by one including the full table, eviction by age, every packed colour word \
+         (LogLuv32 over every luminance boundary and every code), the concurrent moving average \
+         of shared texels, and the MCPG grid and MCMM pixel states.",
+    );
+    Ok(section)
+}
+
+/// One table row: `check`, `inputs`, `result`, `GPU time`.
+type Row = [String; 4];
+
+/// vMF densities of `n` lobes on the GPU against the CPU, by relative error.
+fn vmf_pdf_row(gpu: &GpuContext, rng: &mut Pcg64Mcg, n: usize) -> Result<Row> {
     let lobes: Vec<Vmf> = (0..n)
         .map(|i| {
             let mu = Vec3::new(
@@ -73,7 +94,7 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
         .collect();
     let kernels = VmfKernels::new();
     let t = Instant::now();
-    let (pdfs, _) = kernels.pdf_and_sample(&gpu, &lobes, &queries)?;
+    let (pdfs, _) = kernels.pdf_and_sample(gpu, &lobes, &queries)?;
     let dt = t.elapsed();
     let worst = lobes
         .iter()
@@ -84,14 +105,17 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
             (f64::from(*g) - c).abs() / c.max(1e-30)
         })
         .fold(0.0_f64, f64::max);
-    table.push_row([
+    Ok([
         "vMF pdf, κ ∈ {0.1, 3, 50, 10⁴}".to_owned(),
         n.to_string(),
         format!("largest relative error {worst:.1e}"),
         format!("{:.1} ms", dt.as_secs_f64() * 1e3),
-    ]);
+    ])
+}
 
-    // Hashes and checksums, and racing inserts.
+/// Racing inserts into a GPU table against the CPU's key set, and the bucket hash and
+/// checksum bit for bit.
+fn hashgrid_rows(gpu: &GpuContext, rng: &mut Pcg64Mcg, n: usize) -> Result<[Row; 2]> {
     let keys: Vec<CellKey> = (0..n)
         .map(|_| {
             let c = IVec3::new(
@@ -104,11 +128,11 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
         .collect();
     let capacity = (2 * n as u32).next_power_of_two();
     let empty = HashTable::<u32>::new(capacity, 32, BucketHash::Mix)?;
-    let table_gpu = GpuHashTable::upload(&gpu, &empty)?;
+    let table_gpu = GpuHashTable::upload(gpu, &empty)?;
     let t = Instant::now();
-    let outcomes = table_gpu.insert_or_get(&gpu, &keys)?;
+    let outcomes = table_gpu.insert_or_get(gpu, &keys)?;
     let dt = t.elapsed();
-    let words = table_gpu.read_checksums(&gpu)?;
+    let words = table_gpu.read_checksums(gpu)?;
     let cpu = ConcurrentTable::new(capacity, 32, BucketHash::Mix)?;
     for k in &keys {
         let _ = cpu.insert_or_get(k);
@@ -126,7 +150,7 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
         .zip(&outcomes)
         .filter(|(k, o)| o.slot().is_some_and(|s| words[s as usize] == checksum(k)))
         .count();
-    table.push_row([
+    let inserts = [
         "racing insert-or-get: same key set as the CPU".to_owned(),
         format!("{n} inserts, {} distinct keys", b.len()),
         format!(
@@ -134,25 +158,29 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
             if a == b { "identical" } else { "DIFFERENT" }
         ),
         format!("{:.1} ms", dt.as_secs_f64() * 1e3),
-    ]);
+    ];
 
     let hash_kernels = HashgridKernels::new();
-    hash_kernels.hashes(&gpu, &keys[..1])?; // builds the pipeline outside the timing
+    hash_kernels.hashes(gpu, &keys[..1])?; // builds the pipeline outside the timing
     let t = Instant::now();
-    let hashes = hash_kernels.hashes(&gpu, &keys)?;
+    let hashes = hash_kernels.hashes(gpu, &keys)?;
     let dt = t.elapsed();
     let same = keys
         .iter()
         .zip(&hashes)
         .filter(|(k, h)| h[1] == hash_mix(k) && h[3] == checksum(k))
         .count();
-    table.push_row([
+    let hashes_row = [
         "pcg4d bucket hash and checksum, bit for bit".to_owned(),
         n.to_string(),
         format!("{same}/{n} identical"),
         format!("{:.1} ms", dt.as_secs_f64() * 1e3),
-    ]);
-    // LogLuv32: the CPU encodes in f64, the GPU decides the same codes exactly in f32.
+    ];
+    Ok([inserts, hashes_row])
+}
+
+/// LogLuv32: the CPU encodes in f64, the GPU decides the same codes exactly in f32.
+fn logluv_row(gpu: &GpuContext, rng: &mut Pcg64Mcg, n: usize) -> Result<Row> {
     let colours: Vec<Vec3> = (0..n)
         .map(|_| {
             let base = rng.random_range(-40.0..40.0_f32);
@@ -161,29 +189,19 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
         .collect();
     let words: Vec<u32> = (0..n).map(|_| rng.random()).collect();
     let codec_kernels = CodecKernels::new();
-    codec_kernels.logluv(&gpu, &colours[..1], &words[..1])?; // builds the pipeline
+    codec_kernels.logluv(gpu, &colours[..1], &words[..1])?; // builds the pipeline
     let t = Instant::now();
-    let reads = codec_kernels.logluv(&gpu, &colours, &words)?;
+    let reads = codec_kernels.logluv(gpu, &colours, &words)?;
     let dt = t.elapsed();
     let same = colours
         .iter()
         .zip(&reads)
         .filter(|(c, r)| r.packed[0] == mcg_color_codec::LogLuv32::pack_xyz(**c))
         .count();
-    table.push_row([
+    Ok([
         "LogLuv32 words (f64 on the CPU, exact f32 on the GPU), bit for bit".to_owned(),
         n.to_string(),
         format!("{same}/{n} identical"),
         format!("{:.1} ms", dt.as_secs_f64() * 1e3),
-    ]);
-    section.table(table);
-    section.paragraph(
-        "The full parity suites (`cargo test -p mcg-gpu-backend --test gpu --test twins`) add \
-         sampling, reconstruction from sufficient statistics, products, convolutions and \
-         mixtures, all bucket hashes, static-grid keys and jittered vertices, table outcomes \
-         one by one including the full table, eviction by age, every packed colour word \
-         (LogLuv32 over every luminance boundary and every code), the concurrent moving average \
-         of shared texels, and the MCPG grid and MCMM pixel states.",
-    );
-    Ok(section)
+    ])
 }

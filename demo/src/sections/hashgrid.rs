@@ -438,6 +438,6 @@ mod tests {
         assert!(points.len() >= 15);
         assert!(points.windows(2).all(|w| w[0].load < w[1].load));
         assert!(points[0].mean_probe >= 1.0 && points[0].mean_probe < 1.2);
-        assert!((knuth_successful(0.5) - 1.5).abs() < 1e-12);
+        mcg_tests::assert_close!(knuth_successful(0.5), 1.5, 1e-12);
     }
 }

@@ -13,6 +13,7 @@
 
 use std::f64::consts::PI;
 
+use indicatif::ProgressBar;
 use mcg_markov_guide::glam::{Vec2, Vec3};
 use mcg_markov_guide::mcg_smis::Technique;
 use mcg_markov_guide::mcmm::{CosineChainTechnique, McmmParams, PixelState, ScoreDensity, update};
@@ -304,9 +305,17 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
          irradiance has a closed form.",
     );
 
-    // 1. MCMM Fig. 2.
-    let iterations = (ctx.config.samples).max(10_000);
     let bar = ctx.progress(3, "Markov guide: experiments");
+    chain_figure(ctx, &mut section, &bar)?;
+    moving_light(ctx, &mut section, &bar)?;
+    adaptation_ratios(ctx, &mut section, &bar);
+    bar.finish_and_clear();
+    Ok(section)
+}
+
+/// MCMM Fig. 2 in 1-D: one chain's sample histograms against the integrand.
+fn chain_figure(ctx: &Context<'_>, section: &mut Section, bar: &ProgressBar) -> Result<()> {
+    let iterations = (ctx.config.samples).max(10_000);
     let (reference, snapshots) = chain_histograms(iterations, ctx.config.seed);
     bar.inc(1);
     let edges: Vec<f64> = (0..=BINS)
@@ -366,8 +375,11 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
              widths spread the mass."
         ))
         .figure("markov-guide-fig2.png", "Sample histograms of one MCMM chain against the integrand (MCMM Fig. 2 in 1-D).");
+    Ok(())
+}
 
-    // 2. Convergence with a moving light.
+/// Guided vs cosine sampling over frames under a moving light: the chart and the table.
+fn moving_light(ctx: &Context<'_>, section: &mut Section, bar: &ProgressBar) -> Result<()> {
     let frames = if ctx.config.samples < 1_000_000 {
         30
     } else {
@@ -427,8 +439,11 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
             "Relative RMS error per frame of each sampler.",
         )
         .table(table);
+    Ok(())
+}
 
-    // 3. Adaptation ratios.
+/// Guided / cosine variance ratios with one and eight static lights, and what they mean.
+fn adaptation_ratios(ctx: &Context<'_>, section: &mut Section, bar: &ProgressBar) {
     let quick = ctx.config.samples < 1_000_000;
     let ratios = adaptation(
         if quick { 60 } else { 300 },
@@ -436,7 +451,6 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
         ctx.config.seed,
     );
     bar.inc(1);
-    bar.finish_and_clear();
     let mut table = Table::new(
         "Mean squared relative error of a frame, guided / cosine sampling (static lights, after 20 frames of warm-up)",
         [
@@ -476,5 +490,4 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
              integrand scores the same everywhere, so acceptance keeps the states' learning."
         ))
         .table(table);
-    Ok(section)
 }

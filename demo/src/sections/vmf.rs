@@ -819,7 +819,7 @@ mod tests {
                     )
                 })
                 .sum();
-            assert!((total - 1.0).abs() < 1e-12, "{kappa}: {total}");
+            mcg_tests::assert_close!(total, 1.0, 1e-12, "{kappa}: {total}");
         }
     }
 
@@ -828,7 +828,7 @@ mod tests {
         // mcg-tests switches from the series to the closed form at κ = 10⁻³.
         let a = exact_mean_t(0.999_999e-3);
         let b = exact_mean_t(1.000_001e-3);
-        assert!((a - b).abs() < 1e-9, "{a} {b}");
+        mcg_tests::assert_close!(a, b, 1e-9, "{a} {b}");
         assert_eq!(exact_mean_t(0.0), 1.0);
     }
 
@@ -839,7 +839,7 @@ mod tests {
         let (chi2, dof) = h.chi_squared();
         assert!(chi2 / (dof as f64) < 2.0, "chi2/dof {}", chi2 / dof as f64);
         let (mean, se) = h.mean_t();
-        assert!((mean - exact_mean_t(10.0)).abs() < 5.0 * se);
+        mcg_tests::assert_close!(mean, exact_mean_t(10.0), 5.0 * se);
     }
 
     #[test]

@@ -3,5 +3,7 @@
 //! | guide | WGSL module | host object | CPU reference |
 //! |---|---|---|---|
 //! | MCPG (Alber et al. 2025) | `mcg::mcpg` ([`Module::Mcpg`](crate::shaders::Module::Mcpg)) | [`mcpg::GpuMcpgGuide`] (feature `runtime`) | `mcg_markov_guide::mcpg::Guide` |
+//! | MCMM (Dittebrandt et al. 2023) | `mcg::mcmm` ([`Module::Mcmm`](crate::shaders::Module::Mcmm)) | [`mcmm::GpuMcmmGuide`] (feature `runtime`) | `mcg_markov_guide::mcmm` |
 
+pub mod mcmm;
 pub mod mcpg;

@@ -54,6 +54,11 @@ const MCPG_GUARD_FIRST_STAMP: u32 = 2u;
 const MCPG_FRAME_WORD: u32 = 0u;
 const MCPG_HEADER_WORDS: u32 = 4u;
 const MCPG_MAX_CANDIDATES: u32 = 8u;
+const MCMM_SCORE_TECHNIQUE: u32 = 0u;
+const MCMM_SCORE_TILE_MIXTURE: u32 = 1u;
+const MCMM_PRIOR_FIXED: u32 = 0u;
+const MCMM_PRIOR_LIGHT_SIZE: u32 = 1u;
+const MCMM_MAX_TILE_SIZE: u32 = 32u;
 
 // mcg-vmf
 const VMF_KAPPA_MAX: f32 = 1000000.0;

@@ -26,10 +26,11 @@
 //! | `mcg::color_codec_texels` | the moving average as a compare-and-swap loop on `mcg_codec_texels` | `MovingAverage::update_atomic` |
 //! | `mcg::markov` | `MarkovGridState` (MCPG) and `MarkovPixelState` (MCMM): read, pack, validity, prediction (MCPG eq. 10), lobe | `mcg_markov_guide::{mcpg, mcmm}` |
 //! | `mcg::mcpg` | the whole MCPG guide: `mcpg_begin`, `mcpg_sample`, `mcpg_pdf`, `mcpg_finish`, the irradiance cache, the per-frame pass, on the group of [`defs::MCPG_GROUP`] (host: `GpuMcpgGuide`) | `mcg_markov_guide::mcpg::Guide` |
+//! | `mcg::mcmm` | MCMM's pixel chains: `McmmParams` and the guide's bindings, Alg. 1 (B-spline offsets, motion, reservoir), Alg. 2 (technique, pdf, sample), Alg. 3 (`mcmm_update`), tile shuffles and the tile-mixture density through workgroup memory | `mcg_markov_guide::mcmm`, `mcg_smis::{CyclicShift, XorPermutation}` |
 //! | `mcg::dispatch` | `mcg_invocation_index` of a [`GpuContext::dispatch`](crate::GpuContext::dispatch) | — |
 //!
 //! # Names
-//! Every module-scope name starts with `mcg`, `vmf`, `hashgrid`, `codec` or `markov` (in the
+//! Every module-scope name starts with `mcg`, `vmf`, `hashgrid`, `codec`, `markov` or `mcmm` (in the
 //! case of its kind: `vmf_pdf`, `Vmf`, `VMF_KAPPA_MAX`), so the library never clashes with
 //! your code in plain WGSL either (a test scans every module).
 //!
@@ -39,7 +40,10 @@
 //! [`defs::HASHGRID_GROUP`], [`defs::HASHGRID_BINDING`]), `mcg::color_codec_texels` and
 //! `mcg::color_codec_logluv`. All hash tables of a shader share the one `mcg_hashgrid_words`
 //! array; a `HashgridTable` descriptor (offset and capacity) picks the table, so an adaptive
-//! grid, a static grid and an irradiance cache sit side by side in one buffer.
+//! grid, a static grid and an irradiance cache sit side by side in one buffer. `mcg::mcmm`
+//! declares the MCMM guide's three bindings (parameters, previous and current states) at
+//! bindings 0-2 of the group [`defs::MCMM_GROUP`] names (`GpuMcmmGuide` builds the matching
+//! layout), and a workgroup array for its tile shuffles.
 //!
 //! # Example
 //! ```
@@ -87,6 +91,11 @@ pub mod defs {
     pub const MCPG_GROUP: &str = "MCG_MCPG_GROUP";
     /// K, the number of lobes of `VmfMixture` (`mcg::vmf_mixture`); 4 when not set.
     pub const VMF_MIXTURE_K: &str = "MCG_VMF_MIXTURE_K";
+    /// Bind group of the MCMM guide's parameters and state buffers (`mcg::mcmm`, bindings 0-2).
+    pub const MCMM_GROUP: &str = "MCG_MCMM_GROUP";
+    /// Set (any value) to compile `mcg::mcmm`'s subgroup shuffles (`mcmm_subgroup_*`; the
+    /// device needs wgpu's `SUBGROUP` feature).
+    pub const MCMM_SUBGROUPS: &str = "MCG_MCMM_SUBGROUPS";
 }
 
 /// One module of the shader library.
@@ -119,11 +128,13 @@ pub enum Module {
     Dispatch,
     /// `mcg::mcpg`: the MCPG guide (MCPG Alg. 1-3, the irradiance cache, the per-frame pass).
     Mcpg,
+    /// `mcg::mcmm`: MCMM's screen-space chains (Alg. 1-3) and tile shuffles.
+    Mcmm,
 }
 
 impl Module {
     /// Every module, each after the modules it imports.
-    pub const ALL: [Module; 13] = [
+    pub const ALL: [Module; 14] = [
         Module::Constants,
         Module::Math,
         Module::Dispatch,
@@ -137,6 +148,7 @@ impl Module {
         Module::ColorCodecTexels,
         Module::Markov,
         Module::Mcpg,
+        Module::Mcmm,
     ];
 
     /// The naga_oil import path, e.g. `"mcg::vmf"`.
@@ -156,6 +168,7 @@ impl Module {
             Module::Markov => "mcg::markov",
             Module::Dispatch => "mcg::dispatch",
             Module::Mcpg => "mcg::mcpg",
+            Module::Mcmm => "mcg::mcmm",
         }
     }
 
@@ -176,6 +189,7 @@ impl Module {
             Module::Markov => "mcg/markov.wgsl",
             Module::Dispatch => "mcg/dispatch.wgsl",
             Module::Mcpg => "mcg/mcpg.wgsl",
+            Module::Mcmm => "mcg/mcmm.wgsl",
         }
     }
 
@@ -196,6 +210,7 @@ impl Module {
             Module::Markov => include_str!("markov.wgsl"),
             Module::Dispatch => include_str!("dispatch.wgsl"),
             Module::Mcpg => include_str!("../guides/mcpg/mcpg.wgsl"),
+            Module::Mcmm => include_str!("../guides/mcmm/mcmm.wgsl"),
         }
     }
 
@@ -208,6 +223,7 @@ impl Module {
             Module::ColorCodecLogluv => &[defs::CODEC_LOGLUV_GROUP, defs::CODEC_LOGLUV_BINDING],
             Module::VmfMixture => &[defs::VMF_MIXTURE_K],
             Module::Mcpg => &[defs::MCPG_GROUP],
+            Module::Mcmm => &[defs::MCMM_GROUP, defs::MCMM_SUBGROUPS],
             _ => &[],
         }
     }

@@ -237,7 +237,7 @@ pub(crate) mod tests {
         }
         for (k, w) in [1.0, 3.0, 4.0].iter().enumerate() {
             let p = counts[k] as f32 / (n * n) as f32;
-            assert!((p - w / 8.0).abs() < 0.01, "{k}: {p}");
+            mcg_test_support::assert_close!(p, w / 8.0, 0.01, "candidate {k}");
         }
         assert_eq!(CandidateSet::<2>::new().selected(), None);
     }

@@ -175,7 +175,7 @@ mod tests {
             .pdf(w);
         let want = 0.1 * 0.2 + 0.9 * (0.25 * va + 0.75 * vb);
         let got = set.pdf(Vec3::ZERO, w, 0.2, &p);
-        assert!((got - want).abs() < 1e-5 * want, "{got} vs {want}");
+        mcg_test_support::assert_close!(got, want, 1e-5 * want);
         let (t, s) = choose_technique(set.selected(), Vec3::ZERO, 0.5, &p);
         assert!(matches!(t, SampleChoice::Lobe(_)));
         assert_eq!(s, *set.selected().unwrap());

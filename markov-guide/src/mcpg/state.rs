@@ -60,7 +60,7 @@ impl GridState {
             mean_target: stats.mean_target,
             weight_sum: stats.weight_sum,
             one_minus_mean_cosine: stats.one_minus_mean_cosine,
-            time: if time.is_finite() { time } else { 0.0 },
+            time: mcg_smis::finite_or_zero(time),
             velocity: [0; 3],
             sample_count: stats.sample_count.min(u16::MAX as u32) as u16,
         };
