@@ -459,7 +459,7 @@ fn gpu_reads_base_colour_textures_as_the_cpu() {
 
 /// `render` with `--device gpu` renders on the GPU and says so in its report (for `nee` and
 /// `mcpg`): device, adapter, timing method, one positive time per frame; `mcpg` keeps no CPU
-/// guide.
+/// guide and reports its guide pass's time per frame.
 #[test]
 fn render_command_on_the_gpu() {
     if gpu_or_skip("render_command_on_the_gpu").is_none() {
@@ -500,4 +500,7 @@ fn render_on_the_gpu(method: Method) {
         rendered.guide.is_none(),
         "{method:?} on the GPU uses no CPU guide"
     );
+    let guide_passes = if method == Method::Mcpg { 2 } else { 0 };
+    assert_eq!(report.end_frame_times_s.len(), guide_passes);
+    assert!(report.end_frame_times_s.iter().all(|&t| t > 0.0));
 }

@@ -218,6 +218,8 @@ pub struct GpuTracer {
     guided: Option<Guided>,
     /// The compiled `mcpg` shader, kept for rebuilding its pipeline with a new guide.
     guided_module: Option<wgpu::ShaderModule>,
+    /// Wall-clock seconds of the last `mcpg` frame's guide pass.
+    last_end_frame_s: Option<f64>,
 }
 
 impl std::fmt::Debug for GpuTracer {
@@ -316,6 +318,7 @@ impl GpuTracer {
             timer,
             guided: None,
             guided_module: None,
+            last_end_frame_s: None,
         })
     }
 
@@ -413,6 +416,13 @@ impl GpuTracer {
         self.guided.as_ref().map(|g| &g.guide)
     }
 
+    /// Wall-clock seconds of the guide's per-frame pass in the last [`GpuTracer::render_frame`]
+    /// (part of its time), `None` when that frame was not `mcpg`.
+    #[must_use]
+    pub fn last_end_frame_s(&self) -> Option<f64> {
+        self.last_end_frame_s
+    }
+
     /// The tracer's device and queue.
     #[must_use]
     pub fn context(&self) -> &GpuContext {
@@ -501,7 +511,8 @@ impl GpuTracer {
     /// With [`Method::Mcpg`] the guide of [`GpuTracer::start_mcpg`] follows the camera, guides
     /// and learns in the frame's passes, and its per-frame pass ([`GpuMcpgGuide::end_frame`])
     /// runs after them; the frame's time includes that pass (its wall clock, submission to
-    /// the end of the wait, added to the timestamps when the adapter has them).
+    /// the end of the wait, added to the timestamps when the adapter has them; also
+    /// [`GpuTracer::last_end_frame_s`]).
     ///
     /// # Errors
     /// No scene uploaded, a method without WGSL twin, `mcpg` without a started guide, an image
@@ -643,20 +654,17 @@ impl GpuTracer {
             }
             self.ctx.queue().submit([encoder.finish()]);
         }
-        // The guide's per-frame pass, timed on the wall clock when the tiles have timestamps.
+        // The guide's per-frame pass, after the tiles, timed on the wall clock.
         let mut end_frame_s = 0.0;
+        self.last_end_frame_s = None;
         if guided.is_some() {
-            let timed = self.timer.is_some();
-            if timed {
-                self.wait()?;
-            }
+            self.wait()?;
             let ended = Instant::now();
             let g = self.guided.as_mut().expect("guided above");
             g.guide.end_frame(&self.ctx)?;
-            if timed {
-                self.wait()?;
-                end_frame_s = ended.elapsed().as_secs_f64();
-            }
+            self.wait()?;
+            end_frame_s = ended.elapsed().as_secs_f64();
+            self.last_end_frame_s = Some(end_frame_s);
         }
         self.wait()?;
         let wall = started.elapsed().as_secs_f64();

@@ -158,7 +158,8 @@ pub struct RenderReport {
     /// other work they measure a frame's cost better than the wall clock.
     pub frame_cpu_times_s: Vec<f64>,
     /// Of the wall-clock seconds, those of each frame's [`Guide::end_frame`] (`mcpg` only; empty for the
-    /// other methods).
+    /// other methods); on the GPU the wall clock of the guide's per-frame pass
+    /// ([`GpuTracer::last_end_frame_s`]).
     pub end_frame_times_s: Vec<f64>,
     /// The reference, if any.
     pub reference: Option<PathBuf>,
@@ -265,6 +266,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         let image = if let Some(g) = gpu.as_deref_mut() {
             let (image, seconds) = g.render_frame(&settings, frame)?;
             frame_times_s.push(seconds);
+            end_frame_times_s.extend(g.last_end_frame_s());
             image
         } else {
             let started = Instant::now();
