@@ -5,7 +5,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{furnace, scenes_dir};
+use common::{assert_tiles_agree, furnace, scenes_dir};
 use glam::Vec3;
 use mcg_demo::render::bvh::Hit;
 use mcg_demo::render::cpu::{
@@ -18,7 +18,6 @@ use mcg_demo::render::scene::{SceneError, SceneFile, frame_time};
 use mcg_demo::render::scene_generator::{DOOR_OPENS_AT_FRAME, SCENE_NAMES, built_in_scenes};
 use mcg_demo::render::{Device, RenderArgs, render, write_outputs};
 use mcg_tests::RunningStats;
-use statrs::distribution::{ContinuousCDF, Normal};
 
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("mcg-render-{name}-{}", std::process::id()));
@@ -280,29 +279,6 @@ fn furnace_matches_the_truncated_neumann_series() {
             );
         }
     }
-}
-
-/// Asserts that two sets of [`common::tile_stats`] agree: per tile and channel |z| below the
-/// Bonferroni threshold Φ⁻¹(1 − α/(2·tests)) at family-wise `alpha`; returns the worst |z|.
-fn assert_tiles_agree(a: &[[(f64, f64); 3]], b: &[[(f64, f64); 3]], alpha: f64, what: &str) -> f64 {
-    let tests = (a.len() * 3) as f64;
-    let threshold = Normal::standard().inverse_cdf(1.0 - alpha / (2.0 * tests));
-    let mut worst: f64 = 0.0;
-    for (t, (ta, tb)) in a.iter().zip(b).enumerate() {
-        for c in 0..3 {
-            let z = (ta[c].0 - tb[c].0) / (ta[c].1 + tb[c].1).sqrt();
-            assert!(
-                z.abs() < threshold,
-                "{what}: tile {t} channel {c}: {} vs {} z = {z:.2} (threshold {threshold:.2})",
-                ta[c].0,
-                tb[c].0
-            );
-            worst = worst.max(z.abs());
-        }
-    }
-    assert!(a.iter().flatten().all(|m| m.0 > 0.0), "every tile is lit");
-    eprintln!("{what}: worst |z| = {worst:.2} of threshold {threshold:.2}");
-    worst
 }
 
 /// Hypothesis: `bsdf` and `nee` estimate the same image. Scene: the built-in many-lights room,

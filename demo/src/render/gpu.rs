@@ -10,6 +10,12 @@
 //! [`super::cpu::path_seed`] and drawing its uniforms in the same order, so the two devices
 //! trace the same paths up to floating-point rounding.
 //!
+//! `mcpg` runs a second pipeline of the same shader, composed with the def [`MCPG_DEF`]: the
+//! GPU guide of [`mcg_gpu_backend::guides::mcpg`] ([`GpuMcpgGuide`], the twin of the CPU
+//! guide of [`super::guided`], built from the same [`GuideConfig`]) bound at group
+//! [`GUIDE_GROUP`], begun, sampled and finished at every scattering vertex, and its per-frame
+//! pass recorded after each frame's tiles.
+//!
 //! A frame is dispatched in square tiles of [`TILE`] pixels (one submission each, workgroups of
 //! 8 × 8 invocations, far below the 65 535 workgroups per dimension of WebGPU), so a large image
 //! never becomes one long-running submission. Frame times come from timestamp queries around
@@ -20,7 +26,9 @@ use std::time::Instant;
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
+use mcg_gpu_backend::guides::mcpg::GpuMcpgGuide;
 use mcg_gpu_backend::{ComputeKernel, GpuBuffer, GpuContext, GpuError, shaders, wgpu};
+use mcg_markov_guide::mcpg::GuideConfig;
 
 use super::bvh::{BvhNode, Triangle};
 use super::cpu::{Method, RenderSettings};
@@ -33,6 +41,17 @@ pub const SHADER: &str = include_str!("shaders/path_tracer.wgsl");
 
 /// Side of the square pixel tiles a frame is dispatched in (one submission per tile).
 pub const TILE: u32 = 512;
+
+/// The bind group of the MCPG guide in the `mcpg` pipeline.
+pub const GUIDE_GROUP: u32 = 1;
+
+/// The shader def that turns the tracer's `render` into `mcpg`'s (guided sampling at group
+/// [`GUIDE_GROUP`]).
+pub const MCPG_DEF: &str = "MCG_DEMO_MCPG";
+
+/// Storage buffers the `mcpg` pipeline binds: the tracer's 8 and the guide's 2 (more than
+/// WebGPU's default of 8; [`GpuTracer::new`] asks the adapter for its own maximum).
+pub const MCPG_STORAGE_BUFFERS: u32 = 10;
 
 /// Invocations per workgroup side of the `render` kernel (`@workgroup_size(8, 8)`).
 const GROUP: u32 = 8;
@@ -48,6 +67,7 @@ pub fn method_code(method: Method) -> Option<u32> {
     match method {
         Method::Bsdf => Some(0),
         Method::Nee => Some(1),
+        Method::Mcpg => Some(2),
         _ => None,
     }
 }
@@ -177,6 +197,15 @@ pub enum GpuTiming {
     Wall,
 }
 
+/// The `mcpg` pipeline: the guided `render` with an explicit layout (the tracer's group 0 and
+/// the guide's group), and the guide.
+struct Guided {
+    guide: GpuMcpgGuide,
+    pipeline: wgpu::ComputePipeline,
+    /// Group 0 of `pipeline`.
+    layout: wgpu::BindGroupLayout,
+}
+
 /// The GPU path tracer: a device, the compiled kernels and the uploaded scene.
 pub struct GpuTracer {
     ctx: GpuContext,
@@ -186,6 +215,11 @@ pub struct GpuTracer {
     scene: Option<SceneBuffers>,
     image: Option<GpuBuffer<[f32; 4]>>,
     timer: Option<Timer>,
+    guided: Option<Guided>,
+    /// The compiled `mcpg` shader, kept for rebuilding its pipeline with a new guide.
+    guided_module: Option<wgpu::ShaderModule>,
+    /// Wall-clock seconds of the last `mcpg` frame's guide pass.
+    last_end_frame_s: Option<f64>,
 }
 
 impl std::fmt::Debug for GpuTracer {
@@ -196,12 +230,28 @@ impl std::fmt::Debug for GpuTracer {
     }
 }
 
-/// The tracer's WGSL, composed with the modules of [`mcg_gpu_backend::shaders`] it imports.
+/// The tracer's WGSL for `bsdf` and `nee`, composed with the modules of
+/// [`mcg_gpu_backend::shaders`] it imports (`mcg::mcpg` among them, at group [`GUIDE_GROUP`],
+/// unused by `render` without [`MCPG_DEF`]).
 ///
 /// # Errors
 /// When composition fails (an unknown import).
 pub fn composed_shader() -> Result<String> {
-    Ok(shaders::compose(SHADER, &[])?)
+    Ok(shaders::compose(
+        SHADER,
+        &GpuMcpgGuide::shader_defs(GUIDE_GROUP),
+    )?)
+}
+
+/// The tracer's WGSL for `mcpg`: [`composed_shader`] with [`MCPG_DEF`] defined.
+///
+/// # Errors
+/// When composition fails (an unknown import).
+pub fn composed_mcpg_shader() -> Result<String> {
+    let guide = GpuMcpgGuide::shader_defs(GUIDE_GROUP);
+    let mut defs = guide.to_vec();
+    defs.push((MCPG_DEF, 1));
+    Ok(shaders::compose(SHADER, &defs)?)
 }
 
 impl GpuTracer {
@@ -266,7 +316,117 @@ impl GpuTracer {
             scene: None,
             image: None,
             timer,
+            guided: None,
+            guided_module: None,
+            last_end_frame_s: None,
         })
+    }
+
+    /// Starts `mcpg` with an empty guide of `config` (the CPU's
+    /// [`super::guided::guide_config`] for the same scene and image): a guide equal in
+    /// configuration to the current one is emptied ([`GpuMcpgGuide::reset`]), otherwise a new
+    /// one is made (its per-frame pass's pipelines built) and the `mcpg` pipeline (compiled
+    /// on the first call) is rebuilt around it.
+    /// [`GpuTracer::render_frame`] with [`Method::Mcpg`] then learns from frame to frame.
+    ///
+    /// # Errors
+    /// When the device binds fewer than [`MCPG_STORAGE_BUFFERS`] storage buffers per stage,
+    /// the configuration is invalid or too large for the device, or the shader fails.
+    pub fn start_mcpg(&mut self, config: &GuideConfig) -> Result<()> {
+        if let Some(g) = &mut self.guided
+            && g.guide.config() == config
+        {
+            g.guide.reset(&self.ctx);
+            return Ok(());
+        }
+        let device = self.ctx.device();
+        let available = device.limits().max_storage_buffers_per_shader_stage;
+        if available < MCPG_STORAGE_BUFFERS {
+            return Err(format!(
+                "mcpg on the GPU binds {MCPG_STORAGE_BUFFERS} storage buffers per stage; this \
+                 device allows {available}"
+            )
+            .into());
+        }
+        let mut guide = GpuMcpgGuide::new(&self.ctx, config)?;
+        // Builds the per-frame pass's pipelines now (seconds on a software adapter), not in
+        // the first frame's time; `reset` then empties the guide again.
+        guide.end_frame(&self.ctx)?;
+        guide.reset(&self.ctx);
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        if self.guided_module.is_none() {
+            let source = composed_mcpg_shader()?;
+            self.guided_module = Some(device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("mcg-demo render mcpg"),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            }));
+        }
+        let module = self.guided_module.as_ref().expect("compiled above");
+        let entry = |binding: u32| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: match binding {
+                    0 => wgpu::BufferBindingType::Uniform,
+                    8 => wgpu::BufferBindingType::Storage { read_only: false },
+                    _ => wgpu::BufferBindingType::Storage { read_only: true },
+                },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let entries: Vec<wgpu::BindGroupLayoutEntry> = (0..=8).map(entry).collect();
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("mcg-demo render mcpg"),
+            entries: &entries,
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("mcg-demo render mcpg"),
+            bind_group_layouts: &[Some(&layout), Some(guide.bind_group_layout())],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("mcg-demo render mcpg"),
+            layout: Some(&pipeline_layout),
+            module,
+            entry_point: Some("render"),
+            compilation_options: wgpu::PipelineCompilationOptions::default(),
+            cache: None,
+        });
+        if let Some(error) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Shader {
+                entry_point: "render (mcpg)".to_owned(),
+                message: error.to_string(),
+            }
+            .into());
+        }
+        self.guided = Some(Guided {
+            guide,
+            pipeline,
+            layout,
+        });
+        Ok(())
+    }
+
+    /// The guide of `mcpg` ([`GpuTracer::start_mcpg`]), e.g. for
+    /// [`GpuMcpgGuide::read_back`] on [`GpuTracer::context`].
+    #[must_use]
+    pub fn mcpg_guide(&self) -> Option<&GpuMcpgGuide> {
+        self.guided.as_ref().map(|g| &g.guide)
+    }
+
+    /// Wall-clock seconds of the guide's per-frame pass in the last [`GpuTracer::render_frame`]
+    /// (part of its time), `None` when that frame was not `mcpg`.
+    #[must_use]
+    pub fn last_end_frame_s(&self) -> Option<f64> {
+        self.last_end_frame_s
+    }
+
+    /// The tracer's device and queue.
+    #[must_use]
+    pub fn context(&self) -> &GpuContext {
+        &self.ctx
     }
 
     /// A tracer on the device of `ctx`, sharing it (wgpu handles are reference-counted).
@@ -348,9 +508,15 @@ impl GpuTracer {
     /// mean radiance (row-major from the top-left, as [`super::cpu::render_frame`]) and the
     /// frame's time in seconds (see [`GpuTracer::timing`]).
     ///
+    /// With [`Method::Mcpg`] the guide of [`GpuTracer::start_mcpg`] follows the camera, guides
+    /// and learns in the frame's passes, and its per-frame pass ([`GpuMcpgGuide::end_frame`])
+    /// runs after them; the frame's time includes that pass (its wall clock, submission to
+    /// the end of the wait, added to the timestamps when the adapter has them; also
+    /// [`GpuTracer::last_end_frame_s`]).
+    ///
     /// # Errors
-    /// No scene uploaded, a method without WGSL twin, an image larger than the device's
-    /// largest storage binding, or a device error.
+    /// No scene uploaded, a method without WGSL twin, `mcpg` without a started guide, an image
+    /// larger than the device's largest storage binding, or a device error.
     pub fn render_frame(
         &mut self,
         settings: &RenderSettings,
@@ -375,9 +541,16 @@ impl GpuTracer {
         if self.image.as_ref().is_none_or(|b| b.len() != pixels) {
             self.image = Some(self.ctx.zeroed_buffer("mcg-demo image", pixels));
         }
+        let guided = settings.method == Method::Mcpg;
+        if guided && self.guided.is_none() {
+            return Err("GpuTracer: mcpg needs GpuTracer::start_mcpg first".into());
+        }
+        let camera = self.scene()?.camera;
+        if let Some(g) = self.guided.as_mut().filter(|_| guided) {
+            g.guide.set_camera(&self.ctx, camera.position);
+        }
         let scene = self.scene()?;
         let image = self.image.as_ref().expect("allocated above");
-        let camera = scene.camera;
         let tan_y = (0.5 * camera.yfov).tan();
         let base = GpuParams {
             camera_position: camera.position.to_array(),
@@ -398,8 +571,15 @@ impl GpuTracer {
             texture_count: scene.textures.len() as u32,
             ..GpuParams::default()
         };
+        let guided = self.guided.as_ref().filter(|_| guided);
+        let (pipeline, layout) = match guided {
+            Some(g) => (&g.pipeline, &g.layout),
+            None => (self.render.pipeline(), self.render.bind_group_layout()),
+        };
         let bind_group = self.bind_group(
-            &self.render,
+            "render",
+            layout,
+            &[0, 1, 2, 3, 4, 5, 6, 7, 8],
             &[
                 self.params.raw(),
                 scene.nodes.raw(),
@@ -461,8 +641,11 @@ impl GpuTracer {
                     label: Some("mcg-demo render"),
                     timestamp_writes,
                 });
-                pass.set_pipeline(self.render.pipeline());
+                pass.set_pipeline(pipeline);
                 pass.set_bind_group(0, &bind_group, &[]);
+                if let Some(g) = guided {
+                    pass.set_bind_group(GUIDE_GROUP, g.guide.bind_group(), &[]);
+                }
                 pass.dispatch_workgroups(
                     params.tile_width.div_ceil(GROUP),
                     params.tile_height.div_ceil(GROUP),
@@ -471,6 +654,18 @@ impl GpuTracer {
             }
             self.ctx.queue().submit([encoder.finish()]);
         }
+        // The guide's per-frame pass, after the tiles, timed on the wall clock.
+        let mut end_frame_s = 0.0;
+        self.last_end_frame_s = None;
+        if guided.is_some() {
+            self.wait()?;
+            let ended = Instant::now();
+            let g = self.guided.as_mut().expect("guided above");
+            g.guide.end_frame(&self.ctx)?;
+            self.wait()?;
+            end_frame_s = ended.elapsed().as_secs_f64();
+            self.last_end_frame_s = Some(end_frame_s);
+        }
         self.wait()?;
         let wall = started.elapsed().as_secs_f64();
         if let Some(error) = pollster::block_on(scope.pop()) {
@@ -478,7 +673,7 @@ impl GpuTracer {
         }
         let seconds = match &self.timer {
             Some(timer) if timed_tiles == tiles.len() as u32 => {
-                timer.read(&self.ctx, timed_tiles)?
+                timer.read(&self.ctx, timed_tiles)? + end_frame_s
             }
             _ => wall,
         };
@@ -509,7 +704,9 @@ impl GpuTracer {
         let queries = self.ctx.storage_buffer("mcg-demo rays", rays);
         let hits: GpuBuffer<GpuHit> = self.ctx.zeroed_buffer("mcg-demo hits", rays.len());
         let bind_group = self.bind_group(
-            &self.rays,
+            self.rays.entry_point(),
+            self.rays.bind_group_layout(),
+            &[1, 2, 9, 10],
             &[
                 scene.nodes.raw(),
                 scene.triangles.raw(),
@@ -532,14 +729,15 @@ impl GpuTracer {
         Ok(self.ctx.read_back(&hits)?)
     }
 
-    /// A bind group of `kernel`'s group 0 from the WGSL bindings its entry point uses, in
-    /// binding order: `render` uses 0–8, `trace_rays` 1, 2, 9 and 10.
-    fn bind_group(&self, kernel: &ComputeKernel, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
-        let bindings: &[u32] = if kernel.entry_point() == "render" {
-            &[0, 1, 2, 3, 4, 5, 6, 7, 8]
-        } else {
-            &[1, 2, 9, 10]
-        };
+    /// A bind group of group 0 with `layout`, `buffers` at the WGSL `bindings`: `render` uses
+    /// 0–8, `trace_rays` 1, 2, 9 and 10.
+    fn bind_group(
+        &self,
+        label: &str,
+        layout: &wgpu::BindGroupLayout,
+        bindings: &[u32],
+        buffers: &[&wgpu::Buffer],
+    ) -> wgpu::BindGroup {
         let entries: Vec<wgpu::BindGroupEntry<'_>> = bindings
             .iter()
             .zip(buffers)
@@ -551,8 +749,8 @@ impl GpuTracer {
         self.ctx
             .device()
             .create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(kernel.entry_point()),
-                layout: kernel.bind_group_layout(),
+                label: Some(label),
+                layout,
                 entries: &entries,
             })
     }
@@ -632,33 +830,55 @@ impl Timer {
 mod tests {
     use super::*;
 
-    /// The composed tracer parses and validates with naga under WebGPU's capabilities alone
-    /// (no adapter needed, so CI without a GPU still checks the shader), both entry points
-    /// exist, and the `render` kernel binds at most the 8 storage buffers WebGPU guarantees.
-    #[test]
-    fn shader_validates_without_an_adapter() {
-        let source = composed_shader().unwrap();
-        let module = naga::front::wgsl::parse_str(&source)
-            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
-        naga::valid::Validator::new(
+    /// Parses and validates `source` under WebGPU's capabilities alone; the module and the
+    /// storage buffers `render` binds in groups 0 and [`GUIDE_GROUP`].
+    fn validate(source: &str) -> (naga::Module, usize, usize) {
+        let module = naga::front::wgsl::parse_str(source)
+            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)));
+        let info = naga::valid::Validator::new(
             naga::valid::ValidationFlags::all(),
             naga::valid::Capabilities::empty(),
         )
         .validate(&module)
-        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)));
+        let render = module
+            .entry_points
+            .iter()
+            .position(|e| e.name == "render")
+            .expect("render entry point");
+        let used = info.get_entry_point(render);
+        let storage = |group: u32| {
+            module
+                .global_variables
+                .iter()
+                .filter(|(h, g)| {
+                    !used[*h].is_empty()
+                        && matches!(g.space, naga::AddressSpace::Storage { .. })
+                        && g.binding.as_ref().is_some_and(|b| b.group == group)
+                })
+                .count()
+        };
+        let (tracer, guide) = (storage(0), storage(GUIDE_GROUP));
+        (module, tracer, guide)
+    }
+
+    /// The composed tracer parses and validates with naga under WebGPU's capabilities alone
+    /// (no adapter needed, so CI without a GPU still checks the shader), both entry points
+    /// exist, and the `render` kernel of `bsdf`/`nee` binds the 8 storage buffers WebGPU
+    /// guarantees and nothing of the guide's group; `mcpg`'s adds the guide's 2.
+    #[test]
+    fn shader_validates_without_an_adapter() {
+        let (module, tracer, guide) = validate(&composed_shader().unwrap());
         let names: Vec<&str> = module
             .entry_points
             .iter()
             .map(|e| e.name.as_str())
             .collect();
         assert_eq!(names, ["render", "trace_rays"]);
-        let storage = module
-            .global_variables
-            .iter()
-            .filter(|(_, g)| matches!(g.space, naga::AddressSpace::Storage { .. }))
-            .filter(|(_, g)| g.binding.as_ref().is_some_and(|b| b.binding <= 8))
-            .count();
-        assert_eq!(storage, 8, "render binds 1–8 as storage");
+        assert_eq!((tracer, guide), (8, 0), "render binds 1–8 as storage");
+        let (_, tracer, guide) = validate(&composed_mcpg_shader().unwrap());
+        assert_eq!(tracer + guide, MCPG_STORAGE_BUFFERS as usize);
+        assert_eq!(guide, 2, "the mcpg render binds the guide");
         assert_eq!(size_of::<GpuParams>(), 112);
     }
 }

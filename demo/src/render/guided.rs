@@ -60,16 +60,23 @@ impl Scatter for MaterialScatter {
     }
 }
 
+/// The guide's configuration for `scene` rendered `height` pixels high (both devices):
+/// [`GuideConfig::for_scene`] over the scene's bounds and [`GuideConfig::for_camera`] for its
+/// field of view.
+#[must_use]
+pub fn guide_config(scene: &Scene, height: u32) -> GuideConfig {
+    let root = scene.bvh.nodes[0];
+    GuideConfig::for_scene(Vec3::from(root.min), Vec3::from(root.max))
+        .for_camera(scene.camera.yfov, height)
+}
+
 /// The guide for `scene` rendered `height` pixels high: [`GuideConfig::for_scene`] over the
 /// scene's bounds and [`GuideConfig::for_camera`] for its field of view, the camera set.
 ///
 /// # Errors
 /// [`GuideError`] when the configuration is invalid (it is not for a finite scene).
 pub fn new_guide(scene: &Scene, height: u32) -> Result<Guide, GuideError> {
-    let root = scene.bvh.nodes[0];
-    let config = GuideConfig::for_scene(Vec3::from(root.min), Vec3::from(root.max))
-        .for_camera(scene.camera.yfov, height);
-    let mut guide = Guide::new(config)?;
+    let mut guide = Guide::new(guide_config(scene, height))?;
     guide.set_camera(scene.camera.position);
     Ok(guide)
 }

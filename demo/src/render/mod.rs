@@ -12,7 +12,7 @@
 //! | [`bvh`] | the flattened `#[repr(C)]` BVH and triangle layout, built by `obvhs`, walked by the CPU tracer and its WGSL twin |
 //! | [`material`] | Lambertian + GGX conductor materials with emission |
 //! | [`cpu`] | the CPU path tracer (rayon), methods `bsdf` and `nee`, the per-vertex sampler seam of the guides |
-//! | [`gpu`] | the WGSL twin of the CPU tracer on wgpu, over the same BVH, triangle and material buffers |
+//! | [`gpu`] | the WGSL twin of the CPU tracer on wgpu, over the same BVH, triangle and material buffers; `mcpg` with the GPU guide of `mcg-gpu-backend` |
 //! | [`guided`] | `mcpg` on the CPU: the MCPG guide behind the sampler seam |
 //! | [`output`] | EXR/PNG files, RMSE and relative MSE |
 //! | [`scene_generator`] | the built-in scenes |
@@ -40,7 +40,7 @@ use mcg_markov_guide::mcpg::Guide;
 use crate::Result;
 use cpu::{BsdfSampler, Method, RenderSettings, render_frame};
 use gpu::{GpuTiming, GpuTracer};
-use guided::{McpgSampler, new_guide};
+use guided::{McpgSampler, guide_config, new_guide};
 use output::{Errors, RgbImage, errors};
 use scene::{SceneFile, frame_time};
 
@@ -158,7 +158,8 @@ pub struct RenderReport {
     /// other work they measure a frame's cost better than the wall clock.
     pub frame_cpu_times_s: Vec<f64>,
     /// Of the wall-clock seconds, those of each frame's [`Guide::end_frame`] (`mcpg` only; empty for the
-    /// other methods).
+    /// other methods); on the GPU the wall clock of the guide's per-frame pass
+    /// ([`GpuTracer::last_end_frame_s`]).
     pub end_frame_times_s: Vec<f64>,
     /// The reference, if any.
     pub reference: Option<PathBuf>,
@@ -178,7 +179,7 @@ pub struct Rendered {
     pub image: RgbImage,
     /// Settings and measurements.
     pub report: RenderReport,
-    /// The guide as the last frame left it (`mcpg` only).
+    /// The CPU guide as the last frame left it (`mcpg` on the CPU only).
     pub guide: Option<Arc<Guide>>,
 }
 
@@ -220,12 +221,21 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     let mut gpu = gpu.map(|g| g.lock().unwrap_or_else(std::sync::PoisonError::into_inner));
     if let Some(g) = gpu.as_deref_mut() {
         g.upload(&scene)?;
+        if args.method == Method::Mcpg
+            && let Err(e) = g.start_mcpg(&guide_config(&scene, args.height))
+        {
+            if args.device == Device::Gpu {
+                return Err(format!("--device gpu: {e}").into());
+            }
+            eprintln!("mcg-demo: mcpg cannot run on this GPU ({e}) — rendering on the CPU");
+            gpu = None;
+        }
     }
     let mut guide = match args.method {
-        Method::Mcpg => {
+        Method::Mcpg if gpu.is_none() => {
             Some(new_guide(&scene, args.height).map_err(|e| format!("the MCPG guide: {e:?}"))?)
         }
-        Method::Bsdf | Method::Nee => None,
+        Method::Mcpg | Method::Bsdf | Method::Nee => None,
     };
     let progress = if args.no_progress {
         ProgressBar::hidden()
@@ -256,6 +266,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         let image = if let Some(g) = gpu.as_deref_mut() {
             let (image, seconds) = g.render_frame(&settings, frame)?;
             frame_times_s.push(seconds);
+            end_frame_times_s.extend(g.last_end_frame_s());
             image
         } else {
             let started = Instant::now();

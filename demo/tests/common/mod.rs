@@ -1,5 +1,5 @@
 //! Shared by the renderer's test files: the built-in scenes' folder, the furnace scene and the
-//! per-tile statistics of the expectation tests.
+//! per-tile statistics of the expectation tests and their z-test.
 #![allow(dead_code)] // each test file uses a part
 
 use std::path::{Path, PathBuf};
@@ -9,6 +9,7 @@ use mcg_demo::render::bvh::Triangle;
 use mcg_demo::render::material::Material;
 use mcg_demo::render::scene::{Camera, Scene};
 use mcg_tests::RunningStats;
+use statrs::distribution::{ContinuousCDF, Normal};
 
 /// `demo/scenes/`.
 pub fn scenes_dir() -> PathBuf {
@@ -98,4 +99,32 @@ pub fn tile_stats(
         }
     }
     out
+}
+
+/// Asserts that two sets of [`tile_stats`] agree: per tile and channel |z| below the
+/// Bonferroni threshold Φ⁻¹(1 − α/(2·tests)) at family-wise `alpha`; returns the worst |z|.
+pub fn assert_tiles_agree(
+    a: &[[(f64, f64); 3]],
+    b: &[[(f64, f64); 3]],
+    alpha: f64,
+    what: &str,
+) -> f64 {
+    let tests = (a.len() * 3) as f64;
+    let threshold = Normal::standard().inverse_cdf(1.0 - alpha / (2.0 * tests));
+    let mut worst: f64 = 0.0;
+    for (t, (ta, tb)) in a.iter().zip(b).enumerate() {
+        for c in 0..3 {
+            let z = (ta[c].0 - tb[c].0) / (ta[c].1 + tb[c].1).sqrt();
+            assert!(
+                z.abs() < threshold,
+                "{what}: tile {t} channel {c}: {} vs {} z = {z:.2} (threshold {threshold:.2})",
+                ta[c].0,
+                tb[c].0
+            );
+            worst = worst.max(z.abs());
+        }
+    }
+    assert!(a.iter().flatten().all(|m| m.0 > 0.0), "every tile is lit");
+    eprintln!("{what}: worst |z| = {worst:.2} of threshold {threshold:.2}");
+    worst
 }

@@ -9,10 +9,18 @@
 //
 // Methods: 0 = `bsdf` (BSDF sampling, lights found by chance), 1 = `nee` (BSDF sampling plus one
 // light sample per scattering event, power-heuristic MIS, Veach and Guibas 1995, eq. 9, β = 2).
-// A path guide (MCPG's begin / sample / pdf / finish) replaces `vertex_sample` and `vertex_pdf`
-// below; nothing else in the loop changes.
+// 2 = `mcpg`, composed with the shader def MCG_DEMO_MCPG (and `GpuMcpgGuide::shader_defs(1)`): the
+// MCPG guide of `mcg::mcpg`, bound at group 1, at every scattering vertex (`guided_sample`
+// below), with the material as its fallback technique, and no light sampling. Without
+// MCG_DEMO_MCPG the `render` entry point uses no binding of group 1.
 
-#import mcg::constants::{MCG_F32_MAX, MCG_FRAC_1_PI, MCG_PI}
+#import mcg::constants::{MCG_F32_MAX, MCG_FRAC_1_PI, MCG_PI, MCPG_MAX_CANDIDATES, MCPG_NO_LOBE,
+    MCPG_SCATTER_CUSTOM}
+#import mcg::mcpg::{
+    McpgBeginUniforms, McpgFinishUniforms, McpgGuidedVertex, McpgSample, McpgVertex, mcpg_begin,
+    mcpg_choose, mcpg_finish, mcpg_observation_escaped, mcpg_observation_hit, mcpg_params,
+    mcpg_pdf_with, mcpg_sample_lobe
+}
 #import mcg::sampling::{
     mcg_cosine_hemisphere_pdf, mcg_cosine_hemisphere_sample, mcg_frame_to_world, mcg_pcg_hash,
     mcg_rng_uniform
@@ -125,6 +133,10 @@ struct RayHit {
 @group(0) @binding(10) var<storage, read_write> ray_hits: array<RayHit>;
 
 const METHOD_NEE: u32 = 1u;
+// `cpu::MAX_RECORDED`: the deepest vertex a guide learns from.
+const MAX_RECORDED: u32 = 16u;
+// `cpu::SAMPLER_SALT`: the guide's stream starts away from the path's.
+const SAMPLER_SALT: u32 = 0x5bd1e995u;
 // `bvh::STACK_SIZE`.
 const STACK_SIZE: u32 = 64u;
 const NO_HIT: u32 = 0xffffffffu;
@@ -352,24 +364,95 @@ struct Vertex {
     depth: u32,
 }
 
-// The next direction at `v` from three uniforms: BSDF sampling for `bsdf` and `nee`. A guided
-// method (issue 17's `mcg::mcpg` begin / sample) branches here on `params.method`.
+// The next direction at `v` from three uniforms: BSDF sampling for `bsdf` and `nee` (`mcpg`
+// samples with `guided_sample`).
 fn vertex_sample(v: Vertex, u: vec3<f32>) -> BsdfSample {
     return material_sample(v.material, v.normal, v.wo, u);
 }
 
-// The density with which `vertex_sample` picks `wi` at `v` (the MIS weights need it).
+// The density with which `vertex_sample` picks `wi` at `v` (the MIS weights of `nee` need it;
+// `mcpg` samples no lights, so never asks).
 fn vertex_pdf(v: Vertex, wi: vec3<f32>) -> f32 {
     return material_pdf(v.material, v.normal, v.wo, wi);
 }
 
-// A learning guide also needs `finish`: what arrived along each sampled direction once the path
-// is complete. The CPU (`cpu::trace_path`) keeps, per vertex, the path radiance before its
-// sample, the throughput after it and the share of the next hit's emission that the MIS weight
-// left out, and reports incident = (radiance_end − before + discarded) / throughput; a guided
-// method keeps the same record in `trace_path` below (after `vertex_sample`, and at each
-// emitter hit) and hands it to the guide's finish after the loop. `bsdf` and `nee` learn
-// nothing, so they keep no record.
+#ifdef MCG_DEMO_MCPG
+// MCPG (Alber et al. 2025) at a vertex, the twin of `guided::McpgSampler`: `mcpg_begin` (Alg. 1)
+// with four uniforms per candidate from the guide's own stream `grng`, then Alg. 2 with the
+// material as the fallback technique (`MCPG_SCATTER_CUSTOM`: `mcpg_choose`, the chosen lobe or
+// `material_scatter_sample`, and the exact mixture density of MCPG eq. 6-7 from
+// `mcpg_pdf_with` and the material's pdf).
+fn guided_begin(v: Vertex, grng: ptr<function, u32>) -> McpgGuidedVertex {
+    var u: McpgBeginUniforms;
+    let count = min(mcpg_params.candidates, MCPG_MAX_CANDIDATES);
+    for (var k = 0u; k < count; k++) {
+        let grid = mcg_rng_uniform(grng);
+        let level = mcg_rng_uniform(grng);
+        let corner = mcg_rng_uniform(grng);
+        let reservoir = mcg_rng_uniform(grng);
+        u.candidates[k] = vec4<f32>(grid, level, corner, reservoir);
+    }
+    return mcpg_begin(McpgVertex(v.position, MCPG_SCATTER_CUSTOM, v.normal, 1u, v.normal), u);
+}
+
+// `guided::MaterialScatter::sample`: `material_sample` with the lobe choice and the first
+// direction uniform taken from u.x (the part below `metallic` picks GGX and is stretched back to
+// [0, 1)); a direction the material cannot scatter into becomes −n (weight 0, ends the path).
+fn material_scatter_sample(m: Material, n: vec3<f32>, wo: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
+    var lobe = 1.0;
+    var x = (u.x - m.metallic) / (1.0 - m.metallic);
+    if u.x < m.metallic {
+        lobe = 0.0;
+        x = u.x / m.metallic;
+    }
+    x = clamp(x, 0.0, 1.0 - 1.1920929e-7); // 1 − f32::EPSILON
+    let s = material_sample(m, n, wo, vec3<f32>(lobe, x, u.y));
+    return select(-n, s.direction, s.valid);
+}
+
+// Alg. 2 at the begun vertex `g` from the path's three uniforms (ξ against p_bsdf, then the
+// direction's two): the direction, its exact mixture density and the lobe (`McpgSample`).
+fn guided_sample(g: ptr<function, McpgGuidedVertex>, v: Vertex, u: vec3<f32>) -> McpgSample {
+    let k = mcpg_choose(g, u.x);
+    var w: vec3<f32>;
+    if k == MCPG_NO_LOBE {
+        w = material_scatter_sample(v.material, v.normal, v.wo, u.yz);
+    } else {
+        w = mcpg_sample_lobe(g, k, u.yz);
+    }
+    let pdf = mcpg_pdf_with(g, w, material_pdf(v.material, v.normal, v.wo, w));
+    return McpgSample(w, pdf, k);
+}
+
+// Alg. 3 for the vertex `g` once its ray is traced, with five uniforms from `grng` (accept,
+// store grid, level, corner, cache corner).
+fn guided_finish(g: ptr<function, McpgGuidedVertex>, s: McpgSample, hit: bool, position: vec3<f32>,
+                 normal: vec3<f32>, emitted: vec3<f32>, weight: vec3<f32>,
+                 grng: ptr<function, u32>) {
+    let accept = mcg_rng_uniform(grng);
+    let grid = mcg_rng_uniform(grng);
+    let level = mcg_rng_uniform(grng);
+    let corner = mcg_rng_uniform(grng);
+    let cache = mcg_rng_uniform(grng);
+    let u = McpgFinishUniforms(accept, grid, level, corner, cache);
+    if hit {
+        mcpg_finish(g, s, mcpg_observation_hit(position, normal, emitted, weight), u);
+    } else {
+        mcpg_finish(g, s, mcpg_observation_escaped(vec3<f32>(0.0), weight), u);
+    }
+}
+#endif
+
+// A learning guide needs `finish`: what arrived along each sampled direction. MCPG's
+// observation is only the next hit (position, normal, emission) and the sample's weight f·cos/p
+// (the radiance reflected there comes from the guide's irradiance cache), as in
+// `guided::McpgSampler::finish`; so the GPU finishes a vertex as soon as its ray is traced (at
+// the next hit, or after the loop when it escaped or its weight ended the path), keeping one
+// open vertex instead of the CPU's per-depth records. Vertices deeper than MAX_RECORDED are
+// not finished, as on the CPU. The guide's uniforms come from a stream of their own, seeded
+// like the CPU sampler's (`cpu::SAMPLER_SALT`); they are drawn per vertex (begin, finish)
+// rather than all begins before all finishes, so the guide's updates are not bit-equal to the
+// CPU's (they race across invocations anyway), only the same in distribution.
 
 // ---------------------------------------------------------------------------------------------
 // The integrator (`cpu::trace_path`)
@@ -445,6 +528,14 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
     // Density of the direction that produced the ray (0 for the camera ray: no MIS weight).
     var last_pdf = 0.0;
     var depth = 0u;
+#ifdef MCG_DEMO_MCPG
+    var grng = mcg_pcg_hash(*rng ^ SAMPLER_SALT);
+    // The vertex whose ray is being traced, waiting for its finish.
+    var open: McpgGuidedVertex;
+    var open_sample: McpgSample;
+    var open_weight = vec3<f32>(0.0);
+    var is_open = false;
+#endif
     loop {
         let hit = bvh_walk(o, d, 0.0, FAR, false);
         if hit.triangle == NO_HIT {
@@ -457,6 +548,14 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
         let n_front = c / (2.0 * area);
         let cos_front = -dot(n_front, d);
         let position = o + hit.t * d;
+#ifdef MCG_DEMO_MCPG
+        if is_open {
+            let emitted = select(vec3<f32>(0.0), material.emission, cos_front > 0.0);
+            let n_hit = select(-n_front, n_front, cos_front > 0.0);
+            guided_finish(&open, open_sample, true, position, n_hit, emitted, open_weight, &grng);
+            is_open = false;
+        }
+#endif
         if cos_front > 0.0 && any(material.emission > vec3<f32>(0.0)) {
             var weight = 1.0;
             if params.method == METHOD_NEE && last_pdf > 0.0 {
@@ -481,10 +580,23 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
         let ux = mcg_rng_uniform(rng);
         let uy = mcg_rng_uniform(rng);
         let uz = mcg_rng_uniform(rng);
+#ifdef MCG_DEMO_MCPG
+        open = guided_begin(vertex, &grng);
+        open_sample = guided_sample(&open, vertex, vec3<f32>(ux, uy, uz));
+        if !(open_sample.pdf > 0.0) {
+            break;
+        }
+        let wi = open_sample.direction;
+        let s = BsdfSample(wi, open_sample.pdf,
+                           material_eval(material, normal, -d, wi) / open_sample.pdf, true);
+        is_open = depth < MAX_RECORDED;
+        open_weight = s.weight;
+#else
         let s = vertex_sample(vertex, vec3<f32>(ux, uy, uz));
         if !s.valid {
             break;
         }
+#endif
         throughput *= s.weight;
         last_pdf = s.pdf;
         o = origin_next;
@@ -494,6 +606,14 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
             break;
         }
     }
+#ifdef MCG_DEMO_MCPG
+    // The last ray left the scene, or its weight ended the path (the CPU reports both as
+    // escaped, seeing nothing).
+    if is_open {
+        let zero = vec3<f32>(0.0);
+        guided_finish(&open, open_sample, false, zero, zero, zero, open_weight, &grng);
+    }
+#endif
     return radiance;
 }
 
