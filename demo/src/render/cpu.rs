@@ -12,7 +12,10 @@
 //! chance; `nee` adds one light sample per scattering event (an emitter triangle picked in
 //! proportion to its power, a uniform point on it) and weights both strategies with the power
 //! heuristic (Veach and Guibas 1995, "Optimally Combining Sampling Techniques for Monte Carlo
-//! Rendering", eq. 9 with β = 2).
+//! Rendering", eq. 9 with β = 2). `mcpg` draws every direction from MCPG's guide
+//! ([`super::guided`]) and samples no lights; `mcpg-nee` adds `nee`'s light sample to it, the
+//! light sample weighted against the guide's exact mixture density (mcg's extension: the paper
+//! uses no light sampling).
 //!
 //! The direction of each bounce comes from a [`VertexSampler`] — the seam where a path guide
 //! (MCPG's begin / sample / pdf / finish) replaces BSDF sampling without touching the rest of
@@ -36,6 +39,11 @@ pub enum Method {
     /// MCPG's guide (Alber et al. 2025) at every scattering vertex, no light sampling: the
     /// guide learns where light comes from without being told where the lights are.
     Mcpg,
+    /// MCPG's guide for the scattered direction plus one light sample per vertex, the two
+    /// combined by MIS with the guide's exact mixture density — mcg's extension of MCPG (the
+    /// paper uses no light sampling) for renderers that already sample their lights: the guide
+    /// then learns the indirect light that light sampling cannot reach.
+    McpgNee,
 }
 
 impl Method {
@@ -46,7 +54,20 @@ impl Method {
             Self::Bsdf => "bsdf",
             Self::Nee => "nee",
             Self::Mcpg => "mcpg",
+            Self::McpgNee => "mcpg-nee",
         }
+    }
+
+    /// Whether the method takes one light sample per scattering vertex.
+    #[must_use]
+    pub fn samples_lights(self) -> bool {
+        matches!(self, Self::Nee | Self::McpgNee)
+    }
+
+    /// Whether the method draws its directions from an MCPG guide.
+    #[must_use]
+    pub fn is_guided(self) -> bool {
+        matches!(self, Self::Mcpg | Self::McpgNee)
     }
 }
 
@@ -228,7 +249,7 @@ pub fn trace_path<S: VertexSampler>(
             });
         }
         if cos_front > 0.0 && material.is_emitter() {
-            let weight = if method == Method::Nee && last_pdf > 0.0 {
+            let weight = if method.samples_lights() && last_pdf > 0.0 {
                 let light_pdf = tri.emitter_pmf / area * hit.t * hit.t / cos_front;
                 power_heuristic(last_pdf, light_pdf)
             } else {
@@ -260,11 +281,14 @@ pub fn trace_path<S: VertexSampler>(
         // Three uniforms for light sampling are drawn for every method, so that the stream
         // of the BSDF sample does not depend on the method.
         let (ul, u1, u2) = (u(), u(), u());
-        if method == Method::Nee {
+        // The direction is sampled before the light: a guide's density (for the light
+        // sample's MIS weight) exists once its vertex has begun.
+        let sampled = sampler.sample(&vertex, Vec3::new(u(), u(), u()));
+        if method.samples_lights() {
             radiance +=
                 throughput * light_sample(scene, sampler, &vertex, origin_next, [ul, u1, u2]);
         }
-        let Some(sample) = sampler.sample(&vertex, Vec3::new(u(), u(), u())) else {
+        let Some(sample) = sampled else {
             break;
         };
         let before = radiance;

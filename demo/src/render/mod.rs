@@ -232,10 +232,10 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         }
     }
     let mut guide = match args.method {
-        Method::Mcpg if gpu.is_none() => {
+        Method::Mcpg | Method::McpgNee if gpu.is_none() => {
             Some(new_guide(&scene, args.height).map_err(|e| format!("the MCPG guide: {e:?}"))?)
         }
-        Method::Mcpg | Method::Bsdf | Method::Nee => None,
+        Method::Mcpg | Method::McpgNee | Method::Bsdf | Method::Nee => None,
     };
     let progress = if args.no_progress {
         ProgressBar::hidden()

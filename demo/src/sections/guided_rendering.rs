@@ -430,6 +430,7 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
             Method::Bsdf => PALETTE[0],
             Method::Nee => PALETTE[2],
             Method::Mcpg => PALETTE[1],
+            Method::McpgNee => PALETTE[3],
         };
         let all_errors = runs
             .iter()
