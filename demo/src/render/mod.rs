@@ -168,6 +168,9 @@ pub struct RenderReport {
     /// Errors of each frame's own image against the reference (what a real-time renderer
     /// that shows every frame without accumulation would show).
     pub frame_errors: Vec<Errors>,
+    /// Mean LDR-FLIP of the output image (the mean over all frames) against the reference
+    /// ([`output::flip`]); `None` without a reference.
+    pub flip: Option<f64>,
     /// What the scene loader ignored.
     pub warnings: Vec<String>,
 }
@@ -302,13 +305,14 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     }
     progress.finish_and_clear();
     let scale = 1.0 / args.frames as f32;
+    let image = RgbImage {
+        width: args.width,
+        height: args.height,
+        pixels: sum.into_iter().map(|s| s * scale).collect(),
+    };
     Ok(Rendered {
-        image: RgbImage {
-            width: args.width,
-            height: args.height,
-            pixels: sum.into_iter().map(|s| s * scale).collect(),
-        },
         report: RenderReport {
+            flip: reference.as_ref().and_then(|r| output::flip(&image, r)),
             scene: args.scene.clone(),
             method: args.method,
             device: if gpu.is_some() { "gpu" } else { "cpu" },
@@ -333,6 +337,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             frame_errors: frame_errs,
             warnings,
         },
+        image,
         guide: guide.map(Arc::new),
     })
 }

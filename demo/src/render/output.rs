@@ -1,4 +1,5 @@
-//! Image files and error metrics: linear EXR in and out, sRGB PNG out, RMSE and relative MSE.
+//! Image files and error metrics: linear EXR in and out, sRGB PNG out, RMSE, relative MSE and
+//! FLIP.
 
 use std::path::Path;
 
@@ -59,15 +60,9 @@ impl RgbImage {
     /// # Errors
     /// When the file cannot be written.
     pub fn write_png(&self, path: &Path) -> Result<()> {
-        let bytes: Vec<u8> = self
-            .pixels
-            .iter()
-            .flat_map(|p| p.to_array())
-            .map(|c| (srgb_encode(c) * 255.0 + 0.5) as u8)
-            .collect();
         image::save_buffer(
             path,
-            &bytes,
+            &self.to_srgb8(),
             self.width,
             self.height,
             image::ColorType::Rgb8,
@@ -75,6 +70,41 @@ impl RgbImage {
         .map_err(|e| format!("{}: cannot write PNG: {e}", path.display()))?;
         Ok(())
     }
+}
+
+impl RgbImage {
+    /// The 8-bit sRGB bytes of [`RgbImage::write_png`], RGB interleaved, row-major.
+    #[must_use]
+    pub fn to_srgb8(&self) -> Vec<u8> {
+        self.pixels
+            .iter()
+            .flat_map(|p| p.to_array())
+            .map(|c| (srgb_encode(c) * 255.0 + 0.5) as u8)
+            .collect()
+    }
+}
+
+/// Pixels per degree of visual angle at which [`flip`] compares: FLIP's default, a 0.7 m wide
+/// 3840-pixel monitor seen from 0.7 m.
+pub const FLIP_PIXELS_PER_DEGREE: f32 = nv_flip::DEFAULT_PIXELS_PER_DEGREE;
+
+/// The mean LDR-FLIP error of `image` against `reference` (Andersson et al. 2020, "FLIP: A
+/// Difference Evaluator for Alternating Images", HPG; NVIDIA's implementation through the
+/// `nv-flip` crate), both as [`RgbImage::write_png`] encodes them (clipped, sRGB, 8 bits) and
+/// seen at [`FLIP_PIXELS_PER_DEGREE`]: 0 for identical images, at most 1. `None` when the
+/// sizes differ or the images are empty.
+#[must_use]
+pub fn flip(image: &RgbImage, reference: &RgbImage) -> Option<f64> {
+    if (image.width, image.height) != (reference.width, reference.height)
+        || image.pixels.is_empty()
+        || image.pixels.len() != (image.width * image.height) as usize
+        || reference.pixels.len() != image.pixels.len()
+    {
+        return None;
+    }
+    let encode = |i: &RgbImage| nv_flip::FlipImageRgb8::with_data(i.width, i.height, &i.to_srgb8());
+    let map = nv_flip::flip(encode(reference), encode(image), FLIP_PIXELS_PER_DEGREE);
+    Some(f64::from(nv_flip::FlipPool::from_image(&map).mean()))
 }
 
 /// The sRGB transfer function of a linear value, clipped to [0, 1] (NaN gives 0).
@@ -138,6 +168,41 @@ mod tests {
         assert!(errors(&x, &r[..1]).is_none());
         assert!((srgb_encode(1.0) - 1.0).abs() < 1e-6 && srgb_encode(2.0) == srgb_encode(1.0));
         assert_eq!(srgb_encode(f32::NAN), 0.0);
+    }
+
+    /// FLIP is 0 for identical images, grows with the noise added to one, and refuses images
+    /// of different sizes.
+    #[test]
+    fn flip_grows_with_noise() {
+        let (w, h) = (32, 32);
+        let base: Vec<Vec3> = (0..w * h)
+            .map(|i| Vec3::splat(0.2 + 0.6 * (i % w) as f32 / w as f32))
+            .collect();
+        let noisy = |amplitude: f32| RgbImage {
+            width: w,
+            height: h,
+            pixels: base
+                .iter()
+                .enumerate()
+                .map(|(i, p)| *p * (1.0 + amplitude * if i % 3 == 0 { 1.0 } else { -0.5 }))
+                .collect(),
+        };
+        let reference = noisy(0.0);
+        let (zero, small, large) = (
+            flip(&reference, &reference).unwrap(),
+            flip(&noisy(0.1), &reference).unwrap(),
+            flip(&noisy(0.5), &reference).unwrap(),
+        );
+        assert!(zero.abs() < 1e-6, "{zero}");
+        assert!(
+            0.0 < small && small < large && large <= 1.0,
+            "{small} {large}"
+        );
+        let mut other = reference.clone();
+        other.width = 16;
+        other.pixels.truncate(16 * 32);
+        other.height = 32;
+        assert!(flip(&other, &reference).is_none());
     }
 
     #[test]

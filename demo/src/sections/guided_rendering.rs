@@ -8,7 +8,7 @@
 //!    `bsdf` and `nee` after as many frames as fit in the time `mcpg` took (equal time);
 //! 2. the relative MSE of the running mean after each frame against the frame count (the
 //!    learning curve, MCPG Fig. 5) and against the elapsed time;
-//! 3. a table of relMSE and frame time per method and device, with the ratios the issue's
+//! 3. a table of relMSE, FLIP and frame time per method and device, with the ratios the issue's
 //!    targets name;
 //! 4. the guide after the last frame at each pixel's first hit: the mean direction of the
 //!    chosen chain state, its concentration κ and the adaptive grid's level (MCPG Fig. 3
@@ -17,8 +17,9 @@
 //! The reference is `nee` with many samples per pixel, cached under
 //! `<out>/reference/` with its settings in the file name.
 //!
-//! FLIP is not shown: the `nv-flip` crate wraps NVIDIA's C++ implementation (`nv-flip-sys`
-//! builds it with a C++ compiler), which the report's "nothing to install" rule excludes.
+//! FLIP (LDR-FLIP of the tone-mapped images, [`crate::render::output::flip`]) stands beside
+//! relMSE in the table: relMSE weighs the few bright, noisy pixels near the light; FLIP what a
+//! viewer sees across the image.
 
 use std::path::{Path, PathBuf};
 
@@ -218,6 +219,11 @@ fn late_frame_error(r: &Rendered) -> f64 {
     let e = &r.report.frame_errors;
     let late = &e[e.len() / 2..];
     late.iter().map(|e| e.rel_mse).sum::<f64>() / late.len() as f64
+}
+
+/// A FLIP value for the table (`–` without a reference).
+fn format_flip(flip: Option<f64>) -> String {
+    flip.map_or_else(|| "–".to_owned(), |f| format!("{f:.4}"))
 }
 
 /// Mean seconds of the guide's end of frame (0 without a guide).
@@ -522,9 +528,11 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
                 "cost per frame, ms",
                 "relMSE, equal samples",
                 "÷ mcpg",
+                "FLIP, equal samples",
                 "frames in equal time",
                 "relMSE, equal time",
                 "÷ mcpg",
+                "FLIP, equal time",
                 "relMSE of one late frame",
                 "÷ mcpg",
                 "of which end_frame, ms",
@@ -542,9 +550,11 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
                 format!("{:.1}", 1e3 * seconds_per_frame(&r.equal_samples)),
                 format!("{es:.4}"),
                 format_ratio(es / mcpg_error),
+                format_flip(r.equal_samples.report.flip),
                 et_run.report.frames.to_string(),
                 format!("{et:.4}"),
                 format_ratio(et / mcpg_error),
+                format_flip(et_run.report.flip),
                 format!("{:.4}", late_frame_error(&r.equal_samples)),
                 format_ratio(late_frame_error(&r.equal_samples) / mcpg_late),
                 format!("{:.1}", 1e3 * end_frame_seconds(&r.equal_samples)),
@@ -557,6 +567,8 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
                     "cost_clock": clock,
                     "rel_mse_equal_samples": es,
                     "rmse_equal_samples": last_error(&r.equal_samples).rmse,
+                    "flip_equal_samples": r.equal_samples.report.flip,
+                    "flip_equal_time": et_run.report.flip,
                     "frames_equal_time": et_run.report.frames,
                     "rel_mse_equal_time": et,
                     "late_frame_rel_mse": late_frame_error(&r.equal_samples),
