@@ -174,17 +174,19 @@ fn gpu_furnace_matches_the_truncated_neumann_series() {
     }
 }
 
-/// Furnace test of `mcpg` on the GPU (the CPU's `furnace_matches_the_truncated_neumann_series`
-/// for `mcpg`). Hypothesis: in the closed room of one albedo ρ and one emission L_e every
-/// pixel's radiance with B scattering events is Σ_{k=0}^{B} ρ^k L_e per channel, whatever
-/// the guide has learnt. Sample: 16×16 pixels × 16 spp, B = 3, seed 7, ρ = (0.5, 0.3, 0.8),
-/// L_e = (1, 2, 0.5), the fourth frame after three frames of learning (the 256 pixel values
-/// are independent given the guide). Threshold: |z| < 5 on the pixel mean per channel (3
-/// tests, α ≈ 1.7·10⁻⁶); the frame must show spread (BSDF sampling alone is exact here, so
-/// spread means guided lobes were sampled). Today |z| ≤ 0.8. Dividing the WGSL guided
-/// samples by the material's density instead of the guided mixture's fails it at z = −8.2,
-/// and skipping the finish at the next hit (the guide never learns) fails the spread check
-/// (checked once each).
+/// Furnace test of `mcpg` and `mcpg-nee` on the GPU (the CPU's
+/// `furnace_matches_the_truncated_neumann_series` for the guided methods). Hypothesis: in the
+/// closed room of one albedo ρ and one emission L_e every pixel's radiance with B scattering
+/// events is Σ_{k=0}^{B} ρ^k L_e per channel, whatever the guide has learnt. Sample: B = 3,
+/// seed 7, ρ = (0.5, 0.3, 0.8), L_e = (1, 2, 0.5), the fourth frame after three frames of
+/// learning of a fresh guide (the pixel values are independent given the guide); `mcpg` 16×16
+/// pixels × 16 spp, `mcpg-nee` 32×32 × 32 spp. Threshold: |z| < 5 on the pixel mean per channel
+/// (6 tests, α ≈ 3.4·10⁻⁶); the frame must show spread (BSDF sampling alone is exact here, so
+/// spread means guided lobes were sampled). Today |z| ≤ 2. Dividing the WGSL guided samples by
+/// the material's density instead of the guided mixture's fails `mcpg` at z = −8.2, skipping
+/// the finish at the next hit (the guide never learns) fails the spread check, and weighting
+/// `mcpg-nee`'s light samples with the material's density instead of the guide's fails it at
+/// z = −8.3 (checked once each).
 #[test]
 fn gpu_mcpg_furnace_matches_the_truncated_neumann_series() {
     let (rho, le) = (Vec3::new(0.5, 0.3, 0.8), Vec3::new(1.0, 2.0, 0.5));
@@ -194,36 +196,39 @@ fn gpu_mcpg_furnace_matches_the_truncated_neumann_series() {
     };
     let bounces = 3;
     let expected: Vec3 = (0..=bounces).map(|k| rho.powf(k as f32) * le).sum();
-    let settings = RenderSettings {
-        width: 16,
-        height: 16,
-        spp: 16,
-        bounces,
-        seed: 7,
-        method: Method::Mcpg,
-    };
-    for frame in 0..3 {
-        gpu.render_frame(&settings, frame).unwrap();
-    }
-    let (image, seconds) = gpu.render_frame(&settings, 3).unwrap();
-    assert!(seconds > 0.0);
-    let spread: RunningStats = image.iter().map(|p| f64::from(p.x)).collect();
-    assert!(
-        spread.variance().sqrt() > 1e-3 * f64::from(expected.x),
-        "mcpg sampled no lobe: {}",
-        spread.variance().sqrt()
-    );
-    for c in 0..3 {
-        let stats: RunningStats = image.iter().map(|p| f64::from(p[c])).collect();
-        let diff = stats.mean() - f64::from(expected[c]);
-        let z = diff / stats.standard_error();
-        eprintln!("GPU mcpg furnace channel {c}: z = {z:.2}");
+    for (method, size, spp) in [(Method::Mcpg, 16, 16), (Method::McpgNee, 32, 32)] {
+        let settings = RenderSettings {
+            width: size,
+            height: size,
+            spp,
+            bounces,
+            seed: 7,
+            method,
+        };
+        gpu.start_mcpg(&guide_config(&scene, size)).unwrap();
+        for frame in 0..3 {
+            gpu.render_frame(&settings, frame).unwrap();
+        }
+        let (image, seconds) = gpu.render_frame(&settings, 3).unwrap();
+        assert!(seconds > 0.0);
+        let spread: RunningStats = image.iter().map(|p| f64::from(p.x)).collect();
         assert!(
-            z.abs() < 5.0,
-            "channel {c}: mean {} expected {} (z = {z:.2})",
-            stats.mean(),
-            expected[c]
+            spread.variance().sqrt() > 1e-3 * f64::from(expected.x),
+            "{method:?} sampled no lobe: {}",
+            spread.variance().sqrt()
         );
+        for c in 0..3 {
+            let stats: RunningStats = image.iter().map(|p| f64::from(p[c])).collect();
+            let diff = stats.mean() - f64::from(expected[c]);
+            let z = diff / stats.standard_error();
+            eprintln!("GPU {method:?} furnace channel {c}: z = {z:.2}");
+            assert!(
+                z.abs() < 5.0,
+                "{method:?} channel {c}: mean {} expected {} (z = {z:.2})",
+                stats.mean(),
+                expected[c]
+            );
+        }
     }
 }
 

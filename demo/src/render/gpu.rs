@@ -68,6 +68,7 @@ pub fn method_code(method: Method) -> Option<u32> {
         Method::Bsdf => Some(0),
         Method::Nee => Some(1),
         Method::Mcpg => Some(2),
+        Method::McpgNee => Some(4),
         _ => None,
     }
 }
@@ -541,7 +542,7 @@ impl GpuTracer {
         if self.image.as_ref().is_none_or(|b| b.len() != pixels) {
             self.image = Some(self.ctx.zeroed_buffer("mcg-demo image", pixels));
         }
-        let guided = settings.method == Method::Mcpg;
+        let guided = settings.method.is_guided();
         if guided && self.guided.is_none() {
             return Err("GpuTracer: mcpg needs GpuTracer::start_mcpg first".into());
         }

@@ -224,7 +224,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     let mut gpu = gpu.map(|g| g.lock().unwrap_or_else(std::sync::PoisonError::into_inner));
     if let Some(g) = gpu.as_deref_mut() {
         g.upload(&scene)?;
-        if args.method == Method::Mcpg
+        if args.method.is_guided()
             && let Err(e) = g.start_mcpg(&guide_config(&scene, args.height))
         {
             if args.device == Device::Gpu {

@@ -11,8 +11,9 @@
 // light sample per scattering event, power-heuristic MIS, Veach and Guibas 1995, eq. 9, β = 2).
 // 2 = `mcpg`, composed with the shader def MCG_DEMO_MCPG (and `GpuMcpgGuide::shader_defs(1)`): the
 // MCPG guide of `mcg::mcpg`, bound at group 1, at every scattering vertex (`guided_sample`
-// below), with the material as its fallback technique, and no light sampling. Without
-// MCG_DEMO_MCPG the `render` entry point uses no binding of group 1.
+// below), with the material as its fallback technique, and no light sampling. 4 = `mcpg-nee`,
+// the same guide plus `nee`'s light sample, weighted against the guide's exact mixture density
+// (mcg's extension). Without MCG_DEMO_MCPG the `render` entry point uses no binding of group 1.
 
 #import mcg::constants::{MCG_F32_MAX, MCG_FRAC_1_PI, MCG_PI, MCPG_MAX_CANDIDATES, MCPG_NO_LOBE,
     MCPG_SCATTER_CUSTOM}
@@ -133,6 +134,7 @@ struct RayHit {
 @group(0) @binding(10) var<storage, read_write> ray_hits: array<RayHit>;
 
 const METHOD_NEE: u32 = 1u;
+const METHOD_MCPG_NEE: u32 = 4u;
 // `cpu::MAX_RECORDED`: the deepest vertex a guide learns from.
 const MAX_RECORDED: u32 = 16u;
 // `cpu::SAMPLER_SALT`: the guide's stream starts away from the path's.
@@ -491,8 +493,23 @@ fn pick_emitter(u: f32) -> u32 {
     return emitters[min(lo, params.emitter_count - 1u)].triangle;
 }
 
-// `cpu::light_sample`: one light sample at `v` with its MIS weight, f·cos·L_e·w / p_light.
-fn light_sample(v: Vertex, origin: vec3<f32>, u: vec3<f32>) -> vec3<f32> {
+// A light sample before its MIS weight: f·cos·L_e / p_light, the direction and p_light (0 when
+// the sample carries nothing).
+struct LightSample {
+    value: vec3<f32>,
+    direction: vec3<f32>,
+    pdf: f32,
+}
+
+// Whether the method takes a light sample per vertex (`Method::samples_lights`).
+fn samples_lights() -> bool {
+    return params.method == METHOD_NEE || params.method == METHOD_MCPG_NEE;
+}
+
+// `cpu::light_sample` before its MIS weight, which the caller applies against the density of
+// its own direction sampler (the material's, or the guide's mixture for `mcpg-nee`).
+fn light_sample(v: Vertex, origin: vec3<f32>, u: vec3<f32>) -> LightSample {
+    let none = LightSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0);
     let t = pick_emitter(u.x);
     let tri = triangles[t];
     let su = sqrt(u.y);
@@ -505,18 +522,17 @@ fn light_sample(v: Vertex, origin: vec3<f32>, u: vec3<f32>) -> vec3<f32> {
     let area = 0.5 * length(c);
     let cos_light = -dot(c / (2.0 * area), wi);
     if !(cos_light > 0.0) || dot(v.normal, wi) <= 0.0 {
-        return vec3<f32>(0.0);
+        return none;
     }
     let f_cos = material_eval(v.material, v.normal, v.wo, wi);
     if all(f_cos == vec3<f32>(0.0)) {
-        return vec3<f32>(0.0);
+        return none;
     }
     if bvh_walk(origin, wi, 0.0, dist * (1.0 - 1e-4), true).triangle != NO_HIT {
-        return vec3<f32>(0.0);
+        return none;
     }
     let light_pdf = tri.emitter_pmf / area * dist2 / cos_light;
-    let w = power_heuristic(light_pdf, vertex_pdf(v, wi));
-    return f_cos * materials[tri.material].emission * (w / light_pdf);
+    return LightSample(f_cos * materials[tri.material].emission / light_pdf, wi, light_pdf);
 }
 
 // One path from the camera ray (origin, direction); its radiance.
@@ -558,7 +574,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
 #endif
         if cos_front > 0.0 && any(material.emission > vec3<f32>(0.0)) {
             var weight = 1.0;
-            if params.method == METHOD_NEE && last_pdf > 0.0 {
+            if samples_lights() && last_pdf > 0.0 {
                 let light_pdf = tri.emitter_pmf / area * hit.t * hit.t / cos_front;
                 weight = power_heuristic(last_pdf, light_pdf);
             }
@@ -574,15 +590,21 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
         let ul = mcg_rng_uniform(rng);
         let u1 = mcg_rng_uniform(rng);
         let u2 = mcg_rng_uniform(rng);
-        if params.method == METHOD_NEE {
-            radiance += throughput * light_sample(vertex, origin_next, vec3<f32>(ul, u1, u2));
-        }
         let ux = mcg_rng_uniform(rng);
         let uy = mcg_rng_uniform(rng);
         let uz = mcg_rng_uniform(rng);
 #ifdef MCG_DEMO_MCPG
+        // The direction before the light sample, whose MIS weight needs the guide's density.
         open = guided_begin(vertex, &grng);
         open_sample = guided_sample(&open, vertex, vec3<f32>(ux, uy, uz));
+        if samples_lights() {
+            let l = light_sample(vertex, origin_next, vec3<f32>(ul, u1, u2));
+            if l.pdf > 0.0 {
+                let p = mcpg_pdf_with(&open, l.direction,
+                                      material_pdf(material, normal, -d, l.direction));
+                radiance += throughput * l.value * power_heuristic(l.pdf, p);
+            }
+        }
         if !(open_sample.pdf > 0.0) {
             break;
         }
@@ -592,6 +614,12 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
         is_open = depth < MAX_RECORDED;
         open_weight = s.weight;
 #else
+        if samples_lights() {
+            let l = light_sample(vertex, origin_next, vec3<f32>(ul, u1, u2));
+            if l.pdf > 0.0 {
+                radiance += throughput * l.value * power_heuristic(l.pdf, vertex_pdf(vertex, l.direction));
+            }
+        }
         let s = vertex_sample(vertex, vec3<f32>(ux, uy, uz));
         if !s.valid {
             break;
