@@ -81,6 +81,7 @@ mod gamma5_r10g10b10a2;
 mod heuristics_word;
 mod irradiance_word;
 mod log_codec;
+mod log_table;
 mod logluv32;
 mod math;
 mod moving_average;
