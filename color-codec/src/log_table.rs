@@ -29,11 +29,12 @@ use crate::math::fast_exp2;
 /// The decode and round-down tables of one field.
 #[derive(Clone, Copy, PartialEq)]
 pub(crate) struct LogTable {
-    /// `decode[q]` for q ∈ 0 ..= M, then a +∞ sentinel (the round-down step reads
-    /// `lo + 1 ≤ M + 1`).
-    decode: &'static [f32],
-    /// `index[b]`: the largest code whose y = γ·decode + 1 lies in a bucket below b (0 if none).
-    index: &'static [u16],
+    /// `decode[q]` for q ∈ 0 ..= M, then +∞ (the round-down step reads `lo + 1 ≤ M + 1`).
+    /// Every table has the same power-of-two length, so a masked index needs no bounds check.
+    decode: &'static [f32; DECODE_LEN],
+    /// `index[b]`: the largest code whose y = γ·decode + 1 lies in a bucket below b (0 if
+    /// none); buckets past the top code's hold M.
+    index: &'static [u16; INDEX_LEN],
     gamma: f32,
     /// `decode[M]`: inputs are clamped to it.
     top: f32,
@@ -46,13 +47,19 @@ impl fmt::Debug for LogTable {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("LogTable")
             .field("codes", &(self.max_code + 1))
-            .field("buckets", &self.index.len())
+            .field("bits", &self.max_code.count_ones())
             .finish()
     }
 }
 
 /// Octaves of y = γv + 1 the index covers: y ∈ [1, 2⁸) ⊇ [1, e⁵].
 const OCTAVES: usize = 8;
+/// Widest field with a table.
+const MAX_BITS: u32 = 10;
+/// Length of every decode table: M + 2 ≤ 2¹⁰ + 1 entries used, rounded up to a power of two.
+const DECODE_LEN: usize = 2 << MAX_BITS;
+/// Length of every index: `OCTAVES · 2^k` buckets with k = bits − 2 ≤ 8.
+const INDEX_LEN: usize = OCTAVES << (MAX_BITS - 2);
 
 /// The polynomial decoder's value of code `q` (the operations of `LogLanes::decode_word`).
 const fn decode_value(f: &LogField, q: u32) -> f32 {
@@ -60,11 +67,10 @@ const fn decode_value(f: &LogField, q: u32) -> f32 {
     if d > 0.0 { d } else { 0.0 }
 }
 
-/// `decode[q]` for q ∈ 0 ..= M (`N = M + 2`), then +∞.
-const fn decode_table<const N: usize>(bits: u32) -> [f32; N] {
+/// `decode[q]` for q ∈ 0 ..= M, then +∞.
+const fn decode_table(bits: u32) -> [f32; DECODE_LEN] {
     let f = LogCodec::IRRADIANCE.raw_field(bits);
-    assert!(N == f.max_code() as usize + 2);
-    let mut t = [f32::INFINITY; N];
+    let mut t = [f32::INFINITY; DECODE_LEN];
     let mut q = 0;
     while q <= f.max_code() as usize {
         t[q] = decode_value(&f, q as u32);
@@ -80,19 +86,20 @@ const fn bucket(gamma: f32, v: f32, shift: u32) -> usize {
     ((y.to_bits() - 1.0_f32.to_bits()) >> shift) as usize
 }
 
-/// `index[b]` = the largest q with `bucket(decode[q]) < b`, 0 if none (`B = OCTAVES · 2^k`
-/// buckets). `decode` increases, so the buckets of the codes do not decrease: one sweep.
-const fn index_table<const B: usize>(decode: &[f32], bits: u32) -> [u16; B] {
+/// `index[b]` = the largest q with `bucket(decode[q]) < b`, 0 if none, for the
+/// `OCTAVES · 2^k` buckets of a `bits`-bit field (M past them). `decode` increases, so the
+/// buckets of the codes do not decrease: one sweep.
+const fn index_table(decode: &[f32; DECODE_LEN], bits: u32) -> [u16; INDEX_LEN] {
     let shift = 23 - (bits - 2);
-    assert!(B == OCTAVES << (bits - 2));
+    let buckets = OCTAVES << (bits - 2);
     let gamma = LogCodec::IRRADIANCE.gamma();
-    let max_code = decode.len() - 2;
-    assert!(bucket(gamma, decode[max_code], shift) < B);
-    let mut t = [0_u16; B];
+    let max_code = (1 << bits) - 1;
+    assert!(bucket(gamma, decode[max_code], shift) < buckets);
+    let mut t = [max_code as u16; INDEX_LEN];
     // `below`: how many codes lie in buckets below b.
     let mut below = 0;
     let mut b = 0;
-    while b < B {
+    while b < buckets {
         while below <= max_code && bucket(gamma, decode[below], shift) < b {
             below += 1;
         }
@@ -102,17 +109,21 @@ const fn index_table<const B: usize>(decode: &[f32], bits: u32) -> [u16; B] {
     t
 }
 
-const DECODE_8: [f32; 257] = decode_table(8);
-const DECODE_9: [f32; 513] = decode_table(9);
-const DECODE_10: [f32; 1025] = decode_table(10);
-static DECODE_8_S: [f32; 257] = DECODE_8;
-static DECODE_9_S: [f32; 513] = DECODE_9;
-static DECODE_10_S: [f32; 1025] = DECODE_10;
-static INDEX_8: [u16; OCTAVES << 6] = index_table(&DECODE_8, 8);
-static INDEX_9: [u16; OCTAVES << 7] = index_table(&DECODE_9, 9);
-static INDEX_10: [u16; OCTAVES << 8] = index_table(&DECODE_10, 10);
+const DECODE_8: [f32; DECODE_LEN] = decode_table(8);
+const DECODE_9: [f32; DECODE_LEN] = decode_table(9);
+const DECODE_10: [f32; DECODE_LEN] = decode_table(10);
+static DECODE_8_S: [f32; DECODE_LEN] = DECODE_8;
+static DECODE_9_S: [f32; DECODE_LEN] = DECODE_9;
+static DECODE_10_S: [f32; DECODE_LEN] = DECODE_10;
+static INDEX_8: [u16; INDEX_LEN] = index_table(&DECODE_8, 8);
+static INDEX_9: [u16; INDEX_LEN] = index_table(&DECODE_9, 9);
+static INDEX_10: [u16; INDEX_LEN] = index_table(&DECODE_10, 10);
 
-const fn table(decode: &'static [f32], index: &'static [u16], bits: u32) -> LogTable {
+const fn table(
+    decode: &'static [f32; DECODE_LEN],
+    index: &'static [u16; INDEX_LEN],
+    bits: u32,
+) -> LogTable {
     let max_code = (1_u32 << bits) - 1;
     LogTable {
         decode,
@@ -146,7 +157,7 @@ impl LogTable {
     /// The value of `code` (masked to the field's bits): `LogField::decode`, bit for bit.
     #[inline(always)]
     pub(crate) fn decode(&self, code: u32) -> f32 {
-        self.decode[(code & self.max_code) as usize]
+        self.decode[(code & self.max_code) as usize % DECODE_LEN]
     }
 
     /// The largest code whose value is ≤ v: `LogField::encode(v, Rounding::Down)`, bit for
@@ -156,11 +167,8 @@ impl LogTable {
         let v = if v > 0.0 { v } else { 0.0 };
         let v = if v < self.top { v } else { self.top };
         let b = bucket(self.gamma, v, self.shift);
-        let lo = self.index[b.min(self.index.len() - 1)] as usize;
-        match self.decode.get(lo + 1) {
-            Some(&next) => lo as u32 + u32::from(next <= v),
-            None => self.max_code,
-        }
+        let lo = self.index[b.min(INDEX_LEN - 1)] as usize;
+        lo as u32 + u32::from(self.decode[(lo + 1) % DECODE_LEN] <= v)
     }
 }
 
