@@ -40,8 +40,9 @@
 //! and 0.92–0.95× through the slice API (fastest of repeated runs on a shared 2-vCPU VM,
 //! baseline x86-64: `cargo run --release -p mcg-color-codec --example min_timing`); 94 and 101
 //! instructions per colour against R11G11B10's 70 and 77 (`scripts/codec-instructions`). The
-//! criterion groups (`cargo bench -p mcg-color-codec --bench color_codec -- round_trip`) swing
-//! with the machine's load; numbers and diary: `benches/README.md`.
+//! criterion groups (`cargo bench -p mcg-color-codec --bench color_codec -- round_trip`) gave
+//! 1.02× and 0.97× in one run and 1.58× and 1.24× in another under heavier load; numbers and
+//! diary: `benches/README.md`.
 //!
 //! ## Features
 //! - `std` (default): float functions from the standard library.
