@@ -7,6 +7,7 @@ use glam::Vec3;
 use crate::bits::BitField;
 use crate::error::CodecError;
 use crate::log_codec::{LogCodec, LogField, LogLanes, MAX_FIELD_BITS};
+use crate::log_table::LogTable;
 use crate::quantize::Rounding;
 
 /// Bit layout of an irradiance word: R, G, B fields of the log codec (eq. 21) and a count field.
@@ -43,6 +44,9 @@ pub struct IrradianceLayout {
     lanes: LogLanes,
     places: [BitField; 3],
     count: BitField,
+    /// The three channels' tables when every channel has them (ADGI's codec at 8-10 bits):
+    /// decode by three loads, round down by three table searches, the same bits as `lanes`.
+    tables: Option<[&'static LogTable; 3]>,
 }
 
 /// A packed irradiance texel (see [`IrradianceLayout`] for its bit map); plain `u32` on the GPU.
@@ -114,6 +118,10 @@ impl IrradianceLayout {
                 BitField::new(r_bits + g_bits, b_bits),
             ],
             count: BitField::new(32 - count_bits, count_bits),
+            tables: match (fields[0].table(), fields[1].table(), fields[2].table()) {
+                (Some(r), Some(g), Some(b)) => Some([r, g, b]),
+                _ => None,
+            },
         })
     }
 
@@ -169,6 +177,9 @@ impl IrradianceLayout {
     #[inline(always)]
     #[must_use]
     pub fn encode(&self, rgb: Vec3, count: u32, rounding: Rounding) -> IrradianceWord {
+        if let (Some(t), Rounding::Down) = (self.tables, rounding) {
+            return IrradianceWord(self.count.put(count.min(self.max_count())) | self.pack(t, rgb));
+        }
         // Lane 3 repeats B (it has no field and is left out of the word): a constant there
         // would sit on a code boundary and send every word down round-down's slow path.
         IrradianceWord(
@@ -183,8 +194,23 @@ impl IrradianceLayout {
     #[inline(always)]
     #[must_use]
     pub fn decode(&self, word: IrradianceWord) -> Vec3 {
+        if let Some([r, g, b]) = self.tables {
+            let s = self.shifts();
+            return Vec3::new(
+                r.decode(word.0 >> s[0]),
+                g.decode(word.0 >> s[1]),
+                b.decode(word.0 >> s[2]),
+            );
+        }
         let [r, g, b, _] = self.lanes.decode_word(word.0);
         Vec3::new(r, g, b)
+    }
+
+    /// The colour fields of a word rounded down by the tables.
+    #[inline(always)]
+    fn pack(&self, [r, g, b]: [&'static LogTable; 3], rgb: Vec3) -> u32 {
+        let s = self.shifts();
+        r.encode_down(rgb.x) << s[0] | g.encode_down(rgb.y) << s[1] | b.encode_down(rgb.z) << s[2]
     }
 
     /// Lanes for the batch form: every lane holds channel `i`'s field (R = 0, G = 1, B = 2) at
@@ -232,6 +258,13 @@ impl IrradianceLayout {
             words.len(),
             "encode_slice: colours and words differ in length"
         );
+        if let (Some(t), Rounding::Down) = (self.tables, rounding) {
+            let count_bits = self.count.put(count.min(self.max_count()));
+            for (w, &c) in words.iter_mut().zip(colours) {
+                *w = IrradianceWord(count_bits | self.pack(t, c));
+            }
+            return;
+        }
         // Spelled out, not `[0, 1, 2].map(..)`: LLVM left such closures un-inlined here.
         let lanes = [
             self.channel_lanes(0),
@@ -273,6 +306,12 @@ impl IrradianceLayout {
             colours.len(),
             "decode_slice: words and colours differ in length"
         );
+        if self.tables.is_some() {
+            for (c, &w) in colours.iter_mut().zip(words) {
+                *c = self.decode(w);
+            }
+            return;
+        }
         let lanes = [
             self.channel_lanes(0),
             self.channel_lanes(1),

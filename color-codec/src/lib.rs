@@ -35,11 +35,14 @@
 //!   and [`bytemuck::Pod`].
 //!
 //! ## Performance
-//! A round trip of the ADGI log codec (R9G9B8, round down) takes 2.6–3.4× R11G11B10's time per
-//! colour and 1.05–1.19× through the slice API (`encode_slice` / `decode_slice`, four colours
-//! per vector); `half`'s 3 × f16 takes 1.05–1.55× and 1.01–1.18× (criterion means of two
-//! runs on a shared 2-vCPU VM, baseline x86-64). Run `cargo bench -p mcg-color-codec --bench color_codec -- round_trip`;
-//! numbers and diary: `benches/README.md`.
+//! ADGI's log codec (R9G9B8, round down) decodes from a table and rounds down by a table
+//! search (the polynomials' exact results): a round trip takes 0.79× R11G11B10's time per colour
+//! and 0.92–0.95× through the slice API (fastest of repeated runs on a shared 2-vCPU VM,
+//! baseline x86-64: `cargo run --release -p mcg-color-codec --example min_timing`); 94 and 101
+//! instructions per colour against R11G11B10's 70 and 77 (`scripts/codec-instructions`). The
+//! criterion groups (`cargo bench -p mcg-color-codec --bench color_codec -- round_trip`) gave
+//! 1.02× and 0.97× in one run and 1.58× and 1.24× in another under heavier load; numbers and
+//! diary: `benches/README.md`.
 //!
 //! ## Features
 //! - `std` (default): float functions from the standard library.
@@ -81,6 +84,7 @@ mod gamma5_r10g10b10a2;
 mod heuristics_word;
 mod irradiance_word;
 mod log_codec;
+mod log_table;
 mod logluv32;
 mod math;
 mod moving_average;

@@ -1,6 +1,7 @@
 //! The log codec of ADGI eq. 21 and its k-bit quantisation.
 
 use crate::error::CodecError;
+use crate::log_table::LogTable;
 use crate::math::{ROUND_SHIFT, fast_exp2, fast_exp2_x4, fast_ln_ge1, fast_ln_parts_x4};
 use crate::quantize::Rounding;
 use crate::simd4::{F4, I4};
@@ -147,8 +148,19 @@ impl LogCodec {
     }
 
     /// This codec quantised to `bits` bits (1 ..= [`MAX_FIELD_BITS`]; clamped into that range).
+    ///
+    /// For ADGI's (β, γ) = (5, 15) at 8, 9 and 10 bits the field decodes from a table and
+    /// rounds down by a table search (same codes and values, see the crate's `log_table`
+    /// module); the GPU twin keeps the polynomials.
     #[must_use]
     pub const fn field(self, bits: u32) -> LogField {
+        let mut f = self.raw_field(bits);
+        f.table = LogTable::find(self, f.bits);
+        f
+    }
+
+    /// [`field`](Self::field) without the tables: the polynomial path only.
+    pub(crate) const fn raw_field(self, bits: u32) -> LogField {
         let bits = if bits < 1 {
             1
         } else if bits > MAX_FIELD_BITS {
@@ -172,6 +184,7 @@ impl LogCodec {
             // decoder (see the type docs). Inside the band, rounding down decides exactly
             // against `decode`.
             down_tolerance: 2.0 * m * (6.4e-7 + 9.4e-7 / self.beta) + 1.0 / 4096.0,
+            table: None,
         }
     }
 }
@@ -232,6 +245,8 @@ pub struct LogField {
     decode_scale: f32,
     inv_gamma: f32,
     down_tolerance: f32,
+    /// Decode and round-down tables (ADGI's parameters only).
+    table: Option<&'static LogTable>,
 }
 
 impl LogField {
@@ -293,6 +308,12 @@ impl LogField {
         self.down_tolerance
     }
 
+    /// The decode and round-down tables of this field, if it has them.
+    #[inline(always)]
+    pub(crate) const fn table(&self) -> Option<&'static LogTable> {
+        self.table
+    }
+
     /// Encodes `v` to a code in 0 ..= M with `rounding` (see the type docs for the error bound).
     ///
     /// Negative inputs and NaN encode to 0; values above [`LogCodec::max_value`] (and +∞)
@@ -300,6 +321,9 @@ impl LogField {
     #[inline(always)]
     #[must_use]
     pub fn encode(&self, v: f32, rounding: Rounding) -> u32 {
+        if let (Some(t), Rounding::Down) = (self.table, rounding) {
+            return t.encode_down(v);
+        }
         LogLanes::new([*self; 4], [0; 4], [0; 4], [true; 4]).encode([v; 4], rounding)[0]
     }
 
@@ -308,6 +332,9 @@ impl LogField {
     #[inline(always)]
     #[must_use]
     pub fn decode(&self, code: u32) -> f32 {
+        if let Some(t) = self.table {
+            return t.decode(code);
+        }
         LogLanes::new([*self; 4], [0; 4], [0; 4], [true; 4]).decode_word(code)[0]
     }
 

@@ -122,7 +122,7 @@ pub(crate) fn fast_ln_parts(x: f32) -> (f32, f32) {
 /// of 2^f on f ∈ [−½, ½] (Cephes `exp2f` coefficients, evaluated by Estrin's scheme in the order
 /// written here; relative error ≈ 2·10⁻⁷, tested against f64). Exactly 1 at x = 0.
 #[inline(always)]
-pub(crate) fn fast_exp2(x: f32) -> f32 {
+pub(crate) const fn fast_exp2(x: f32) -> f32 {
     let shifted = x + ROUND_SHIFT;
     let i = shifted - ROUND_SHIFT;
     let f = x - i;

@@ -14,6 +14,8 @@
 //! - `peers_lookup/2^b`: warm (criterion repeats the pass, so what fits stays in the caches):
 //!   `mcg_get` (`HashTable::get` per key), `mcg_find_many` (one `find_many` over the pass, then
 //!   the value reads), and `get` of each map; every lookup reads one value word.
+//!   `mcg_find_no_value` (`HashTable::find` alone, no value read) is a diagnostic: one cache
+//!   line per lookup, what a slot layout with the checksum beside the value would approach.
 //! - `peers_lookup_cold/2^b`: the same passes, each after flushing the structure's memory from
 //!   every cache level (`clflush` over the table's two arrays; over every entry of a map and
 //!   its control bytes), untimed.
@@ -47,7 +49,7 @@ mod pool;
 #[path = "common/stream.rs"]
 mod stream;
 
-use lookups::{State, find_many_pass, get_pass};
+use lookups::{State, find_many_pass, find_pass, get_pass};
 use stream::{Sized, bench_hash, pack, sized, slot_bits};
 
 const MAX_PROBES: u32 = 16;
@@ -164,6 +166,9 @@ fn bench_lookup(c: &mut Criterion) {
             g.bench_function(id("mcg_find_many"), |b| {
                 b.iter(|| find_many_pass(&t, &s.queries, &mut slots))
             });
+            g.bench_function(id("mcg_find_no_value"), |b| {
+                b.iter(|| find_pass(&t, &s.queries))
+            });
             g.bench_function(id("hashbrown_foldhash"), |b| {
                 b.iter(|| map_pass(|k| brown.get(k).map(|v| v[0]), &packed))
             });
@@ -187,6 +192,18 @@ fn bench_lookup(c: &mut Criterion) {
                     |_| flush_table(&t),
                     |_| {
                         black_box(get_pass(&t, &s.queries));
+                    },
+                )
+            })
+        });
+        g.bench_function(id("mcg_find_no_value"), |b| {
+            b.iter_custom(|n| {
+                timed(
+                    n,
+                    &mut (),
+                    |_| flush_table(&t),
+                    |_| {
+                        black_box(find_pass(&t, &s.queries));
                     },
                 )
             })

@@ -30,6 +30,16 @@ pub fn get_pass(table: &HashTable<State>, queries: &[CellKey]) -> f32 {
         .sum()
 }
 
+/// `HashTable::find` per key without the value read: one cache line per lookup, what a
+/// layout with the checksum inside the value's line would approach (a diagnostic, not a peer).
+#[inline]
+pub fn find_pass(table: &HashTable<State>, queries: &[CellKey]) -> f32 {
+    black_box(queries)
+        .iter()
+        .map(|k| table.find(k).map_or(0.0, |s| s as f32))
+        .sum()
+}
+
 /// `HashTable::find_many` over all queries into `slots`, then the value reads.
 #[inline]
 pub fn find_many_pass(
