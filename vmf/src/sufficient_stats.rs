@@ -332,7 +332,7 @@ impl SufficientStats {
     /// 1 − r of [`SufficientStats::posterior_mean_cosine`], computed without cancellation:
     /// (N² (1 − r̄) + N_p (1 − r_p)) / (N² + N_p).
     #[inline]
-    fn posterior_one_minus_mean_cosine(&self, prior: MapPrior) -> f32 {
+    pub(crate) fn posterior_one_minus_mean_cosine(&self, prior: MapPrior) -> f32 {
         let n = self.sample_count as f32;
         let n_eff = match prior.decay {
             PriorDecay::SquaredCount => n * n,

@@ -5,8 +5,8 @@ use mcg_hashgrid::{
     AdaptiveGrid, CellKey, LevelParams, StaticGrid, cell_and_fraction, geometric_jitter,
     normal_class, stochastic_corner, stochastic_trilinear,
 };
-use mcg_vmf::Vmf;
 use mcg_vmf::glam::{IVec3, Vec2, Vec3};
+use mcg_vmf::{MapPrior, SufficientStats, Vmf, VmfLanes};
 
 use super::single_scattering::jittered_view_direction;
 use super::{
@@ -656,9 +656,7 @@ impl Guide {
             scatter,
             set: CandidateSet::new(),
             slots: [None; MAX_CANDIDATES],
-            lobes: [Vmf::uniform(); MAX_CANDIDATES],
-            normalizations: [0.0; MAX_CANDIDATES],
-            shares: [0.0; MAX_CANDIDATES],
+            lobes: VmfLanes::EMPTY,
             scatter_share: 0.0,
             class: normal_class(vertex.key_direction),
             target_level: self.adaptive.target_level(self.camera.distance(x)),
@@ -705,11 +703,9 @@ pub struct GuidedVertex<'g, S> {
     scatter: S,
     set: CandidateSet<MAX_CANDIDATES>,
     slots: [Option<(GridKind, u32)>; MAX_CANDIDATES],
-    lobes: [Vmf; MAX_CANDIDATES],
-    /// C(κ) of each lobe, for the pdf.
-    normalizations: [f32; MAX_CANDIDATES],
-    /// w̄_k / Σw̄ of candidates with a lobe, 0 otherwise.
-    shares: [f32; MAX_CANDIDATES],
+    /// The lobe of each candidate with a lobe at x, weighted by its share w̄_k / Σw̄; the
+    /// other lanes empty.
+    lobes: VmfLanes<MAX_CANDIDATES>,
     /// The shares of valid candidates whose lobe cannot be built at x: Alg. 2 answers them
     /// with the scatter technique.
     scatter_share: f32,
@@ -731,24 +727,24 @@ impl<S: Scatter> GuidedVertex<'_, S> {
             (Hemisphere::CosineProduct, Some(n)) => Vmf::clamped_cosine(n).ok(),
             _ => None,
         };
+        let mut stats = [SufficientStats::EMPTY; MAX_CANDIDATES];
+        let mut priors = [MapPrior::NONE; MAX_CANDIDATES];
+        let mut shares = [0.0; MAX_CANDIDATES];
         for (k, s) in self.set.states().iter().enumerate() {
-            let w = s.resampling_weight();
-            if !(w > 0.0) {
-                continue;
+            // `prepare_candidate` zeroed w̄ of every invalid state: w̄ > 0 is valid here.
+            let w = s.weight_sum;
+            if w > 0.0 {
+                stats[k] = s.stats();
+                priors[k] = distance_prior(s, x, params);
+                shares[k] = w / total;
             }
-            let share = w / total;
-            match s.lobe(x, distance_prior(s, x, params)) {
-                Some(lobe) => {
-                    // The product's lobe only, μ' ∝ κμ + κ_c n, κ' = |κμ + κ_c n|.
-                    let lobe = match &cosine {
-                        Some(c) => lobe.product_lobe(c),
-                        None => lobe,
-                    };
-                    self.lobes[k] = lobe;
-                    self.normalizations[k] = lobe.normalization();
-                    self.shares[k] = share;
-                }
-                None => self.scatter_share += share,
+        }
+        // Every lobe at once (Alg. 2 lines 6-8; with the cosine product's lobe only,
+        // μ' ∝ κμ + κ_c n, κ' = |κμ + κ_c n|), lane-wise, bit-identical to building each.
+        self.lobes = VmfLanes::from_stats(x, &stats, &priors, &shares, cosine.as_ref());
+        for (k, share) in shares.iter().enumerate() {
+            if *share > 0.0 && !self.lobes.is_set(k) {
+                self.scatter_share += share;
             }
         }
     }
@@ -776,7 +772,7 @@ impl<S: Scatter> GuidedVertex<'_, S> {
     pub fn sample(&self, u: &SampleUniforms) -> GuidedSample {
         let lobe = self.lobe_choice(u.choice);
         let direction = match lobe {
-            Some(k) => self.lobes[k].sample(u.direction),
+            Some(k) => self.lobes.lobe(k).sample(u.direction),
             None => self.scatter.sample(u.direction),
         };
         GuidedSample {
@@ -789,7 +785,7 @@ impl<S: Scatter> GuidedVertex<'_, S> {
     #[inline]
     fn lobe_choice(&self, choice: f32) -> Option<usize> {
         let k = self.set.selected_index()?;
-        if choice < self.guide.config.params.bsdf_probability || !(self.shares[k] > 0.0) {
+        if choice < self.guide.config.params.bsdf_probability || !self.lobes.is_set(k) {
             return None;
         }
         Some(k)
@@ -806,16 +802,8 @@ impl<S: Scatter> GuidedVertex<'_, S> {
         if !(self.set.weight_sum() > 0.0) {
             return scatter;
         }
-        let mut lobes = self.scatter_share * scatter;
-        for k in 0..self.set.states().len() {
-            if self.shares[k] > 0.0 {
-                // Vmf::pdf with its normalisation computed once in `begin`.
-                let lobe = &self.lobes[k];
-                let d2 = (w - lobe.mu()).length_squared();
-                lobes +=
-                    self.shares[k] * (self.normalizations[k] * (-0.5 * lobe.kappa() * d2).exp());
-            }
-        }
+        // Every lobe's share·V_k(ω) in one lane-wise pass (normalisations computed in `begin`).
+        let lobes = self.scatter_share * scatter + self.lobes.pdf(w);
         let p = self.guide.config.params.bsdf_probability;
         p * scatter + (1.0 - p) * lobes
     }
