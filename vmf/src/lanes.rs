@@ -10,9 +10,9 @@
 
 use glam::Vec3;
 
+use crate::KAPPA_MAX;
 use crate::constants::KAPPA_SATURATED;
 use crate::math;
-use crate::mean_cosine::kappa_from_one_minus_mean_cosine;
 use crate::sphere::UNIFORM_SPHERE_PDF;
 use crate::{MapPrior, SufficientStats, Vmf};
 
@@ -101,6 +101,7 @@ impl<const N: usize> VmfLanes<N> {
     /// `product_lobe`): the lane pass does the same operations in the same order, with
     /// selects for branches; a lane whose |ȳ − x|² leaves the normal range, where `to_vmf`
     /// rescales first, is redone by the scalar path.
+    #[inline]
     #[must_use]
     pub fn from_stats(
         x: Vec3,
@@ -113,22 +114,26 @@ impl<const N: usize> VmfLanes<N> {
         let mut slow = [false; N];
         // Gather into lanes: the target offsets, κ and the weights (the posterior's and κ's
         // branches per lane), then the arithmetic over whole lanes.
-        let mut kappa = [0.0_f32; N];
+        let mut parts = [[0.0_f32; N]; 4];
         for i in 0..N {
             let s = &stats[i];
             let d = s.mean_target - x;
             out.mu_x[i] = d.x;
             out.mu_y[i] = d.y;
             out.mu_z[i] = d.z;
-            kappa[i] =
-                kappa_from_one_minus_mean_cosine(s.posterior_one_minus_mean_cosine(priors[i]));
+            let (n_eff, prior_weight, prior_complement) = s.posterior_parts(priors[i]);
+            parts[0][i] = n_eff;
+            parts[1][i] = prior_weight;
+            parts[2][i] = prior_complement;
+            parts[3][i] = s.one_minus_mean_cosine;
             let w = weights[i];
-            let has = s.sample_count != 0 && s.is_valid() && w > 0.0 && w.is_finite();
+            // `&`, not `&&`: compares and no branches.
+            let has = (s.sample_count != 0) & s.is_valid() & (w > 0.0) & (w < f32::INFINITY);
             out.weight[i] = if has { w } else { 0.0 };
         }
         match product {
-            Some(p) => out.lobes_from_offsets::<true>(&kappa, p, &mut slow),
-            None => out.lobes_from_offsets::<false>(&kappa, &Vmf::uniform(), &mut slow),
+            Some(p) => out.lobes_from_offsets::<true>(&parts, p, &mut slow),
+            None => out.lobes_from_offsets::<false>(&parts, &Vmf::uniform(), &mut slow),
         }
         for i in 0..N {
             if slow[i] {
@@ -142,13 +147,14 @@ impl<const N: usize> VmfLanes<N> {
         out
     }
 
-    /// The lanes' μ from the offsets ȳ − x in `mu_*`, κ from `kappa`, times `product` when
+    /// The lanes' μ from the offsets ȳ − x in `mu_*`, κ from the posterior's parts (N_eff,
+    /// N_p, 1 − r_p, 1 − r̄) in `parts`, times `product` when
     /// `PRODUCT`, and the scales; lanes whose |ȳ − x|² leaves the normal range are marked
     /// `slow` and emptied.
     #[inline(always)]
     fn lobes_from_offsets<const PRODUCT: bool>(
         &mut self,
-        kappa: &[f32; N],
+        parts: &[[f32; N]; 4],
         product: &Vmf,
         slow: &mut [bool; N],
     ) {
@@ -158,10 +164,11 @@ impl<const N: usize> VmfLanes<N> {
             // `to_vmf`'s `normalize_robust` is `try_normalize` (d · 1/|d|) in this range.
             let fast = l2 >= f32::MIN_POSITIVE && l2 <= f32::MAX;
             let mu = d * (1.0 / math::sqrt(l2));
+            let kappa = kappa_lane(parts[0][i], parts[1][i], parts[2][i], parts[3][i]);
             let (mu, k) = if PRODUCT {
-                product_lane(mu, kappa[i], product)
+                product_lane(mu, kappa, product)
             } else {
-                (mu, kappa[i])
+                (mu, kappa)
             };
             slow[i] = self.weight[i] > 0.0 && !fast;
             let w = if fast { self.weight[i] } else { 0.0 };
@@ -214,6 +221,25 @@ impl<const N: usize> VmfLanes<N> {
     }
 }
 
+/// κ of `to_vmf`: Banerjee's κ (`kappa_from_one_minus_mean_cosine`) of the posterior
+/// complement (N_eff (1 − r̄) + N_p (1 − r_p)) / (N_eff + N_p)
+/// (`posterior_one_minus_mean_cosine`), the same operations with the branches as selects.
+#[inline(always)]
+fn kappa_lane(n_eff: f32, prior_weight: f32, prior_complement: f32, sample: f32) -> f32 {
+    let total = n_eff + prior_weight;
+    let e = (n_eff * sample.clamp(0.0, 1.0) + prior_weight * prior_complement) / total;
+    let e = if total > 0.0 { e } else { 1.0 };
+    let e = if prior_weight == f32::INFINITY {
+        prior_complement
+    } else {
+        e
+    };
+    let r = 1.0 - e;
+    let kappa = (r * (3.0 - r * r) / (e * (2.0 - e))).min(KAPPA_MAX);
+    let kappa = if e > 0.0 { kappa } else { KAPPA_MAX };
+    if e < 1.0 { kappa } else { 0.0 }
+}
+
 /// [`Vmf::product_lobe`] of the lobe (μ, κ) with `other`, the same operations in the same order
 /// with its branches as selects (bit-identical results).
 #[inline(always)]
@@ -222,7 +248,9 @@ fn product_lane(mu: Vec3, kappa: f32, other: &Vmf) -> (Vec3, f32) {
     let length = m.length();
     let unit = if length > 0.0 { m / length } else { mu };
     let rcp = 1.0 / unit.length();
-    let unit = if rcp.is_finite() && rcp > 0.0 {
+    // `rcp.is_finite() && rcp > 0.0` of `try_normalize`, as two compares (LLVM lowers
+    // `is_finite` to integer class tests).
+    let unit = if (rcp > 0.0) & (rcp < f32::INFINITY) {
         unit * rcp
     } else {
         mu

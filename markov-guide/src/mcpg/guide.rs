@@ -584,6 +584,7 @@ impl Guide {
     /// grid and level instead of once per candidate (most candidates share the static grid's
     /// cell or the target level's). The same keys as [`key`](Self::key) bit for bit:
     /// [`stochastic_trilinear`] is the lower corner plus the [`stochastic_corner`] offset.
+    #[inline(always)]
     fn candidate_keys(
         &self,
         position: Vec3,
@@ -661,7 +662,7 @@ impl Guide {
             class: normal_class(vertex.key_direction),
             target_level: self.adaptive.target_level(self.camera.distance(x)),
         };
-        if !x.is_finite() {
+        if !crate::math::all_finite(x) {
             return v;
         }
         let keys = self.candidate_keys(x, v.class, v.target_level, u, count);
@@ -687,7 +688,9 @@ impl Guide {
                 None => (GridState::EMPTY, true),
             };
             let candidate = prepare_candidate(state, collided, kind, x, vertex.normal, now, params);
-            v.set.offer(candidate, u.candidates[k].reservoir);
+            // Prepared: w̄ is the resampling weight (0 for every invalid state).
+            v.set
+                .offer_weighted(candidate, candidate.weight_sum, u.candidates[k].reservoir);
         }
         v.build_lobes();
         v
@@ -860,7 +863,7 @@ impl<S: Scatter> GuidedVertex<'_, S> {
             }
         };
         let carried = observation.weight * incident;
-        let carried = if carried.is_finite() {
+        let carried = if crate::math::all_finite(carried) {
             carried.max(Vec3::ZERO)
         } else {
             Vec3::ZERO

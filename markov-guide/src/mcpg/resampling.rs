@@ -55,9 +55,16 @@ pub fn prepare_candidate(
     now: f32,
     params: &McpgParams,
 ) -> GridState {
-    let mut s = state.predicted(now);
+    // Prediction never changes validity (it keeps ȳ unless the moved one is finite), so one
+    // test serves both.
+    let valid = state.is_valid();
+    let mut s = if valid {
+        state.predicted_valid(now)
+    } else {
+        state
+    };
     let rejected = collided
-        || !s.is_valid()
+        || !valid
         || (grid == GridKind::Static
             && normal.is_some_and(|n| {
                 let mu = (s.mean_target - x).normalize_or_zero();
@@ -111,9 +118,19 @@ impl<const N: usize> CandidateSet<N> {
         if self.len == N {
             return false;
         }
+        self.offer_weighted(candidate, candidate.resampling_weight(), u)
+    }
+
+    /// [`offer`](Self::offer) of a candidate whose resampling weight is known: `weight` must
+    /// equal `candidate.resampling_weight()` (for a [`prepare_candidate`] result it is its
+    /// w̄, which preparation zeroed for every invalid state).
+    #[inline]
+    pub(crate) fn offer_weighted(&mut self, candidate: GridState, weight: f32, u: f32) -> bool {
+        if self.len == N {
+            return false;
+        }
         self.states[self.len] = candidate;
-        self.reservoir
-            .offer(self.len, candidate.resampling_weight(), u);
+        self.reservoir.offer(self.len, weight, u);
         self.len += 1;
         true
     }

@@ -112,7 +112,10 @@ impl GridState {
     #[inline]
     #[must_use]
     pub fn is_valid(&self) -> bool {
-        self.weight_sum > 0.0 && self.weight_sum.is_finite() && self.mean_target.is_finite()
+        // Compares joined by `&`: no branches, and no `is_finite` class tests.
+        (self.weight_sum > 0.0)
+            & (self.weight_sum < f32::INFINITY)
+            & crate::math::all_finite(self.mean_target)
     }
 
     /// The resampling weight w̄ (MCPG Alg. 1 line 8), 0 for an invalid state.
@@ -132,8 +135,17 @@ impl GridState {
     #[inline]
     #[must_use]
     pub fn predicted(&self, now: f32) -> Self {
+        if !self.is_valid() {
+            return *self;
+        }
+        self.predicted_valid(now)
+    }
+
+    /// [`predicted`](Self::predicted) of a state known to be valid.
+    #[inline]
+    pub(crate) fn predicted_valid(&self, now: f32) -> Self {
         // v = 0 (every static scene) moves nothing: skip the f16 decoding.
-        if self.velocity == [0; 3] || !self.is_valid() {
+        if self.velocity == [0; 3] {
             return *self;
         }
         let moved = self.mean_target + (now - self.time) * self.velocity();
