@@ -22,6 +22,10 @@ use crate::{MapPrior, SufficientStats, Vmf};
 /// can tell from 0.
 const EXP_FLOOR: f32 = -87.0;
 
+/// The per-lane inputs [`VmfLanes::from_stats`] gathers: ȳ − x (3), N_eff, N_p, 1 − r_p,
+/// 1 − r̄ and the weight.
+const LANE_INPUTS: usize = 8;
+
 /// Up to `N` vMF lobes with mixture weights, stored lane-wise: the density
 /// Σᵢ wᵢ V(ω | μᵢ, κᵢ) in one pass over the lanes.
 ///
@@ -110,33 +114,36 @@ impl<const N: usize> VmfLanes<N> {
         weights: &[f32; N],
         product: Option<&Vmf>,
     ) -> Self {
-        let mut out = Self::EMPTY;
-        let mut slow = [false; N];
-        // Gather into lanes: the target offsets, κ and the weights (the posterior's and κ's
-        // branches per lane), then the arithmetic over whole lanes.
-        let mut parts = [[0.0_f32; N]; 4];
+        // Gather the lanes' inputs (the fields of `stats`, the posterior's parts and the
+        // weights) into arrays, then do the arithmetic over whole lanes.
+        let mut lanes = [[0.0_f32; N]; LANE_INPUTS];
         for i in 0..N {
             let s = &stats[i];
             let d = s.mean_target - x;
-            out.mu_x[i] = d.x;
-            out.mu_y[i] = d.y;
-            out.mu_z[i] = d.z;
             let (n_eff, prior_weight, prior_complement) = s.posterior_parts(priors[i]);
-            parts[0][i] = n_eff;
-            parts[1][i] = prior_weight;
-            parts[2][i] = prior_complement;
-            parts[3][i] = s.one_minus_mean_cosine;
-            let w = weights[i];
-            // `&`, not `&&`: compares and no branches.
-            let has = (s.sample_count != 0) & s.is_valid() & (w > 0.0) & (w < f32::INFINITY);
-            out.weight[i] = if has { w } else { 0.0 };
+            // w̄ > 0 (`is_valid`) and N ≠ 0, as 1/0 for the lane pass.
+            let has = (s.sample_count != 0) & s.is_valid();
+            let inputs = [
+                d.x,
+                d.y,
+                d.z,
+                n_eff,
+                prior_weight,
+                prior_complement,
+                s.one_minus_mean_cosine,
+                if has { weights[i] } else { 0.0 },
+            ];
+            for (lane, v) in lanes.iter_mut().zip(inputs) {
+                lane[i] = v;
+            }
         }
-        match product {
-            Some(p) => out.lobes_from_offsets::<true>(&parts, p, &mut slow),
-            None => out.lobes_from_offsets::<false>(&parts, &Vmf::uniform(), &mut slow),
-        }
+        let mut out = match product {
+            Some(p) => Self::lobes_from_inputs::<true>(&lanes, p),
+            None => Self::lobes_from_inputs::<false>(&lanes, &Vmf::uniform()),
+        };
+        // A lane marked by a negative weight has |ȳ − x|² outside the normal range.
         for i in 0..N {
-            if slow[i] {
+            if out.weight[i] < 0.0 {
                 out.set(i, &Vmf::uniform(), 0.0);
                 if let Some(lobe) = stats[i].to_vmf(x, priors[i]) {
                     let lobe = product.map_or(lobe, |p| lobe.product_lobe(p));
@@ -147,38 +154,54 @@ impl<const N: usize> VmfLanes<N> {
         out
     }
 
-    /// The lanes' μ from the offsets ȳ − x in `mu_*`, κ from the posterior's parts (N_eff,
-    /// N_p, 1 − r_p, 1 − r̄) in `parts`, times `product` when
-    /// `PRODUCT`, and the scales; lanes whose |ȳ − x|² leaves the normal range are marked
-    /// `slow` and emptied.
+    /// The lanes from [`from_stats`](Self::from_stats)' gathered inputs: μ from the offsets
+    /// ȳ − x, κ from the posterior's parts (N_eff, N_p, 1 − r_p, 1 − r̄), times `product` when
+    /// `PRODUCT`, and the scales. A lane whose |ȳ − x|² leaves the normal range gets the
+    /// negated weight (the caller redoes it by the scalar path).
     #[inline(always)]
-    fn lobes_from_offsets<const PRODUCT: bool>(
-        &mut self,
-        parts: &[[f32; N]; 4],
+    fn lobes_from_inputs<const PRODUCT: bool>(
+        lanes: &[[f32; N]; LANE_INPUTS],
         product: &Vmf,
-        slow: &mut [bool; N],
-    ) {
+    ) -> Self {
+        let [
+            dx,
+            dy,
+            dz,
+            n_eff,
+            prior_weight,
+            prior_complement,
+            sample,
+            weight,
+        ] = lanes;
+        let mut out = Self::EMPTY;
         for i in 0..N {
-            let d = Vec3::new(self.mu_x[i], self.mu_y[i], self.mu_z[i]);
+            let d = Vec3::new(dx[i], dy[i], dz[i]);
             let l2 = d.length_squared();
             // `to_vmf`'s `normalize_robust` is `try_normalize` (d · 1/|d|) in this range.
-            let fast = l2 >= f32::MIN_POSITIVE && l2 <= f32::MAX;
+            let fast = (l2 >= f32::MIN_POSITIVE) & (l2 <= f32::MAX);
             let mu = d * (1.0 / math::sqrt(l2));
-            let kappa = kappa_lane(parts[0][i], parts[1][i], parts[2][i], parts[3][i]);
+            let kappa = kappa_lane(n_eff[i], prior_weight[i], prior_complement[i], sample[i]);
             let (mu, k) = if PRODUCT {
                 product_lane(mu, kappa, product)
             } else {
                 (mu, kappa)
             };
-            slow[i] = self.weight[i] > 0.0 && !fast;
-            let w = if fast { self.weight[i] } else { 0.0 };
-            self.mu_x[i] = mu.x;
-            self.mu_y[i] = mu.y;
-            self.mu_z[i] = mu.z;
-            self.kappa[i] = k;
-            self.weight[i] = w;
-            self.scale[i] = w * normalization_lane(k);
+            // `&`, not `&&`: compares and no branches.
+            let w = weight[i];
+            let w = if (w > 0.0) & (w < f32::INFINITY) {
+                w
+            } else {
+                0.0
+            };
+            let w = if fast { w } else { -w };
+            out.mu_x[i] = mu.x;
+            out.mu_y[i] = mu.y;
+            out.mu_z[i] = mu.z;
+            out.kappa[i] = k;
+            out.weight[i] = w;
+            out.scale[i] = w * normalization_lane(k);
         }
+        out
     }
 
     /// The lobe in lane `i` (the uniform lobe for a lane never set).

@@ -8,10 +8,11 @@ use mcg_hashgrid::{
 use mcg_vmf::glam::{IVec3, Vec2, Vec3};
 use mcg_vmf::{MapPrior, SufficientStats, Vmf, VmfLanes};
 
+use super::resampling::prepare_in_place;
 use super::single_scattering::jittered_view_direction;
 use super::{
     CacheConfig, CandidateSet, GridKind, GridState, GridUniforms, IrradianceCache, McpgParams,
-    Observation, SharedGrid, distance_prior, prepare_candidate, should_discard, update,
+    Observation, SharedGrid, distance_prior, should_discard, update,
 };
 use crate::error::GuideError;
 use crate::{cosine_hemisphere, cosine_hemisphere_pdf};
@@ -671,26 +672,24 @@ impl Guide {
         for (slot, (kind, key)) in v.slots.iter_mut().zip(&keys).take(count) {
             *slot = self.grid(*kind).find(key).map(|s| (*kind, s));
         }
-        let mut states = [None; MAX_CANDIDATES];
+        // The states go straight into the candidate set's storage (all `EMPTY` so far, which
+        // a slot without a state, a hash collision or a torn read leaves there), are
+        // prepared there, then offered in load order.
+        let states = v.set.storage_mut();
         for (state, slot) in states.iter_mut().zip(&mut v.slots).take(count) {
-            if let Some((kind, s)) = *slot {
-                *state = self.grid(kind).state(s);
-                if state.is_none() {
-                    *slot = None;
-                }
+            if let Some((kind, s)) = *slot
+                && !self.grid(kind).load_into(s, state)
+            {
+                *slot = None;
             }
         }
         let now = self.frame as f32;
-        for k in 0..count {
-            let kind = keys[k].0;
-            let (state, collided) = match states[k] {
-                Some(state) => (state, false),
-                None => (GridState::EMPTY, true),
-            };
-            let candidate = prepare_candidate(state, collided, kind, x, vertex.normal, now, params);
-            // Prepared: w̄ is the resampling weight (0 for every invalid state).
-            v.set
-                .offer_weighted(candidate, candidate.weight_sum, u.candidates[k].reservoir);
+        for (state, (kind, _)) in states.iter_mut().zip(&keys).take(count) {
+            // An `EMPTY` state is invalid: prepared to w̄ = 0 like a collision (Alg. 1 line 6).
+            prepare_in_place(state, false, *kind, x, vertex.normal, now, params);
+        }
+        for c in u.candidates.iter().take(count) {
+            v.set.offer_stored(c.reservoir);
         }
         v.build_lobes();
         v

@@ -135,25 +135,24 @@ impl GridState {
     #[inline]
     #[must_use]
     pub fn predicted(&self, now: f32) -> Self {
-        if !self.is_valid() {
-            return *self;
-        }
-        self.predicted_valid(now)
-    }
-
-    /// [`predicted`](Self::predicted) of a state known to be valid.
-    #[inline]
-    pub(crate) fn predicted_valid(&self, now: f32) -> Self {
-        // v = 0 (every static scene) moves nothing: skip the f16 decoding.
-        if self.velocity == [0; 3] {
-            return *self;
-        }
-        let moved = self.mean_target + (now - self.time) * self.velocity();
         let mut s = *self;
-        if moved.is_finite() {
-            s.mean_target = moved;
+        if s.is_valid() {
+            s.predict_valid(now);
         }
         s
+    }
+
+    /// [`predicted`](Self::predicted) in place, for a state known to be valid.
+    #[inline]
+    pub(crate) fn predict_valid(&mut self, now: f32) {
+        // v = 0 (every static scene) moves nothing: skip the f16 decoding.
+        if self.velocity == [0; 3] {
+            return;
+        }
+        let moved = self.mean_target + (now - self.time) * self.velocity();
+        if crate::math::all_finite(moved) {
+            self.mean_target = moved;
+        }
     }
 
     /// The lobe at shading point `x` (MCPG Alg. 2 lines 6-8) with prior `prior`, `None` for an
