@@ -94,12 +94,14 @@ impl<const N: usize> VmfLanes<N> {
         self.scale[i] = self.weight[i] * normalization_lane(lobe.kappa());
     }
 
-    /// The lobes [`SufficientStats::to_vmf`] builds at `x` from `stats[i]` with `priors[i]`,
-    /// each multiplied by `product` ([`Vmf::product_lobe`]) when given, with mixture weights
-    /// `weights[i]`: what a guide that reconstructs every accessed state's lobe at a shading
-    /// point (MCPG Alg. 2 lines 6-8, with Open PGL's cosine product) does per vertex, in one
-    /// pass over the lanes. Lanes whose `to_vmf` gives `None` (empty statistics, ȳ at `x`) or
-    /// whose weight is not finite and positive stay empty.
+    /// The lobes [`SufficientStats::to_vmf`] builds at `x`, each multiplied by `product`
+    /// ([`Vmf::product_lobe`]) when given, with mixture weights: `lane(i)` gives lane `i`'s
+    /// statistics, prior and weight (it is called once per lane, and again for the rare lane
+    /// the scalar path redoes, so it must give the same answer each time). What a guide that
+    /// reconstructs every accessed state's lobe at a shading point (MCPG Alg. 2 lines 6-8,
+    /// with Open PGL's cosine product) does per vertex, in one pass over the lanes. Lanes
+    /// whose `to_vmf` gives `None` (empty statistics, ȳ at `x`) or whose weight is not finite
+    /// and positive stay empty.
     ///
     /// μ and κ of every lane are bit-identical to the scalar path's (`to_vmf` then
     /// `product_lobe`): the lane pass does the same operations in the same order, with
@@ -109,18 +111,16 @@ impl<const N: usize> VmfLanes<N> {
     #[must_use]
     pub fn from_stats(
         x: Vec3,
-        stats: &[SufficientStats; N],
-        priors: &[MapPrior; N],
-        weights: &[f32; N],
         product: Option<&Vmf>,
+        lane: impl Fn(usize) -> (SufficientStats, MapPrior, f32),
     ) -> Self {
-        // Gather the lanes' inputs (the fields of `stats`, the posterior's parts and the
-        // weights) into arrays, then do the arithmetic over whole lanes.
+        // Gather the lanes' inputs (the fields of the statistics, the posterior's parts and
+        // the weights) into arrays, then do the arithmetic over whole lanes.
         let mut lanes = [[0.0_f32; N]; LANE_INPUTS];
         for i in 0..N {
-            let s = &stats[i];
+            let (s, prior, weight) = lane(i);
             let d = s.mean_target - x;
-            let (n_eff, prior_weight, prior_complement) = s.posterior_parts(priors[i]);
+            let (n_eff, prior_weight, prior_complement) = s.posterior_parts(prior);
             // w̄ > 0 (`is_valid`) and N ≠ 0, as 1/0 for the lane pass.
             let has = (s.sample_count != 0) & s.is_valid();
             let inputs = [
@@ -131,10 +131,10 @@ impl<const N: usize> VmfLanes<N> {
                 prior_weight,
                 prior_complement,
                 s.one_minus_mean_cosine,
-                if has { weights[i] } else { 0.0 },
+                if has { weight } else { 0.0 },
             ];
-            for (lane, v) in lanes.iter_mut().zip(inputs) {
-                lane[i] = v;
+            for (values, v) in lanes.iter_mut().zip(inputs) {
+                values[i] = v;
             }
         }
         let mut out = match product {
@@ -145,9 +145,10 @@ impl<const N: usize> VmfLanes<N> {
         for i in 0..N {
             if out.weight[i] < 0.0 {
                 out.set(i, &Vmf::uniform(), 0.0);
-                if let Some(lobe) = stats[i].to_vmf(x, priors[i]) {
+                let (s, prior, weight) = lane(i);
+                if let Some(lobe) = s.to_vmf(x, prior) {
                     let lobe = product.map_or(lobe, |p| lobe.product_lobe(p));
-                    out.set(i, &lobe, weights[i]);
+                    out.set(i, &lobe, weight);
                 }
             }
         }
@@ -402,7 +403,8 @@ mod tests {
                 };
             }
             for product in [None, Some(&cosine)] {
-                let lanes = VmfLanes::from_stats(x, &stats, &priors, &weights, product);
+                let lanes =
+                    VmfLanes::<8>::from_stats(x, product, |i| (stats[i], priors[i], weights[i]));
                 for i in 0..8 {
                     let want = stats[i]
                         .to_vmf(x, priors[i])

@@ -597,26 +597,33 @@ impl Guide {
         let params = &self.config.params;
         let max_level = self.adaptive.params().max_level;
         let mut keys = [(GridKind::Static, CellKey::unclassed(IVec3::ZERO)); MAX_CANDIDATES];
-        // (grid, level) → cell; a handful of entries at most.
-        type Cell = (Option<(GridKind, u32)>, IVec3, Vec3);
-        let mut memo: [Cell; MAX_CANDIDATES] = [(None, IVec3::ZERO, Vec3::ZERO); MAX_CANDIDATES];
+        // The cells met so far, direct-mapped: entry 0 the static grid's, entry 1 + j the
+        // adaptive level target_level + j (j < 7; the geometric jitter rarely goes further),
+        // `filled` their bits.
+        let mut memo = [(IVec3::ZERO, Vec3::ZERO); MAX_CANDIDATES];
+        let mut filled = 0_u32;
         for (key, c) in keys.iter_mut().zip(&u.candidates).take(count) {
-            let (kind, level, width) = if c.grid < params.adaptive_probability {
+            let (kind, level, width, entry) = if c.grid < params.adaptive_probability {
                 let level = (target_level + geometric_jitter(c.level)).min(max_level);
-                (GridKind::Adaptive, level, self.adaptive.width(level))
+                let j = level.wrapping_sub(target_level) as usize;
+                let entry = if j < MAX_CANDIDATES - 1 {
+                    j + 1
+                } else {
+                    usize::MAX
+                };
+                (GridKind::Adaptive, level, self.adaptive.width(level), entry)
             } else {
-                (GridKind::Static, 0, self.static_grid.width())
+                (GridKind::Static, 0, self.static_grid.width(), 0)
             };
-            let id = Some((kind, level));
-            let i = memo.iter().position(|m| m.0 == id || m.0.is_none());
-            let (base, f) = match i {
-                Some(i) if memo[i].0 == id => (memo[i].1, memo[i].2),
-                _ => {
-                    let (base, f) = cell_and_fraction(position / width);
-                    if let Some(i) = i {
-                        memo[i] = (id, base, f);
+            let (base, f) = match memo.get_mut(entry) {
+                Some(m) if filled & (1 << entry) != 0 => *m,
+                m => {
+                    let cell = cell_and_fraction(position / width);
+                    if let Some(m) = m {
+                        *m = cell;
+                        filled |= 1 << entry;
                     }
-                    (base, f)
+                    cell
                 }
             };
             let corner = stochastic_corner(f, c.corner) as i32;
@@ -729,24 +736,22 @@ impl<S: Scatter> GuidedVertex<'_, S> {
             (Hemisphere::CosineProduct, Some(n)) => Vmf::clamped_cosine(n).ok(),
             _ => None,
         };
-        let mut stats = [SufficientStats::EMPTY; MAX_CANDIDATES];
-        let mut priors = [MapPrior::NONE; MAX_CANDIDATES];
-        let mut shares = [0.0; MAX_CANDIDATES];
-        for (k, s) in self.set.states().iter().enumerate() {
-            // `prepare_candidate` zeroed w̄ of every invalid state: w̄ > 0 is valid here.
-            let w = s.weight_sum;
-            if w > 0.0 {
-                stats[k] = s.stats();
-                priors[k] = distance_prior(s, x, params);
-                shares[k] = w / total;
-            }
-        }
+        let states = self.set.states();
+        let lane = |k: usize| match states.get(k) {
+            // `prepare_in_place` zeroed w̄ of every invalid state: w̄ > 0 is valid here.
+            Some(s) if s.weight_sum > 0.0 => (
+                s.stats(),
+                distance_prior(s, x, params),
+                s.weight_sum / total,
+            ),
+            _ => (SufficientStats::EMPTY, MapPrior::NONE, 0.0),
+        };
         // Every lobe at once (Alg. 2 lines 6-8; with the cosine product's lobe only,
         // μ' ∝ κμ + κ_c n, κ' = |κμ + κ_c n|), lane-wise, bit-identical to building each.
-        self.lobes = VmfLanes::from_stats(x, &stats, &priors, &shares, cosine.as_ref());
-        for (k, share) in shares.iter().enumerate() {
-            if *share > 0.0 && !self.lobes.is_set(k) {
-                self.scatter_share += share;
+        self.lobes = VmfLanes::from_stats(x, cosine.as_ref(), lane);
+        for (k, s) in states.iter().enumerate() {
+            if s.weight_sum > 0.0 && !self.lobes.is_set(k) {
+                self.scatter_share += s.weight_sum / total;
             }
         }
     }
