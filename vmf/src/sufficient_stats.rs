@@ -241,7 +241,8 @@ impl SufficientStats {
     /// `y = x` contributes a zero direction (it lowers r̄).
     #[inline]
     pub fn update(&mut self, x: Vec3, y: Vec3, weight: f32, params: &FitParams) -> bool {
-        if !(weight >= 0.0 && weight.is_finite() && x.is_finite() && y.is_finite()) {
+        if !((weight >= 0.0) & (weight < f32::INFINITY) & math::all_finite(x) & math::all_finite(y))
+        {
             return false;
         }
         let max_count = params.max_count.max(1);
@@ -283,7 +284,7 @@ impl SufficientStats {
             }
         };
         let mean_target = self.mean_target * (1.0 - beta) + y * beta;
-        if mean_target.is_finite() {
+        if math::all_finite(mean_target) {
             self.mean_target = mean_target;
         }
         self.weight_sum = weight_sum;

@@ -98,7 +98,7 @@ impl GridState {
     /// velocity store 0 (a broken velocity estimate must not move ȳ).
     #[inline]
     pub fn set_velocity(&mut self, velocity: Vec3) {
-        let v = if velocity.is_finite() {
+        let v = if crate::math::all_finite(velocity) {
             velocity
         } else {
             Vec3::ZERO
