@@ -46,6 +46,7 @@ pub(crate) use mcg_smis::finite_non_negative_or_zero;
 /// finite c and NaN for ±∞ and NaN. LLVM lowers `f32::is_finite` to integer class tests,
 /// several times the instructions, on the guide's per-vertex path.
 #[inline(always)]
+#[allow(clippy::eq_op)] // c − c is the test
 pub(crate) fn all_finite(v: mcg_vmf::glam::Vec3) -> bool {
     (v.x - v.x) + (v.y - v.y) + (v.z - v.z) == 0.0
 }

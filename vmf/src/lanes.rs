@@ -179,7 +179,7 @@ impl<const N: usize> VmfLanes<N> {
             let d = Vec3::new(dx[i], dy[i], dz[i]);
             let l2 = d.length_squared();
             // `to_vmf`'s `normalize_robust` is `try_normalize` (d · 1/|d|) in this range.
-            let fast = (l2 >= f32::MIN_POSITIVE) & (l2 <= f32::MAX);
+            let fast = (f32::MIN_POSITIVE..=f32::MAX).contains(&l2);
             let mu = d * (1.0 / math::sqrt(l2));
             let kappa = kappa_lane(n_eff[i], prior_weight[i], prior_complement[i], sample[i]);
             let (mu, k) = if PRODUCT {

@@ -68,6 +68,7 @@ pub(crate) fn exp_m1(x: f32) -> f32 {
 /// ±∞ and NaN. LLVM lowers `f32::is_finite` to integer class tests, several times the
 /// instructions, on the per-sample update path.
 #[inline(always)]
+#[allow(clippy::eq_op)] // c − c is the test
 pub(crate) fn all_finite(v: glam::Vec3) -> bool {
     (v.x - v.x) + (v.y - v.y) + (v.z - v.z) == 0.0
 }

@@ -241,8 +241,7 @@ impl SufficientStats {
     /// `y = x` contributes a zero direction (it lowers r̄).
     #[inline]
     pub fn update(&mut self, x: Vec3, y: Vec3, weight: f32, params: &FitParams) -> bool {
-        if !((weight >= 0.0) & (weight < f32::INFINITY) & math::all_finite(x) & math::all_finite(y))
-        {
+        if !((0.0..f32::INFINITY).contains(&weight) & math::all_finite(x) & math::all_finite(y)) {
             return false;
         }
         let max_count = params.max_count.max(1);
