@@ -12,6 +12,7 @@
 //! | [`mean_cosine_from_kappa`], [`kappa_from_mean_cosine`], [`kappa_from_mean_cosine_exact`] | A₃(κ) = coth κ − 1/κ and its inverses | MCMM Alg. 2 l. 7, MCPG Alg. 2 l. 8 |
 //! | [`SufficientStats`], [`FitParams`], [`MapPrior`] | parallax-aware fit (ȳ, r̄, w̄, N) with α = max(1/N, α_min) and the N² MAP prior | MCMM Table 1, Alg. 2-3; MCPG Table 1, Alg. 2-3 |
 //! | [`Vmf::product`], [`Vmf::convolve`], [`Vmf::clamped_cosine`] | closed-form product with its scale, approximate convolution, cosine lobe | — |
+//! | [`VmfLanes`] | a weighted mixture of a few lobes stored lane-wise, its density in one vectorised pass | MCPG eq. 6-7 |
 //! | [`VmfMixture`] | K-lobe mixture, one uniform reused for the component choice | MCMM eq. 5 |
 //! | [`Frame`] | branchless orthonormal frame | Duff et al. 2017 |
 //! | [`uniform_sphere`], [`UNIFORM_SPHERE_PDF`] | uniform directions on S², the baseline of every guided sampler | pbrt-v4 `SampleUniformSphere` |
@@ -63,6 +64,7 @@ mod batch;
 pub mod constants;
 mod error;
 mod frame;
+mod lanes;
 mod math;
 mod mean_cosine;
 mod mixture;
@@ -79,6 +81,7 @@ mod features {
 pub use batch::sample_batch;
 pub use error::{MixtureError, VmfError};
 pub use frame::Frame;
+pub use lanes::VmfLanes;
 pub use mean_cosine::{
     KAPPA_MAX, kappa_from_mean_cosine, kappa_from_mean_cosine_exact, mean_cosine_from_kappa,
 };

@@ -64,6 +64,15 @@ pub(crate) fn exp_m1(x: f32) -> f32 {
     (u - 1.0) * x / ln(u)
 }
 
+/// `v.is_finite()` as float arithmetic and one compare: c − c is 0 for finite c and NaN for
+/// ±∞ and NaN. LLVM lowers `f32::is_finite` to integer class tests, several times the
+/// instructions, on the per-sample update path.
+#[inline(always)]
+#[allow(clippy::eq_op)] // c − c is the test
+pub(crate) fn all_finite(v: glam::Vec3) -> bool {
+    (v.x - v.x) + (v.y - v.y) + (v.z - v.z) == 0.0
+}
+
 /// `v / |v|` that keeps full precision for every finite non-zero `v`, or `None` for zero and
 /// non-finite vectors.
 ///
@@ -75,7 +84,9 @@ pub(crate) fn exp_m1(x: f32) -> f32 {
 pub(crate) fn normalize_robust(v: glam::Vec3) -> Option<glam::Vec3> {
     let length_squared = v.length_squared();
     if (f32::MIN_POSITIVE..=f32::MAX).contains(&length_squared) {
-        return v.try_normalize();
+        // `v.try_normalize()` (1/|v| and its finiteness test), with the test as two compares.
+        let rcp = 1.0 / sqrt(length_squared);
+        return ((rcp > 0.0) & (rcp < f32::INFINITY)).then(|| v * rcp);
     }
     let largest = v.abs().max_element();
     if !(largest > 0.0 && largest <= f32::MAX) {

@@ -241,7 +241,7 @@ impl SufficientStats {
     /// `y = x` contributes a zero direction (it lowers r̄).
     #[inline]
     pub fn update(&mut self, x: Vec3, y: Vec3, weight: f32, params: &FitParams) -> bool {
-        if !(weight >= 0.0 && weight.is_finite() && x.is_finite() && y.is_finite()) {
+        if !((0.0..f32::INFINITY).contains(&weight) & math::all_finite(x) & math::all_finite(y)) {
             return false;
         }
         let max_count = params.max_count.max(1);
@@ -283,7 +283,7 @@ impl SufficientStats {
             }
         };
         let mean_target = self.mean_target * (1.0 - beta) + y * beta;
-        if mean_target.is_finite() {
+        if math::all_finite(mean_target) {
             self.mean_target = mean_target;
         }
         self.weight_sum = weight_sum;
@@ -329,19 +329,26 @@ impl SufficientStats {
         1.0 - self.posterior_one_minus_mean_cosine(prior)
     }
 
-    /// 1 − r of [`SufficientStats::posterior_mean_cosine`], computed without cancellation:
-    /// (N² (1 − r̄) + N_p (1 − r_p)) / (N² + N_p).
-    #[inline]
-    fn posterior_one_minus_mean_cosine(&self, prior: MapPrior) -> f32 {
+    /// The inputs of the posterior besides 1 − r̄: (N_eff, N_p, 1 − r_p) with N_eff = N² or N
+    /// by the prior's decay, N_p = max(0, weight) and r_p clamped to [0, 1] (NaN → 0).
+    #[inline(always)]
+    pub(crate) fn posterior_parts(&self, prior: MapPrior) -> (f32, f32, f32) {
         let n = self.sample_count as f32;
         let n_eff = match prior.decay {
             PriorDecay::SquaredCount => n * n,
             PriorDecay::Count => n,
         };
-        let prior_weight = prior.weight.max(0.0);
         // `max` maps NaN to 0 (`clamp` would keep it); in-range values pass unchanged.
         #[allow(clippy::manual_clamp)]
         let prior_complement = 1.0 - prior.mean_cosine.max(0.0).min(1.0);
+        (n_eff, prior.weight.max(0.0), prior_complement)
+    }
+
+    /// 1 − r of [`SufficientStats::posterior_mean_cosine`], computed without cancellation:
+    /// (N² (1 − r̄) + N_p (1 − r_p)) / (N² + N_p).
+    #[inline]
+    fn posterior_one_minus_mean_cosine(&self, prior: MapPrior) -> f32 {
+        let (n_eff, prior_weight, prior_complement) = self.posterior_parts(prior);
         if prior_weight == f32::INFINITY {
             return prior_complement;
         }

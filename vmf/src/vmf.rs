@@ -61,7 +61,7 @@ impl Vmf {
     /// [`VmfError::MeanNotFinite`], [`VmfError::MeanZeroLength`], [`VmfError::KappaNotFinite`],
     /// [`VmfError::KappaNegative`], [`VmfError::KappaAboveMax`].
     pub fn new(mu: Vec3, kappa: f32) -> Result<Self, VmfError> {
-        if !mu.is_finite() {
+        if !math::all_finite(mu) {
             return Err(VmfError::MeanNotFinite);
         }
         if !kappa.is_finite() {

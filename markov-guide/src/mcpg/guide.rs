@@ -5,13 +5,14 @@ use mcg_hashgrid::{
     AdaptiveGrid, CellKey, LevelParams, StaticGrid, cell_and_fraction, geometric_jitter,
     normal_class, stochastic_corner, stochastic_trilinear,
 };
-use mcg_vmf::Vmf;
 use mcg_vmf::glam::{IVec3, Vec2, Vec3};
+use mcg_vmf::{MapPrior, SufficientStats, Vmf, VmfLanes};
 
+use super::resampling::prepare_in_place;
 use super::single_scattering::jittered_view_direction;
 use super::{
     CacheConfig, CandidateSet, GridKind, GridState, GridUniforms, IrradianceCache, McpgParams,
-    Observation, SharedGrid, distance_prior, prepare_candidate, should_discard, update,
+    Observation, SharedGrid, distance_prior, should_discard, update,
 };
 use crate::error::GuideError;
 use crate::{cosine_hemisphere, cosine_hemisphere_pdf};
@@ -584,6 +585,7 @@ impl Guide {
     /// grid and level instead of once per candidate (most candidates share the static grid's
     /// cell or the target level's). The same keys as [`key`](Self::key) bit for bit:
     /// [`stochastic_trilinear`] is the lower corner plus the [`stochastic_corner`] offset.
+    #[inline(always)]
     fn candidate_keys(
         &self,
         position: Vec3,
@@ -595,26 +597,33 @@ impl Guide {
         let params = &self.config.params;
         let max_level = self.adaptive.params().max_level;
         let mut keys = [(GridKind::Static, CellKey::unclassed(IVec3::ZERO)); MAX_CANDIDATES];
-        // (grid, level) → cell; a handful of entries at most.
-        type Cell = (Option<(GridKind, u32)>, IVec3, Vec3);
-        let mut memo: [Cell; MAX_CANDIDATES] = [(None, IVec3::ZERO, Vec3::ZERO); MAX_CANDIDATES];
+        // The cells met so far, direct-mapped: entry 0 the static grid's, entry 1 + j the
+        // adaptive level target_level + j (j < 7; the geometric jitter rarely goes further),
+        // `filled` their bits.
+        let mut memo = [(IVec3::ZERO, Vec3::ZERO); MAX_CANDIDATES];
+        let mut filled = 0_u32;
         for (key, c) in keys.iter_mut().zip(&u.candidates).take(count) {
-            let (kind, level, width) = if c.grid < params.adaptive_probability {
+            let (kind, level, width, entry) = if c.grid < params.adaptive_probability {
                 let level = (target_level + geometric_jitter(c.level)).min(max_level);
-                (GridKind::Adaptive, level, self.adaptive.width(level))
+                let j = level.wrapping_sub(target_level) as usize;
+                let entry = if j < MAX_CANDIDATES - 1 {
+                    j + 1
+                } else {
+                    usize::MAX
+                };
+                (GridKind::Adaptive, level, self.adaptive.width(level), entry)
             } else {
-                (GridKind::Static, 0, self.static_grid.width())
+                (GridKind::Static, 0, self.static_grid.width(), 0)
             };
-            let id = Some((kind, level));
-            let i = memo.iter().position(|m| m.0 == id || m.0.is_none());
-            let (base, f) = match i {
-                Some(i) if memo[i].0 == id => (memo[i].1, memo[i].2),
-                _ => {
-                    let (base, f) = cell_and_fraction(position / width);
-                    if let Some(i) = i {
-                        memo[i] = (id, base, f);
+            let (base, f) = match memo.get_mut(entry) {
+                Some(m) if filled & (1 << entry) != 0 => *m,
+                m => {
+                    let cell = cell_and_fraction(position / width);
+                    if let Some(m) = m {
+                        *m = cell;
+                        filled |= 1 << entry;
                     }
-                    (base, f)
+                    cell
                 }
             };
             let corner = stochastic_corner(f, c.corner) as i32;
@@ -656,14 +665,12 @@ impl Guide {
             scatter,
             set: CandidateSet::new(),
             slots: [None; MAX_CANDIDATES],
-            lobes: [Vmf::uniform(); MAX_CANDIDATES],
-            normalizations: [0.0; MAX_CANDIDATES],
-            shares: [0.0; MAX_CANDIDATES],
+            lobes: VmfLanes::EMPTY,
             scatter_share: 0.0,
             class: normal_class(vertex.key_direction),
             target_level: self.adaptive.target_level(self.camera.distance(x)),
         };
-        if !x.is_finite() {
+        if !crate::math::all_finite(x) {
             return v;
         }
         let keys = self.candidate_keys(x, v.class, v.target_level, u, count);
@@ -672,24 +679,24 @@ impl Guide {
         for (slot, (kind, key)) in v.slots.iter_mut().zip(&keys).take(count) {
             *slot = self.grid(*kind).find(key).map(|s| (*kind, s));
         }
-        let mut states = [None; MAX_CANDIDATES];
+        // The states go straight into the candidate set's storage (all `EMPTY` so far, which
+        // a slot without a state, a hash collision or a torn read leaves there), are
+        // prepared there, then offered in load order.
+        let states = v.set.storage_mut();
         for (state, slot) in states.iter_mut().zip(&mut v.slots).take(count) {
-            if let Some((kind, s)) = *slot {
-                *state = self.grid(kind).state(s);
-                if state.is_none() {
-                    *slot = None;
-                }
+            if let Some((kind, s)) = *slot
+                && !self.grid(kind).load_into(s, state)
+            {
+                *slot = None;
             }
         }
         let now = self.frame as f32;
-        for k in 0..count {
-            let kind = keys[k].0;
-            let (state, collided) = match states[k] {
-                Some(state) => (state, false),
-                None => (GridState::EMPTY, true),
-            };
-            let candidate = prepare_candidate(state, collided, kind, x, vertex.normal, now, params);
-            v.set.offer(candidate, u.candidates[k].reservoir);
+        for (state, (kind, _)) in states.iter_mut().zip(&keys).take(count) {
+            // An `EMPTY` state is invalid: prepared to w̄ = 0 like a collision (Alg. 1 line 6).
+            prepare_in_place(state, false, *kind, x, vertex.normal, now, params);
+        }
+        for c in u.candidates.iter().take(count) {
+            v.set.offer_stored(c.reservoir);
         }
         v.build_lobes();
         v
@@ -705,11 +712,9 @@ pub struct GuidedVertex<'g, S> {
     scatter: S,
     set: CandidateSet<MAX_CANDIDATES>,
     slots: [Option<(GridKind, u32)>; MAX_CANDIDATES],
-    lobes: [Vmf; MAX_CANDIDATES],
-    /// C(κ) of each lobe, for the pdf.
-    normalizations: [f32; MAX_CANDIDATES],
-    /// w̄_k / Σw̄ of candidates with a lobe, 0 otherwise.
-    shares: [f32; MAX_CANDIDATES],
+    /// The lobe of each candidate with a lobe at x, weighted by its share w̄_k / Σw̄; the
+    /// other lanes empty.
+    lobes: VmfLanes<MAX_CANDIDATES>,
     /// The shares of valid candidates whose lobe cannot be built at x: Alg. 2 answers them
     /// with the scatter technique.
     scatter_share: f32,
@@ -731,24 +736,22 @@ impl<S: Scatter> GuidedVertex<'_, S> {
             (Hemisphere::CosineProduct, Some(n)) => Vmf::clamped_cosine(n).ok(),
             _ => None,
         };
-        for (k, s) in self.set.states().iter().enumerate() {
-            let w = s.resampling_weight();
-            if !(w > 0.0) {
-                continue;
-            }
-            let share = w / total;
-            match s.lobe(x, distance_prior(s, x, params)) {
-                Some(lobe) => {
-                    // The product's lobe only, μ' ∝ κμ + κ_c n, κ' = |κμ + κ_c n|.
-                    let lobe = match &cosine {
-                        Some(c) => lobe.product_lobe(c),
-                        None => lobe,
-                    };
-                    self.lobes[k] = lobe;
-                    self.normalizations[k] = lobe.normalization();
-                    self.shares[k] = share;
-                }
-                None => self.scatter_share += share,
+        let states = self.set.states();
+        let lane = |k: usize| match states.get(k) {
+            // `prepare_in_place` zeroed w̄ of every invalid state: w̄ > 0 is valid here.
+            Some(s) if s.weight_sum > 0.0 => (
+                s.stats(),
+                distance_prior(s, x, params),
+                s.weight_sum / total,
+            ),
+            _ => (SufficientStats::EMPTY, MapPrior::NONE, 0.0),
+        };
+        // Every lobe at once (Alg. 2 lines 6-8; with the cosine product's lobe only,
+        // μ' ∝ κμ + κ_c n, κ' = |κμ + κ_c n|), lane-wise, bit-identical to building each.
+        self.lobes = VmfLanes::from_stats(x, cosine.as_ref(), lane);
+        for (k, s) in states.iter().enumerate() {
+            if s.weight_sum > 0.0 && !self.lobes.is_set(k) {
+                self.scatter_share += s.weight_sum / total;
             }
         }
     }
@@ -776,7 +779,7 @@ impl<S: Scatter> GuidedVertex<'_, S> {
     pub fn sample(&self, u: &SampleUniforms) -> GuidedSample {
         let lobe = self.lobe_choice(u.choice);
         let direction = match lobe {
-            Some(k) => self.lobes[k].sample(u.direction),
+            Some(k) => self.lobes.lobe(k).sample(u.direction),
             None => self.scatter.sample(u.direction),
         };
         GuidedSample {
@@ -789,7 +792,7 @@ impl<S: Scatter> GuidedVertex<'_, S> {
     #[inline]
     fn lobe_choice(&self, choice: f32) -> Option<usize> {
         let k = self.set.selected_index()?;
-        if choice < self.guide.config.params.bsdf_probability || !(self.shares[k] > 0.0) {
+        if choice < self.guide.config.params.bsdf_probability || !self.lobes.is_set(k) {
             return None;
         }
         Some(k)
@@ -806,16 +809,8 @@ impl<S: Scatter> GuidedVertex<'_, S> {
         if !(self.set.weight_sum() > 0.0) {
             return scatter;
         }
-        let mut lobes = self.scatter_share * scatter;
-        for k in 0..self.set.states().len() {
-            if self.shares[k] > 0.0 {
-                // Vmf::pdf with its normalisation computed once in `begin`.
-                let lobe = &self.lobes[k];
-                let d2 = (w - lobe.mu()).length_squared();
-                lobes +=
-                    self.shares[k] * (self.normalizations[k] * (-0.5 * lobe.kappa() * d2).exp());
-            }
-        }
+        // Every lobe's share·V_k(ω) in one lane-wise pass (normalisations computed in `begin`).
+        let lobes = self.scatter_share * scatter + self.lobes.pdf(w);
         let p = self.guide.config.params.bsdf_probability;
         p * scatter + (1.0 - p) * lobes
     }
@@ -872,7 +867,7 @@ impl<S: Scatter> GuidedVertex<'_, S> {
             }
         };
         let carried = observation.weight * incident;
-        let carried = if carried.is_finite() {
+        let carried = if crate::math::all_finite(carried) {
             carried.max(Vec3::ZERO)
         } else {
             Vec3::ZERO

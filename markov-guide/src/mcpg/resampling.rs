@@ -55,9 +55,31 @@ pub fn prepare_candidate(
     now: f32,
     params: &McpgParams,
 ) -> GridState {
-    let mut s = state.predicted(now);
+    let mut s = state;
+    prepare_in_place(&mut s, collided, grid, x, normal, now, params);
+    s
+}
+
+/// [`prepare_candidate`] on a state where it lies (the candidate set's storage), so that a
+/// vertex's states are not copied from array to array.
+#[inline]
+pub(crate) fn prepare_in_place(
+    s: &mut GridState,
+    collided: bool,
+    grid: GridKind,
+    x: Vec3,
+    normal: Option<Vec3>,
+    now: f32,
+    params: &McpgParams,
+) {
+    // Prediction never changes validity (it keeps ȳ unless the moved one is finite), so one
+    // test serves both.
+    let valid = s.is_valid();
+    if valid {
+        s.predict_valid(now);
+    }
     let rejected = collided
-        || !s.is_valid()
+        || !valid
         || (grid == GridKind::Static
             && normal.is_some_and(|n| {
                 let mu = (s.mean_target - x).normalize_or_zero();
@@ -66,7 +88,6 @@ pub fn prepare_candidate(
     if rejected {
         s.weight_sum = 0.0;
     }
-    s
 }
 
 /// The candidates of one vertex and the one chosen among them (MCPG Alg. 1): up to `N`
@@ -114,6 +135,28 @@ impl<const N: usize> CandidateSet<N> {
         self.states[self.len] = candidate;
         self.reservoir
             .offer(self.len, candidate.resampling_weight(), u);
+        self.len += 1;
+        true
+    }
+
+    /// The storage of the states not yet offered (the first `len` entries are offered ones):
+    /// load and prepare candidates there, then [`offer_stored`](Self::offer_stored) them in
+    /// order.
+    #[inline]
+    pub(crate) fn storage_mut(&mut self) -> &mut [GridState; N] {
+        &mut self.states
+    }
+
+    /// Offers the state already in the storage at the next index (see
+    /// [`storage_mut`](Self::storage_mut)), prepared by [`prepare_in_place`]: its w̄ is its
+    /// resampling weight (preparation zeroed it for every invalid state).
+    #[inline]
+    pub(crate) fn offer_stored(&mut self, u: f32) -> bool {
+        if self.len == N {
+            return false;
+        }
+        self.reservoir
+            .offer(self.len, self.states[self.len].weight_sum, u);
         self.len += 1;
         true
     }

@@ -92,6 +92,19 @@ impl SharedStates {
         Some(bytemuck::cast(raw))
     }
 
+    /// [`load`](Self::load) into `out`: `false`, with `out` unchanged, for a torn read or a
+    /// slot out of range.
+    #[inline]
+    pub(crate) fn load_into(&self, slot: u32, out: &mut GridState) -> bool {
+        match self.load(slot) {
+            Some(state) => {
+                *out = state;
+                true
+            }
+            None => false,
+        }
+    }
+
     /// Writes `state` at `slot` (all eight words) unless another writer is inside; returns
     /// whether it was written.
     #[inline]
@@ -217,6 +230,12 @@ impl SharedGrid {
     #[must_use]
     pub fn state(&self, slot: u32) -> Option<GridState> {
         self.states.load(slot)
+    }
+
+    /// The state at `slot` written into `out`; `false` (and `out` unchanged) for a torn read.
+    #[inline]
+    pub(crate) fn load_into(&self, slot: u32, out: &mut GridState) -> bool {
+        self.states.load_into(slot, out)
     }
 
     /// Writes `state` at `key` (claiming a slot if needed). `false` when the probe

@@ -98,7 +98,7 @@ impl GridState {
     /// velocity store 0 (a broken velocity estimate must not move ȳ).
     #[inline]
     pub fn set_velocity(&mut self, velocity: Vec3) {
-        let v = if velocity.is_finite() {
+        let v = if crate::math::all_finite(velocity) {
             velocity
         } else {
             Vec3::ZERO
@@ -112,7 +112,10 @@ impl GridState {
     #[inline]
     #[must_use]
     pub fn is_valid(&self) -> bool {
-        self.weight_sum > 0.0 && self.weight_sum.is_finite() && self.mean_target.is_finite()
+        // Compares joined by `&`: no branches, and no `is_finite` class tests.
+        (self.weight_sum > 0.0)
+            & (self.weight_sum < f32::INFINITY)
+            & crate::math::all_finite(self.mean_target)
     }
 
     /// The resampling weight w̄ (MCPG Alg. 1 line 8), 0 for an invalid state.
@@ -132,16 +135,24 @@ impl GridState {
     #[inline]
     #[must_use]
     pub fn predicted(&self, now: f32) -> Self {
-        // v = 0 (every static scene) moves nothing: skip the f16 decoding.
-        if self.velocity == [0; 3] || !self.is_valid() {
-            return *self;
-        }
-        let moved = self.mean_target + (now - self.time) * self.velocity();
         let mut s = *self;
-        if moved.is_finite() {
-            s.mean_target = moved;
+        if s.is_valid() {
+            s.predict_valid(now);
         }
         s
+    }
+
+    /// [`predicted`](Self::predicted) in place, for a state known to be valid.
+    #[inline]
+    pub(crate) fn predict_valid(&mut self, now: f32) {
+        // v = 0 (every static scene) moves nothing: skip the f16 decoding.
+        if self.velocity == [0; 3] {
+            return;
+        }
+        let moved = self.mean_target + (now - self.time) * self.velocity();
+        if crate::math::all_finite(moved) {
+            self.mean_target = moved;
+        }
     }
 
     /// The lobe at shading point `x` (MCPG Alg. 2 lines 6-8) with prior `prior`, `None` for an
