@@ -1,7 +1,8 @@
 // One guided path vertex per invocation, as a renderer's kernel runs it with `mcg::mcpg` (the
 // guide at group 1): a shading point on a plane, MCPG's begin, sample (with its exact pdf), an
 // analytic trace to one sphere light, finish; `cosine_vertex` is the same kernel with cosine
-// sampling and no guide.
+// sampling and no guide; `launch_vertex` only writes its output (the cost of the dispatch, the
+// bounds check and the store that both kernels pay).
 
 #import mcg::constants::{MCG_FRAC_1_PI, MCG_PI, MCG_WORKGROUP_SIZE}
 #import mcg::dispatch::mcg_invocation_index
@@ -71,4 +72,13 @@ fn cosine_vertex(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_work
     var rng = mcg_pcg_hash(i ^ mcg_pcg_hash(mcpg_frame()));
     let d = mcg_cosine_hemisphere_sample(n, vec2<f32>(mcg_rng_uniform(&rng), mcg_rng_uniform(&rng))).direction;
     estimates[i] = select(0.0, 40.0 * MCG_PI, light_hit(x, d) > 0.0);
+}
+
+@compute @workgroup_size(MCG_WORKGROUP_SIZE)
+fn launch_vertex(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&estimates) {
+        return;
+    }
+    estimates[i] = f32(i);
 }

@@ -25,13 +25,13 @@
 // order of the stores, is what detects a mixture of two writes.
 
 #import mcg::constants::{
-    HASHGRID_NO_SLOT, MCG_F32_MAX, MCPG_DISCARD_PAPER, MCPG_ENGINE_DISCARD_BASE,
-    MCPG_ENGINE_DISCARD_SLOPE, MCPG_FRAME_WORD, MCPG_GUARD_FIRST_STAMP, MCPG_GUARD_LOCKED,
-    MCPG_HEMISPHERE_COSINE_PRODUCT, MCPG_LUMINANCE_B, MCPG_LUMINANCE_G, MCPG_LUMINANCE_R,
-    MCPG_MAX_CANDIDATES, MCPG_NO_LOBE, MCPG_SCATTER_ISOTROPIC, MCPG_SCATTER_LAMBERTIAN,
-    MCPG_TRACED_ESCAPED, MCPG_TRACED_HIT, MCPG_TRANSITION_DISCARDED, MCPG_TRANSITION_DROPPED,
-    MCPG_TRANSITION_REJECTED, MCPG_TRANSITION_STORED, VMF_CLAMPED_COSINE_KAPPA, VMF_KAPPA_MAX,
-    VMF_PRIOR_DECAY_SQUARED_COUNT, VMF_UNIFORM_SPHERE_PDF
+    HASHGRID_CLASS_NONE, HASHGRID_NO_SLOT, MCG_F32_MAX, MCPG_DISCARD_PAPER,
+    MCPG_ENGINE_DISCARD_BASE, MCPG_ENGINE_DISCARD_SLOPE, MCPG_FRAME_WORD, MCPG_GUARD_FIRST_STAMP,
+    MCPG_GUARD_LOCKED, MCPG_HEMISPHERE_COSINE_PRODUCT, MCPG_LUMINANCE_B, MCPG_LUMINANCE_G,
+    MCPG_LUMINANCE_R, MCPG_MAX_CANDIDATES, MCPG_NO_LOBE, MCPG_SCATTER_ISOTROPIC,
+    MCPG_SCATTER_LAMBERTIAN, MCPG_TRACED_ESCAPED, MCPG_TRACED_HIT, MCPG_TRANSITION_DISCARDED,
+    MCPG_TRANSITION_DROPPED, MCPG_TRANSITION_REJECTED, MCPG_TRANSITION_STORED,
+    VMF_CLAMPED_COSINE_KAPPA, VMF_KAPPA_MAX, VMF_PRIOR_DECAY_SQUARED_COUNT, VMF_UNIFORM_SPHERE_PDF
 }
 #import mcg::math::{mcg_is_finite, mcg_is_finite3, mcg_rounded}
 #import mcg::sampling::{mcg_cosine_hemisphere_pdf, mcg_cosine_hemisphere_sample, mcg_pcg_hash}
@@ -42,7 +42,7 @@
 #import mcg::hashgrid::{
     HashgridCellKey, HashgridLevels, HashgridTable, hashgrid_cell_key, hashgrid_checksum,
     hashgrid_geometric_jitter, hashgrid_home_slot, hashgrid_normal_class,
-    hashgrid_static_vertex_key, hashgrid_stochastic_trilinear, hashgrid_target_level
+    hashgrid_stochastic_trilinear, hashgrid_target_level
 }
 #import mcg::hashgrid_table::{
     hashgrid_evict_slot, hashgrid_find, hashgrid_insert_or_get, hashgrid_touch, hashgrid_trim_slot
@@ -247,6 +247,16 @@ fn mcpg_words_of_state(s: MarkovGridState) -> array<u32, 8> {
     return array<u32, 8>(bitcast<u32>(s.mean_target_x), bitcast<u32>(s.mean_target_y), bitcast<u32>(s.mean_target_z), bitcast<u32>(s.weight_sum), bitcast<u32>(s.one_minus_mean_cosine), bitcast<u32>(s.time), s.velocity_xy, s.velocity_z_count);
 }
 
+// The eight words of the state at `slot`, as they are (no guard check).
+fn mcpg_read_words(is_static: bool, slot: u32) -> array<u32, 8> {
+    let base = mcpg_state_word(is_static, slot);
+    var w: array<u32, 8>;
+    for (var i = 0u; i < 8u; i += 1u) {
+        w[i] = atomicLoad(&mcpg_words[base + i]);
+    }
+    return w;
+}
+
 // The state at `slot`; false (and `out` untouched) while a writer is inside or when the words
 // read do not match the guard (a torn read).
 fn mcpg_load_state(is_static: bool, slot: u32, out: ptr<function, MarkovGridState>) -> bool {
@@ -254,11 +264,7 @@ fn mcpg_load_state(is_static: bool, slot: u32, out: ptr<function, MarkovGridStat
     if guard == MCPG_GUARD_LOCKED {
         return false;
     }
-    let base = mcpg_state_word(is_static, slot);
-    var w: array<u32, 8>;
-    for (var i = 0u; i < 8u; i += 1u) {
-        w[i] = atomicLoad(&mcpg_words[base + i]);
-    }
+    let w = mcpg_read_words(is_static, slot);
     if mcpg_stamp(w) != guard {
         return false;
     }
@@ -307,11 +313,7 @@ fn mcpg_clear_weight(is_static: bool, slot: u32) -> bool {
     if !mcpg_lock(mcpg_guard_word(is_static, slot)) {
         return false;
     }
-    let base = mcpg_state_word(is_static, slot);
-    var w: array<u32, 8>;
-    for (var i = 0u; i < 8u; i += 1u) {
-        w[i] = atomicLoad(&mcpg_words[base + i]);
-    }
+    var w = mcpg_read_words(is_static, slot);
     w[3] = 0u;
     mcpg_write_and_unlock(is_static, slot, w);
     return true;
@@ -324,30 +326,31 @@ struct McpgKey {
 }
 
 // `Guide::key`: the adaptive grid with probability p_adaptive at the target level plus the
-// geometric jitter, its stochastic trilinear vertex and the class; else the static grid's vertex.
+// geometric jitter, its stochastic trilinear vertex and the class; else the static grid's vertex
+// (`StaticGrid::vertex_key`: level 0, no class). One trilinear choice and one key serve both
+// grids, so the code exists once (a SIMD CPU driver runs both sides of a branch).
 fn mcpg_key(position: vec3<f32>, normal_class: u32, target_level: u32, u_grid: f32, u_level: f32, u_corner: f32) -> McpgKey {
-    if u_grid < mcpg_params.adaptive_probability {
-        let level = min(target_level + hashgrid_geometric_jitter(u_level), mcpg_params.levels.max_level);
-        let vertex = hashgrid_stochastic_trilinear(position / mcpg_width(level), u_corner);
-        return McpgKey(false, hashgrid_cell_key(vertex, level, normal_class));
-    }
-    return McpgKey(true, hashgrid_static_vertex_key(mcpg_params.static_width, position, u_corner));
+    let is_static = !(u_grid < mcpg_params.adaptive_probability);
+    let level = min(target_level + hashgrid_geometric_jitter(u_level), mcpg_params.levels.max_level);
+    let width = select(mcpg_width(level), mcpg_params.static_width, is_static);
+    let vertex = hashgrid_stochastic_trilinear(position / width, u_corner);
+    return McpgKey(is_static, hashgrid_cell_key(vertex, select(level, 0u, is_static), select(normal_class, HASHGRID_CLASS_NONE, is_static)));
 }
 
-// The slot holding `key` (touching its age), HASHGRID_NO_SLOT when absent.
-fn mcpg_find(table: HashgridTable, key: HashgridCellKey, touch: bool) -> u32 {
+// The slot holding `key` (touching its age with `frame`), HASHGRID_NO_SLOT when absent.
+fn mcpg_find(table: HashgridTable, key: HashgridCellKey, touch: bool, frame: u32) -> u32 {
     let slot = hashgrid_find(table, hashgrid_home_slot(table, key), hashgrid_checksum(key));
     if slot != HASHGRID_NO_SLOT && touch {
-        hashgrid_touch(table, slot, mcpg_frame());
+        hashgrid_touch(table, slot, frame);
     }
     return slot;
 }
 
-// Finds or claims the slot of `key` (touching its age), HASHGRID_NO_SLOT when full.
-fn mcpg_insert(table: HashgridTable, key: HashgridCellKey, touch: bool) -> u32 {
+// Finds or claims the slot of `key` (touching its age with `frame`), HASHGRID_NO_SLOT when full.
+fn mcpg_insert(table: HashgridTable, key: HashgridCellKey, touch: bool, frame: u32) -> u32 {
     let slot = hashgrid_insert_or_get(table, hashgrid_home_slot(table, key), hashgrid_checksum(key)).slot;
     if slot != HASHGRID_NO_SLOT && touch {
-        hashgrid_touch(table, slot, mcpg_frame());
+        hashgrid_touch(table, slot, frame);
     }
     return slot;
 }
@@ -430,25 +433,24 @@ fn mcpg_begin(vertex: McpgVertex, u: McpgBeginUniforms) -> McpgGuidedVertex {
         return v;
     }
     v.count = count;
-    let now = f32(mcpg_frame());
+    let frame = mcpg_frame();
+    let now = f32(frame);
     let touch = mcpg_params.age_tracking != 0u;
     var cosine = Vmf(vec3<f32>(0.0), 0.0);
     var has_cosine = false;
     if mcpg_params.hemisphere == MCPG_HEMISPHERE_COSINE_PRODUCT && vertex.has_normal != 0u {
         has_cosine = mcpg_vmf_new(vertex.normal, VMF_CLAMPED_COSINE_KAPPA, &cosine);
     }
-    // One pass over a fixed trip count (the compiler can unroll it and keep the per-candidate
-    // arrays in registers): load, prepare, offer to the reservoir, and build the lobe of every
-    // candidate with w̄ > 0 (a w̄ > 0 makes Σw̄ > 0, when the CPU builds them all); `shares`
-    // holds w̄ until Σw̄ is known, `lobeless` marks the candidates without a lobe at x.
+    // One pass over the N_mc candidates (N_mc, not MCPG_MAX_CANDIDATES, iterations: a SIMD CPU
+    // driver such as llvmpipe runs a skipped iteration's body anyway, masked): load, prepare,
+    // offer to the reservoir, and build the lobe of every candidate with w̄ > 0 (a w̄ > 0
+    // makes Σw̄ > 0, when the CPU builds them all); `shares` holds w̄ until Σw̄ is known,
+    // `lobeless` marks the candidates without a lobe at x.
     var lobeless = 0u;
-    for (var k = 0u; k < MCPG_MAX_CANDIDATES; k += 1u) {
-        if k >= count {
-            continue;
-        }
+    for (var k = 0u; k < count; k += 1u) {
         let c = u.candidates[k];
         let key = mcpg_key(x, v.normal_class, v.target_level, c.x, c.y, c.z);
-        let slot = mcpg_find(mcpg_table(key.is_static), key.key, touch);
+        let slot = mcpg_find(mcpg_table(key.is_static), key.key, touch, frame);
         var state: MarkovGridState;
         var collided = true;
         if slot != HASHGRID_NO_SLOT && mcpg_load_state(key.is_static, slot, &state) {
@@ -479,6 +481,8 @@ fn mcpg_begin(vertex: McpgVertex, u: McpgBeginUniforms) -> McpgGuidedVertex {
             lobeless |= 1u << k;
         }
     }
+    // A fixed trip count here and in `mcpg_pdf_with`: small loops unroll, and the arrays are
+    // read at constant indices (a loop over N_mc made the whole guide 1.3x slower on llvmpipe).
     let total = v.weight_sum;
     for (var k = 0u; k < MCPG_MAX_CANDIDATES; k += 1u) {
         let w = v.shares[k];
@@ -554,13 +558,17 @@ fn mcpg_pdf(v: ptr<function, McpgGuidedVertex>, w: vec3<f32>) -> f32 {
 }
 
 // `GuidedVertex::sample` with the built-in scattering (MCPG Alg. 2): ω and the exact density.
+// One `vmf_sample` serves the chosen lobe and the isotropic phase function (the uniform sphere is
+// the lobe κ = 0), so its code exists once.
 fn mcpg_sample(v: ptr<function, McpgGuidedVertex>, u: McpgSampleUniforms) -> McpgSample {
     let k = mcpg_choose(v, u.choice);
-    var w: vec3<f32>;
-    if k == MCPG_NO_LOBE {
-        w = mcpg_scatter_sample(v, u.direction);
-    } else {
-        w = mcpg_sample_lobe(v, k, u.direction);
+    var lobe = Vmf(vec3<f32>(0.0, 0.0, 1.0), 0.0);
+    if k != MCPG_NO_LOBE {
+        lobe = (*v).lobes[k];
+    }
+    var w = vmf_sample(lobe, u.direction);
+    if k == MCPG_NO_LOBE && (*v).vertex.scatter == MCPG_SCATTER_LAMBERTIAN {
+        w = mcg_cosine_hemisphere_sample((*v).vertex.normal, u.direction).direction;
     }
     return McpgSample(w, mcpg_pdf(v, w), k);
 }
@@ -580,49 +588,69 @@ fn mcpg_cache_key(position: vec3<f32>, normal: vec3<f32>, level: u32, corner: f3
 // sums of the cell at `level` (coarser on a full probe neighbourhood). NaN, infinite or
 // negative samples are ignored.
 fn mcpg_cache_add(position: vec3<f32>, normal: vec3<f32>, level: u32, corner: f32, radiance: vec3<f32>) -> bool {
+    return mcpg_cache_add_at(position, normal, level, corner, radiance, mcpg_frame());
+}
+
+// `mcpg_cache_add` in `frame`. The level loop only finds the slot and the sums are added after
+// it, so the adding code exists once (a SIMD CPU driver runs every iteration's body, masked).
+fn mcpg_cache_add_at(position: vec3<f32>, normal: vec3<f32>, level: u32, corner: f32, radiance: vec3<f32>, frame: u32) -> bool {
     if !(mcg_is_finite3(radiance) && min(min(radiance.x, radiance.y), radiance.z) >= 0.0 && mcg_is_finite3(position)) {
         return false;
     }
+    var slot = HASHGRID_NO_SLOT;
     for (var extra = 0u; extra <= mcpg_params.cache_coarser_levels; extra += 1u) {
         let key = mcpg_cache_key(position, normal, mcpg_cache_level(level, extra), corner);
-        let slot = mcpg_insert(mcpg_params.cache_table, key, true);
+        slot = mcpg_insert(mcpg_params.cache_table, key, true, frame);
         if slot != HASHGRID_NO_SLOT {
-            let base = mcpg_params.cache_sums + 4u * slot;
-            for (var c = 0u; c < 3u; c += 1u) {
-                var old = atomicLoad(&mcpg_words[base + c]);
-                loop {
-                    let next = bitcast<u32>(bitcast<f32>(old) + radiance[c]);
-                    let r = atomicCompareExchangeWeak(&mcpg_words[base + c], old, next);
-                    if r.exchanged {
-                        break;
-                    }
-                    old = r.old_value;
-                }
-            }
-            atomicAdd(&mcpg_words[base + 3u], 1u);
-            return true;
+            break;
         }
     }
-    return false;
+    if slot == HASHGRID_NO_SLOT {
+        return false;
+    }
+    let base = mcpg_params.cache_sums + 4u * slot;
+    for (var c = 0u; c < 3u; c += 1u) {
+        var old = atomicLoad(&mcpg_words[base + c]);
+        loop {
+            let next = bitcast<u32>(bitcast<f32>(old) + radiance[c]);
+            let r = atomicCompareExchangeWeak(&mcpg_words[base + c], old, next);
+            if r.exchanged {
+                break;
+            }
+            old = r.old_value;
+        }
+    }
+    atomicAdd(&mcpg_words[base + 3u], 1u);
+    return true;
 }
 
 // `IrradianceCache::query`: the committed radiance of the first cell found from `level` on
 // (MCPG sec. 4, "Irradiance Caching"); 0 when none holds one.
 fn mcpg_cache_query(position: vec3<f32>, normal: vec3<f32>, level: u32, corner: f32) -> vec3<f32> {
+    return mcpg_cache_query_at(position, normal, level, corner, mcpg_frame());
+}
+
+// `mcpg_cache_query` in `frame`; the radiance is read after the level loop, once.
+fn mcpg_cache_query_at(position: vec3<f32>, normal: vec3<f32>, level: u32, corner: f32, frame: u32) -> vec3<f32> {
     if !mcg_is_finite3(position) {
         return vec3<f32>(0.0);
     }
+    var cell = HASHGRID_NO_SLOT;
     for (var extra = 0u; extra <= mcpg_params.cache_coarser_levels; extra += 1u) {
         let key = mcpg_cache_key(position, normal, mcpg_cache_level(level, extra), corner);
-        let slot = mcpg_find(mcpg_params.cache_table, key, true);
+        let slot = mcpg_find(mcpg_params.cache_table, key, true, frame);
         if slot != HASHGRID_NO_SLOT {
             let base = mcpg_params.cache_cells + 4u * slot;
             if bitcast<f32>(atomicLoad(&mcpg_words[base + 3u])) > 0.0 {
-                return vec3<f32>(bitcast<f32>(atomicLoad(&mcpg_words[base])), bitcast<f32>(atomicLoad(&mcpg_words[base + 1u])), bitcast<f32>(atomicLoad(&mcpg_words[base + 2u])));
+                cell = base;
+                break;
             }
         }
     }
-    return vec3<f32>(0.0);
+    if cell == HASHGRID_NO_SLOT {
+        return vec3<f32>(0.0);
+    }
+    return vec3<f32>(bitcast<f32>(atomicLoad(&mcpg_words[cell])), bitcast<f32>(atomicLoad(&mcpg_words[cell + 1u])), bitcast<f32>(atomicLoad(&mcpg_words[cell + 2u])));
 }
 
 // `should_discard` (MCPG sec. 5): a rejected lobe sample whose estimate is small, for a state not
@@ -654,6 +682,7 @@ fn mcpg_should_discard(s: MarkovGridState, x: vec3<f32>, w: vec3<f32>, estimate:
 // (eq. 9), stored at a fresh vertex (line 12); a rejected lobe sample may discard its state.
 // Returns MCPG_TRANSITION_*.
 fn mcpg_finish(v: ptr<function, McpgGuidedVertex>, sample: McpgSample, obs: McpgObservation, u: McpgFinishUniforms) -> u32 {
+    let frame = mcpg_frame();
     let x = (*v).vertex.position;
     let w = sample.direction;
     var next: vec3<f32>;
@@ -665,7 +694,7 @@ fn mcpg_finish(v: ptr<function, McpgGuidedVertex>, sample: McpgSample, obs: Mcpg
             reflected = vec3<f32>(0.0);
             if mcpg_params.cache_enabled != 0u {
                 let level = hashgrid_target_level(mcpg_params.levels, distance(mcpg_params.camera, obs.position));
-                reflected = mcpg_cache_query(obs.position, obs.normal, level, u.cache);
+                reflected = mcpg_cache_query_at(obs.position, obs.normal, level, u.cache, frame);
             }
         }
         next = obs.position;
@@ -683,10 +712,10 @@ fn mcpg_finish(v: ptr<function, McpgGuidedVertex>, sample: McpgSample, obs: Mcpg
         carried = vec3<f32>(0.0);
     }
     if mcpg_params.cache_enabled != 0u && (*v).vertex.has_normal != 0u {
-        mcpg_cache_add(x, (*v).vertex.normal, (*v).target_level, u.cache, carried);
+        mcpg_cache_add_at(x, (*v).vertex.normal, (*v).target_level, u.cache, carried, frame);
     }
     let estimate = mcpg_luminance(carried);
-    let now = f32(mcpg_frame());
+    let now = f32(frame);
     var chosen: MarkovGridState;
     if sample.lobe != MCPG_NO_LOBE {
         chosen = (*v).chosen;
@@ -698,25 +727,38 @@ fn mcpg_finish(v: ptr<function, McpgGuidedVertex>, sample: McpgSample, obs: Mcpg
     if !(mean_weight >= 0.0 && mcg_is_finite(mean_weight)) {
         mean_weight = 0.0;
     }
-    // `update`: eq. 8's acceptance u < f/(sum/N), then the MLE step.
+    // `update`: eq. 8's acceptance u < f/(sum/N), then the MLE step, stored at a fresh vertex;
+    // or the discard of the chosen state. Both end in one locked write of a slot (`store`, or
+    // `clear_weight` on the words read under the lock), so that code exists once.
+    var transition = MCPG_TRANSITION_REJECTED;
+    var is_static = false;
+    var slot = HASHGRID_NO_SLOT;
+    var words: array<u32, 8>;
     let acceptable = estimate >= 0.0 && mcg_is_finite(estimate) && mcg_is_finite(now);
+    let k = sample.lobe;
     if acceptable && estimate > 0.0 && u.accept * mean_weight < estimate {
         var stats = markov_grid_state_stats(chosen);
         vmf_stats_update(&stats, x, next, estimate, mcpg_params.fit);
-        let new_state = markov_grid_state_pack(stats, now, next - next_previous);
+        words = mcpg_words_of_state(markov_grid_state_pack(stats, now, next - next_previous));
         let key = mcpg_key(x, (*v).normal_class, (*v).target_level, u.store_grid, u.store_level, u.store_corner);
-        let slot = mcpg_insert(mcpg_table(key.is_static), key.key, mcpg_params.age_tracking != 0u);
-        if slot != HASHGRID_NO_SLOT && mcpg_store_state(key.is_static, slot, new_state) {
-            return MCPG_TRANSITION_STORED;
+        is_static = key.is_static;
+        slot = mcpg_insert(mcpg_table(is_static), key.key, mcpg_params.age_tracking != 0u, frame);
+        transition = MCPG_TRANSITION_DROPPED;
+    } else if k != MCPG_NO_LOBE && mcpg_should_discard(chosen, x, w, estimate, now) && (*v).slots[k] != HASHGRID_NO_SLOT {
+        is_static = ((*v).static_mask & (1u << k)) != 0u;
+        slot = (*v).slots[k];
+        transition = MCPG_TRANSITION_DISCARDED;
+    }
+    if slot != HASHGRID_NO_SLOT && mcpg_lock(mcpg_guard_word(is_static, slot)) {
+        if transition == MCPG_TRANSITION_DISCARDED {
+            words = mcpg_read_words(is_static, slot);
+            words[3] = 0u;
+        } else {
+            transition = MCPG_TRANSITION_STORED;
         }
-        return MCPG_TRANSITION_DROPPED;
+        mcpg_write_and_unlock(is_static, slot, words);
     }
-    let k = sample.lobe;
-    if k != MCPG_NO_LOBE && mcpg_should_discard(chosen, x, w, estimate, now) && (*v).slots[k] != HASHGRID_NO_SLOT {
-        mcpg_clear_weight(((*v).static_mask & (1u << k)) != 0u, (*v).slots[k]);
-        return MCPG_TRANSITION_DISCARDED;
-    }
-    return MCPG_TRANSITION_REJECTED;
+    return transition;
 }
 
 // The per-frame pass (`Guide::end_frame`), one dispatch per function over
