@@ -36,6 +36,10 @@ pub enum Method {
     /// MCPG's guide (Alber et al. 2025) at every scattering vertex, no light sampling: the
     /// guide learns where light comes from without being told where the lights are.
     Mcpg,
+    /// MCMM's screen-space chains (Dittebrandt et al. 2023) at the first hit, for direct light
+    /// only (`--bounces 1`), no light sampling: rendered by [`super::mcmm::McmmRenderer`] on
+    /// the CPU, not by [`render_frame`] (which would treat it as `bsdf`).
+    Mcmm,
 }
 
 impl Method {
@@ -46,6 +50,7 @@ impl Method {
             Self::Bsdf => "bsdf",
             Self::Nee => "nee",
             Self::Mcpg => "mcpg",
+            Self::Mcmm => "mcmm",
         }
     }
 }
@@ -152,7 +157,7 @@ pub fn path_seed(seed: u32, frame: u32, pixel: u32, sample: u32) -> u32 {
 const RAY_OFFSET: f32 = 1e-4;
 
 /// `p` moved off its surface along `n` by a distance that grows with `|p|`.
-fn offset(p: Vec3, n: Vec3) -> Vec3 {
+pub(crate) fn offset(p: Vec3, n: Vec3) -> Vec3 {
     p + n * (RAY_OFFSET * p.abs().max_element().max(1.0))
 }
 

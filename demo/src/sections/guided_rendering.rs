@@ -31,6 +31,7 @@ use crate::Result;
 use crate::plot::{self, Axis, LineChart, PALETTE, Series, SeriesLabelPosition};
 use crate::render::cpu::Method;
 use crate::render::guided::MaterialScatter;
+use crate::render::mcmm::McmmScore;
 use crate::render::output::{Errors, RgbImage, srgb_encode};
 use crate::render::scene::{SceneFile, frame_time};
 use crate::render::{Device, RenderArgs, Rendered, render};
@@ -137,6 +138,8 @@ fn args(
         out: PathBuf::new(),
         reference: reference.map(Path::to_path_buf),
         no_progress: true,
+        no_irradiance_cache: false,
+        mcmm_score: McmmScore::TileMixture,
     }
 }
 
@@ -430,6 +433,7 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
             Method::Bsdf => PALETTE[0],
             Method::Nee => PALETTE[2],
             Method::Mcpg => PALETTE[1],
+            Method::Mcmm => PALETTE[3],
         };
         let all_errors = runs
             .iter()
