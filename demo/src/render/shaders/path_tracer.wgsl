@@ -17,16 +17,19 @@
 // the entry point `render_mcmm` (direct light only), the twin of `mcmm::McmmRenderer`, with the
 // chain states of `mcg::mcmm` bound at group 1 (`mcg::mcpg` then goes to the unused group 2).
 
-#import mcg::constants::{MCG_F32_MAX, MCG_FRAC_1_PI, MCG_PI, MCMM_SCORE_TECHNIQUE,
+#import mcg::constants::{MCG_F32_MAX, MCG_FRAC_1_PI, MCG_PI, MCMM_PRIOR_LIGHT_SIZE, MCMM_SCORE_TECHNIQUE,
     MCPG_MAX_CANDIDATES, MCPG_NO_LOBE, MCPG_SCATTER_CUSTOM}
-#import mcg::markov::MarkovPixelState
+#import mcg::markov::{MarkovPixelState, markov_pixel_state_is_valid}
 #import mcg::math::mcg_is_finite
 #import mcg::mcmm::{
     mcg_mcmm_params, mcmm_choose_technique, mcmm_collaborative_discovery, mcmm_empty_state,
     mcmm_load_previous, mcmm_ratio, mcmm_select_uniform, mcmm_store_current, mcmm_technique_pdf,
     mcmm_tile, mcmm_tile_exchange, mcmm_tile_publish, mcmm_update, mcmm_xor_source_lane
 }
-#import mcg::vmf::{Vmf, vmf_sample}
+#import mcg::vmf::{
+    Vmf, VmfMapPrior, vmf_kappa_from_one_minus_mean_cosine, vmf_normalization,
+    vmf_posterior_one_minus_mean_cosine, vmf_sample, vmf_try_normalize
+}
 #import mcg::mcpg::{
     McpgBeginUniforms, McpgFinishUniforms, McpgGuidedVertex, McpgSample, McpgVertex, mcpg_begin,
     mcpg_choose, mcpg_finish, mcpg_observation_escaped, mcpg_observation_hit, mcpg_params,
@@ -717,6 +720,58 @@ fn emitter_along(origin: vec3<f32>, w: vec3<f32>) -> EmitterHit {
     return EmitterHit(origin + hit.t * w, emitted);
 }
 
+// The x-independent part of each published state's lobe (fixed prior): ȳ and κ in `.xyz`,
+// `.w` (κ < 0: no lobe), and the normalisation C(κ) of `vmf_pdf`. Written by each lane for its
+// own state between the exchanges' barriers and the publish's, read by the mixture.
+var<workgroup> tile_lobes: array<vec4<f32>, MCMM_LANES>;
+var<workgroup> tile_norms: array<f32, MCMM_LANES>;
+
+// Writes lane `lane`'s entry of `tile_lobes`/`tile_norms` for `state`: the κ of
+// `vmf_from_sufficient_stats` under the fixed prior (no lobe for an invalid or empty state).
+fn publish_lobe(lane: u32, state: MarkovPixelState, mp: McmmParams) {
+    var lobe = vec4<f32>(0.0, 0.0, 0.0, -1.0);
+    var norm = 0.0;
+    let stats = state.stats;
+    if markov_pixel_state_is_valid(state) && stats.sample_count > 0u && stats.weight_sum > 0.0 {
+        let prior = VmfMapPrior(mp.prior_mean_cosine, mp.prior_weight, mp.prior_decay);
+        let kappa = vmf_kappa_from_one_minus_mean_cosine(
+            vmf_posterior_one_minus_mean_cosine(stats, prior));
+        lobe = vec4<f32>(stats.mean_target_x, stats.mean_target_y, stats.mean_target_z, kappa);
+        norm = vmf_normalization(kappa);
+    }
+    tile_lobes[lane] = lobe;
+    tile_norms[lane] = norm;
+}
+
+// The tile's mixture density (1/n) Σⱼ p(ω | tⱼ) at x (MCMM eq. 9) with the material's density
+// `bsdf_pdf` as each technique's defensive branch: `mcmm_technique_pdf` over the published
+// states, its x-independent part (κ, C(κ)) taken from `tile_lobes` (computed once per state
+// instead of once per state and pixel). The light-size prior's κ depends on x: it takes
+// the full path.
+fn tile_mixture_pdf(x: vec3<f32>, w: vec3<f32>, bsdf_pdf: f32, mp: McmmParams) -> f32 {
+    var sum = 0.0;
+    if mp.prior_kind == MCMM_PRIOR_LIGHT_SIZE {
+        for (var j = 0u; j < MCMM_LANES; j++) {
+            sum += mcmm_technique_pdf(mcmm_tile[j], x, w, bsdf_pdf, mp);
+        }
+        return min(sum, MCG_F32_MAX) / f32(MCMM_LANES);
+    }
+    let p = mp.hemisphere_probability;
+    for (var j = 0u; j < MCMM_LANES; j++) {
+        let lobe = tile_lobes[j];
+        var mu: vec3<f32>;
+        if lobe.w >= 0.0 && vmf_try_normalize(lobe.xyz - x, &mu) {
+            let d = w - mu;
+            let distance_squared = d.x * d.x + d.y * d.y + d.z * d.z;
+            let vmf = tile_norms[j] * exp(-0.5 * lobe.w * distance_squared);
+            sum += p * bsdf_pdf + (1.0 - p) * vmf;
+        } else {
+            sum += bsdf_pdf;
+        }
+    }
+    return min(sum, MCG_F32_MAX) / f32(MCMM_LANES);
+}
+
 // `McmmRenderer::shade`: one step at pixel (x, y) — the camera ray, the chain's sample
 // (Alg. 2, the material as the defensive technique), the one-sample SSMIS estimate over the tile's published states (MCMM eq. 9) and
 // the chain's update (Alg. 3) with the score of `score_density`. Uniforms from `rng` in the
@@ -753,11 +808,7 @@ fn mcmm_shade(x: u32, y: u32, tentative: ptr<function, MarkovPixelState>,
     let next = emitter_along(offset_origin(position, normal), w);
     let value = material_eval(material, normal, -d, w) * next.emitted;
     let bsdf_pdf = material_pdf(material, normal, -d, w);
-    var mixture_sum = 0.0;
-    for (var j = 0u; j < MCMM_LANES; j++) {
-        mixture_sum += mcmm_technique_pdf(mcmm_tile[j], position, w, bsdf_pdf, mp);
-    }
-    let mixture = min(mixture_sum, MCG_F32_MAX) / f32(MCMM_LANES);
+    let mixture = tile_mixture_pdf(position, w, bsdf_pdf, mp);
     radiance += ratio3(value, mixture);
     var density = mixture;
     if mp.score_density == MCMM_SCORE_TECHNIQUE {
@@ -807,6 +858,9 @@ fn render_mcmm(@builtin(local_invocation_id) lid: vec3<u32>,
         let source = mcmm_xor_source_lane(lane, mask);
         tentative = mcmm_tile_exchange(lane, source, tentative);
         current = mcmm_tile_exchange(lane, source, current);
+        // After the exchanges' barriers (the last step's mixtures are read) and before the
+        // publish's (this step's mixtures read them).
+        publish_lobe(lane, tentative, mcg_mcmm_params);
         mcmm_tile_publish(lane, tentative);
         if inside {
             sum += mcmm_shade(x, y, &tentative, &current, &rng);
