@@ -13,8 +13,8 @@ use mcg_demo::render::cpu::{
     render_frame, trace_path,
 };
 use mcg_demo::render::guided::{McpgSampler, new_guide};
-use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
 use mcg_demo::render::material::BsdfSample;
+use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
 use mcg_demo::render::scene::{SceneError, SceneFile, frame_time};
 use mcg_demo::render::scene_generator::{DOOR_OPENS_AT_FRAME, SCENE_NAMES, built_in_scenes};
 use mcg_demo::render::{Device, RenderArgs, render, write_outputs};
@@ -414,7 +414,10 @@ fn mcmm_furnace_matches_direct_light() {
         seed: 7,
         method: Method::Mcmm,
     };
-    assert!(r.render_frame(&scene, &three, 0).is_err(), "mcmm is direct light only");
+    assert!(
+        r.render_frame(&scene, &three, 0).is_err(),
+        "mcmm is direct light only"
+    );
 }
 
 /// Hypothesis: `mcmm` is unbiased — the mean of independent runs equals the `nee` image of

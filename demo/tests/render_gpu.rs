@@ -627,8 +627,7 @@ fn gpu_mcmm_follows_the_cpu_mcmm() {
 fn gpu_mcmm_agrees_with_gpu_nee_per_tile() {
     let scene = built_in("many_lights_room.gltf");
     let (w, h) = (32u32, 32u32);
-    let Some(mut gpu) = mcmm_tracer("gpu_mcmm_agrees_with_gpu_nee_per_tile", &scene, (w, h))
-    else {
+    let Some(mut gpu) = mcmm_tracer("gpu_mcmm_agrees_with_gpu_nee_per_tile", &scene, (w, h)) else {
         return;
     };
     let settings = |method, seed| RenderSettings {

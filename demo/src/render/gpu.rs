@@ -258,7 +258,10 @@ impl std::fmt::Debug for GpuTracer {
 /// # Errors
 /// When composition fails (an unknown import).
 pub fn composed_shader() -> Result<String> {
-    Ok(shaders::compose(SHADER, &guide_defs(GUIDE_GROUP, UNUSED_GROUP))?)
+    Ok(shaders::compose(
+        SHADER,
+        &guide_defs(GUIDE_GROUP, UNUSED_GROUP),
+    )?)
 }
 
 /// The shader defs placing `mcg::mcpg` at group `mcpg` and `mcg::mcmm` at group `mcmm`.
@@ -438,7 +441,11 @@ impl GpuTracer {
     /// An error unless the device binds the [`MCPG_STORAGE_BUFFERS`] storage buffers per stage
     /// that a guided pipeline (`method`) needs.
     fn check_storage_buffers(&self, method: &str) -> Result<()> {
-        let available = self.ctx.device().limits().max_storage_buffers_per_shader_stage;
+        let available = self
+            .ctx
+            .device()
+            .limits()
+            .max_storage_buffers_per_shader_stage;
         if available < MCPG_STORAGE_BUFFERS {
             return Err(format!(
                 "{method} on the GPU binds {MCPG_STORAGE_BUFFERS} storage buffers per stage; \
@@ -682,12 +689,18 @@ impl GpuTracer {
             }
             Method::Mcmm => match &self.mcmm {
                 None => return Err("GpuTracer: mcmm needs GpuTracer::start_mcmm first".into()),
-                Some(g) => super::mcmm::check_settings(settings, g.guide.width(), g.guide.height())?,
+                Some(g) => {
+                    super::mcmm::check_settings(settings, g.guide.width(), g.guide.height())?
+                }
             },
             _ => {}
         }
         let camera = self.scene()?.camera;
-        if let Some(g) = self.guided.as_mut().filter(|_| settings.method == Method::Mcpg) {
+        if let Some(g) = self
+            .guided
+            .as_mut()
+            .filter(|_| settings.method == Method::Mcpg)
+        {
             g.guide.set_camera(&self.ctx, camera.position);
         }
         let scene = self.scene()?;

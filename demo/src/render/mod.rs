@@ -289,7 +289,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         },
         report,
         guide: match guide {
-            CpuGuide::Mcpg(g) => Some(Arc::new(g)),
+            CpuGuide::Mcpg(g) => Some(Arc::new(*g)),
             CpuGuide::None | CpuGuide::Mcmm(_) => None,
         },
     })
@@ -341,7 +341,7 @@ struct FrameTimes {
 /// runs on the GPU).
 enum CpuGuide {
     None,
-    Mcpg(Guide),
+    Mcpg(Box<Guide>),
     Mcmm(McmmRenderer),
 }
 
@@ -387,7 +387,7 @@ fn start_guide(
             let mut guide = Guide::new(mcpg_config(scene, args))
                 .map_err(|e| format!("the MCPG guide: {e:?}"))?;
             guide.set_camera(scene.camera.position);
-            CpuGuide::Mcpg(guide)
+            CpuGuide::Mcpg(Box::new(guide))
         }
         Method::Mcmm => CpuGuide::Mcmm(McmmRenderer::new(args.width, args.height, mcmm())?),
         Method::Bsdf | Method::Nee => CpuGuide::None,

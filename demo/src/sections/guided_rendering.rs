@@ -538,7 +538,12 @@ fn study_section(
         device_summary.insert("targets".to_owned(), targets);
         summary.insert(device_name.to_owned(), device_summary.into());
         let mcpg = find(&runs, Method::Mcpg);
-        if let Some(guide) = mcpg.equal_samples.guide.as_ref().filter(|_| study.mcpg_cache) {
+        if let Some(guide) = mcpg
+            .equal_samples
+            .guide
+            .as_ref()
+            .filter(|_| study.mcpg_cache)
+        {
             guide_figure(ctx, section, guide, &study.settings, &id)?;
         }
     }
@@ -595,7 +600,13 @@ fn compute_runs(
         let frames = ((budget / seconds_per_frame(&run.equal_samples)).round() as u32).max(1);
         run.equal_time = Some(render_on(
             device,
-            &args(study, run.method, frames, seed ^ 0xe07e, Some(reference_path)),
+            &args(
+                study,
+                run.method,
+                frames,
+                seed ^ 0xe07e,
+                Some(reference_path),
+            ),
         )?);
         bar.inc(1);
     }
@@ -851,8 +862,7 @@ fn error_of(runs: &[Runs], m: Method, equal_time: bool) -> f64 {
 
 /// The paragraph of MCPG's targets (scene (a)); their numbers.
 fn mcpg_targets(section: &mut Section, runs: &[Runs]) -> serde_json::Value {
-    let ratio_samples =
-        error_of(runs, Method::Mcpg, false) / error_of(runs, Method::Bsdf, false);
+    let ratio_samples = error_of(runs, Method::Mcpg, false) / error_of(runs, Method::Bsdf, false);
     let mcpg_et = error_of(runs, Method::Mcpg, true);
     let (vs_bsdf, vs_nee) = (
         mcpg_et / error_of(runs, Method::Bsdf, true),
@@ -905,7 +915,11 @@ fn mcmm_targets(
     let a = &find(runs, Method::Mcmm).equal_samples.image;
     let b = &find(runs, Method::Mcpg).equal_samples.image;
     let (map, mcmm_wins, tiles) = win_map(a, b, reference, study.settings.size);
-    image_strip(&ctx.figure_path(&id("wins")), &[&map], 256 / study.settings.size)?;
+    image_strip(
+        &ctx.figure_path(&id("wins")),
+        &[&map],
+        256 / study.settings.size,
+    )?;
     section.paragraph(&format!(
         "Targets (issue: mcmm relMSE ≤ ¼ of bsdf at equal samples after {} frames): mcmm ÷ \
          bsdf = {over_bsdf:.3}; mcmm ÷ mcpg = {over_mcpg:.3} at equal samples and \
