@@ -674,6 +674,23 @@ fn colour(m: Method) -> plot::RGBColor {
     }
 }
 
+/// The log axis of relMSE spanning every error of `runs` (whole decades).
+fn error_axis(runs: &[Runs]) -> Axis {
+    let all_errors = runs
+        .iter()
+        .flat_map(|r| {
+            std::iter::once(&r.equal_samples)
+                .chain(&r.equal_time)
+                .flat_map(|x| x.report.errors.iter().map(|e| e.rel_mse))
+        })
+        .filter(|e| *e > 0.0 && e.is_finite());
+    let (lo, hi) = all_errors.fold((f64::MAX, 0.0f64), |(lo, hi), e| (lo.min(e), hi.max(e)));
+    Axis::log10(
+        "relative MSE of the running mean",
+        10f64.powf(lo.log10().floor())..10f64.powf(hi.log10().ceil()),
+    )
+}
+
 /// The learning curve (error against frame) and the error against time.
 fn error_charts(
     ctx: &Context<'_>,
@@ -686,19 +703,7 @@ fn error_charts(
 ) -> Result<()> {
     let s = &study.settings;
     let device_name = runs[0].equal_samples.report.device;
-    let all_errors = runs
-        .iter()
-        .flat_map(|r| {
-            std::iter::once(&r.equal_samples)
-                .chain(&r.equal_time)
-                .flat_map(|x| x.report.errors.iter().map(|e| e.rel_mse))
-        })
-        .filter(|e| *e > 0.0 && e.is_finite());
-    let (lo, hi) = all_errors.fold((f64::MAX, 0.0f64), |(lo, hi), e| (lo.min(e), hi.max(e)));
-    let y = Axis::log10(
-        "relative MSE of the running mean",
-        10f64.powf(lo.log10().floor())..10f64.powf(hi.log10().ceil()),
-    );
+    let y = error_axis(runs);
     let curve = |r: &Rendered, x: Vec<f64>| -> Vec<(f64, f64)> {
         x.into_iter()
             .zip(r.report.errors.iter().map(|e| e.rel_mse))
