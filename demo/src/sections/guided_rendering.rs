@@ -14,7 +14,13 @@
 //!    targets name;
 //! 4. the guide after the last frame at each pixel's first hit: the mean direction of the
 //!    chosen chain state, its concentration κ and the adaptive grid's level (MCPG Fig. 3
-//!    right).
+//!    right), for scene (a);
+//! 5. for scene (b), MCMM's targets and a map of the tiles where `mcmm` or `mcpg` has the
+//!    lower error.
+//!
+//! Each scene is a [`Study`]; [`build`] runs them in turn through the compute
+//! (`compute_runs`), figure (`image_figures`, `error_charts`), table (`results_table`) and
+//! target (`mcpg_targets`, `mcmm_targets`) steps.
 //!
 //! The reference is `nee` with many samples per pixel, cached under
 //! `<out>/reference/` with its settings in the file name.
