@@ -14,6 +14,7 @@ use mcg_demo::render::cpu::{
 };
 use mcg_demo::render::guided::{McpgSampler, new_guide};
 use mcg_demo::render::material::BsdfSample;
+use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
 use mcg_demo::render::scene::{SceneError, SceneFile, frame_time};
 use mcg_demo::render::scene_generator::{DOOR_OPENS_AT_FRAME, SCENE_NAMES, built_in_scenes};
 use mcg_demo::render::{Device, RenderArgs, render, write_outputs};
@@ -449,6 +450,109 @@ fn mcpg_nee_weights_light_samples_with_the_samplers_density() {
     }
 }
 
+/// Hypothesis: `mcmm` estimates direct light without bias in the furnace: with B = 1 every
+/// pixel's radiance is L_e + ρ L_e (the emission seen plus one scattering of the emitting
+/// walls). Sample: 16×16 pixels × 16 spp (MCMM steps), seed 7, ρ = (0.5, 0.3, 0.8),
+/// L_e = (1, 2, 0.5), the fourth frame after three frames of learning, for both scores; the
+/// 256 pixel values are independent given the previous frame's states. Threshold: |z| < 5 on
+/// the pixel mean per channel and score (6 tests, α ≈ 3.4·10⁻⁶); the frame must show spread
+/// (BSDF sampling alone is exact here, so spread means the chains' lobes were sampled).
+/// Skipping the tiles' xor permutation (each pixel samples its own chain but divides by the
+/// tile's mixture, MCMM Fig. 16's bias) fails it at z = 10, and halving the material's share
+/// in the densities at z = 13 (checked once each). (Dividing by the chain's own density
+/// instead of the mixture is no break: with the shuffle that too is unbiased, only noisier.)
+#[test]
+fn mcmm_furnace_matches_direct_light() {
+    let (rho, le) = (Vec3::new(0.5, 0.3, 0.8), Vec3::new(1.0, 2.0, 0.5));
+    let scene = furnace(rho, le);
+    let expected = le + rho * le;
+    for score in [McmmScore::TileMixture, McmmScore::Paper] {
+        let settings = RenderSettings {
+            width: 16,
+            height: 16,
+            spp: 16,
+            bounces: 1,
+            seed: 7,
+            method: Method::Mcmm,
+        };
+        let mut r = McmmRenderer::new(16, 16, mcmm_params(score, 16)).unwrap();
+        for frame in 0..3 {
+            r.render_frame(&scene, &settings, frame).unwrap();
+        }
+        let image = r.render_frame(&scene, &settings, 3).unwrap();
+        let spread: RunningStats = image.iter().map(|p| f64::from(p.x)).collect();
+        assert!(
+            spread.variance().sqrt() > 1e-3 * f64::from(expected.x),
+            "{score:?}: mcmm sampled no lobe: {}",
+            spread.variance().sqrt()
+        );
+        for c in 0..3 {
+            let stats: RunningStats = image.iter().map(|p| f64::from(p[c])).collect();
+            let z = (stats.mean() - f64::from(expected[c])) / stats.standard_error();
+            eprintln!("mcmm furnace {score:?} channel {c}: z = {z:.2}");
+            assert!(
+                z.abs() < 5.0,
+                "{score:?} channel {c}: mean {} expected {} (z = {z:.2})",
+                stats.mean(),
+                expected[c]
+            );
+        }
+    }
+    let mut r = McmmRenderer::new(16, 16, mcmm_params(McmmScore::TileMixture, 16)).unwrap();
+    let three = RenderSettings {
+        width: 16,
+        height: 16,
+        spp: 1,
+        bounces: 3,
+        seed: 7,
+        method: Method::Mcmm,
+    };
+    assert!(
+        r.render_frame(&scene, &three, 0).is_err(),
+        "mcmm is direct light only"
+    );
+}
+
+/// Hypothesis: `mcmm` is unbiased — the mean of independent runs equals the `nee` image of
+/// direct light. Scene: the built-in many-lights room (its small lights are MCMM's case),
+/// 32×32 pixels (4 tiles of 16×16), B = 1. `mcmm`: 32 independent runs (seeds 100–131), each
+/// fresh chains learning over 4 frames of 4 spp; a run's sample is its mean image. `nee`:
+/// 128 independent frames of 4 spp (seed 12). Per tile and channel the means are compared
+/// with [`common::tile_stats`]; threshold: Bonferroni over the 12 tests at family-wise
+/// α = 10⁻⁴, |z| < Φ⁻¹(1 − α/24) ≈ 4.5. Today the worst |z| is 1.2; halving the material's
+/// share in the densities fails it at z = 5.0 in the first tile (checked once).
+#[test]
+fn mcmm_agrees_with_nee_per_tile() {
+    let file = SceneFile::open(scenes_dir().join("many_lights_room.gltf")).unwrap();
+    let scene = file.build(0.0).unwrap();
+    let (w, h) = (32u32, 32u32);
+    let settings = |method, seed| RenderSettings {
+        width: w,
+        height: h,
+        spp: 4,
+        bounces: 1,
+        seed,
+        method,
+    };
+    let nee = settings(Method::Nee, 12);
+    let reference = common::tile_stats((w, h, 16, 128), |f| {
+        render_frame(&scene, &nee, f, || BsdfSampler, || ())
+    });
+    let guided = common::tile_stats((w, h, 16, 32), |run| {
+        let s = settings(Method::Mcmm, 100 + run);
+        let mut r = McmmRenderer::new(w, h, mcmm_params(McmmScore::TileMixture, h)).unwrap();
+        let mut sum = vec![Vec3::ZERO; (w * h) as usize];
+        for f in 0..4 {
+            let image = r.render_frame(&scene, &s, f).unwrap();
+            for (a, p) in sum.iter_mut().zip(image) {
+                *a += p / 4.0;
+            }
+        }
+        sum
+    });
+    assert_tiles_agree(&guided, &reference, 1e-4, "mcmm vs nee");
+}
+
 /// `render` + `write_outputs`: the three files exist, the JSON carries one time and one error
 /// per frame, and a reference of the wrong size is an error.
 #[test]
@@ -467,6 +571,8 @@ fn render_command_writes_exr_png_and_json() {
         out: dir.clone(),
         reference: None,
         no_progress: true,
+        no_irradiance_cache: false,
+        mcmm_score: McmmScore::TileMixture,
     };
     let first = render(&args).unwrap();
     let paths = write_outputs(&dir, &first).unwrap();

@@ -44,6 +44,10 @@ pub enum Method {
     /// paper uses no light sampling) for renderers that already sample their lights: the guide
     /// then learns the indirect light that light sampling cannot reach.
     McpgNee,
+    /// MCMM's screen-space chains (Dittebrandt et al. 2023) at the first hit, for direct light
+    /// only (`--bounces 1`), no light sampling: rendered by [`super::mcmm::McmmRenderer`] on
+    /// the CPU, not by [`render_frame`] (which would treat it as `bsdf`).
+    Mcmm,
 }
 
 impl Method {
@@ -55,6 +59,7 @@ impl Method {
             Self::Nee => "nee",
             Self::Mcpg => "mcpg",
             Self::McpgNee => "mcpg-nee",
+            Self::Mcmm => "mcmm",
         }
     }
 
@@ -173,7 +178,7 @@ pub fn path_seed(seed: u32, frame: u32, pixel: u32, sample: u32) -> u32 {
 const RAY_OFFSET: f32 = 1e-4;
 
 /// `p` moved off its surface along `n` by a distance that grows with `|p|`.
-fn offset(p: Vec3, n: Vec3) -> Vec3 {
+pub(crate) fn offset(p: Vec3, n: Vec3) -> Vec3 {
     p + n * (RAY_OFFSET * p.abs().max_element().max(1.0))
 }
 

@@ -16,6 +16,11 @@
 //! [`GUIDE_GROUP`], begun, sampled and finished at every scattering vertex, and its per-frame
 //! pass recorded after each frame's tiles.
 //!
+//! `mcmm` runs the entry point `render_mcmm` of the shader composed with [`MCMM_DEF`]: the chain
+//! states of [`GpuMcmmGuide`] at group [`GUIDE_GROUP`] (the MCPG module's bindings move to the
+//! unused group [`UNUSED_GROUP`]), workgroups of 8 × 4 invocations, one tile of 32 chains
+//! each, the twin of [`super::mcmm::McmmRenderer`]; the guide's buffers swap after each frame.
+//!
 //! A frame is dispatched in square tiles of [`TILE`] pixels (one submission each, workgroups of
 //! 8 × 8 invocations, far below the 65 535 workgroups per dimension of WebGPU), so a large image
 //! never becomes one long-running submission. Frame times come from timestamp queries around
@@ -26,8 +31,10 @@ use std::time::Instant;
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
+use mcg_gpu_backend::guides::mcmm::GpuMcmmGuide;
 use mcg_gpu_backend::guides::mcpg::GpuMcpgGuide;
 use mcg_gpu_backend::{ComputeKernel, GpuBuffer, GpuContext, GpuError, shaders, wgpu};
+use mcg_markov_guide::mcmm::McmmParams;
 use mcg_markov_guide::mcpg::GuideConfig;
 
 use super::bvh::{BvhNode, Triangle};
@@ -49,12 +56,22 @@ pub const GUIDE_GROUP: u32 = 1;
 /// [`GUIDE_GROUP`]).
 pub const MCPG_DEF: &str = "MCG_DEMO_MCPG";
 
+/// The shader def that compiles `render_mcmm`, MCMM at group [`GUIDE_GROUP`].
+pub const MCMM_DEF: &str = "MCG_DEMO_MCMM";
+
+/// The group a shader composes the other guide's module at (no pipeline binds it).
+pub const UNUSED_GROUP: u32 = 2;
+
 /// Storage buffers the `mcpg` pipeline binds: the tracer's 8 and the guide's 2 (more than
 /// WebGPU's default of 8; [`GpuTracer::new`] asks the adapter for its own maximum).
 pub const MCPG_STORAGE_BUFFERS: u32 = 10;
 
 /// Invocations per workgroup side of the `render` kernel (`@workgroup_size(8, 8)`).
 const GROUP: u32 = 8;
+
+/// Invocations per workgroup of the `render_mcmm` kernel (`@workgroup_size(8, 4)`): one tile
+/// of [`super::mcmm::TILE_SIZE`] chains.
+const MCMM_GROUP: (u32, u32) = (super::mcmm::TILE_WIDTH, super::mcmm::TILE_HEIGHT);
 
 /// Invocations per workgroup of the `trace_rays` kernel.
 const RAY_GROUP: u32 = 64;
@@ -69,6 +86,7 @@ pub fn method_code(method: Method) -> Option<u32> {
         Method::Nee => Some(1),
         Method::Mcpg => Some(2),
         Method::McpgNee => Some(4),
+        Method::Mcmm => Some(3),
         _ => None,
     }
 }
@@ -198,10 +216,10 @@ pub enum GpuTiming {
     Wall,
 }
 
-/// The `mcpg` pipeline: the guided `render` with an explicit layout (the tracer's group 0 and
-/// the guide's group), and the guide.
-struct Guided {
-    guide: GpuMcpgGuide,
+/// A guided pipeline: the guided entry point with an explicit layout (the tracer's group 0 and
+/// the guide's group [`GUIDE_GROUP`]), and the guide.
+struct Guided<G> {
+    guide: G,
     pipeline: wgpu::ComputePipeline,
     /// Group 0 of `pipeline`.
     layout: wgpu::BindGroupLayout,
@@ -216,9 +234,12 @@ pub struct GpuTracer {
     scene: Option<SceneBuffers>,
     image: Option<GpuBuffer<[f32; 4]>>,
     timer: Option<Timer>,
-    guided: Option<Guided>,
+    guided: Option<Guided<GpuMcpgGuide>>,
     /// The compiled `mcpg` shader, kept for rebuilding its pipeline with a new guide.
     guided_module: Option<wgpu::ShaderModule>,
+    mcmm: Option<Guided<GpuMcmmGuide>>,
+    /// The compiled `mcmm` shader.
+    mcmm_module: Option<wgpu::ShaderModule>,
     /// Wall-clock seconds of the last `mcpg` frame's guide pass.
     last_end_frame_s: Option<f64>,
 }
@@ -240,8 +261,26 @@ impl std::fmt::Debug for GpuTracer {
 pub fn composed_shader() -> Result<String> {
     Ok(shaders::compose(
         SHADER,
-        &GpuMcpgGuide::shader_defs(GUIDE_GROUP),
+        &guide_defs(GUIDE_GROUP, UNUSED_GROUP),
     )?)
+}
+
+/// The shader defs placing `mcg::mcpg` at group `mcpg` and `mcg::mcmm` at group `mcmm`.
+fn guide_defs(mcpg: u32, mcmm: u32) -> Vec<(&'static str, u32)> {
+    let mut defs = GpuMcpgGuide::shader_defs(mcpg).to_vec();
+    defs.extend(GpuMcmmGuide::shader_defs(mcmm));
+    defs
+}
+
+/// The tracer's WGSL for `mcmm`: `render_mcmm` ([`MCMM_DEF`]) with `mcg::mcmm` at group
+/// [`GUIDE_GROUP`].
+///
+/// # Errors
+/// When composition fails (an unknown import).
+pub fn composed_mcmm_shader() -> Result<String> {
+    let mut defs = guide_defs(UNUSED_GROUP, GUIDE_GROUP);
+    defs.push((MCMM_DEF, 1));
+    Ok(shaders::compose(SHADER, &defs)?)
 }
 
 /// The tracer's WGSL for `mcpg`: [`composed_shader`] with [`MCPG_DEF`] defined.
@@ -249,8 +288,7 @@ pub fn composed_shader() -> Result<String> {
 /// # Errors
 /// When composition fails (an unknown import).
 pub fn composed_mcpg_shader() -> Result<String> {
-    let guide = GpuMcpgGuide::shader_defs(GUIDE_GROUP);
-    let mut defs = guide.to_vec();
+    let mut defs = guide_defs(GUIDE_GROUP, UNUSED_GROUP);
     defs.push((MCPG_DEF, 1));
     Ok(shaders::compose(SHADER, &defs)?)
 }
@@ -319,6 +357,8 @@ impl GpuTracer {
             timer,
             guided: None,
             guided_module: None,
+            mcmm: None,
+            mcmm_module: None,
             last_end_frame_s: None,
         })
     }
@@ -340,30 +380,104 @@ impl GpuTracer {
             g.guide.reset(&self.ctx);
             return Ok(());
         }
-        let device = self.ctx.device();
-        let available = device.limits().max_storage_buffers_per_shader_stage;
-        if available < MCPG_STORAGE_BUFFERS {
-            return Err(format!(
-                "mcpg on the GPU binds {MCPG_STORAGE_BUFFERS} storage buffers per stage; this \
-                 device allows {available}"
-            )
-            .into());
-        }
+        self.check_storage_buffers("mcpg")?;
         let mut guide = GpuMcpgGuide::new(&self.ctx, config)?;
         // Builds the per-frame pass's pipelines now (seconds on a software adapter), not in
         // the first frame's time; `reset` then empties the guide again.
         guide.end_frame(&self.ctx)?;
         guide.reset(&self.ctx);
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         if self.guided_module.is_none() {
-            let source = composed_mcpg_shader()?;
-            self.guided_module = Some(device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("mcg-demo render mcpg"),
-                source: wgpu::ShaderSource::Wgsl(source.into()),
-            }));
+            self.guided_module = Some(self.module("mcg-demo render mcpg", composed_mcpg_shader()?));
         }
         let module = self.guided_module.as_ref().expect("compiled above");
-        let entry = |binding: u32| wgpu::BindGroupLayoutEntry {
+        let (pipeline, layout) =
+            self.guided_pipeline(module, "render", guide.bind_group_layout())?;
+        self.guided = Some(Guided {
+            guide,
+            pipeline,
+            layout,
+        });
+        Ok(())
+    }
+
+    /// Starts `mcmm` with empty chains for a `width × height` image and `params` (the CPU's
+    /// [`super::mcmm::mcmm_params`]): a guide of the same size is emptied and given `params`,
+    /// otherwise a new one is made and the `mcmm` pipeline (compiled on the first call)
+    /// rebuilt around it. [`GpuTracer::render_frame`] with [`Method::Mcmm`] then learns from
+    /// frame to frame.
+    ///
+    /// # Errors
+    /// When the device binds fewer than [`MCPG_STORAGE_BUFFERS`] storage buffers per stage,
+    /// `params` are invalid, the states do not fit the device, or the shader fails.
+    pub fn start_mcmm(&mut self, params: &McmmParams, width: u32, height: u32) -> Result<()> {
+        if let Some(g) = &mut self.mcmm
+            && (g.guide.width(), g.guide.height()) == (width, height)
+        {
+            g.guide.set_params(&self.ctx, params)?;
+            g.guide.clear(&self.ctx)?;
+            return Ok(());
+        }
+        self.check_storage_buffers("mcmm")?;
+        let guide = GpuMcmmGuide::new(&self.ctx, width, height, params)?;
+        if self.mcmm_module.is_none() {
+            self.mcmm_module = Some(self.module("mcg-demo render mcmm", composed_mcmm_shader()?));
+        }
+        let module = self.mcmm_module.as_ref().expect("compiled above");
+        let (pipeline, layout) =
+            self.guided_pipeline(module, "render_mcmm", guide.bind_group_layout())?;
+        self.mcmm = Some(Guided {
+            guide,
+            pipeline,
+            layout,
+        });
+        Ok(())
+    }
+
+    /// The guide of `mcmm` ([`GpuTracer::start_mcmm`]), e.g. for reading its states.
+    #[must_use]
+    pub fn mcmm_guide(&self) -> Option<&GpuMcmmGuide> {
+        self.mcmm.as_ref().map(|g| &g.guide)
+    }
+
+    /// An error unless the device binds the [`MCPG_STORAGE_BUFFERS`] storage buffers per stage
+    /// that a guided pipeline (`method`) needs.
+    fn check_storage_buffers(&self, method: &str) -> Result<()> {
+        let available = self
+            .ctx
+            .device()
+            .limits()
+            .max_storage_buffers_per_shader_stage;
+        if available < MCPG_STORAGE_BUFFERS {
+            return Err(format!(
+                "{method} on the GPU binds {MCPG_STORAGE_BUFFERS} storage buffers per stage; \
+                 this device allows {available}"
+            )
+            .into());
+        }
+        Ok(())
+    }
+
+    /// Compiles composed WGSL.
+    fn module(&self, label: &str, source: String) -> wgpu::ShaderModule {
+        self.ctx
+            .device()
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(label),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            })
+    }
+
+    /// The pipeline of `entry` in `module` with the tracer's group 0 (bindings 0–8) and
+    /// `guide` at [`GUIDE_GROUP`]; the pipeline and its group 0 layout.
+    fn guided_pipeline(
+        &self,
+        module: &wgpu::ShaderModule,
+        entry: &str,
+        guide: &wgpu::BindGroupLayout,
+    ) -> Result<(wgpu::ComputePipeline, wgpu::BindGroupLayout)> {
+        let device = self.ctx.device();
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let entry_layout = |binding: u32| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: wgpu::ShaderStages::COMPUTE,
             ty: wgpu::BindingType::Buffer {
@@ -377,37 +491,33 @@ impl GpuTracer {
             },
             count: None,
         };
-        let entries: Vec<wgpu::BindGroupLayoutEntry> = (0..=8).map(entry).collect();
+        let entries: Vec<wgpu::BindGroupLayoutEntry> = (0..=8).map(entry_layout).collect();
+        let label = Some(entry);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("mcg-demo render mcpg"),
+            label,
             entries: &entries,
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("mcg-demo render mcpg"),
-            bind_group_layouts: &[Some(&layout), Some(guide.bind_group_layout())],
+            label,
+            bind_group_layouts: &[Some(&layout), Some(guide)],
             immediate_size: 0,
         });
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("mcg-demo render mcpg"),
+            label,
             layout: Some(&pipeline_layout),
             module,
-            entry_point: Some("render"),
+            entry_point: Some(entry),
             compilation_options: wgpu::PipelineCompilationOptions::default(),
             cache: None,
         });
         if let Some(error) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Shader {
-                entry_point: "render (mcpg)".to_owned(),
+                entry_point: entry.to_owned(),
                 message: error.to_string(),
             }
             .into());
         }
-        self.guided = Some(Guided {
-            guide,
-            pipeline,
-            layout,
-        });
-        Ok(())
+        Ok((pipeline, layout))
     }
 
     /// The guide of `mcpg` ([`GpuTracer::start_mcpg`]), e.g. for
@@ -513,16 +623,48 @@ impl GpuTracer {
     /// and learns in the frame's passes, and its per-frame pass ([`GpuMcpgGuide::end_frame`])
     /// runs after them; the frame's time includes that pass (its wall clock, submission to
     /// the end of the wait, added to the timestamps when the adapter has them; also
-    /// [`GpuTracer::last_end_frame_s`]).
+    /// [`GpuTracer::last_end_frame_s`]). With [`Method::Mcmm`] (`bounces` 1) the chains of
+    /// [`GpuTracer::start_mcmm`] guide and learn, and their buffers swap after the frame.
     ///
     /// # Errors
-    /// No scene uploaded, a method without WGSL twin, `mcpg` without a started guide, an image
-    /// larger than the device's largest storage binding, or a device error.
+    /// No scene uploaded, a method without WGSL twin, a guided method without a started
+    /// guide (or `mcmm` for another image size or bounce count), an image larger than the
+    /// device's largest storage binding, or a device error.
     pub fn render_frame(
         &mut self,
         settings: &RenderSettings,
         frame: u32,
     ) -> Result<(Vec<Vec3>, f64)> {
+        let base = self.frame_params(settings, frame)?;
+        let scope = self
+            .ctx
+            .device()
+            .push_error_scope(wgpu::ErrorFilter::Validation);
+        let started = Instant::now();
+        let (timed_tiles, tiles) = self.dispatch_tiles(settings.method, &base)?;
+        let end_frame_s = self.end_guide_frame(settings.method)?;
+        self.wait()?;
+        let wall = started.elapsed().as_secs_f64();
+        if let Some(error) = pollster::block_on(scope.pop()) {
+            return Err(format!("the GPU tracer failed: {error}").into());
+        }
+        let seconds = match &self.timer {
+            Some(timer) if timed_tiles == tiles => {
+                timer.read(&self.ctx, timed_tiles)? + end_frame_s
+            }
+            _ => wall,
+        };
+        let image = self.image.as_ref().expect("allocated in frame_params");
+        let texels = self.ctx.read_back(image)?;
+        Ok((
+            texels.iter().map(|t| Vec3::new(t[0], t[1], t[2])).collect(),
+            seconds,
+        ))
+    }
+
+    /// Checks `settings` against the device and the started guides, allocates the image and
+    /// returns the frame's uniform (tile fields zero); the `mcpg` guide follows the camera.
+    fn frame_params(&mut self, settings: &RenderSettings, frame: u32) -> Result<GpuParams> {
         let method = method_code(settings.method).ok_or_else(|| {
             format!(
                 "the GPU tracer has no method {} yet (use --device cpu)",
@@ -542,18 +684,25 @@ impl GpuTracer {
         if self.image.as_ref().is_none_or(|b| b.len() != pixels) {
             self.image = Some(self.ctx.zeroed_buffer("mcg-demo image", pixels));
         }
-        let guided = settings.method.is_guided();
-        if guided && self.guided.is_none() {
-            return Err("GpuTracer: mcpg needs GpuTracer::start_mcpg first".into());
+        match settings.method {
+            Method::Mcpg | Method::McpgNee if self.guided.is_none() => {
+                return Err("GpuTracer: mcpg needs GpuTracer::start_mcpg first".into());
+            }
+            Method::Mcmm => match &self.mcmm {
+                None => return Err("GpuTracer: mcmm needs GpuTracer::start_mcmm first".into()),
+                Some(g) => {
+                    super::mcmm::check_settings(settings, g.guide.width(), g.guide.height())?
+                }
+            },
+            _ => {}
         }
         let camera = self.scene()?.camera;
-        if let Some(g) = self.guided.as_mut().filter(|_| guided) {
+        if let Some(g) = self.guided.as_mut().filter(|_| settings.method.is_guided()) {
             g.guide.set_camera(&self.ctx, camera.position);
         }
         let scene = self.scene()?;
-        let image = self.image.as_ref().expect("allocated above");
         let tan_y = (0.5 * camera.yfov).tan();
-        let base = GpuParams {
+        Ok(GpuParams {
             camera_position: camera.position.to_array(),
             tan_x: tan_y * width as f32 / height as f32,
             camera_right: camera.right.to_array(),
@@ -571,12 +720,49 @@ impl GpuTracer {
             uv_count: scene.uvs.len() as u32,
             texture_count: scene.textures.len() as u32,
             ..GpuParams::default()
-        };
-        let guided = self.guided.as_ref().filter(|_| guided);
-        let (pipeline, layout) = match guided {
-            Some(g) => (&g.pipeline, &g.layout),
-            None => (self.render.pipeline(), self.render.bind_group_layout()),
-        };
+        })
+    }
+
+    /// The pipeline, its group 0 layout, the guide's bind group and the workgroup size of
+    /// `method`.
+    fn pipeline_of(
+        &self,
+        method: Method,
+    ) -> (
+        &wgpu::ComputePipeline,
+        &wgpu::BindGroupLayout,
+        Option<&wgpu::BindGroup>,
+        (u32, u32),
+    ) {
+        match (method, &self.guided, &self.mcmm) {
+            (Method::Mcpg | Method::McpgNee, Some(g), _) => (
+                &g.pipeline,
+                &g.layout,
+                Some(g.guide.bind_group()),
+                (GROUP, GROUP),
+            ),
+            (Method::Mcmm, _, Some(g)) => (
+                &g.pipeline,
+                &g.layout,
+                Some(g.guide.bind_group()),
+                (MCMM_GROUP.0, MCMM_GROUP.1),
+            ),
+            _ => (
+                self.render.pipeline(),
+                self.render.bind_group_layout(),
+                None,
+                (GROUP, GROUP),
+            ),
+        }
+    }
+
+    /// Records and submits one pass per tile of [`TILE`] pixels with `base`'s settings;
+    /// returns the timed tiles and the tiles.
+    fn dispatch_tiles(&self, method: Method, base: &GpuParams) -> Result<(u32, u32)> {
+        let (width, height) = (base.width, base.height);
+        let scene = self.scene()?;
+        let image = self.image.as_ref().expect("allocated in frame_params");
+        let (pipeline, layout, guide, group) = self.pipeline_of(method);
         let bind_group = self.bind_group(
             "render",
             layout,
@@ -596,23 +782,15 @@ impl GpuTracer {
         let tiles: Vec<(u32, u32)> = (0..height.div_ceil(TILE))
             .flat_map(|ty| (0..width.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
             .collect();
-        let max_groups = self
-            .ctx
-            .device()
-            .limits()
-            .max_compute_workgroups_per_dimension;
-        let groups = TILE.div_ceil(GROUP);
-        if groups > max_groups {
+        let limits = self.ctx.device().limits();
+        let groups = TILE.div_ceil(group.0.min(group.1));
+        if groups > limits.max_compute_workgroups_per_dimension {
             return Err(format!(
-                "{groups} workgroups per dimension exceed this GPU's {max_groups}"
+                "{groups} workgroups per dimension exceed this GPU's {}",
+                limits.max_compute_workgroups_per_dimension
             )
             .into());
         }
-        let scope = self
-            .ctx
-            .device()
-            .push_error_scope(wgpu::ErrorFilter::Validation);
-        let started = Instant::now();
         let mut timed_tiles = 0u32;
         for (i, &(x, y)) in tiles.iter().enumerate() {
             let params = GpuParams {
@@ -620,7 +798,7 @@ impl GpuTracer {
                 tile_y: y,
                 tile_width: TILE.min(width - x),
                 tile_height: TILE.min(height - y),
-                ..base
+                ..*base
             };
             // Ordered before the next submission (queue writes land before later submits).
             self.ctx.write(&self.params, &[params])?;
@@ -644,45 +822,45 @@ impl GpuTracer {
                 });
                 pass.set_pipeline(pipeline);
                 pass.set_bind_group(0, &bind_group, &[]);
-                if let Some(g) = guided {
-                    pass.set_bind_group(GUIDE_GROUP, g.guide.bind_group(), &[]);
+                if let Some(g) = guide {
+                    pass.set_bind_group(GUIDE_GROUP, g, &[]);
                 }
                 pass.dispatch_workgroups(
-                    params.tile_width.div_ceil(GROUP),
-                    params.tile_height.div_ceil(GROUP),
+                    params.tile_width.div_ceil(group.0),
+                    params.tile_height.div_ceil(group.1),
                     1,
                 );
             }
             self.ctx.queue().submit([encoder.finish()]);
         }
-        // The guide's per-frame pass, after the tiles, timed on the wall clock.
-        let mut end_frame_s = 0.0;
+        Ok((timed_tiles, tiles.len() as u32))
+    }
+
+    /// The guide's end of frame after the tiles: `mcpg`'s per-frame pass, timed on the wall
+    /// clock (its seconds; also [`GpuTracer::last_end_frame_s`]), or `mcmm`'s buffer swap.
+    fn end_guide_frame(&mut self, method: Method) -> Result<f64> {
         self.last_end_frame_s = None;
-        if guided.is_some() {
-            self.wait()?;
-            let ended = Instant::now();
-            let g = self.guided.as_mut().expect("guided above");
-            g.guide.end_frame(&self.ctx)?;
-            self.wait()?;
-            end_frame_s = ended.elapsed().as_secs_f64();
-            self.last_end_frame_s = Some(end_frame_s);
-        }
-        self.wait()?;
-        let wall = started.elapsed().as_secs_f64();
-        if let Some(error) = pollster::block_on(scope.pop()) {
-            return Err(format!("the GPU tracer failed: {error}").into());
-        }
-        let seconds = match &self.timer {
-            Some(timer) if timed_tiles == tiles.len() as u32 => {
-                timer.read(&self.ctx, timed_tiles)? + end_frame_s
+        match method {
+            Method::Mcpg | Method::McpgNee => {
+                self.wait()?;
+                let ended = Instant::now();
+                let g = self.guided.as_mut().expect("checked in frame_params");
+                g.guide.end_frame(&self.ctx)?;
+                self.wait()?;
+                let seconds = ended.elapsed().as_secs_f64();
+                self.last_end_frame_s = Some(seconds);
+                Ok(seconds)
             }
-            _ => wall,
-        };
-        let texels = self.ctx.read_back(image)?;
-        Ok((
-            texels.iter().map(|t| Vec3::new(t[0], t[1], t[2])).collect(),
-            seconds,
-        ))
+            Method::Mcmm => {
+                self.mcmm
+                    .as_mut()
+                    .expect("checked in frame_params")
+                    .guide
+                    .swap();
+                Ok(0.0)
+            }
+            Method::Bsdf | Method::Nee => Ok(0.0),
+        }
     }
 
     /// Walks the uploaded scene's BVH for each ray on the GPU (the WGSL `bvh_walk` that the

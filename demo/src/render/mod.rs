@@ -1,6 +1,6 @@
 //! The renderer: glTF 2.0 scenes path traced with and without mcg's guides.
 //!
-//! `mcg-demo render --scene FILE --method bsdf|nee|mcpg …` renders a scene and writes
+//! `mcg-demo render --scene FILE --method bsdf|nee|mcpg|mcmm …` renders a scene and writes
 //! `<out>/<method>.exr` (the mean over all frames, linear RGB), `<out>/<method>.png`
 //! (sRGB-encoded, clipped) and `<out>/<method>.json` (settings, device, per-frame times and,
 //! with `--reference`, per-frame errors of the running mean). `mcg-demo scenes` rewrites the
@@ -12,8 +12,9 @@
 //! | [`bvh`] | the flattened `#[repr(C)]` BVH and triangle layout, built by `obvhs`, walked by the CPU tracer and its WGSL twin |
 //! | [`material`] | Lambertian + GGX conductor materials with emission |
 //! | [`cpu`] | the CPU path tracer (rayon), methods `bsdf` and `nee`, the per-vertex sampler seam of the guides |
-//! | [`gpu`] | the WGSL twin of the CPU tracer on wgpu, over the same BVH, triangle and material buffers; `mcpg` with the GPU guide of `mcg-gpu-backend` |
+//! | [`gpu`] | the WGSL twin of the CPU tracer on wgpu, over the same BVH, triangle and material buffers; `mcpg` and `mcmm` with the GPU guides of `mcg-gpu-backend` |
 //! | [`guided`] | `mcpg` on the CPU: the MCPG guide behind the sampler seam |
+//! | [`mcmm`] | `mcmm` on the CPU: MCMM's screen-space chains for direct light, SSMIS over tiles of 32 pixels |
 //! | [`output`] | EXR/PNG files, RMSE and relative MSE |
 //! | [`scene_generator`] | the built-in scenes |
 
@@ -25,6 +26,7 @@ pub mod cpu;
 pub mod gpu;
 pub mod guided;
 pub mod material;
+pub mod mcmm;
 pub mod output;
 pub mod scene;
 pub mod scene_generator;
@@ -35,14 +37,15 @@ use std::time::Instant;
 
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
-use mcg_markov_guide::mcpg::Guide;
+use mcg_markov_guide::mcpg::{Guide, GuideConfig};
 
 use crate::Result;
 use cpu::{BsdfSampler, Method, RenderSettings, render_frame};
 use gpu::{GpuTiming, GpuTracer};
-use guided::{McpgSampler, guide_config, new_guide};
+use guided::{McpgSampler, guide_config};
+use mcmm::{McmmRenderer, McmmScore, mcmm_params};
 use output::{Errors, RgbImage, errors};
-use scene::{SceneFile, frame_time};
+use scene::{Scene, SceneFile, frame_time};
 
 /// Where the tracer runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
@@ -100,6 +103,14 @@ pub struct RenderArgs {
     /// No progress bar.
     #[arg(long)]
     pub no_progress: bool,
+    /// `mcpg` without its irradiance cache: the guide learns from the emission its rays hit
+    /// only (as MCPG Fig. 8 compares on direct light).
+    #[arg(long)]
+    pub no_irradiance_cache: bool,
+    /// The score of `mcmm`'s chains (MCMM Alg. 3): the tile's mixture density (the pixel's
+    /// one-sample SSMIS estimate) or the paper's, the chain's own technique density.
+    #[arg(long, value_enum, default_value_t = McmmScore::TileMixture)]
+    pub mcmm_score: McmmScore,
 }
 
 fn parse_seed(v: &str) -> Result<u64, String> {
@@ -192,24 +203,14 @@ pub struct Rendered {
 /// Scene errors ([`scene::SceneError`]), an unreadable reference or one of another size.
 pub fn render(args: &RenderArgs) -> Result<Rendered> {
     let file = SceneFile::open(&args.scene)?;
-    let reference = match &args.reference {
-        Some(path) => {
-            let r = RgbImage::read_exr(path)?;
-            if (r.width, r.height) != (args.width, args.height) {
-                return Err(format!(
-                    "{}: the reference is {}×{}, the render {}×{}",
-                    path.display(),
-                    r.width,
-                    r.height,
-                    args.width,
-                    args.height
-                )
-                .into());
-            }
-            Some(r)
-        }
-        None => None,
-    };
+    let reference = read_reference(args)?;
+    if args.method == Method::Mcmm && args.bounces != 1 {
+        return Err(format!(
+            "--method mcmm guides direct light only: use --bounces 1 (got {})",
+            args.bounces
+        )
+        .into());
+    }
     let settings = RenderSettings {
         width: args.width,
         height: args.height,
@@ -224,41 +225,12 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     let mut gpu = gpu.map(|g| g.lock().unwrap_or_else(std::sync::PoisonError::into_inner));
     if let Some(g) = gpu.as_deref_mut() {
         g.upload(&scene)?;
-        if args.method.is_guided()
-            && let Err(e) = g.start_mcpg(&guide_config(&scene, args.height))
-        {
-            if args.device == Device::Gpu {
-                return Err(format!("--device gpu: {e}").into());
-            }
-            eprintln!("mcg-demo: mcpg cannot run on this GPU ({e}) — rendering on the CPU");
-            gpu = None;
-        }
     }
-    let mut guide = match args.method {
-        Method::Mcpg | Method::McpgNee if gpu.is_none() => {
-            Some(new_guide(&scene, args.height).map_err(|e| format!("the MCPG guide: {e:?}"))?)
-        }
-        Method::Mcpg | Method::McpgNee | Method::Bsdf | Method::Nee => None,
-    };
-    let progress = if args.no_progress {
-        ProgressBar::hidden()
-    } else {
-        let bar = ProgressBar::new(u64::from(args.frames));
-        bar.set_style(
-            ProgressStyle::with_template(
-                "{msg} [{bar:30}] frame {pos}/{len} ({elapsed}, eta {eta})",
-            )
-            .map_err(|e| e.to_string())?,
-        );
-        bar.set_message(format!("{} {}", args.method.name(), args.scene.display()));
-        bar
-    };
+    let mut guide = start_guide(args, &scene, &mut gpu)?;
+    let progress = progress_bar(args)?;
     let mut sum = vec![Vec3::ZERO; (args.width * args.height) as usize];
-    let mut frame_times_s = Vec::new();
-    let mut end_frame_times_s = Vec::new();
-    let mut frame_cpu_times_s = Vec::new();
-    let mut errs = Vec::new();
-    let mut frame_errs = Vec::new();
+    let mut times = FrameTimes::default();
+    let (mut errs, mut frame_errs) = (Vec::new(), Vec::new());
     for frame in 0..args.frames {
         if frame > 0 && file.is_animated() {
             scene = file.build(frame_time(frame))?;
@@ -268,29 +240,11 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         }
         let image = if let Some(g) = gpu.as_deref_mut() {
             let (image, seconds) = g.render_frame(&settings, frame)?;
-            frame_times_s.push(seconds);
-            end_frame_times_s.extend(g.last_end_frame_s());
+            times.frame.push(seconds);
+            times.end_frame.extend(g.last_end_frame_s());
             image
         } else {
-            let started = Instant::now();
-            let cpu_started = process_cpu_seconds();
-            let image = match &mut guide {
-                Some(g) => {
-                    g.set_camera(scene.camera.position);
-                    let image =
-                        render_frame(&scene, &settings, frame, || McpgSampler::new(g), || ());
-                    let ending = Instant::now();
-                    g.end_frame();
-                    end_frame_times_s.push(ending.elapsed().as_secs_f64());
-                    image
-                }
-                None => render_frame(&scene, &settings, frame, || BsdfSampler, || ()),
-            };
-            frame_times_s.push(started.elapsed().as_secs_f64());
-            if let (Some(a), Some(b)) = (cpu_started, process_cpu_seconds()) {
-                frame_cpu_times_s.push(b - a);
-            }
-            image
+            cpu_frame(&scene, &settings, frame, &mut guide, &mut times)?
         };
         progress.inc(1);
         for (s, p) in sum.iter_mut().zip(&image) {
@@ -310,36 +264,168 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         height: args.height,
         pixels: sum.into_iter().map(|s| s * scale).collect(),
     };
-    Ok(Rendered {
-        report: RenderReport {
-            flip: reference.as_ref().and_then(|r| output::flip(&image, r)),
-            scene: args.scene.clone(),
-            method: args.method,
-            device: if gpu.is_some() { "gpu" } else { "cpu" },
-            threads: rayon::current_num_threads(),
-            adapter: gpu.as_deref().map(GpuTracer::adapter_name),
-            gpu_timing: gpu.as_deref().map(GpuTracer::timing),
-            width: args.width,
-            height: args.height,
-            spp: args.spp,
-            frames: args.frames,
-            bounces: args.bounces,
-            seed: args.seed,
-            frame_cpu_times_s: if frame_cpu_times_s.len() == frame_times_s.len() {
-                frame_cpu_times_s
-            } else {
-                Vec::new()
-            },
-            frame_times_s,
-            end_frame_times_s,
-            reference: args.reference.clone(),
-            errors: errs,
-            frame_errors: frame_errs,
-            warnings,
+    let report = RenderReport {
+        flip: reference.as_ref().and_then(|r| output::flip(&image, r)),
+        scene: args.scene.clone(),
+        method: args.method,
+        device: if gpu.is_some() { "gpu" } else { "cpu" },
+        threads: rayon::current_num_threads(),
+        adapter: gpu.as_deref().map(GpuTracer::adapter_name),
+        gpu_timing: gpu.as_deref().map(GpuTracer::timing),
+        width: args.width,
+        height: args.height,
+        spp: args.spp,
+        frames: args.frames,
+        bounces: args.bounces,
+        seed: args.seed,
+        frame_cpu_times_s: if times.cpu.len() == times.frame.len() {
+            times.cpu
+        } else {
+            Vec::new()
         },
+        frame_times_s: times.frame,
+        end_frame_times_s: times.end_frame,
+        reference: args.reference.clone(),
+        errors: errs,
+        frame_errors: frame_errs,
+        warnings,
+    };
+    Ok(Rendered {
         image,
-        guide: guide.map(Arc::new),
+        report,
+        guide: match guide {
+            CpuGuide::Mcpg(g) => Some(Arc::new(*g)),
+            CpuGuide::None | CpuGuide::Mcmm(_) => None,
+        },
     })
+}
+
+/// The reference of `--reference`, checked to have the render's size.
+fn read_reference(args: &RenderArgs) -> Result<Option<RgbImage>> {
+    let Some(path) = &args.reference else {
+        return Ok(None);
+    };
+    let r = RgbImage::read_exr(path)?;
+    if (r.width, r.height) != (args.width, args.height) {
+        return Err(format!(
+            "{}: the reference is {}×{}, the render {}×{}",
+            path.display(),
+            r.width,
+            r.height,
+            args.width,
+            args.height
+        )
+        .into());
+    }
+    Ok(Some(r))
+}
+
+/// The progress bar of a render (hidden with `--no-progress`).
+fn progress_bar(args: &RenderArgs) -> Result<ProgressBar> {
+    if args.no_progress {
+        return Ok(ProgressBar::hidden());
+    }
+    let bar = ProgressBar::new(u64::from(args.frames));
+    bar.set_style(
+        ProgressStyle::with_template("{msg} [{bar:30}] frame {pos}/{len} ({elapsed}, eta {eta})")
+            .map_err(|e| e.to_string())?,
+    );
+    bar.set_message(format!("{} {}", args.method.name(), args.scene.display()));
+    Ok(bar)
+}
+
+/// The per-frame times a render measures (see [`RenderReport`]).
+#[derive(Default)]
+struct FrameTimes {
+    frame: Vec<f64>,
+    cpu: Vec<f64>,
+    end_frame: Vec<f64>,
+}
+
+/// The CPU side of a guided method: its guide, or nothing (`bsdf`, `nee`, or a guide that
+/// runs on the GPU).
+enum CpuGuide {
+    None,
+    Mcpg(Box<Guide>),
+    Mcmm(McmmRenderer),
+}
+
+/// MCPG's configuration for `args` on `scene`: [`guide_config`], without the irradiance
+/// cache under `--no-irradiance-cache`.
+#[must_use]
+pub fn mcpg_config(scene: &Scene, args: &RenderArgs) -> GuideConfig {
+    let mut config = guide_config(scene, args.height);
+    if args.no_irradiance_cache {
+        config.cache = None;
+    }
+    config
+}
+
+/// Starts the method's guide on the GPU when `gpu` holds a tracer (under `--device auto`, a
+/// guide the GPU cannot run drops `gpu` with a one-line message), else on the CPU.
+fn start_guide(
+    args: &RenderArgs,
+    scene: &Scene,
+    gpu: &mut Option<std::sync::MutexGuard<'_, GpuTracer>>,
+) -> Result<CpuGuide> {
+    let mcmm = || mcmm_params(args.mcmm_score, args.height);
+    if let Some(g) = gpu.as_deref_mut() {
+        let started = match args.method {
+            Method::Mcpg | Method::McpgNee => g.start_mcpg(&mcpg_config(scene, args)),
+            Method::Mcmm => g.start_mcmm(&mcmm(), args.width, args.height),
+            Method::Bsdf | Method::Nee => Ok(()),
+        };
+        match started {
+            Ok(()) => return Ok(CpuGuide::None),
+            Err(e) if args.device == Device::Gpu => {
+                return Err(format!("--device gpu: {e}").into());
+            }
+            Err(e) => {
+                let name = args.method.name();
+                eprintln!("mcg-demo: {name} cannot run on this GPU ({e}) — rendering on the CPU");
+                *gpu = None;
+            }
+        }
+    }
+    Ok(match args.method {
+        Method::Mcpg | Method::McpgNee => {
+            let mut guide = Guide::new(mcpg_config(scene, args))
+                .map_err(|e| format!("the MCPG guide: {e:?}"))?;
+            guide.set_camera(scene.camera.position);
+            CpuGuide::Mcpg(Box::new(guide))
+        }
+        Method::Mcmm => CpuGuide::Mcmm(McmmRenderer::new(args.width, args.height, mcmm())?),
+        Method::Bsdf | Method::Nee => CpuGuide::None,
+    })
+}
+
+/// One frame on the CPU with `guide`; its times go into `times`.
+fn cpu_frame(
+    scene: &Scene,
+    settings: &RenderSettings,
+    frame: u32,
+    guide: &mut CpuGuide,
+    times: &mut FrameTimes,
+) -> Result<Vec<Vec3>> {
+    let started = Instant::now();
+    let cpu_started = process_cpu_seconds();
+    let image = match guide {
+        CpuGuide::Mcpg(g) => {
+            g.set_camera(scene.camera.position);
+            let image = render_frame(scene, settings, frame, || McpgSampler::new(g), || ());
+            let ending = Instant::now();
+            g.end_frame();
+            times.end_frame.push(ending.elapsed().as_secs_f64());
+            image
+        }
+        CpuGuide::Mcmm(r) => r.render_frame(scene, settings, frame)?,
+        CpuGuide::None => render_frame(scene, settings, frame, || BsdfSampler, || ()),
+    };
+    times.frame.push(started.elapsed().as_secs_f64());
+    if let (Some(a), Some(b)) = (cpu_started, process_cpu_seconds()) {
+        times.cpu.push(b - a);
+    }
+    Ok(image)
 }
 
 /// CPU seconds (user + system) this process has used, from `/proc/self/stat` (fields 14 and

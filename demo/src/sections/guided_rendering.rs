@@ -1,5 +1,7 @@
-//! Section "Guided rendering": the built-in hidden-light room path traced with `bsdf`, `nee`
-//! and `mcpg`, at equal samples and at equal time, against a reference.
+//! Section "Guided rendering": the built-in hidden-light room (scene (a)) path traced with
+//! `bsdf`, `nee` and `mcpg`, and the many-lights room (scene (b), direct light) with `bsdf`,
+//! `nee`, `mcpg` (irradiance cache off) and `mcmm`, at equal samples and at equal time,
+//! against a reference.
 //!
 //! Every render goes through [`render_on`], which takes the device: the CPU tracer today, the
 //! GPU tracer where one exists (the list [`DEVICES`] grows with it). What the section shows:
@@ -8,17 +10,23 @@
 //!    `bsdf` and `nee` after as many frames as fit in the time `mcpg` took (equal time);
 //! 2. the relative MSE of the running mean after each frame against the frame count (the
 //!    learning curve, MCPG Fig. 5) and against the elapsed time;
-//! 3. a table of relMSE, FLIP and frame time per method and device, with the ratios the issue's
+//! 3. a table of relMSE and frame time per method and device, with the ratios the issue's
 //!    targets name;
 //! 4. the guide after the last frame at each pixel's first hit: the mean direction of the
 //!    chosen chain state, its concentration κ and the adaptive grid's level (MCPG Fig. 3
-//!    right).
+//!    right), for scene (a);
+//! 5. for scene (b), MCMM's targets and a map of the tiles where `mcmm` or `mcpg` has the
+//!    lower error.
+//!
+//! Each scene is a [`Study`]; [`build`] runs them in turn through the compute
+//! (`compute_runs`), figure (`image_figures`, `error_charts`), table (`results_table`) and
+//! target (`mcpg_targets`, `mcmm_targets`) steps.
 //!
 //! The reference is `nee` with many samples per pixel, cached under
 //! `<out>/reference/` with its settings in the file name.
 //!
 //! FLIP (LDR-FLIP of the tone-mapped images, [`crate::render::output::flip`]) stands beside
-//! relMSE in the table: relMSE weighs the few bright, noisy pixels near the light; FLIP what a
+//! relMSE in the tables: relMSE weighs the few bright, noisy pixels near a light; FLIP what a
 //! viewer sees across the image.
 
 use std::path::{Path, PathBuf};
@@ -32,6 +40,7 @@ use crate::Result;
 use crate::plot::{self, Axis, LineChart, PALETTE, Series, SeriesLabelPosition};
 use crate::render::cpu::Method;
 use crate::render::guided::MaterialScatter;
+use crate::render::mcmm::McmmScore;
 use crate::render::output::{Errors, RgbImage, srgb_encode};
 use crate::render::scene::{SceneFile, frame_time};
 use crate::render::{Device, RenderArgs, Rendered, render};
@@ -43,8 +52,16 @@ pub const SCENE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/hidden_ligh
 /// The devices the section renders on.
 pub const DEVICES: [Device; 1] = [Device::Cpu];
 
-/// The methods compared, in display order.
+/// The methods compared on scene (a), in display order.
 pub const METHODS: [Method; 3] = [Method::Bsdf, Method::Nee, Method::Mcpg];
+
+/// Scene (b): many small lights of different colours (direct light, MCMM's case).
+pub const MANY_LIGHTS_SCENE: &str =
+    concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/many_lights_room.gltf");
+
+/// The methods compared on scene (b), in display order.
+pub const MANY_LIGHTS_METHODS: [Method; 4] =
+    [Method::Bsdf, Method::Nee, Method::Mcpg, Method::Mcmm];
 
 /// The sizes of one run of the section.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -83,6 +100,16 @@ impl Settings {
         reference_spp: 64,
         reference_frames: 32,
     };
+    /// Scene (b) in the full report: 64 × 64, 4 spp × 64 frames, direct light (1 bounce);
+    /// the reference 128 spp × 16 frames (2 048 spp, 8× the samples of a measured render).
+    pub const MANY_LIGHTS: Self = Self {
+        size: 64,
+        spp: 4,
+        frames: 64,
+        bounces: 1,
+        reference_spp: 128,
+        reference_frames: 16,
+    };
     /// Fewer samples than `--quick` (the smoke test): 32 × 32, 4 frames of 2 spp.
     pub const SMOKE: Self = Self {
         size: 32,
@@ -119,14 +146,15 @@ pub fn render_on(device: Device, args: &RenderArgs) -> Result<Rendered> {
 
 /// The arguments of one render of the section.
 fn args(
-    s: &Settings,
+    study: &Study,
     method: Method,
     frames: u32,
     seed: u64,
     reference: Option<&Path>,
 ) -> RenderArgs {
+    let s = &study.settings;
     RenderArgs {
-        scene: PathBuf::from(SCENE),
+        scene: PathBuf::from(study.scene),
         method,
         device: Device::Cpu,
         width: s.size,
@@ -138,25 +166,33 @@ fn args(
         out: PathBuf::new(),
         reference: reference.map(Path::to_path_buf),
         no_progress: true,
+        no_irradiance_cache: !study.mcpg_cache,
+        mcmm_score: McmmScore::TileMixture,
     }
 }
 
 /// The cached reference of `s`, rendered when missing; returns its path.
-fn reference(ctx: &Context<'_>, s: &Settings, seed: u64) -> Result<PathBuf> {
+fn reference(ctx: &Context<'_>, study: &Study, seed: u64) -> Result<PathBuf> {
+    let s = &study.settings;
     let dir = ctx.out_dir().join("reference");
+    let stem = Path::new(study.scene)
+        .file_stem()
+        .and_then(|n| n.to_str())
+        .unwrap_or("scene");
     let path = dir.join(format!(
-        "hidden_light_room_{0}x{0}_b{1}_nee_{2}spp_seed{3:x}.exr",
+        "{4}_{0}x{0}_b{1}_nee_{2}spp_seed{3:x}.exr",
         s.size,
         s.bounces,
         s.reference_spp * s.reference_frames,
-        seed
+        seed,
+        stem
     ));
     if path.exists() {
         return Ok(path);
     }
     std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     let bar = ctx.progress(1, "guided rendering: reference");
-    let mut a = args(s, Method::Nee, s.reference_frames, seed, None);
+    let mut a = args(study, Method::Nee, s.reference_frames, seed, None);
     a.spp = s.reference_spp;
     let r = render_on(Device::Cpu, &a)?;
     r.image.write_exr(&path)?;
@@ -221,7 +257,7 @@ fn late_frame_error(r: &Rendered) -> f64 {
     late.iter().map(|e| e.rel_mse).sum::<f64>() / late.len() as f64
 }
 
-/// A FLIP value for the table (`–` without a reference).
+/// A FLIP value for a table (`–` without a reference).
 fn format_flip(flip: Option<f64>) -> String {
     flip.map_or_else(|| "–".to_owned(), |f| format!("{f:.4}"))
 }
@@ -365,320 +401,81 @@ fn format_ratio(x: f64) -> String {
     }
 }
 
-/// Builds the section.
-///
-/// # Errors
-/// When the scene cannot be loaded, a render fails or a file cannot be written.
-pub fn build(ctx: &Context<'_>) -> Result<Section> {
-    let s = Settings::for_samples(ctx.config.samples);
-    let seed = ctx.config.seed;
-    let reference_path = reference(ctx, &s, seed ^ 0x0005_eed0_f7ef)?;
-    let reference = RgbImage::read_exr(&reference_path)?;
-    let mut section = Section::new("guided-rendering", "Guided rendering");
-    let mut summary = serde_json::Map::new();
-    for device in DEVICES {
-        let bar = ctx.progress(5, "guided rendering");
-        let mut runs: Vec<Runs> = Vec::new();
-        for method in METHODS {
-            let r = render_on(
-                device,
-                &args(&s, method, s.frames, seed, Some(&reference_path)),
-            )?;
-            bar.inc(1);
-            runs.push(Runs {
-                method,
-                equal_samples: r,
-                equal_time: None,
-            });
-        }
-        // Equal time: the budget is the slowest method's total time.
-        let budget = runs
-            .iter()
-            .map(|r| frame_costs(&r.equal_samples).iter().sum::<f64>())
-            .fold(0.0, f64::max);
-        let slowest = runs
-            .iter()
-            .max_by(|a, b| {
-                seconds_per_frame(&a.equal_samples).total_cmp(&seconds_per_frame(&b.equal_samples))
-            })
-            .map(|r| r.method)
-            .expect("three methods");
-        for run in &mut runs {
-            if run.method == slowest {
-                continue;
-            }
-            let frames = ((budget / seconds_per_frame(&run.equal_samples)).round() as u32).max(1);
-            run.equal_time = Some(render_on(
-                device,
-                &args(&s, run.method, frames, seed ^ 0xe07e, Some(&reference_path)),
-            )?);
-            bar.inc(1);
-        }
-        bar.finish_and_clear();
-        let device_name = runs[0].equal_samples.report.device;
-        let clock = if runs.iter().all(|r| costs_are_cpu(&r.equal_samples)) {
-            "CPU seconds (all threads)"
-        } else {
-            "seconds (wall clock)"
-        };
-        let id = |name: &str| format!("guided-rendering-{device_name}-{name}.png");
+/// One scene of the section: what is rendered, with which methods and sizes.
+#[derive(Clone, Copy, Debug)]
+pub struct Study {
+    /// Short name, part of the figure and reference file names.
+    pub key: &'static str,
+    /// The heading's scene name.
+    pub title: &'static str,
+    /// The glTF file.
+    pub scene: &'static str,
+    /// The methods compared, in display order.
+    pub methods: &'static [Method],
+    /// Sizes.
+    pub settings: Settings,
+    /// Whether `mcpg` uses its irradiance cache.
+    pub mcpg_cache: bool,
+}
 
-        // Images.
-        let mut images: Vec<&RgbImage> = runs.iter().map(|r| &r.equal_samples.image).collect();
-        images.push(&reference);
-        image_strip(&ctx.figure_path(&id("equal-samples")), &images, 2)?;
-        let mut images: Vec<&RgbImage> = runs.iter().map(|r| &equal_time_image(r).image).collect();
-        images.push(&reference);
-        image_strip(&ctx.figure_path(&id("equal-time")), &images, 2)?;
-
-        // Error curves.
-        let colour = |m: Method| match m {
-            Method::Bsdf => PALETTE[0],
-            Method::Nee => PALETTE[2],
-            Method::Mcpg => PALETTE[1],
-            Method::McpgNee => PALETTE[3],
-        };
-        let all_errors = runs
-            .iter()
-            .flat_map(|r| {
-                std::iter::once(&r.equal_samples)
-                    .chain(&r.equal_time)
-                    .flat_map(|x| x.report.errors.iter().map(|e| e.rel_mse))
-            })
-            .filter(|e| *e > 0.0 && e.is_finite());
-        let (lo, hi) = all_errors.fold((f64::MAX, 0.0f64), |(lo, hi), e| (lo.min(e), hi.max(e)));
-        let y = Axis::log10(
-            "relative MSE of the running mean",
-            10f64.powf(lo.log10().floor())..10f64.powf(hi.log10().ceil()),
-        );
-        let per_frame = LineChart {
-            title: format!("Learning curve ({device_name}, {} spp per frame)", s.spp),
-            x: Axis::linear("frame", 1.0..f64::from(s.frames)),
-            y: y.clone(),
-            series: runs
-                .iter()
-                .map(|r| {
-                    Series::line(
-                        r.method.name(),
-                        colour(r.method),
-                        r.equal_samples
-                            .report
-                            .errors
-                            .iter()
-                            .enumerate()
-                            .map(|(i, e)| ((i + 1) as f64, e.rel_mse))
-                            .collect(),
-                    )
-                })
-                .collect(),
-            legend: SeriesLabelPosition::UpperRight,
-        };
-        plot::line_chart(&ctx.figure_path(&id("per-frame")), (720, 420), &per_frame)?;
-        let per_time = LineChart {
-            title: format!("Error against time ({device_name})"),
-            x: Axis::log10(clock, {
-                let first = runs
-                    .iter()
-                    .map(|r| frame_costs(&r.equal_samples)[0].max(1e-3))
-                    .fold(f64::MAX, f64::min);
-                10f64.powf(first.log10().floor())..10f64.powf(budget.log10().ceil())
-            }),
-            y,
-            series: runs
-                .iter()
-                .map(|r| {
-                    let longest = equal_time_image(r);
-                    Series::line(
-                        r.method.name(),
-                        colour(r.method),
-                        cumulative_seconds(longest)
-                            .into_iter()
-                            .zip(longest.report.errors.iter().map(|e| e.rel_mse))
-                            .collect(),
-                    )
-                })
-                .collect(),
-            legend: SeriesLabelPosition::UpperRight,
-        };
-        plot::line_chart(&ctx.figure_path(&id("per-time")), (720, 420), &per_time)?;
-
-        // Table and targets.
-        let mcpg = runs
-            .iter()
-            .find(|r| r.method == Method::Mcpg)
-            .expect("mcpg");
-        let mcpg_error = last_error(&mcpg.equal_samples).rel_mse;
-        let mcpg_late = late_frame_error(&mcpg.equal_samples);
-        let mut table = Table::new(
-            &format!(
-                "{device_name}, {0}×{0}, {1} bounces, {2} spp per frame; relMSE of the mean \
-                 against the reference; cost = {6}; equal time = the {3:.1} s that {4} took for {5} frames",
-                s.size,
-                s.bounces,
-                s.spp,
-                budget,
-                slowest.name(),
-                s.frames,
-                clock
-            ),
-            [
-                "method",
-                "device",
-                "ms per frame (wall)",
-                "cost per frame, ms",
-                "relMSE, equal samples",
-                "÷ mcpg",
-                "FLIP, equal samples",
-                "frames in equal time",
-                "relMSE, equal time",
-                "÷ mcpg",
-                "FLIP, equal time",
-                "relMSE of one late frame",
-                "÷ mcpg",
-                "of which end_frame, ms",
-            ],
-        );
-        let mut device_summary = serde_json::Map::new();
-        for r in &runs {
-            let es = last_error(&r.equal_samples).rel_mse;
-            let et_run = equal_time_image(r);
-            let et = last_error(et_run).rel_mse;
-            table.push_row([
-                r.method.name().to_owned(),
-                device_name.to_owned(),
-                format!("{:.1}", 1e3 * wall_seconds_per_frame(&r.equal_samples)),
-                format!("{:.1}", 1e3 * seconds_per_frame(&r.equal_samples)),
-                format!("{es:.4}"),
-                format_ratio(es / mcpg_error),
-                format_flip(r.equal_samples.report.flip),
-                et_run.report.frames.to_string(),
-                format!("{et:.4}"),
-                format_ratio(et / mcpg_error),
-                format_flip(et_run.report.flip),
-                format!("{:.4}", late_frame_error(&r.equal_samples)),
-                format_ratio(late_frame_error(&r.equal_samples) / mcpg_late),
-                format!("{:.1}", 1e3 * end_frame_seconds(&r.equal_samples)),
-            ]);
-            device_summary.insert(
-                r.method.name().to_owned(),
-                serde_json::json!({
-                    "cost_seconds_per_frame": seconds_per_frame(&r.equal_samples),
-                    "wall_seconds_per_frame": wall_seconds_per_frame(&r.equal_samples),
-                    "cost_clock": clock,
-                    "rel_mse_equal_samples": es,
-                    "rmse_equal_samples": last_error(&r.equal_samples).rmse,
-                    "flip_equal_samples": r.equal_samples.report.flip,
-                    "flip_equal_time": et_run.report.flip,
-                    "frames_equal_time": et_run.report.frames,
-                    "rel_mse_equal_time": et,
-                    "late_frame_rel_mse": late_frame_error(&r.equal_samples),
-                    "end_frame_seconds": end_frame_seconds(&r.equal_samples),
-                }),
-            );
-        }
-        let err = |m: Method, equal_time: bool| {
-            let r = runs.iter().find(|r| r.method == m).expect("method");
-            last_error(if equal_time {
-                equal_time_image(r)
-            } else {
-                &r.equal_samples
-            })
-            .rel_mse
-        };
-        let ratio_samples = mcpg_error / err(Method::Bsdf, false);
-        let (vs_bsdf, vs_nee) = (
-            mcpg_error / err(Method::Bsdf, true),
-            mcpg_error / err(Method::Nee, true),
-        );
-        device_summary.insert(
-            "targets".to_owned(),
-            serde_json::json!({
-                "mcpg_over_bsdf_equal_samples": ratio_samples,
-                "mcpg_over_bsdf_equal_time": vs_bsdf,
-                "mcpg_over_nee_equal_time": vs_nee,
-            }),
-        );
-        summary.insert(device_name.to_owned(), device_summary.into());
-
-        section.heading(&format!("Hidden light room on the {device_name}"));
-        section.figure(
-            &id("equal-samples"),
-            &format!(
-                "Equal samples ({} frames × {} spp): bsdf, nee, mcpg, and the reference ({} spp \
-                 of nee), left to right. sRGB, clipped at 1.",
-                s.frames,
-                s.spp,
-                s.reference_spp * s.reference_frames
-            ),
-        );
-        section.figure(
-            &id("equal-time"),
-            &format!(
-                "Equal time ({budget:.1} {clock} each): bsdf, nee, mcpg, and the reference, left \
-                 to right."
-            ),
-        );
-        section.figure(
-            &id("per-frame"),
-            "Relative MSE of the running mean after each frame (the learning curve of MCPG \
-             Fig. 5). mcpg starts as plain BSDF sampling — the guide is empty — and pulls away \
-             as its chains find the light.",
-        );
-        section.figure(
-            &id("per-time"),
-            &format!("The same errors against the tracing cost ({clock}), equal-time runs."),
-        );
-        section.table(table);
-        let time_of = |m: Method| {
-            seconds_per_frame(
-                &runs
-                    .iter()
-                    .find(|r| r.method == m)
-                    .expect("method")
-                    .equal_samples,
-            )
-        };
-        let late_of = |m: Method| {
-            late_frame_error(
-                &runs
-                    .iter()
-                    .find(|r| r.method == m)
-                    .expect("method")
-                    .equal_samples,
-            )
-        };
-        section.paragraph(&format!(
-            "Targets (issue: mcpg relMSE ≤ ¼ of bsdf at equal samples, below both at equal \
-             time): mcpg ÷ bsdf at equal samples = {ratio_samples:.3}; at equal time mcpg ÷ \
-             bsdf = {vs_bsdf:.3}, mcpg ÷ nee = {vs_nee:.3}. Where the time goes: an mcpg frame \
-             costs {:.1}× a bsdf frame and {:.1}× a nee frame ({:.1} ms of it the guide's \
-             end_frame). Once learned, one late mcpg frame has {:.3}× the relMSE of a bsdf frame \
-             and {:.3}× that of a nee frame. The late-frame ratios against the accumulated ones \
-             separate the learned guide from its warm-up (the first frames, sampled while the \
-             guide is still empty or thin, weigh on the mean); the cost ratio is what equal time \
-             charges for the guide.",
-            time_of(Method::Mcpg) / time_of(Method::Bsdf),
-            time_of(Method::Mcpg) / time_of(Method::Nee),
-            1e3 * end_frame_seconds(&mcpg.equal_samples),
-            late_of(Method::Mcpg) / late_of(Method::Bsdf),
-            late_of(Method::Mcpg) / late_of(Method::Nee),
-        ));
-        if let Some(guide) = &mcpg.equal_samples.guide {
-            let picture = guide_picture(guide, &s)?;
-            let (k_lo, k_hi, l_lo, l_hi) =
-                write_guide_picture(&ctx.figure_path(&id("guide")), &picture, s.size)?;
-            section.figure(
-                &id("guide"),
-                &format!(
-                    "The guide after the last frame, at each pixel's first hit (MCPG Fig. 3 \
-                     right): the chosen chain state's mean direction (RGB = ½ + ½·xyz), its \
-                     concentration κ (log scale, {k_lo:.2} dark to {k_hi:.0} yellow) and the \
-                     adaptive grid's level ({l_lo} dark to {l_hi} yellow). Dark grey: no state \
-                     stored there."
-                ),
-            );
+impl Study {
+    /// Scene (a), the hidden-light room (global illumination, MCPG's case), for `samples`.
+    #[must_use]
+    pub fn hidden_light(samples: usize) -> Self {
+        Self {
+            key: "hidden-light",
+            title: "Hidden light room",
+            scene: SCENE,
+            methods: &METHODS,
+            settings: Settings::for_samples(samples),
+            mcpg_cache: true,
         }
     }
+
+    /// Scene (b), the many-lights room, direct light only (MCMM's case), for `samples`: `mcpg`
+    /// without its irradiance cache (as MCPG Fig. 8 compares direct light), small images.
+    #[must_use]
+    pub fn many_lights(samples: usize) -> Self {
+        let full = Settings::for_samples(samples) == Settings::FULL;
+        let quick = Settings::for_samples(samples) == Settings::QUICK;
+        let settings = if full {
+            Settings::MANY_LIGHTS
+        } else if quick {
+            Settings {
+                size: 48,
+                frames: 32,
+                ..Settings::MANY_LIGHTS
+            }
+        } else {
+            Settings {
+                size: 32,
+                frames: 4,
+                reference_spp: 16,
+                reference_frames: 4,
+                ..Settings::MANY_LIGHTS
+            }
+        };
+        Self {
+            key: "many-lights",
+            title: "Many-lights room",
+            scene: MANY_LIGHTS_SCENE,
+            methods: &MANY_LIGHTS_METHODS,
+            settings,
+            mcpg_cache: false,
+        }
+    }
+}
+
+/// Builds the section: scene (a) with [`METHODS`], then scene (b) with
+/// [`MANY_LIGHTS_METHODS`].
+///
+/// # Errors
+/// When a scene cannot be loaded, a render fails or a file cannot be written.
+pub fn build(ctx: &Context<'_>) -> Result<Section> {
+    let mut section = Section::new("guided-rendering", "Guided rendering");
+    let mut summary = serde_json::Map::new();
+    let hidden = Study::hidden_light(ctx.config.samples);
+    let reference_path = study_section(ctx, &hidden, &mut section, &mut summary)?;
     section.paragraph(&format!(
         "The scene (demo/scenes/hidden_light_room.gltf): a closed room whose only light, 1.2 m \
          square, lies in a 2.2 m tray hung under the ceiling and shines up at it; the tray's rim \
@@ -686,18 +483,556 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
          after it bounced off the ceiling above the tray. A light sample (nee) from the floor or \
          the walls is occluded; what reaches the camera has scattered at least twice. \
          Paths of {} scattering events, no Russian roulette, no light information for mcpg. \
-         FLIP is not computed: the nv-flip crate builds NVIDIA's C++ code, and the report \
-         installs nothing. The reference is cached in {}.",
-        s.bounces,
+         FLIP is NVIDIA's LDR-FLIP of the sRGB images (the PNGs) at 67 pixels per degree. \
+         The reference is cached in {}.",
+        hidden.settings.bounces,
         reference_path
             .strip_prefix(ctx.out_dir())
             .unwrap_or(&reference_path)
             .display()
     ));
+    let many = Study::many_lights(ctx.config.samples);
+    let mut many_summary = serde_json::Map::new();
+    study_section(ctx, &many, &mut section, &mut many_summary)?;
+    section.paragraph(&format!(
+        "The scene (demo/scenes/many_lights_room.gltf): a room lit by 24 small lights of \
+         different colours on the ceiling and the walls, with a glossy metal block; direct \
+         light only ({} scattering event): the case MCMM was made for. mcmm (MCMM, Dittebrandt \
+         et al. 2023) keeps one chain per pixel on the screen, discovers lights from its \
+         neighbours (Alg. 1), shuffles the 32 chains of each 8 × 4 tile by a random xor mask \
+         and weights each sample by the tile's mixture density (spatial SMIS, eq. 9); its \
+         chains are scored by that mixture density (an extension of the paper, see \
+         mcg_markov_guide::mcmm::ScoreDensity), its defensive technique is the material's \
+         sampling with p_h = 0.2. mcpg runs without its irradiance cache, as MCPG Fig. 8 \
+         compares on direct light. Neither guide knows where the lights are; nee does.",
+        many.settings.bounces
+    ));
+    summary.insert("many_lights_room".to_owned(), many_summary.into());
     std::fs::write(
         ctx.figure_path("guided-rendering.json"),
         serde_json::to_string_pretty(&serde_json::Value::Object(summary))? + "\n",
     )
     .map_err(|e| format!("cannot write guided-rendering.json: {e}"))?;
     Ok(section)
+}
+
+/// Renders `study` on every device of [`DEVICES`] and adds its headings, figures, table and
+/// targets to `section` and its numbers to `summary` (per device); returns the reference's
+/// path.
+fn study_section(
+    ctx: &Context<'_>,
+    study: &Study,
+    section: &mut Section,
+    summary: &mut serde_json::Map<String, serde_json::Value>,
+) -> Result<PathBuf> {
+    let seed = ctx.config.seed;
+    let reference_path = reference(ctx, study, seed ^ 0x0005_eed0_f7ef)?;
+    let reference = RgbImage::read_exr(&reference_path)?;
+    for device in DEVICES {
+        let (runs, budget, slowest) = compute_runs(ctx, study, device, &reference_path)?;
+        let device_name = runs[0].equal_samples.report.device;
+        let clock = if runs.iter().all(|r| costs_are_cpu(&r.equal_samples)) {
+            "CPU seconds (all threads)"
+        } else {
+            "seconds (wall clock)"
+        };
+        let id = |name: &str| format!("guided-rendering-{}-{device_name}-{name}.png", study.key);
+        section.heading(&format!("{} on the {device_name}", study.title));
+        image_figures(ctx, section, study, &runs, &reference, budget, clock, &id)?;
+        error_charts(ctx, section, study, &runs, budget, clock, &id)?;
+        let (table, mut device_summary) = results_table(study, &runs, budget, slowest, clock);
+        section.table(table);
+        let targets = if study.methods.contains(&Method::Mcmm) {
+            mcmm_targets(ctx, section, study, &runs, &reference, &id)?
+        } else {
+            mcpg_targets(section, &runs)
+        };
+        device_summary.insert("targets".to_owned(), targets);
+        summary.insert(device_name.to_owned(), device_summary.into());
+        let mcpg = find(&runs, Method::Mcpg);
+        if let Some(guide) = mcpg
+            .equal_samples
+            .guide
+            .as_ref()
+            .filter(|_| study.mcpg_cache)
+        {
+            guide_figure(ctx, section, guide, &study.settings, &id)?;
+        }
+    }
+    Ok(reference_path)
+}
+
+/// The run of `method`.
+fn find(runs: &[Runs], method: Method) -> &Runs {
+    runs.iter().find(|r| r.method == method).expect("method")
+}
+
+/// The equal-samples renders of every method, then the equal-time renders (as many frames as
+/// fit in the slowest method's total cost); the runs, that budget and the slowest method.
+fn compute_runs(
+    ctx: &Context<'_>,
+    study: &Study,
+    device: Device,
+    reference_path: &Path,
+) -> Result<(Vec<Runs>, f64, Method)> {
+    let s = &study.settings;
+    let seed = ctx.config.seed;
+    let bar = ctx.progress(
+        2 * study.methods.len() as u64 - 1,
+        &format!("guided rendering: {}", study.key),
+    );
+    let mut runs: Vec<Runs> = Vec::new();
+    for &method in study.methods {
+        let r = render_on(
+            device,
+            &args(study, method, s.frames, seed, Some(reference_path)),
+        )?;
+        bar.inc(1);
+        runs.push(Runs {
+            method,
+            equal_samples: r,
+            equal_time: None,
+        });
+    }
+    let budget = runs
+        .iter()
+        .map(|r| frame_costs(&r.equal_samples).iter().sum::<f64>())
+        .fold(0.0, f64::max);
+    let slowest = runs
+        .iter()
+        .max_by(|a, b| {
+            seconds_per_frame(&a.equal_samples).total_cmp(&seconds_per_frame(&b.equal_samples))
+        })
+        .map(|r| r.method)
+        .expect("methods");
+    for run in &mut runs {
+        if run.method == slowest {
+            continue;
+        }
+        let frames = ((budget / seconds_per_frame(&run.equal_samples)).round() as u32).max(1);
+        run.equal_time = Some(render_on(
+            device,
+            &args(
+                study,
+                run.method,
+                frames,
+                seed ^ 0xe07e,
+                Some(reference_path),
+            ),
+        )?);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    Ok((runs, budget, slowest))
+}
+
+/// The methods' names joined for captions ("bsdf, nee, mcpg").
+fn method_list(study: &Study) -> String {
+    study
+        .methods
+        .iter()
+        .map(|m| m.name())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The equal-samples and equal-time image strips.
+#[allow(clippy::too_many_arguments)]
+fn image_figures(
+    ctx: &Context<'_>,
+    section: &mut Section,
+    study: &Study,
+    runs: &[Runs],
+    reference: &RgbImage,
+    budget: f64,
+    clock: &str,
+    id: &dyn Fn(&str) -> String,
+) -> Result<()> {
+    let s = &study.settings;
+    let zoom = (256 / s.size).max(1);
+    let mut images: Vec<&RgbImage> = runs.iter().map(|r| &r.equal_samples.image).collect();
+    images.push(reference);
+    image_strip(&ctx.figure_path(&id("equal-samples")), &images, zoom)?;
+    let mut images: Vec<&RgbImage> = runs.iter().map(|r| &equal_time_image(r).image).collect();
+    images.push(reference);
+    image_strip(&ctx.figure_path(&id("equal-time")), &images, zoom)?;
+    let methods = method_list(study);
+    section.figure(
+        &id("equal-samples"),
+        &format!(
+            "Equal samples ({} frames × {} spp): {methods}, and the reference ({} spp of nee), \
+             left to right. sRGB, clipped at 1.",
+            s.frames,
+            s.spp,
+            s.reference_spp * s.reference_frames
+        ),
+    );
+    section.figure(
+        &id("equal-time"),
+        &format!(
+            "Equal time ({budget:.1} {clock} each): {methods}, and the reference, left to right."
+        ),
+    );
+    Ok(())
+}
+
+/// The colour of a method in the charts.
+fn colour(m: Method) -> plot::RGBColor {
+    match m {
+        Method::Bsdf => PALETTE[0],
+        Method::Nee => PALETTE[2],
+        Method::Mcpg => PALETTE[1],
+        Method::Mcmm => PALETTE[3],
+        Method::McpgNee => PALETTE[4],
+    }
+}
+
+/// The log axis of relMSE spanning every error of `runs` (whole decades).
+fn error_axis(runs: &[Runs]) -> Axis {
+    let all_errors = runs
+        .iter()
+        .flat_map(|r| {
+            std::iter::once(&r.equal_samples)
+                .chain(&r.equal_time)
+                .flat_map(|x| x.report.errors.iter().map(|e| e.rel_mse))
+        })
+        .filter(|e| *e > 0.0 && e.is_finite());
+    let (lo, hi) = all_errors.fold((f64::MAX, 0.0f64), |(lo, hi), e| (lo.min(e), hi.max(e)));
+    Axis::log10(
+        "relative MSE of the running mean",
+        10f64.powf(lo.log10().floor())..10f64.powf(hi.log10().ceil()),
+    )
+}
+
+/// The learning curve (error against frame) and the error against time.
+fn error_charts(
+    ctx: &Context<'_>,
+    section: &mut Section,
+    study: &Study,
+    runs: &[Runs],
+    budget: f64,
+    clock: &str,
+    id: &dyn Fn(&str) -> String,
+) -> Result<()> {
+    let s = &study.settings;
+    let device_name = runs[0].equal_samples.report.device;
+    let y = error_axis(runs);
+    let curve = |r: &Rendered, x: Vec<f64>| -> Vec<(f64, f64)> {
+        x.into_iter()
+            .zip(r.report.errors.iter().map(|e| e.rel_mse))
+            .collect()
+    };
+    let per_frame = LineChart {
+        title: format!("Learning curve ({device_name}, {} spp per frame)", s.spp),
+        x: Axis::linear("frame", 1.0..f64::from(s.frames)),
+        y: y.clone(),
+        series: runs
+            .iter()
+            .map(|r| {
+                let frames = (1..=r.equal_samples.report.errors.len())
+                    .map(|i| i as f64)
+                    .collect();
+                Series::line(
+                    r.method.name(),
+                    colour(r.method),
+                    curve(&r.equal_samples, frames),
+                )
+            })
+            .collect(),
+        legend: SeriesLabelPosition::UpperRight,
+    };
+    plot::line_chart(&ctx.figure_path(&id("per-frame")), (720, 420), &per_frame)?;
+    let first = runs
+        .iter()
+        .map(|r| frame_costs(&r.equal_samples)[0].max(1e-3))
+        .fold(f64::MAX, f64::min);
+    let per_time = LineChart {
+        title: format!("Error against time ({device_name})"),
+        x: Axis::log10(
+            clock,
+            10f64.powf(first.log10().floor())..10f64.powf(budget.log10().ceil()),
+        ),
+        y,
+        series: runs
+            .iter()
+            .map(|r| {
+                let longest = equal_time_image(r);
+                Series::line(
+                    r.method.name(),
+                    colour(r.method),
+                    curve(longest, cumulative_seconds(longest)),
+                )
+            })
+            .collect(),
+        legend: SeriesLabelPosition::UpperRight,
+    };
+    plot::line_chart(&ctx.figure_path(&id("per-time")), (720, 420), &per_time)?;
+    section.figure(
+        &id("per-frame"),
+        "Relative MSE of the running mean after each frame (the learning curve of MCPG \
+         Fig. 5). The guides start as plain BSDF sampling — they are empty — and pull away as \
+         their chains find the light.",
+    );
+    section.figure(
+        &id("per-time"),
+        &format!("The same errors against the tracing cost ({clock}), equal-time runs."),
+    );
+    Ok(())
+}
+
+/// The table of relMSE and cost per method (ratios against the study's guide: `mcmm` where
+/// it runs, else `mcpg`), and the same numbers for the JSON summary.
+fn results_table(
+    study: &Study,
+    runs: &[Runs],
+    budget: f64,
+    slowest: Method,
+    clock: &str,
+) -> (Table, serde_json::Map<String, serde_json::Value>) {
+    let s = &study.settings;
+    let device_name = runs[0].equal_samples.report.device;
+    let guide = if study.methods.contains(&Method::Mcmm) {
+        Method::Mcmm
+    } else {
+        Method::Mcpg
+    };
+    let g = find(runs, guide);
+    let (g_error, g_late) = (
+        last_error(&g.equal_samples).rel_mse,
+        late_frame_error(&g.equal_samples),
+    );
+    let per = format!("÷ {}", guide.name());
+    let mut table = Table::new(
+        &format!(
+            "{device_name}, {0}×{0}, {1} bounces, {2} spp per frame; relMSE of the mean \
+             against the reference; cost = {6}; equal time = the {3:.1} s that {4} took for {5} frames",
+            s.size,
+            s.bounces,
+            s.spp,
+            budget,
+            slowest.name(),
+            s.frames,
+            clock
+        ),
+        [
+            "method",
+            "device",
+            "ms per frame (wall)",
+            "cost per frame, ms",
+            "relMSE, equal samples",
+            &per,
+            "FLIP, equal samples",
+            "frames in equal time",
+            "relMSE, equal time",
+            &per,
+            "FLIP, equal time",
+            "relMSE of one late frame",
+            &per,
+            "of which end_frame, ms",
+        ],
+    );
+    let mut summary = serde_json::Map::new();
+    for r in runs {
+        let es = last_error(&r.equal_samples).rel_mse;
+        let et_run = equal_time_image(r);
+        let et = last_error(et_run).rel_mse;
+        let late = late_frame_error(&r.equal_samples);
+        table.push_row([
+            r.method.name().to_owned(),
+            device_name.to_owned(),
+            format!("{:.1}", 1e3 * wall_seconds_per_frame(&r.equal_samples)),
+            format!("{:.1}", 1e3 * seconds_per_frame(&r.equal_samples)),
+            format!("{es:.4}"),
+            format_ratio(es / g_error),
+            format_flip(r.equal_samples.report.flip),
+            et_run.report.frames.to_string(),
+            format!("{et:.4}"),
+            format_ratio(et / g_error),
+            format_flip(et_run.report.flip),
+            format!("{late:.4}"),
+            format_ratio(late / g_late),
+            format!("{:.1}", 1e3 * end_frame_seconds(&r.equal_samples)),
+        ]);
+        summary.insert(
+            r.method.name().to_owned(),
+            serde_json::json!({
+                "cost_seconds_per_frame": seconds_per_frame(&r.equal_samples),
+                "wall_seconds_per_frame": wall_seconds_per_frame(&r.equal_samples),
+                "cost_clock": clock,
+                "rel_mse_equal_samples": es,
+                "rmse_equal_samples": last_error(&r.equal_samples).rmse,
+                "flip_equal_samples": r.equal_samples.report.flip,
+                "flip_equal_time": et_run.report.flip,
+                "frames_equal_time": et_run.report.frames,
+                "rel_mse_equal_time": et,
+                "late_frame_rel_mse": late,
+                "end_frame_seconds": end_frame_seconds(&r.equal_samples),
+            }),
+        );
+    }
+    (table, summary)
+}
+
+/// The relMSE of `m`'s mean, at equal samples or at equal time.
+fn error_of(runs: &[Runs], m: Method, equal_time: bool) -> f64 {
+    let r = find(runs, m);
+    last_error(if equal_time {
+        equal_time_image(r)
+    } else {
+        &r.equal_samples
+    })
+    .rel_mse
+}
+
+/// The paragraph of MCPG's targets (scene (a)); their numbers.
+fn mcpg_targets(section: &mut Section, runs: &[Runs]) -> serde_json::Value {
+    let ratio_samples = error_of(runs, Method::Mcpg, false) / error_of(runs, Method::Bsdf, false);
+    let mcpg_et = error_of(runs, Method::Mcpg, true);
+    let (vs_bsdf, vs_nee) = (
+        mcpg_et / error_of(runs, Method::Bsdf, true),
+        mcpg_et / error_of(runs, Method::Nee, true),
+    );
+    let time_of = |m: Method| seconds_per_frame(&find(runs, m).equal_samples);
+    let late_of = |m: Method| late_frame_error(&find(runs, m).equal_samples);
+    section.paragraph(&format!(
+        "Targets (issue: mcpg relMSE ≤ ¼ of bsdf at equal samples, below both at equal \
+         time): mcpg ÷ bsdf at equal samples = {ratio_samples:.3}; at equal time mcpg ÷ \
+         bsdf = {vs_bsdf:.3}, mcpg ÷ nee = {vs_nee:.3}. Where the time goes: an mcpg frame \
+         costs {:.1}× a bsdf frame and {:.1}× a nee frame ({:.1} ms of it the guide's \
+         end_frame). Once learned, one late mcpg frame has {:.3}× the relMSE of a bsdf frame \
+         and {:.3}× that of a nee frame. The late-frame ratios against the accumulated ones \
+         separate the learned guide from its warm-up (the first frames, sampled while the \
+         guide is still empty or thin, weigh on the mean); the cost ratio is what equal time \
+         charges for the guide.",
+        time_of(Method::Mcpg) / time_of(Method::Bsdf),
+        time_of(Method::Mcpg) / time_of(Method::Nee),
+        1e3 * end_frame_seconds(&find(runs, Method::Mcpg).equal_samples),
+        late_of(Method::Mcpg) / late_of(Method::Bsdf),
+        late_of(Method::Mcpg) / late_of(Method::Nee),
+    ));
+    serde_json::json!({
+        "mcpg_over_bsdf_equal_samples": ratio_samples,
+        "mcpg_over_bsdf_equal_time": vs_bsdf,
+        "mcpg_over_nee_equal_time": vs_nee,
+    })
+}
+
+/// Side of the tiles of the MCMM-against-MCPG map, in pixels.
+const WIN_TILE: u32 = 8;
+
+/// The paragraph of MCMM's targets (scene (b)), with a map of the tiles where `mcmm` or
+/// `mcpg` has the lower relMSE at equal samples; their numbers.
+fn mcmm_targets(
+    ctx: &Context<'_>,
+    section: &mut Section,
+    study: &Study,
+    runs: &[Runs],
+    reference: &RgbImage,
+    id: &dyn Fn(&str) -> String,
+) -> Result<serde_json::Value> {
+    let mcmm = error_of(runs, Method::Mcmm, false);
+    let over_bsdf = mcmm / error_of(runs, Method::Bsdf, false);
+    let over_mcpg = mcmm / error_of(runs, Method::Mcpg, false);
+    let over_mcpg_time = error_of(runs, Method::Mcmm, true) / error_of(runs, Method::Mcpg, true);
+    let time_of = |m: Method| seconds_per_frame(&find(runs, m).equal_samples);
+    let late_of = |m: Method| late_frame_error(&find(runs, m).equal_samples);
+    let a = &find(runs, Method::Mcmm).equal_samples.image;
+    let b = &find(runs, Method::Mcpg).equal_samples.image;
+    let (map, mcmm_wins, tiles) = win_map(a, b, reference, study.settings.size);
+    image_strip(
+        &ctx.figure_path(&id("wins")),
+        &[&map],
+        256 / study.settings.size,
+    )?;
+    section.paragraph(&format!(
+        "Targets (issue: mcmm relMSE ≤ ¼ of bsdf at equal samples after {} frames): mcmm ÷ \
+         bsdf = {over_bsdf:.3}; mcmm ÷ mcpg = {over_mcpg:.3} at equal samples and \
+         {over_mcpg_time:.3} at equal time. Cost: an mcmm frame costs {:.2}× a bsdf frame and \
+         {:.2}× an mcpg frame here (CPU tracers; the GPU ratio is measured with mcg-demo \
+         render). One late frame: mcmm ÷ bsdf = {:.3}, mcmm ÷ mcpg = {:.3}.",
+        study.settings.frames,
+        time_of(Method::Mcmm) / time_of(Method::Bsdf),
+        time_of(Method::Mcmm) / time_of(Method::Mcpg),
+        late_of(Method::Mcmm) / late_of(Method::Bsdf),
+        late_of(Method::Mcmm) / late_of(Method::Mcpg),
+    ));
+    section.figure(
+        &id("wins"),
+        &format!(
+            "Where each guide wins, at equal samples: {WIN_TILE}×{WIN_TILE}-pixel tiles \
+             coloured by the method with the lower relMSE against the reference (mcmm blue, \
+             mcpg orange, brighter = larger margin, log₂ of the ratio up to 8×). mcmm wins \
+             {mcmm_wins} of {tiles} tiles."
+        ),
+    );
+    Ok(serde_json::json!({
+        "mcmm_over_bsdf_equal_samples": over_bsdf,
+        "mcmm_over_mcpg_equal_samples": over_mcpg,
+        "mcmm_over_mcpg_equal_time": over_mcpg_time,
+        "mcmm_over_bsdf_cost": time_of(Method::Mcmm) / time_of(Method::Bsdf),
+        "mcmm_tiles_won_against_mcpg": mcmm_wins,
+        "tiles": tiles,
+    }))
+}
+
+/// Per tile of [`WIN_TILE`] pixels, which of `a` (blue) and `b` (orange) has the lower
+/// relMSE against `reference`; the map, the tiles `a` wins and the tile count.
+fn win_map(a: &RgbImage, b: &RgbImage, reference: &RgbImage, size: u32) -> (RgbImage, u32, u32) {
+    let per_side = size.div_ceil(WIN_TILE);
+    let mut err = vec![(0.0f64, 0.0f64); (per_side * per_side) as usize];
+    for (i, r) in reference.pixels.iter().enumerate() {
+        let (x, y) = (i as u32 % size, i as u32 / size);
+        let t = ((y / WIN_TILE) * per_side + x / WIN_TILE) as usize;
+        let d = |p: Vec3| {
+            let q = (p - *r) * (p - *r) / (*r * *r + Vec3::splat(1e-2));
+            f64::from(q.x + q.y + q.z)
+        };
+        err[t].0 += d(a.pixels[i]);
+        err[t].1 += d(b.pixels[i]);
+    }
+    let wins = err.iter().filter(|(ea, eb)| ea < eb).count() as u32;
+    let pixels = (0..size * size)
+        .map(|i| {
+            let (x, y) = (i % size, i / size);
+            let (ea, eb) = err[((y / WIN_TILE) * per_side + x / WIN_TILE) as usize];
+            let margin = ((eb.max(1e-12) / ea.max(1e-12)).log2().abs() / 3.0).min(1.0) as f32;
+            let level = 0.25 + 0.75 * margin;
+            let c = if ea < eb {
+                Vec3::new(0.1, 0.35, 1.0)
+            } else {
+                Vec3::new(1.0, 0.5, 0.05)
+            };
+            (c * level).powf(2.2)
+        })
+        .collect();
+    let map = RgbImage {
+        width: size,
+        height: size,
+        pixels,
+    };
+    (map, wins, per_side * per_side)
+}
+
+/// The picture of the MCPG guide after the last frame (scene (a)).
+fn guide_figure(
+    ctx: &Context<'_>,
+    section: &mut Section,
+    guide: &Guide,
+    s: &Settings,
+    id: &dyn Fn(&str) -> String,
+) -> Result<()> {
+    let picture = guide_picture(guide, s)?;
+    let (k_lo, k_hi, l_lo, l_hi) =
+        write_guide_picture(&ctx.figure_path(&id("guide")), &picture, s.size)?;
+    section.figure(
+        &id("guide"),
+        &format!(
+            "The guide after the last frame, at each pixel's first hit (MCPG Fig. 3 \
+             right): the chosen chain state's mean direction (RGB = ½ + ½·xyz), its \
+             concentration κ (log scale, {k_lo:.2} dark to {k_hi:.0} yellow) and the \
+             adaptive grid's level ({l_lo} dark to {l_hi} yellow). Dark grey: no state \
+             stored there."
+        ),
+    );
+    Ok(())
 }

@@ -14,9 +14,23 @@
 // below), with the material as its fallback technique, and no light sampling. 4 = `mcpg-nee`,
 // the same guide plus `nee`'s light sample, weighted against the guide's exact mixture density
 // (mcg's extension). Without MCG_DEMO_MCPG the `render` entry point uses no binding of group 1.
+// 3 = `mcmm`, composed with the shader def MCG_DEMO_MCMM (and `GpuMcmmGuide::shader_defs(1)`):
+// the entry point `render_mcmm` (direct light only), the twin of `mcmm::McmmRenderer`, with the
+// chain states of `mcg::mcmm` bound at group 1 (`mcg::mcpg` then goes to the unused group 2).
 
-#import mcg::constants::{MCG_F32_MAX, MCG_FRAC_1_PI, MCG_PI, MCPG_MAX_CANDIDATES, MCPG_NO_LOBE,
-    MCPG_SCATTER_CUSTOM}
+#import mcg::constants::{MCG_F32_MAX, MCG_FRAC_1_PI, MCG_PI, MCMM_PRIOR_LIGHT_SIZE, MCMM_SCORE_TECHNIQUE,
+    MCPG_MAX_CANDIDATES, MCPG_NO_LOBE, MCPG_SCATTER_CUSTOM}
+#import mcg::markov::{MarkovPixelState, markov_pixel_state_is_valid}
+#import mcg::math::mcg_is_finite
+#import mcg::mcmm::{
+    mcg_mcmm_params, mcmm_choose_technique, mcmm_collaborative_discovery, mcmm_empty_state,
+    mcmm_load_previous, mcmm_ratio, mcmm_select_uniform, mcmm_store_current, mcmm_technique_pdf,
+    mcmm_tile, mcmm_tile_exchange, mcmm_tile_publish, mcmm_update, mcmm_xor_source_lane
+}
+#import mcg::vmf::{
+    Vmf, VmfMapPrior, vmf_kappa_from_one_minus_mean_cosine, vmf_normalization,
+    vmf_posterior_one_minus_mean_cosine, vmf_sample, vmf_try_normalize
+}
 #import mcg::mcpg::{
     McpgBeginUniforms, McpgFinishUniforms, McpgGuidedVertex, McpgSample, McpgVertex, mcpg_begin,
     mcpg_choose, mcpg_finish, mcpg_observation_escaped, mcpg_observation_hit, mcpg_params,
@@ -378,6 +392,21 @@ fn vertex_pdf(v: Vertex, wi: vec3<f32>) -> f32 {
     return material_pdf(v.material, v.normal, v.wo, wi);
 }
 
+// `guided::MaterialScatter::sample`: `material_sample` with the lobe choice and the first
+// direction uniform taken from u.x (the part below `metallic` picks GGX and is stretched back to
+// [0, 1)); a direction the material cannot scatter into becomes −n (weight 0, ends the path).
+fn material_scatter_sample(m: Material, n: vec3<f32>, wo: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
+    var lobe = 1.0;
+    var x = (u.x - m.metallic) / (1.0 - m.metallic);
+    if u.x < m.metallic {
+        lobe = 0.0;
+        x = u.x / m.metallic;
+    }
+    x = clamp(x, 0.0, 1.0 - 1.1920929e-7); // 1 − f32::EPSILON
+    let s = material_sample(m, n, wo, vec3<f32>(lobe, x, u.y));
+    return select(-n, s.direction, s.valid);
+}
+
 #ifdef MCG_DEMO_MCPG
 // MCPG (Alber et al. 2025) at a vertex, the twin of `guided::McpgSampler`: `mcpg_begin` (Alg. 1)
 // with four uniforms per candidate from the guide's own stream `grng`, then Alg. 2 with the
@@ -395,21 +424,6 @@ fn guided_begin(v: Vertex, grng: ptr<function, u32>) -> McpgGuidedVertex {
         u.candidates[k] = vec4<f32>(grid, level, corner, reservoir);
     }
     return mcpg_begin(McpgVertex(v.position, MCPG_SCATTER_CUSTOM, v.normal, 1u, v.normal), u);
-}
-
-// `guided::MaterialScatter::sample`: `material_sample` with the lobe choice and the first
-// direction uniform taken from u.x (the part below `metallic` picks GGX and is stretched back to
-// [0, 1)); a direction the material cannot scatter into becomes −n (weight 0, ends the path).
-fn material_scatter_sample(m: Material, n: vec3<f32>, wo: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
-    var lobe = 1.0;
-    var x = (u.x - m.metallic) / (1.0 - m.metallic);
-    if u.x < m.metallic {
-        lobe = 0.0;
-        x = u.x / m.metallic;
-    }
-    x = clamp(x, 0.0, 1.0 - 1.1920929e-7); // 1 − f32::EPSILON
-    let s = material_sample(m, n, wo, vec3<f32>(lobe, x, u.y));
-    return select(-n, s.direction, s.valid);
 }
 
 // Alg. 2 at the begun vertex `g` from the path's three uniforms (ξ against p_bsdf, then the
@@ -684,3 +698,205 @@ fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>) {
     let r = rays[id.x];
     ray_hits[id.x] = bvh_walk(r.origin, r.direction, 0.0, r.t_max, r.any_hit != 0u);
 }
+
+#ifdef MCG_DEMO_MCMM
+// ---------------------------------------------------------------------------------------------
+// MCMM (Dittebrandt et al. 2023) for direct light, the twin of `mcmm::McmmRenderer`: one
+// workgroup of 8 × 4 invocations is one tile of 32 chains (MCMM sec. 4.2), shuffled through
+// the workgroup memory of `mcg::mcmm` (the portable path; lavapipe's subgroup broadcast is
+// unreliable, so the subgroup path is not used).
+
+// `mcmm::TILE_WIDTH`, `TILE_HEIGHT` and their product.
+const MCMM_TILE_WIDTH: u32 = 8u;
+const MCMM_TILE_HEIGHT: u32 = 4u;
+const MCMM_LANES: u32 = 32u;
+// `mcmm::TILE_SALT`: the per-tile stream of the xor masks.
+const MCMM_TILE_SALT: u32 = 0x7f4a7c15u;
+
+// `scene::luminance`: Rec. 709 luminance of linear RGB.
+fn luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
+}
+
+// `mcmm::ratio`: value/density, zero where the density is not positive or the quotient not
+// finite.
+fn ratio3(value: vec3<f32>, density: f32) -> vec3<f32> {
+    let r = value / density;
+    if density > 0.0 && mcg_is_finite(r.x) && mcg_is_finite(r.y) && mcg_is_finite(r.z) {
+        return r;
+    }
+    return vec3<f32>(0.0);
+}
+
+// `mcmm::emitter_along`: the point the ray (origin, w) hits (xyz of `point`) and the radiance
+// its front face emits back; origin + w and zero when it leaves the scene.
+struct EmitterHit {
+    point: vec3<f32>,
+    emitted: vec3<f32>,
+}
+
+fn emitter_along(origin: vec3<f32>, w: vec3<f32>) -> EmitterHit {
+    let hit = bvh_walk(origin, w, 0.0, FAR, false);
+    if hit.triangle == NO_HIT {
+        return EmitterHit(origin + w, vec3<f32>(0.0));
+    }
+    let tri = triangles[hit.triangle];
+    var emitted = vec3<f32>(0.0);
+    if dot(cross(tri.e1, tri.e2), w) < 0.0 {
+        emitted = material_at(hit).emission;
+    }
+    return EmitterHit(origin + hit.t * w, emitted);
+}
+
+// The x-independent part of each published state's lobe (fixed prior): ȳ and κ in `.xyz`,
+// `.w` (κ < 0: no lobe), and the normalisation C(κ) of `vmf_pdf`. Written by each lane for its
+// own state between the exchanges' barriers and the publish's, read by the mixture.
+var<workgroup> tile_lobes: array<vec4<f32>, MCMM_LANES>;
+var<workgroup> tile_norms: array<f32, MCMM_LANES>;
+
+// Writes lane `lane`'s entry of `tile_lobes`/`tile_norms` for `state`: the κ of
+// `vmf_from_sufficient_stats` under the fixed prior (no lobe for an invalid or empty state).
+fn publish_lobe(lane: u32, state: MarkovPixelState, mp: McmmParams) {
+    var lobe = vec4<f32>(0.0, 0.0, 0.0, -1.0);
+    var norm = 0.0;
+    let stats = state.stats;
+    if markov_pixel_state_is_valid(state) && stats.sample_count > 0u && stats.weight_sum > 0.0 {
+        let prior = VmfMapPrior(mp.prior_mean_cosine, mp.prior_weight, mp.prior_decay);
+        let kappa = vmf_kappa_from_one_minus_mean_cosine(
+            vmf_posterior_one_minus_mean_cosine(stats, prior));
+        lobe = vec4<f32>(stats.mean_target_x, stats.mean_target_y, stats.mean_target_z, kappa);
+        norm = vmf_normalization(kappa);
+    }
+    tile_lobes[lane] = lobe;
+    tile_norms[lane] = norm;
+}
+
+// The tile's mixture density (1/n) Σⱼ p(ω | tⱼ) at x (MCMM eq. 9) with the material's density
+// `bsdf_pdf` as each technique's defensive branch: `mcmm_technique_pdf` over the published
+// states, its x-independent part (κ, C(κ)) taken from `tile_lobes` (computed once per state
+// instead of once per state and pixel). The light-size prior's κ depends on x: it takes
+// the full path.
+fn tile_mixture_pdf(x: vec3<f32>, w: vec3<f32>, bsdf_pdf: f32, mp: McmmParams) -> f32 {
+    var sum = 0.0;
+    if mp.prior_kind == MCMM_PRIOR_LIGHT_SIZE {
+        for (var j = 0u; j < MCMM_LANES; j++) {
+            sum += mcmm_technique_pdf(mcmm_tile[j], x, w, bsdf_pdf, mp);
+        }
+        return min(sum, MCG_F32_MAX) / f32(MCMM_LANES);
+    }
+    let p = mp.hemisphere_probability;
+    for (var j = 0u; j < MCMM_LANES; j++) {
+        let lobe = tile_lobes[j];
+        var mu: vec3<f32>;
+        if lobe.w >= 0.0 && vmf_try_normalize(lobe.xyz - x, &mu) {
+            let d = w - mu;
+            let distance_squared = d.x * d.x + d.y * d.y + d.z * d.z;
+            let vmf = tile_norms[j] * exp(-0.5 * lobe.w * distance_squared);
+            sum += p * bsdf_pdf + (1.0 - p) * vmf;
+        } else {
+            sum += bsdf_pdf;
+        }
+    }
+    return min(sum, MCG_F32_MAX) / f32(MCMM_LANES);
+}
+
+// `McmmRenderer::shade`: one step at pixel (x, y) — the camera ray, the chain's sample
+// (Alg. 2, the material as the defensive technique), the one-sample SSMIS estimate over the tile's published states (MCMM eq. 9) and
+// the chain's update (Alg. 3) with the score of `score_density`. Uniforms from `rng` in the
+// CPU's order: jitter (2), branch, direction (2), acceptance.
+fn mcmm_shade(x: u32, y: u32, tentative: ptr<function, MarkovPixelState>,
+              current: ptr<function, MarkovPixelState>, rng: ptr<function, u32>) -> vec3<f32> {
+    let jx = mcg_rng_uniform(rng);
+    let jy = mcg_rng_uniform(rng);
+    let d = camera_direction(f32(x) + jx, f32(y) + jy);
+    let hit = bvh_walk(params.camera_position, d, 0.0, FAR, false);
+    if hit.triangle == NO_HIT {
+        return vec3<f32>(0.0);
+    }
+    let tri = triangles[hit.triangle];
+    let material = material_at(hit);
+    let c = cross(tri.e1, tri.e2);
+    let n_front = c / length(c);
+    let front = dot(n_front, d) < 0.0;
+    let normal = select(-n_front, n_front, front);
+    let position = params.camera_position + hit.t * d;
+    var radiance = select(vec3<f32>(0.0), material.emission, front);
+    let mp = mcg_mcmm_params;
+    let u_select = mcg_rng_uniform(rng);
+    let u = vec2<f32>(mcg_rng_uniform(rng), mcg_rng_uniform(rng));
+    // Alg. 2 with the material as the defensive ("hemisphere") technique.
+    var lobe: Vmf;
+    var w: vec3<f32>;
+    let from_hemisphere = !mcmm_choose_technique(*tentative, position, u_select, mp, &lobe);
+    if from_hemisphere {
+        w = material_scatter_sample(material, normal, -d, u);
+    } else {
+        w = vmf_sample(lobe, u);
+    }
+    let next = emitter_along(offset_origin(position, normal), w);
+    let value = material_eval(material, normal, -d, w) * next.emitted;
+    let bsdf_pdf = material_pdf(material, normal, -d, w);
+    let mixture = tile_mixture_pdf(position, w, bsdf_pdf, mp);
+    radiance += ratio3(value, mixture);
+    var density = mixture;
+    if mp.score_density == MCMM_SCORE_TECHNIQUE {
+        density = mcmm_technique_pdf(*tentative, position, w, bsdf_pdf, mp);
+    }
+    let score = mcmm_ratio(luminance(value), density);
+    let u_accept = mcg_rng_uniform(rng);
+    mcmm_update(tentative, current, position, next.point, score, from_hemisphere, u_accept, mp);
+    return radiance;
+}
+
+// One workgroup per tile of 8 × 4 pixels of the dispatch tile, `spp` MCMM steps per pixel:
+// Alg. 1 from the previous frame's states (motion zero: the camera is static), the tile's xor
+// permutation of the chains (one mask per tile and step from its own stream), the states
+// published for the mixture, `mcmm_shade`; at the end the chain's S_c is stored where it ended
+// and the mean into `image`. Lanes past the image's edge hold empty chains and take part in
+// the shuffles (every barrier is reached by the whole workgroup).
+@compute @workgroup_size(8, 4)
+fn render_mcmm(@builtin(local_invocation_id) lid: vec3<u32>,
+               @builtin(workgroup_id) wid: vec3<u32>) {
+    let lane = lid.y * MCMM_TILE_WIDTH + lid.x;
+    let lx = wid.x * MCMM_TILE_WIDTH + lid.x;
+    let ly = wid.y * MCMM_TILE_HEIGHT + lid.y;
+    let x = params.tile_x + lx;
+    let y = params.tile_y + ly;
+    let inside = lx < params.tile_width && ly < params.tile_height && x < params.width
+        && y < params.height;
+    let index = y * params.width + x;
+    let tiles_x = (params.width + MCMM_TILE_WIDTH - 1u) / MCMM_TILE_WIDTH;
+    let tile = (y / MCMM_TILE_HEIGHT) * tiles_x + x / MCMM_TILE_WIDTH;
+    var tentative = mcmm_empty_state();
+    if inside {
+        tentative = mcmm_load_previous(index);
+    }
+    var current = tentative;
+    var sum = vec3<f32>(0.0);
+    for (var s = 0u; s < params.spp; s++) {
+        var rng = path_seed(params.seed, params.frame, index, s);
+        if inside {
+            var taken = 0u;
+            tentative = mcmm_collaborative_discovery(tentative, vec2<i32>(i32(x), i32(y)),
+                                                     vec2<f32>(0.0), mcg_mcmm_params, &rng,
+                                                     &taken);
+        }
+        var trng = path_seed(params.seed ^ MCMM_TILE_SALT, params.frame, tile, s);
+        let mask = mcmm_select_uniform(MCMM_LANES, mcg_rng_uniform(&trng));
+        let source = mcmm_xor_source_lane(lane, mask);
+        tentative = mcmm_tile_exchange(lane, source, tentative);
+        current = mcmm_tile_exchange(lane, source, current);
+        // After the exchanges' barriers (the last step's mixtures are read) and before the
+        // publish's (this step's mixtures read them).
+        publish_lobe(lane, tentative, mcg_mcmm_params);
+        mcmm_tile_publish(lane, tentative);
+        if inside {
+            sum += mcmm_shade(x, y, &tentative, &current, &rng);
+        }
+    }
+    if inside {
+        mcmm_store_current(index, current);
+        image[index] = vec4<f32>(sum / f32(params.spp), 1.0);
+    }
+}
+#endif

@@ -1,0 +1,369 @@
+//! MCMM in the CPU tracer (Dittebrandt et al. 2023, "Markov Chain Mixture Models for Real-Time
+//! Direct Illumination"): [`McmmRenderer`], one chain per pixel over the screen, for direct
+//! light (`--bounces 1`).
+//!
+//! The image is cut into tiles of [`TILE_WIDTH`] × [`TILE_HEIGHT`] = 32 pixels (one GPU
+//! subgroup or workgroup in the WGSL twin). Each frame, every chain starts from the state its
+//! pixel wrote last frame; then, per sample (step) of the frame and per pixel:
+//! 1. collaborative discovery (MCMM Alg. 1): the chain's tentative state is resampled from
+//!    neighbour states of the previous frame at B-spline offsets (no motion: the built-in
+//!    cameras are static, the motion vector is zero);
+//! 2. the chains of the tile are permuted by a random xor mask, one per tile and step
+//!    (spatial SMIS, MCMM sec. 4.2), so that the technique a pixel samples is a uniform pick
+//!    from the tile's;
+//! 3. the camera ray (box filter) finds the shading point x; the chain's technique (Alg. 2:
+//!    the material's BSDF sampling — MCMM's defensive "hemisphere" technique, here the
+//!    material so that glossy surfaces stay well sampled — with probability p_h or when the
+//!    state has no lobe, else the state's vMF lobe) samples ω; the ray along ω finds the
+//!    emitter;
+//! 4. the pixel's estimate is the one-sample SSMIS estimator (MCMM eq. 9)
+//!    f(ω) / ((1/n) Σⱼ p(ω | tⱼ)), the tile's n = 32 techniques reconstructed at x;
+//! 5. the chain learns (Alg. 3) from the score f = lum(f_r cos L_e)/p, p the tile's mixture
+//!    density ([`ScoreDensity::TileMixture`], default) or the chain's own technique density
+//!    (the paper's [`ScoreDensity::Technique`]).
+//!
+//! At the end of the frame each chain's current state is written where it ended. The estimator
+//! is unbiased for any chain states: the states a step samples from are fixed before that
+//! step's samples are drawn, and the mixture density is exact (MCMM appendix A).
+
+use glam::{Vec2, Vec3};
+use mcg_gpu_backend::sampling::next_uniform;
+use mcg_markov_guide::mcmm::{
+    McmmParams, PixelState, PixelStateBuffers, SampleChoice, ScoreDensity, bspline_offset,
+    choose_technique, collaborative_discovery, technique_pdf, update,
+};
+use mcg_markov_guide::mcpg::Scatter;
+use mcg_smis::XorPermutation;
+use rayon::prelude::*;
+
+use super::cpu::{RenderSettings, offset, path_seed};
+use super::guided::MaterialScatter;
+use super::scene::{Scene, luminance};
+use crate::Result;
+
+/// Tile width in pixels (the population one xor permutation acts on).
+pub const TILE_WIDTH: u32 = 8;
+/// Tile height in pixels.
+pub const TILE_HEIGHT: u32 = 4;
+/// Pixels per tile: one subgroup of 32 lanes, the largest tile of `mcg-smis`.
+pub const TILE_SIZE: usize = (TILE_WIDTH * TILE_HEIGHT) as usize;
+
+/// The salt of the per-tile stream of the xor masks (the WGSL twin uses the same).
+pub const TILE_SALT: u32 = 0x7f4a_7c15;
+
+/// The score density on the command line.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum McmmScore {
+    /// [`ScoreDensity::TileMixture`]: the score is the pixel's one-sample SSMIS estimate.
+    #[default]
+    TileMixture,
+    /// [`ScoreDensity::Technique`]: the paper's score, divided by the chain's own density.
+    Paper,
+}
+
+/// The smallest half width of the neighbour window, in pixels. Measured on the many-lights
+/// room at 64 × 64, 64 frames of 4 spp, relMSE of `mcmm` (tile-mixture score): half width 2 →
+/// 0.35, 4 → 0.34, 8 → 0.26, 16 → 0.23, 32 → 0.24 (`bsdf`: 0.41). The paper's 45 pixels at
+/// 1080 rows scale to 3 pixels there: too few neighbours to spread what a chain finds.
+pub const MIN_WINDOW_HALF_WIDTH: f32 = 16.0;
+
+/// MCMM's constants for an image `height` pixels high: the paper's (MCMM sec. 5), the
+/// neighbour window scaled from 45 pixels at 1080 rows to the image (at least
+/// [`MIN_WINDOW_HALF_WIDTH`]), and the score density of `score`.
+#[must_use]
+pub fn mcmm_params(score: McmmScore, height: u32) -> McmmParams {
+    let mut params = McmmParams::PAPER;
+    params.window_half_width = (45.0 * height as f32 / 1080.0).max(MIN_WINDOW_HALF_WIDTH);
+    params.score_density = match score {
+        McmmScore::TileMixture => ScoreDensity::TileMixture,
+        McmmScore::Paper => ScoreDensity::Technique,
+    };
+    params
+}
+
+/// The tiles across and down of a `width × height` image.
+#[must_use]
+pub fn tile_grid(width: u32, height: u32) -> (u32, u32) {
+    (width.div_ceil(TILE_WIDTH), height.div_ceil(TILE_HEIGHT))
+}
+
+/// The xor mask of tile `tile` at step `step` of `frame`: ⌊32 u⌋ of the first uniform of the
+/// tile's own stream.
+#[must_use]
+pub fn tile_mask(seed: u32, frame: u32, tile: u32, step: u32) -> XorPermutation {
+    let mut rng = path_seed(seed ^ TILE_SALT, frame, tile, step);
+    XorPermutation::from_uniform(TILE_SIZE as u32, next_uniform(&mut rng))
+        .expect("32 is a power of two")
+}
+
+/// A pixel's chain: tentative state S and current state S_c (MCMM Table 2).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Chain {
+    tentative: PixelState,
+    current: PixelState,
+}
+
+/// MCMM on the CPU: the per-pixel state buffers of the previous and the current frame.
+#[derive(Clone, Debug)]
+pub struct McmmRenderer {
+    params: McmmParams,
+    buffers: PixelStateBuffers,
+}
+
+impl McmmRenderer {
+    /// Empty chains for a `width × height` image.
+    ///
+    /// # Errors
+    /// Invalid `params`, or an image too large for its state buffers.
+    pub fn new(width: u32, height: u32, params: McmmParams) -> Result<Self> {
+        params
+            .validate()
+            .map_err(|e| format!("MCMM parameters: {e:?}"))?;
+        let buffers = PixelStateBuffers::new(width, height)
+            .map_err(|e| format!("MCMM state buffers: {e:?}"))?;
+        Ok(Self { params, buffers })
+    }
+
+    /// The constants.
+    #[must_use]
+    pub const fn params(&self) -> &McmmParams {
+        &self.params
+    }
+
+    /// The states written by the last frame, row-major.
+    #[must_use]
+    pub fn states(&self) -> &[PixelState] {
+        self.buffers.previous_states()
+    }
+
+    /// Renders one frame of direct light (`settings.bounces` must be 1): `spp` MCMM steps per
+    /// pixel; returns the per-pixel mean radiance, row-major.
+    ///
+    /// # Errors
+    /// When `settings` do not match the image of [`McmmRenderer::new`] or ask for more than
+    /// one bounce.
+    pub fn render_frame(
+        &mut self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        frame: u32,
+    ) -> Result<Vec<Vec3>> {
+        check_settings(settings, self.buffers.width(), self.buffers.height())?;
+        let (tiles_x, tiles_y) = tile_grid(settings.width, settings.height);
+        let done: Vec<([Vec3; TILE_SIZE], [Chain; TILE_SIZE])> = (0..tiles_x * tiles_y)
+            .into_par_iter()
+            .map(|tile| self.tile_frame(scene, settings, frame, tile))
+            .collect();
+        let mut image = vec![Vec3::ZERO; (settings.width * settings.height) as usize];
+        for (tile, (radiance, chains)) in done.iter().enumerate() {
+            for lane in 0..TILE_SIZE {
+                if let Some((x, y)) = lane_pixel(settings, tile as u32, lane) {
+                    image[(y * settings.width + x) as usize] = radiance[lane];
+                    self.buffers
+                        .set_current(x as i32, y as i32, chains[lane].current);
+                }
+            }
+        }
+        self.buffers.swap();
+        Ok(image)
+    }
+
+    /// One frame of the 32 chains of `tile`: their radiance (mean over the steps) and the
+    /// chains where they ended.
+    fn tile_frame(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        frame: u32,
+        tile: u32,
+    ) -> ([Vec3; TILE_SIZE], [Chain; TILE_SIZE]) {
+        let pixels: [Option<(u32, u32)>; TILE_SIZE] =
+            core::array::from_fn(|lane| lane_pixel(settings, tile, lane));
+        let mut chains: [Chain; TILE_SIZE] = core::array::from_fn(|lane| {
+            let state = pixels[lane]
+                .and_then(|(x, y)| self.buffers.previous(x as i32, y as i32))
+                .unwrap_or(PixelState::EMPTY);
+            Chain {
+                tentative: state,
+                current: state,
+            }
+        });
+        let mut sums = [Vec3::ZERO; TILE_SIZE];
+        for step in 0..settings.spp {
+            let mut rngs = [0u32; TILE_SIZE];
+            for lane in 0..TILE_SIZE {
+                if let Some((x, y)) = pixels[lane] {
+                    let index = y * settings.width + x;
+                    rngs[lane] = path_seed(settings.seed, frame, index, step);
+                    chains[lane].tentative =
+                        self.discover(chains[lane].tentative, (x, y), &mut rngs[lane]);
+                }
+            }
+            tile_mask(settings.seed, frame, tile, step).apply(&mut chains);
+            // The streams stay with the pixels; only the chains move.
+            let step_states: [PixelState; TILE_SIZE] =
+                core::array::from_fn(|lane| chains[lane].tentative);
+            for lane in 0..TILE_SIZE {
+                if let Some(pixel) = pixels[lane] {
+                    sums[lane] += self.shade(
+                        scene,
+                        settings,
+                        pixel,
+                        &step_states,
+                        &mut chains[lane],
+                        &mut rngs[lane],
+                    );
+                }
+            }
+        }
+        let scale = 1.0 / settings.spp as f32;
+        (sums.map(|s| s * scale), chains)
+    }
+
+    /// Alg. 1 for the pixel `(x, y)`: 12 uniforms for the offset and one for the selection per
+    /// candidate, in this order (the WGSL twin's).
+    fn discover(&self, state: PixelState, (x, y): (u32, u32), rng: &mut u32) -> PixelState {
+        let params = &self.params;
+        let mut candidates = Vec::with_capacity(params.neighbour_candidates as usize);
+        for _ in 0..params.neighbour_candidates {
+            let u: [f32; 12] = core::array::from_fn(|_| next_uniform(rng));
+            let offset = bspline_offset(&u, params.window_half_width);
+            let select = next_uniform(rng);
+            let pixel = (x as i32, y as i32);
+            if let Some(s) = self.buffers.neighbour(pixel, offset, Vec2::ZERO) {
+                candidates.push((s, select));
+            }
+        }
+        collaborative_discovery(state, candidates)
+    }
+
+    /// One step at pixel `(x, y)`: the camera ray, the chain's sample, the SSMIS estimate over
+    /// the tile's `step_states` and the chain's update (Alg. 2-3); the step's estimate
+    /// (camera-visible emission plus the SSMIS estimate).
+    fn shade(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        (x, y): (u32, u32),
+        step_states: &[PixelState; TILE_SIZE],
+        chain: &mut Chain,
+        rng: &mut u32,
+    ) -> Vec3 {
+        let params = &self.params;
+        let (jx, jy) = (next_uniform(rng), next_uniform(rng));
+        let d = scene.camera.direction(
+            x as f32 + jx,
+            y as f32 + jy,
+            settings.width,
+            settings.height,
+        );
+        let origin = scene.camera.position;
+        let Some(hit) = scene.bvh.intersect(origin, d, 0.0, f32::INFINITY) else {
+            return Vec3::ZERO;
+        };
+        let tri = scene.bvh.triangles[hit.triangle as usize];
+        let material = scene.material_at(&hit);
+        let n_front = tri.cross().normalize();
+        let front = n_front.dot(d) < 0.0;
+        let normal = if front { n_front } else { -n_front };
+        let position = origin + hit.t * d;
+        let mut radiance = if front {
+            material.emission()
+        } else {
+            Vec3::ZERO
+        };
+        let u_select = next_uniform(rng);
+        let u = Vec2::new(next_uniform(rng), next_uniform(rng));
+        let scatter = MaterialScatter {
+            material,
+            normal,
+            wo: -d,
+        };
+        let (w, from_hemisphere) =
+            match choose_technique(&chain.tentative, position, u_select, params) {
+                SampleChoice::Lobe(lobe) => (lobe.sample(u), false),
+                SampleChoice::Hemisphere => (scatter.sample(u), true),
+            };
+        let (x2, emitted) = emitter_along(scene, offset(position, normal), w);
+        let value = material.eval(normal, -d, w) * emitted;
+        let bsdf_pdf = scatter.pdf(w);
+        let pdf_of = |s: &PixelState| technique_pdf(s, position, w, bsdf_pdf, params);
+        let mixture = step_states.iter().map(pdf_of).sum::<f32>().min(f32::MAX) / TILE_SIZE as f32;
+        radiance += ratio(value, mixture);
+        let density = match params.score_density {
+            ScoreDensity::TileMixture => mixture,
+            ScoreDensity::Technique => pdf_of(&chain.tentative),
+        };
+        let score = ratio(Vec3::splat(luminance(value)), density).x;
+        let u_accept = next_uniform(rng);
+        update(
+            &mut chain.tentative,
+            &mut chain.current,
+            position,
+            x2,
+            score,
+            from_hemisphere,
+            u_accept,
+            params,
+        );
+        radiance
+    }
+}
+
+/// The pixel of `lane` in `tile`, `None` past the image's edge.
+fn lane_pixel(settings: &RenderSettings, tile: u32, lane: usize) -> Option<(u32, u32)> {
+    let (tiles_x, _) = tile_grid(settings.width, settings.height);
+    let x = (tile % tiles_x) * TILE_WIDTH + lane as u32 % TILE_WIDTH;
+    let y = (tile / tiles_x) * TILE_HEIGHT + lane as u32 / TILE_WIDTH;
+    (x < settings.width && y < settings.height).then_some((x, y))
+}
+
+/// The point the ray `(origin, w)` hits and the radiance it carries back (front faces emit);
+/// `origin + w` and zero when it leaves the scene.
+fn emitter_along(scene: &Scene, origin: Vec3, w: Vec3) -> (Vec3, Vec3) {
+    match scene.bvh.intersect(origin, w, 0.0, f32::INFINITY) {
+        Some(hit) => {
+            let tri = scene.bvh.triangles[hit.triangle as usize];
+            let emitted = if tri.cross().dot(w) < 0.0 {
+                scene.material_at(&hit).emission()
+            } else {
+                Vec3::ZERO
+            };
+            (origin + hit.t * w, emitted)
+        }
+        None => (origin + w, Vec3::ZERO),
+    }
+}
+
+/// `value / density`, zero where the density is not positive or the quotient not finite.
+fn ratio(value: Vec3, density: f32) -> Vec3 {
+    let r = value / density;
+    if density > 0.0 && r.is_finite() {
+        r
+    } else {
+        Vec3::ZERO
+    }
+}
+
+/// MCMM renders direct light of one image size.
+///
+/// # Errors
+/// When `settings.bounces` is not 1 or the image is not `width × height`.
+pub fn check_settings(settings: &RenderSettings, width: u32, height: u32) -> Result<()> {
+    if settings.bounces != 1 {
+        return Err(format!(
+            "mcmm guides direct light only: use --bounces 1 (got {})",
+            settings.bounces
+        )
+        .into());
+    }
+    if (settings.width, settings.height) != (width, height) {
+        return Err(format!(
+            "mcmm: the chains are for {width}×{height}, the frame is {}×{}",
+            settings.width, settings.height
+        )
+        .into());
+    }
+    Ok(())
+}
