@@ -39,10 +39,10 @@ impl Frustum {
     /// normal.
     pub fn from_planes(planes: [Vec4; 6]) -> Result<Self, ControlError> {
         let mut out = [Vec4::ZERO; 6];
-        for (o, p) in out.iter_mut().zip(planes) {
+        for (index, (o, p)) in out.iter_mut().zip(planes).enumerate() {
             let len = p.truncate().length();
             if !p.is_finite() || !(len > 0.0) || !len.is_finite() {
-                return Err(ControlError::ClipVolumeInvalid);
+                return Err(ControlError::ClipPlaneInvalid { index, plane: p });
             }
             *o = p / len;
         }
@@ -112,7 +112,7 @@ impl ClipVolume {
     /// bounds are allowed: an unbounded box).
     pub fn new(frustum: Frustum, min: Vec3, max: Vec3) -> Result<Self, ControlError> {
         if !(min.cmple(max).all()) {
-            return Err(ControlError::ClipVolumeInvalid);
+            return Err(ControlError::ClipBoxInvalid { min, max });
         }
         Ok(Self { frustum, min, max })
     }
@@ -244,9 +244,7 @@ impl ClipVolumes {
         grid: &ProbeGrid,
         out: &mut [ClipRegion],
     ) -> Result<(), LayoutError> {
-        if out.len() != grid.probe_count() {
-            return Err(LayoutError::TableLengthMismatch);
-        }
+        LayoutError::check_tables(grid.probe_count(), &[out.len()])?;
         for (i, o) in out.iter_mut().enumerate() {
             *o = self.classify(grid.probe_position(grid.probe_coords(i)));
         }
@@ -337,7 +335,10 @@ mod tests {
         }
         assert_eq!(
             Frustum::from_view_projection(Mat4::ZERO),
-            Err(ControlError::ClipVolumeInvalid)
+            Err(ControlError::ClipPlaneInvalid {
+                index: 0,
+                plane: Vec4::ZERO
+            })
         );
         assert_eq!(f.expanded(f32::NAN), f);
     }

@@ -421,23 +421,40 @@ fn write_gltf(
 /// The built-in scenes: `(name, glTF JSON, binary buffer)` each, in [`SCENE_NAMES`] order.
 #[must_use]
 pub fn built_in_scenes() -> Vec<(&'static str, String, Vec<u8>)> {
-    let static_node = |parts| Node {
+    let (a_json, a_bin) = hidden_light_scene();
+    let (b_json, b_bin) = many_lights_scene();
+    let (c_json, c_bin) = dynamic_scene();
+    vec![
+        (SCENE_NAMES[0], a_json, a_bin),
+        (SCENE_NAMES[1], b_json, b_bin),
+        (SCENE_NAMES[2], c_json, c_bin),
+    ]
+}
+
+/// The room as one static node.
+fn static_node(parts: Vec<Part>) -> Node {
+    Node {
         name: "room",
         parts,
         translation: Vec3::ZERO,
-    };
+    }
+}
 
-    // (a) Hidden light.
+/// (a) Hidden light: a closed room lit through a slit by a light in a tray under the ceiling.
+fn hidden_light_scene() -> (String, Vec<u8>) {
     let mut parts = room(false);
     parts.extend(cove_light());
-    let (a_json, a_bin) = write_gltf(
+    write_gltf(
         SCENE_NAMES[0],
         &[static_node(parts)],
         &[],
         json!({ "description": "a closed room lit through a slit by a light hidden in a tray under the ceiling" }),
-    );
+    )
+}
 
-    // (b) Many lights: 4×4 on the ceiling, 8 on the back wall, colours around the hue circle.
+/// (b) Many lights: 4×4 on the ceiling, 8 on the back wall, colours around the hue circle, and
+/// a copper block.
+fn many_lights_scene() -> (String, Vec<u8>) {
     let mut parts = room(false);
     let mut k = 0;
     let colour = |k: usize| {
@@ -479,48 +496,18 @@ pub fn built_in_scenes() -> Vec<(&'static str, String, Vec<u8>)> {
         },
         metal,
     ));
-    let (b_json, b_bin) = write_gltf(
+    write_gltf(
         SCENE_NAMES[1],
         &[static_node(parts)],
         &[],
         json!({ "description": "a closed room lit directly by 24 small lights of different colours" }),
-    );
+    )
+}
 
-    // (c) Dynamic: moving hidden light, door to a lit side room opening at a known frame.
+/// (c) Dynamic: the moving hidden light and a door to a lit side room opening at a known frame.
+fn dynamic_scene() -> (String, Vec<u8>) {
     let mut parts = room(true);
-    let mut side = Vec::new();
-    let (x0, x1, z0, z1, h) = (2.0, 3.5, -1.0, 1.0, 3.0);
-    quad(
-        &mut side,
-        Vec3::new(x0, 0.0, z0),
-        Vec3::Z * (z1 - z0),
-        Vec3::X * (x1 - x0),
-    ); // floor
-    quad(
-        &mut side,
-        Vec3::new(x0, h, z0),
-        Vec3::X * (x1 - x0),
-        Vec3::Z * (z1 - z0),
-    ); // ceiling
-    quad(
-        &mut side,
-        Vec3::new(x1, 0.0, z0),
-        Vec3::Z * (z1 - z0),
-        Vec3::Y * h,
-    ); // far wall
-    quad(
-        &mut side,
-        Vec3::new(x0, 0.0, z0),
-        Vec3::X * (x1 - x0),
-        Vec3::Y * h,
-    ); // z0 wall
-    quad(
-        &mut side,
-        Vec3::new(x0, 0.0, z1),
-        Vec3::Y * h,
-        Vec3::X * (x1 - x0),
-    ); // z1 wall
-    parts.push(part(WHITE, side));
+    parts.push(part(WHITE, side_room()));
     let mut lamp = Vec::new();
     quad(
         &mut lamp,
@@ -567,7 +554,7 @@ pub fn built_in_scenes() -> Vec<(&'static str, String, Vec<u8>)> {
             values: vec![vec![0.0, 0.0, 0.0, 1.0], open],
         },
     ];
-    let (c_json, c_bin) = write_gltf(
+    write_gltf(
         SCENE_NAMES[2],
         &nodes,
         &channels,
@@ -577,12 +564,44 @@ pub fn built_in_scenes() -> Vec<(&'static str, String, Vec<u8>)> {
             "door_opens_at_frame": DOOR_OPENS_AT_FRAME,
             "light_moves_until_frame": LIGHT_STOPS_AT_FRAME,
         }),
-    );
-    vec![
-        (SCENE_NAMES[0], a_json, a_bin),
-        (SCENE_NAMES[1], b_json, b_bin),
-        (SCENE_NAMES[2], c_json, c_bin),
-    ]
+    )
+}
+
+/// The white side room of scene (c) behind the door: floor, ceiling and three walls.
+fn side_room() -> Vec<[Vec3; 3]> {
+    let mut side = Vec::new();
+    let (x0, x1, z0, z1, h) = (2.0, 3.5, -1.0, 1.0, 3.0);
+    quad(
+        &mut side,
+        Vec3::new(x0, 0.0, z0),
+        Vec3::Z * (z1 - z0),
+        Vec3::X * (x1 - x0),
+    ); // floor
+    quad(
+        &mut side,
+        Vec3::new(x0, h, z0),
+        Vec3::X * (x1 - x0),
+        Vec3::Z * (z1 - z0),
+    ); // ceiling
+    quad(
+        &mut side,
+        Vec3::new(x1, 0.0, z0),
+        Vec3::Z * (z1 - z0),
+        Vec3::Y * h,
+    ); // far wall
+    quad(
+        &mut side,
+        Vec3::new(x0, 0.0, z0),
+        Vec3::X * (x1 - x0),
+        Vec3::Y * h,
+    ); // z0 wall
+    quad(
+        &mut side,
+        Vec3::new(x0, 0.0, z1),
+        Vec3::Y * h,
+        Vec3::X * (x1 - x0),
+    ); // z1 wall
+    side
 }
 
 /// Writes the built-in scenes as `<name>.gltf` + `<name>.bin` into `dir` (created if missing).
