@@ -35,7 +35,7 @@ impl Frustum {
     /// The six planes `(n, d)` with `n · p + d ≥ 0` inside; each is normalised.
     ///
     /// # Errors
-    /// [`ControlError::ClipVolumeInvalid`] for a plane with a NaN or infinite component or a zero
+    /// [`ControlError::ClipPlaneInvalid`] for a plane with a NaN or infinite component or a zero
     /// normal.
     pub fn from_planes(planes: [Vec4; 6]) -> Result<Self, ControlError> {
         let mut out = [Vec4::ZERO; 6];
@@ -108,7 +108,7 @@ impl ClipVolume {
     /// `frustum ∩ [min, max]`.
     ///
     /// # Errors
-    /// [`ControlError::ClipVolumeInvalid`] if a bound is NaN or `min > max` on an axis (infinite
+    /// [`ControlError::ClipBoxInvalid`] if a bound is NaN or `min > max` on an axis (infinite
     /// bounds are allowed: an unbounded box).
     pub fn new(frustum: Frustum, min: Vec3, max: Vec3) -> Result<Self, ControlError> {
         if !(min.cmple(max).all()) {
@@ -186,8 +186,8 @@ impl ClipVolumes {
     /// `outer_bounds`.
     ///
     /// # Errors
-    /// [`ControlError::ClipVolumeInvalid`] as [`Frustum::from_view_projection`] and
-    /// [`ClipVolume::new`].
+    /// [`ControlError::ClipPlaneInvalid`] or [`ControlError::ClipBoxInvalid`] as
+    /// [`Frustum::from_view_projection`] and [`ClipVolume::new`].
     pub fn from_camera(
         view_projection: Mat4,
         inner_bounds: (Vec3, Vec3),
