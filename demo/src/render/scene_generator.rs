@@ -279,6 +279,116 @@ struct Channel {
     values: Vec<Vec<f32>>,
 }
 
+/// The binary buffer of a glTF file with its buffer views and accessors.
+#[derive(Default)]
+struct GltfBuffer {
+    bin: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+}
+
+impl GltfBuffer {
+    /// Appends `data` as little-endian f32 with a view and an accessor of `count` elements of
+    /// `kind` (`"VEC3"`, …) and optional (min, max); returns the accessor's index.
+    fn push_floats(
+        &mut self,
+        data: &[f32],
+        kind: &str,
+        count: usize,
+        bounds: Option<(Value, Value)>,
+    ) -> usize {
+        let offset = self.bin.len();
+        for f in data {
+            self.bin.extend_from_slice(&f.to_le_bytes());
+        }
+        self.views
+            .push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": data.len() * 4 }));
+        let mut accessor = json!({
+            "bufferView": self.views.len() - 1, "componentType": 5126, "count": count, "type": kind,
+        });
+        if let Some((min, max)) = bounds {
+            accessor["min"] = min;
+            accessor["max"] = max;
+        }
+        self.accessors.push(accessor);
+        self.accessors.len() - 1
+    }
+
+    /// A part's triangles as a POSITION accessor with its bounds.
+    fn push_positions(&mut self, p: &Part) -> usize {
+        let flat: Vec<f32> = p
+            .triangles
+            .iter()
+            .flatten()
+            .flat_map(|v| v.to_array())
+            .collect();
+        let lo = p
+            .triangles
+            .iter()
+            .flatten()
+            .fold(Vec3::INFINITY, |a, &b| a.min(b));
+        let hi = p
+            .triangles
+            .iter()
+            .flatten()
+            .fold(Vec3::NEG_INFINITY, |a, &b| a.max(b));
+        self.push_floats(
+            &flat,
+            "VEC3",
+            p.triangles.len() * 3,
+            Some((json!(lo.to_array()), json!(hi.to_array()))),
+        )
+    }
+}
+
+/// A material as glTF metallic-roughness, emissive ones with `KHR_materials_emissive_strength`.
+fn material_json(m: &Mat) -> Value {
+    let mut material = json!({
+        "name": m.name,
+        "pbrMetallicRoughness": {
+            "baseColorFactor": [m.base[0], m.base[1], m.base[2], 1.0],
+            "metallicFactor": m.metallic,
+            "roughnessFactor": m.roughness,
+        },
+    });
+    if m.emissive != [0.0; 3] {
+        material["emissiveFactor"] = json!(m.emissive);
+        material["extensions"] = json!({
+            "KHR_materials_emissive_strength": { "emissiveStrength": m.strength }
+        });
+    }
+    material
+}
+
+/// The animation samplers and channels of `channels`, their keys appended to `buffer`.
+fn animation_json(buffer: &mut GltfBuffer, channels: &[Channel]) -> (Vec<Value>, Vec<Value>) {
+    let mut samplers = Vec::new();
+    let mut gltf_channels = Vec::new();
+    for c in channels {
+        let input = buffer.push_floats(
+            &c.times,
+            "SCALAR",
+            c.times.len(),
+            Some((json!([c.times[0]]), json!([c.times[c.times.len() - 1]]))),
+        );
+        let flat: Vec<f32> = c.values.iter().flatten().copied().collect();
+        let kind = if c.values[0].len() == 4 {
+            "VEC4"
+        } else {
+            "VEC3"
+        };
+        let output = buffer.push_floats(&flat, kind, c.values.len(), None);
+        samplers.push(json!({
+            "input": input, "output": output,
+            "interpolation": if c.step { "STEP" } else { "LINEAR" },
+        }));
+        gltf_channels.push(
+            json!({ "sampler": samplers.len() - 1, "target": { "node": c.node, "path": c.path } }),
+        );
+    }
+    (samplers, gltf_channels)
+}
+
 /// Serialises nodes, channels and scene extras into glTF JSON and its binary buffer.
 fn write_gltf(
     name: &str,
@@ -286,74 +396,15 @@ fn write_gltf(
     channels: &[Channel],
     extras: Value,
 ) -> (String, Vec<u8>) {
-    let mut bin: Vec<u8> = Vec::new();
-    let mut views = Vec::new();
-    let mut accessors = Vec::new();
-    let mut push_floats = |bin: &mut Vec<u8>,
-                           data: &[f32],
-                           kind: &str,
-                           count: usize,
-                           bounds: Option<(Value, Value)>| {
-        let offset = bin.len();
-        for f in data {
-            bin.extend_from_slice(&f.to_le_bytes());
-        }
-        views.push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": data.len() * 4 }));
-        let mut accessor = json!({
-            "bufferView": views.len() - 1, "componentType": 5126, "count": count, "type": kind,
-        });
-        if let Some((min, max)) = bounds {
-            accessor["min"] = min;
-            accessor["max"] = max;
-        }
-        accessors.push(accessor);
-        accessors.len() - 1
-    };
+    let mut buffer = GltfBuffer::default();
     let mut materials = Vec::new();
     let mut meshes = Vec::new();
     let mut gltf_nodes = Vec::new();
     for node in nodes {
         let mut primitives = Vec::new();
         for p in &node.parts {
-            let flat: Vec<f32> = p
-                .triangles
-                .iter()
-                .flatten()
-                .flat_map(|v| v.to_array())
-                .collect();
-            let lo = p
-                .triangles
-                .iter()
-                .flatten()
-                .fold(Vec3::INFINITY, |a, &b| a.min(b));
-            let hi = p
-                .triangles
-                .iter()
-                .flatten()
-                .fold(Vec3::NEG_INFINITY, |a, &b| a.max(b));
-            let position = push_floats(
-                &mut bin,
-                &flat,
-                "VEC3",
-                p.triangles.len() * 3,
-                Some((json!(lo.to_array()), json!(hi.to_array()))),
-            );
-            let m = p.material;
-            let mut material = json!({
-                "name": m.name,
-                "pbrMetallicRoughness": {
-                    "baseColorFactor": [m.base[0], m.base[1], m.base[2], 1.0],
-                    "metallicFactor": m.metallic,
-                    "roughnessFactor": m.roughness,
-                },
-            });
-            if m.emissive != [0.0; 3] {
-                material["emissiveFactor"] = json!(m.emissive);
-                material["extensions"] = json!({
-                    "KHR_materials_emissive_strength": { "emissiveStrength": m.strength }
-                });
-            }
-            materials.push(material);
+            let position = buffer.push_positions(p);
+            materials.push(material_json(&p.material));
             primitives.push(
                 json!({ "attributes": { "POSITION": position }, "material": materials.len() - 1 }),
             );
@@ -367,31 +418,12 @@ fn write_gltf(
     }
     // The camera: 60° vertical field of view, at (0, 1.5, 2.3), looking down −z (no rotation).
     gltf_nodes.push(json!({ "name": "camera", "camera": 0, "translation": [0.0, 1.5, 2.3] }));
-    let mut samplers = Vec::new();
-    let mut gltf_channels = Vec::new();
-    for c in channels {
-        let input = push_floats(
-            &mut bin,
-            &c.times,
-            "SCALAR",
-            c.times.len(),
-            Some((json!([c.times[0]]), json!([c.times[c.times.len() - 1]]))),
-        );
-        let flat: Vec<f32> = c.values.iter().flatten().copied().collect();
-        let kind = if c.values[0].len() == 4 {
-            "VEC4"
-        } else {
-            "VEC3"
-        };
-        let output = push_floats(&mut bin, &flat, kind, c.values.len(), None);
-        samplers.push(json!({
-            "input": input, "output": output,
-            "interpolation": if c.step { "STEP" } else { "LINEAR" },
-        }));
-        gltf_channels.push(
-            json!({ "sampler": samplers.len() - 1, "target": { "node": c.node, "path": c.path } }),
-        );
-    }
+    let (samplers, gltf_channels) = animation_json(&mut buffer, channels);
+    let GltfBuffer {
+        bin,
+        views,
+        accessors,
+    } = buffer;
     let mut doc = json!({
         "asset": { "version": "2.0", "generator": "mcg-demo scene_generator" },
         "extensionsUsed": ["KHR_materials_emissive_strength"],
