@@ -88,15 +88,16 @@ impl HeuristicsLayout {
         let mut i = 0;
         while i < 3 {
             if widths[i] < 1 || widths[i] > MAX_FIELD_BITS {
-                return Err(CodecError::FieldWidthOutOfRange);
+                return Err(CodecError::FieldWidthOutOfRange { bits: widths[i] });
             }
             i += 1;
         }
         if flag_bits > MAX_FIELD_BITS {
-            return Err(CodecError::FieldWidthOutOfRange);
+            return Err(CodecError::FieldWidthOutOfRange { bits: flag_bits });
         }
-        if f_v_bits + f_s_bits + f_d_bits + flag_bits != 32 {
-            return Err(CodecError::WidthsDoNotSumTo32);
+        let sum = f_v_bits + f_s_bits + f_d_bits + flag_bits;
+        if sum != 32 {
+            return Err(CodecError::WidthsDoNotSumTo32 { sum });
         }
         Ok(Self {
             places: [
@@ -206,11 +207,11 @@ mod tests {
         assert_eq!(l.shifts(), [0, 6, 16, 26]);
         assert_eq!(
             HeuristicsLayout::new(6, 10, 10, 7),
-            Err(CodecError::WidthsDoNotSumTo32)
+            Err(CodecError::WidthsDoNotSumTo32 { sum: 33 })
         );
         assert_eq!(
             HeuristicsLayout::new(0, 16, 10, 6),
-            Err(CodecError::FieldWidthOutOfRange)
+            Err(CodecError::FieldWidthOutOfRange { bits: 0 })
         );
         assert!(HeuristicsLayout::new(16, 8, 8, 0).is_ok());
         let all = Heuristics {

@@ -89,15 +89,16 @@ impl IrradianceLayout {
         let mut i = 0;
         while i < 3 {
             if widths[i] < 1 || widths[i] > MAX_FIELD_BITS {
-                return Err(CodecError::FieldWidthOutOfRange);
+                return Err(CodecError::FieldWidthOutOfRange { bits: widths[i] });
             }
             i += 1;
         }
         if count_bits < 1 || count_bits > MAX_FIELD_BITS {
-            return Err(CodecError::CountWidthOutOfRange);
+            return Err(CodecError::CountWidthOutOfRange { bits: count_bits });
         }
-        if r_bits + g_bits + b_bits + count_bits != 32 {
-            return Err(CodecError::WidthsDoNotSumTo32);
+        let sum = r_bits + g_bits + b_bits + count_bits;
+        if sum != 32 {
+            return Err(CodecError::WidthsDoNotSumTo32 { sum });
         }
         let fields = [
             codec.field(r_bits),
@@ -391,19 +392,19 @@ mod tests {
         let c = LogCodec::IRRADIANCE;
         assert_eq!(
             IrradianceLayout::new(9, 9, 9, 6, c),
-            Err(CodecError::WidthsDoNotSumTo32)
+            Err(CodecError::WidthsDoNotSumTo32 { sum: 33 })
         );
         assert_eq!(
             IrradianceLayout::new(0, 13, 13, 6, c),
-            Err(CodecError::FieldWidthOutOfRange)
+            Err(CodecError::FieldWidthOutOfRange { bits: 0 })
         );
         assert_eq!(
             IrradianceLayout::new(17, 7, 7, 1, c),
-            Err(CodecError::FieldWidthOutOfRange)
+            Err(CodecError::FieldWidthOutOfRange { bits: 17 })
         );
         assert_eq!(
             IrradianceLayout::new(11, 11, 10, 0, c),
-            Err(CodecError::CountWidthOutOfRange)
+            Err(CodecError::CountWidthOutOfRange { bits: 0 })
         );
         assert!(IrradianceLayout::new(11, 11, 9, 1, c).is_ok());
     }

@@ -78,13 +78,14 @@ impl LogCodec {
     /// checks); [`CodecError::MaxValueOverflows`] for a positive γ below `gamma_min(β)`.
     pub const fn new(beta: f32, gamma: f32) -> Result<Self, CodecError> {
         if !(beta >= Self::BETA_MIN && beta <= Self::BETA_MAX) {
-            return Err(CodecError::BetaOutOfRange);
+            return Err(CodecError::BetaOutOfRange { beta });
         }
         if !(gamma > 0.0 && gamma < f32::INFINITY) {
-            return Err(CodecError::GammaNotPositive);
+            return Err(CodecError::GammaNotPositive { gamma });
         }
-        if gamma < Self::gamma_min(beta) {
-            return Err(CodecError::MaxValueOverflows);
+        let minimum = Self::gamma_min(beta);
+        if gamma < minimum {
+            return Err(CodecError::MaxValueOverflows { gamma, minimum });
         }
         Ok(Self { beta, gamma })
     }
@@ -583,40 +584,66 @@ impl LogLanes {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::string::ToString;
 
     #[test]
     fn construction() {
         assert_eq!(LogCodec::new(5.0, 15.0), Ok(LogCodec::IRRADIANCE));
-        assert_eq!(LogCodec::new(0.0, 15.0), Err(CodecError::BetaOutOfRange));
+        assert_eq!(
+            LogCodec::new(0.0, 15.0),
+            Err(CodecError::BetaOutOfRange { beta: 0.0 })
+        );
         // Below BETA_MIN the scales grow without bound (β = 10⁻⁴⁵ made M/β infinite).
         for beta in [0.139, 1e-3, 1e-30, 1e-45] {
-            assert_eq!(LogCodec::new(beta, 15.0), Err(CodecError::BetaOutOfRange));
+            assert_eq!(
+                LogCodec::new(beta, 15.0),
+                Err(CodecError::BetaOutOfRange { beta })
+            );
         }
         assert!(LogCodec::new(LogCodec::BETA_MIN, 15.0).is_ok());
-        assert_eq!(
+        assert!(matches!(
             LogCodec::new(f32::NAN, 15.0),
-            Err(CodecError::BetaOutOfRange)
-        );
-        assert_eq!(LogCodec::new(81.0, 15.0), Err(CodecError::BetaOutOfRange));
-        assert_eq!(LogCodec::new(5.0, 0.0), Err(CodecError::GammaNotPositive));
+            Err(CodecError::BetaOutOfRange { beta }) if beta.is_nan()
+        ));
         assert_eq!(
-            LogCodec::new(5.0, f32::NAN),
-            Err(CodecError::GammaNotPositive)
+            LogCodec::new(81.0, 15.0),
+            Err(CodecError::BetaOutOfRange { beta: 81.0 })
         );
+        assert_eq!(
+            LogCodec::new(5.0, 0.0),
+            Err(CodecError::GammaNotPositive { gamma: 0.0 })
+        );
+        assert!(matches!(
+            LogCodec::new(5.0, f32::NAN),
+            Err(CodecError::GammaNotPositive { gamma }) if gamma.is_nan()
+        ));
         assert_eq!(
             LogCodec::new(5.0, f32::INFINITY),
-            Err(CodecError::GammaNotPositive)
+            Err(CodecError::GammaNotPositive {
+                gamma: f32::INFINITY
+            })
         );
         assert!(LogCodec::new(80.0, 1e-3).is_ok());
         // Issue 14 row 4: (80, 10⁻⁴) was accepted and decoded its top code to +∞; γ = 10⁻⁴⁵
         // made 1/γ infinite.
         assert_eq!(
             LogCodec::new(80.0, 1e-4),
-            Err(CodecError::MaxValueOverflows)
+            Err(CodecError::MaxValueOverflows {
+                gamma: 1e-4,
+                minimum: 2f32.powi(-11)
+            })
         );
         assert_eq!(
             LogCodec::new(0.2, 1e-45),
-            Err(CodecError::MaxValueOverflows)
+            Err(CodecError::MaxValueOverflows {
+                gamma: 1e-45,
+                minimum: LogCodec::gamma_min(0.2)
+            })
+        );
+        assert_eq!(
+            LogCodec::new(80.0, 1e-4).unwrap_err().to_string(),
+            "log codec gamma = 0.0001 is below 0.00048828125, the smallest for its beta: \
+             (e^beta - 1)/gamma would overflow f32"
         );
         assert_eq!(LogCodec::gamma_min(80.0), 2f32.powi(-11));
         assert_eq!(LogCodec::gamma_min(5.0), 2f32.powi(-119));
@@ -626,7 +653,10 @@ mod tests {
             let g = LogCodec::gamma_min(beta);
             assert_eq!(
                 LogCodec::new(beta, g / 2.0),
-                Err(CodecError::MaxValueOverflows)
+                Err(CodecError::MaxValueOverflows {
+                    gamma: g / 2.0,
+                    minimum: g
+                })
             );
             let codec = LogCodec::new(beta, g).unwrap();
             assert!(codec.max_value().is_finite(), "{beta}");

@@ -74,18 +74,18 @@ impl VisibilityLayout {
         mean_codec: LogCodec,
         mean_sq_codec: LogCodec,
     ) -> Result<Self, CodecError> {
-        if mean_bits < 1
-            || mean_bits > MAX_FIELD_BITS
-            || mean_sq_bits < 1
-            || mean_sq_bits > MAX_FIELD_BITS
-        {
-            return Err(CodecError::FieldWidthOutOfRange);
+        if mean_bits < 1 || mean_bits > MAX_FIELD_BITS {
+            return Err(CodecError::FieldWidthOutOfRange { bits: mean_bits });
+        }
+        if mean_sq_bits < 1 || mean_sq_bits > MAX_FIELD_BITS {
+            return Err(CodecError::FieldWidthOutOfRange { bits: mean_sq_bits });
         }
         if count_bits < 1 || count_bits > MAX_FIELD_BITS {
-            return Err(CodecError::CountWidthOutOfRange);
+            return Err(CodecError::CountWidthOutOfRange { bits: count_bits });
         }
-        if mean_bits + mean_sq_bits + count_bits != 32 {
-            return Err(CodecError::WidthsDoNotSumTo32);
+        let sum = mean_bits + mean_sq_bits + count_bits;
+        if sum != 32 {
+            return Err(CodecError::WidthsDoNotSumTo32 { sum });
         }
         Ok(Self {
             fields: [
@@ -211,15 +211,15 @@ mod tests {
         let c = LogCodec::DISTANCE;
         assert_eq!(
             VisibilityLayout::new(13, 13, 7, c, c),
-            Err(CodecError::WidthsDoNotSumTo32)
+            Err(CodecError::WidthsDoNotSumTo32 { sum: 33 })
         );
         assert_eq!(
             VisibilityLayout::new(20, 6, 6, c, c),
-            Err(CodecError::FieldWidthOutOfRange)
+            Err(CodecError::FieldWidthOutOfRange { bits: 20 })
         );
         assert_eq!(
             VisibilityLayout::new(16, 16, 0, c, c),
-            Err(CodecError::CountWidthOutOfRange)
+            Err(CodecError::CountWidthOutOfRange { bits: 0 })
         );
         let w = l.encode(Vec2::splat(1e9), 99, Rounding::Down);
         assert_eq!(w.0, u32::MAX);

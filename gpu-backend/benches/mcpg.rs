@@ -12,7 +12,7 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::Vec3;
 use mcg_gpu_backend::guides::mcpg::GpuMcpgGuide;
-use mcg_gpu_backend::{GpuBuffer, GpuContext, shaders, wgpu};
+use mcg_gpu_backend::{GpuBuffer, GpuContext, GuidedKernel, shaders, storage_entry, wgpu};
 use mcg_markov_guide::mcpg::GuideConfig;
 
 const KERNEL: &str = include_str!("mcpg_vertex.wgsl");
@@ -45,49 +45,18 @@ fn benches(c: &mut Criterion) {
     eprintln!("memory: {memory:?}");
     let device = ctx.device();
     let source = shaders::compose(KERNEL, &GpuMcpgGuide::shader_defs(1)).unwrap();
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("mcpg vertex"),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
-    let io_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("estimates"),
-        entries: &[wgpu::BindGroupLayoutEntry {
-            binding: 0,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: false },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        }],
-    });
-    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("mcpg vertex"),
-        bind_group_layouts: &[Some(&io_layout), Some(guide.bind_group_layout())],
-        immediate_size: 0,
-    });
-    let pipeline = |entry: &str| {
-        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(entry),
-            layout: Some(&layout),
-            module: &module,
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            cache: None,
-        })
-    };
-    let (guided, cosine) = (pipeline("guided_vertex"), pipeline("cosine_vertex"));
-    let launch = pipeline("launch_vertex");
+    let kernel = GuidedKernel::from_wgsl(
+        ctx,
+        "mcpg vertex",
+        source,
+        &[storage_entry(0, false)],
+        guide.bind_group_layout(),
+    );
+    let guided = kernel.pipeline(ctx, "guided_vertex");
+    let cosine = kernel.pipeline(ctx, "cosine_vertex");
+    let launch = kernel.pipeline(ctx, "launch_vertex");
     let estimates: GpuBuffer<f32> = ctx.zeroed_buffer("estimates", VERTICES as usize);
-    let io = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("estimates"),
-        layout: &io_layout,
-        entries: &[wgpu::BindGroupEntry {
-            binding: 0,
-            resource: estimates.raw().as_entire_binding(),
-        }],
-    });
+    let io = kernel.io_bind_group(ctx, &[estimates.raw()]);
     let run = |pipeline: &wgpu::ComputePipeline, guide: &GpuMcpgGuide| {
         let mut encoder = device.create_command_encoder(&Default::default());
         {

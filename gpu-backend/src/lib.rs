@@ -51,6 +51,9 @@ pub use naga_oil;
 pub use wgpu;
 
 pub mod codes;
+// The host side's error type is needed without it too: `McpgGpuParams::new` returns it.
+#[path = "runtime/error.rs"]
+mod error;
 pub mod guides;
 #[cfg(feature = "runtime")]
 mod runtime;
@@ -58,11 +61,13 @@ pub mod sampling;
 pub mod shaders;
 pub mod types;
 
+pub use error::GpuError;
 #[cfg(feature = "runtime")]
 pub use runtime::{
-    CodecKernels, CodecPackRead, ComputeKernel, GpuBuffer, GpuContext, GpuError, GpuHashTable,
-    GpuTexels, GridStateQueryRead, GridStateRead, HashgridKernels, LogLuvRead, MarkovKernels,
-    PixelStateRead, VmfKernels, VmfMixtureEval, VmfMixtureKernel, testing,
+    CodecKernels, CodecPackRead, ComputeKernel, GpuBuffer, GpuContext, GpuHashTable, GpuTexels,
+    GridStateQueryRead, GridStateRead, GuidedKernel, HashgridKernels, LogLuvRead, MarkovKernels,
+    PixelStateRead, VmfKernels, VmfMixtureEval, VmfMixtureKernel, buffer_entry, sized_buffer_entry,
+    storage_entry, testing,
 };
 
 /// Invocations per workgroup of every kernel in this crate (WebGPU guarantees 256).

@@ -10,6 +10,7 @@ use glam::Vec3;
 use mcg_gpu_backend::MarkovKernels;
 use mcg_gpu_backend::testing::gpu_or_skip;
 use mcg_markov_guide::mcmm::PixelState;
+use mcg_test_support::assert_close;
 use mcg_vmf::{FitParams, MapPrior, PriorDecay, SufficientStats, Vmf};
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
@@ -291,10 +292,7 @@ fn assert_same_lobe(i: usize, cpu: Option<Vmf>, gpu: Option<(Vec3, f32)>) -> boo
         (Some(lobe), Some((mu, kappa))) => {
             assert!((mu - lobe.mu()).length() <= 64.0 * f32::EPSILON, "{i}: μ");
             let k = f64::from(lobe.kappa());
-            assert!(
-                (f64::from(kappa) - k).abs() <= 64.0 * EPS * k.max(1e-30),
-                "{i}: κ {kappa} vs {k}"
-            );
+            assert_close!(f64::from(kappa), k, 64.0 * EPS * k.max(1e-30), "{i}: κ");
             true
         }
         (cpu, gpu) => panic!("{i}: CPU lobe {cpu:?}, GPU lobe {gpu:?}"),

@@ -13,13 +13,14 @@
 use glam::{Vec2, Vec3};
 use mcg_gpu_backend::guides::mcmm::GpuMcmmGuide;
 use mcg_gpu_backend::sampling::next_uniform;
-use mcg_gpu_backend::{GpuContext, shaders, wgpu};
+use mcg_gpu_backend::{GpuContext, GuidedKernel, shaders, storage_entry, wgpu};
 use mcg_markov_guide::mcmm::{
     CosineChainTechnique, McmmParams, McmmPrior, PixelState, PixelStateBuffers, ScoreDensity,
     bspline_offset, resample_neighbour, update,
 };
 use mcg_markov_guide::{cosine_hemisphere, cosine_hemisphere_pdf};
 use mcg_smis::{CyclicShift, Technique, XorPermutation, smis_one_sample};
+use mcg_test_support::assert_close;
 use mcg_vmf::{FitParams, SufficientStats};
 use rand::{Rng, RngExt};
 
@@ -58,52 +59,25 @@ struct StepOutput {
 /// The test kernel's two pipelines with the guide's bind group layout at group 1 (the
 /// renderer's choice here) and the test's buffers at group 0.
 struct Kernel {
-    io_layout: wgpu::BindGroupLayout,
+    kernel: GuidedKernel,
     step: wgpu::ComputePipeline,
     shuffle: wgpu::ComputePipeline,
 }
 
 impl Kernel {
     fn new(ctx: &GpuContext, guide: &GpuMcmmGuide) -> Self {
-        let device = ctx.device();
         let source = shaders::compose(KERNEL, &GpuMcmmGuide::shader_defs(1)).unwrap();
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("mcmm parity"),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
-        let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let io_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("mcmm parity io"),
-            entries: &[storage(0, true), storage(1, false)],
-        });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("mcmm parity"),
-            bind_group_layouts: &[Some(&io_layout), Some(guide.bind_group_layout())],
-            immediate_size: 0,
-        });
-        let pipeline = |entry| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
+        let kernel = GuidedKernel::from_wgsl(
+            ctx,
+            "mcmm parity",
+            source,
+            &[storage_entry(0, true), storage_entry(1, false)],
+            guide.bind_group_layout(),
+        );
         Self {
-            step: pipeline("mcmm_step"),
-            shuffle: pipeline("mcmm_shuffle"),
-            io_layout,
+            step: kernel.pipeline(ctx, "mcmm_step"),
+            shuffle: kernel.pipeline(ctx, "mcmm_shuffle"),
+            kernel,
         }
     }
 
@@ -120,20 +94,7 @@ impl Kernel {
         let device = ctx.device();
         let input = ctx.storage_buffer("inputs", inputs);
         let output = ctx.zeroed_buffer::<StepOutput>("outputs", inputs.len());
-        let io = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("mcmm parity io"),
-            layout: &self.io_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: input.raw().as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: output.raw().as_entire_binding(),
-                },
-            ],
-        });
+        let io = self.kernel.io_bind_group(ctx, &[input.raw(), output.raw()]);
         let mut encoder = device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
@@ -344,19 +305,15 @@ fn check_frame(
             .sum::<f64>()
             / set.len() as f64
             + 4.0 * EPS * pdf;
-        assert!(
-            (f64::from(g.pdf) - pdf).abs() <= tol,
-            "{i}: pdf {} vs {pdf} (tolerance {tol})",
-            g.pdf
-        );
+        assert_close!(f64::from(g.pdf), pdf, tol, "{i}: pdf");
         let value = input.value * input.normal.dot(wg).max(0.0);
         let f = smis_one_sample(&set, &wg, value);
         let rel = tol / pdf.max(f64::MIN_POSITIVE) + 4.0 * EPS;
-        assert!(
-            (f64::from(g.score) - f64::from(f)).abs()
-                <= rel * f64::from(f) + f64::from(f32::MIN_POSITIVE),
-            "{i}: score {} vs {f}",
-            g.score
+        assert_close!(
+            f64::from(g.score),
+            f64::from(f),
+            rel * f64::from(f) + f64::from(f32::MIN_POSITIVE),
+            "{i}: score"
         );
         // Alg. 3 with the CPU's f; acceptance decisions equal unless u·S_c.f is within the
         // score's tolerance of f (a tie the two sides may break differently).
@@ -540,7 +497,10 @@ fn guide_validates_its_inputs() {
     assert!(matches!(
         GpuMcmmGuide::new(ctx, 4, 4, &p),
         Err(GpuError::Guide(GuideError::Params(
-            ParamsError::ProbabilityOutOfRange
+            ParamsError::ProbabilityOutOfRange {
+                parameter: "hemisphere_probability",
+                ..
+            }
         )))
     ));
     let mut p = McmmParams::PAPER;
@@ -549,7 +509,9 @@ fn guide_validates_its_inputs() {
     assert!(matches!(
         guide.set_params(ctx, &p),
         Err(GpuError::Guide(GuideError::Params(
-            ParamsError::NoCandidates
+            ParamsError::NoCandidates {
+                parameter: "neighbour_candidates"
+            }
         )))
     ));
     for (w, h) in [(1 << 20, 1 << 20), (u32::MAX, u32::MAX)] {

@@ -27,6 +27,7 @@ use mcg_markov_guide::mcpg::{
     CacheConfig, DiscardRule, GridState, Guide, GuideConfig, Hemisphere, Traced, Transition,
     Vertex, VertexObservation, single_scattering::jittered_view_direction,
 };
+use mcg_test_support::assert_close;
 use rand::{Rng, RngExt};
 
 const FRAMES: usize = 6;
@@ -198,9 +199,10 @@ fn compare_states(label: &str, cpu: &[GridState], gpu: &[GridState]) {
             (c.mean_target - g.mean_target).length() <= 1e-4 * (1.0 + c.mean_target.length()),
             "{l}: ȳ {c:?} vs {g:?}"
         );
-        assert!(
-            (c.one_minus_mean_cosine - g.one_minus_mean_cosine).abs()
-                <= 1e-4 * c.one_minus_mean_cosine.abs() + 1e-6,
+        assert_close!(
+            c.one_minus_mean_cosine,
+            g.one_minus_mean_cosine,
+            1e-4 * c.one_minus_mean_cosine.abs() + 1e-6,
             "{l}: 1 − r̄ {c:?} vs {g:?}"
         );
     }

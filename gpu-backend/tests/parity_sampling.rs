@@ -10,6 +10,7 @@ use glam::{Vec2, Vec3};
 use mcg_gpu_backend::sampling::{next_u32, next_uniform, pcg_hash, uniform_float};
 use mcg_gpu_backend::{GpuBuffer, shaders};
 use mcg_markov_guide::{cosine_hemisphere, cosine_hemisphere_pdf};
+use mcg_test_support::assert_close;
 use mcg_vmf::Frame;
 use rand::RngExt;
 
@@ -151,7 +152,7 @@ fn sampling_matches_the_cpu() {
             r.pdf
         );
         let again = cosine_hemisphere_pdf(q.normal, r.direction);
-        assert!((r.pdf_again - again).abs() <= 1e-6, "{i}: pdf");
+        assert_close!(r.pdf_again, again, 1e-6, "{i}: pdf");
     }
     println!("cosine hemisphere: largest GPU − CPU difference {worst:.2e}");
 }

@@ -13,6 +13,7 @@ use mcg_gpu_backend::types::{
     VmfQuery, VmfStatsQuery, VmfUpdate, mixture_stride_floats, pack_mixtures,
 };
 use mcg_gpu_backend::{VmfKernels, VmfMixtureKernel};
+use mcg_test_support::assert_close;
 use mcg_vmf::{FitParams, MapPrior, PriorDecay, SufficientStats, Vmf, VmfMixture};
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
@@ -178,16 +179,14 @@ fn vmf_reconstruction_and_products_match_the_cpu() {
                     lobe.mu()
                 );
                 let k = f64::from(lobe.kappa());
-                assert!(
-                    (f64::from(g.reconstructed[3]) - k).abs() <= 64.0 * EPS * k,
-                    "{i}: κ {} vs {k}",
-                    g.reconstructed[3]
-                );
+                assert_close!(f64::from(g.reconstructed[3]), k, 64.0 * EPS * k, "{i}: κ");
                 // Product with `other`, from the CPU's lobe.
                 let (p, scale) = lobe.product(&q.other);
                 let pk = f64::from(p.kappa());
-                assert!(
-                    (f64::from(g.product[3]) - pk).abs() <= 64.0 * EPS * pk.max(1.0),
+                assert_close!(
+                    f64::from(g.product[3]),
+                    pk,
+                    64.0 * EPS * pk.max(1.0),
                     "{i}: product κ"
                 );
                 let pmu = Vec3::from_slice(&g.product[..3]);
@@ -216,17 +215,14 @@ fn vmf_reconstruction_and_products_match_the_cpu() {
         let a = mcg_vmf::mean_cosine_from_kappa(kappa);
         let kd = f64::from(kappa);
         let tol = tolerance::mean_cosine(kd);
-        assert!(
-            (f64::from(g.mean_cosine) - f64::from(a)).abs() <= tol,
-            "A₃({kappa}): {} vs {a}",
-            g.mean_cosine
-        );
+        assert_close!(f64::from(g.mean_cosine), f64::from(a), tol, "A₃({kappa})");
         // Banerjee's κ of the GPU's own A₃ (arithmetic only) matches the CPU's of the same r.
         let kb = mcg_vmf::kappa_from_mean_cosine(g.mean_cosine);
-        assert!(
-            (f64::from(g.kappa_back) - f64::from(kb)).abs() <= 64.0 * EPS * f64::from(kb).max(1.0),
-            "κ(A₃) {} vs {kb}",
-            g.kappa_back
+        assert_close!(
+            f64::from(g.kappa_back),
+            f64::from(kb),
+            64.0 * EPS * f64::from(kb).max(1.0),
+            "κ(A₃)"
         );
     }
     assert!(lobes > 1500, "{lobes} lobes");
@@ -290,11 +286,7 @@ fn vmf_stats_update_matches_the_cpu() {
             let g = gpu[i];
             assert_eq!(g.sample_count, cpu.sample_count, "{i}");
             let w = f64::from(cpu.weight_sum);
-            assert!(
-                (f64::from(g.weight_sum) - w).abs() <= 8.0 * EPS * w,
-                "{i}: w̄ {} vs {w}",
-                g.weight_sum
-            );
+            assert_close!(f64::from(g.weight_sum), w, 8.0 * EPS * w, "{i}: w̄");
             let scale = f64::from(before.mean_target.length() + u.y.length());
             assert!(
                 f64::from((g.mean_target - cpu.mean_target).length()) <= 16.0 * EPS * scale,
@@ -312,11 +304,7 @@ fn vmf_stats_update_matches_the_cpu() {
             let e = f64::from(before.one_minus_mean_cosine);
             let tol = 32.0 * EPS * ((2.0 * t).sqrt() + e + t) + 400.0 * EPS * EPS;
             let c = f64::from(cpu.one_minus_mean_cosine);
-            assert!(
-                (f64::from(g.one_minus_mean_cosine) - c).abs() <= tol,
-                "{i}: 1 − r̄ {} vs {c} (tolerance {tol})",
-                g.one_minus_mean_cosine
-            );
+            assert_close!(f64::from(g.one_minus_mean_cosine), c, tol, "{i}: 1 − r̄");
         }
     }
 }
@@ -408,11 +396,7 @@ fn vmf_mixture_matches_the_cpu() {
         worst_dir = worst_dir.max(err_dir / tol_dir);
         let at = f64::from(m.pdf(g.direction));
         let tol_p = pdf_tolerance(m, g.direction);
-        assert!(
-            (f64::from(g.pdf) - at).abs() <= tol_p,
-            "{i}: sample pdf GPU {} CPU {at}",
-            g.pdf
-        );
+        assert_close!(f64::from(g.pdf), at, tol_p, "{i}: sample pdf, GPU vs CPU");
     }
     println!(
         "mixture parity ({n} mixtures of 4): choices bit-exact; largest error / tolerance: \
@@ -539,11 +523,7 @@ fn vmf_mixture_kernel_takes_any_k() {
                 "K = {K}"
             );
             let cpu = m.pdf(q.direction);
-            assert!(
-                (e.pdf - cpu).abs() <= 1e-4 * cpu + 1e-30,
-                "K = {K}: pdf GPU {} CPU {cpu}",
-                e.pdf
-            );
+            assert_close!(e.pdf, cpu, 1e-4 * cpu + 1e-30, "K = {K}: pdf, GPU vs CPU");
         }
     }
     check::<1>(ctx, &mut rng);

@@ -9,6 +9,7 @@ use mcg_gpu_backend::testing::gpu_or_skip;
 use mcg_gpu_backend::types::{HashgridTableParams, VmfQuery};
 use mcg_gpu_backend::{GpuBuffer, GpuContext, VmfKernels};
 use mcg_hashgrid::{BucketHash, CellKey, HashTable, Insert};
+use mcg_test_support::assert_close;
 use mcg_vmf::Vmf;
 
 mod common;
@@ -50,7 +51,7 @@ fn host_types_run_on_the_renderers_own_device() {
     let kernels = VmfKernels::new();
     let (pdfs, _) = kernels.pdf_and_sample(&ctx, &lobes, &queries).unwrap();
     let cpu = lobes[0].pdf(Vec3::Z);
-    assert!((pdfs[0] - cpu).abs() <= 1e-4 * cpu, "{} vs {cpu}", pdfs[0]);
+    assert_close!(pdfs[0], cpu, 1e-4 * cpu);
     assert_eq!(
         kernels.pdf_and_sample(&ctx, &lobes, &queries[..2]),
         Err(GpuError::LengthMismatch {

@@ -20,7 +20,7 @@
 use glam::Vec3;
 use mcg_gpu_backend::guides::mcmm::GpuMcmmGuide;
 use mcg_gpu_backend::testing::gpu_or_skip;
-use mcg_gpu_backend::{GpuContext, shaders, wgpu};
+use mcg_gpu_backend::{GpuContext, GuidedKernel, buffer_entry, shaders, storage_entry, wgpu};
 use mcg_markov_guide::mcmm::McmmParams;
 
 const KERNEL: &str = include_str!("kernels/mcmm_smis.wgsl");
@@ -86,40 +86,17 @@ fn observations(ctx: &GpuContext, scheme: Scheme, seed: u32, subgroups: bool) ->
         defs.push((shaders::defs::MCMM_SUBGROUPS, 1));
     }
     let source = shaders::compose(KERNEL, &defs).unwrap();
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("mcmm smis"),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
-    let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    let io_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("mcmm smis io"),
-        entries: &[
-            entry(0, wgpu::BufferBindingType::Uniform),
-            entry(1, wgpu::BufferBindingType::Storage { read_only: false }),
+    let kernel = GuidedKernel::from_wgsl(
+        ctx,
+        "mcmm smis",
+        source,
+        &[
+            buffer_entry(0, wgpu::BufferBindingType::Uniform),
+            storage_entry(1, false),
         ],
-    });
-    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("mcmm smis"),
-        bind_group_layouts: &[Some(&io_layout), Some(guide.bind_group_layout())],
-        immediate_size: 0,
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("mcmm_smis_frame"),
-        layout: Some(&layout),
-        module: &module,
-        entry_point: Some("mcmm_smis_frame"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
+        guide.bind_group_layout(),
+    );
+    let pipeline = kernel.pipeline(ctx, "mcmm_smis_frame");
     let n = (TILE * TILES) as usize;
     let estimates = ctx.zeroed_buffer::<f32>("estimates", n);
     let mut sums = vec![0.0f64; TILES as usize];
@@ -135,20 +112,7 @@ fn observations(ctx: &GpuContext, scheme: Scheme, seed: u32, subgroups: bool) ->
             steps: STEPS,
         };
         let uniform = ctx.uniform_buffer("frame", &frame);
-        let io = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("mcmm smis io"),
-            layout: &io_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: uniform.raw().as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: estimates.raw().as_entire_binding(),
-                },
-            ],
-        });
+        let io = kernel.io_bind_group(ctx, &[uniform.raw(), estimates.raw()]);
         let mut encoder = device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());

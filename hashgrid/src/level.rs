@@ -96,19 +96,28 @@ impl AdaptiveGrid {
     /// [`GridError::CoarsestWidthNotFinite`] for the last one.
     pub fn new(params: LevelParams) -> Result<Self, GridError> {
         if !(params.tan_half_angle > 0.0 && params.tan_half_angle.is_finite()) {
-            return Err(GridError::TanHalfAngleNotPositive);
+            return Err(GridError::TanHalfAngleNotPositive {
+                tan_half_angle: params.tan_half_angle,
+            });
         }
         if !(params.min_width > 0.0 && params.min_width.is_finite()) {
-            return Err(GridError::WidthNotPositive);
+            return Err(GridError::WidthNotPositive {
+                width: params.min_width,
+            });
         }
         if !(params.power > 1.0 && params.power.is_finite()) {
-            return Err(GridError::PowerNotAboveOne);
+            return Err(GridError::PowerNotAboveOne {
+                power: params.power,
+            });
         }
         if params.steps == 0 {
             return Err(GridError::StepsZero);
         }
         if params.max_level > MAX_LEVEL {
-            return Err(GridError::MaxLevelTooLarge);
+            return Err(GridError::MaxLevelTooLarge {
+                max_level: params.max_level,
+                maximum: MAX_LEVEL,
+            });
         }
         let ln_power = math::ln(params.power);
         // `width` evaluates w_min · exp(level · ln POWER / STEPS): both the exponential (the
@@ -116,7 +125,7 @@ impl AdaptiveGrid {
         let ln_ratio = params.max_level as f32 * (ln_power / params.steps as f32);
         let ln_coarsest = math::ln(params.min_width) + ln_ratio;
         if !(ln_ratio < LN_WIDTH_MAX && ln_coarsest < LN_WIDTH_MAX) {
-            return Err(GridError::CoarsestWidthNotFinite);
+            return Err(GridError::CoarsestWidthNotFinite { params });
         }
         let ln_per_level = ln_power / params.steps as f32;
         let mut widths = [0.0; MAX_LEVEL as usize + 1];
@@ -256,7 +265,7 @@ impl StaticGrid {
     /// A static grid with cells `width` wide (positive and finite).
     pub fn new(width: f32) -> Result<Self, GridError> {
         if !(width > 0.0 && width.is_finite()) {
-            return Err(GridError::WidthNotPositive);
+            return Err(GridError::WidthNotPositive { width });
         }
         Ok(Self { width })
     }
@@ -300,6 +309,7 @@ impl Default for StaticGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::string::ToString;
 
     #[test]
     fn constructors_validate() {
@@ -309,34 +319,63 @@ mod tests {
             f(&mut p);
             AdaptiveGrid::new(p).unwrap_err()
         };
-        assert_eq!(
+        assert!(matches!(
             bad(|p| p.tan_half_angle = f32::NAN),
-            GridError::TanHalfAngleNotPositive
-        );
+            GridError::TanHalfAngleNotPositive { tan_half_angle } if tan_half_angle.is_nan()
+        ));
         assert_eq!(
             bad(|p| p.tan_half_angle = 0.0),
-            GridError::TanHalfAngleNotPositive
+            GridError::TanHalfAngleNotPositive {
+                tan_half_angle: 0.0
+            }
         );
-        assert_eq!(bad(|p| p.min_width = -1.0), GridError::WidthNotPositive);
+        assert_eq!(
+            bad(|p| p.min_width = -1.0),
+            GridError::WidthNotPositive { width: -1.0 }
+        );
         assert_eq!(
             bad(|p| p.min_width = f32::INFINITY),
-            GridError::WidthNotPositive
+            GridError::WidthNotPositive {
+                width: f32::INFINITY
+            }
         );
-        assert_eq!(bad(|p| p.power = 1.0), GridError::PowerNotAboveOne);
-        assert_eq!(bad(|p| p.power = f32::NAN), GridError::PowerNotAboveOne);
+        assert_eq!(
+            bad(|p| p.power = 1.0),
+            GridError::PowerNotAboveOne { power: 1.0 }
+        );
+        assert!(matches!(
+            bad(|p| p.power = f32::NAN),
+            GridError::PowerNotAboveOne { power } if power.is_nan()
+        ));
         assert_eq!(bad(|p| p.steps = 0), GridError::StepsZero);
-        assert_eq!(bad(|p| p.max_level = 256), GridError::MaxLevelTooLarge);
+        assert_eq!(
+            bad(|p| p.max_level = 256),
+            GridError::MaxLevelTooLarge {
+                max_level: 256,
+                maximum: 255
+            }
+        );
         // Issue 14 row 8: power 10¹⁰ per level was accepted and width(level 25) was +∞.
         assert_eq!(
             bad(|p| {
                 p.power = 1e10;
                 p.steps = 1;
             }),
-            GridError::CoarsestWidthNotFinite
+            GridError::CoarsestWidthNotFinite {
+                params: LevelParams {
+                    power: 1e10,
+                    steps: 1,
+                    ..ok
+                }
+            }
+        );
+        let e = bad(|p| p.min_width = 1e38);
+        assert!(
+            matches!(e, GridError::CoarsestWidthNotFinite { params } if params.min_width == 1e38)
         );
         assert_eq!(
-            bad(|p| p.min_width = 1e38),
-            GridError::CoarsestWidthNotFinite
+            e.to_string(),
+            "coarsest cell width 100000000000000000000000000000000000000 * 4^(255/4) overflows f32"
         );
         let wide = AdaptiveGrid::new(LevelParams {
             tan_half_angle: f32::MAX,
@@ -353,7 +392,15 @@ mod tests {
                 p.steps = 43;
                 p.max_level = 83;
             }),
-            GridError::CoarsestWidthNotFinite
+            GridError::CoarsestWidthNotFinite {
+                params: LevelParams {
+                    min_width: 1e-45,
+                    power: 1e20,
+                    steps: 43,
+                    max_level: 83,
+                    ..ok
+                }
+            }
         );
         let g = AdaptiveGrid::new(LevelParams {
             power: 1e10,
@@ -370,8 +417,14 @@ mod tests {
         let w = g.width(g.level(1e30, 0.999_999_9));
         assert!(w.is_finite(), "{w}");
         assert!(AdaptiveGrid::new(ok).is_ok());
-        assert_eq!(StaticGrid::new(0.0), Err(GridError::WidthNotPositive));
-        assert_eq!(StaticGrid::new(f32::NAN), Err(GridError::WidthNotPositive));
+        assert_eq!(
+            StaticGrid::new(0.0),
+            Err(GridError::WidthNotPositive { width: 0.0 })
+        );
+        assert!(matches!(
+            StaticGrid::new(f32::NAN),
+            Err(GridError::WidthNotPositive { width }) if width.is_nan()
+        ));
         assert_eq!(StaticGrid::new(2.0).unwrap().width(), 2.0);
     }
 

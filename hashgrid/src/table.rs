@@ -22,7 +22,10 @@ pub(crate) fn validate(capacity: u32, max_probes: u32) -> Result<SlotIndexer, Ta
         return Err(TableError::MaxProbesZero);
     }
     if max_probes > capacity {
-        return Err(TableError::MaxProbesAboveCapacity);
+        return Err(TableError::MaxProbesAboveCapacity {
+            max_probes,
+            capacity,
+        });
     }
     Ok(indexer)
 }
@@ -536,7 +539,10 @@ mod tests {
         );
         assert_eq!(
             HashTable::<u32>::new(8, 9, BucketHash::Mix).unwrap_err(),
-            TableError::MaxProbesAboveCapacity
+            TableError::MaxProbesAboveCapacity {
+                max_probes: 9,
+                capacity: 8
+            }
         );
     }
 

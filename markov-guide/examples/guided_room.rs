@@ -473,7 +473,43 @@ fn run(
     }
 }
 
-fn main() {
+/// The guide's settings given on the command line (`None`: the default).
+struct GuideOptions {
+    hemisphere: Hemisphere,
+    bsdf_probability: Option<f32>,
+    cache: bool,
+    level_bias: Option<u32>,
+    candidates: Option<u32>,
+    adaptive_capacity: Option<u32>,
+}
+
+impl GuideOptions {
+    /// The configuration for the room seen by the camera, with these options applied.
+    fn config(&self, settings: &Settings) -> GuideConfig {
+        let mut config = GuideConfig::for_scene(Vec3::ZERO, Vec3::ONE)
+            .for_camera(FOV_Y.to_radians(), settings.size as u32);
+        config.hemisphere = self.hemisphere;
+        if let Some(p) = self.bsdf_probability {
+            config.params.bsdf_probability = p;
+        }
+        if let Some(n) = self.candidates {
+            config.params.candidates = n;
+        }
+        if let Some(n) = self.adaptive_capacity {
+            config.adaptive_capacity = n;
+        }
+        if !self.cache {
+            config.cache = None;
+        }
+        if let (Some(c), Some(b)) = (&mut config.cache, self.level_bias) {
+            c.level_bias = b;
+        }
+        config
+    }
+}
+
+/// The settings and guide options from the command line (see the module docs).
+fn parse_args() -> (Settings, GuideOptions) {
     let mut settings = Settings {
         size: 96,
         frames: 64,
@@ -483,12 +519,14 @@ fn main() {
         bounces: 3,
         seed: 1,
     };
-    let mut hemisphere = Hemisphere::CosineProduct;
-    let mut bsdf_probability = None;
-    let mut cache = true;
-    let mut level_bias = None;
-    let mut candidates = None;
-    let mut adaptive_capacity = None;
+    let mut options = GuideOptions {
+        hemisphere: Hemisphere::CosineProduct,
+        bsdf_probability: None,
+        cache: true,
+        level_bias: None,
+        candidates: None,
+        adaptive_capacity: None,
+    };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
     while i < args.len() {
@@ -504,32 +542,36 @@ fn main() {
             "--bounces" => settings.bounces = value().parse().expect("--bounces N"),
             "--seed" => settings.seed = value().parse().expect("--seed N"),
             "--cache-level-bias" => {
-                level_bias = Some(value().parse().expect("--cache-level-bias N"))
+                options.level_bias = Some(value().parse().expect("--cache-level-bias N"))
             }
             "--bsdf-probability" => {
-                bsdf_probability = Some(value().parse().expect("--bsdf-probability P"))
+                options.bsdf_probability = Some(value().parse().expect("--bsdf-probability P"))
             }
-            "--candidates" => candidates = Some(value().parse().expect("--candidates N")),
+            "--candidates" => options.candidates = Some(value().parse().expect("--candidates N")),
             "--adaptive-capacity" => {
-                adaptive_capacity = Some(value().parse().expect("--adaptive-capacity N"))
+                options.adaptive_capacity = Some(value().parse().expect("--adaptive-capacity N"))
             }
             "--hemisphere" => {
-                hemisphere = match value().as_str() {
+                options.hemisphere = match value().as_str() {
                     "sphere" => Hemisphere::Sphere,
                     _ => Hemisphere::CosineProduct,
                 }
             }
             "--no-cache" => {
-                cache = false;
+                options.cache = false;
                 i -= 1;
             }
             other => panic!("unknown argument {other}"),
         }
         i += 2;
     }
-    let scene = Scene::room();
+    (settings, options)
+}
+
+/// The reference image: read from the temporary directory when an earlier run stored it (it
+/// depends on size, bounces, spp and seed only), else rendered with cosine sampling and stored.
+fn reference_image(scene: &Scene, settings: &Settings) -> Vec<Vec3> {
     let start = Instant::now();
-    // The reference depends on size, bounces, spp and seed only; keep it between runs.
     let path = std::env::temp_dir().join(format!(
         "guided_room_reference_{}_{}_{}_{}.f32",
         settings.size, settings.bounces, settings.reference_spp, settings.seed
@@ -546,9 +588,9 @@ fn main() {
         Some(r) => r,
         None => {
             let (r, _) = render_frame(
-                &scene,
+                scene,
                 None,
-                &settings,
+                settings,
                 settings.reference_spp,
                 u64::MAX - settings.seed,
             );
@@ -567,24 +609,14 @@ fn main() {
         path.display(),
         start.elapsed().as_secs_f64()
     );
-    let mut config = GuideConfig::for_scene(Vec3::ZERO, Vec3::ONE)
-        .for_camera(FOV_Y.to_radians(), settings.size as u32);
-    config.hemisphere = hemisphere;
-    if let Some(p) = bsdf_probability {
-        config.params.bsdf_probability = p;
-    }
-    if let Some(n) = candidates {
-        config.params.candidates = n;
-    }
-    if let Some(n) = adaptive_capacity {
-        config.adaptive_capacity = n;
-    }
-    if !cache {
-        config.cache = None;
-    }
-    if let (Some(c), Some(b)) = (&mut config.cache, level_bias) {
-        c.level_bias = b;
-    }
+    reference
+}
+
+fn main() {
+    let (settings, options) = parse_args();
+    let scene = Scene::room();
+    let reference = reference_image(&scene, &settings);
+    let config = options.config(&settings);
     let cosine = run(&scene, None, &settings, &reference, settings.seed);
     let guided = run(
         &scene,
@@ -593,6 +625,13 @@ fn main() {
         &reference,
         settings.seed + 17,
     );
+    print_comparison(&settings, &cosine, &guided);
+}
+
+/// The table of the two runs: late-frame MSE and time per frame, the MSE ratios at equal spp
+/// and equal time, the guided lobe samples below the surface, the warm-up ratios, and the
+/// accumulated image sums (unbiasedness).
+fn print_comparison(settings: &Settings, cosine: &Run, guided: &Run) {
     let half = settings.frames / 2;
     println!(
         "{}x{}, {} frames x {} spp, {} bounces, {} threads; frames {}-{}:",
@@ -605,7 +644,7 @@ fn main() {
         half + 1,
         settings.frames
     );
-    for (name, r) in [("cosine", &cosine), ("MCPG", &guided)] {
+    for (name, r) in [("cosine", cosine), ("MCPG", guided)] {
         println!(
             "  {name:6}: per-frame MSE {:.5}, {:.1} ms per frame (wall), {} ms CPU per frame",
             r.mse_late,

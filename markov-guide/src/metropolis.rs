@@ -132,15 +132,19 @@ impl<const D: usize> RandomWalk<D> {
         if D == 0 {
             return Err(WalkError::NoDimensions);
         }
-        for s in step {
+        for (dimension, s) in step.into_iter().enumerate() {
             if !s.is_finite() {
-                return Err(WalkError::StepNotFinite);
+                return Err(WalkError::StepNotFinite { dimension, step: s });
             }
             if !(s > 0.0) {
-                return Err(WalkError::StepNotPositive);
+                return Err(WalkError::StepNotPositive { dimension, step: s });
             }
             if s > Self::STEP_MAX {
-                return Err(WalkError::StepAboveMax);
+                return Err(WalkError::StepAboveMax {
+                    dimension,
+                    step: s,
+                    maximum: Self::STEP_MAX,
+                });
             }
         }
         Ok(Self { step })
@@ -289,7 +293,10 @@ impl FrameSchedule {
     /// M ≥ 2 and K < M; we only need one emitted sample, so M = 1, K = 0 is accepted too).
     pub const fn new(iterations: u32, burn_in: u32) -> Result<Self, WalkError> {
         if burn_in >= iterations {
-            return Err(WalkError::BurnInTooLong);
+            return Err(WalkError::BurnInTooLong {
+                burn_in,
+                iterations,
+            });
         }
         Ok(Self {
             iterations,
@@ -322,6 +329,7 @@ impl Default for FrameSchedule {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::string::ToString;
 
     /// Φ⁻¹ in f64: bisection on Φ, computed by composite Simpson integration of the density.
     fn reference_quantile(u: f64) -> f64 {
@@ -376,14 +384,36 @@ mod tests {
 
     #[test]
     fn rejects_bad_steps() {
-        assert_eq!(
+        assert!(matches!(
             RandomWalk::new([1.0, f32::NAN]),
-            Err(WalkError::StepNotFinite)
+            Err(WalkError::StepNotFinite { dimension: 1, step }) if step.is_nan()
+        ));
+        assert_eq!(
+            RandomWalk::new([1.0, 0.0]),
+            Err(WalkError::StepNotPositive {
+                dimension: 1,
+                step: 0.0
+            })
         );
-        assert_eq!(RandomWalk::new([1.0, 0.0]), Err(WalkError::StepNotPositive));
-        assert_eq!(RandomWalk::new([-1.0]), Err(WalkError::StepNotPositive));
+        assert_eq!(
+            RandomWalk::new([-1.0]),
+            Err(WalkError::StepNotPositive {
+                dimension: 0,
+                step: -1.0
+            })
+        );
         assert_eq!(RandomWalk::<0>::new([]), Err(WalkError::NoDimensions));
-        assert_eq!(FrameSchedule::new(4, 4), Err(WalkError::BurnInTooLong));
+        assert_eq!(
+            FrameSchedule::new(4, 4),
+            Err(WalkError::BurnInTooLong {
+                burn_in: 4,
+                iterations: 4
+            })
+        );
+        assert_eq!(
+            FrameSchedule::new(4, 5).unwrap_err().to_string(),
+            "burn-in 5 is not shorter than the 4 steps per frame"
+        );
         assert!(RandomWalk::adgi_static(0.5).is_ok());
         assert!(RandomWalk::adgi_static(-0.5).is_err());
     }
@@ -406,8 +436,22 @@ mod tests {
     fn huge_steps_are_rejected_and_proposals_stay_finite() {
         // Issue 14 row 11: σ = f32::MAX was accepted, `propose` returned ∞ and an accepting
         // chain ended at NaN.
-        assert_eq!(RandomWalk::new([f32::MAX]), Err(WalkError::StepAboveMax));
-        assert_eq!(RandomWalk::new([0.1, 1.1e30]), Err(WalkError::StepAboveMax));
+        assert_eq!(
+            RandomWalk::new([f32::MAX]),
+            Err(WalkError::StepAboveMax {
+                dimension: 0,
+                step: f32::MAX,
+                maximum: 1e30
+            })
+        );
+        assert_eq!(
+            RandomWalk::new([0.1, 1.1e30]),
+            Err(WalkError::StepAboveMax {
+                dimension: 1,
+                step: 1.1e30,
+                maximum: 1e30
+            })
+        );
         let walk = RandomWalk::new([RandomWalk::<1>::STEP_MAX]).unwrap();
         let mut chain = MetropolisChain::new([0.0]);
         for i in 0..64 {

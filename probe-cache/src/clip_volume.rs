@@ -35,14 +35,14 @@ impl Frustum {
     /// The six planes `(n, d)` with `n · p + d ≥ 0` inside; each is normalised.
     ///
     /// # Errors
-    /// [`ControlError::ClipVolumeInvalid`] for a plane with a NaN or infinite component or a zero
+    /// [`ControlError::ClipPlaneInvalid`] for a plane with a NaN or infinite component or a zero
     /// normal.
     pub fn from_planes(planes: [Vec4; 6]) -> Result<Self, ControlError> {
         let mut out = [Vec4::ZERO; 6];
-        for (o, p) in out.iter_mut().zip(planes) {
+        for (index, (o, p)) in out.iter_mut().zip(planes).enumerate() {
             let len = p.truncate().length();
             if !p.is_finite() || !(len > 0.0) || !len.is_finite() {
-                return Err(ControlError::ClipVolumeInvalid);
+                return Err(ControlError::ClipPlaneInvalid { index, plane: p });
             }
             *o = p / len;
         }
@@ -108,11 +108,11 @@ impl ClipVolume {
     /// `frustum ∩ [min, max]`.
     ///
     /// # Errors
-    /// [`ControlError::ClipVolumeInvalid`] if a bound is NaN or `min > max` on an axis (infinite
+    /// [`ControlError::ClipBoxInvalid`] if a bound is NaN or `min > max` on an axis (infinite
     /// bounds are allowed: an unbounded box).
     pub fn new(frustum: Frustum, min: Vec3, max: Vec3) -> Result<Self, ControlError> {
         if !(min.cmple(max).all()) {
-            return Err(ControlError::ClipVolumeInvalid);
+            return Err(ControlError::ClipBoxInvalid { min, max });
         }
         Ok(Self { frustum, min, max })
     }
@@ -186,8 +186,8 @@ impl ClipVolumes {
     /// `outer_bounds`.
     ///
     /// # Errors
-    /// [`ControlError::ClipVolumeInvalid`] as [`Frustum::from_view_projection`] and
-    /// [`ClipVolume::new`].
+    /// [`ControlError::ClipPlaneInvalid`] or [`ControlError::ClipBoxInvalid`] as
+    /// [`Frustum::from_view_projection`] and [`ClipVolume::new`].
     pub fn from_camera(
         view_projection: Mat4,
         inner_bounds: (Vec3, Vec3),
@@ -244,9 +244,7 @@ impl ClipVolumes {
         grid: &ProbeGrid,
         out: &mut [ClipRegion],
     ) -> Result<(), LayoutError> {
-        if out.len() != grid.probe_count() {
-            return Err(LayoutError::TableLengthMismatch);
-        }
+        LayoutError::check_tables(grid.probe_count(), &[out.len()])?;
         for (i, o) in out.iter_mut().enumerate() {
             *o = self.classify(grid.probe_position(grid.probe_coords(i)));
         }
@@ -337,7 +335,10 @@ mod tests {
         }
         assert_eq!(
             Frustum::from_view_projection(Mat4::ZERO),
-            Err(ControlError::ClipVolumeInvalid)
+            Err(ControlError::ClipPlaneInvalid {
+                index: 0,
+                plane: Vec4::ZERO
+            })
         );
         assert_eq!(f.expanded(f32::NAN), f);
     }

@@ -4,56 +4,88 @@
 
 use core::fmt;
 
+use glam::{UVec3, Vec3, Vec4};
 use mcg_markov_guide::WalkError;
 
 /// Why a probe lattice or its proxy grid was rejected ([`crate::ProbeGrid::new`],
-/// [`crate::ProxyGrid::new`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+/// [`crate::ProxyGrid::new`]). Variants carry the values that were rejected.
+#[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum GridError {
     /// The grid origin has a NaN or infinite component.
-    OriginNotFinite,
+    OriginNotFinite {
+        /// The origin given.
+        origin: Vec3,
+    },
     /// A probe spacing component is NaN, infinite, or not positive.
-    SpacingNotPositive,
+    SpacingNotPositive {
+        /// The spacing given.
+        spacing: Vec3,
+    },
     /// A probe count along an axis is zero, or the total probe count overflows `u32`.
-    CountsOutOfRange,
+    CountsOutOfRange {
+        /// The counts given.
+        counts: UVec3,
+    },
     /// A proxy block size is zero.
     ProxyBlockZero,
 }
 
 impl fmt::Display for GridError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            GridError::OriginNotFinite => "probe grid origin is not finite",
-            GridError::SpacingNotPositive => "probe spacing is not a positive finite vector",
-            GridError::CountsOutOfRange => {
-                "probe counts must be at least 1 per axis and at most 2^32 - 1 in total"
+        match self {
+            GridError::OriginNotFinite { origin } => {
+                write!(f, "probe grid origin {origin} is not finite")
             }
-            GridError::ProxyBlockZero => "proxy block size is zero",
-        })
+            GridError::SpacingNotPositive { spacing } => {
+                write!(f, "probe spacing {spacing} is not a positive finite vector")
+            }
+            GridError::CountsOutOfRange { counts } => write!(
+                f,
+                "probe counts {counts} must be at least 1 per axis and at most 2^32 - 1 in total"
+            ),
+            GridError::ProxyBlockZero => f.write_str("proxy block size is zero"),
+        }
     }
 }
 
 impl core::error::Error for GridError {}
 
 /// Why the parameters of the heuristics ([`crate::HeuristicParams`]) or of the guiding
-/// function ([`crate::GuideParams`]) were rejected.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+/// function ([`crate::GuideParams`]) were rejected. Variants name the parameter and carry its
+/// value.
+#[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum ParameterError {
     /// A heuristic parameter (camera threshold k, voxel diagonal s, radiance range β,
     /// lighting weight μ) is NaN, infinite or out of its range.
-    HeuristicOutOfRange,
+    HeuristicOutOfRange {
+        /// The parameter's name, e.g. `"voxel_diagonal"`.
+        parameter: &'static str,
+        /// Its value.
+        value: f32,
+    },
     /// A guiding-function parameter (α, exponent cap) is NaN, infinite or out of its range.
-    GuideOutOfRange,
+    GuideOutOfRange {
+        /// The parameter's name, `"alpha"` or `"exponent_cap"`.
+        parameter: &'static str,
+        /// Its value.
+        value: f32,
+    },
 }
 
 impl fmt::Display for ParameterError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            ParameterError::HeuristicOutOfRange => "heuristic parameter is out of range",
-            ParameterError::GuideOutOfRange => "guiding function parameter is out of range",
-        })
+        match self {
+            ParameterError::HeuristicOutOfRange { parameter, value } => write!(
+                f,
+                "heuristic parameter {parameter} = {value} is out of range"
+            ),
+            ParameterError::GuideOutOfRange { parameter, value } => write!(
+                f,
+                "guiding function parameter {parameter} = {value} is out of range"
+            ),
+        }
     }
 }
 
@@ -65,27 +97,69 @@ impl core::error::Error for ParameterError {}
 pub enum LayoutError {
     /// A per-probe (or per-proxy) table does not have one entry per cell and octant, or two
     /// tables that must match differ in length.
-    TableLengthMismatch,
+    TableLengthMismatch {
+        /// The length required (the first table's length where tables must match).
+        expected: usize,
+        /// The first length that differs.
+        found: usize,
+    },
     /// A texel map's side length leaves no interior texel or exceeds the maximum.
-    MapSizeOutOfRange,
+    MapSizeOutOfRange {
+        /// The side length given.
+        side: u32,
+        /// The smallest side accepted (1, or 3 with a border).
+        minimum: u32,
+        /// The largest side accepted, [`crate::MAX_MAP_SIDE`].
+        maximum: u32,
+    },
     /// A word slice handed to [`crate::ProbeTexels::from_words`] (or copied out) does not have
     /// one word per stored texel of the grid.
-    WordCountMismatch,
+    WordCountMismatch {
+        /// The grid's stored texel count.
+        expected: usize,
+        /// The slice's length.
+        found: usize,
+    },
+}
+
+impl LayoutError {
+    /// `Ok` when every length in `found` equals `expected`, else
+    /// [`LayoutError::TableLengthMismatch`] with the first that differs.
+    pub(crate) fn check_tables(expected: usize, found: &[usize]) -> Result<(), LayoutError> {
+        match found.iter().find(|&&n| n != expected) {
+            None => Ok(()),
+            Some(&found) => Err(LayoutError::TableLengthMismatch { expected, found }),
+        }
+    }
+
+    /// `Ok` when `found == expected`, else [`LayoutError::WordCountMismatch`].
+    pub(crate) fn check_words(expected: usize, found: usize) -> Result<(), LayoutError> {
+        if expected == found {
+            Ok(())
+        } else {
+            Err(LayoutError::WordCountMismatch { expected, found })
+        }
+    }
 }
 
 impl fmt::Display for LayoutError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            LayoutError::TableLengthMismatch => {
-                "table length does not match the cell count times 8 octants"
-            }
-            LayoutError::MapSizeOutOfRange => {
-                "texel map side must leave at least one interior texel and be at most 1024"
-            }
-            LayoutError::WordCountMismatch => {
-                "word slice length does not match the grid's stored texel count"
-            }
-        })
+        match self {
+            LayoutError::TableLengthMismatch { expected, found } => write!(
+                f,
+                "table length {found} does not match the expected {expected} \
+                 (cells times 8 octants, or the first table's length)"
+            ),
+            LayoutError::MapSizeOutOfRange {
+                side,
+                minimum,
+                maximum,
+            } => write!(f, "texel map side {side} is not in {minimum}..={maximum}"),
+            LayoutError::WordCountMismatch { expected, found } => write!(
+                f,
+                "word slice length {found} does not match the grid's {expected} stored texels"
+            ),
+        }
     }
 }
 
@@ -93,7 +167,7 @@ impl core::error::Error for LayoutError {}
 
 /// Why a set of Metropolis chains ([`crate::ProbeChains`], [`crate::ChainKind::walk`]) could
 /// not be built.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum ChainError {
     /// A chain set was asked for zero chains.
@@ -131,27 +205,55 @@ impl core::error::Error for ChainError {
 
 /// Why a per-frame control was rejected: the temporal trigger
 /// ([`crate::TemporalTrigger::new`]), a clip volume ([`crate::ClipVolume`],
-/// [`crate::Frustum`]) or the pilot schedule ([`crate::PilotSchedule::new`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+/// [`crate::Frustum`]) or the pilot schedule ([`crate::PilotSchedule::new`]). Variants carry
+/// the values that were rejected.
+#[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum ControlError {
     /// A temporal trigger's decay θ is not in [0, 1).
-    TriggerDecayOutOfRange,
-    /// A clip volume's plane or box is NaN, degenerate or inverted.
-    ClipVolumeInvalid,
+    TriggerDecayOutOfRange {
+        /// The θ given.
+        decay: f32,
+    },
+    /// A frustum plane has a NaN or infinite component or a zero or non-finite normal.
+    ClipPlaneInvalid {
+        /// The plane's index (0..6).
+        index: usize,
+        /// The plane given, (n, d).
+        plane: Vec4,
+    },
+    /// A clip box bound is NaN or `min > max` on an axis.
+    ClipBoxInvalid {
+        /// The lower corner given.
+        min: Vec3,
+        /// The upper corner given.
+        max: Vec3,
+    },
     /// A pilot schedule holds its directions for fewer than 2 frames.
-    PilotHoldTooShort,
+    PilotHoldTooShort {
+        /// The hold given, in frames.
+        hold: u32,
+    },
 }
 
 impl fmt::Display for ControlError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            ControlError::TriggerDecayOutOfRange => "temporal trigger decay is not in [0, 1)",
-            ControlError::ClipVolumeInvalid => "clip volume plane or box is invalid",
-            ControlError::PilotHoldTooShort => {
-                "pilot directions must be held for at least 2 frames"
+        match self {
+            ControlError::TriggerDecayOutOfRange { decay } => {
+                write!(f, "temporal trigger decay {decay} is not in [0, 1)")
             }
-        })
+            ControlError::ClipPlaneInvalid { index, plane } => write!(
+                f,
+                "clip plane {index} = {plane} is not finite or has a zero normal"
+            ),
+            ControlError::ClipBoxInvalid { min, max } => {
+                write!(f, "clip box from {min} to {max} is NaN or inverted")
+            }
+            ControlError::PilotHoldTooShort { hold } => write!(
+                f,
+                "pilot directions are held for {hold} frames, at least 2 are needed"
+            ),
+        }
     }
 }
 
@@ -160,7 +262,7 @@ impl core::error::Error for ControlError {}
 /// Any error of this crate: the error of the concept that failed, for callers that collect
 /// them with `?`. Its message and [`source`](core::error::Error::source) are those of the
 /// wrapped error.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum ProbeError {
     /// The probe lattice or proxy grid.
@@ -225,18 +327,18 @@ mod tests {
 
     #[test]
     fn probe_error_keeps_the_concept_message_and_the_walk_cause() {
-        let e = ProbeError::from(ChainError::ChainStep(WalkError::StepAboveMax));
-        assert_eq!(
-            e.to_string(),
-            ChainError::ChainStep(WalkError::StepAboveMax).to_string()
-        );
-        assert_eq!(
-            e.source().map(ToString::to_string),
-            Some(WalkError::StepAboveMax.to_string())
-        );
-        let g = ProbeError::from(GridError::OriginNotFinite);
-        assert_eq!(g, ProbeError::Grid(GridError::OriginNotFinite));
-        assert_eq!(g.to_string(), "probe grid origin is not finite");
+        let walk = WalkError::StepAboveMax {
+            dimension: 0,
+            step: 2e30,
+            maximum: 1e30,
+        };
+        let e = ProbeError::from(ChainError::ChainStep(walk));
+        assert_eq!(e.to_string(), ChainError::ChainStep(walk).to_string());
+        assert_eq!(e.source().map(ToString::to_string), Some(walk.to_string()));
+        let origin = Vec3::new(0.0, f32::INFINITY, 1.0);
+        let g = ProbeError::from(GridError::OriginNotFinite { origin });
+        assert_eq!(g, ProbeError::Grid(GridError::OriginNotFinite { origin }));
+        assert_eq!(g.to_string(), "probe grid origin [0, inf, 1] is not finite");
         assert!(g.source().is_none());
     }
 }

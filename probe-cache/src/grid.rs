@@ -37,15 +37,15 @@ impl ProbeGrid {
     /// [`GridError::CountsOutOfRange`] for a zero count or more than `u32::MAX` probes.
     pub fn new(origin: Vec3, spacing: Vec3, counts: UVec3) -> Result<Self, GridError> {
         if !origin.is_finite() {
-            return Err(GridError::OriginNotFinite);
+            return Err(GridError::OriginNotFinite { origin });
         }
         if !(spacing.min_element() > 0.0) || !spacing.is_finite() {
-            return Err(GridError::SpacingNotPositive);
+            return Err(GridError::SpacingNotPositive { spacing });
         }
         // In u128: three u32 factors cannot overflow it (u64 could: 2³¹ · 2³¹ · 4 = 2⁶⁴).
         let total = u128::from(counts.x) * u128::from(counts.y) * u128::from(counts.z);
         if counts.min_element() == 0 || total > u128::from(u32::MAX) {
-            return Err(GridError::CountsOutOfRange);
+            return Err(GridError::CountsOutOfRange { counts });
         }
         Ok(Self {
             origin,
@@ -180,29 +180,37 @@ mod tests {
     fn rejects_bad_parameters() {
         let s = Vec3::ONE;
         let c = UVec3::splat(2);
-        assert_eq!(
+        assert!(matches!(
             ProbeGrid::new(Vec3::NAN, s, c),
-            Err(GridError::OriginNotFinite)
-        );
+            Err(GridError::OriginNotFinite { origin }) if origin.is_nan()
+        ));
         assert_eq!(
             ProbeGrid::new(Vec3::ZERO, Vec3::new(1.0, 0.0, 1.0), c),
-            Err(GridError::SpacingNotPositive)
+            Err(GridError::SpacingNotPositive {
+                spacing: Vec3::new(1.0, 0.0, 1.0)
+            })
         );
-        assert_eq!(
+        assert!(matches!(
             ProbeGrid::new(Vec3::ZERO, Vec3::splat(f32::NAN), c),
-            Err(GridError::SpacingNotPositive)
-        );
+            Err(GridError::SpacingNotPositive { spacing }) if spacing.is_nan()
+        ));
         assert_eq!(
             ProbeGrid::new(Vec3::ZERO, Vec3::splat(f32::INFINITY), c),
-            Err(GridError::SpacingNotPositive)
+            Err(GridError::SpacingNotPositive {
+                spacing: Vec3::splat(f32::INFINITY)
+            })
         );
         assert_eq!(
             ProbeGrid::new(Vec3::ZERO, s, UVec3::new(2, 0, 2)),
-            Err(GridError::CountsOutOfRange)
+            Err(GridError::CountsOutOfRange {
+                counts: UVec3::new(2, 0, 2)
+            })
         );
         assert_eq!(
             ProbeGrid::new(Vec3::ZERO, s, UVec3::splat(2048)),
-            Err(GridError::CountsOutOfRange)
+            Err(GridError::CountsOutOfRange {
+                counts: UVec3::splat(2048)
+            })
         );
         // Issue 14 row 13: 2³¹ · 2³¹ · 4 = 2⁶⁴ overflowed the u64 product (debug panic;
         // release accepted the grid with probe_count() == 0).
@@ -213,7 +221,7 @@ mod tests {
         ] {
             assert_eq!(
                 ProbeGrid::new(Vec3::ZERO, s, counts),
-                Err(GridError::CountsOutOfRange),
+                Err(GridError::CountsOutOfRange { counts }),
                 "{counts}"
             );
         }

@@ -59,8 +59,17 @@ impl GuideParams {
     /// [`ParameterError::GuideOutOfRange`] unless `alpha` is finite and ≥ 0 and
     /// `exponent_cap` is in [0, [`MAX_EXPONENT`]].
     pub fn new(alpha: f32, exponent_cap: f32) -> Result<Self, ParameterError> {
-        if !(alpha >= 0.0) || !alpha.is_finite() || !(0.0..=MAX_EXPONENT).contains(&exponent_cap) {
-            return Err(ParameterError::GuideOutOfRange);
+        if !(alpha >= 0.0) || !alpha.is_finite() {
+            return Err(ParameterError::GuideOutOfRange {
+                parameter: "alpha",
+                value: alpha,
+            });
+        }
+        if !(0.0..=MAX_EXPONENT).contains(&exponent_cap) {
+            return Err(ParameterError::GuideOutOfRange {
+                parameter: "exponent_cap",
+                value: exponent_cap,
+            });
         }
         Ok(Self {
             alpha,
@@ -194,9 +203,7 @@ impl<'a> GuidingFunction<'a> {
         params: GuideParams,
     ) -> Result<Self, LayoutError> {
         let n = cells.table_len();
-        if f.len() != n || feedback.is_some_and(|g| g.len() != n) {
-            return Err(LayoutError::TableLengthMismatch);
-        }
+        LayoutError::check_tables(n, &[f.len(), feedback.map_or(n, <[f32]>::len)])?;
         Ok(Self {
             cells,
             f,
@@ -318,9 +325,7 @@ pub fn decode_field(
     field: HeuristicField,
     out: &mut [f32],
 ) -> Result<(), LayoutError> {
-    if words.len() != out.len() {
-        return Err(LayoutError::TableLengthMismatch);
-    }
+    LayoutError::check_tables(words.len(), &[out.len()])?;
     for (o, &w) in out.iter_mut().zip(words) {
         let h = decode(w);
         *o = match field {
@@ -377,10 +382,16 @@ mod tests {
             (1.0, -0.1),
             (1.0, f32::NAN),
         ] {
-            assert_eq!(
-                GuideParams::new(a, c),
-                Err(ParameterError::GuideOutOfRange),
-                "{a} {c}"
+            let (parameter, value) = if a >= 0.0 && a.is_finite() {
+                ("exponent_cap", c)
+            } else {
+                ("alpha", a)
+            };
+            let e = GuideParams::new(a, c);
+            assert!(
+                matches!(e, Err(ParameterError::GuideOutOfRange { parameter: p, value: v })
+                    if p == parameter && v.to_bits() == value.to_bits()),
+                "{a} {c}: {e:?}"
             );
         }
         let p = GuideParams::new(0.5, MAX_EXPONENT).unwrap();
@@ -423,11 +434,17 @@ mod tests {
         mcg_test_support::assert_close!(plain.value(4, 5), 0.55, 1e-7);
         assert_eq!(
             GuidingFunction::new(cells, &f[1..], None, GuideParams::STATIC).err(),
-            Some(LayoutError::TableLengthMismatch)
+            Some(LayoutError::TableLengthMismatch {
+                expected: f.len(),
+                found: f.len() - 1
+            })
         );
         assert_eq!(
             GuidingFunction::new(cells, &f, Some(&g[1..]), GuideParams::STATIC).err(),
-            Some(LayoutError::TableLengthMismatch)
+            Some(LayoutError::TableLengthMismatch {
+                expected: f.len(),
+                found: g.len() - 1
+            })
         );
     }
 
@@ -453,7 +470,10 @@ mod tests {
         assert!((out[0] - 0.2).abs() < 1e-2 && out[1] == 1.0);
         assert_eq!(
             decode_field(&words, HeuristicField::Static, &mut [0.0; 3]),
-            Err(LayoutError::TableLengthMismatch)
+            Err(LayoutError::TableLengthMismatch {
+                expected: 2,
+                found: 3
+            })
         );
     }
 

@@ -203,20 +203,16 @@ impl HeuristicParams {
         radiance_range: f32,
         lighting_weight: f32,
     ) -> Result<Self, ParameterError> {
-        let ok = camera_threshold >= 0.0
-            && voxel_diagonal > 0.0
-            && radiance_range > 0.0
-            && lighting_weight >= 0.0
-            && [
-                camera_threshold,
-                voxel_diagonal,
-                radiance_range,
-                lighting_weight,
-            ]
-            .iter()
-            .all(|x| x.is_finite());
-        if !ok {
-            return Err(ParameterError::HeuristicOutOfRange);
+        for (parameter, value, positive) in [
+            ("camera_threshold", camera_threshold, false),
+            ("voxel_diagonal", voxel_diagonal, true),
+            ("radiance_range", radiance_range, true),
+            ("lighting_weight", lighting_weight, false),
+        ] {
+            let in_range = if positive { value > 0.0 } else { value >= 0.0 };
+            if !(in_range && value.is_finite()) {
+                return Err(ParameterError::HeuristicOutOfRange { parameter, value });
+            }
         }
         Ok(Self {
             camera_threshold,
@@ -331,9 +327,7 @@ pub fn compose_grid(
     out: &mut [HeuristicsWord],
 ) -> Result<(), LayoutError> {
     let n = grid.probe_count() * OCTANTS;
-    if f_v.len() != n || delta_v.len() != n || delta_r.len() != n || out.len() != n {
-        return Err(LayoutError::TableLengthMismatch);
-    }
+    LayoutError::check_tables(n, &[f_v.len(), delta_v.len(), delta_r.len(), out.len()])?;
     let layout = HeuristicsLayout::ADGI;
     for probe in 0..grid.probe_count() {
         let f_c = params.camera_distance(grid.probe_position(grid.probe_coords(probe)), camera);
@@ -456,9 +450,16 @@ mod tests {
             (1.0, 0.0),
             (1.0, f32::INFINITY),
         ] {
-            assert_eq!(
-                HeuristicParams::new(k, s),
-                Err(ParameterError::HeuristicOutOfRange)
+            let (parameter, value) = if k >= 0.0 && k.is_finite() {
+                ("voxel_diagonal", s)
+            } else {
+                ("camera_threshold", k)
+            };
+            let e = HeuristicParams::new(k, s);
+            assert!(
+                matches!(e, Err(ParameterError::HeuristicOutOfRange { parameter: p, value: v })
+                    if p == parameter && v.to_bits() == value.to_bits()),
+                "{k} {s}: {e:?}"
             );
         }
         assert!(HeuristicParams::with_ranges(1.0, 1.0, 0.0, 2.0).is_err());

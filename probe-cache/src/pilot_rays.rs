@@ -58,7 +58,7 @@ impl PilotSchedule {
     /// same rays).
     pub const fn new(hold: u32) -> Result<Self, ControlError> {
         if hold < 2 {
-            return Err(ControlError::PilotHoldTooShort);
+            return Err(ControlError::PilotHoldTooShort { hold });
         }
         Ok(Self { hold })
     }
@@ -250,7 +250,10 @@ mod tests {
         assert_eq!(phases, [false, true, true, true, false, true, true, true]);
         assert_eq!(s.frame(7).pattern, 1);
         assert_eq!(s.hold(), 4);
-        assert_eq!(PilotSchedule::new(1), Err(ControlError::PilotHoldTooShort));
+        assert_eq!(
+            PilotSchedule::new(1),
+            Err(ControlError::PilotHoldTooShort { hold: 1 })
+        );
         assert_eq!(PilotSchedule::default(), PilotSchedule::ADGI);
     }
 

@@ -658,13 +658,26 @@ mod tests {
         let grid = |s: f32| ProbeGrid::new(Vec3::ZERO, Vec3::splat(s), UVec3::splat(2)).unwrap();
         // 3 · 10³⁰ is above the walk's maximum step; 3 · f32::MAX overflows.
         let err = ChainKind::Dynamic.walk(&grid(1e30)).unwrap_err();
-        assert_eq!(err, ChainError::ChainStep(WalkError::StepAboveMax));
+        assert!(matches!(
+            err,
+            ChainError::ChainStep(WalkError::StepAboveMax {
+                dimension: 0,
+                step,
+                maximum: 1e30
+            }) if step > 1e30
+        ));
         assert!(
             err.source()
                 .is_some_and(|c| c.to_string().contains("above"))
         );
         let err = ChainKind::Dynamic.walk(&grid(f32::MAX)).unwrap_err();
-        assert_eq!(err, ChainError::ChainStep(WalkError::StepNotFinite));
+        assert_eq!(
+            err,
+            ChainError::ChainStep(WalkError::StepNotFinite {
+                dimension: 0,
+                step: f32::INFINITY
+            })
+        );
         assert!(ChainKind::Static.walk(&grid(1.0)).is_ok());
     }
 

@@ -266,9 +266,8 @@ impl ProbeTexels {
     /// [`LayoutError::WordCountMismatch`] unless each slice has one word per stored texel
     /// (nothing is written then).
     pub fn load_words(&self, irradiance: &[u32], visibility: &[u32]) -> Result<(), LayoutError> {
-        if irradiance.len() != self.irradiance.len() || visibility.len() != self.visibility.len() {
-            return Err(LayoutError::WordCountMismatch);
-        }
+        LayoutError::check_words(self.irradiance.len(), irradiance.len())?;
+        LayoutError::check_words(self.visibility.len(), visibility.len())?;
         for (a, &w) in self.irradiance.iter().zip(irradiance) {
             a.store(w, Ordering::Relaxed);
         }
@@ -675,9 +674,7 @@ fn texel_offset(probe: usize, texel: usize, probe_count: usize, texel_count: usi
 }
 
 fn copy_out(words: &[AtomicU32], out: &mut [u32]) -> Result<(), LayoutError> {
-    if out.len() != words.len() {
-        return Err(LayoutError::WordCountMismatch);
-    }
+    LayoutError::check_words(words.len(), out.len())?;
     for (o, a) in out.iter_mut().zip(words) {
         *o = a.load(Ordering::Relaxed);
     }
@@ -788,11 +785,17 @@ mod tests {
         assert_eq!(out, vis);
         assert_eq!(
             t.copy_irradiance_words(&mut [0; 3]),
-            Err(LayoutError::WordCountMismatch)
+            Err(LayoutError::WordCountMismatch {
+                expected: irr.len(),
+                found: 3
+            })
         );
         assert_eq!(
             ProbeTexels::from_words(*t.grid(), *t.config(), &irr[1..], &vis).err(),
-            Some(LayoutError::WordCountMismatch)
+            Some(LayoutError::WordCountMismatch {
+                expected: irr.len(),
+                found: irr.len() - 1
+            })
         );
     }
 

@@ -181,9 +181,8 @@ impl ProxyGrid {
     /// [`LayoutError::TableLengthMismatch`] unless `per_probe.len() == probe_count · 8` and
     /// `out.len() == self.table_len()`.
     pub fn max_pool(&self, per_probe: &[f32], out: &mut [f32]) -> Result<(), LayoutError> {
-        if per_probe.len() != self.grid.probe_count() * OCTANTS || out.len() != self.table_len() {
-            return Err(LayoutError::TableLengthMismatch);
-        }
+        LayoutError::check_tables(self.grid.probe_count() * OCTANTS, &[per_probe.len()])?;
+        LayoutError::check_tables(self.table_len(), &[out.len()])?;
         out.fill(0.0);
         for probe in 0..self.grid.probe_count() {
             let proxy = self.proxy_of_probe(self.grid.probe_coords(probe));
@@ -297,7 +296,10 @@ mod tests {
         }
         assert_eq!(
             p.max_pool(&table[1..], &mut out),
-            Err(LayoutError::TableLengthMismatch)
+            Err(LayoutError::TableLengthMismatch {
+                expected: table.len(),
+                found: table.len() - 1
+            })
         );
     }
 

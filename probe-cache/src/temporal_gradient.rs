@@ -36,9 +36,7 @@ pub fn temporal_gradient(
     previous: &[f32],
     out: &mut [f32],
 ) -> Result<(), LayoutError> {
-    if current.len() != previous.len() || current.len() != out.len() {
-        return Err(LayoutError::TableLengthMismatch);
-    }
+    LayoutError::check_tables(current.len(), &[previous.len(), out.len()])?;
     for ((o, &c), &p) in out.iter_mut().zip(current).zip(previous) {
         let d = c - p;
         *o = if d.is_finite() { d } else { 0.0 };
@@ -82,7 +80,7 @@ impl TemporalTrigger {
     /// [`ControlError::TriggerDecayOutOfRange`] unless θ ∈ [0, 1).
     pub fn new(decay: f32) -> Result<Self, ControlError> {
         if !(0.0..1.0).contains(&decay) {
-            return Err(ControlError::TriggerDecayOutOfRange);
+            return Err(ControlError::TriggerDecayOutOfRange { decay });
         }
         Ok(Self { decay })
     }
@@ -117,9 +115,7 @@ impl TemporalTrigger {
     /// # Errors
     /// [`LayoutError::TableLengthMismatch`] when the slices differ in length.
     pub fn apply_slice(&self, pulses: &[f32], state: &mut [f32]) -> Result<(), LayoutError> {
-        if pulses.len() != state.len() {
-            return Err(LayoutError::TableLengthMismatch);
-        }
+        LayoutError::check_tables(pulses.len(), &[state.len()])?;
         for (s, &x) in state.iter_mut().zip(pulses) {
             *s = self.apply(x, *s);
         }
@@ -179,9 +175,7 @@ pub fn spatial_smoothing(
     scratch: &mut [f32],
 ) -> Result<(), LayoutError> {
     let n = grid.probe_count() * OCTANTS;
-    if input.len() != n || out.len() != n || scratch.len() != n {
-        return Err(LayoutError::TableLengthMismatch);
-    }
+    LayoutError::check_tables(n, &[input.len(), out.len(), scratch.len()])?;
     let finite = |x: f32| if x.is_finite() { x } else { 0.0 };
     // Direction first (into `out`), then x → scratch, y → out, z → scratch, copy to out.
     for (o_chunk, i_chunk) in out
@@ -296,10 +290,8 @@ impl ChangeDetector {
 
     /// Both tables have `probe_count · 8` entries.
     fn check_lengths(&self, f_v: &[f32], f_r: &[f32]) -> Result<(), LayoutError> {
-        if f_v.len() != self.reference_v.len() || f_r.len() != self.reference_r.len() {
-            return Err(LayoutError::TableLengthMismatch);
-        }
-        Ok(())
+        LayoutError::check_tables(self.reference_v.len(), &[f_v.len()])?;
+        LayoutError::check_tables(self.reference_r.len(), &[f_r.len()])
     }
 
     /// One detection (a later frame of a pilot direction set): gradients against the reference
@@ -389,7 +381,10 @@ mod tests {
         assert_eq!(out, [0.25, -0.5, 0.0, 0.0]);
         assert_eq!(
             temporal_gradient(&[0.0], &[0.0, 1.0], &mut out),
-            Err(LayoutError::TableLengthMismatch)
+            Err(LayoutError::TableLengthMismatch {
+                expected: 1,
+                found: 2
+            })
         );
     }
 
@@ -472,7 +467,10 @@ mod tests {
         assert!(out.iter().all(|&v| (v - 0.6).abs() < 1e-6));
         assert_eq!(
             spatial_smoothing(&g, k, &ones[1..], &mut out, &mut scratch),
-            Err(LayoutError::TableLengthMismatch)
+            Err(LayoutError::TableLengthMismatch {
+                expected: 27 * 8,
+                found: 27 * 8 - 1
+            })
         );
     }
 
@@ -557,7 +555,10 @@ mod tests {
         let before = snapshot(&d);
         assert_eq!(
             d.detect(&[0.9; 16], &[0.4; 15]),
-            Err(LayoutError::TableLengthMismatch)
+            Err(LayoutError::TableLengthMismatch {
+                expected: 16,
+                found: 15
+            })
         );
         assert_eq!(snapshot(&d), before);
         assert!(d.detect(&[0.9; 17], &[0.4; 16]).is_err());

@@ -77,7 +77,11 @@ impl TexelMap {
     pub const fn new(kind: MapKind, side: u32, border: bool) -> Result<Self, LayoutError> {
         let border = border as u32;
         if side < 1 + 2 * border || side > MAX_MAP_SIDE {
-            return Err(LayoutError::MapSizeOutOfRange);
+            return Err(LayoutError::MapSizeOutOfRange {
+                side,
+                minimum: 1 + 2 * border,
+                maximum: MAX_MAP_SIDE,
+            });
         }
         Ok(Self { kind, side, border })
     }
@@ -333,15 +337,27 @@ mod tests {
     fn rejects_bad_sizes() {
         assert_eq!(
             TexelMap::new(MapKind::Octahedral, 2, true),
-            Err(LayoutError::MapSizeOutOfRange)
+            Err(LayoutError::MapSizeOutOfRange {
+                side: 2,
+                minimum: 3,
+                maximum: MAX_MAP_SIDE
+            })
         );
         assert_eq!(
             TexelMap::new(MapKind::EqualArea, 0, false),
-            Err(LayoutError::MapSizeOutOfRange)
+            Err(LayoutError::MapSizeOutOfRange {
+                side: 0,
+                minimum: 1,
+                maximum: MAX_MAP_SIDE
+            })
         );
         assert_eq!(
             TexelMap::new(MapKind::EqualArea, 2000, false),
-            Err(LayoutError::MapSizeOutOfRange)
+            Err(LayoutError::MapSizeOutOfRange {
+                side: 2000,
+                minimum: 1,
+                maximum: MAX_MAP_SIDE
+            })
         );
         assert_eq!(TexelMap::ADGI_IRRADIANCE.interior(), 6);
         assert_eq!(TexelMap::ADGI_VISIBILITY.interior(), 14);

@@ -66,7 +66,7 @@ where
     #[inline]
     pub fn new(classical: C, probability: f32, set: &'a [T]) -> Result<Self, SmisError> {
         if !(0.0..=1.0).contains(&probability) {
-            return Err(SmisError::ProbabilityOutOfRange);
+            return Err(SmisError::ProbabilityOutOfRange { probability });
         }
         if set.is_empty() && probability < 1.0 {
             return Err(SmisError::EmptyTechniqueSet);
@@ -167,10 +167,11 @@ mod tests {
     fn validates() {
         let set = [Boxcar { a: 0.0, w: 0.5 }];
         for p in [-0.1, 1.1, f32::NAN, f32::INFINITY] {
-            assert_eq!(
-                Defensive::new(UNIFORM, p, &set).unwrap_err(),
-                SmisError::ProbabilityOutOfRange
-            );
+            assert!(matches!(
+                Defensive::new(UNIFORM, p, &set),
+                Err(SmisError::ProbabilityOutOfRange { probability })
+                    if probability.to_bits() == p.to_bits()
+            ));
         }
         assert_eq!(
             Defensive::<Boxcar, Boxcar>::new(UNIFORM, 0.5, &[]).unwrap_err(),

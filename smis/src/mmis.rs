@@ -85,7 +85,10 @@ where
         counts: &'a [u32],
     ) -> Result<Mmis<'a, C2, T>, SmisError> {
         if classical.len() != counts.len() {
-            return Err(SmisError::CountsLengthMismatch);
+            return Err(SmisError::CountsLengthMismatch {
+                expected: classical.len(),
+                found: counts.len(),
+            });
         }
         Ok(Mmis {
             classical,
@@ -189,7 +192,10 @@ mod tests {
         let spaces: [&[Boxcar]; 1] = [&set];
         assert_eq!(
             Mmis::new(&spaces).with_classical(&set, &[]).unwrap_err(),
-            SmisError::CountsLengthMismatch
+            SmisError::CountsLengthMismatch {
+                expected: 1,
+                found: 0
+            }
         );
     }
 

@@ -53,13 +53,16 @@ impl XorPermutation {
             return Err(SmisError::TileSizeZero);
         }
         if size > MAX_TILE_SIZE {
-            return Err(SmisError::TileSizeTooLarge);
+            return Err(SmisError::TileSizeTooLarge {
+                size,
+                maximum: MAX_TILE_SIZE,
+            });
         }
         if !size.is_power_of_two() {
-            return Err(SmisError::TileSizeNotPowerOfTwo);
+            return Err(SmisError::TileSizeNotPowerOfTwo { size });
         }
         if mask >= size {
-            return Err(SmisError::OffsetOutOfRange);
+            return Err(SmisError::OffsetOutOfRange { offset: mask, size });
         }
         Ok(Self { size, mask })
     }
@@ -158,12 +161,21 @@ mod tests {
     #[test]
     fn validates_and_draws_uniform_masks() {
         assert_eq!(XorPermutation::new(0, 0), Err(SmisError::TileSizeZero));
-        assert_eq!(XorPermutation::new(64, 0), Err(SmisError::TileSizeTooLarge));
+        assert_eq!(
+            XorPermutation::new(64, 0),
+            Err(SmisError::TileSizeTooLarge {
+                size: 64,
+                maximum: 32
+            })
+        );
         assert_eq!(
             XorPermutation::new(12, 0),
-            Err(SmisError::TileSizeNotPowerOfTwo)
+            Err(SmisError::TileSizeNotPowerOfTwo { size: 12 })
         );
-        assert_eq!(XorPermutation::new(8, 8), Err(SmisError::OffsetOutOfRange));
+        assert_eq!(
+            XorPermutation::new(8, 8),
+            Err(SmisError::OffsetOutOfRange { offset: 8, size: 8 })
+        );
         assert_eq!(
             XorPermutation::from_uniform(0, 0.5),
             Err(SmisError::TileSizeZero)

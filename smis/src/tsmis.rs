@@ -63,10 +63,16 @@ impl CyclicShift {
             return Err(SmisError::TileSizeZero);
         }
         if size > MAX_TILE_SIZE {
-            return Err(SmisError::TileSizeTooLarge);
+            return Err(SmisError::TileSizeTooLarge {
+                size,
+                maximum: MAX_TILE_SIZE,
+            });
         }
         if shift >= size {
-            return Err(SmisError::OffsetOutOfRange);
+            return Err(SmisError::OffsetOutOfRange {
+                offset: shift,
+                size,
+            });
         }
         Ok(Self { size, shift })
     }
@@ -143,8 +149,17 @@ mod tests {
     #[test]
     fn validates() {
         assert_eq!(CyclicShift::new(0, 0), Err(SmisError::TileSizeZero));
-        assert_eq!(CyclicShift::new(33, 1), Err(SmisError::TileSizeTooLarge));
-        assert_eq!(CyclicShift::new(8, 8), Err(SmisError::OffsetOutOfRange));
+        assert_eq!(
+            CyclicShift::new(33, 1),
+            Err(SmisError::TileSizeTooLarge {
+                size: 33,
+                maximum: 32
+            })
+        );
+        assert_eq!(
+            CyclicShift::new(8, 8),
+            Err(SmisError::OffsetOutOfRange { offset: 8, size: 8 })
+        );
     }
 
     #[test]

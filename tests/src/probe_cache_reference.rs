@@ -62,7 +62,7 @@ use mcg_probe_cache::{
     ProbeStepUniforms, ProbeTexels, ProxyGrid, RaySample, TexelConfig, TexelContent,
     reference_irradiance,
 };
-use mcg_probe_cache::{HeuristicField, PilotSchedule};
+use mcg_probe_cache::{HeuristicField, PilotFrame, PilotSchedule};
 use rand::RngExt;
 
 use crate::{Pcg64Mcg, seeded_rng};
@@ -634,6 +634,8 @@ impl Renderer {
         counter
     }
 
+    /// One ADGI frame: pilot rays, heuristics, dynamic chains, static chains (in this order,
+    /// so the random stream is consumed as one sequence).
     #[allow(clippy::too_many_arguments)]
     fn adgi_frame(
         &mut self,
@@ -644,16 +646,38 @@ impl Renderer {
         near: &[bool],
         rng: &mut Pcg64Mcg,
     ) -> RayCounter {
-        let grid = exp.scene.grid;
-        let probes = grid.probe_count();
-        let budget = u64::from(exp.config.rays_per_probe) * probes as u64;
+        let budget = u64::from(exp.config.rays_per_probe) * exp.scene.grid.probe_count() as u64;
         let mut counter = RayCounter::default();
-        let seed = self.seed;
+        let pilot = self.adgi_pilot_rays(a, exp, scene, frame, near, rng, &mut counter);
+        compose_adgi_heuristics(a, exp, pilot);
+        let f = AdgiFrame {
+            exp,
+            scene,
+            near,
+            budget,
+        };
+        self.adgi_dynamic_chains(a, f, rng, &mut counter);
+        self.adgi_static_chains(a, f, rng, &mut counter);
+        counter
+    }
 
-        // 1. Pilot rays (sec. 4.4): one per octant, the same set on the two frames of a pair
-        //    (direction and light-sample uniforms hashed from the pattern index), so the
-        //    difference between the two frames is the scene's change, not noise. The first
-        //    frame of a pair also updates the caches.
+    /// 1. Pilot rays (sec. 4.4): one per octant, the same set on the two frames of a pair
+    ///    (direction and light-sample uniforms hashed from the pattern index), so the
+    ///    difference between the two frames is the scene's change, not noise. The first
+    ///    frame of a pair also updates the caches. Fills `a.f_v` and `a.f_r`.
+    #[allow(clippy::too_many_arguments)]
+    fn adgi_pilot_rays(
+        &mut self,
+        a: &mut AdgiState,
+        exp: &Experiment,
+        scene: &Scene,
+        frame: u32,
+        near: &[bool],
+        rng: &mut Pcg64Mcg,
+        counter: &mut RayCounter,
+    ) -> PilotFrame {
+        let grid = exp.scene.grid;
+        let seed = self.seed;
         let pilot = PilotSchedule::ADGI.frame(u64::from(frame));
         let hash = |pattern: u64, probe: usize, o: usize, k: u64| {
             let c = (seed ^ 0x5bd1_e995)
@@ -662,7 +686,7 @@ impl Renderer {
                 .wrapping_add(k);
             Vec2::new(hash_uniform(c), hash_uniform(c + 1))
         };
-        let mut rays = Vec::with_capacity(probes * OCTANTS);
+        let mut rays = Vec::with_capacity(grid.probe_count() * OCTANTS);
         pilot_rays(
             &grid,
             pilot,
@@ -696,33 +720,26 @@ impl Renderer {
                 a.f_r[p * OCTANTS..][..OCTANTS].copy_from_slice(&f_r);
             }
         }
+        pilot
+    }
 
-        // 2. Change detection (eq. 13-18) on the second frame of a pair, composition (eq. 19,
-        //    20; f_c = 1: the camera sees the whole grid) into the 6-10-10 words (sec. 4.3),
-        //    whose 10-bit f_d ends a decayed trigger at exactly 0.
-        if pilot.measures_gradient() {
-            a.detector.detect(&a.f_v, &a.f_r).expect("table sizes");
-        } else {
-            a.detector
-                .set_reference(&a.f_v, &a.f_r)
-                .expect("table sizes");
-        }
-        heuristics::compose_grid(
-            &grid,
-            &a.params,
-            grid.origin(),
-            &a.f_v,
-            a.detector.delta_visibility(),
-            a.detector.delta_radiance(),
-            &mut a.words,
-        )
-        .expect("table sizes");
-        decode_field(&a.words, HeuristicField::Static, &mut a.f_s).expect("table sizes");
-        decode_field(&a.words, HeuristicField::Dynamic, &mut a.f_d).expect("table sizes");
-
-        // 3. Dynamic chains on the proxies (sec. 4.9): each sample = one octant of every probe
-        //    in its proxy, DYNAMIC_RAYS_PER_OCTANT rays spread over the octant's texels, each
-        //    updating its texel with N_max = 10.
+    /// 3. Dynamic chains on the proxies (sec. 4.9): each sample = one octant of every probe
+    ///    in its proxy, DYNAMIC_RAYS_PER_OCTANT rays spread over the octant's texels, each
+    ///    updating its texel with N_max = 10, within `DYNAMIC_SHARE` of the non-pilot budget.
+    fn adgi_dynamic_chains(
+        &mut self,
+        a: &mut AdgiState,
+        f: AdgiFrame<'_>,
+        rng: &mut Pcg64Mcg,
+        counter: &mut RayCounter,
+    ) {
+        let AdgiFrame {
+            exp,
+            scene,
+            near,
+            budget,
+        } = f;
+        let grid = exp.scene.grid;
         let non_pilot = budget.saturating_sub(counter.rays);
         let dynamic_budget = (non_pilot as f32 * DYNAMIC_SHARE) as u64;
         let proxies = a.dynamic_chains.cells();
@@ -744,7 +761,6 @@ impl Renderer {
                     .step_frame(&guide, || step_uniforms(rng))
                     .to_vec()
             };
-            let map = self.texels.config().irradiance_map;
             'samples: for s in samples {
                 for coords in proxies.probes_of(s.cell as usize) {
                     let p = grid.probe_index(coords);
@@ -759,25 +775,7 @@ impl Renderer {
                         .iter()
                         .flat_map(|t| core::iter::repeat_n(t, per_texel))
                     {
-                        // A direction uniform in the texel's square (see DYNAMIC_RAYS_PER_OCTANT).
-                        let t = map.coords(index) - UVec2::ONE;
-                        let uv = (t.as_vec2() + Vec2::new(rng.random(), rng.random()))
-                            * (2.0 / map.interior() as f32)
-                            - Vec2::ONE;
-                        let d = map.decode(uv);
-                        let hit =
-                            scene.trace_probe_ray(pos, d, Vec2::new(rng.random(), rng.random()));
-                        // The dynamic N_max (Table 3).
-                        self.texels.update_sample_with(
-                            p,
-                            &RaySample {
-                                direction: d,
-                                radiance: hit.radiance,
-                                distance: hit.distance,
-                            },
-                            rng.random(),
-                            MovingAverage::DYNAMIC,
-                        );
+                        self.dynamic_texel_ray(scene, p, pos, index, rng);
                     }
                     dynamic_rays += cost;
                     if near[p] {
@@ -788,11 +786,55 @@ impl Renderer {
         }
         counter.rays += dynamic_rays;
         counter.rays_dynamic = dynamic_rays;
+    }
 
-        // 4. Static chains (sec. 4.8): h = exp(min(ĝ/f_s, 1)) f_s, ĝ = the octant's mean cached
-        //    luminance, with the rest of the budget; one texel update per sample.
+    /// One dynamic-chain ray of probe `p` at `pos`: a direction uniform in irradiance texel
+    /// `index`'s square (see DYNAMIC_RAYS_PER_OCTANT), stored with the dynamic N_max (Table 3).
+    fn dynamic_texel_ray(
+        &mut self,
+        scene: &Scene,
+        p: usize,
+        pos: Vec3,
+        index: usize,
+        rng: &mut Pcg64Mcg,
+    ) {
+        let map = self.texels.config().irradiance_map;
+        let t = map.coords(index) - UVec2::ONE;
+        let uv = (t.as_vec2() + Vec2::new(rng.random(), rng.random()))
+            * (2.0 / map.interior() as f32)
+            - Vec2::ONE;
+        let d = map.decode(uv);
+        let hit = scene.trace_probe_ray(pos, d, Vec2::new(rng.random(), rng.random()));
+        self.texels.update_sample_with(
+            p,
+            &RaySample {
+                direction: d,
+                radiance: hit.radiance,
+                distance: hit.distance,
+            },
+            rng.random(),
+            MovingAverage::DYNAMIC,
+        );
+    }
+
+    /// 4. Static chains (sec. 4.8): h = exp(min(ĝ/f_s, 1)) f_s, ĝ = the octant's mean cached
+    ///    luminance, with the rest of the budget; one texel update per sample.
+    fn adgi_static_chains(
+        &mut self,
+        a: &mut AdgiState,
+        f: AdgiFrame<'_>,
+        rng: &mut Pcg64Mcg,
+        counter: &mut RayCounter,
+    ) {
+        let AdgiFrame {
+            exp,
+            scene,
+            near,
+            budget,
+        } = f;
+        let grid = exp.scene.grid;
         let dirs: Vec<Vec3> = exp.texels.iter().map(|t| t.1).collect();
-        for p in 0..probes {
+        for p in 0..grid.probe_count() {
             let mut g = [0.0; OCTANTS];
             octant_feedback(
                 &dirs,
@@ -828,6 +870,41 @@ impl Renderer {
                 .update_sample(p, &ray_sample(s.direction, &hit), rng.random());
             counter.count(1, near[p]);
         }
-        counter
     }
+}
+
+/// What the chain steps of an ADGI frame read: the experiment, the scene of this frame, which
+/// probes are near the event, and the frame's ray budget.
+#[derive(Clone, Copy)]
+struct AdgiFrame<'a> {
+    exp: &'a Experiment,
+    scene: &'a Scene,
+    near: &'a [bool],
+    budget: u64,
+}
+
+/// 2. Change detection (eq. 13-18) on the second frame of a pair, composition (eq. 19, 20;
+///    f_c = 1: the camera sees the whole grid) into the 6-10-10 words (sec. 4.3), whose 10-bit
+///    f_d ends a decayed trigger at exactly 0; decoded into `a.f_s` and `a.f_d`.
+fn compose_adgi_heuristics(a: &mut AdgiState, exp: &Experiment, pilot: PilotFrame) {
+    let grid = exp.scene.grid;
+    if pilot.measures_gradient() {
+        a.detector.detect(&a.f_v, &a.f_r).expect("table sizes");
+    } else {
+        a.detector
+            .set_reference(&a.f_v, &a.f_r)
+            .expect("table sizes");
+    }
+    heuristics::compose_grid(
+        &grid,
+        &a.params,
+        grid.origin(),
+        &a.f_v,
+        a.detector.delta_visibility(),
+        a.detector.delta_radiance(),
+        &mut a.words,
+    )
+    .expect("table sizes");
+    decode_field(&a.words, HeuristicField::Static, &mut a.f_s).expect("table sizes");
+    decode_field(&a.words, HeuristicField::Dynamic, &mut a.f_d).expect("table sizes");
 }

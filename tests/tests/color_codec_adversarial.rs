@@ -56,15 +56,23 @@ fn any_codec() -> impl Strategy<Value = (f32, f32)> {
 fn codec_of((beta, gamma): (f32, f32)) -> Result<LogCodec, CodecError> {
     let codec = LogCodec::new(beta, gamma);
     let want = if !(LogCodec::BETA_MIN..=LogCodec::BETA_MAX).contains(&beta) {
-        Err(CodecError::BetaOutOfRange)
+        Err(CodecError::BetaOutOfRange { beta })
     } else if !(gamma > 0.0 && gamma.is_finite()) {
-        Err(CodecError::GammaNotPositive)
+        Err(CodecError::GammaNotPositive { gamma })
     } else if gamma < LogCodec::gamma_min(beta) {
-        Err(CodecError::MaxValueOverflows)
+        Err(CodecError::MaxValueOverflows {
+            gamma,
+            minimum: LogCodec::gamma_min(beta),
+        })
     } else {
         Ok(())
     };
-    assert_eq!(codec.map(|_| ()), want, "LogCodec::new({beta}, {gamma})");
+    // Compared through `Debug` so that a NaN parameter carried by the error compares equal.
+    assert_eq!(
+        format!("{:?}", codec.map(|_| ())),
+        format!("{want:?}"),
+        "LogCodec::new({beta}, {gamma})"
+    );
     codec
 }
 

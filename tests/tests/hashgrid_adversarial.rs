@@ -102,19 +102,20 @@ proptest! {
             }
             Err(e) => {
                 let want = if !(p.tan_half_angle > 0.0 && p.tan_half_angle.is_finite()) {
-                    GridError::TanHalfAngleNotPositive
+                    GridError::TanHalfAngleNotPositive { tan_half_angle: p.tan_half_angle }
                 } else if !(p.min_width > 0.0 && p.min_width.is_finite()) {
-                    GridError::WidthNotPositive
+                    GridError::WidthNotPositive { width: p.min_width }
                 } else if !(p.power > 1.0 && p.power.is_finite()) {
-                    GridError::PowerNotAboveOne
+                    GridError::PowerNotAboveOne { power: p.power }
                 } else if p.steps == 0 {
                     GridError::StepsZero
                 } else if p.max_level > 255 {
-                    GridError::MaxLevelTooLarge
+                    GridError::MaxLevelTooLarge { max_level: p.max_level, maximum: 255 }
                 } else {
-                    GridError::CoarsestWidthNotFinite
+                    GridError::CoarsestWidthNotFinite { params: p }
                 };
-                prop_assert_eq!(e, want);
+                // Compared through `Debug` so that a NaN carried by the error compares equal.
+                prop_assert_eq!(format!("{e:?}"), format!("{want:?}"));
             }
         }
         let g = AdaptiveGrid::mcpg();
@@ -125,7 +126,10 @@ proptest! {
                 prop_assert!(is_corner_of(v.cell, position / width) || !(position / width).is_finite());
                 let _ = s.cell(position);
             }
-            Err(e) => prop_assert!(e == GridError::WidthNotPositive && !(width > 0.0 && width.is_finite())),
+            Err(e) => {
+                let carries_width = matches!(e, GridError::WidthNotPositive { width: w } if w.to_bits() == width.to_bits());
+                prop_assert!(carries_width && !(width > 0.0 && width.is_finite()), "{e:?}");
+            }
         }
         let _ = StaticGrid::mcpg().vertex_key(position, u);
         prop_assert!(geometric_jitter(xi) <= 24);
@@ -179,7 +183,9 @@ proptest! {
                     { let expected = match e {
                         TableError::CapacityZero => capacity == 0,
                         TableError::MaxProbesZero => max_probes == 0,
-                        TableError::MaxProbesAboveCapacity => max_probes > capacity,
+                        TableError::MaxProbesAboveCapacity { max_probes: m, capacity: c } => {
+                            max_probes > capacity && (m, c) == (max_probes, capacity)
+                        }
                         _ => false,
                     }; prop_assert!(expected); };
                     continue;

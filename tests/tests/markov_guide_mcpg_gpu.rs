@@ -14,7 +14,9 @@
 use glam::Vec3;
 use mcg_gpu_backend::guides::mcpg::GpuMcpgGuide;
 use mcg_gpu_backend::testing::gpu_or_skip;
-use mcg_gpu_backend::{GpuBuffer, GpuContext, shaders, wgpu};
+use mcg_gpu_backend::{
+    GpuBuffer, GpuContext, GuidedKernel, buffer_entry, shaders, storage_entry, wgpu,
+};
 use mcg_markov_guide::mcpg::GuideConfig;
 use mcg_markov_guide::toy_scene::{SphereLight, ToyScene};
 use mcg_tests::{RunningStats, assert_z_test, z_test};
@@ -47,51 +49,26 @@ struct SceneParams {
 
 /// The scene kernel with the guide's layout at group 1.
 struct SceneKernel {
-    io_layout: wgpu::BindGroupLayout,
+    kernel: GuidedKernel,
     pipeline: wgpu::ComputePipeline,
 }
 
 impl SceneKernel {
     fn new(ctx: &GpuContext, guide: &GpuMcpgGuide) -> Self {
-        let device = ctx.device();
         let source = shaders::compose(SCENE, &GpuMcpgGuide::shader_defs(1)).unwrap();
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("mcpg scene"),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
-        let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty,
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let io_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("scene io"),
-            entries: &[
-                entry(0, wgpu::BufferBindingType::Uniform),
-                entry(1, wgpu::BufferBindingType::Storage { read_only: false }),
+        let kernel = GuidedKernel::from_wgsl(
+            ctx,
+            "mcpg scene",
+            source,
+            &[
+                buffer_entry(0, wgpu::BufferBindingType::Uniform),
+                storage_entry(1, false),
             ],
-        });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("mcpg scene"),
-            bind_group_layouts: &[Some(&io_layout), Some(guide.bind_group_layout())],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("scene_frame"),
-            layout: Some(&layout),
-            module: &module,
-            entry_point: Some("scene_frame"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+            guide.bind_group_layout(),
+        );
         Self {
-            io_layout,
-            pipeline,
+            pipeline: kernel.pipeline(ctx, "scene_frame"),
+            kernel,
         }
     }
 }
@@ -145,20 +122,9 @@ fn run(
         ..Default::default()
     };
     let params_buffer = ctx.uniform_buffer("scene", &params);
-    let io = ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("scene io"),
-        layout: &kernel.io_layout,
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: params_buffer.raw().as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: estimates.raw().as_entire_binding(),
-            },
-        ],
-    });
+    let io = kernel
+        .kernel
+        .io_bind_group(ctx, &[params_buffer.raw(), estimates.raw()]);
     let mut exact = Vec::with_capacity(count * FRAMES as usize);
     for frame in 0..FRAMES {
         let now = scene.at_time(frame as f32);

@@ -63,9 +63,14 @@ proptest! {
             Err(e) => {
                 let total = u128::from(counts.x) * u128::from(counts.y) * u128::from(counts.z);
                 { let expected = match e {
-                    GridError::OriginNotFinite => !origin.is_finite(),
-                    GridError::SpacingNotPositive => !(spacing.min_element() > 0.0 && spacing.is_finite()),
-                    GridError::CountsOutOfRange => counts.min_element() == 0 || total > u128::from(u32::MAX),
+                    GridError::OriginNotFinite { origin: o } => !origin.is_finite() && format!("{o:?}") == format!("{origin:?}"),
+                    GridError::SpacingNotPositive { spacing: s } => {
+                        origin.is_finite() && !(spacing.min_element() > 0.0 && spacing.is_finite())
+                            && format!("{s:?}") == format!("{spacing:?}")
+                    }
+                    GridError::CountsOutOfRange { counts: c } => {
+                        c == counts && (counts.min_element() == 0 || total > u128::from(u32::MAX))
+                    }
                     _ => false,
                 }; prop_assert!(expected, "{e:?}"); };
                 return Ok(());
@@ -142,7 +147,8 @@ proptest! {
         let trigger = match TemporalTrigger::new(decay) {
             Ok(t) => t,
             Err(e) => {
-                prop_assert!(!(0.0..1.0).contains(&decay) && e == ControlError::TriggerDecayOutOfRange);
+                let carries_decay = matches!(e, ControlError::TriggerDecayOutOfRange { decay: d } if d.to_bits() == decay.to_bits());
+                prop_assert!(!(0.0..1.0).contains(&decay) && carries_decay, "{e:?}");
                 TemporalTrigger::DEFAULT
             }
         };

@@ -144,7 +144,9 @@ proptest! {
                 prop_assert!(finite_non_negative(d.pdf(&d.sample((u.0, u.1)))));
             }
             Err(e) => { let expected = match e {
-                SmisError::ProbabilityOutOfRange => !(0.0..=1.0).contains(&p),
+                SmisError::ProbabilityOutOfRange { probability } => {
+                    !(0.0..=1.0).contains(&p) && probability.to_bits() == p.to_bits()
+                }
                 SmisError::EmptyTechniqueSet => set.is_empty(),
                 _ => false,
             }; prop_assert!(expected, "{e:?}"); },

@@ -85,21 +85,26 @@ proptest! {
                 prop_assert!(c.kappa().is_finite() && c.mu() == v.mu());
             }
             Err(e) => {
-                let want = if !mu.is_finite() {
-                    VmfError::MeanNotFinite
-                } else if !kappa.is_finite() {
-                    VmfError::KappaNotFinite
-                } else if kappa < 0.0 {
-                    VmfError::KappaNegative
-                } else if kappa > KAPPA_MAX {
-                    VmfError::KappaAboveMax
-                } else {
-                    VmfError::MeanZeroLength
+                let same = |a: f32, b: f32| a.to_bits() == b.to_bits();
+                let same3 = |a: Vec3, b: Vec3| (0..3).all(|i| same(a[i], b[i]));
+                let expected = match e {
+                    VmfError::MeanNotFinite { mean } => !mu.is_finite() && same3(mean, mu),
+                    VmfError::KappaNotFinite { kappa: k } => {
+                        mu.is_finite() && !kappa.is_finite() && same(k, kappa)
+                    }
+                    VmfError::KappaNegative { kappa: k } => {
+                        mu.is_finite() && kappa.is_finite() && kappa < 0.0 && same(k, kappa)
+                    }
+                    VmfError::KappaAboveMax { kappa: k, maximum } => {
+                        mu.is_finite() && kappa.is_finite() && kappa > KAPPA_MAX
+                            && same(k, kappa) && maximum == KAPPA_MAX
+                    }
+                    VmfError::MeanZeroLength { mean } => {
+                        (0.0..=KAPPA_MAX).contains(&kappa) && mu == Vec3::ZERO && same3(mean, mu)
+                    }
+                    _ => false,
                 };
-                prop_assert_eq!(e, want, "{} {}", mu, kappa);
-                if e == VmfError::MeanZeroLength {
-                    prop_assert_eq!(mu, Vec3::ZERO);
-                }
+                prop_assert!(expected, "{:?} for {} {}", e, mu, kappa);
             }
         }
         if let Ok(c) = Vmf::clamped_cosine(mu) {
@@ -153,8 +158,11 @@ proptest! {
                 let bad = weights.iter().any(|w| !w.is_finite());
                 let negative = weights.iter().any(|&w| w < 0.0);
                 { let expected = match e {
-                    MixtureError::WeightNotFinite => bad || weights.iter().sum::<f32>().is_infinite(),
-                    MixtureError::WeightNegative => negative,
+                    MixtureError::WeightNotFinite { index, weight } => {
+                        bad && !weights[index].is_finite() && weight.to_bits() == weights[index].to_bits()
+                    }
+                    MixtureError::WeightSumNotFinite => !bad && !negative && weights.iter().sum::<f32>().is_infinite(),
+                    MixtureError::WeightNegative { index, weight } => negative && weights[index] < 0.0 && weight == weights[index],
                     MixtureError::WeightsSumToZero => weights.iter().all(|&w| w == 0.0),
                     _ => false,
                 }; prop_assert!(expected, "{e:?} for {weights:?}"); };

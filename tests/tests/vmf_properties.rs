@@ -153,17 +153,19 @@ proptest! {
     ) {
         let mut mu = mu;
         mu[axis] = bad;
-        prop_assert_eq!(Vmf::new(mu, kappa), Err(VmfError::MeanNotFinite));
+        let e = Vmf::new(mu, kappa);
+        prop_assert!(matches!(e, Err(VmfError::MeanNotFinite { mean }) if mean.to_array()[axis].to_bits() == bad.to_bits()), "{:?}", e);
     }
 
     /// With a valid mean, a NaN or infinite κ is `KappaNotFinite` and a negative finite κ is
     /// `KappaNegative`; −0 is accepted as 0.
     #[test]
     fn bad_kappa_is_rejected(mu in mean(), bad in non_finite(), magnitude in proptest::num::f32::POSITIVE) {
-        prop_assert_eq!(Vmf::new(mu, bad), Err(VmfError::KappaNotFinite));
+        let e = Vmf::new(mu, bad);
+        prop_assert!(matches!(e, Err(VmfError::KappaNotFinite { kappa }) if kappa.to_bits() == bad.to_bits()), "{:?}", e);
         let negative = -magnitude;
         if negative.is_finite() {
-            prop_assert_eq!(Vmf::new(mu, negative), Err(VmfError::KappaNegative));
+            prop_assert_eq!(Vmf::new(mu, negative), Err(VmfError::KappaNegative { kappa: negative }));
         }
         prop_assert_eq!(Vmf::new(mu, -0.0).map(|v| v.kappa()), Ok(0.0));
     }
@@ -174,9 +176,10 @@ proptest! {
     fn zero_mean_is_rejected(signs in 0_u8..8, kappa in kappa(), bad in non_finite()) {
         let zero = |bit: u8| if signs & bit != 0 { -0.0 } else { 0.0 };
         let mu = Vec3::new(zero(1), zero(2), zero(4));
-        prop_assert_eq!(Vmf::new(mu, kappa), Err(VmfError::MeanZeroLength));
-        prop_assert_eq!(Vmf::new(mu, bad), Err(VmfError::KappaNotFinite));
-        prop_assert_eq!(Vmf::new(mu, -1.0), Err(VmfError::KappaNegative));
+        prop_assert_eq!(Vmf::new(mu, kappa), Err(VmfError::MeanZeroLength { mean: mu }));
+        let e = Vmf::new(mu, bad);
+        prop_assert!(matches!(e, Err(VmfError::KappaNotFinite { .. })), "{:?}", e);
+        prop_assert_eq!(Vmf::new(mu, -1.0), Err(VmfError::KappaNegative { kappa: -1.0 }));
     }
 
     /// Mixture weights: any NaN or infinite weight (others valid) is `WeightNotFinite`, any
@@ -192,10 +195,11 @@ proptest! {
         let lobes = [Vmf::uniform(); 3];
         let mut with_bad = weights;
         with_bad[index] = bad;
-        prop_assert_eq!(VmfMixture::new(lobes, with_bad), Err(MixtureError::WeightNotFinite));
+        let e = VmfMixture::new(lobes, with_bad);
+        prop_assert!(matches!(e, Err(MixtureError::WeightNotFinite { index: i, weight }) if i == index && weight.to_bits() == bad.to_bits()), "{:?}", e);
         let mut with_negative = weights;
         with_negative[index] = -negative;
-        prop_assert_eq!(VmfMixture::new(lobes, with_negative), Err(MixtureError::WeightNegative));
+        prop_assert_eq!(VmfMixture::new(lobes, with_negative), Err(MixtureError::WeightNegative { index, weight: -negative }));
         prop_assert_eq!(VmfMixture::new(lobes, [0.0, -0.0, 0.0]), Err(MixtureError::WeightsSumToZero));
         if weights.iter().sum::<f32>() > 0.0 {
             let mixture = VmfMixture::new(lobes, weights).unwrap();

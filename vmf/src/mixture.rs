@@ -37,22 +37,23 @@ impl<const K: usize> VmfMixture<K> {
     /// Creates a mixture; `weights` are normalised to sum to one.
     ///
     /// Errors: [`MixtureError::WeightNotFinite`], [`MixtureError::WeightNegative`],
-    /// [`MixtureError::WeightsSumToZero`] (also for `K = 0`). Zero weights are allowed:
+    /// [`MixtureError::WeightSumNotFinite`], [`MixtureError::WeightsSumToZero`] (also for
+    /// `K = 0`). Zero weights are allowed:
     /// such a component is never sampled.
     pub fn new(lobes: [Vmf; K], weights: [f32; K]) -> Result<Self, MixtureError> {
         let mut sum = 0.0;
-        for &w in &weights {
-            if !w.is_finite() {
-                return Err(MixtureError::WeightNotFinite);
+        for (index, &weight) in weights.iter().enumerate() {
+            if !weight.is_finite() {
+                return Err(MixtureError::WeightNotFinite { index, weight });
             }
-            if w < 0.0 {
-                return Err(MixtureError::WeightNegative);
+            if weight < 0.0 {
+                return Err(MixtureError::WeightNegative { index, weight });
             }
-            sum += w;
+            sum += weight;
         }
         if !(sum > 0.0 && sum.is_finite()) {
             return Err(if sum > 0.0 {
-                MixtureError::WeightNotFinite
+                MixtureError::WeightSumNotFinite
             } else {
                 MixtureError::WeightsSumToZero
             });
@@ -132,13 +133,16 @@ mod tests {
     #[test]
     fn validates_weights() {
         let l = [Vmf::uniform(); 2];
-        assert_eq!(
+        assert!(matches!(
             VmfMixture::new(l, [1.0, f32::NAN]),
-            Err(MixtureError::WeightNotFinite)
-        );
+            Err(MixtureError::WeightNotFinite { index: 1, weight }) if weight.is_nan()
+        ));
         assert_eq!(
             VmfMixture::new(l, [1.0, -0.5]),
-            Err(MixtureError::WeightNegative)
+            Err(MixtureError::WeightNegative {
+                index: 1,
+                weight: -0.5
+            })
         );
         assert_eq!(
             VmfMixture::new(l, [0.0, 0.0]),
@@ -146,7 +150,7 @@ mod tests {
         );
         assert_eq!(
             VmfMixture::new(l, [f32::MAX, f32::MAX]),
-            Err(MixtureError::WeightNotFinite)
+            Err(MixtureError::WeightSumNotFinite)
         );
         assert_eq!(
             VmfMixture::<0>::new([], []),

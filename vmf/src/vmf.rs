@@ -62,26 +62,29 @@ impl Vmf {
     /// [`VmfError::KappaNegative`], [`VmfError::KappaAboveMax`].
     pub fn new(mu: Vec3, kappa: f32) -> Result<Self, VmfError> {
         if !math::all_finite(mu) {
-            return Err(VmfError::MeanNotFinite);
+            return Err(VmfError::MeanNotFinite { mean: mu });
         }
         if !kappa.is_finite() {
-            return Err(VmfError::KappaNotFinite);
+            return Err(VmfError::KappaNotFinite { kappa });
         }
         if kappa < 0.0 {
-            return Err(VmfError::KappaNegative);
+            return Err(VmfError::KappaNegative { kappa });
         }
         if kappa > crate::KAPPA_MAX {
-            return Err(VmfError::KappaAboveMax);
+            return Err(VmfError::KappaAboveMax {
+                kappa,
+                maximum: crate::KAPPA_MAX,
+            });
         }
         // Scale by the largest component first so that squaring the length can neither
         // overflow (|μ| > 1.8·10¹⁹) nor underflow (|μ| < 3.7·10⁻²³).
         let largest = mu.abs().max_element();
         if largest == 0.0 {
-            return Err(VmfError::MeanZeroLength);
+            return Err(VmfError::MeanZeroLength { mean: mu });
         }
         let mu = (mu / largest)
             .try_normalize()
-            .ok_or(VmfError::MeanZeroLength)?;
+            .ok_or(VmfError::MeanZeroLength { mean: mu })?;
         Ok(Self { mu, kappa })
     }
 
@@ -268,28 +271,52 @@ pub(crate) fn cos_theta_minus_one(kappa: f32, xi: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::string::ToString;
 
     #[test]
     fn new_validates() {
-        assert_eq!(
+        assert!(matches!(
             Vmf::new(Vec3::new(f32::NAN, 0.0, 1.0), 1.0),
-            Err(VmfError::MeanNotFinite)
+            Err(VmfError::MeanNotFinite { mean }) if mean.y == 0.0 && mean.x.is_nan()
+        ));
+        let inf = Vec3::new(f32::INFINITY, 0.0, 1.0);
+        assert_eq!(
+            Vmf::new(inf, 1.0),
+            Err(VmfError::MeanNotFinite { mean: inf })
         );
         assert_eq!(
-            Vmf::new(Vec3::new(f32::INFINITY, 0.0, 1.0), 1.0),
-            Err(VmfError::MeanNotFinite)
+            Vmf::new(Vec3::ZERO, 1.0),
+            Err(VmfError::MeanZeroLength { mean: Vec3::ZERO })
         );
-        assert_eq!(Vmf::new(Vec3::ZERO, 1.0), Err(VmfError::MeanZeroLength));
-        assert_eq!(Vmf::new(Vec3::Z, f32::NAN), Err(VmfError::KappaNotFinite));
+        assert!(matches!(
+            Vmf::new(Vec3::Z, f32::NAN),
+            Err(VmfError::KappaNotFinite { kappa }) if kappa.is_nan()
+        ));
         assert_eq!(
             Vmf::new(Vec3::Z, f32::INFINITY),
-            Err(VmfError::KappaNotFinite)
+            Err(VmfError::KappaNotFinite {
+                kappa: f32::INFINITY
+            })
         );
-        assert_eq!(Vmf::new(Vec3::Z, -1e-30), Err(VmfError::KappaNegative));
+        assert_eq!(
+            Vmf::new(Vec3::Z, -1e-30),
+            Err(VmfError::KappaNegative { kappa: -1e-30 })
+        );
         assert!(Vmf::new(Vec3::Z, crate::KAPPA_MAX).is_ok());
         for kappa in [1.000_001e6, 1e20, f32::MAX] {
-            assert_eq!(Vmf::new(Vec3::Z, kappa), Err(VmfError::KappaAboveMax));
+            let e = Vmf::new(Vec3::Z, kappa).unwrap_err();
+            assert_eq!(
+                e,
+                VmfError::KappaAboveMax {
+                    kappa,
+                    maximum: crate::KAPPA_MAX
+                }
+            );
         }
+        assert_eq!(
+            Vmf::new(Vec3::Z, 2e6).unwrap_err().to_string(),
+            "concentration kappa = 2000000 is above the maximum 1000000"
+        );
         let v = Vmf::new(Vec3::new(3.0, 0.0, 4.0), 2.0).unwrap();
         assert!((v.mu() - Vec3::new(0.6, 0.0, 0.8)).length() < 1e-7);
         assert_eq!(v.kappa(), 2.0);

@@ -477,19 +477,10 @@ impl GpuTracer {
     ) -> Result<(wgpu::ComputePipeline, wgpu::BindGroupLayout)> {
         let device = self.ctx.device();
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let entry_layout = |binding: u32| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: match binding {
-                    0 => wgpu::BufferBindingType::Uniform,
-                    8 => wgpu::BufferBindingType::Storage { read_only: false },
-                    _ => wgpu::BufferBindingType::Storage { read_only: true },
-                },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
+        let entry_layout = |binding: u32| match binding {
+            0 => mcg_gpu_backend::buffer_entry(binding, wgpu::BufferBindingType::Uniform),
+            8 => mcg_gpu_backend::storage_entry(binding, false),
+            _ => mcg_gpu_backend::storage_entry(binding, true),
         };
         let entries: Vec<wgpu::BindGroupLayoutEntry> = (0..=8).map(entry_layout).collect();
         let label = Some(entry);

@@ -279,6 +279,116 @@ struct Channel {
     values: Vec<Vec<f32>>,
 }
 
+/// The binary buffer of a glTF file with its buffer views and accessors.
+#[derive(Default)]
+struct GltfBuffer {
+    bin: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+}
+
+impl GltfBuffer {
+    /// Appends `data` as little-endian f32 with a view and an accessor of `count` elements of
+    /// `kind` (`"VEC3"`, …) and optional (min, max); returns the accessor's index.
+    fn push_floats(
+        &mut self,
+        data: &[f32],
+        kind: &str,
+        count: usize,
+        bounds: Option<(Value, Value)>,
+    ) -> usize {
+        let offset = self.bin.len();
+        for f in data {
+            self.bin.extend_from_slice(&f.to_le_bytes());
+        }
+        self.views
+            .push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": data.len() * 4 }));
+        let mut accessor = json!({
+            "bufferView": self.views.len() - 1, "componentType": 5126, "count": count, "type": kind,
+        });
+        if let Some((min, max)) = bounds {
+            accessor["min"] = min;
+            accessor["max"] = max;
+        }
+        self.accessors.push(accessor);
+        self.accessors.len() - 1
+    }
+
+    /// A part's triangles as a POSITION accessor with its bounds.
+    fn push_positions(&mut self, p: &Part) -> usize {
+        let flat: Vec<f32> = p
+            .triangles
+            .iter()
+            .flatten()
+            .flat_map(|v| v.to_array())
+            .collect();
+        let lo = p
+            .triangles
+            .iter()
+            .flatten()
+            .fold(Vec3::INFINITY, |a, &b| a.min(b));
+        let hi = p
+            .triangles
+            .iter()
+            .flatten()
+            .fold(Vec3::NEG_INFINITY, |a, &b| a.max(b));
+        self.push_floats(
+            &flat,
+            "VEC3",
+            p.triangles.len() * 3,
+            Some((json!(lo.to_array()), json!(hi.to_array()))),
+        )
+    }
+}
+
+/// A material as glTF metallic-roughness, emissive ones with `KHR_materials_emissive_strength`.
+fn material_json(m: &Mat) -> Value {
+    let mut material = json!({
+        "name": m.name,
+        "pbrMetallicRoughness": {
+            "baseColorFactor": [m.base[0], m.base[1], m.base[2], 1.0],
+            "metallicFactor": m.metallic,
+            "roughnessFactor": m.roughness,
+        },
+    });
+    if m.emissive != [0.0; 3] {
+        material["emissiveFactor"] = json!(m.emissive);
+        material["extensions"] = json!({
+            "KHR_materials_emissive_strength": { "emissiveStrength": m.strength }
+        });
+    }
+    material
+}
+
+/// The animation samplers and channels of `channels`, their keys appended to `buffer`.
+fn animation_json(buffer: &mut GltfBuffer, channels: &[Channel]) -> (Vec<Value>, Vec<Value>) {
+    let mut samplers = Vec::new();
+    let mut gltf_channels = Vec::new();
+    for c in channels {
+        let input = buffer.push_floats(
+            &c.times,
+            "SCALAR",
+            c.times.len(),
+            Some((json!([c.times[0]]), json!([c.times[c.times.len() - 1]]))),
+        );
+        let flat: Vec<f32> = c.values.iter().flatten().copied().collect();
+        let kind = if c.values[0].len() == 4 {
+            "VEC4"
+        } else {
+            "VEC3"
+        };
+        let output = buffer.push_floats(&flat, kind, c.values.len(), None);
+        samplers.push(json!({
+            "input": input, "output": output,
+            "interpolation": if c.step { "STEP" } else { "LINEAR" },
+        }));
+        gltf_channels.push(
+            json!({ "sampler": samplers.len() - 1, "target": { "node": c.node, "path": c.path } }),
+        );
+    }
+    (samplers, gltf_channels)
+}
+
 /// Serialises nodes, channels and scene extras into glTF JSON and its binary buffer.
 fn write_gltf(
     name: &str,
@@ -286,74 +396,15 @@ fn write_gltf(
     channels: &[Channel],
     extras: Value,
 ) -> (String, Vec<u8>) {
-    let mut bin: Vec<u8> = Vec::new();
-    let mut views = Vec::new();
-    let mut accessors = Vec::new();
-    let mut push_floats = |bin: &mut Vec<u8>,
-                           data: &[f32],
-                           kind: &str,
-                           count: usize,
-                           bounds: Option<(Value, Value)>| {
-        let offset = bin.len();
-        for f in data {
-            bin.extend_from_slice(&f.to_le_bytes());
-        }
-        views.push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": data.len() * 4 }));
-        let mut accessor = json!({
-            "bufferView": views.len() - 1, "componentType": 5126, "count": count, "type": kind,
-        });
-        if let Some((min, max)) = bounds {
-            accessor["min"] = min;
-            accessor["max"] = max;
-        }
-        accessors.push(accessor);
-        accessors.len() - 1
-    };
+    let mut buffer = GltfBuffer::default();
     let mut materials = Vec::new();
     let mut meshes = Vec::new();
     let mut gltf_nodes = Vec::new();
     for node in nodes {
         let mut primitives = Vec::new();
         for p in &node.parts {
-            let flat: Vec<f32> = p
-                .triangles
-                .iter()
-                .flatten()
-                .flat_map(|v| v.to_array())
-                .collect();
-            let lo = p
-                .triangles
-                .iter()
-                .flatten()
-                .fold(Vec3::INFINITY, |a, &b| a.min(b));
-            let hi = p
-                .triangles
-                .iter()
-                .flatten()
-                .fold(Vec3::NEG_INFINITY, |a, &b| a.max(b));
-            let position = push_floats(
-                &mut bin,
-                &flat,
-                "VEC3",
-                p.triangles.len() * 3,
-                Some((json!(lo.to_array()), json!(hi.to_array()))),
-            );
-            let m = p.material;
-            let mut material = json!({
-                "name": m.name,
-                "pbrMetallicRoughness": {
-                    "baseColorFactor": [m.base[0], m.base[1], m.base[2], 1.0],
-                    "metallicFactor": m.metallic,
-                    "roughnessFactor": m.roughness,
-                },
-            });
-            if m.emissive != [0.0; 3] {
-                material["emissiveFactor"] = json!(m.emissive);
-                material["extensions"] = json!({
-                    "KHR_materials_emissive_strength": { "emissiveStrength": m.strength }
-                });
-            }
-            materials.push(material);
+            let position = buffer.push_positions(p);
+            materials.push(material_json(&p.material));
             primitives.push(
                 json!({ "attributes": { "POSITION": position }, "material": materials.len() - 1 }),
             );
@@ -367,31 +418,12 @@ fn write_gltf(
     }
     // The camera: 60° vertical field of view, at (0, 1.5, 2.3), looking down −z (no rotation).
     gltf_nodes.push(json!({ "name": "camera", "camera": 0, "translation": [0.0, 1.5, 2.3] }));
-    let mut samplers = Vec::new();
-    let mut gltf_channels = Vec::new();
-    for c in channels {
-        let input = push_floats(
-            &mut bin,
-            &c.times,
-            "SCALAR",
-            c.times.len(),
-            Some((json!([c.times[0]]), json!([c.times[c.times.len() - 1]]))),
-        );
-        let flat: Vec<f32> = c.values.iter().flatten().copied().collect();
-        let kind = if c.values[0].len() == 4 {
-            "VEC4"
-        } else {
-            "VEC3"
-        };
-        let output = push_floats(&mut bin, &flat, kind, c.values.len(), None);
-        samplers.push(json!({
-            "input": input, "output": output,
-            "interpolation": if c.step { "STEP" } else { "LINEAR" },
-        }));
-        gltf_channels.push(
-            json!({ "sampler": samplers.len() - 1, "target": { "node": c.node, "path": c.path } }),
-        );
-    }
+    let (samplers, gltf_channels) = animation_json(&mut buffer, channels);
+    let GltfBuffer {
+        bin,
+        views,
+        accessors,
+    } = buffer;
     let mut doc = json!({
         "asset": { "version": "2.0", "generator": "mcg-demo scene_generator" },
         "extensionsUsed": ["KHR_materials_emissive_strength"],
@@ -421,23 +453,40 @@ fn write_gltf(
 /// The built-in scenes: `(name, glTF JSON, binary buffer)` each, in [`SCENE_NAMES`] order.
 #[must_use]
 pub fn built_in_scenes() -> Vec<(&'static str, String, Vec<u8>)> {
-    let static_node = |parts| Node {
+    let (a_json, a_bin) = hidden_light_scene();
+    let (b_json, b_bin) = many_lights_scene();
+    let (c_json, c_bin) = dynamic_scene();
+    vec![
+        (SCENE_NAMES[0], a_json, a_bin),
+        (SCENE_NAMES[1], b_json, b_bin),
+        (SCENE_NAMES[2], c_json, c_bin),
+    ]
+}
+
+/// The room as one static node.
+fn static_node(parts: Vec<Part>) -> Node {
+    Node {
         name: "room",
         parts,
         translation: Vec3::ZERO,
-    };
+    }
+}
 
-    // (a) Hidden light.
+/// (a) Hidden light: a closed room lit through a slit by a light in a tray under the ceiling.
+fn hidden_light_scene() -> (String, Vec<u8>) {
     let mut parts = room(false);
     parts.extend(cove_light());
-    let (a_json, a_bin) = write_gltf(
+    write_gltf(
         SCENE_NAMES[0],
         &[static_node(parts)],
         &[],
         json!({ "description": "a closed room lit through a slit by a light hidden in a tray under the ceiling" }),
-    );
+    )
+}
 
-    // (b) Many lights: 4×4 on the ceiling, 8 on the back wall, colours around the hue circle.
+/// (b) Many lights: 4×4 on the ceiling, 8 on the back wall, colours around the hue circle, and
+/// a copper block.
+fn many_lights_scene() -> (String, Vec<u8>) {
     let mut parts = room(false);
     let mut k = 0;
     let colour = |k: usize| {
@@ -479,48 +528,18 @@ pub fn built_in_scenes() -> Vec<(&'static str, String, Vec<u8>)> {
         },
         metal,
     ));
-    let (b_json, b_bin) = write_gltf(
+    write_gltf(
         SCENE_NAMES[1],
         &[static_node(parts)],
         &[],
         json!({ "description": "a closed room lit directly by 24 small lights of different colours" }),
-    );
+    )
+}
 
-    // (c) Dynamic: moving hidden light, door to a lit side room opening at a known frame.
+/// (c) Dynamic: the moving hidden light and a door to a lit side room opening at a known frame.
+fn dynamic_scene() -> (String, Vec<u8>) {
     let mut parts = room(true);
-    let mut side = Vec::new();
-    let (x0, x1, z0, z1, h) = (2.0, 3.5, -1.0, 1.0, 3.0);
-    quad(
-        &mut side,
-        Vec3::new(x0, 0.0, z0),
-        Vec3::Z * (z1 - z0),
-        Vec3::X * (x1 - x0),
-    ); // floor
-    quad(
-        &mut side,
-        Vec3::new(x0, h, z0),
-        Vec3::X * (x1 - x0),
-        Vec3::Z * (z1 - z0),
-    ); // ceiling
-    quad(
-        &mut side,
-        Vec3::new(x1, 0.0, z0),
-        Vec3::Z * (z1 - z0),
-        Vec3::Y * h,
-    ); // far wall
-    quad(
-        &mut side,
-        Vec3::new(x0, 0.0, z0),
-        Vec3::X * (x1 - x0),
-        Vec3::Y * h,
-    ); // z0 wall
-    quad(
-        &mut side,
-        Vec3::new(x0, 0.0, z1),
-        Vec3::Y * h,
-        Vec3::X * (x1 - x0),
-    ); // z1 wall
-    parts.push(part(WHITE, side));
+    parts.push(part(WHITE, side_room()));
     let mut lamp = Vec::new();
     quad(
         &mut lamp,
@@ -567,7 +586,7 @@ pub fn built_in_scenes() -> Vec<(&'static str, String, Vec<u8>)> {
             values: vec![vec![0.0, 0.0, 0.0, 1.0], open],
         },
     ];
-    let (c_json, c_bin) = write_gltf(
+    write_gltf(
         SCENE_NAMES[2],
         &nodes,
         &channels,
@@ -577,12 +596,44 @@ pub fn built_in_scenes() -> Vec<(&'static str, String, Vec<u8>)> {
             "door_opens_at_frame": DOOR_OPENS_AT_FRAME,
             "light_moves_until_frame": LIGHT_STOPS_AT_FRAME,
         }),
-    );
-    vec![
-        (SCENE_NAMES[0], a_json, a_bin),
-        (SCENE_NAMES[1], b_json, b_bin),
-        (SCENE_NAMES[2], c_json, c_bin),
-    ]
+    )
+}
+
+/// The white side room of scene (c) behind the door: floor, ceiling and three walls.
+fn side_room() -> Vec<[Vec3; 3]> {
+    let mut side = Vec::new();
+    let (x0, x1, z0, z1, h) = (2.0, 3.5, -1.0, 1.0, 3.0);
+    quad(
+        &mut side,
+        Vec3::new(x0, 0.0, z0),
+        Vec3::Z * (z1 - z0),
+        Vec3::X * (x1 - x0),
+    ); // floor
+    quad(
+        &mut side,
+        Vec3::new(x0, h, z0),
+        Vec3::X * (x1 - x0),
+        Vec3::Z * (z1 - z0),
+    ); // ceiling
+    quad(
+        &mut side,
+        Vec3::new(x1, 0.0, z0),
+        Vec3::Z * (z1 - z0),
+        Vec3::Y * h,
+    ); // far wall
+    quad(
+        &mut side,
+        Vec3::new(x0, 0.0, z0),
+        Vec3::X * (x1 - x0),
+        Vec3::Y * h,
+    ); // z0 wall
+    quad(
+        &mut side,
+        Vec3::new(x0, 0.0, z1),
+        Vec3::Y * h,
+        Vec3::X * (x1 - x0),
+    ); // z1 wall
+    side
 }
 
 /// Writes the built-in scenes as `<name>.gltf` + `<name>.bin` into `dir` (created if missing).

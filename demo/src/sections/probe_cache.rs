@@ -181,17 +181,44 @@ fn slices(ctx: &Context<'_>, section: &mut Section, study: &Study) -> Result<()>
 
 /// The error-over-frames chart, the table of frames to the threshold and the text.
 fn error_over_frames(ctx: &Context<'_>, section: &mut Section, study: &Study) -> Result<()> {
-    let Study {
-        cfg,
-        exp,
-        runs,
-        before,
-        ..
-    } = study;
-    let before = *before;
+    let Study { cfg, exp, .. } = study;
     let grid = exp.scene.grid;
     let probes = grid.probe_count();
     let near = exp.near.len();
+    let file = error_figure(ctx, study)?;
+    let table = error_table(study);
+    section
+        .heading("Error over frames at equal rays")
+        .paragraph(&format!(
+            "Lines: the probes near the event ({near} of {probes}); dots: all probes. Uniform \
+             DDGI gives every probe the same {} rays per frame and blends them with hysteresis \
+             0.94 (Q-DDGI, ADGI Table 3), so after the door opens its error near the event falls \
+             by at most 6 % of the gap per frame. ADGI's pilot rays see the visibility and \
+             radiance change at the doorway, its dynamic chains send 64 rays per probe octant \
+             into the changed octants of the 3×3×3 proxies around it with N_max = 10, and the \
+             static chains refine the rest: its error near the event drops within a few frames. \
+             It does not stay there: after the dynamic phase the texels near the door restart \
+             their moving average from N = 10 and need tens of frames to reach N = 63 again, \
+             while DDGI's blend uses every ray for half of each probe's texels, so late in the \
+             run DDGI's error is the lower one. ADGI's texels also hold radiance per texel, and \
+             turning them into irradiance costs a discretisation floor (≈ 0.07) that DDGI's \
+             cosine-blended texels do not have. The constant-guide run spends ADGI's rays \
+             through the same machinery but uniformly over (p, ω): the gap between it and ADGI \
+             is what the guide buys.",
+            cfg.rays_per_probe
+        ))
+        .figure(
+            file,
+            "Relative RMS error per frame, near the event (lines) and over all probes (dots).",
+        )
+        .table(table);
+    Ok(())
+}
+
+/// The chart of the relative error per frame, near the event and over all probes, per policy;
+/// returns its file name.
+fn error_figure(ctx: &Context<'_>, study: &Study) -> Result<&'static str> {
+    let Study { cfg, runs, .. } = study;
     let file = "probe-cache-error.png";
     let mut series = Vec::new();
     for (i, run) in runs.iter().enumerate() {
@@ -233,6 +260,16 @@ fn error_over_frames(ctx: &Context<'_>, section: &mut Section, study: &Study) ->
             legend: SeriesLabelPosition::LowerRight,
         },
     )?;
+    Ok(file)
+}
+
+/// Frames until the error near the event drops below [`THRESHOLD`], the errors around the
+/// event and the share of rays spent near it, per policy.
+fn error_table(study: &Study) -> Table {
+    let Study {
+        cfg, runs, before, ..
+    } = study;
+    let before = *before;
     let mut table = Table::new(
         &format!(
             "Frames from the door's first move until the error near the event first drops below {THRESHOLD}, and until it stays below; the errors around it"
@@ -268,32 +305,7 @@ fn error_over_frames(ctx: &Context<'_>, section: &mut Section, study: &Study) ->
             format!("{:.0} %", 100.0 * near_rays as f64 / rays.max(1) as f64),
         ]);
     }
-    section
-        .heading("Error over frames at equal rays")
-        .paragraph(&format!(
-            "Lines: the probes near the event ({near} of {probes}); dots: all probes. Uniform \
-             DDGI gives every probe the same {} rays per frame and blends them with hysteresis \
-             0.94 (Q-DDGI, ADGI Table 3), so after the door opens its error near the event falls \
-             by at most 6 % of the gap per frame. ADGI's pilot rays see the visibility and \
-             radiance change at the doorway, its dynamic chains send 64 rays per probe octant \
-             into the changed octants of the 3×3×3 proxies around it with N_max = 10, and the \
-             static chains refine the rest: its error near the event drops within a few frames. \
-             It does not stay there: after the dynamic phase the texels near the door restart \
-             their moving average from N = 10 and need tens of frames to reach N = 63 again, \
-             while DDGI's blend uses every ray for half of each probe's texels, so late in the \
-             run DDGI's error is the lower one. ADGI's texels also hold radiance per texel, and \
-             turning them into irradiance costs a discretisation floor (≈ 0.07) that DDGI's \
-             cosine-blended texels do not have. The constant-guide run spends ADGI's rays \
-             through the same machinery but uniformly over (p, ω): the gap between it and ADGI \
-             is what the guide buys.",
-            cfg.rays_per_probe
-        ))
-        .figure(
-            file,
-            "Relative RMS error per frame, near the event (lines) and over all probes (dots).",
-        )
-        .table(table);
-    Ok(())
+    table
 }
 
 /// Bytes per probe of ADGI's words against plain float texels.

@@ -69,6 +69,44 @@ fn convergence(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
     let pixels = TILES * TILE;
     let budget = (ctx.config.samples / 128).clamp(256, 8192);
     let max_spp = 1_usize << budget.ilog2();
+    let runs = convergence_runs(ctx, max_spp);
+    let file = convergence_figure(ctx, &runs, max_spp)?;
+    let table = convergence_table(&runs, max_spp, pixels);
+    let verdict = convergence_verdict(&runs);
+    section
+        .heading("Decorrelating adaptive chains (MCMM Fig. 16)")
+        .paragraph(&format!(
+            "A tile of {TILE} pixels; pixel l integrates its own function \
+             0.2 + 4·e^(−|x − b_l|/0.02) on [0, 1) with b_l = 0.3 + 0.05·l (every pixel sees its \
+             own light). Each pixel holds one Markov chain: the centre c of a lobe \
+             {CHAIN_DEFENSIVE}·U(0, 1) + {}·Laplace(c, {CHAIN_SCALE}) (MCMM's defensive \
+             probability {CHAIN_DEFENSIVE}). A chain samples its lobe and moves the lobe onto \
+             the sample with probability min(1, f(x)/score) (MCMM Alg. 3), so the next lobe \
+             depends on the sample just drawn. {TSMIS_STEPS}-TSMIS evaluates eq. 8 over the \
+             {TSMIS_STEPS} (lobe, sample) pairs a pixel saw in a frame; {TILE}-SSMIS evaluates \
+             eq. 9 over the tile's {TILE} lobes after each step. Without the shuffle, a TSMIS \
+             pixel's history is its own chain (each sample's denominator contains the next lobe, \
+             centred on that very sample: biased low), and an SSMIS pixel always samples its own \
+             chain, adapted to its own light (a non-uniform selection: biased high).",
+            1.0 - CHAIN_DEFENSIVE
+        ))
+        .figure(
+            file,
+            &format!(
+                "Relative RMS error over {} pixels of the running mean against samples per pixel \
+                 (log-log, seed {:#x}); the grey line has the slope −1/2 of an unbiased estimator.",
+                group_thousands(pixels),
+                ctx.config.seed
+            ),
+        )
+        .table(table)
+        .paragraph(&verdict);
+    Ok(())
+}
+
+/// The four decorrelation schemes' runs up to `max_spp` samples per pixel, each from its own
+/// seed.
+fn convergence_runs(ctx: &Context<'_>, max_spp: usize) -> Vec<Convergence> {
     let bar = ctx.progress(Decorrelation::ALL.len() as u64, "SMIS: adaptive chains");
     let runs: Vec<Convergence> = Decorrelation::ALL
         .iter()
@@ -81,7 +119,15 @@ fn convergence(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
         })
         .collect();
     bar.finish_and_clear();
+    runs
+}
 
+/// The log-log figure of relative RMSE against spp, with a 1/√spp guide; returns its file name.
+fn convergence_figure(
+    ctx: &Context<'_>,
+    runs: &[Convergence],
+    max_spp: usize,
+) -> Result<&'static str> {
     let mut series: Vec<Series> = runs
         .iter()
         .enumerate()
@@ -126,7 +172,11 @@ fn convergence(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
     };
     let file = "smis-convergence.png";
     plot::line_chart(&ctx.figure_path(file), (1100, 640), &chart)?;
+    Ok(file)
+}
 
+/// The table of final error, bias and tail slope per scheme.
+fn convergence_table(runs: &[Convergence], max_spp: usize, pixels: usize) -> Table {
     let mut table = Table::new(
         &format!(
             "Error at {} samples per pixel over {} pixels ({} tiles of {TILE}); bias = mean over \
@@ -143,7 +193,7 @@ fn convergence(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
             "log-log slope (last 4 points)",
         ],
     );
-    for r in &runs {
+    for r in runs {
         table.push_row([
             legend(r.scheme),
             format!("{:.2e}", r.final_rmse()),
@@ -152,6 +202,12 @@ fn convergence(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
             format!("{:+.2}", r.tail_slope(4)),
         ]);
     }
+    table
+}
+
+/// Whether MCMM Fig. 16 is reproduced: shuffled schemes unbiased and converging, unshuffled
+/// ones biased.
+fn convergence_verdict(runs: &[Convergence]) -> String {
     let shuffled_ok = runs
         .iter()
         .filter(|r| r.scheme.is_shuffled())
@@ -160,7 +216,7 @@ fn convergence(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
         .iter()
         .filter(|r| !r.scheme.is_shuffled())
         .all(|r| (r.bias / r.bias_error).abs() > 5.0);
-    let verdict = if shuffled_ok && unshuffled_biased {
+    if shuffled_ok && unshuffled_biased {
         format!(
             "Reproduced: with the shuffle both estimators keep converging (slopes {:+.2} and \
              {:+.2}, close to the −0.5 of an unbiased Monte Carlo estimate) with a bias within \
@@ -175,36 +231,7 @@ fn convergence(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
         "Not reproduced in this run: see the table — a shuffled estimator shows a bias or no \
          convergence, or an unshuffled one shows no significant bias."
             .to_owned()
-    };
-    section
-        .heading("Decorrelating adaptive chains (MCMM Fig. 16)")
-        .paragraph(&format!(
-            "A tile of {TILE} pixels; pixel l integrates its own function \
-             0.2 + 4·e^(−|x − b_l|/0.02) on [0, 1) with b_l = 0.3 + 0.05·l (every pixel sees its \
-             own light). Each pixel holds one Markov chain: the centre c of a lobe \
-             {CHAIN_DEFENSIVE}·U(0, 1) + {}·Laplace(c, {CHAIN_SCALE}) (MCMM's defensive \
-             probability {CHAIN_DEFENSIVE}). A chain samples its lobe and moves the lobe onto \
-             the sample with probability min(1, f(x)/score) (MCMM Alg. 3), so the next lobe \
-             depends on the sample just drawn. {TSMIS_STEPS}-TSMIS evaluates eq. 8 over the \
-             {TSMIS_STEPS} (lobe, sample) pairs a pixel saw in a frame; {TILE}-SSMIS evaluates \
-             eq. 9 over the tile's {TILE} lobes after each step. Without the shuffle, a TSMIS \
-             pixel's history is its own chain (each sample's denominator contains the next lobe, \
-             centred on that very sample: biased low), and an SSMIS pixel always samples its own \
-             chain, adapted to its own light (a non-uniform selection: biased high).",
-            1.0 - CHAIN_DEFENSIVE
-        ))
-        .figure(
-            file,
-            &format!(
-                "Relative RMS error over {} pixels of the running mean against samples per pixel \
-                 (log-log, seed {:#x}); the grey line has the slope −1/2 of an unbiased estimator.",
-                group_thousands(pixels),
-                ctx.config.seed
-            ),
-        )
-        .table(table)
-        .paragraph(&verdict);
-    Ok(())
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -222,6 +249,38 @@ struct Moments {
 
 fn mmis_variance(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
     let realizations = (ctx.config.samples / 50).max(400);
+    let rows = mmis_rows(ctx, realizations);
+    let table = mmis_table(&rows, realizations);
+    let file = mmis_figure(ctx, &rows)?;
+    let verdict = mmis_verdict(&rows);
+    section
+        .heading("Marginal MIS against classical MIS (MMIS Fig. 1)")
+        .paragraph(&format!(
+            "West et al.'s canonical experiment: four marginal techniques on [0, 1) with \
+             1-D technique spaces. Technique i draws t ~ U(0, 1) and then x from a tent of width \
+             0.1-0.15 that slides with t over part of the domain; the first three each cover one \
+             feature of the integrand (a background 0.05 and three triangular bumps, ∫ = \
+             {FIG1_INTEGRAL}) and miss the rest, the fourth is a defensive uniform technique. \
+             With a total budget of N = {FIG1_BUDGET} samples, MMISₙ (eq. 6, `mcg_smis::Mmis`) \
+             draws n technique-sample pairs per technique and averages N/(nT) realizations; the \
+             reference is classical MIS with the balance heuristic and the exact (closed-form) \
+             x-marginals, which a renderer could not evaluate.",
+        ))
+        .figure(
+            file,
+            &format!(
+                "Variance of one budget-{FIG1_BUDGET} estimate against n; the horizontal line is \
+                 the classical MIS reference."
+            ),
+        )
+        .table(table)
+        .paragraph(&verdict);
+    Ok(())
+}
+
+/// Classical MIS (`None`) and MMISₙ for each n of `FIG1_NS`: the moments of `realizations`
+/// estimates each, from their own seeds.
+fn mmis_rows(ctx: &Context<'_>, realizations: usize) -> Vec<(Option<usize>, Moments)> {
     let bar = ctx.progress(FIG1_NS.len() as u64 + 1, "SMIS: MMIS variance");
     let mut rows: Vec<(Option<usize>, Moments)> = Vec::new();
     for (k, n) in std::iter::once(None)
@@ -244,9 +303,13 @@ fn mmis_variance(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
         bar.inc(1);
     }
     bar.finish_and_clear();
+    rows
+}
+
+/// The table of pdf evaluations, mean and variance per estimator.
+fn mmis_table(rows: &[(Option<usize>, Moments)], realizations: usize) -> Table {
     let mis = rows[0].1;
     let techniques = FIG1_TECHNIQUES.len();
-
     let mut table = Table::new(
         &format!(
             "Variance of one budget-N = {FIG1_BUDGET} estimate over {} independent estimates (± \
@@ -261,7 +324,7 @@ fn mmis_variance(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
             "variance / MIS",
         ],
     );
-    for &(n, m) in &rows {
+    for &(n, m) in rows {
         let (name, evals) = match n {
             None => (
                 "classical MIS (exact marginals)".to_owned(),
@@ -277,7 +340,12 @@ fn mmis_variance(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
             format!("{:.3}", m.variance / mis.variance),
         ]);
     }
+    table
+}
 
+/// The variance of MMISₙ against n with the MIS reference line; returns the file name.
+fn mmis_figure(ctx: &Context<'_>, rows: &[(Option<usize>, Moments)]) -> Result<&'static str> {
+    let mis = rows[0].1;
     let mmis = &rows[1..];
     let points: Vec<(f64, f64)> = mmis
         .iter()
@@ -304,8 +372,13 @@ fn mmis_variance(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
     };
     let file = "smis-mmis-variance.png";
     plot::line_chart(&ctx.figure_path(file), (1000, 560), &chart)?;
+    Ok(file)
+}
 
-    // The same criteria as the suite `smis_mmis_fig1`, on this run's numbers.
+/// Whether MMIS Fig. 1 is reproduced, by the criteria of the suite `smis_mmis_fig1`.
+fn mmis_verdict(rows: &[(Option<usize>, Moments)]) -> String {
+    let mis = rows[0].1;
+    let mmis = &rows[1..];
     let apart =
         |a: Moments, b: Moments| (a.variance_error.powi(2) + b.variance_error.powi(2)).sqrt();
     let ratios: Vec<f64> = mmis.iter().map(|r| r.1.variance / mis.variance).collect();
@@ -316,7 +389,7 @@ fn mmis_variance(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
     let starts_above = first.variance - mis.variance > 5.0 * apart(first, mis);
     let reaches = last.variance < mis.variance + 3.0 * apart(last, mis);
     let below = mis.variance - last.variance > 3.0 * apart(last, mis);
-    let verdict = if falling && starts_above && reaches {
+    if falling && starts_above && reaches {
         format!(
             "Reproduced: the variance of MMISₙ falls monotonically with n, from {:.2}× the MIS \
              reference at n = 1 to {:.2}× at n = {}, so the additional variance of the stochastic \
@@ -341,29 +414,5 @@ fn mmis_variance(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
                 .collect::<Vec<_>>()
                 .join(", ")
         )
-    };
-
-    section
-        .heading("Marginal MIS against classical MIS (MMIS Fig. 1)")
-        .paragraph(&format!(
-            "West et al.'s canonical experiment: four marginal techniques on [0, 1) with \
-             1-D technique spaces. Technique i draws t ~ U(0, 1) and then x from a tent of width \
-             0.1-0.15 that slides with t over part of the domain; the first three each cover one \
-             feature of the integrand (a background 0.05 and three triangular bumps, ∫ = \
-             {FIG1_INTEGRAL}) and miss the rest, the fourth is a defensive uniform technique. \
-             With a total budget of N = {FIG1_BUDGET} samples, MMISₙ (eq. 6, `mcg_smis::Mmis`) \
-             draws n technique-sample pairs per technique and averages N/(nT) realizations; the \
-             reference is classical MIS with the balance heuristic and the exact (closed-form) \
-             x-marginals, which a renderer could not evaluate.",
-        ))
-        .figure(
-            file,
-            &format!(
-                "Variance of one budget-{FIG1_BUDGET} estimate against n; the horizontal line is \
-                 the classical MIS reference."
-            ),
-        )
-        .table(table)
-        .paragraph(&verdict);
-    Ok(())
+    }
 }

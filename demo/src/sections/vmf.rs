@@ -221,72 +221,9 @@ pub fn sample_histogram(
 }
 
 fn histograms(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
-    let samples = ctx.config.samples as u64;
-    let bar = ctx.progress(
-        samples * HISTOGRAM_KAPPAS.len() as u64,
-        "vMF: sampling lobes",
-    );
-    let mut hists = Vec::with_capacity(HISTOGRAM_KAPPAS.len());
-    for (i, &kappa) in HISTOGRAM_KAPPAS.iter().enumerate() {
-        let mut rng = Pcg64Mcg::seed_from_u64(ctx.config.seed.wrapping_add(i as u64));
-        hists.push(sample_histogram(kappa, samples, &mut rng, |n| bar.inc(n))?);
-    }
-    bar.finish_and_clear();
-
-    let panels: Vec<HistogramPanel> = hists
-        .iter()
-        .map(|h| {
-            let (chi2, dof) = h.chi_squared();
-            let curve = (0..=400)
-                .map(|i| {
-                    let t = h.t_max * f64::from(i) / 400.0;
-                    (t, t_density(h.normalization, h.kappa, t))
-                })
-                .collect();
-            HistogramPanel {
-                title: format!(
-                    "κ = {}    χ²/dof = {:.2}",
-                    plot::format_number(f64::from(h.kappa)),
-                    chi2 / dof as f64
-                ),
-                x_label: "t = 1 − cos θ".to_owned(),
-                y_label: "density of t".to_owned(),
-                edges: h.edges(),
-                heights: h.densities(),
-                bars_label: "samples".to_owned(),
-                curve,
-                curve_label: "2π C(κ) exp(−κt)".to_owned(),
-            }
-        })
-        .collect();
-    let file = "vmf-histograms.png";
-    plot::histogram_grid(&ctx.figure_path(file), (1500, 920), 3, &panels)?;
-
-    let mut table = Table::new(
-        "Sampling checks per κ (χ² over the bins plus one cell for t beyond the panel; z = (mean of t − exact) / standard error)",
-        [
-            "κ",
-            "t shown",
-            "χ² / dof",
-            "mean of t (samples)",
-            "1 − A₃(κ) (exact)",
-            "z",
-        ],
-    );
-    for h in &hists {
-        let (chi2, dof) = h.chi_squared();
-        let (mean, se) = h.mean_t();
-        let exact = exact_mean_t(f64::from(h.kappa));
-        table.push_row([
-            plot::format_number(f64::from(h.kappa)),
-            format!("[0, {}]", plot::format_number(h.t_max)),
-            format!("{:.1} / {dof} = {:.3}", chi2, chi2 / dof as f64),
-            significant_like(mean, exact, 6),
-            significant(exact, 6),
-            format!("{:+.2}", (mean - exact) / se),
-        ]);
-    }
-
+    let hists = histogram_samples(ctx)?;
+    let file = histogram_figure(ctx, &hists)?;
+    let table = histogram_table(&hists);
     section
         .heading("Samples against the density")
         .paragraph(
@@ -322,6 +259,84 @@ fn histograms(ctx: &Context<'_>, section: &mut Section) -> Result<()> {
              is what a correct sampler gives.",
         );
     Ok(())
+}
+
+/// One histogram of t per κ of [`HISTOGRAM_KAPPAS`], `samples` each, each κ from its own seed.
+fn histogram_samples(ctx: &Context<'_>) -> Result<Vec<THistogram>> {
+    let samples = ctx.config.samples as u64;
+    let bar = ctx.progress(
+        samples * HISTOGRAM_KAPPAS.len() as u64,
+        "vMF: sampling lobes",
+    );
+    let mut hists = Vec::with_capacity(HISTOGRAM_KAPPAS.len());
+    for (i, &kappa) in HISTOGRAM_KAPPAS.iter().enumerate() {
+        let mut rng = Pcg64Mcg::seed_from_u64(ctx.config.seed.wrapping_add(i as u64));
+        hists.push(sample_histogram(kappa, samples, &mut rng, |n| bar.inc(n))?);
+    }
+    bar.finish_and_clear();
+    Ok(hists)
+}
+
+/// The panels of histograms against the exact density; returns the figure's file name.
+fn histogram_figure(ctx: &Context<'_>, hists: &[THistogram]) -> Result<&'static str> {
+    let panels: Vec<HistogramPanel> = hists
+        .iter()
+        .map(|h| {
+            let (chi2, dof) = h.chi_squared();
+            let curve = (0..=400)
+                .map(|i| {
+                    let t = h.t_max * f64::from(i) / 400.0;
+                    (t, t_density(h.normalization, h.kappa, t))
+                })
+                .collect();
+            HistogramPanel {
+                title: format!(
+                    "κ = {}    χ²/dof = {:.2}",
+                    plot::format_number(f64::from(h.kappa)),
+                    chi2 / dof as f64
+                ),
+                x_label: "t = 1 − cos θ".to_owned(),
+                y_label: "density of t".to_owned(),
+                edges: h.edges(),
+                heights: h.densities(),
+                bars_label: "samples".to_owned(),
+                curve,
+                curve_label: "2π C(κ) exp(−κt)".to_owned(),
+            }
+        })
+        .collect();
+    let file = "vmf-histograms.png";
+    plot::histogram_grid(&ctx.figure_path(file), (1500, 920), 3, &panels)?;
+    Ok(file)
+}
+
+/// χ² and the mean of t against its exact value, per κ.
+fn histogram_table(hists: &[THistogram]) -> Table {
+    let mut table = Table::new(
+        "Sampling checks per κ (χ² over the bins plus one cell for t beyond the panel; z = (mean of t − exact) / standard error)",
+        [
+            "κ",
+            "t shown",
+            "χ² / dof",
+            "mean of t (samples)",
+            "1 − A₃(κ) (exact)",
+            "z",
+        ],
+    );
+    for h in hists {
+        let (chi2, dof) = h.chi_squared();
+        let (mean, se) = h.mean_t();
+        let exact = exact_mean_t(f64::from(h.kappa));
+        table.push_row([
+            plot::format_number(f64::from(h.kappa)),
+            format!("[0, {}]", plot::format_number(h.t_max)),
+            format!("{:.1} / {dof} = {:.3}", chi2, chi2 / dof as f64),
+            significant_like(mean, exact, 6),
+            significant(exact, 6),
+            format!("{:+.2}", (mean - exact) / se),
+        ]);
+    }
+    table
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -1,4 +1,5 @@
-//! Errors of the host side.
+//! Errors of the host side (compiled without the `runtime` feature too: `McpgGpuParams::new`
+//! returns them).
 
 use core::fmt;
 
@@ -6,7 +7,7 @@ use core::fmt;
 /// or while reading results back.
 ///
 /// Variants carry the values that explain them, as wgpu's errors do.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum GpuError {
     /// No wgpu adapter (GPU or software rasteriser) was found. `reason` is wgpu's message.
@@ -59,7 +60,7 @@ pub enum GpuError {
     },
     /// A GPU guide's configuration is invalid (the CPU guide would reject it too).
     Guide(mcg_markov_guide::mcpg::GuideError),
-    /// A GPU guide's buffer would exceed what one binding or one `u32` index can address.
+    /// A GPU guide's buffer would exceed what one binding or one `u32` word index can address.
     GuideTooLarge {
         /// Bytes the buffer would need.
         bytes: u64,
@@ -111,10 +112,18 @@ impl fmt::Display for GpuError {
     }
 }
 
-impl std::error::Error for GpuError {}
+impl std::error::Error for GpuError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            GpuError::Guide(e) => Some(e),
+            _ => None,
+        }
+    }
+}
 
 impl GpuError {
     /// `Ok` when `found == expected`, else [`GpuError::LengthMismatch`].
+    #[cfg_attr(not(feature = "runtime"), allow(dead_code))] // used by the host types only
     pub(crate) fn check_len(expected: usize, found: usize) -> Result<(), GpuError> {
         if expected == found {
             Ok(())

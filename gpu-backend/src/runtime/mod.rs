@@ -4,9 +4,9 @@
 mod buffer;
 mod codec_kernels;
 mod context;
-mod error;
 mod gpu_hash_table;
 mod gpu_texels;
+mod guided_kernel;
 mod hashgrid_kernels;
 mod markov_kernels;
 pub mod testing;
@@ -15,12 +15,13 @@ mod vmf_mixture_kernel;
 
 use std::sync::OnceLock;
 
+pub use crate::error::GpuError;
 pub use buffer::GpuBuffer;
 pub use codec_kernels::{CodecKernels, CodecPackRead, LogLuvRead};
 pub use context::{ComputeKernel, GpuContext};
-pub use error::GpuError;
 pub use gpu_hash_table::GpuHashTable;
 pub use gpu_texels::GpuTexels;
+pub use guided_kernel::{GuidedKernel, buffer_entry, sized_buffer_entry, storage_entry};
 pub use hashgrid_kernels::HashgridKernels;
 pub use markov_kernels::{GridStateQueryRead, GridStateRead, MarkovKernels, PixelStateRead};
 pub use vmf_kernels::VmfKernels;

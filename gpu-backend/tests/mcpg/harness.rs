@@ -6,7 +6,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 use mcg_gpu_backend::guides::mcpg::GpuMcpgGuide;
 use mcg_gpu_backend::shaders;
-use mcg_gpu_backend::{GpuBuffer, GpuContext, codes, wgpu};
+use mcg_gpu_backend::{GpuBuffer, GpuContext, GuidedKernel, codes, storage_entry, wgpu};
 use mcg_markov_guide::mcpg::{
     BeginUniforms, CandidateUniforms, FinishUniforms, GridUniforms, Guide, GuidedSample,
     IsotropicPhase, Lambertian, SampleUniforms, Scatter, Traced, Transition, Vertex,
@@ -245,16 +245,13 @@ pub fn sample_uniforms(mut next: impl FnMut() -> f32) -> SampleUniforms {
 
 /// The pipelines of `steps.wgsl` with the guide's layout at group 1.
 pub struct Steps {
-    io_layout: wgpu::BindGroupLayout,
-    module: wgpu::ShaderModule,
-    layout: wgpu::PipelineLayout,
+    kernel: GuidedKernel,
 }
 
 impl Steps {
     /// Composes `steps.wgsl` as plain WGSL (`naga_oil` false) or through naga_oil.
     pub fn new(ctx: &GpuContext, guide: &GpuMcpgGuide, naga_oil: bool) -> Self {
         let defs = GpuMcpgGuide::shader_defs(GUIDE_GROUP);
-        let device = ctx.device();
         let source = if naga_oil {
             use naga_oil::compose::{Composer, NagaModuleDescriptor, ShaderDefValue};
             let mut composer = Composer::default();
@@ -274,34 +271,9 @@ impl Steps {
         } else {
             wgpu::ShaderSource::Wgsl(shaders::compose(STEPS, &defs).unwrap().into())
         };
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("steps"),
-            source,
-        });
-        let entry = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let io_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("steps io"),
-            entries: &[entry(0, true), entry(1, false)],
-        });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("steps"),
-            bind_group_layouts: &[Some(&io_layout), Some(guide.bind_group_layout())],
-            immediate_size: 0,
-        });
-        Self {
-            io_layout,
-            module,
-            layout,
-        }
+        let io = [storage_entry(0, true), storage_entry(1, false)];
+        let kernel = GuidedKernel::new(ctx, "steps", source, &io, guide.bind_group_layout());
+        Self { kernel }
     }
 
     /// Runs `entry` with `invocations` invocations (64 per workgroup unless the entry's
@@ -317,30 +289,12 @@ impl Steps {
     ) -> Vec<StepOutput> {
         let device = ctx.device();
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(entry),
-            layout: Some(&self.layout),
-            module: &self.module,
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let pipeline = self.kernel.pipeline(ctx, entry);
         let inputs: GpuBuffer<StepInput> = ctx.storage_buffer("inputs", inputs);
         let outputs: GpuBuffer<StepOutput> = ctx.zeroed_buffer("outputs", outputs_len);
-        let io = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("steps io"),
-            layout: &self.io_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: inputs.raw().as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: outputs.raw().as_entire_binding(),
-                },
-            ],
-        });
+        let io = self
+            .kernel
+            .io_bind_group(ctx, &[inputs.raw(), outputs.raw()]);
         let mut encoder = device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());

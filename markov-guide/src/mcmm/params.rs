@@ -77,15 +77,24 @@ impl McmmParams {
     /// The first [`ParamsError`] found.
     pub fn validate(&self) -> Result<(), ParamsError> {
         if !(0.0..=1.0).contains(&self.hemisphere_probability) {
-            return Err(ParamsError::ProbabilityOutOfRange);
+            return Err(ParamsError::ProbabilityOutOfRange {
+                parameter: "hemisphere_probability",
+                value: self.hemisphere_probability,
+            });
         }
-        let finite_width = self.window_half_width >= 0.0 && self.window_half_width.is_finite();
-        let alpha_in_range = (0.0..=1.0).contains(&self.fit.alpha_min);
-        if !(finite_width && alpha_in_range && self.prior.is_valid()) {
-            return Err(ParamsError::NotFiniteNonNegative);
+        let out_of_range =
+            |parameter, value| ParamsError::NotFiniteNonNegative { parameter, value };
+        if !(self.window_half_width >= 0.0 && self.window_half_width.is_finite()) {
+            return Err(out_of_range("window_half_width", self.window_half_width));
         }
+        if !(0.0..=1.0).contains(&self.fit.alpha_min) {
+            return Err(out_of_range("fit.alpha_min", self.fit.alpha_min));
+        }
+        self.prior.check()?;
         if self.neighbour_candidates == 0 {
-            return Err(ParamsError::NoCandidates);
+            return Err(ParamsError::NoCandidates {
+                parameter: "neighbour_candidates",
+            });
         }
         Ok(())
     }
@@ -135,15 +144,29 @@ impl McmmPrior {
         }
     }
 
-    fn is_valid(&self) -> bool {
+    /// The first field out of range, as a [`ParamsError::NotFiniteNonNegative`].
+    fn check(&self) -> Result<(), ParamsError> {
+        let out_of_range =
+            |parameter, value| ParamsError::NotFiniteNonNegative { parameter, value };
         match *self {
             McmmPrior::Fixed(prior) => {
-                prior.weight >= 0.0 && (-1.0..=1.0).contains(&prior.mean_cosine)
+                if !(prior.weight >= 0.0) {
+                    return Err(out_of_range("prior.weight", prior.weight));
+                }
+                if !(-1.0..=1.0).contains(&prior.mean_cosine) {
+                    return Err(out_of_range("prior.mean_cosine", prior.mean_cosine));
+                }
             }
             McmmPrior::LightSize { radius, weight } => {
-                radius >= 0.0 && radius.is_finite() && weight >= 0.0 && weight.is_finite()
+                if !(radius >= 0.0 && radius.is_finite()) {
+                    return Err(out_of_range("prior.radius", radius));
+                }
+                if !(weight >= 0.0 && weight.is_finite()) {
+                    return Err(out_of_range("prior.weight", weight));
+                }
             }
         }
+        Ok(())
     }
 }
 
@@ -157,6 +180,7 @@ impl Default for McmmParams {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::string::ToString;
 
     #[test]
     fn paper_defaults_validate_and_bad_values_do_not() {
@@ -165,12 +189,38 @@ mod tests {
         assert_eq!(McmmParams::default(), McmmParams::PAPER);
         let mut p = McmmParams::PAPER;
         p.hemisphere_probability = f32::NAN;
-        assert_eq!(p.validate(), Err(ParamsError::ProbabilityOutOfRange));
+        assert!(matches!(
+            p.validate(),
+            Err(ParamsError::ProbabilityOutOfRange {
+                parameter: "hemisphere_probability",
+                value
+            }) if value.is_nan()
+        ));
         let mut p = McmmParams::PAPER;
         p.window_half_width = -1.0;
-        assert_eq!(p.validate(), Err(ParamsError::NotFiniteNonNegative));
+        assert_eq!(
+            p.validate(),
+            Err(ParamsError::NotFiniteNonNegative {
+                parameter: "window_half_width",
+                value: -1.0
+            })
+        );
+        let mut p = McmmParams::PAPER;
+        p.prior = McmmPrior::LightSize {
+            radius: 1.0,
+            weight: -2.0,
+        };
+        assert_eq!(
+            p.validate().unwrap_err().to_string(),
+            "parameter prior.weight = -2 is not finite, non-negative and in range"
+        );
         let mut p = McmmParams::PAPER;
         p.neighbour_candidates = 0;
-        assert_eq!(p.validate(), Err(ParamsError::NoCandidates));
+        assert_eq!(
+            p.validate(),
+            Err(ParamsError::NoCandidates {
+                parameter: "neighbour_candidates"
+            })
+        );
     }
 }

@@ -91,8 +91,9 @@ impl PixelStateBuffers {
     /// [`BufferError::AllocationFailed`] when the allocator cannot provide them (instead of
     /// aborting the process).
     pub fn new(width: u32, height: u32) -> Result<Self, BufferError> {
+        let too_large = BufferError::DimensionAboveMax { width, height };
         if width > i32::MAX as u32 || height > i32::MAX as u32 {
-            return Err(BufferError::DimensionAboveMax);
+            return Err(too_large);
         }
         let n = (width as usize)
             .checked_mul(height as usize)
@@ -100,11 +101,11 @@ impl PixelStateBuffers {
                 n.checked_mul(2 * core::mem::size_of::<PixelState>())
                     .is_some_and(|bytes| bytes <= isize::MAX as usize)
             })
-            .ok_or(BufferError::DimensionAboveMax)?;
+            .ok_or(too_large)?;
         let buffer = || {
             let mut v = std::vec::Vec::new();
             v.try_reserve_exact(n)
-                .map_err(|_| BufferError::AllocationFailed)?;
+                .map_err(|source| BufferError::AllocationFailed { states: n, source })?;
             v.resize(n, PixelState::EMPTY);
             Ok(v)
         };
@@ -252,16 +253,25 @@ mod tests {
         // Issue 14: `new(u32::MAX, 1)` aborted the process on a 120 GB allocation.
         assert_eq!(
             PixelStateBuffers::new(u32::MAX, 1),
-            Err(BufferError::DimensionAboveMax)
+            Err(BufferError::DimensionAboveMax {
+                width: u32::MAX,
+                height: 1
+            })
         );
         assert_eq!(
             PixelStateBuffers::new(1, 1 << 31),
-            Err(BufferError::DimensionAboveMax)
+            Err(BufferError::DimensionAboveMax {
+                width: 1,
+                height: 1 << 31
+            })
         );
         // 2³¹ − 1 pixels square is 1.3·10²⁰ bytes: above isize::MAX on every target.
         assert_eq!(
             PixelStateBuffers::new(i32::MAX as u32, i32::MAX as u32),
-            Err(BufferError::DimensionAboveMax)
+            Err(BufferError::DimensionAboveMax {
+                width: i32::MAX as u32,
+                height: i32::MAX as u32
+            })
         );
         let b = PixelStateBuffers::new(0, 5).unwrap();
         assert_eq!(b.previous(0, 0), None);

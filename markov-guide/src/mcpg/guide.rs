@@ -463,7 +463,9 @@ impl Guide {
     pub fn new(config: GuideConfig) -> Result<Self, GuideError> {
         config.params.validate().map_err(GuideError::Params)?;
         if !(config.environment_distance > 0.0 && config.environment_distance.is_finite()) {
-            return Err(GuideError::EnvironmentDistanceNotPositive);
+            return Err(GuideError::EnvironmentDistanceNotPositive {
+                distance: config.environment_distance,
+            });
         }
         let adaptive = AdaptiveGrid::new(config.adaptive).map_err(GuideError::Grid)?;
         let static_grid = StaticGrid::new(config.static_width).map_err(GuideError::Grid)?;

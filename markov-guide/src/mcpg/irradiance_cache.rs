@@ -65,7 +65,10 @@ impl CacheConfig {
 
     fn validate(&self) -> Result<(), ParamsError> {
         if !(self.accumulation > 0.0 && self.accumulation <= 1.0) {
-            return Err(ParamsError::ProbabilityOutOfRange);
+            return Err(ParamsError::ProbabilityOutOfRange {
+                parameter: "cache.accumulation",
+                value: self.accumulation,
+            });
         }
         Ok(())
     }

@@ -83,25 +83,45 @@ impl McpgParams {
     /// # Errors
     /// The first [`ParamsError`] found. N_max must fit the state's 16-bit count.
     pub fn validate(&self) -> Result<(), ParamsError> {
-        for p in [self.adaptive_probability, self.bsdf_probability] {
-            if !(0.0..=1.0).contains(&p) {
-                return Err(ParamsError::ProbabilityOutOfRange);
+        for (parameter, value) in [
+            ("adaptive_probability", self.adaptive_probability),
+            ("bsdf_probability", self.bsdf_probability),
+        ] {
+            if !(0.0..=1.0).contains(&value) {
+                return Err(ParamsError::ProbabilityOutOfRange { parameter, value });
             }
         }
         let (DiscardRule::Paper { ratio } | DiscardRule::Engine { ratio }) = self.discard;
-        for v in [self.prior_scale, self.prior_min_weight, ratio] {
-            if !(v >= 0.0 && v.is_finite()) {
-                return Err(ParamsError::NotFiniteNonNegative);
+        for (parameter, value) in [
+            ("prior_scale", self.prior_scale),
+            ("prior_min_weight", self.prior_min_weight),
+            ("discard.ratio", ratio),
+        ] {
+            if !(value >= 0.0 && value.is_finite()) {
+                return Err(ParamsError::NotFiniteNonNegative { parameter, value });
             }
         }
-        if !(self.static_normal_threshold.abs() <= 1.0)
-            || !(0.0..=1.0).contains(&self.fit.alpha_min)
-            || self.fit.max_count > u16::MAX as u32
-        {
-            return Err(ParamsError::NotFiniteNonNegative);
+        let out_of_range =
+            |parameter, value| ParamsError::NotFiniteNonNegative { parameter, value };
+        if !(self.static_normal_threshold.abs() <= 1.0) {
+            let value = self.static_normal_threshold;
+            return Err(out_of_range("static_normal_threshold", value));
         }
-        if self.candidates == 0 || self.fit.max_count == 0 {
-            return Err(ParamsError::NoCandidates);
+        if !(0.0..=1.0).contains(&self.fit.alpha_min) {
+            return Err(out_of_range("fit.alpha_min", self.fit.alpha_min));
+        }
+        if self.fit.max_count > u16::MAX as u32 {
+            return Err(out_of_range("fit.max_count", self.fit.max_count as f32));
+        }
+        if self.candidates == 0 {
+            return Err(ParamsError::NoCandidates {
+                parameter: "candidates",
+            });
+        }
+        if self.fit.max_count == 0 {
+            return Err(ParamsError::NoCandidates {
+                parameter: "fit.max_count",
+            });
         }
         Ok(())
     }
@@ -123,15 +143,38 @@ mod tests {
         assert_eq!(McpgParams::PAPER.validate(), Ok(()));
         let mut p = McpgParams::PAPER;
         p.adaptive_probability = 1.5;
-        assert_eq!(p.validate(), Err(ParamsError::ProbabilityOutOfRange));
+        assert_eq!(
+            p.validate(),
+            Err(ParamsError::ProbabilityOutOfRange {
+                parameter: "adaptive_probability",
+                value: 1.5
+            })
+        );
         let mut p = McpgParams::PAPER;
         p.prior_scale = f32::NAN;
-        assert_eq!(p.validate(), Err(ParamsError::NotFiniteNonNegative));
+        assert!(matches!(
+            p.validate(),
+            Err(ParamsError::NotFiniteNonNegative {
+                parameter: "prior_scale",
+                value
+            }) if value.is_nan()
+        ));
         let mut p = McpgParams::PAPER;
         p.fit.max_count = 70_000;
-        assert_eq!(p.validate(), Err(ParamsError::NotFiniteNonNegative));
+        assert_eq!(
+            p.validate(),
+            Err(ParamsError::NotFiniteNonNegative {
+                parameter: "fit.max_count",
+                value: 70_000.0
+            })
+        );
         let mut p = McpgParams::PAPER;
         p.candidates = 0;
-        assert_eq!(p.validate(), Err(ParamsError::NoCandidates));
+        assert_eq!(
+            p.validate(),
+            Err(ParamsError::NoCandidates {
+                parameter: "candidates"
+            })
+        );
     }
 }

@@ -226,28 +226,12 @@ impl McmmToyRenderer {
     /// At the end of the frame every chain's S_c is written to the pixel it ended at.
     pub fn render_frame<R: Rng + ?Sized>(&mut self, scene: &ToyScene, rng: &mut R) -> Vec<f32> {
         let config = self.config;
-        let params = config.params;
         let size = config.tile_size() as usize;
         let steps = config.steps as usize;
         let n = self.chains.len();
-        let guided = matches!(config.sampling, Sampling::Guided(_));
-        // Every chain starts the frame from the state its pixel wrote last frame.
-        for index in 0..n {
-            let (px, py) = self.pixel(index);
-            let state = self.buffers.previous(px, py).unwrap_or(PixelState::EMPTY);
-            self.chains[index] = Chain {
-                tentative: state,
-                current: state,
-            };
-        }
-        let empty = CosineChainTechnique::new(&PixelState::EMPTY, Vec3::ZERO, TOY_NORMAL, &params);
-        let mut techniques = std::vec![empty; n * steps];
-        let mut samples = std::vec![Vec3::ZERO; n * steps];
-        let mut values = std::vec![0.0f32; n * steps];
-        let mut scores = std::vec![0.0f32; n * steps];
+        self.start_chains();
+        let mut frame = FrameSamples::new(n * steps, &config.params);
         let mut estimates = std::vec![0.0f32; n];
-        let mut set = Vec::with_capacity(size);
-
         for step in 0..steps {
             if config.sampling == Sampling::Guided(Decorrelation::Tsmis) {
                 let shift = CyclicShift::new(size as u32, 1).expect("tile size checked in new");
@@ -255,22 +239,8 @@ impl McmmToyRenderer {
                     shift.apply(tile);
                 }
             }
-            // Alg. 1: collaborative discovery from the previous frame's states.
-            if guided {
-                for index in 0..n {
-                    let pixel = self.pixel(index);
-                    let mut candidates = Vec::with_capacity(params.neighbour_candidates as usize);
-                    for _ in 0..params.neighbour_candidates {
-                        let u: [f32; 12] = core::array::from_fn(|_| rng.random());
-                        let offset = bspline_offset(&u, params.window_half_width);
-                        let select: f32 = rng.random();
-                        if let Some(state) = self.buffers.neighbour(pixel, offset, Vec2::ZERO) {
-                            candidates.push((state, select));
-                        }
-                    }
-                    let chain = &mut self.chains[index];
-                    chain.tentative = collaborative_discovery(chain.tentative, candidates);
-                }
+            if matches!(config.sampling, Sampling::Guided(_)) {
+                self.discover(rng);
             }
             if config.sampling == Sampling::Guided(Decorrelation::Ssmis) {
                 for tile in self.chains.chunks_mut(size) {
@@ -281,79 +251,8 @@ impl McmmToyRenderer {
             }
             // The states this step's techniques come from (SSMIS rebuilds them at every pixel).
             let step_states: Vec<PixelState> = self.chains.iter().map(|c| c.tentative).collect();
-            // Alg. 2, tracing, Alg. 3.
-            for (index, &step_state) in step_states.iter().enumerate() {
-                let x = self.shading_point(index);
-                let state = if guided {
-                    step_state
-                } else {
-                    PixelState::EMPTY
-                };
-                let technique = CosineChainTechnique::new(&state, x, TOY_NORMAL, &params);
-                let u_select: f32 = rng.random();
-                let u = Vec2::new(rng.random(), rng.random());
-                let (w, from_hemisphere) = technique.sample_with_branch(u_select, u);
-                let hit = scene.trace(x, w);
-                let value = hit.radiance * TOY_NORMAL.dot(w).max(0.0);
-                // f = value/p as a one-sample SMIS estimate over the scoring set (0 where
-                // p = 0 or the ratio overflows): the chain's own technique, or the tile.
-                let score = match params.score_density {
-                    ScoreDensity::Technique => {
-                        smis_one_sample(core::slice::from_ref(&technique), &w, value)
-                    }
-                    ScoreDensity::TileMixture => {
-                        tile_techniques(&mut set, &step_states, index, size, x, &params);
-                        smis_one_sample(&set, &w, value)
-                    }
-                };
-                let slot = index * steps + step;
-                scores[slot] = score;
-                techniques[slot] = technique;
-                samples[slot] = w;
-                values[slot] = value;
-                if guided {
-                    let chain = &mut self.chains[index];
-                    let u_accept: f32 = rng.random();
-                    update(
-                        &mut chain.tentative,
-                        &mut chain.current,
-                        x,
-                        hit.point,
-                        score,
-                        from_hemisphere,
-                        u_accept,
-                        &params,
-                    );
-                }
-            }
-            match config.sampling {
-                Sampling::Guided(Decorrelation::Ssmis) => {
-                    // Eq. 9 at each pixel over all of its tile's states at this step, each
-                    // reconstructed at the pixel's own shading point.
-                    // With the tile-mixture score the score already is this estimate.
-                    for (index, estimate) in estimates.iter_mut().enumerate() {
-                        let slot = index * steps + step;
-                        let one_sample = if params.score_density == ScoreDensity::TileMixture {
-                            scores[slot]
-                        } else {
-                            let x = self.shading_point(index);
-                            tile_techniques(&mut set, &step_states, index, size, x, &params);
-                            smis_one_sample(&set, &samples[slot], values[slot])
-                        };
-                        *estimate += one_sample / steps as f32;
-                    }
-                }
-                Sampling::Cosine => {
-                    for (index, estimate) in estimates.iter_mut().enumerate() {
-                        let slot = index * steps + step;
-                        let pdf = techniques[slot].pdf(&samples[slot]);
-                        if pdf > 0.0 {
-                            *estimate += values[slot] / pdf / steps as f32;
-                        }
-                    }
-                }
-                _ => {}
-            }
+            self.sample_step(scene, rng, step, &step_states, &mut frame);
+            self.accumulate_step(step, &step_states, &mut frame, &mut estimates);
         }
         if matches!(
             config.sampling,
@@ -363,14 +262,153 @@ impl McmmToyRenderer {
             for (index, estimate) in estimates.iter_mut().enumerate() {
                 let range = index * steps..(index + 1) * steps;
                 *estimate = smis(
-                    &techniques[range.clone()],
-                    &samples[range.clone()],
-                    &values[range],
+                    &frame.techniques[range.clone()],
+                    &frame.samples[range.clone()],
+                    &frame.values[range],
                 );
             }
         }
-        // Write S_c where each chain ended; it becomes the previous frame.
-        for index in 0..n {
+        self.end_frame();
+        estimates
+    }
+
+    /// Every chain starts the frame from the state its pixel wrote last frame.
+    fn start_chains(&mut self) {
+        for index in 0..self.chains.len() {
+            let (px, py) = self.pixel(index);
+            let state = self.buffers.previous(px, py).unwrap_or(PixelState::EMPTY);
+            self.chains[index] = Chain {
+                tentative: state,
+                current: state,
+            };
+        }
+    }
+
+    /// Alg. 1: collaborative discovery from the previous frame's states, at every pixel.
+    fn discover<R: Rng + ?Sized>(&mut self, rng: &mut R) {
+        let params = self.config.params;
+        for index in 0..self.chains.len() {
+            let pixel = self.pixel(index);
+            let mut candidates = Vec::with_capacity(params.neighbour_candidates as usize);
+            for _ in 0..params.neighbour_candidates {
+                let u: [f32; 12] = core::array::from_fn(|_| rng.random());
+                let offset = bspline_offset(&u, params.window_half_width);
+                let select: f32 = rng.random();
+                if let Some(state) = self.buffers.neighbour(pixel, offset, Vec2::ZERO) {
+                    candidates.push((state, select));
+                }
+            }
+            let chain = &mut self.chains[index];
+            chain.tentative = collaborative_discovery(chain.tentative, candidates);
+        }
+    }
+
+    /// Alg. 2, tracing and Alg. 3 at every pixel for step `step`: stores the technique, the
+    /// sample, its value and its score in `frame`, and updates guided chains.
+    fn sample_step<R: Rng + ?Sized>(
+        &mut self,
+        scene: &ToyScene,
+        rng: &mut R,
+        step: usize,
+        step_states: &[PixelState],
+        frame: &mut FrameSamples,
+    ) {
+        let params = self.config.params;
+        let size = self.config.tile_size() as usize;
+        let steps = self.config.steps as usize;
+        let guided = matches!(self.config.sampling, Sampling::Guided(_));
+        for (index, &step_state) in step_states.iter().enumerate() {
+            let x = self.shading_point(index);
+            let state = if guided {
+                step_state
+            } else {
+                PixelState::EMPTY
+            };
+            let technique = CosineChainTechnique::new(&state, x, TOY_NORMAL, &params);
+            let u_select: f32 = rng.random();
+            let u = Vec2::new(rng.random(), rng.random());
+            let (w, from_hemisphere) = technique.sample_with_branch(u_select, u);
+            let hit = scene.trace(x, w);
+            let value = hit.radiance * TOY_NORMAL.dot(w).max(0.0);
+            // f = value/p as a one-sample SMIS estimate over the scoring set (0 where
+            // p = 0 or the ratio overflows): the chain's own technique, or the tile.
+            let score = match params.score_density {
+                ScoreDensity::Technique => {
+                    smis_one_sample(core::slice::from_ref(&technique), &w, value)
+                }
+                ScoreDensity::TileMixture => {
+                    tile_techniques(&mut frame.set, step_states, index, size, x, &params);
+                    smis_one_sample(&frame.set, &w, value)
+                }
+            };
+            let slot = index * steps + step;
+            frame.scores[slot] = score;
+            frame.techniques[slot] = technique;
+            frame.samples[slot] = w;
+            frame.values[slot] = value;
+            if guided {
+                let chain = &mut self.chains[index];
+                let u_accept: f32 = rng.random();
+                update(
+                    &mut chain.tentative,
+                    &mut chain.current,
+                    x,
+                    hit.point,
+                    score,
+                    from_hemisphere,
+                    u_accept,
+                    &params,
+                );
+            }
+        }
+    }
+
+    /// Adds step `step`'s share to the estimates of the estimators that sum per step: SSMIS
+    /// (eq. 9) and plain cosine sampling.
+    fn accumulate_step(
+        &self,
+        step: usize,
+        step_states: &[PixelState],
+        frame: &mut FrameSamples,
+        estimates: &mut [f32],
+    ) {
+        let params = self.config.params;
+        let size = self.config.tile_size() as usize;
+        let steps = self.config.steps as usize;
+        match self.config.sampling {
+            Sampling::Guided(Decorrelation::Ssmis) => {
+                // Eq. 9 at each pixel over all of its tile's states at this step, each
+                // reconstructed at the pixel's own shading point.
+                // With the tile-mixture score the score already is this estimate.
+                for (index, estimate) in estimates.iter_mut().enumerate() {
+                    let slot = index * steps + step;
+                    let one_sample = if params.score_density == ScoreDensity::TileMixture {
+                        frame.scores[slot]
+                    } else {
+                        let x = self.shading_point(index);
+                        tile_techniques(&mut frame.set, step_states, index, size, x, &params);
+                        smis_one_sample(&frame.set, &frame.samples[slot], frame.values[slot])
+                    };
+                    *estimate += one_sample / steps as f32;
+                }
+            }
+            Sampling::Cosine => {
+                for (index, estimate) in estimates.iter_mut().enumerate() {
+                    let slot = index * steps + step;
+                    let pdf = frame.techniques[slot].pdf(&frame.samples[slot]);
+                    if pdf > 0.0 {
+                        *estimate += frame.values[slot] / pdf / steps as f32;
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+
+    /// Writes S_c where each chain ended; it becomes the previous frame.
+    fn end_frame(&mut self) {
+        let guided = matches!(self.config.sampling, Sampling::Guided(_));
+        for index in 0..self.chains.len() {
             let (px, py) = self.pixel(index);
             let state = if guided {
                 self.chains[index].current
@@ -380,7 +418,30 @@ impl McmmToyRenderer {
             self.buffers.set_current(px, py, state);
         }
         self.buffers.swap();
-        estimates
+    }
+}
+
+/// A frame's (technique, sample, value, score) per pixel and step (slot `index · steps + step`),
+/// and the scratch set of a tile's techniques.
+struct FrameSamples {
+    techniques: Vec<CosineChainTechnique>,
+    samples: Vec<Vec3>,
+    values: Vec<f32>,
+    scores: Vec<f32>,
+    set: Vec<CosineChainTechnique>,
+}
+
+impl FrameSamples {
+    /// `slots` empty slots.
+    fn new(slots: usize, params: &McmmParams) -> Self {
+        let empty = CosineChainTechnique::new(&PixelState::EMPTY, Vec3::ZERO, TOY_NORMAL, params);
+        Self {
+            techniques: std::vec![empty; slots],
+            samples: std::vec![Vec3::ZERO; slots],
+            values: std::vec![0.0f32; slots],
+            scores: std::vec![0.0f32; slots],
+            set: Vec::new(),
+        }
     }
 }
 

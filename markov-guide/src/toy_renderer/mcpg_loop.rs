@@ -185,9 +185,7 @@ impl McpgToyRenderer {
     /// vertex; or, after a rejected lobe sample, apply the discard heuristic (sec. 5).
     pub fn render_frame<R: Rng + ?Sized>(&mut self, scene: &ToyScene, rng: &mut R) -> McpgFrame {
         let config = self.config;
-        let params = config.params;
         let now = self.frame as f32;
-        let candidates = (params.candidates as usize).clamp(1, MAX_CANDIDATES);
         let n = self.pixel_count();
         let spp = config.samples_per_pixel.max(1);
         let mut frame = McpgFrame {
@@ -207,86 +205,122 @@ impl McpgToyRenderer {
                     }
                     continue;
                 }
-                // Alg. 1: grid resampling.
-                let mut set = CandidateSet::<MAX_CANDIDATES>::new();
-                let mut slots: [Option<GridSlot>; MAX_CANDIDATES] = [None; MAX_CANDIDATES];
-                for slot in slots.iter_mut().take(candidates) {
-                    let u = Self::grid_uniforms(rng);
-                    let (state, collided, grid, found) =
-                        self.grids.load(x, TOY_NORMAL, config.camera, &u);
-                    let predict_to = if config.velocity_prediction {
-                        now
-                    } else {
-                        state.time
-                    };
-                    let candidate = prepare_candidate(
-                        state,
-                        collided,
-                        grid,
-                        x,
-                        Some(TOY_NORMAL),
-                        predict_to,
-                        &params,
-                    );
-                    set.offer(candidate, rng.random());
-                    *slot = found;
-                }
-                // Alg. 2: sampling and tracing.
-                let (choice, state) = choose_technique(set.selected(), x, rng.random(), &params);
-                let w =
-                    match choice {
-                        SampleChoice::Bsdf => cosine_hemisphere(TOY_NORMAL, u_dir).0,
-                        SampleChoice::Lobe(lobe) => {
-                            frame.lobe_samples += 1;
-                            if let Some(light) = scene.lights.iter().min_by(|a, b| {
-                                a.center.distance(x).total_cmp(&b.center.distance(x))
-                            }) {
-                                let to_light = (light.center - x).normalize();
-                                frame.lobe_angle_sum +=
-                                    lobe.mu().dot(to_light).clamp(-1.0, 1.0).acos() as f64;
-                            }
-                            lobe.sample(u_dir)
-                        }
-                    };
-                let hit = scene.trace(x, w);
-                let value = hit.radiance * TOY_NORMAL.dot(w).max(0.0);
-                // Eq. 6-7: the estimator over the accessed states (a one-vertex path).
-                let technique = CosineVertexTechnique::new(&set, x, TOY_NORMAL, &params);
-                let estimate = path_estimate(value, &[&[technique]], &[w]);
-                frame.estimates[index] += estimate / spp as f32;
-                // Alg. 3: transition, or discard.
-                let observation = Observation {
-                    x,
-                    next: hit.point,
-                    next_previous: hit.point - hit.velocity,
-                    estimate,
-                    now,
-                    frame_time: 1.0,
-                };
-                match update(
-                    &state,
-                    set.mean_weight(),
-                    &observation,
-                    rng.random(),
-                    &params,
-                ) {
-                    Some(new) => {
-                        let u = Self::grid_uniforms(rng);
-                        self.grids.store(x, TOY_NORMAL, config.camera, &u, new);
-                    }
-                    None => {
-                        if config.discard
-                            && matches!(choice, SampleChoice::Lobe(_))
-                            && should_discard(&state, x, w, estimate, now, &params)
-                            && let Some(slot) = set.selected_index().and_then(|i| slots[i])
-                        {
-                            self.grids.discard(slot);
-                        }
-                    }
-                }
+                self.guided_sample(scene, x, index, u_dir, now, rng, &mut frame);
             }
         }
         self.frame += 1;
         frame
+    }
+
+    /// Alg. 1: grid resampling of `candidates` states at x into a candidate set, with the
+    /// grid slot each came from.
+    fn load_candidates<R: Rng + ?Sized>(
+        &self,
+        x: Vec3,
+        now: f32,
+        candidates: usize,
+        rng: &mut R,
+    ) -> (
+        CandidateSet<MAX_CANDIDATES>,
+        [Option<GridSlot>; MAX_CANDIDATES],
+    ) {
+        let config = self.config;
+        let params = config.params;
+        let mut set = CandidateSet::<MAX_CANDIDATES>::new();
+        let mut slots: [Option<GridSlot>; MAX_CANDIDATES] = [None; MAX_CANDIDATES];
+        for slot in slots.iter_mut().take(candidates) {
+            let u = Self::grid_uniforms(rng);
+            let (state, collided, grid, found) = self.grids.load(x, TOY_NORMAL, config.camera, &u);
+            let predict_to = if config.velocity_prediction {
+                now
+            } else {
+                state.time
+            };
+            let candidate = prepare_candidate(
+                state,
+                collided,
+                grid,
+                x,
+                Some(TOY_NORMAL),
+                predict_to,
+                &params,
+            );
+            set.offer(candidate, rng.random());
+            *slot = found;
+        }
+        (set, slots)
+    }
+
+    /// One guided sample at x (pixel `index`): Alg. 1 (candidates), Alg. 2 (sampling and
+    /// tracing), eq. 6-7 (the estimate, added to the pixel's), Alg. 3 (transition or discard).
+    #[allow(clippy::too_many_arguments)]
+    fn guided_sample<R: Rng + ?Sized>(
+        &mut self,
+        scene: &ToyScene,
+        x: Vec3,
+        index: usize,
+        u_dir: Vec2,
+        now: f32,
+        rng: &mut R,
+        frame: &mut McpgFrame,
+    ) {
+        let config = self.config;
+        let params = config.params;
+        let spp = config.samples_per_pixel.max(1);
+        let candidates = (params.candidates as usize).clamp(1, MAX_CANDIDATES);
+        let (set, slots) = self.load_candidates(x, now, candidates, rng);
+        // Alg. 2: sampling and tracing.
+        let (choice, state) = choose_technique(set.selected(), x, rng.random(), &params);
+        let w = match choice {
+            SampleChoice::Bsdf => cosine_hemisphere(TOY_NORMAL, u_dir).0,
+            SampleChoice::Lobe(lobe) => {
+                frame.lobe_samples += 1;
+                if let Some(light) = scene
+                    .lights
+                    .iter()
+                    .min_by(|a, b| a.center.distance(x).total_cmp(&b.center.distance(x)))
+                {
+                    let to_light = (light.center - x).normalize();
+                    frame.lobe_angle_sum += lobe.mu().dot(to_light).clamp(-1.0, 1.0).acos() as f64;
+                }
+                lobe.sample(u_dir)
+            }
+        };
+        let hit = scene.trace(x, w);
+        let value = hit.radiance * TOY_NORMAL.dot(w).max(0.0);
+        // Eq. 6-7: the estimator over the accessed states (a one-vertex path).
+        let technique = CosineVertexTechnique::new(&set, x, TOY_NORMAL, &params);
+        let estimate = path_estimate(value, &[&[technique]], &[w]);
+        frame.estimates[index] += estimate / spp as f32;
+        // Alg. 3: transition, or discard.
+        let observation = Observation {
+            x,
+            next: hit.point,
+            next_previous: hit.point - hit.velocity,
+            estimate,
+            now,
+            frame_time: 1.0,
+        };
+        match update(
+            &state,
+            set.mean_weight(),
+            &observation,
+            rng.random(),
+            &params,
+        ) {
+            Some(new) => {
+                let u = Self::grid_uniforms(rng);
+                self.grids.store(x, TOY_NORMAL, config.camera, &u, new);
+            }
+            None => {
+                if config.discard
+                    && matches!(choice, SampleChoice::Lobe(_))
+                    && should_discard(&state, x, w, estimate, now, &params)
+                    && let Some(slot) = set.selected_index().and_then(|i| slots[i])
+                {
+                    self.grids.discard(slot);
+                }
+            }
+        }
     }
 }

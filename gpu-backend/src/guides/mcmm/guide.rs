@@ -5,7 +5,7 @@ use mcg_markov_guide::mcmm::{McmmParams, PixelState};
 
 use super::GpuMcmmParams;
 use crate::shaders::defs;
-use crate::{GpuBuffer, GpuContext, GpuError};
+use crate::{GpuBuffer, GpuContext, GpuError, sized_buffer_entry};
 
 /// The MCMM guide's GPU resources for a `width × height` image: the parameters as a uniform
 /// and two buffers of [`PixelState`]s (MCMM sec. 4.1: a pixel resamples the states its
@@ -102,33 +102,20 @@ impl GpuMcmmGuide {
             ctx.zeroed_buffer::<PixelState>("mcmm states a", n),
             ctx.zeroed_buffer::<PixelState>("mcmm states b", n),
         ];
-        let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only },
-                has_dynamic_offset: false,
-                min_binding_size: wgpu::BufferSize::new(state_size),
-            },
-            count: None,
+        let storage = |binding, read_only| {
+            let ty = wgpu::BufferBindingType::Storage { read_only };
+            sized_buffer_entry(binding, ty, wgpu::BufferSize::new(state_size))
         };
         let layout = ctx
             .device()
             .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("mcmm guide"),
                 entries: &[
-                    wgpu::BindGroupLayoutEntry {
-                        binding: 0,
-                        visibility: wgpu::ShaderStages::COMPUTE,
-                        ty: wgpu::BindingType::Buffer {
-                            ty: wgpu::BufferBindingType::Uniform,
-                            has_dynamic_offset: false,
-                            min_binding_size: wgpu::BufferSize::new(
-                                size_of::<GpuMcmmParams>() as u64
-                            ),
-                        },
-                        count: None,
-                    },
+                    sized_buffer_entry(
+                        0,
+                        wgpu::BufferBindingType::Uniform,
+                        wgpu::BufferSize::new(size_of::<GpuMcmmParams>() as u64),
+                    ),
                     storage(1, true),
                     storage(2, false),
                 ],

@@ -8,7 +8,9 @@ use mcg_markov_guide::mcpg::{CacheCell, GridState, GuideConfig};
 
 use super::{McpgBufferWords, McpgGpuParams};
 use crate::shaders::{defs, kernels};
-use crate::{GpuBuffer, GpuContext, GpuError, WORKGROUP_SIZE, codes};
+use crate::{
+    GpuBuffer, GpuContext, GpuError, WORKGROUP_SIZE, codes, sized_buffer_entry, storage_entry,
+};
 
 /// The per-frame pass's pipelines, in the order they run.
 #[derive(Debug)]
@@ -99,7 +101,7 @@ impl GpuMcpgGuide {
     /// [`GpuError::Guide`] for a configuration the CPU guide rejects,
     /// [`GpuError::GuideTooLarge`] when a buffer exceeds the device's binding size.
     pub fn new(ctx: &GpuContext, config: &GuideConfig) -> Result<Self, GpuError> {
-        let (params, sizes) = McpgGpuParams::new(config).map_err(GpuError::Guide)?;
+        let (params, sizes) = McpgGpuParams::new(config)?;
         let maximum = ctx.device().limits().max_storage_buffer_binding_size;
         for words in [sizes.table_words, sizes.guide_words] {
             let bytes = 4 * words;
@@ -110,33 +112,18 @@ impl GpuMcpgGuide {
         let params_buffer = ctx.uniform_buffer("mcpg params", &params);
         let table_words = ctx.zeroed_buffer("mcpg hash words", sizes.table_words as usize);
         let guide_words = ctx.zeroed_buffer("mcpg words", sizes.guide_words as usize);
-        let storage = |binding: u32| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: false },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
         let layout = ctx
             .device()
             .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("mcg::mcpg"),
                 entries: &[
-                    wgpu::BindGroupLayoutEntry {
-                        binding: Self::PARAMS_BINDING,
-                        visibility: wgpu::ShaderStages::COMPUTE,
-                        ty: wgpu::BindingType::Buffer {
-                            ty: wgpu::BufferBindingType::Uniform,
-                            has_dynamic_offset: false,
-                            min_binding_size: NonZeroU64::new(size_of::<McpgGpuParams>() as u64),
-                        },
-                        count: None,
-                    },
-                    storage(Self::TABLE_WORDS_BINDING),
-                    storage(Self::GUIDE_WORDS_BINDING),
+                    sized_buffer_entry(
+                        Self::PARAMS_BINDING,
+                        wgpu::BufferBindingType::Uniform,
+                        NonZeroU64::new(size_of::<McpgGpuParams>() as u64),
+                    ),
+                    storage_entry(Self::TABLE_WORDS_BINDING, false),
+                    storage_entry(Self::GUIDE_WORDS_BINDING, false),
                 ],
             });
         let bind_group = ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {

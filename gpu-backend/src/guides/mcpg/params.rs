@@ -4,8 +4,9 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use mcg_hashgrid::{AdaptiveGrid, BucketHash, StaticGrid, TableError};
-use mcg_markov_guide::mcpg::{DiscardRule, GuideConfig, GuideError};
+use mcg_markov_guide::mcpg::{CacheConfig, DiscardRule, GuideConfig, GuideError};
 
+use crate::GpuError;
 use crate::codes;
 use crate::types::{HashgridLevelParams, HashgridTableParams, VmfFitParamsGpu};
 
@@ -101,57 +102,36 @@ impl McpgGpuParams {
     /// the camera at the origin (as the CPU guide starts), and the sizes of its buffers.
     ///
     /// # Errors
-    /// The [`GuideError`] `Guide::new` would return (a capacity below 8 is
-    /// [`TableError::MaxProbesAboveCapacity`]).
-    pub fn new(config: &GuideConfig) -> Result<(Self, McpgBufferWords), GuideError> {
-        config.params.validate().map_err(GuideError::Params)?;
-        if !(config.environment_distance > 0.0 && config.environment_distance.is_finite()) {
-            return Err(GuideError::EnvironmentDistanceNotPositive);
+    /// [`GpuError::Guide`] with the [`GuideError`] `Guide::new` would return (a capacity below
+    /// 8 is [`TableError::MaxProbesAboveCapacity`]); [`GpuError::GuideTooLarge`] when a buffer
+    /// holds more than `u32::MAX` words (the WGSL indexes them with `u32`).
+    pub fn new(config: &GuideConfig) -> Result<(Self, McpgBufferWords), GpuError> {
+        let (params, sizes) = Self::from_config(config).map_err(GpuError::Guide)?;
+        let maximum = 4 * u64::from(u32::MAX);
+        for words in [sizes.table_words, sizes.guide_words] {
+            let bytes = 4 * words;
+            if bytes > maximum {
+                return Err(GpuError::GuideTooLarge { bytes, maximum });
+            }
         }
-        let adaptive = AdaptiveGrid::new(config.adaptive).map_err(GuideError::Grid)?;
-        StaticGrid::new(config.static_width).map_err(GuideError::Grid)?;
-        let table = |capacity: u32| -> Result<HashgridTableParams, GuideError> {
-            if capacity == 0 {
-                return Err(GuideError::Table(TableError::CapacityZero));
-            }
-            if capacity < MCPG_MAX_PROBES {
-                return Err(GuideError::Table(TableError::MaxProbesAboveCapacity));
-            }
-            Ok(
-                HashgridTableParams::new(capacity, MCPG_MAX_PROBES, BucketHash::default())
-                    .expect("a non-zero capacity"),
-            )
-        };
+        Ok((params, sizes))
+    }
+
+    /// [`McpgGpuParams::new`] before the size check: the offsets are computed in u64 and
+    /// truncated to u32 (`new` rejects sizes whose offsets would not fit).
+    fn from_config(config: &GuideConfig) -> Result<(Self, McpgBufferWords), GuideError> {
+        let (adaptive, adaptive_table, static_table, cache) = Self::validated(config)?;
         let (ca, cs) = (config.adaptive_capacity, config.static_capacity);
-        let adaptive_table = table(ca)?;
-        let static_table = table(cs)?;
-        let cache = match config.cache {
-            Some(c) => {
-                if !(c.accumulation > 0.0 && c.accumulation <= 1.0) {
-                    return Err(GuideError::Params(
-                        mcg_markov_guide::ParamsError::ProbabilityOutOfRange,
-                    ));
-                }
-                Some((c, table(c.capacity)?))
-            }
-            None => None,
-        };
         let cc = cache.map_or(0, |(c, _)| c.capacity);
         let (ca64, cs64, cc64) = (u64::from(ca), u64::from(cs), u64::from(cc));
         // Hash words: adaptive checksums and ages, static checksums and ages, the cache's.
-        let words = |offset: u64| u32::try_from(offset).ok();
-        let too_large = || GuideError::Table(TableError::MaxProbesAboveCapacity);
+        // Every offset is at most `table_words`, which `new` checks against `u32::MAX`.
+        let words = |offset: u64| offset as u32;
         let adaptive_table = adaptive_table.at_offsets(0, ca);
-        let static_table = static_table.at_offsets(
-            words(2 * ca64).ok_or_else(too_large)?,
-            words(2 * ca64 + cs64).ok_or_else(too_large)?,
-        );
+        let static_table = static_table.at_offsets(words(2 * ca64), words(2 * ca64 + cs64));
         let table_words = 2 * (ca64 + cs64 + cc64);
         let cache_table = match cache {
-            Some((_, t)) => t.at_offsets(
-                words(2 * (ca64 + cs64)).ok_or_else(too_large)?,
-                words(2 * (ca64 + cs64) + cc64).ok_or_else(too_large)?,
-            ),
+            Some((_, t)) => t.at_offsets(words(2 * (ca64 + cs64)), words(2 * (ca64 + cs64) + cc64)),
             None => HashgridTableParams::default(),
         };
         // Guide words: header, states, guards, cache cells and sums.
@@ -163,9 +143,6 @@ impl McpgGpuParams {
         let cache_cells = static_guards + cs64;
         let cache_sums = cache_cells + 4 * cc64;
         let guide_words = cache_sums + 4 * cc64;
-        if words(guide_words).is_none() {
-            return Err(too_large());
-        }
         let mut widths = [[0.0; 4]; 64];
         for (level, w) in widths.iter_mut().flatten().enumerate() {
             *w = adaptive.width(level as u32);
@@ -217,12 +194,67 @@ impl McpgGpuParams {
             },
         ))
     }
+
+    /// Validates `config` as `Guide::new` does; the adaptive grid, the tables' parameters
+    /// (adaptive, static) and the cache's configuration and table.
+    #[allow(clippy::type_complexity)]
+    fn validated(
+        config: &GuideConfig,
+    ) -> Result<
+        (
+            AdaptiveGrid,
+            HashgridTableParams,
+            HashgridTableParams,
+            Option<(CacheConfig, HashgridTableParams)>,
+        ),
+        GuideError,
+    > {
+        config.params.validate().map_err(GuideError::Params)?;
+        if !(config.environment_distance > 0.0 && config.environment_distance.is_finite()) {
+            return Err(GuideError::EnvironmentDistanceNotPositive {
+                distance: config.environment_distance,
+            });
+        }
+        let adaptive = AdaptiveGrid::new(config.adaptive).map_err(GuideError::Grid)?;
+        StaticGrid::new(config.static_width).map_err(GuideError::Grid)?;
+        let table = |capacity: u32| -> Result<HashgridTableParams, GuideError> {
+            if capacity == 0 {
+                return Err(GuideError::Table(TableError::CapacityZero));
+            }
+            if capacity < MCPG_MAX_PROBES {
+                return Err(GuideError::Table(TableError::MaxProbesAboveCapacity {
+                    max_probes: MCPG_MAX_PROBES,
+                    capacity,
+                }));
+            }
+            Ok(
+                HashgridTableParams::new(capacity, MCPG_MAX_PROBES, BucketHash::default())
+                    .expect("a non-zero capacity"),
+            )
+        };
+        let adaptive_table = table(config.adaptive_capacity)?;
+        let static_table = table(config.static_capacity)?;
+        let cache = match config.cache {
+            Some(c) => {
+                if !(c.accumulation > 0.0 && c.accumulation <= 1.0) {
+                    return Err(GuideError::Params(
+                        mcg_markov_guide::ParamsError::ProbabilityOutOfRange {
+                            parameter: "cache.accumulation",
+                            value: c.accumulation,
+                        },
+                    ));
+                }
+                Some((c, table(c.capacity)?))
+            }
+            None => None,
+        };
+        Ok((adaptive, adaptive_table, static_table, cache))
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mcg_markov_guide::mcpg::CacheConfig;
 
     /// The README's memory figure: `GuideConfig::PAPER` (2²⁰ + 2¹⁶ grid slots at 44 bytes,
     /// 2¹⁶ cache slots at 40, a 16-byte header) takes 51 642 384 bytes.
@@ -241,14 +273,18 @@ mod tests {
         c.static_capacity = 4;
         assert_eq!(
             McpgGpuParams::new(&c).unwrap_err(),
-            GuideError::Table(TableError::MaxProbesAboveCapacity)
+            GpuError::Guide(GuideError::Table(TableError::MaxProbesAboveCapacity {
+                max_probes: 8,
+                capacity: 4
+            }))
         );
         let mut c = GuideConfig::PAPER;
         c.environment_distance = f32::NAN;
-        assert_eq!(
+        assert!(matches!(
             McpgGpuParams::new(&c).unwrap_err(),
-            GuideError::EnvironmentDistanceNotPositive
-        );
+            GpuError::Guide(GuideError::EnvironmentDistanceNotPositive { distance })
+                if distance.is_nan()
+        ));
         let mut c = GuideConfig::PAPER;
         c.cache = Some(CacheConfig {
             accumulation: 0.0,
@@ -256,14 +292,23 @@ mod tests {
         });
         assert!(matches!(
             McpgGpuParams::new(&c).unwrap_err(),
-            GuideError::Params(_)
+            GpuError::Guide(GuideError::Params(_))
         ));
         let mut c = GuideConfig::PAPER;
         c.params.bsdf_probability = 2.0;
         assert!(mcg_markov_guide::mcpg::Guide::new(c).is_err());
         assert!(matches!(
             McpgGpuParams::new(&c).unwrap_err(),
-            GuideError::Params(_)
+            GpuError::Guide(GuideError::Params(_))
+        ));
+        // 2³¹ slots per grid: the hash words exceed u32 indices (was reported as a probe limit).
+        let mut c = GuideConfig::PAPER;
+        c.adaptive_capacity = 1 << 31;
+        c.static_capacity = 1 << 31;
+        assert!(matches!(
+            McpgGpuParams::new(&c).unwrap_err(),
+            GpuError::GuideTooLarge { bytes, maximum }
+                if bytes > maximum && maximum == 4 * u64::from(u32::MAX)
         ));
     }
 }

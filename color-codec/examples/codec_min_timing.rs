@@ -8,7 +8,7 @@
 //! `decode_slice`: R11G11B10's default loop, the log codec's 4-colours-per-vector batch; the
 //! "round trip" there is `encode_slice` then `decode_slice`).
 //!
-//! `cargo run --release -p mcg-color-codec --example min_timing`
+//! `cargo run --release -p mcg-color-codec --example codec_min_timing`
 
 use std::hint::black_box;
 use std::time::Instant;

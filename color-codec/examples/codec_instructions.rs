@@ -4,7 +4,7 @@
 //! `callgrind` and divides the difference of the two totals by 2 · colours per pass, so the
 //! set-up cancels out.
 //!
-//! `cargo run --release -p mcg-color-codec --example instructions -- CASE PASSES`, CASE one of
+//! `cargo run --release -p mcg-color-codec --example codec_instructions -- CASE PASSES`, CASE one of
 //! `r11g11b10`, `log_down`, `log_nearest`, `half` (per colour: `decode(encode(c))`) and
 //! `r11g11b10_slice`, `log_down_slice`, `half_slice` (`encode_slice` then `decode_slice`).
 //! Prints `CASE PASSES colours-per-pass CHECKSUM`.
