@@ -542,6 +542,12 @@ impl GpuTracer {
         )?)
     }
 
+    /// The adapter's description (name, backend, device type).
+    #[must_use]
+    pub fn adapter_info(&self) -> wgpu::AdapterInfo {
+        self.ctx.adapter_info()
+    }
+
     /// Name and backend of the adapter, e.g. `"llvmpipe (LLVM 15.0.7, 256 bits) (Vulkan)"`.
     #[must_use]
     pub fn adapter_name(&self) -> String {

@@ -440,6 +440,25 @@ fn process_cpu_seconds() -> Option<f64> {
     Some((user + system) / 100.0)
 }
 
+/// The process-wide GPU tracer, created on first use; the error says why there is none.
+fn shared_tracer() -> std::result::Result<&'static Mutex<GpuTracer>, &'static String> {
+    static TRACER: OnceLock<Result<Mutex<GpuTracer>, String>> = OnceLock::new();
+    TRACER
+        .get_or_init(|| GpuTracer::new().map(Mutex::new).map_err(|e| e.to_string()))
+        .as_ref()
+}
+
+/// The adapter of the process-wide GPU tracer (created on first use, as `--device auto`
+/// would), or `None` where wgpu finds no adapter.
+#[must_use]
+pub fn gpu_adapter_info() -> Option<mcg_gpu_backend::wgpu::AdapterInfo> {
+    let tracer = shared_tracer().ok()?;
+    let tracer = tracer
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    Some(tracer.adapter_info())
+}
+
 /// The process-wide GPU tracer for `device` and `method`, created on first use (device
 /// creation and shader compilation cost about a second on a software adapter), or `None` for
 /// the CPU. `Auto` falls back to the CPU with a one-line message when there is no adapter or
@@ -448,7 +467,6 @@ fn process_cpu_seconds() -> Option<f64> {
 /// # Errors
 /// `--device gpu` without adapter, or with a method the GPU tracer does not have.
 fn gpu_tracer(device: Device, method: Method) -> Result<Option<&'static Mutex<GpuTracer>>> {
-    static TRACER: OnceLock<Result<Mutex<GpuTracer>, String>> = OnceLock::new();
     if device == Device::Cpu {
         return Ok(None);
     }
@@ -466,7 +484,7 @@ fn gpu_tracer(device: Device, method: Method) -> Result<Option<&'static Mutex<Gp
         );
         return Ok(None);
     }
-    match TRACER.get_or_init(|| GpuTracer::new().map(Mutex::new).map_err(|e| e.to_string())) {
+    match shared_tracer() {
         Ok(tracer) => Ok(Some(tracer)),
         Err(e) if device == Device::Gpu => Err(format!("--device gpu: {e}").into()),
         Err(e) => {
