@@ -171,14 +171,16 @@ fn own_names(module: Module) -> Vec<String> {
 /// The library's prefixes, in the case of each kind of name: `vmf_pdf`, `Vmf`,
 /// `VMF_KAPPA_MAX`, `mcg_rounded`, `McgDirectionSample`, `MCG_PI`.
 fn has_mcg_prefix(name: &str) -> bool {
-    ["mcg", "vmf", "hashgrid", "codec", "markov", "mcpg", "mcmm", "adgi"]
-        .iter()
-        .any(|p| {
-            let camel = format!("{}{}", p[..1].to_uppercase(), &p[1..]);
-            name.starts_with(&format!("{p}_"))
-                || name.starts_with(&format!("{}_", p.to_uppercase()))
-                || name.starts_with(&camel)
-        })
+    [
+        "mcg", "vmf", "hashgrid", "codec", "markov", "mcpg", "mcmm", "adgi",
+    ]
+    .iter()
+    .any(|p| {
+        let camel = format!("{}{}", p[..1].to_uppercase(), &p[1..]);
+        name.starts_with(&format!("{p}_"))
+            || name.starts_with(&format!("{}_", p.to_uppercase()))
+            || name.starts_with(&camel)
+    })
 }
 
 #[test]
@@ -489,6 +491,12 @@ fn wgsl_structs_match_the_rust_pod_types() {
             size_of::<GpuIrradianceQuery>(),
             fields!(GpuIrradianceQuery: position, normal, to_viewer),
         );
+        // The float-texel variant (the benches' baseline) composes and validates too.
+        let mut float_defs = DEFS.to_vec();
+        float_defs.push((defs::ADGI_FLOAT_TEXELS, 1));
+        let float = shaders::wgsl(&[Module::Adgi], &float_defs).unwrap();
+        assert!(float.contains("adgi_float_irradiance"));
+        parse_and_validate("adgi float texels", &float);
     }
     // PixelState: the statistics nested, then the score.
     {

@@ -276,7 +276,15 @@ fn irradiance_query_matches_the_cpu() {
         let mut occluded = 0;
         for (&(x, n, v), g) in queries.iter().zip(&got) {
             let c = cpu.irradiance_at(x, n, v, &query);
-            let without = cpu.irradiance_at(x, n, v, &QueryConfig { visibility: false, ..query });
+            let without = cpu.irradiance_at(
+                x,
+                n,
+                v,
+                &QueryConfig {
+                    visibility: false,
+                    ..query
+                },
+            );
             occluded += usize::from(!close(c, without, 1e-3));
             assert!(
                 close(*g, c, 1e-4),
@@ -286,7 +294,10 @@ fn irradiance_query_matches_the_cpu() {
         }
         assert!(got.iter().any(|e| e.max_element() > 0.1));
         if query.visibility {
-            assert!(occluded > 100, "visibility changed {occluded} of 600 queries");
+            assert!(
+                occluded > 100,
+                "visibility changed {occluded} of 600 queries"
+            );
         }
         println!(
             "{:?}: worst relative difference {worst:e}, {occluded} queries changed by visibility",
@@ -347,4 +358,22 @@ fn clip_reset_matches_the_cpu() {
     gpu.clip_reset(ctx, &clip, SHELL_COUNT).unwrap();
     assert_words_equal(ctx, &gpu, &cpu, "clip reset");
     assert_ne!(cpu.irradiance_words(), irr, "the reset changed nothing");
+}
+
+/// Memory: ADGI's words take 4 bytes per texel of both maps, 1 280 bytes per probe — a quarter
+/// of 16-byte float texels (RGB32F + count) in both maps (5 120), and 2.4× less than RGBA32F
+/// irradiance + RG32F moments (3 072). The CPU grid reports the same figure.
+#[test]
+fn bytes_per_probe_are_a_quarter_of_float_texels() {
+    let Some(ctx) = mcg_gpu_backend::testing::gpu_or_skip("bytes_per_probe") else {
+        return;
+    };
+    let cfg = config(TexelConfig::ADGI, 1);
+    let gpu = GpuProbeCache::new(ctx, &cfg).unwrap();
+    let cpu = ProbeTexels::new(cfg.grid, TexelConfig::ADGI);
+    assert_eq!(gpu.bytes_per_probe(), 1280);
+    assert_eq!(gpu.bytes_per_probe(), cpu.bytes_per_probe() as u64);
+    let (ni, nv) = (64u64, 256u64);
+    assert_eq!(16 * (ni + nv), 4 * gpu.bytes_per_probe());
+    assert_eq!(gpu.words().len() as u64, 12 * (ni + nv));
 }

@@ -95,6 +95,10 @@ pub mod defs {
     /// [`CODEC_TEXELS_BINDING`] to 1, the texel table at 2, DDGI's rays at 3).
     /// `GpuProbeCache::shader_defs` gives all three.
     pub const ADGI_GROUP: &str = "MCG_ADGI_GROUP";
+    /// Set (any value) to make `mcg::adgi`'s query read float texels (RGBA32F irradiance and
+    /// RG32F moments at bindings 4 and 5 of its group) instead of the packed words: DDGI's
+    /// storage, the baseline of the benches.
+    pub const ADGI_FLOAT_TEXELS: &str = "MCG_ADGI_FLOAT_TEXELS";
     /// K, the number of lobes of `VmfMixture` (`mcg::vmf_mixture`); 4 when not set.
     pub const VMF_MIXTURE_K: &str = "MCG_VMF_MIXTURE_K";
     /// Bind group of the MCMM guide's parameters and state buffers (`mcg::mcmm`, bindings 0-2).
@@ -240,6 +244,7 @@ impl Module {
                 defs::ADGI_GROUP,
                 defs::CODEC_TEXELS_GROUP,
                 defs::CODEC_TEXELS_BINDING,
+                defs::ADGI_FLOAT_TEXELS,
             ],
             _ => &[],
         }

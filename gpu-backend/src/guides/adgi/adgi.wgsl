@@ -16,7 +16,8 @@
 // directions and solid angles (`adgi_texel_table`, computed on the host by the CPU crate's
 // `TexelMap`, irradiance texels first), 3 the rays of DDGI's blend (`adgi_rays`, probe-major,
 // written by the renderer). Maps are octahedral with the ADGI word layouts of
-// `mcg::color_codec`.
+// `mcg::color_codec`. With the shader def MCG_ADGI_FLOAT_TEXELS the query reads float texels at
+// bindings 4 and 5 instead (the benches' RGBA32F + RG32F baseline).
 
 #import mcg::constants::{
     ADGI_BLEND_WEIGHT_EPSILON, ADGI_TEXEL_UNIFORM_PERIOD, ADGI_TEXEL_UNIFORM_STEP,
@@ -288,6 +289,35 @@ fn adgi_fold(xy: vec2<i32>, interior: u32) -> vec2<u32> {
     return vec2<u32>(vec2<i32>(clamp(x, 0, n - 1), clamp(y, 0, n - 1)));
 }
 
+#ifdef MCG_ADGI_FLOAT_TEXELS
+// DDGI's float texels instead of the packed words (shader def MCG_ADGI_FLOAT_TEXELS): RGBA32F
+// irradiance texels (RGB, count in A) and RG32F visibility moments, at bindings 4 and 5 of the
+// group, same probe-major layout. The baseline of the benches; `GpuProbeCache` binds words.
+@group(#{MCG_ADGI_GROUP}) @binding(4) var<storage, read_write> adgi_float_irradiance: array<vec4<f32>>;
+@group(#{MCG_ADGI_GROUP}) @binding(5) var<storage, read_write> adgi_float_visibility: array<vec2<f32>>;
+
+// The value of probe `probe`'s irradiance texel `texel`.
+fn adgi_load_irradiance(probe: u32, texel: u32) -> vec3<f32> {
+    return adgi_float_irradiance[adgi_irradiance_word_index(probe, texel)].xyz;
+}
+
+// The moments (t̄, t̄²) of probe `probe`'s visibility texel `texel`.
+fn adgi_load_moments(probe: u32, texel: u32) -> vec2<f32> {
+    let side = adgi_params.visibility_side;
+    return adgi_float_visibility[probe * side * side + texel];
+}
+#else
+// The value of probe `probe`'s irradiance texel `texel` (`IrradianceLayout::decode`).
+fn adgi_load_irradiance(probe: u32, texel: u32) -> vec3<f32> {
+    return codec_irradiance_decode(atomicLoad(&mcg_codec_texels[adgi_irradiance_word_index(probe, texel)]));
+}
+
+// The moments (t̄, t̄²) of probe `probe`'s visibility texel `texel` (`VisibilityLayout::decode`).
+fn adgi_load_moments(probe: u32, texel: u32) -> vec2<f32> {
+    return codec_visibility_decode(atomicLoad(&mcg_codec_texels[adgi_visibility_word_index(probe, texel)]));
+}
+#endif
+
 // The four bilinear taps of a map (`TexelMap::bilinear`): stored indices and weights.
 struct AdgiTaps {
     index: vec4<u32>,
@@ -317,11 +347,10 @@ fn adgi_bilinear(d: vec3<f32>, side: u32, interior: u32) -> AdgiTaps {
 // for irradiance texels (DDGI's blend), the normalised cosine convolution over the interior
 // texels for radiance texels (ADGI's per-sample update).
 fn adgi_probe_irradiance(probe: u32, n: vec3<f32>, taps: AdgiTaps) -> vec3<f32> {
-    let base = adgi_irradiance_word_index(probe, 0u);
     if adgi_params.radiance_content == 0u {
         var e = vec3<f32>(0.0);
         for (var i = 0; i < 4; i += 1) {
-            e += taps.weight[i] * codec_irradiance_decode(atomicLoad(&mcg_codec_texels[base + taps.index[i]]));
+            e += taps.weight[i] * adgi_load_irradiance(probe, taps.index[i]);
         }
         return MCG_PI * e;
     }
@@ -334,7 +363,7 @@ fn adgi_probe_irradiance(probe: u32, n: vec3<f32>, taps: AdgiTaps) -> vec3<f32> 
         let c = dot(n, t.xyz);
         if c > 0.0 {
             let w = c * t.w;
-            e += w * codec_irradiance_decode(atomicLoad(&mcg_codec_texels[base + adgi_interior_index(k, side, interior)]));
+            e += w * adgi_load_irradiance(probe, adgi_interior_index(k, side, interior));
             wsum += w;
         }
     }
@@ -347,11 +376,10 @@ fn adgi_probe_irradiance(probe: u32, n: vec3<f32>, taps: AdgiTaps) -> vec3<f32> 
 // `ProbeTexels::probe_moments`: bilinear (t̄, t̄²) of one probe in direction `d`.
 fn adgi_probe_moments(probe: u32, d: vec3<f32>) -> vec2<f32> {
     let taps = adgi_bilinear(d, adgi_params.visibility_side, adgi_params.visibility_interior);
-    let base = adgi_visibility_word_index(probe, 0u);
     var m = vec2<f32>(0.0);
     for (var i = 0; i < 4; i += 1) {
         if taps.weight[i] > 0.0 {
-            m += taps.weight[i] * codec_visibility_decode(atomicLoad(&mcg_codec_texels[base + taps.index[i]]));
+            m += taps.weight[i] * adgi_load_moments(probe, taps.index[i]);
         }
     }
     return m;

@@ -396,7 +396,13 @@ impl GpuProbeCache {
             uniforms: Some(probe_uniforms),
             ..StepInputs::default()
         };
-        self.record(ctx, encoder, &steps.blend, &inputs, p.probe_count * per_probe);
+        self.record(
+            ctx,
+            encoder,
+            &steps.blend,
+            &inputs,
+            p.probe_count * per_probe,
+        );
         Ok(())
     }
 
@@ -450,7 +456,13 @@ impl GpuProbeCache {
             },
             ..StepInputs::default()
         };
-        self.record(ctx, encoder, &steps.clip_reset, &inputs, self.words.len() as u32);
+        self.record(
+            ctx,
+            encoder,
+            &steps.clip_reset,
+            &inputs,
+            self.words.len() as u32,
+        );
         Ok(())
     }
 
