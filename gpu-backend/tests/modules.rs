@@ -491,6 +491,13 @@ fn wgsl_structs_match_the_rust_pod_types() {
             size_of::<GpuIrradianceQuery>(),
             fields!(GpuIrradianceQuery: position, normal, to_viewer),
         );
+        use mcg_gpu_backend::guides::adgi::GpuPilotStep;
+        check(
+            &steps,
+            "AdgiPilotStep",
+            size_of::<GpuPilotStep>(),
+            fields!(GpuPilotStep: voxel_diagonal, radiance_range, decay, detect),
+        );
         // The float-texel variant (the benches' baseline) composes and validates too.
         let mut float_defs = DEFS.to_vec();
         float_defs.push((defs::ADGI_FLOAT_TEXELS, 1));

@@ -336,11 +336,7 @@ fn clip_reset_matches_the_cpu() {
     let gpu = GpuProbeCache::new(ctx, &cfg).unwrap();
     let (irr, vis) = cpu_words(&cpu);
     gpu.upload_words(ctx, &irr, &vis).unwrap();
-    let view = look_at_mat4(Vec3::new(0.0, 0.5, 6.0), Vec3::ZERO, Vec3::Y);
-    let proj = perspective(0.9, 1.5, 0.1, 30.0);
-    let lo = Vec3::splat(-3.0);
-    let hi = Vec3::splat(3.0);
-    let clip = ClipVolumes::from_camera(proj * view, (lo, hi), 1.5, (lo - 1.0, hi + 1.0)).unwrap();
+    let clip = camera_volumes();
     let mut regions = vec![ClipRegion::Outside; grid.probe_count()];
     clip.classify_grid(&grid, &mut regions).unwrap();
     for region in [ClipRegion::Inner, ClipRegion::Shell, ClipRegion::Outside] {
@@ -376,4 +372,121 @@ fn bytes_per_probe_are_a_quarter_of_float_texels() {
     let (ni, nv) = (64u64, 256u64);
     assert_eq!(16 * (ni + nv), 4 * gpu.bytes_per_probe());
     assert_eq!(gpu.words().len() as u64, 12 * (ni + nv));
+}
+
+/// The clip volumes of a camera at (0, 0.5, 6) looking at the origin over the 9 × 9 × 9 grid
+/// of the clip tests: probes in all three regions.
+fn camera_volumes() -> ClipVolumes {
+    let view = look_at_mat4(Vec3::new(0.0, 0.5, 6.0), Vec3::ZERO, Vec3::Y);
+    let proj = perspective(0.9, 1.5, 0.1, 30.0);
+    let lo = Vec3::splat(-3.0);
+    let hi = Vec3::splat(3.0);
+    ClipVolumes::from_camera(proj * view, (lo, hi), 1.5, (lo - 1.0, hi + 1.0)).unwrap()
+}
+
+/// Pilot rays and their state over 4 frames (reference, detect, reference, detect) on the
+/// 9 × 9 × 9 grid: the GPU's directions are the CPU's `pilot_direction` within 2·10⁻⁶ (WGSL's
+/// `sin`/`cos`) in the same octant, traced exactly for the probes in V_out; after each frame's
+/// hits (random distances with misses, random radiance) the reference f_v, f_r
+/// (`octant_heuristics`, eq. 11-12) and the trigger states (`temporal_gradient` +
+/// `TemporalTrigger::apply`, eq. 13-17) equal the CPU's within relative 10⁻⁵ (`exp` in f_v).
+#[test]
+fn pilot_rays_and_trigger_match_the_cpu() {
+    use mcg_probe_cache::heuristics::octant;
+    use mcg_probe_cache::pilot_rays::{PilotHit, octant_heuristics, pilot_direction};
+    use mcg_probe_cache::temporal_gradient::temporal_gradient;
+    use mcg_probe_cache::{HeuristicParams, PilotPhase, TemporalTrigger};
+    let Some((ctx, mut rng)) = common::gpu_and_rng("pilot_rays_and_trigger_match_the_cpu", 24)
+    else {
+        return;
+    };
+    let grid = ProbeGrid::new(Vec3::splat(-4.0), Vec3::splat(1.0), UVec3::splat(9)).unwrap();
+    let cfg = ProbeCacheConfig {
+        grid,
+        ..config(TexelConfig::ADGI, 1)
+    };
+    let gpu = GpuProbeCache::new(ctx, &cfg).unwrap();
+    let clip = camera_volumes();
+    let probes = grid.probe_count();
+    let n = 8 * probes;
+    let uniforms: Vec<f32> = (0..2 * n).map(|_| rng.random()).collect();
+    let rays = gpu.pilot_rays(ctx, &uniforms, &clip).unwrap();
+    let mut traced = 0;
+    for (i, r) in rays.iter().enumerate() {
+        let (probe, o) = (i / 8, i % 8);
+        let d = pilot_direction(o, glam::Vec2::new(uniforms[2 * i], uniforms[2 * i + 1]));
+        let g = Vec3::new(r[0], r[1], r[2]);
+        assert!((g - d).abs().max_element() < 2e-6, "{i}: GPU {g} CPU {d}");
+        assert_eq!(octant(g), o);
+        let p = grid.probe_position(grid.probe_coords(probe));
+        assert_eq!(r[3] == 1.0, clip.traces_pilots(p), "probe {probe}");
+        traced += usize::from(r[3] == 1.0);
+    }
+    assert!(
+        traced > 0 && traced < n,
+        "{traced} of {n} pilot rays traced"
+    );
+
+    let heuristics = HeuristicParams::new(5.0, grid.cell_diagonal()).unwrap();
+    let trigger = TemporalTrigger::DEFAULT;
+    let luminance = mcg_probe_cache::guiding_function::LUMINANCE;
+    // CPU state per probe · 8 + octant: reference f_v, f_r, trigger states.
+    let mut state = vec![[0.0f32; 4]; n];
+    for frame in 0..4 {
+        let phase = mcg_probe_cache::PilotFrame::of(frame).phase;
+        let hits: Vec<GpuRaySample> = (0..n)
+            .map(|i| GpuRaySample {
+                direction: Vec3::new(rays[i][0], rays[i][1], rays[i][2]),
+                distance: if rng.random_range(0..10) == 0 {
+                    f32::INFINITY
+                } else {
+                    rng.random_range(0.0f32..3.0)
+                },
+                radiance: Vec3::new(rng.random(), rng.random(), rng.random()) * 4.0,
+                probe: (i / 8) as u32,
+            })
+            .collect();
+        gpu.pilot_hits(ctx, &hits, &clip, &heuristics, trigger, phase)
+            .unwrap();
+        for probe in 0..probes {
+            if rays[probe * 8][3] != 1.0 {
+                continue;
+            }
+            let h: [PilotHit; 8] = core::array::from_fn(|o| PilotHit {
+                distance: hits[probe * 8 + o].distance,
+                luminance: hits[probe * 8 + o].radiance.dot(luminance),
+            });
+            let (f_v, f_r) = octant_heuristics(&h, &heuristics);
+            for o in 0..8 {
+                let s = &mut state[probe * 8 + o];
+                if phase == PilotPhase::Detect {
+                    let mut d = [0.0; 2];
+                    temporal_gradient(&[f_v[o], f_r[o]], &[s[0], s[1]], &mut d).unwrap();
+                    s[2] = trigger.apply(d[0], s[2]);
+                    s[3] = trigger.apply(d[1], s[3]);
+                }
+                if f_v[o].is_finite() {
+                    s[0] = f_v[o];
+                }
+                if f_r[o].is_finite() {
+                    s[1] = f_r[o];
+                }
+            }
+        }
+        let got = gpu.read_pilot_state(ctx).unwrap();
+        for (i, (g, c)) in got.iter().zip(&state).enumerate() {
+            for k in 0..4 {
+                assert!(
+                    (g[k] - c[k]).abs() <= 1e-5 * c[k].abs() + 1e-6,
+                    "frame {frame} probe {} octant {} field {k}: GPU {g:?} CPU {c:?}",
+                    i / 8,
+                    i % 8
+                );
+            }
+        }
+    }
+    assert!(
+        state.iter().filter(|s| s[2] > 0.05).count() > traced / 2,
+        "the trigger fired"
+    );
 }

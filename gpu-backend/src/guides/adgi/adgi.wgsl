@@ -9,7 +9,7 @@
 //   let e = adgi_irradiance_at(x, n, to_viewer);                             // DDGI sec. 4-5
 //
 // Bindings, all in one group chosen by the shader def MCG_ADGI_GROUP (the host object
-// `GpuProbeCache` builds that group): 0 the parameters (`adgi_params`), 1 the texel words
+// `GpuProbeCache` builds that group; 6 holds the pilot rays' state): 0 the parameters (`adgi_params`), 1 the texel words
 // (`mcg_codec_texels` of `mcg::color_codec_texels`: set MCG_CODEC_TEXELS_GROUP to the same
 // group and MCG_CODEC_TEXELS_BINDING to 1; the irradiance words first, probe-major, then the
 // visibility words from `adgi_params.visibility_offset`), 2 the interior texels' centre
@@ -22,7 +22,9 @@
 #import mcg::constants::{
     ADGI_BLEND_WEIGHT_EPSILON, ADGI_TEXEL_UNIFORM_PERIOD, ADGI_TEXEL_UNIFORM_STEP,
     ADGI_WRAP_SHADING_OFFSET, CODEC_IRRADIANCE_COUNT_BITS, CODEC_IRRADIANCE_COUNT_SHIFT,
-    CODEC_VISIBILITY_COUNT_BITS, CODEC_VISIBILITY_COUNT_SHIFT, MCG_F32_MAX, MCG_PI
+    CODEC_VISIBILITY_COUNT_BITS, CODEC_VISIBILITY_COUNT_SHIFT, MCG_F32_EPSILON, MCG_F32_MAX,
+    MCG_FRAC_PI_2, MCG_ONE_MINUS_EPSILON, MCG_PI, MCPG_LUMINANCE_B, MCPG_LUMINANCE_G,
+    MCPG_LUMINANCE_R
 }
 #import mcg::math::{mcg_is_finite, mcg_is_finite3, mcg_rounded, mcg_rounded3}
 #import mcg::color_codec::{
@@ -81,6 +83,9 @@ struct AdgiRaySample {
 @group(#{MCG_ADGI_GROUP}) @binding(0) var<uniform> adgi_params: AdgiParams;
 @group(#{MCG_ADGI_GROUP}) @binding(2) var<storage, read> adgi_texel_table: array<vec4<f32>>;
 @group(#{MCG_ADGI_GROUP}) @binding(3) var<storage, read> adgi_rays: array<AdgiRaySample>;
+// Per probe and octant (`probe · 8 + octant`): the pilot rays' reference f_v, f_r and the
+// temporal trigger's states for f_v and f_r (`adgi_pilot_update`).
+@group(#{MCG_ADGI_GROUP}) @binding(6) var<storage, read_write> adgi_pilot_state: array<vec4<f32>>;
 
 // `f32::is_nan` from the bits: the exponent all ones and a non-zero mantissa, i.e. the bits
 // without the sign above those of +∞ (the bits of f32::MAX plus one). Comparisons such as
@@ -548,4 +553,104 @@ fn adgi_clip_contains(v: AdgiClipVolume, p: vec3<f32>) -> bool {
 fn adgi_in_shell(volumes: AdgiClipVolumes, probe: u32) -> bool {
     let p = adgi_probe_position(probe);
     return !adgi_clip_contains(volumes.inner, p) && adgi_clip_contains(volumes.outer, p);
+}
+
+// Whether probe `probe` traces pilot rays: it lies in V_out (`ClipVolumes::traces_pilots`).
+fn adgi_traces_pilots(volumes: AdgiClipVolumes, probe: u32) -> bool {
+    let p = adgi_probe_position(probe);
+    return adgi_clip_contains(volumes.inner, p) || adgi_clip_contains(volumes.outer, p);
+}
+
+// `pilot_direction` (ADGI sec. 4.4): the stratified pilot direction of octant `octant` from
+// uniforms `u` — (z, φ) uniform on the first octant's patch of the sphere (z ∈ (0, 1),
+// φ ∈ (0, π/2)), mirrored into the octant; inputs clamped to [2⁻²⁴, 1 − 2⁻²⁴] (NaN → ½).
+fn adgi_pilot_direction(octant: u32, u: vec2<f32>) -> vec3<f32> {
+    let lo = 0.5 * MCG_F32_EPSILON;
+    var open = clamp(u, vec2<f32>(lo), vec2<f32>(MCG_ONE_MINUS_EPSILON));
+    if adgi_is_nan(u.x) {
+        open.x = 0.5;
+    }
+    if adgi_is_nan(u.y) {
+        open.y = 0.5;
+    }
+    let z = open.x;
+    let phi = open.y * MCG_FRAC_PI_2;
+    let r = sqrt(max(1.0 - z * z, 0.0));
+    let signs = select(vec3<f32>(1.0), vec3<f32>(-1.0), (vec3<u32>(octant) >> vec3<u32>(0u, 1u, 2u) & vec3<u32>(1u)) == vec3<u32>(1u));
+    return vec3<f32>(r * cos(phi), r * sin(phi), z) * signs;
+}
+
+// `heuristics::probe_visibility` (ADGI eq. 11): f_v = exp(−2t/s) for a hit at distance t
+// along −ω, s the voxel diagonal; 1 for t ≤ 0, 0 for a miss.
+fn adgi_probe_visibility(t: f32, s: f32) -> f32 {
+    if adgi_is_nan(t) {
+        return 0.0;
+    }
+    if t <= 0.0 {
+        return 1.0;
+    }
+    if !(s > 0.0) {
+        return 0.0;
+    }
+    let ratio = 2.0 * t / s;
+    if adgi_is_nan(ratio) {
+        return 0.0;
+    }
+    return exp(-ratio);
+}
+
+// `heuristics::incoming_radiance` (ADGI eq. 12): f_r = min(r, β)/β.
+fn adgi_incoming_radiance(r: f32, beta: f32) -> f32 {
+    if !(beta > 0.0) || !mcg_is_finite(beta) || !(r > 0.0) {
+        return 0.0;
+    }
+    return min(r, beta) / beta;
+}
+
+// `TemporalTrigger::apply` (ADGI eq. 14, 17): max(|pulse|, θ · state).
+fn adgi_trigger(pulse: f32, state: f32, decay: f32) -> f32 {
+    var x = 0.0;
+    if !adgi_is_nan(pulse) {
+        x = min(abs(pulse), MCG_F32_MAX);
+    }
+    var y = 0.0;
+    if state > 0.0 {
+        y = min(state, MCG_F32_MAX);
+    }
+    return max(x, decay * y);
+}
+
+// `temporal_gradient` of one entry: current − previous, 0 when not finite.
+fn adgi_gradient(current: f32, previous: f32) -> f32 {
+    let d = current - previous;
+    return select(0.0, d, mcg_is_finite(d));
+}
+
+// Rec. 709 luminance (`guiding_function::LUMINANCE`).
+fn adgi_luminance(rgb: vec3<f32>) -> f32 {
+    return adgi_dot(rgb, vec3<f32>(MCPG_LUMINANCE_R, MCPG_LUMINANCE_G, MCPG_LUMINANCE_B));
+}
+
+// One pilot update of probe `probe`, octant `octant` from the probe's 8 hits (`hit_r` traced
+// in the octant, `hit_v` in the opposite one, eq. 11 uses −ω): f_v, f_r (`octant_heuristics`);
+// on a detection frame the temporal gradient against the reference and the trigger
+// (`ChangeDetector::detect` before its smoothing); then the finite values become the
+// reference. Returns (f_v, f_r, trigger_v, trigger_r) as stored.
+fn adgi_pilot_update(probe: u32, octant: u32, hit_r: AdgiRaySample, hit_v: AdgiRaySample, voxel_diagonal: f32, radiance_range: f32, decay: f32, detect: bool) -> vec4<f32> {
+    let f_v = adgi_probe_visibility(hit_v.distance, voxel_diagonal);
+    let f_r = adgi_incoming_radiance(adgi_luminance(hit_r.radiance), radiance_range);
+    let i = probe * 8u + octant;
+    var s = adgi_pilot_state[i];
+    if detect {
+        s.z = adgi_trigger(adgi_gradient(f_v, s.x), s.z, decay);
+        s.w = adgi_trigger(adgi_gradient(f_r, s.y), s.w, decay);
+    }
+    if mcg_is_finite(f_v) {
+        s.x = f_v;
+    }
+    if mcg_is_finite(f_r) {
+        s.y = f_r;
+    }
+    adgi_pilot_state[i] = s;
+    return s;
 }

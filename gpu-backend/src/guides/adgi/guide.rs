@@ -5,10 +5,10 @@ use std::sync::OnceLock;
 
 use glam::{UVec2, Vec3};
 use mcg_color_codec::MovingAverage;
-use mcg_probe_cache::ClipVolumes;
+use mcg_probe_cache::{ClipVolumes, HeuristicParams, PilotPhase, TemporalTrigger};
 
 use super::{
-    AdgiConfigError, AdgiGpuParams, GpuClipVolumes, GpuIrradianceQuery, GpuRaySample,
+    AdgiConfigError, AdgiGpuParams, GpuClipVolumes, GpuIrradianceQuery, GpuPilotStep, GpuRaySample,
     GpuStepParams, ProbeCacheConfig,
 };
 use crate::shaders::{self, defs, kernels};
@@ -21,6 +21,8 @@ struct Steps {
     blend: wgpu::ComputePipeline,
     query: wgpu::ComputePipeline,
     clip_reset: wgpu::ComputePipeline,
+    pilot_rays: wgpu::ComputePipeline,
+    pilot_hits: wgpu::ComputePipeline,
 }
 
 /// One-element buffers bound where a step does not use a binding of the step group.
@@ -31,6 +33,7 @@ struct Unused {
     queries: GpuBuffer<GpuIrradianceQuery>,
     results: GpuBuffer<[f32; 4]>,
     clip: GpuBuffer<GpuClipVolumes>,
+    pilot: GpuBuffer<GpuPilotStep>,
 }
 
 /// The step group's buffers of one dispatch (`None`: the unused one-element buffer).
@@ -41,6 +44,7 @@ struct StepInputs<'a> {
     queries: Option<&'a wgpu::Buffer>,
     results: Option<&'a wgpu::Buffer>,
     clip: Option<GpuClipVolumes>,
+    pilot: Option<GpuPilotStep>,
     step: GpuStepParams,
 }
 
@@ -55,6 +59,8 @@ struct StepInputs<'a> {
 /// | DDGI's uniform blend (the baseline) | [`record_blend`](Self::record_blend) | `ProbeTexels::blend_rays` |
 /// | irradiance query | [`record_query`](Self::record_query) (or `adgi_irradiance_at` in the renderer's shader) | `ProbeTexels::irradiance_at` |
 /// | clip-volume reset | [`record_clip_reset`](Self::record_clip_reset) | `ClipVolumes::classify` + `clamp_*_counts` |
+/// | pilot directions | [`record_pilot_rays`](Self::record_pilot_rays) | `pilot_rays::pilot_rays` |
+/// | pilot heuristics, temporal gradient, trigger | [`record_pilot_hits`](Self::record_pilot_hits) | `octant_heuristics`, `temporal_gradient`, `TemporalTrigger` |
 ///
 /// The renderer traces the probe rays: into its own sample buffer for ADGI's update (or it calls
 /// `adgi_update_sample` itself), into [`rays`](Self::rays) (probe-major) for DDGI's blend.
@@ -66,6 +72,7 @@ pub struct GpuProbeCache {
     words: GpuBuffer<u32>,
     table: GpuBuffer<[f32; 4]>,
     rays: GpuBuffer<GpuRaySample>,
+    pilot_state: GpuBuffer<[f32; 4]>,
     layout: wgpu::BindGroupLayout,
     bind_group: wgpu::BindGroup,
     step_layout: wgpu::BindGroupLayout,
@@ -99,6 +106,9 @@ impl GpuProbeCache {
     pub const TABLE_BINDING: u32 = 2;
     /// The binding of DDGI's rays (`adgi_rays`).
     pub const RAYS_BINDING: u32 = 3;
+    /// The binding of the pilot state (`adgi_pilot_state`; 4 and 5 are the float texels of
+    /// the benches' baseline).
+    pub const PILOT_BINDING: u32 = 6;
 
     /// An empty cache (every word 0) on `ctx`'s device, from the same types as the CPU
     /// crate's `ProbeTexels`.
@@ -125,6 +135,7 @@ impl GpuProbeCache {
         let words = ctx.zeroed_buffer("adgi texel words", words as usize);
         let table = ctx.storage_buffer("adgi texel table", &table);
         let rays = ctx.zeroed_buffer("adgi rays", rays as usize);
+        let pilot_state = ctx.zeroed_buffer("adgi pilot state", 8 * params.probe_count as usize);
         let device = ctx.device();
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("mcg::adgi"),
@@ -142,6 +153,7 @@ impl GpuProbeCache {
                 layout_entry(Self::WORDS_BINDING, READ_WRITE),
                 layout_entry(Self::TABLE_BINDING, READ),
                 layout_entry(Self::RAYS_BINDING, READ),
+                layout_entry(Self::PILOT_BINDING, READ_WRITE),
             ],
         });
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -152,6 +164,7 @@ impl GpuProbeCache {
                 (Self::WORDS_BINDING, words.raw()),
                 (Self::TABLE_BINDING, table.raw()),
                 (Self::RAYS_BINDING, rays.raw()),
+                (Self::PILOT_BINDING, pilot_state.raw()),
             ]
             .map(|(binding, b)| wgpu::BindGroupEntry {
                 binding,
@@ -167,6 +180,7 @@ impl GpuProbeCache {
                 layout_entry(3, READ),
                 layout_entry(4, READ_WRITE),
                 layout_entry(5, UNIFORM),
+                layout_entry(6, UNIFORM),
             ],
         });
         let unused = Unused {
@@ -175,6 +189,7 @@ impl GpuProbeCache {
             queries: ctx.zeroed_buffer("adgi unused queries", 1),
             results: ctx.zeroed_buffer("adgi unused results", 1),
             clip: ctx.uniform_buffer("adgi unused clip", &GpuClipVolumes::default()),
+            pilot: ctx.uniform_buffer("adgi unused pilot", &GpuPilotStep::default()),
         };
         Ok(Self {
             config: *config,
@@ -183,6 +198,7 @@ impl GpuProbeCache {
             words,
             table,
             rays,
+            pilot_state,
             layout,
             bind_group,
             step_layout,
@@ -284,6 +300,8 @@ impl GpuProbeCache {
             blend: pipeline("adgi_blend"),
             query: pipeline("adgi_query"),
             clip_reset: pipeline("adgi_clip_reset"),
+            pilot_rays: pipeline("adgi_pilot_rays"),
+            pilot_hits: pipeline("adgi_pilot_hits"),
         };
         if let Some(error) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Shader {
@@ -308,6 +326,9 @@ impl GpuProbeCache {
         let clip = inputs
             .clip
             .map(|c| ctx.uniform_buffer("adgi clip volumes", &c));
+        let pilot = inputs
+            .pilot
+            .map(|p| ctx.uniform_buffer("adgi pilot step", &p));
         let u = &self.unused;
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("adgi step"),
@@ -319,6 +340,7 @@ impl GpuProbeCache {
                 inputs.queries.unwrap_or(u.queries.raw()),
                 inputs.results.unwrap_or(u.results.raw()),
                 clip.as_ref().map_or(u.clip.raw(), GpuBuffer::raw),
+                pilot.as_ref().map_or(u.pilot.raw(), GpuBuffer::raw),
             ]
             .into_iter()
             .enumerate()
@@ -466,6 +488,136 @@ impl GpuProbeCache {
         Ok(())
     }
 
+    /// Records the pilot rays of every probe and octant (ADGI sec. 4.4; `pilot_rays`): into
+    /// `out` (`vec4<f32>` per `probe · 8 + octant`) the direction of octant `octant` from the
+    /// caller's uniforms (`uniforms[2i]`, `uniforms[2i + 1]`; key them by pattern, probe and
+    /// octant so both frames of a pair trace the same rays) in `xyz`, and in `w` 1 for a probe
+    /// in V_out of `volumes` (trace it) and 0 otherwise.
+    ///
+    /// # Errors
+    /// [`GpuError::Shader`] if the steps' pipelines fail to build (a bug of this crate).
+    pub fn record_pilot_rays(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        uniforms: &wgpu::Buffer,
+        volumes: &ClipVolumes,
+        out: &wgpu::Buffer,
+    ) -> Result<(), GpuError> {
+        let steps = self.steps(ctx)?;
+        let inputs = StepInputs {
+            uniforms: Some(uniforms),
+            results: Some(out),
+            clip: Some(volumes.into()),
+            ..StepInputs::default()
+        };
+        self.record(
+            ctx,
+            encoder,
+            &steps.pilot_rays,
+            &inputs,
+            8 * self.params.probe_count,
+        );
+        Ok(())
+    }
+
+    /// Records the pilot hits' update of the pilot state (ADGI eq. 11-17) for every probe in
+    /// V_out: `hits` holds one [`GpuRaySample`] per `probe · 8 + octant` (the ray of
+    /// [`record_pilot_rays`](Self::record_pilot_rays): its hit distance, +∞ for a miss, and
+    /// the radiance arriving along it); f_v of an octant reads the hit of the opposite octant
+    /// (eq. 11 traces −ω), f_r the luminance of its own. On a [`PilotPhase::Detect`] frame the
+    /// temporal gradient against the stored reference drives the trigger states; then the
+    /// finite heuristics become the reference. Read the state with
+    /// [`read_pilot_state`](Self::read_pilot_state).
+    ///
+    /// # Errors
+    /// [`GpuError::Shader`] if the steps' pipelines fail to build (a bug of this crate).
+    #[allow(clippy::too_many_arguments)] // the CPU types of one step, each needed
+    pub fn record_pilot_hits(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        hits: &wgpu::Buffer,
+        volumes: &ClipVolumes,
+        heuristics: &HeuristicParams,
+        trigger: TemporalTrigger,
+        phase: PilotPhase,
+    ) -> Result<(), GpuError> {
+        let steps = self.steps(ctx)?;
+        let inputs = StepInputs {
+            samples: Some(hits),
+            clip: Some(volumes.into()),
+            pilot: Some(GpuPilotStep::new(heuristics, trigger, phase)),
+            ..StepInputs::default()
+        };
+        self.record(
+            ctx,
+            encoder,
+            &steps.pilot_hits,
+            &inputs,
+            8 * self.params.probe_count,
+        );
+        Ok(())
+    }
+
+    /// The pilot state (`adgi_pilot_state`): per `probe · 8 + octant`, the reference f_v and
+    /// f_r and the trigger states of f_v and f_r.
+    #[must_use]
+    pub fn pilot_state(&self) -> &GpuBuffer<[f32; 4]> {
+        &self.pilot_state
+    }
+
+    /// [`record_pilot_rays`](Self::record_pilot_rays) from host uniforms, read back.
+    ///
+    /// # Errors
+    /// [`GpuError::LengthMismatch`] unless there are 2 uniforms per probe and octant; as
+    /// [`record_pilot_rays`](Self::record_pilot_rays); [`GpuError::Map`] when the read-back
+    /// fails.
+    pub fn pilot_rays(
+        &self,
+        ctx: &GpuContext,
+        uniforms: &[f32],
+        volumes: &ClipVolumes,
+    ) -> Result<Vec<[f32; 4]>, GpuError> {
+        let n = 8 * self.params.probe_count as usize;
+        GpuError::check_len(2 * n, uniforms.len())?;
+        let u = ctx.storage_buffer("adgi pilot uniforms", uniforms);
+        let out = ctx.zeroed_buffer::<[f32; 4]>("adgi pilot rays", n);
+        self.submit(ctx, |e| {
+            self.record_pilot_rays(ctx, e, u.raw(), volumes, out.raw())
+        })?;
+        ctx.read_back(&out)
+    }
+
+    /// [`record_pilot_hits`](Self::record_pilot_hits) from host hits, submitted.
+    ///
+    /// # Errors
+    /// [`GpuError::LengthMismatch`] unless there is one hit per probe and octant; as
+    /// [`record_pilot_hits`](Self::record_pilot_hits).
+    pub fn pilot_hits(
+        &self,
+        ctx: &GpuContext,
+        hits: &[GpuRaySample],
+        volumes: &ClipVolumes,
+        heuristics: &HeuristicParams,
+        trigger: TemporalTrigger,
+        phase: PilotPhase,
+    ) -> Result<(), GpuError> {
+        GpuError::check_len(8 * self.params.probe_count as usize, hits.len())?;
+        let h = ctx.storage_buffer("adgi pilot hits", hits);
+        self.submit(ctx, |e| {
+            self.record_pilot_hits(ctx, e, h.raw(), volumes, heuristics, trigger, phase)
+        })
+    }
+
+    /// The pilot state, read back (waits for the queue).
+    ///
+    /// # Errors
+    /// [`GpuError::Map`] when the read-back fails.
+    pub fn read_pilot_state(&self, ctx: &GpuContext) -> Result<Vec<[f32; 4]>, GpuError> {
+        ctx.read_back(&self.pilot_state)
+    }
+
     /// Runs `record` in an encoder of its own and submits it.
     fn submit(
         &self,
@@ -574,12 +726,14 @@ impl GpuProbeCache {
         Ok((all, visibility))
     }
 
-    /// Sets every word to 0 (black, no distance, count 0), keeping buffers and pipelines.
+    /// Sets every word to 0 (black, no distance, count 0) and the pilot state to 0, keeping
+    /// buffers and pipelines.
     pub fn reset(&self, ctx: &GpuContext) {
         let mut encoder = ctx
             .device()
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
         encoder.clear_buffer(self.words.raw(), 0, None);
+        encoder.clear_buffer(self.pilot_state.raw(), 0, None);
         ctx.queue().submit([encoder.finish()]);
     }
 

@@ -22,9 +22,14 @@
 //! The query agrees within f32 rounding (WGSL's `sqrt`, `pow` and fused products differ from
 //! the CPU's in the last bits).
 //!
-//! Not on the GPU yet: the guiding function, the Metropolis probe chains, the temporal trigger
-//! and the pilot rays (`mcg_probe_cache::{guiding_function, probe_chains, temporal_gradient,
-//! pilot_rays}`), which a renderer runs on the CPU and feeds with the GPU's rays.
+//! The pilot rays (ADGI sec. 4.4) run on the GPU too: their directions per probe and octant in
+//! V_out, and from their hits the heuristics f_v, f_r (eq. 11-12), the temporal gradient and
+//! the trigger (eq. 13-17), kept per probe and octant in the cache's pilot state.
+//!
+//! Not on the GPU yet: the 5 × 5 × 5 × octant smoothing of the trigger states, the guiding
+//! function and the Metropolis probe chains (`mcg_probe_cache::{temporal_gradient::
+//! spatial_smoothing, guiding_function, probe_chains}`), which a renderer runs on the CPU from
+//! the pilot state it reads back, feeding the chains' samples to the GPU's per-sample update.
 
 #[cfg(feature = "runtime")]
 mod guide;
@@ -34,5 +39,5 @@ mod params;
 pub use guide::GpuProbeCache;
 pub use params::{
     AdgiConfigError, AdgiGpuParams, GpuClipVolume, GpuClipVolumes, GpuIrradianceQuery,
-    GpuRaySample, GpuStepParams, ProbeCacheConfig, rounding_code,
+    GpuPilotStep, GpuRaySample, GpuStepParams, ProbeCacheConfig, rounding_code,
 };

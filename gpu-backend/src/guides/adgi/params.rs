@@ -9,8 +9,8 @@ use glam::{UVec3, Vec3, Vec4};
 use mcg_color_codec::{IrradianceLayout, VisibilityLayout};
 use mcg_probe_cache::clip_volume::{ClipVolume, SHELL_COUNT};
 use mcg_probe_cache::{
-    BlendWeights, ClipVolumes, MapKind, ProbeGrid, ProbeTexels, QueryConfig, RaySample,
-    RoundingMode, TexelConfig, TexelContent,
+    BlendWeights, ClipVolumes, HeuristicParams, MapKind, PilotPhase, ProbeGrid, ProbeTexels,
+    QueryConfig, RaySample, RoundingMode, TemporalTrigger, TexelConfig, TexelContent,
 };
 
 use crate::codes;
@@ -356,6 +356,35 @@ impl From<&ClipVolumes> for GpuClipVolumes {
         Self {
             inner: v.inner().into(),
             outer: v.outer().into(),
+        }
+    }
+}
+
+/// The constants of a pilot step, WGSL `AdgiPilotStep` (uniform, 16 bytes), from the CPU
+/// crate's `HeuristicParams` and `TemporalTrigger`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuPilotStep {
+    /// `HeuristicParams::voxel_diagonal` (eq. 11's s).
+    pub voxel_diagonal: f32,
+    /// `HeuristicParams::radiance_range` (eq. 12's β).
+    pub radiance_range: f32,
+    /// `TemporalTrigger::decay` (θ).
+    pub decay: f32,
+    /// 1 on a detection frame (`PilotPhase::Detect`), 0 on a reference frame.
+    pub detect: u32,
+}
+const _: () = assert!(size_of::<GpuPilotStep>() == 16);
+
+impl GpuPilotStep {
+    /// The step of `phase` with `heuristics`' ranges and `trigger`'s decay.
+    #[must_use]
+    pub fn new(heuristics: &HeuristicParams, trigger: TemporalTrigger, phase: PilotPhase) -> Self {
+        Self {
+            voxel_diagonal: heuristics.voxel_diagonal(),
+            radiance_range: heuristics.radiance_range(),
+            decay: trigger.decay(),
+            detect: u32::from(phase == PilotPhase::Detect),
         }
     }
 }
