@@ -5,7 +5,7 @@
 // clip-volume count reset).
 //
 //   adgi_update_sample(probe, direction, radiance, distance, u, max_count); // ADGI Alg. 2-4
-//   adgi_blend_texel(probe, k, first_ray, ray_count, u);                     // DDGI sec. 4
+//   adgi_blend_texel(probe, k, u);   // DDGI sec. 4, the probe's rays in adgi_rays
 //   let e = adgi_irradiance_at(x, n, to_viewer);                             // DDGI sec. 4-5
 //
 // Bindings, all in one group chosen by the shader def MCG_ADGI_GROUP (the host object
