@@ -1,5 +1,5 @@
 #define_import_path mcg::adgi
-// ADGI's probe cache (Hu et al., "Adaptive Dynamic Global Illumination") and DDGI's uniform
+// ADGI's probe cache ("Adaptive Dynamic Global Illumination", ADGI) and DDGI's uniform
 // update (Majercik et al. 2019) as one module a renderer imports: the twin of
 // `mcg_probe_cache::ProbeTexels` (texel words, per-sample update, DDGI blend, irradiance query,
 // clip-volume count reset).
@@ -9,13 +9,13 @@
 //   let e = adgi_irradiance_at(x, n, to_viewer);                             // DDGI sec. 4-5
 //
 // Bindings, all in one group chosen by the shader def MCG_ADGI_GROUP (the host object
-// `GpuProbeCache` builds that group; 6 holds the pilot rays' state): 0 the parameters (`adgi_params`), 1 the texel words
-// (`mcg_codec_texels` of `mcg::color_codec_texels`: set MCG_CODEC_TEXELS_GROUP to the same
-// group and MCG_CODEC_TEXELS_BINDING to 1; the irradiance words first, probe-major, then the
-// visibility words from `adgi_params.visibility_offset`), 2 the interior texels' centre
-// directions and solid angles (`adgi_texel_table`, computed on the host by the CPU crate's
-// `TexelMap`, irradiance texels first), 3 the rays of DDGI's blend (`adgi_rays`, probe-major,
-// written by the renderer). Maps are octahedral with the ADGI word layouts of
+// `GpuProbeCache` builds that group; 6 holds the pilot rays' state): 0 the parameters
+// (`adgi_params`), 1 the texel words (`mcg_codec_texels` of `mcg::color_codec_texels`: set
+// MCG_CODEC_TEXELS_GROUP to the same group and MCG_CODEC_TEXELS_BINDING to 1; the irradiance words
+// first, probe-major, then the visibility words from `adgi_params.visibility_offset`), 2 the
+// interior texels' centre directions and solid angles (`adgi_texel_table`, computed on the host by
+// the CPU crate's `TexelMap`, irradiance texels first), 3 the rays of DDGI's blend (`adgi_rays`,
+// probe-major, written by the renderer). Maps are octahedral with the ADGI word layouts of
 // `mcg::color_codec`. With the shader def MCG_ADGI_FLOAT_TEXELS the query reads float texels at
 // bindings 4 and 5 instead (the benches' RGBA32F + RG32F baseline).
 
