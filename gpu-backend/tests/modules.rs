@@ -52,9 +52,11 @@ fn parse_and_validate(name: &str, source: &str) -> naga::Module {
 }
 
 /// Group 0, bindings 1, 2 and 3 for the three storage arrays of the library; the MCPG guide's
-/// group is 1, the MCMM guide's 2.
+/// group is 1, the MCMM guide's 2, ADGI's probe cache 3 (its texel words are the library's
+/// `mcg_codec_texels`).
 const DEFS: &[(&str, u32)] = &[
     (defs::MCPG_GROUP, 1),
+    (defs::ADGI_GROUP, 3),
     (defs::HASHGRID_GROUP, 0),
     (defs::HASHGRID_BINDING, 1),
     (defs::CODEC_TEXELS_GROUP, 0),
@@ -169,14 +171,16 @@ fn own_names(module: Module) -> Vec<String> {
 /// The library's prefixes, in the case of each kind of name: `vmf_pdf`, `Vmf`,
 /// `VMF_KAPPA_MAX`, `mcg_rounded`, `McgDirectionSample`, `MCG_PI`.
 fn has_mcg_prefix(name: &str) -> bool {
-    ["mcg", "vmf", "hashgrid", "codec", "markov", "mcpg", "mcmm"]
-        .iter()
-        .any(|p| {
-            let camel = format!("{}{}", p[..1].to_uppercase(), &p[1..]);
-            name.starts_with(&format!("{p}_"))
-                || name.starts_with(&format!("{}_", p.to_uppercase()))
-                || name.starts_with(&camel)
-        })
+    [
+        "mcg", "vmf", "hashgrid", "codec", "markov", "mcpg", "mcmm", "adgi",
+    ]
+    .iter()
+    .any(|p| {
+        let camel = format!("{}{}", p[..1].to_uppercase(), &p[1..]);
+        name.starts_with(&format!("{p}_"))
+            || name.starts_with(&format!("{}_", p.to_uppercase()))
+            || name.starts_with(&camel)
+    })
 }
 
 #[test]
@@ -435,6 +439,71 @@ fn wgsl_structs_match_the_rust_pod_types() {
                 cache_max_age, cache_max_weight, adaptive_states, static_states, adaptive_guards,
                 static_guards, cache_cells, cache_sums, widths),
         );
+    }
+    // ADGI's probe cache: the parameters (a uniform) and the structs its steps exchange.
+    {
+        use mcg_gpu_backend::guides::adgi::{
+            AdgiGpuParams as P, GpuClipVolume, GpuClipVolumes, GpuRaySample,
+        };
+        check(
+            &m,
+            "AdgiParams",
+            size_of::<P>(),
+            fields!(P: origin, cell_diagonal, spacing, min_spacing, counts, probe_count,
+                irradiance_side, irradiance_interior, visibility_side, visibility_interior,
+                visibility_offset, max_count, rounding, rays_per_probe, max_distance,
+                irradiance_max_value, irradiance_power, distance_power, radiance_content,
+                normal_bias, view_bias, wrap_shading, visibility, chebyshev_floor,
+                crush_threshold, min_weight, min_trilinear, sqrt_blend, shell_count, pad_a),
+        );
+        check(
+            &m,
+            "AdgiRaySample",
+            size_of::<GpuRaySample>(),
+            fields!(GpuRaySample: direction, distance, radiance, probe),
+        );
+        check(
+            &m,
+            "AdgiClipVolume",
+            size_of::<GpuClipVolume>(),
+            fields!(GpuClipVolume: planes, min_corner, max_corner),
+        );
+        check(
+            &m,
+            "AdgiClipVolumes",
+            size_of::<GpuClipVolumes>(),
+            fields!(GpuClipVolumes: inner, outer),
+        );
+        use mcg_gpu_backend::guides::adgi::{GpuIrradianceQuery, GpuProbeCache, GpuStepParams};
+        let steps = parse_and_validate(
+            "adgi steps",
+            &shaders::compose(kernels::ADGI_STEPS, &GpuProbeCache::shader_defs(0)).unwrap(),
+        );
+        check(
+            &steps,
+            "AdgiStep",
+            size_of::<GpuStepParams>(),
+            fields!(GpuStepParams: count, max_count, cap, pad_a),
+        );
+        check(
+            &steps,
+            "AdgiQuery",
+            size_of::<GpuIrradianceQuery>(),
+            fields!(GpuIrradianceQuery: position, normal, to_viewer),
+        );
+        use mcg_gpu_backend::guides::adgi::GpuPilotStep;
+        check(
+            &steps,
+            "AdgiPilotStep",
+            size_of::<GpuPilotStep>(),
+            fields!(GpuPilotStep: voxel_diagonal, radiance_range, decay, detect),
+        );
+        // The float-texel variant (the benches' baseline) composes and validates too.
+        let mut float_defs = DEFS.to_vec();
+        float_defs.push((defs::ADGI_FLOAT_TEXELS, 1));
+        let float = shaders::wgsl(&[Module::Adgi], &float_defs).unwrap();
+        assert!(float.contains("adgi_float_irradiance"));
+        parse_and_validate("adgi float texels", &float);
     }
     // PixelState: the statistics nested, then the score.
     {

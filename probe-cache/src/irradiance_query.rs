@@ -64,6 +64,10 @@ pub struct QueryConfig {
     pub sqrt_blend: bool,
 }
 
+/// The constant of DDGI's wrap shading, `((n·d + 1)/2)² + WRAP_SHADING_OFFSET` (DDGI sec. 4.2;
+/// the RTXGI SDK's 0.2); public so that a GPU twin reads the same value.
+pub const WRAP_SHADING_OFFSET: f32 = 0.2;
+
 impl QueryConfig {
     /// DDGI's / RTXGI's query constants (each field's docs give the source).
     pub const DDGI: QueryConfig = QueryConfig {
@@ -243,7 +247,7 @@ impl ProbeTexels {
             if config.wrap_shading {
                 let d = (p - x).try_normalize().unwrap_or(Vec3::ZERO);
                 let s = (n.dot(d) + 1.0) * 0.5;
-                w *= s * s + 0.2;
+                w *= s * s + WRAP_SHADING_OFFSET;
             }
             if config.visibility {
                 let to_probe = p - biased;

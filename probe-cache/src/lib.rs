@@ -90,7 +90,7 @@ pub use error::{ChainError, ControlError, GridError, LayoutError, ParameterError
 pub use grid::{ProbeCell, ProbeGrid};
 pub use guiding_function::{Guide, GuideParams, GuidingFunction, HeuristicField};
 pub use heuristics::HeuristicParams;
-pub use irradiance_query::{QueryConfig, TexelContent};
+pub use irradiance_query::{QueryConfig, TexelContent, WRAP_SHADING_OFFSET};
 pub use octahedral::{
     octahedral_decode, octahedral_encode, octahedral_solid_angle, octahedron_point,
 };
@@ -98,7 +98,9 @@ pub use pilot_rays::{PilotFrame, PilotHit, PilotPhase, PilotRay, PilotSchedule};
 pub use probe_chains::{
     ChainKind, FrameStats, ProbeChainState, ProbeChains, ProbeSample, ProbeStepUniforms,
 };
-pub use probe_texels::{ProbeTexels, RoundingMode, TexelConfig};
+pub use probe_texels::{
+    ProbeTexels, RoundingMode, TEXEL_UNIFORM_PERIOD, TEXEL_UNIFORM_STEP, TexelConfig,
+};
 pub use proxies::ProxyGrid;
 #[cfg(feature = "scene")]
 pub use reference::{reference_irradiance, reference_texel_irradiance};
@@ -106,7 +108,7 @@ pub use reference::{reference_irradiance, reference_texel_irradiance};
 pub use scene::{DynamicScene, ProbeRay, Scene, SceneEvent};
 pub use temporal_gradient::{ChangeDetector, SmoothingKernel, TemporalTrigger};
 pub use texel_map::{MAX_MAP_SIDE, MapKind, TexelMap};
-pub use texel_update::{BlendWeights, RaySample};
+pub use texel_update::{BLEND_WEIGHT_EPSILON, BlendWeights, RaySample};
 
 /// The README's example, compiled and run as a doctest.
 #[cfg(doctest)]

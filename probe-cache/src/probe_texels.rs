@@ -181,13 +181,19 @@ pub struct ProbeTexels {
 }
 
 /// The golden-ratio-like step that spreads one caller uniform over many texels (the plastic
-/// number's reciprocal, so it does not coincide with the codec's per-channel golden-ratio step).
-const TEXEL_UNIFORM_STEP: f32 = 0.754_877_7;
+/// number's reciprocal, so it does not coincide with the codec's per-channel golden-ratio step):
+/// texel `k` of one update rounds with `u + (k mod 4096)·step mod 1`. Public so that a GPU twin
+/// reads the same value.
+pub const TEXEL_UNIFORM_STEP: f32 = 0.754_877_7;
+
+/// The period of the texel rotations: texel `k` uses rotation `k mod TEXEL_UNIFORM_PERIOD`
+/// (keeps `k·step` exact enough in f32).
+pub const TEXEL_UNIFORM_PERIOD: u32 = 4096;
 
 /// The `k`-th rotation `u + k·0.7548… mod 1` of a uniform: each is again uniform in [0, 1).
 #[inline(always)]
 pub(crate) fn rotate_uniform(u: f32, k: u32) -> f32 {
-    let v = u + (k % 4096) as f32 * TEXEL_UNIFORM_STEP;
+    let v = u + (k % TEXEL_UNIFORM_PERIOD) as f32 * TEXEL_UNIFORM_STEP;
     let f = v - v.floor();
     if f < 1.0 { f } else { 0.0 }
 }

@@ -46,8 +46,9 @@ impl Default for BlendWeights {
     }
 }
 
-/// Weights below this sum are treated as "no ray reached the texel" (RTXGI's epsilon).
-const WEIGHT_EPSILON: f32 = 1e-9;
+/// Weight sums of DDGI's blend ([`ProbeTexels::blend_rays`]) at or below this are treated as
+/// "no ray reached the texel" (RTXGI's epsilon); public so that a GPU twin reads the same value.
+pub const BLEND_WEIGHT_EPSILON: f32 = 1e-9;
 
 impl ProbeTexels {
     /// ADGI's per-sample update (Alg. 2 line 3, Alg. 4): the sample lands in the irradiance
@@ -176,7 +177,7 @@ impl ProbeTexels {
                     wsum += w;
                 }
             }
-            if wsum > WEIGHT_EPSILON {
+            if wsum > BLEND_WEIGHT_EPSILON {
                 self.update_irradiance(
                     probe,
                     texel as usize,
@@ -198,7 +199,7 @@ impl ProbeTexels {
                     wsum += w;
                 }
             }
-            if wsum > WEIGHT_EPSILON {
+            if wsum > BLEND_WEIGHT_EPSILON {
                 self.update_visibility(
                     probe,
                     texel as usize,

@@ -174,6 +174,33 @@ pub fn generate() -> String {
 
     out.push_str("\n// mcg-markov-guide: MCPG's parameters (`McpgParams::PAPER`).\n");
     push_mcpg_params(&mut out, &McpgParams::PAPER);
+
+    out.push_str("\n// mcg-probe-cache: ADGI / DDGI texel constants.\n");
+    push_f32(
+        &mut out,
+        "ADGI_TEXEL_UNIFORM_STEP",
+        mcg_probe_cache::TEXEL_UNIFORM_STEP,
+    );
+    push_u32(
+        &mut out,
+        "ADGI_TEXEL_UNIFORM_PERIOD",
+        mcg_probe_cache::TEXEL_UNIFORM_PERIOD,
+    );
+    push_u32(
+        &mut out,
+        "ADGI_SHELL_COUNT",
+        mcg_probe_cache::clip_volume::SHELL_COUNT,
+    );
+    push_f32(
+        &mut out,
+        "ADGI_BLEND_WEIGHT_EPSILON",
+        mcg_probe_cache::BLEND_WEIGHT_EPSILON,
+    );
+    push_f32(
+        &mut out,
+        "ADGI_WRAP_SHADING_OFFSET",
+        mcg_probe_cache::WRAP_SHADING_OFFSET,
+    );
     out
 }
 

@@ -27,6 +27,7 @@
 //! | `mcg::markov` | `MarkovGridState` (MCPG) and `MarkovPixelState` (MCMM): read, pack, validity, prediction (MCPG eq. 10), lobe | `mcg_markov_guide::{mcpg, mcmm}` |
 //! | `mcg::mcpg` | the whole MCPG guide: `mcpg_begin`, `mcpg_sample`, `mcpg_pdf`, `mcpg_finish`, the irradiance cache, the per-frame pass, on the group of [`defs::MCPG_GROUP`] (host: `GpuMcpgGuide`) | `mcg_markov_guide::mcpg::Guide` |
 //! | `mcg::mcmm` | MCMM's pixel chains: `McmmParams` and the guide's bindings, Alg. 1 (B-spline offsets, motion, reservoir), Alg. 2 (technique, pdf, sample), Alg. 3 (`mcmm_update`), tile shuffles and the tile-mixture density through workgroup memory | `mcg_markov_guide::mcmm`, `mcg_smis::{CyclicShift, XorPermutation}` |
+//! | `mcg::adgi` | ADGI's probe cache: texel words with the CAS moving average, `adgi_update_sample`, DDGI's `adgi_blend_texel`, `adgi_irradiance_at` with Chebyshev visibility, the clip-volume count reset, on the group of [`defs::ADGI_GROUP`] (host: `GpuProbeCache`) | `mcg_probe_cache::ProbeTexels` |
 //! | `mcg::dispatch` | `mcg_invocation_index` of a [`GpuContext::dispatch`](crate::GpuContext::dispatch) | — |
 //!
 //! # Names
@@ -89,6 +90,15 @@ pub mod defs {
     /// binding 1 with [`HASHGRID_GROUP`] set to the same group and [`HASHGRID_BINDING`] to 1,
     /// the guide's words at binding 2). `GpuMcpgGuide::shader_defs` gives all three.
     pub const MCPG_GROUP: &str = "MCG_MCPG_GROUP";
+    /// Bind group of ADGI's probe cache (`mcg::adgi`: parameters at binding 0, the texel words
+    /// at binding 1 with [`CODEC_TEXELS_GROUP`] set to the same group and
+    /// [`CODEC_TEXELS_BINDING`] to 1, the texel table at 2, DDGI's rays at 3).
+    /// `GpuProbeCache::shader_defs` gives all three.
+    pub const ADGI_GROUP: &str = "MCG_ADGI_GROUP";
+    /// Set (any value) to make `mcg::adgi`'s query read float texels (RGBA32F irradiance and
+    /// RG32F moments at bindings 4 and 5 of its group) instead of the packed words: DDGI's
+    /// storage, the baseline of the benches.
+    pub const ADGI_FLOAT_TEXELS: &str = "MCG_ADGI_FLOAT_TEXELS";
     /// K, the number of lobes of `VmfMixture` (`mcg::vmf_mixture`); 4 when not set.
     pub const VMF_MIXTURE_K: &str = "MCG_VMF_MIXTURE_K";
     /// Bind group of the MCMM guide's parameters and state buffers (`mcg::mcmm`, bindings 0-2).
@@ -130,11 +140,13 @@ pub enum Module {
     Mcpg,
     /// `mcg::mcmm`: MCMM's screen-space chains (Alg. 1-3) and tile shuffles.
     Mcmm,
+    /// `mcg::adgi`: ADGI's probe cache (texels, per-sample update, DDGI's blend, the query).
+    Adgi,
 }
 
 impl Module {
     /// Every module, each after the modules it imports.
-    pub const ALL: [Module; 14] = [
+    pub const ALL: [Module; 15] = [
         Module::Constants,
         Module::Math,
         Module::Dispatch,
@@ -149,6 +161,7 @@ impl Module {
         Module::Markov,
         Module::Mcpg,
         Module::Mcmm,
+        Module::Adgi,
     ];
 
     /// The naga_oil import path, e.g. `"mcg::vmf"`.
@@ -169,6 +182,7 @@ impl Module {
             Module::Dispatch => "mcg::dispatch",
             Module::Mcpg => "mcg::mcpg",
             Module::Mcmm => "mcg::mcmm",
+            Module::Adgi => "mcg::adgi",
         }
     }
 
@@ -190,6 +204,7 @@ impl Module {
             Module::Dispatch => "mcg/dispatch.wgsl",
             Module::Mcpg => "mcg/mcpg.wgsl",
             Module::Mcmm => "mcg/mcmm.wgsl",
+            Module::Adgi => "mcg/adgi.wgsl",
         }
     }
 
@@ -211,6 +226,7 @@ impl Module {
             Module::Dispatch => include_str!("dispatch.wgsl"),
             Module::Mcpg => include_str!("../guides/mcpg/mcpg.wgsl"),
             Module::Mcmm => include_str!("../guides/mcmm/mcmm.wgsl"),
+            Module::Adgi => include_str!("../guides/adgi/adgi.wgsl"),
         }
     }
 
@@ -224,6 +240,12 @@ impl Module {
             Module::VmfMixture => &[defs::VMF_MIXTURE_K],
             Module::Mcpg => &[defs::MCPG_GROUP],
             Module::Mcmm => &[defs::MCMM_GROUP, defs::MCMM_SUBGROUPS],
+            Module::Adgi => &[
+                defs::ADGI_GROUP,
+                defs::CODEC_TEXELS_GROUP,
+                defs::CODEC_TEXELS_BINDING,
+                defs::ADGI_FLOAT_TEXELS,
+            ],
             _ => &[],
         }
     }
@@ -311,6 +333,7 @@ pub mod kernels {
         (super::defs::CODEC_LOGLUV_GROUP, 0),
         (super::defs::CODEC_LOGLUV_BINDING, 3),
         (super::defs::MCPG_GROUP, 0),
+        (super::defs::ADGI_GROUP, 0),
     ];
     /// Entry point `vmf_pdf_and_sample`: bindings `lobes`, `queries`, `pdfs`, `samples`.
     pub const VMF: &str = include_str!("kernels/vmf.wgsl");
@@ -356,6 +379,11 @@ pub mod kernels {
     /// MCPG guide's per-frame pass, the guide's group at group 0 (run by `GpuMcpgGuide` with
     /// the guide's own layout, so not in [`ALL`], whose kernels `GpuContext::dispatch` runs).
     pub const MCPG_MAINTENANCE: &str = include_str!("../guides/mcpg/maintenance.wgsl");
+
+    /// Entry points `adgi_update_samples`, `adgi_blend`, `adgi_query`, `adgi_clip_reset`: the
+    /// steps of `GpuProbeCache`, the cache's group at group 0 and the step's inputs at group 1
+    /// (run with the cache's own layouts, so not in [`ALL`]).
+    pub const ADGI_STEPS: &str = include_str!("../guides/adgi/kernels.wgsl");
 
     /// Every kernel with its name and entry points, for validation loops.
     pub const ALL: &[(&str, &str, &[&str])] = &[
