@@ -241,6 +241,62 @@ fn concurrent_texel_updates_match_a_serial_order() {
     }
 }
 
+/// A NaN sample leaves a texel word unchanged on the GPU, as `MovingAverage::update` does on
+/// the CPU: 64 irradiance and 64 visibility words holding a value and a count, each updated
+/// with samples that have a NaN in one component (each component the word reads, in turn).
+/// Hypothesis: every
+/// word is bit for bit what it was. Deterministic; the NaN test written as `any(x != x)` (which
+/// lavapipe compiles as never true) fails it (checked once).
+#[test]
+fn nan_samples_leave_texel_words_unchanged() {
+    let Some(ctx) = gpu_or_skip("nan_samples_leave_texel_words_unchanged") else {
+        return;
+    };
+    use mcg_color_codec::{IrradianceLayout, MovingAverage, Rounding, VisibilityLayout};
+    let average = MovingAverage::STATIC;
+    let before: Vec<u32> = (0..64u32)
+        .map(|t| {
+            let x = Vec3::new(1.0 + t as f32, 0.5, 0.25);
+            (0..3).fold(0, |w, _| {
+                average.update(&IrradianceLayout::ADGI, w, x, Rounding::Nearest)
+            })
+        })
+        .collect();
+    let visibility: Vec<u32> = (0..64u32)
+        .map(|t| {
+            let m = Vec2::new(1.0 + t as f32, 2.0 + t as f32);
+            (0..3).fold(0, |w, _| {
+                average.update(&VisibilityLayout::ADGI, w, m, Rounding::Nearest)
+            })
+        })
+        .collect();
+    let updates: Vec<TexelUpdate> = (0..192u32)
+        .map(|k| {
+            let mut sample = Vec3::splat(3.0);
+            sample[(k / 64) as usize] = f32::NAN;
+            TexelUpdate {
+                sample,
+                texel: k % 64,
+            }
+        })
+        .collect();
+    // Visibility words read the sample's x and y (the moments): the first 128 updates.
+    for (word_layout, words, updates) in [
+        (0, &before, &updates[..]),
+        (1, &visibility, &updates[..128]),
+    ] {
+        let params = TexelParams {
+            max_count: average.max_count(),
+            rounding_mode: 1,
+            rounding_u: 0.0,
+            word_layout,
+        };
+        let texels = GpuTexels::upload(ctx, words).unwrap();
+        texels.update(ctx, updates, &params).unwrap();
+        assert_eq!(&texels.read(ctx).unwrap(), words, "layout {word_layout}");
+    }
+}
+
 /// LogLuv32 (`pack_xyz`, `encode`, `unpack_xyz`, `decode`) bit for bit. Encode: 65 536
 /// luminance boundaries (Y = 2ᵉ·T[k] and the float below it for every exponent e of the
 /// range and every log₂ step k, so every Le boundary is crossed), 40 000 colours

@@ -38,7 +38,7 @@
     CODEC_VISIBILITY_MEAN_SQ_INV_GAMMA, CODEC_VISIBILITY_MEAN_SQ_MAX_CODE,
     CODEC_VISIBILITY_MEAN_SQ_SHIFT, MCG_LOG2_E
 }
-#import mcg::math::{mcg_rounded, mcg_rounded3}
+#import mcg::math::{mcg_any_nan2, mcg_any_nan3, mcg_rounded, mcg_rounded3}
 
 // `f32_to_ufloat`: the unsigned small float with 5 exponent bits and `n` mantissa bits
 // (n = 6 for R11, 5 for B10), rounded to nearest even, negatives and NaN to 0, overflow to
@@ -399,9 +399,9 @@ fn codec_heuristics_decode(word: u32) -> vec4<f32> {
 
 // `MovingAverage::update` on an irradiance word (ADGI sec. 4.7): N ← min(N + 1, N_max),
 // value ← old + (x − old)/N (x itself when N was 0), negatives clamped to 0; a NaN sample
-// leaves the word unchanged (where the GPU reports NaN at all).
+// leaves the word unchanged (NaN tested from the bits, `mcg_is_nan`).
 fn codec_irradiance_update(word: u32, sample: vec3<f32>, max_count: u32, rounding: CodecRounding) -> u32 {
-    if any(sample != sample) {
+    if mcg_any_nan3(sample) {
         return word;
     }
     let x = max(sample, vec3<f32>(0.0));
@@ -419,7 +419,7 @@ fn codec_irradiance_update(word: u32, sample: vec3<f32>, max_count: u32, roundin
 // `MovingAverage::update` on a visibility word: the same running mean of the moments
 // (mean, mean²) as `codec_irradiance_update`.
 fn codec_visibility_update(word: u32, sample: vec2<f32>, max_count: u32, rounding: CodecRounding) -> u32 {
-    if any(sample != sample) {
+    if mcg_any_nan2(sample) {
         return word;
     }
     let x = max(sample, vec2<f32>(0.0));

@@ -25,3 +25,20 @@ fn mcg_is_finite(x: f32) -> bool {
 fn mcg_is_finite3(v: vec3<f32>) -> bool {
     return all(abs(v) <= vec3<f32>(MCG_F32_MAX));
 }
+
+// `f32::is_nan` from the bits: the exponent all ones and a non-zero mantissa, i.e. the bits
+// without the sign above those of +∞ (the bits of f32::MAX plus one). Comparisons such as
+// `x != x` do not detect NaN on every driver (lavapipe compiles them as never true).
+fn mcg_is_nan(x: f32) -> bool {
+    return (bitcast<u32>(x) << 1u) > ((bitcast<u32>(MCG_F32_MAX) + 1u) << 1u);
+}
+
+// Whether any component is NaN (`mcg_is_nan`).
+fn mcg_any_nan2(v: vec2<f32>) -> bool {
+    return mcg_is_nan(v.x) || mcg_is_nan(v.y);
+}
+
+// Whether any component is NaN (`mcg_is_nan`).
+fn mcg_any_nan3(v: vec3<f32>) -> bool {
+    return mcg_is_nan(v.x) || mcg_is_nan(v.y) || mcg_is_nan(v.z);
+}

@@ -26,7 +26,9 @@
     MCG_FRAC_PI_2, MCG_ONE_MINUS_EPSILON, MCG_PI, MCPG_LUMINANCE_B, MCPG_LUMINANCE_G,
     MCPG_LUMINANCE_R
 }
-#import mcg::math::{mcg_is_finite, mcg_is_finite3, mcg_rounded, mcg_rounded3}
+#import mcg::math::{
+    mcg_any_nan3, mcg_is_finite, mcg_is_finite3, mcg_is_nan, mcg_rounded, mcg_rounded3
+}
 #import mcg::color_codec::{
     CodecRounding, codec_bit_mask, codec_irradiance_decode, codec_visibility_decode
 }
@@ -87,17 +89,6 @@ struct AdgiRaySample {
 // temporal trigger's states for f_v and f_r (`adgi_pilot_update`).
 @group(#{MCG_ADGI_GROUP}) @binding(6) var<storage, read_write> adgi_pilot_state: array<vec4<f32>>;
 
-// `f32::is_nan` from the bits: the exponent all ones and a non-zero mantissa, i.e. the bits
-// without the sign above those of +∞ (the bits of f32::MAX plus one). Comparisons such as
-// `x != x` do not detect NaN on every driver (lavapipe compiles them as never true).
-fn adgi_is_nan(x: f32) -> bool {
-    return (bitcast<u32>(x) << 1u) > ((bitcast<u32>(MCG_F32_MAX) + 1u) << 1u);
-}
-
-// Whether any component is NaN.
-fn adgi_any_nan3(v: vec3<f32>) -> bool {
-    return adgi_is_nan(v.x) || adgi_is_nan(v.y) || adgi_is_nan(v.z);
-}
 
 // ±1 with the sign of each component, +1 for ±0 (RTXGI's `DDGISignNotZero`).
 fn adgi_sign_not_zero(v: vec2<f32>) -> vec2<f32> {
@@ -160,7 +151,7 @@ fn adgi_rotate_uniform(u: f32, k: u32) -> f32 {
 // `ProbeTexels::normalise_distance`: world distance → cell diagonals in [0, max_distance];
 // −1 for NaN (no update).
 fn adgi_normalise_distance(distance: f32) -> f32 {
-    if adgi_is_nan(distance) {
+    if mcg_is_nan(distance) {
         return -1.0;
     }
     return clamp(distance / adgi_params.cell_diagonal, 0.0, adgi_params.max_distance);
@@ -187,7 +178,7 @@ fn adgi_rounding(u: f32) -> CodecRounding {
 // diagonals; stochastic rounding from `u` (the visibility word takes its first rotation).
 fn adgi_update_sample(probe: u32, direction: vec3<f32>, radiance: vec3<f32>, distance: f32, u: f32, max_count: u32) {
     // A NaN component leaves the word unchanged (`MovingAverage::update`).
-    if !adgi_any_nan3(radiance) {
+    if !mcg_any_nan3(radiance) {
         let ti = adgi_map_texel(direction, adgi_params.irradiance_side, adgi_params.irradiance_interior);
         codec_irradiance_update_atomic(adgi_irradiance_word_index(probe, ti), radiance, max_count, adgi_rounding(u));
     }
@@ -243,7 +234,7 @@ fn adgi_blend_texel(probe: u32, k: u32, u: f32) -> u32 {
         var x: vec3<f32>;
         var power: f32;
         if is_irradiance {
-            if adgi_any_nan3(ray.radiance) {
+            if mcg_any_nan3(ray.radiance) {
                 continue;
             }
             x = clamp(ray.radiance, vec3<f32>(0.0), vec3<f32>(adgi_params.irradiance_max_value));
@@ -567,10 +558,10 @@ fn adgi_traces_pilots(volumes: AdgiClipVolumes, probe: u32) -> bool {
 fn adgi_pilot_direction(octant: u32, u: vec2<f32>) -> vec3<f32> {
     let lo = 0.5 * MCG_F32_EPSILON;
     var open = clamp(u, vec2<f32>(lo), vec2<f32>(MCG_ONE_MINUS_EPSILON));
-    if adgi_is_nan(u.x) {
+    if mcg_is_nan(u.x) {
         open.x = 0.5;
     }
-    if adgi_is_nan(u.y) {
+    if mcg_is_nan(u.y) {
         open.y = 0.5;
     }
     let z = open.x;
@@ -583,7 +574,7 @@ fn adgi_pilot_direction(octant: u32, u: vec2<f32>) -> vec3<f32> {
 // `heuristics::probe_visibility` (ADGI eq. 11): f_v = exp(−2t/s) for a hit at distance t
 // along −ω, s the voxel diagonal; 1 for t ≤ 0, 0 for a miss.
 fn adgi_probe_visibility(t: f32, s: f32) -> f32 {
-    if adgi_is_nan(t) {
+    if mcg_is_nan(t) {
         return 0.0;
     }
     if t <= 0.0 {
@@ -593,7 +584,7 @@ fn adgi_probe_visibility(t: f32, s: f32) -> f32 {
         return 0.0;
     }
     let ratio = 2.0 * t / s;
-    if adgi_is_nan(ratio) {
+    if mcg_is_nan(ratio) {
         return 0.0;
     }
     return exp(-ratio);
@@ -610,7 +601,7 @@ fn adgi_incoming_radiance(r: f32, beta: f32) -> f32 {
 // `TemporalTrigger::apply` (ADGI eq. 14, 17): max(|pulse|, θ · state).
 fn adgi_trigger(pulse: f32, state: f32, decay: f32) -> f32 {
     var x = 0.0;
-    if !adgi_is_nan(pulse) {
+    if !mcg_is_nan(pulse) {
         x = min(abs(pulse), MCG_F32_MAX);
     }
     var y = 0.0;
