@@ -97,6 +97,49 @@ const READ: wgpu::BufferBindingType = wgpu::BufferBindingType::Storage { read_on
 const READ_WRITE: wgpu::BufferBindingType = wgpu::BufferBindingType::Storage { read_only: false };
 const UNIFORM: wgpu::BufferBindingType = wgpu::BufferBindingType::Uniform;
 
+/// The interior texels' directions and solid angles of the irradiance then visibility map.
+fn texel_table(config: &ProbeCacheConfig) -> Vec<[f32; 4]> {
+    let mut table = Vec::new();
+    for map in [config.texels.irradiance_map, config.texels.visibility_map] {
+        let (n, b) = (map.interior(), (map.side() - map.interior()) / 2);
+        for k in 0..n * n {
+            let t = UVec2::new(k % n + b, k / n + b);
+            table.push(map.direction(t).extend(map.solid_angle(t)).to_array());
+        }
+    }
+    table
+}
+
+/// The layout of the step group (samples, uniforms, queries, results, clip, pilot).
+fn step_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("mcg::adgi steps"),
+        entries: &[
+            layout_entry(0, READ),
+            layout_entry(1, READ),
+            layout_entry(2, UNIFORM),
+            layout_entry(3, READ),
+            layout_entry(4, READ_WRITE),
+            layout_entry(5, UNIFORM),
+            layout_entry(6, UNIFORM),
+        ],
+    })
+}
+
+impl Unused {
+    /// The one-element stand-ins, created on `ctx`'s device.
+    fn new(ctx: &GpuContext) -> Self {
+        Self {
+            samples: ctx.zeroed_buffer("adgi unused samples", 1),
+            uniforms: ctx.zeroed_buffer("adgi unused uniforms", 1),
+            queries: ctx.zeroed_buffer("adgi unused queries", 1),
+            results: ctx.zeroed_buffer("adgi unused results", 1),
+            clip: ctx.uniform_buffer("adgi unused clip", &GpuClipVolumes::default()),
+            pilot: ctx.uniform_buffer("adgi unused pilot", &GpuPilotStep::default()),
+        }
+    }
+}
+
 impl GpuProbeCache {
     /// The binding of the parameters in the cache's group.
     pub const PARAMS_BINDING: u32 = 0;
@@ -123,21 +166,50 @@ impl GpuProbeCache {
         if 4 * words > maximum || 32 * rays > maximum {
             return Err(AdgiConfigError::TooManyWords { words });
         }
-        let mut table = Vec::new();
-        for map in [config.texels.irradiance_map, config.texels.visibility_map] {
-            let (n, b) = (map.interior(), (map.side() - map.interior()) / 2);
-            for k in 0..n * n {
-                let t = UVec2::new(k % n + b, k / n + b);
-                table.push(map.direction(t).extend(map.solid_angle(t)).to_array());
-            }
-        }
+        let table = texel_table(config);
         let params_buffer = ctx.uniform_buffer("adgi params", &params);
         let words = ctx.zeroed_buffer("adgi texel words", words as usize);
         let table = ctx.storage_buffer("adgi texel table", &table);
         let rays = ctx.zeroed_buffer("adgi rays", rays as usize);
         let pilot_state = ctx.zeroed_buffer("adgi pilot state", 8 * params.probe_count as usize);
         let device = ctx.device();
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        let layout = Self::cache_layout(device);
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("mcg::adgi"),
+            layout: &layout,
+            entries: &[
+                (Self::PARAMS_BINDING, params_buffer.raw()),
+                (Self::WORDS_BINDING, words.raw()),
+                (Self::TABLE_BINDING, table.raw()),
+                (Self::RAYS_BINDING, rays.raw()),
+                (Self::PILOT_BINDING, pilot_state.raw()),
+            ]
+            .map(|(binding, b)| wgpu::BindGroupEntry {
+                binding,
+                resource: b.as_entire_binding(),
+            }),
+        });
+        let step_layout = step_layout(device);
+        let unused = Unused::new(ctx);
+        Ok(Self {
+            config: *config,
+            params,
+            params_buffer,
+            words,
+            table,
+            rays,
+            pilot_state,
+            layout,
+            bind_group,
+            step_layout,
+            unused,
+            steps: OnceLock::new(),
+        })
+    }
+
+    /// The layout of the cache's group: the parameters, words, table, rays and pilot state.
+    fn cache_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+        device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("mcg::adgi"),
             entries: &[
                 wgpu::BindGroupLayoutEntry {
@@ -155,55 +227,6 @@ impl GpuProbeCache {
                 layout_entry(Self::RAYS_BINDING, READ),
                 layout_entry(Self::PILOT_BINDING, READ_WRITE),
             ],
-        });
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("mcg::adgi"),
-            layout: &layout,
-            entries: &[
-                (Self::PARAMS_BINDING, params_buffer.raw()),
-                (Self::WORDS_BINDING, words.raw()),
-                (Self::TABLE_BINDING, table.raw()),
-                (Self::RAYS_BINDING, rays.raw()),
-                (Self::PILOT_BINDING, pilot_state.raw()),
-            ]
-            .map(|(binding, b)| wgpu::BindGroupEntry {
-                binding,
-                resource: b.as_entire_binding(),
-            }),
-        });
-        let step_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("mcg::adgi steps"),
-            entries: &[
-                layout_entry(0, READ),
-                layout_entry(1, READ),
-                layout_entry(2, UNIFORM),
-                layout_entry(3, READ),
-                layout_entry(4, READ_WRITE),
-                layout_entry(5, UNIFORM),
-                layout_entry(6, UNIFORM),
-            ],
-        });
-        let unused = Unused {
-            samples: ctx.zeroed_buffer("adgi unused samples", 1),
-            uniforms: ctx.zeroed_buffer("adgi unused uniforms", 1),
-            queries: ctx.zeroed_buffer("adgi unused queries", 1),
-            results: ctx.zeroed_buffer("adgi unused results", 1),
-            clip: ctx.uniform_buffer("adgi unused clip", &GpuClipVolumes::default()),
-            pilot: ctx.uniform_buffer("adgi unused pilot", &GpuPilotStep::default()),
-        };
-        Ok(Self {
-            config: *config,
-            params,
-            params_buffer,
-            words,
-            table,
-            rays,
-            pilot_state,
-            layout,
-            bind_group,
-            step_layout,
-            unused,
-            steps: OnceLock::new(),
         })
     }
 

@@ -152,54 +152,28 @@ impl AdgiGpuParams {
     /// # Errors
     /// An [`AdgiConfigError`] naming what has no GPU twin or is invalid.
     pub fn new(config: &ProbeCacheConfig) -> Result<(Self, u64), AdgiConfigError> {
+        validate(config)?;
         let t = &config.texels;
-        if t.irradiance_map.kind() != MapKind::Octahedral
-            || t.visibility_map.kind() != MapKind::Octahedral
-        {
-            return Err(AdgiConfigError::MapNotOctahedral);
-        }
-        if t.irradiance_layout != IrradianceLayout::ADGI {
-            return Err(AdgiConfigError::IrradianceLayoutNotAdgi);
-        }
-        if t.visibility_layout != VisibilityLayout::ADGI {
-            return Err(AdgiConfigError::VisibilityLayoutNotAdgi);
-        }
-        let b = &config.blend;
-        let positive = |x: f32| x > 0.0 && x.is_finite();
-        if !positive(b.irradiance_power) || !positive(b.distance_power) {
-            return Err(AdgiConfigError::BlendPowerNotPositive);
-        }
-        let q = &config.query;
-        let non_negative = |x: f32| x >= 0.0 && x.is_finite();
-        if ![
-            q.normal_bias.abs(),
-            q.view_bias.abs(),
-            q.chebyshev_floor,
-            q.crush_threshold,
-            q.min_weight,
-            q.min_trilinear,
-        ]
-        .into_iter()
-        .all(non_negative)
-        {
-            return Err(AdgiConfigError::QueryConstantInvalid);
-        }
-        if config.rays_per_probe == 0 {
-            return Err(AdgiConfigError::RaysPerProbeZero);
-        }
-        let grid = &config.grid;
-        let probes = grid.probe_count() as u64;
+        let probes = config.grid.probe_count() as u64;
         let irradiance_words = probes * t.irradiance_map.texel_count() as u64;
         let words = irradiance_words + probes * t.visibility_map.texel_count() as u64;
         let rays = probes * u64::from(config.rays_per_probe);
         if words > u64::from(u32::MAX) || rays > u64::from(u32::MAX) {
             return Err(AdgiConfigError::TooManyWords { words });
         }
+        let params = Self::derive(config, probes, irradiance_words);
+        Ok((params, words))
+    }
+
+    /// The parameters of a validated `config` with `probes` probes, the visibility words
+    /// starting at `irradiance_words`.
+    fn derive(config: &ProbeCacheConfig, probes: u64, irradiance_words: u64) -> Self {
+        let (grid, t, b, q) = (&config.grid, &config.texels, &config.blend, &config.query);
         // The CPU texels own the derived constants (max distance); build a one-probe twin.
         let one = ProbeGrid::new(grid.origin(), grid.spacing(), UVec3::ONE)
             .expect("a valid grid's origin and spacing");
         let max_distance = ProbeTexels::new(one, *t).max_distance();
-        let params = Self {
+        Self {
             origin: grid.origin(),
             cell_diagonal: grid.cell_diagonal(),
             spacing: grid.spacing(),
@@ -230,9 +204,49 @@ impl AdgiGpuParams {
             sqrt_blend: u32::from(q.sqrt_blend),
             shell_count: SHELL_COUNT,
             pad_a: 0,
-        };
-        Ok((params, words))
+        }
     }
+}
+
+/// Checks that `config` has a GPU twin: octahedral maps, ADGI layouts, positive blend powers,
+/// finite non-negative query constants and some rays per probe.
+fn validate(config: &ProbeCacheConfig) -> Result<(), AdgiConfigError> {
+    let t = &config.texels;
+    if t.irradiance_map.kind() != MapKind::Octahedral
+        || t.visibility_map.kind() != MapKind::Octahedral
+    {
+        return Err(AdgiConfigError::MapNotOctahedral);
+    }
+    if t.irradiance_layout != IrradianceLayout::ADGI {
+        return Err(AdgiConfigError::IrradianceLayoutNotAdgi);
+    }
+    if t.visibility_layout != VisibilityLayout::ADGI {
+        return Err(AdgiConfigError::VisibilityLayoutNotAdgi);
+    }
+    let b = &config.blend;
+    let positive = |x: f32| x > 0.0 && x.is_finite();
+    if !positive(b.irradiance_power) || !positive(b.distance_power) {
+        return Err(AdgiConfigError::BlendPowerNotPositive);
+    }
+    let q = &config.query;
+    let non_negative = |x: f32| x >= 0.0 && x.is_finite();
+    if ![
+        q.normal_bias.abs(),
+        q.view_bias.abs(),
+        q.chebyshev_floor,
+        q.crush_threshold,
+        q.min_weight,
+        q.min_trilinear,
+    ]
+    .into_iter()
+    .all(non_negative)
+    {
+        return Err(AdgiConfigError::QueryConstantInvalid);
+    }
+    if config.rays_per_probe == 0 {
+        return Err(AdgiConfigError::RaysPerProbeZero);
+    }
+    Ok(())
 }
 
 /// The `codes::ROUND_*` of a [`RoundingMode`].
