@@ -90,74 +90,84 @@ pub fn generate() -> String {
          // Regenerate: MCG_BLESS=1 cargo test -p mcg-gpu-backend --test modules\n\n",
     );
 
+    push_core_constants(&mut out);
+    push_vmf_hashgrid_constants(&mut out);
+    push_codec_constants(&mut out);
+    out.push_str("\n// mcg-markov-guide: MCPG's parameters (`McpgParams::PAPER`).\n");
+    push_mcpg_params(&mut out, &McpgParams::PAPER);
+
+    push_probe_cache_constants(&mut out);
+    out
+}
+
+/// The backend's dispatch shape, Rust core's float constants, random-number convention, codes.
+fn push_core_constants(out: &mut String) {
     out.push_str("// mcg-gpu-backend: dispatch shape and float constants of Rust's core.\n");
-    push_u32(&mut out, "MCG_WORKGROUP_SIZE", WORKGROUP_SIZE);
-    push_f32(&mut out, "MCG_F32_MAX", f32::MAX);
-    push_f32(&mut out, "MCG_F32_EPSILON", f32::EPSILON);
+    push_u32(out, "MCG_WORKGROUP_SIZE", WORKGROUP_SIZE);
+    push_f32(out, "MCG_F32_MAX", f32::MAX);
+    push_f32(out, "MCG_F32_EPSILON", f32::EPSILON);
     // 1 − ε/2, the largest f32 below 1 (the CPU crates clamp rescaled uniforms to it).
-    push_f32(&mut out, "MCG_ONE_MINUS_EPSILON", 1.0 - f32::EPSILON / 2.0);
-    push_f32(&mut out, "MCG_FRAC_1_PI", core::f32::consts::FRAC_1_PI);
-    push_f32(&mut out, "MCG_FRAC_PI_2", core::f32::consts::FRAC_PI_2);
-    push_f32(&mut out, "MCG_LN_2", core::f32::consts::LN_2);
-    push_f32(&mut out, "MCG_LOG2_E", core::f32::consts::LOG2_E);
-    push_f32(&mut out, "MCG_PI", core::f32::consts::PI);
+    push_f32(out, "MCG_ONE_MINUS_EPSILON", 1.0 - f32::EPSILON / 2.0);
+    push_f32(out, "MCG_FRAC_1_PI", core::f32::consts::FRAC_1_PI);
+    push_f32(out, "MCG_FRAC_PI_2", core::f32::consts::FRAC_PI_2);
+    push_f32(out, "MCG_LN_2", core::f32::consts::LN_2);
+    push_f32(out, "MCG_LOG2_E", core::f32::consts::LOG2_E);
+    push_f32(out, "MCG_PI", core::f32::consts::PI);
 
     out.push_str("\n// mcg-gpu-backend: the random-number convention (`sampling`).\n");
-    push_u32(&mut out, "MCG_PCG_HASH_MUL", sampling::PCG_HASH_MUL);
-    push_u32(&mut out, "MCG_PCG_HASH_INC", sampling::PCG_HASH_INC);
+    push_u32(out, "MCG_PCG_HASH_MUL", sampling::PCG_HASH_MUL);
+    push_u32(out, "MCG_PCG_HASH_INC", sampling::PCG_HASH_INC);
     push_u32(
-        &mut out,
+        out,
         "MCG_PCG_HASH_OUTPUT_MUL",
         sampling::PCG_HASH_OUTPUT_MUL,
     );
     push_f32(
-        &mut out,
+        out,
         "MCG_UNIFORM_FLOAT_SCALE",
         sampling::UNIFORM_FLOAT_SCALE,
     );
 
     out.push_str("\n// mcg-gpu-backend: enum codes (`codes`).\n");
     for &(name, v) in crate::codes::WGSL_CODES {
-        push_u32(&mut out, name, v);
+        push_u32(out, name, v);
     }
+}
 
+/// The constants of mcg-vmf and mcg-hashgrid.
+fn push_vmf_hashgrid_constants(out: &mut String) {
     out.push_str("\n// mcg-vmf\n");
     for &(name, v) in mcg_vmf::constants::F32_CONSTANTS {
-        push_f32(&mut out, name, v);
+        push_f32(out, name, v);
     }
     for &(name, v) in mcg_vmf::constants::U32_CONSTANTS {
-        push_u32(&mut out, name, v);
+        push_u32(out, name, v);
     }
 
     out.push_str("\n// mcg-hashgrid\n");
     for &(name, v) in mcg_hashgrid::constants::U32_CONSTANTS {
-        push_u32(&mut out, name, v);
+        push_u32(out, name, v);
     }
     for &(name, v) in mcg_hashgrid::constants::F32_CONSTANTS {
-        push_f32(&mut out, name, v);
+        push_f32(out, name, v);
     }
     // 1 − ε/2, the largest f32 below 1 (mcg-hashgrid clamps uniforms to it).
-    push_f32(
-        &mut out,
-        "HASHGRID_ONE_MINUS_EPSILON",
-        1.0 - f32::EPSILON / 2.0,
-    );
+    push_f32(out, "HASHGRID_ONE_MINUS_EPSILON", 1.0 - f32::EPSILON / 2.0);
+}
 
+/// mcg-color-codec's constants: its WGSL constants, ranges and the ADGI layouts' log fields.
+fn push_codec_constants(out: &mut String) {
     out.push_str("\n// mcg-color-codec\n");
     for c in mcg_color_codec::CONSTANTS {
         let declaration = c.to_string().replacen("const ", "const CODEC_", 1);
         writeln!(out, "{declaration}").expect("writing to a String");
     }
-    push_f32(&mut out, "CODEC_R11_MAX", R11_MAX);
-    push_f32(&mut out, "CODEC_B10_MAX", B10_MAX);
-    push_f32(&mut out, "CODEC_RGB9E5_MAX", RGB9E5_MAX);
-    push_f32(
-        &mut out,
-        "CODEC_RTXGI_IRRADIANCE_GAMMA",
-        RTXGI_IRRADIANCE_GAMMA,
-    );
-    push_f32(&mut out, "CODEC_LOG_BETA_MAX", LogCodec::BETA_MAX);
-    push_u32(&mut out, "CODEC_MAX_FIELD_BITS", MAX_FIELD_BITS);
+    push_f32(out, "CODEC_R11_MAX", R11_MAX);
+    push_f32(out, "CODEC_B10_MAX", B10_MAX);
+    push_f32(out, "CODEC_RGB9E5_MAX", RGB9E5_MAX);
+    push_f32(out, "CODEC_RTXGI_IRRADIANCE_GAMMA", RTXGI_IRRADIANCE_GAMMA);
+    push_f32(out, "CODEC_LOG_BETA_MAX", LogCodec::BETA_MAX);
+    push_u32(out, "CODEC_MAX_FIELD_BITS", MAX_FIELD_BITS);
     out.push_str("// log-coded fields of the ADGI layouts (`CodecLogField` in color_codec.wgsl)\n");
     for (name, field) in [
         ("CODEC_IRRADIANCE_R", IrradianceLayout::ADGI.channel(0)),
@@ -169,39 +179,38 @@ pub fn generate() -> String {
             VisibilityLayout::ADGI.channel(1),
         ),
     ] {
-        push_log_field(&mut out, name, &field);
+        push_log_field(out, name, &field);
     }
+}
 
-    out.push_str("\n// mcg-markov-guide: MCPG's parameters (`McpgParams::PAPER`).\n");
-    push_mcpg_params(&mut out, &McpgParams::PAPER);
-
+/// The texel constants of mcg-probe-cache (ADGI / DDGI).
+fn push_probe_cache_constants(out: &mut String) {
     out.push_str("\n// mcg-probe-cache: ADGI / DDGI texel constants.\n");
     push_f32(
-        &mut out,
+        out,
         "ADGI_TEXEL_UNIFORM_STEP",
         mcg_probe_cache::TEXEL_UNIFORM_STEP,
     );
     push_u32(
-        &mut out,
+        out,
         "ADGI_TEXEL_UNIFORM_PERIOD",
         mcg_probe_cache::TEXEL_UNIFORM_PERIOD,
     );
     push_u32(
-        &mut out,
+        out,
         "ADGI_SHELL_COUNT",
         mcg_probe_cache::clip_volume::SHELL_COUNT,
     );
     push_f32(
-        &mut out,
+        out,
         "ADGI_BLEND_WEIGHT_EPSILON",
         mcg_probe_cache::BLEND_WEIGHT_EPSILON,
     );
     push_f32(
-        &mut out,
+        out,
         "ADGI_WRAP_SHADING_OFFSET",
         mcg_probe_cache::WRAP_SHADING_OFFSET,
     );
-    out
 }
 
 /// MCPG's parameters as `MCPG_*` constants: N_mc, p_adaptive, p_bsdf, the fit's N_max and
