@@ -66,6 +66,31 @@ fn main() {
     let (device, queue) = (ctx.device(), ctx.queue());
 
     // 1. Compose with naga_oil: register mcg's modules, then build your shader.
+    let pipeline = compose_pipeline(device);
+
+    // 2. Buffers and dispatch, plain wgpu.
+    let n = 256_usize;
+    let uniforms: Vec<[f32; 2]> = (0..n)
+        .map(|i| {
+            [
+                (i as f32 + 0.5) / n as f32,
+                ((i * 37) % n) as f32 / n as f32,
+            ]
+        })
+        .collect();
+    let results = dispatch(device, queue, &pipeline, &uniforms);
+
+    // 3. The CPU crates give the same answers.
+    let worst = check_against_cpu(&uniforms, &results);
+    println!("{n} samples: largest |ω_gpu − ω_cpu| = {worst:.2e}; every checksum equals the CPU's");
+    println!(
+        "first: ω = {:?}, pdf = {}",
+        results[0].direction, results[0].pdf
+    );
+}
+
+/// Composes `MY_CODE` with mcg's modules (naga_oil) and builds its compute pipeline.
+fn compose_pipeline(device: &wgpu::Device) -> wgpu::ComputePipeline {
     let mut composer = Composer::default();
     shaders::add_to_composer(&mut composer).expect("mcg's modules compose");
     let naga_module = match composer.make_naga_module(NagaModuleDescriptor {
@@ -80,28 +105,27 @@ fn main() {
         label: Some("my shader"),
         source: wgpu::ShaderSource::Naga(std::borrow::Cow::Owned(naga_module)),
     });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some("my pipeline"),
         layout: None,
         module: &module,
         entry_point: Some("main"),
         compilation_options: Default::default(),
         cache: None,
-    });
+    })
+}
 
-    // 2. Buffers and dispatch, plain wgpu.
-    let n = 256_usize;
-    let uniforms: Vec<[f32; 2]> = (0..n)
-        .map(|i| {
-            [
-                (i as f32 + 0.5) / n as f32,
-                ((i * 37) % n) as f32 / n as f32,
-            ]
-        })
-        .collect();
+/// Runs `pipeline` over `uniforms` (one thread each) and reads its output back.
+fn dispatch(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    pipeline: &wgpu::ComputePipeline,
+    uniforms: &[[f32; 2]],
+) -> Vec<Out> {
+    let n = uniforms.len();
     let input = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("uniforms"),
-        contents: bytemuck::cast_slice(&uniforms),
+        contents: bytemuck::cast_slice(uniforms),
         usage: wgpu::BufferUsages::STORAGE,
     });
     let size = (n * size_of::<Out>()) as u64;
@@ -134,7 +158,7 @@ fn main() {
     let mut encoder = device.create_command_encoder(&Default::default());
     {
         let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
+        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &bind_group, &[]);
         pass.dispatch_workgroups((n as u32).div_ceil(64), 1, 1);
     }
@@ -146,15 +170,15 @@ fn main() {
     device
         .poll(wgpu::PollType::wait_indefinitely())
         .expect("poll");
-    let results: Vec<Out> = {
-        let view = staging.slice(..).get_mapped_range().expect("mapped");
-        bytemuck::pod_collect_to_vec(&view)
-    };
+    let view = staging.slice(..).get_mapped_range().expect("mapped");
+    bytemuck::pod_collect_to_vec(&view)
+}
 
-    // 3. The CPU crates give the same answers.
+/// Checks every checksum against the CPU's and returns the largest direction difference.
+fn check_against_cpu(uniforms: &[[f32; 2]], results: &[Out]) -> f32 {
     let lobe = Vmf::new(Vec3::Z, 40.0).expect("valid lobe");
     let mut worst = 0.0_f32;
-    for (u, g) in uniforms.iter().zip(&results) {
+    for (u, g) in uniforms.iter().zip(results) {
         let (w, _pdf) = lobe.sample_with_pdf(Vec2::from_array(*u));
         worst = worst.max((Vec3::from_array(g.direction) - w).length());
         let gw = Vec3::from_array(g.direction);
@@ -169,9 +193,5 @@ fn main() {
         );
         assert_eq!(g.key_checksum, checksum(&key), "checksum of {key:?}");
     }
-    println!("{n} samples: largest |ω_gpu − ω_cpu| = {worst:.2e}; every checksum equals the CPU's");
-    println!(
-        "first: ω = {:?}, pdf = {}",
-        results[0].direction, results[0].pdf
-    );
+    worst
 }
