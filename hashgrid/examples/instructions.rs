@@ -36,11 +36,38 @@ fn main() {
     let mut table = HashTable::<State>::new(1 << bits, 16, stream::bench_hash()).unwrap();
     let timing = args.get(4).is_some_and(|a| a == "time");
     let mut best = f64::INFINITY;
-    let mut sum = 0.0_f32;
     // Called after each pass with its start: keeps the fastest pass.
     let mut lap = |t0: Instant, ops: usize| {
         best = best.min(t0.elapsed().as_secs_f64() * 1e9 / ops as f64);
     };
+    let sum = match case {
+        "mcg_get" | "mcg_find_many" | "mcg_insert" => {
+            mcg_case(case, &s, &mut table, passes, &mut lap)
+        }
+        "hashbrown_get" | "fx_get" | "std_get" => get_case(case, &packed, &fill, passes, &mut lap),
+        "hashbrown_insert" | "fx_insert" => insert_case(case, &fill, passes, &mut lap),
+        _ => panic!("unknown case {case}; {usage}"),
+    };
+    let per_pass = if case.ends_with("_insert") {
+        s.fill.len()
+    } else {
+        s.queries.len()
+    };
+    if timing {
+        println!("{case} {bits}: fastest pass {best:.2} ns per operation");
+    }
+    println!("{case} {bits} {passes} {per_pass} {sum}");
+}
+
+/// The table's cases (`mcg_get`, `mcg_find_many`, `mcg_insert`) run `passes` times; the sum.
+fn mcg_case(
+    case: &str,
+    s: &stream::Sized,
+    table: &mut HashTable<State>,
+    passes: usize,
+    lap: &mut impl FnMut(Instant, usize),
+) -> f32 {
+    let mut sum = 0.0_f32;
     match case {
         "mcg_get" | "mcg_find_many" => {
             let mut full = 0;
@@ -55,45 +82,11 @@ fn main() {
             for _ in 0..passes {
                 let t0 = Instant::now();
                 sum += if case == "mcg_get" {
-                    get_pass(&table, &s.queries)
+                    get_pass(table, &s.queries)
                 } else {
-                    find_many_pass(&table, &s.queries, &mut slots)
+                    find_many_pass(table, &s.queries, &mut slots)
                 };
                 lap(t0, s.queries.len());
-            }
-        }
-        "hashbrown_get" => {
-            let m: hashbrown::HashMap<u64, State> = fill.iter().map(|&k| (k, [1.0; 8])).collect();
-            for _ in 0..passes {
-                let t0 = Instant::now();
-                sum += black_box(&packed)
-                    .iter()
-                    .map(|k| m.get(k).map_or(0.0, |v| v[0]))
-                    .sum::<f32>();
-                lap(t0, packed.len());
-            }
-        }
-        "fx_get" => {
-            let m: HashMap<u64, State, FxBuildHasher> =
-                fill.iter().map(|&k| (k, [1.0; 8])).collect();
-            for _ in 0..passes {
-                let t0 = Instant::now();
-                sum += black_box(&packed)
-                    .iter()
-                    .map(|k| m.get(k).map_or(0.0, |v| v[0]))
-                    .sum::<f32>();
-                lap(t0, packed.len());
-            }
-        }
-        "std_get" => {
-            let m: HashMap<u64, State> = fill.iter().map(|&k| (k, [1.0; 8])).collect();
-            for _ in 0..passes {
-                let t0 = Instant::now();
-                sum += black_box(&packed)
-                    .iter()
-                    .map(|k| m.get(k).map_or(0.0, |v| v[0]))
-                    .sum::<f32>();
-                lap(t0, packed.len());
             }
         }
         // Inserts: the fill keys into an emptied structure, `passes` times; a pass per
@@ -111,12 +104,75 @@ fn main() {
             }
             sum += table.len() as f32;
         }
+        _ => unreachable!("not a table case: {case}"),
+    }
+    sum
+}
+
+/// The peer maps' lookup cases (`hashbrown_get`, `fx_get`, `std_get`) run `passes` times.
+fn get_case(
+    case: &str,
+    packed: &[u64],
+    fill: &[u64],
+    passes: usize,
+    lap: &mut impl FnMut(Instant, usize),
+) -> f32 {
+    let mut sum = 0.0_f32;
+    match case {
+        "hashbrown_get" => {
+            let m: hashbrown::HashMap<u64, State> = fill.iter().map(|&k| (k, [1.0; 8])).collect();
+            for _ in 0..passes {
+                let t0 = Instant::now();
+                sum += black_box(packed)
+                    .iter()
+                    .map(|k| m.get(k).map_or(0.0, |v| v[0]))
+                    .sum::<f32>();
+                lap(t0, packed.len());
+            }
+        }
+        "fx_get" => {
+            let m: HashMap<u64, State, FxBuildHasher> =
+                fill.iter().map(|&k| (k, [1.0; 8])).collect();
+            for _ in 0..passes {
+                let t0 = Instant::now();
+                sum += black_box(packed)
+                    .iter()
+                    .map(|k| m.get(k).map_or(0.0, |v| v[0]))
+                    .sum::<f32>();
+                lap(t0, packed.len());
+            }
+        }
+        "std_get" => {
+            let m: HashMap<u64, State> = fill.iter().map(|&k| (k, [1.0; 8])).collect();
+            for _ in 0..passes {
+                let t0 = Instant::now();
+                sum += black_box(packed)
+                    .iter()
+                    .map(|k| m.get(k).map_or(0.0, |v| v[0]))
+                    .sum::<f32>();
+                lap(t0, packed.len());
+            }
+        }
+        _ => unreachable!("not a peer lookup case: {case}"),
+    }
+    sum
+}
+
+/// The peer maps' insert cases (`hashbrown_insert`, `fx_insert`) run `passes` times.
+fn insert_case(
+    case: &str,
+    fill: &[u64],
+    passes: usize,
+    lap: &mut impl FnMut(Instant, usize),
+) -> f32 {
+    let mut sum = 0.0_f32;
+    match case {
         "hashbrown_insert" => {
             let mut m = hashbrown::HashMap::<u64, State>::with_capacity(fill.len());
             for _ in 0..passes {
                 m.clear();
                 let t0 = Instant::now();
-                for &k in black_box(&fill) {
+                for &k in black_box(fill) {
                     m.entry(k).or_insert([0.0; 8])[0] += 1.0;
                 }
                 lap(t0, fill.len());
@@ -131,22 +187,14 @@ fn main() {
             for _ in 0..passes {
                 m.clear();
                 let t0 = Instant::now();
-                for &k in black_box(&fill) {
+                for &k in black_box(fill) {
                     m.entry(k).or_insert([0.0; 8])[0] += 1.0;
                 }
                 lap(t0, fill.len());
             }
             sum += m.len() as f32;
         }
-        _ => panic!("unknown case {case}; {usage}"),
+        _ => unreachable!("not a peer insert case: {case}"),
     }
-    let per_pass = if case.ends_with("_insert") {
-        s.fill.len()
-    } else {
-        s.queries.len()
-    };
-    if timing {
-        println!("{case} {bits}: fastest pass {best:.2} ns per operation");
-    }
-    println!("{case} {bits} {passes} {per_pass} {sum}");
+    sum
 }
