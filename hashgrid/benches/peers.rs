@@ -149,103 +149,125 @@ fn timed<S>(
     total
 }
 
+/// The tables and maps of one slot count, filled, and the queries packed for the maps.
+struct Lookups {
+    s: Sized,
+    t: HashTable<State>,
+    brown: hashbrown::HashMap<u64, State>,
+    fx: HashMap<u64, State, FxBuildHasher>,
+    std_map: HashMap<u64, State>,
+    packed: Vec<u64>,
+}
+
 fn bench_lookup(c: &mut Criterion) {
     for bits in slot_bits() {
         let s = sized(bits);
-        let t = table(&s);
-        let brown = hashbrown_map(&s);
-        let fx: HashMap<u64, State, FxBuildHasher> = map(&s);
-        let std_map: HashMap<u64, State> = map(&s);
-        let packed: Vec<u64> = s.queries.iter().map(pack).collect();
-        let mut slots = vec![None; s.queries.len()];
-        let id = |name: &str| BenchmarkId::new(name, format!("2^{bits}"));
-        {
-            let mut g = c.benchmark_group("peers_lookup");
-            g.throughput(Throughput::Elements(s.queries.len() as u64));
-            g.bench_function(id("mcg_get"), |b| b.iter(|| get_pass(&t, &s.queries)));
-            g.bench_function(id("mcg_find_many"), |b| {
-                b.iter(|| find_many_pass(&t, &s.queries, &mut slots))
-            });
-            g.bench_function(id("mcg_find_no_value"), |b| {
-                b.iter(|| find_pass(&t, &s.queries))
-            });
-            g.bench_function(id("hashbrown_foldhash"), |b| {
-                b.iter(|| map_pass(|k| brown.get(k).map(|v| v[0]), &packed))
-            });
-            g.bench_function(id("fxhashmap"), |b| {
-                b.iter(|| map_pass(|k| fx.get(k).map(|v| v[0]), &packed))
-            });
-            g.bench_function(id("std_hashmap"), |b| {
-                b.iter(|| map_pass(|k| std_map.get(k).map(|v| v[0]), &packed))
-            });
-            g.finish();
-        }
-        let mut g = c.benchmark_group("peers_lookup_cold");
-        g.throughput(Throughput::Elements(s.queries.len() as u64));
-        g.sample_size(10);
-        g.measurement_time(Duration::from_secs(3));
-        g.bench_function(id("mcg_get"), |b| {
-            b.iter_custom(|n| {
-                timed(
-                    n,
-                    &mut (),
-                    |_| flush_table(&t),
-                    |_| {
-                        black_box(get_pass(&t, &s.queries));
-                    },
-                )
-            })
-        });
-        g.bench_function(id("mcg_find_no_value"), |b| {
-            b.iter_custom(|n| {
-                timed(
-                    n,
-                    &mut (),
-                    |_| flush_table(&t),
-                    |_| {
-                        black_box(find_pass(&t, &s.queries));
-                    },
-                )
-            })
-        });
-        g.bench_function(id("mcg_find_many"), |b| {
-            b.iter_custom(|n| {
-                timed(
-                    n,
-                    &mut slots,
-                    |_| flush_table(&t),
-                    |sl| {
-                        black_box(find_many_pass(&t, &s.queries, sl));
-                    },
-                )
-            })
-        });
-        g.bench_function(id("hashbrown_foldhash"), |b| {
-            b.iter_custom(|n| {
-                timed(
-                    n,
-                    &mut (),
-                    |_| flush_entries(brown.iter(), brown.capacity()),
-                    |_| {
-                        black_box(map_pass(|k| brown.get(k).map(|v| v[0]), &packed));
-                    },
-                )
-            })
-        });
-        g.bench_function(id("fxhashmap"), |b| {
-            b.iter_custom(|n| {
-                timed(
-                    n,
-                    &mut (),
-                    |_| flush_entries(fx.iter(), fx.capacity()),
-                    |_| {
-                        black_box(map_pass(|k| fx.get(k).map(|v| v[0]), &packed));
-                    },
-                )
-            })
-        });
-        g.finish();
+        let l = Lookups {
+            t: table(&s),
+            brown: hashbrown_map(&s),
+            fx: map(&s),
+            std_map: map(&s),
+            packed: s.queries.iter().map(pack).collect(),
+            s,
+        };
+        let mut slots = vec![None; l.s.queries.len()];
+        bench_lookup_warm(c, bits, &l, &mut slots);
+        bench_lookup_cold(c, bits, &l, &mut slots);
     }
+}
+
+/// Group `peers_lookup` at `2^bits` slots: the lookups with warm caches.
+fn bench_lookup_warm(c: &mut Criterion, bits: u32, l: &Lookups, slots: &mut [Option<u32>]) {
+    let id = |name: &str| BenchmarkId::new(name, format!("2^{bits}"));
+    let mut g = c.benchmark_group("peers_lookup");
+    g.throughput(Throughput::Elements(l.s.queries.len() as u64));
+    g.bench_function(id("mcg_get"), |b| b.iter(|| get_pass(&l.t, &l.s.queries)));
+    g.bench_function(id("mcg_find_many"), |b| {
+        b.iter(|| find_many_pass(&l.t, &l.s.queries, slots))
+    });
+    g.bench_function(id("mcg_find_no_value"), |b| {
+        b.iter(|| find_pass(&l.t, &l.s.queries))
+    });
+    g.bench_function(id("hashbrown_foldhash"), |b| {
+        b.iter(|| map_pass(|k| l.brown.get(k).map(|v| v[0]), &l.packed))
+    });
+    g.bench_function(id("fxhashmap"), |b| {
+        b.iter(|| map_pass(|k| l.fx.get(k).map(|v| v[0]), &l.packed))
+    });
+    g.bench_function(id("std_hashmap"), |b| {
+        b.iter(|| map_pass(|k| l.std_map.get(k).map(|v| v[0]), &l.packed))
+    });
+    g.finish();
+}
+
+/// Group `peers_lookup_cold` at `2^bits` slots: each pass after flushing the structure.
+fn bench_lookup_cold(c: &mut Criterion, bits: u32, l: &Lookups, slots: &mut [Option<u32>]) {
+    let id = |name: &str| BenchmarkId::new(name, format!("2^{bits}"));
+    let mut g = c.benchmark_group("peers_lookup_cold");
+    g.throughput(Throughput::Elements(l.s.queries.len() as u64));
+    g.sample_size(10);
+    g.measurement_time(Duration::from_secs(3));
+    g.bench_function(id("mcg_get"), |b| {
+        b.iter_custom(|n| {
+            timed(
+                n,
+                &mut (),
+                |_| flush_table(&l.t),
+                |_| {
+                    black_box(get_pass(&l.t, &l.s.queries));
+                },
+            )
+        })
+    });
+    g.bench_function(id("mcg_find_no_value"), |b| {
+        b.iter_custom(|n| {
+            timed(
+                n,
+                &mut (),
+                |_| flush_table(&l.t),
+                |_| {
+                    black_box(find_pass(&l.t, &l.s.queries));
+                },
+            )
+        })
+    });
+    g.bench_function(id("mcg_find_many"), |b| {
+        b.iter_custom(|n| {
+            timed(
+                n,
+                &mut &mut *slots,
+                |_| flush_table(&l.t),
+                |sl| {
+                    black_box(find_many_pass(&l.t, &l.s.queries, sl));
+                },
+            )
+        })
+    });
+    g.bench_function(id("hashbrown_foldhash"), |b| {
+        b.iter_custom(|n| {
+            timed(
+                n,
+                &mut (),
+                |_| flush_entries(l.brown.iter(), l.brown.capacity()),
+                |_| {
+                    black_box(map_pass(|k| l.brown.get(k).map(|v| v[0]), &l.packed));
+                },
+            )
+        })
+    });
+    g.bench_function(id("fxhashmap"), |b| {
+        b.iter_custom(|n| {
+            timed(
+                n,
+                &mut (),
+                |_| flush_entries(l.fx.iter(), l.fx.capacity()),
+                |_| {
+                    black_box(map_pass(|k| l.fx.get(k).map(|v| v[0]), &l.packed));
+                },
+            )
+        })
+    });
+    g.finish();
 }
 
 fn bench_insert(c: &mut Criterion) {
