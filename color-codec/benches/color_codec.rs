@@ -54,26 +54,34 @@ fn group<'a>(c: &'a mut Criterion, name: &str) -> BenchmarkGroup<'a, WallTime> {
     g
 }
 
+// Each bench calls the concrete codec type (static dispatch), so that it inlines.
+macro_rules! each_codec {
+    ($g:expr, $body:ident) => {
+        $body!($g, "r11g11b10_baseline", R11G11B10);
+        $body!($g, "log_r9g9b8_down", LogRgb::ADGI);
+        $body!($g, "log_r9g9b8_nearest", LogRgb::ADGI_NEAREST);
+        $body!($g, "log_r10g10b10_down", LogRgb::EQUAL_10);
+        $body!($g, "rgb9e5", Rgb9E5);
+        $body!($g, "logluv32", LogLuv32);
+        $body!($g, "gamma5_r10g10b10a2", Gamma5R10G10B10A2);
+    };
+}
+
+/// The per-colour codec groups `encode`, `decode` and `round_trip` on one batch.
 fn bench_codecs(c: &mut Criterion) {
     let input = colours();
-    // Each bench calls the concrete codec type (static dispatch), so that it inlines.
-    macro_rules! each_codec {
-        ($g:expr, $body:ident) => {
-            $body!($g, "r11g11b10_baseline", R11G11B10);
-            $body!($g, "log_r9g9b8_down", LogRgb::ADGI);
-            $body!($g, "log_r9g9b8_nearest", LogRgb::ADGI_NEAREST);
-            $body!($g, "log_r10g10b10_down", LogRgb::EQUAL_10);
-            $body!($g, "rgb9e5", Rgb9E5);
-            $body!($g, "logluv32", LogLuv32);
-            $body!($g, "gamma5_r10g10b10a2", Gamma5R10G10B10A2);
-        };
-    }
+    bench_encode(c, &input);
+    bench_decode(c, &input);
+    bench_round_trip(c, &input);
+}
 
+/// Group `encode`: the f32 copy baseline, then each codec's encode of the batch.
+fn bench_encode(c: &mut Criterion, input: &[Vec3]) {
     let mut g = group(c, "encode");
     let mut out = vec![Vec3::ZERO; BATCH];
     g.bench_function("f32_copy_baseline", |b| {
         b.iter(|| {
-            out.copy_from_slice(black_box(&input));
+            out.copy_from_slice(black_box(input));
             black_box(&out);
         })
     });
@@ -83,7 +91,7 @@ fn bench_codecs(c: &mut Criterion) {
             $g.bench_function($name, |b| {
                 let codec = $codec;
                 b.iter(|| {
-                    for (w, &c) in words.iter_mut().zip(black_box(&input)) {
+                    for (w, &c) in words.iter_mut().zip(black_box(input)) {
                         *w = codec.encode(c);
                     }
                     black_box(&words);
@@ -93,11 +101,15 @@ fn bench_codecs(c: &mut Criterion) {
     }
     each_codec!(g, enc);
     g.finish();
+}
 
+/// Group `decode`: the f32 copy baseline, then each codec's decode of the encoded batch.
+fn bench_decode(c: &mut Criterion, input: &[Vec3]) {
+    let mut out = vec![Vec3::ZERO; BATCH];
     let mut g = group(c, "decode");
     g.bench_function("f32_copy_baseline", |b| {
         b.iter(|| {
-            out.copy_from_slice(black_box(&input));
+            out.copy_from_slice(black_box(input));
             black_box(&out);
         })
     });
@@ -117,11 +129,15 @@ fn bench_codecs(c: &mut Criterion) {
     }
     each_codec!(g, dec);
     g.finish();
+}
 
+/// Group `round_trip`: the f32 copy baseline, each codec's encode + decode, and f16 × 3.
+fn bench_round_trip(c: &mut Criterion, input: &[Vec3]) {
+    let mut out = vec![Vec3::ZERO; BATCH];
     let mut g = group(c, "round_trip");
     g.bench_function("f32_copy_baseline", |b| {
         b.iter(|| {
-            out.copy_from_slice(black_box(&input));
+            out.copy_from_slice(black_box(input));
             black_box(&out);
         })
     });
@@ -130,7 +146,7 @@ fn bench_codecs(c: &mut Criterion) {
             $g.bench_function($name, |b| {
                 let codec = $codec;
                 b.iter(|| {
-                    for (o, &c) in out.iter_mut().zip(black_box(&input)) {
+                    for (o, &c) in out.iter_mut().zip(black_box(input)) {
                         *o = codec.decode(codec.encode(c));
                     }
                     black_box(&out);
@@ -141,7 +157,7 @@ fn bench_codecs(c: &mut Criterion) {
     each_codec!(g, rt);
     g.bench_function("half_f16x3_peer", |b| {
         b.iter(|| {
-            for (o, &c) in out.iter_mut().zip(black_box(&input)) {
+            for (o, &c) in out.iter_mut().zip(black_box(input)) {
                 let h = black_box([f16::from_f32(c.x), f16::from_f32(c.y), f16::from_f32(c.z)]);
                 *o = Vec3::new(h[0].to_f32(), h[1].to_f32(), h[2].to_f32());
             }
