@@ -167,25 +167,34 @@ fn bench_round_trip(c: &mut Criterion, input: &[Vec3]) {
     g.finish();
 }
 
+// The three codecs with a batch form worth measuring (the baseline and the log codec's two).
+macro_rules! each_batch_codec {
+    ($g:expr, $body:ident) => {
+        $body!($g, "r11g11b10_baseline", R11G11B10);
+        $body!($g, "log_r9g9b8_down", LogRgb::ADGI);
+        $body!($g, "log_r9g9b8_nearest", LogRgb::ADGI_NEAREST);
+    };
+}
+
 /// The slice API (`ColorCodec::encode_slice` / `decode_slice`): R11G11B10's is the default
 /// per-colour loop (which the compiler vectorises across colours), the log codec's the batch
 /// form (four colours per 4-lane vector, lane = colour).
 fn bench_batch(c: &mut Criterion) {
     let input = colours();
-    macro_rules! each_batch_codec {
-        ($g:expr, $body:ident) => {
-            $body!($g, "r11g11b10_baseline", R11G11B10);
-            $body!($g, "log_r9g9b8_down", LogRgb::ADGI);
-            $body!($g, "log_r9g9b8_nearest", LogRgb::ADGI_NEAREST);
-        };
-    }
+    bench_batch_encode(c, &input);
+    bench_batch_decode(c, &input);
+    bench_batch_round_trip(c, &input);
+}
+
+/// Group `batch_encode`: the f32 copy baseline, then each codec's `encode_slice`.
+fn bench_batch_encode(c: &mut Criterion, input: &[Vec3]) {
     let mut out = vec![Vec3::ZERO; BATCH];
     let mut words = vec![0u32; BATCH];
 
     let mut g = group(c, "batch_encode");
     g.bench_function("f32_copy_baseline", |b| {
         b.iter(|| {
-            out.copy_from_slice(black_box(&input));
+            out.copy_from_slice(black_box(input));
             black_box(&out);
         })
     });
@@ -194,7 +203,7 @@ fn bench_batch(c: &mut Criterion) {
             $g.bench_function($name, |b| {
                 let codec = $codec;
                 b.iter(|| {
-                    codec.encode_slice(black_box(&input), &mut words);
+                    codec.encode_slice(black_box(input), &mut words);
                     black_box(&words);
                 })
             });
@@ -202,11 +211,16 @@ fn bench_batch(c: &mut Criterion) {
     }
     each_batch_codec!(g, enc);
     g.finish();
+}
+
+/// Group `batch_decode`: the f32 copy baseline, then each codec's `decode_slice`.
+fn bench_batch_decode(c: &mut Criterion, input: &[Vec3]) {
+    let mut out = vec![Vec3::ZERO; BATCH];
 
     let mut g = group(c, "batch_decode");
     g.bench_function("f32_copy_baseline", |b| {
         b.iter(|| {
-            out.copy_from_slice(black_box(&input));
+            out.copy_from_slice(black_box(input));
             black_box(&out);
         })
     });
@@ -215,7 +229,7 @@ fn bench_batch(c: &mut Criterion) {
             $g.bench_function($name, |b| {
                 let codec = $codec;
                 let mut encoded = vec![0u32; BATCH];
-                codec.encode_slice(&input, &mut encoded);
+                codec.encode_slice(input, &mut encoded);
                 b.iter(|| {
                     codec.decode_slice(black_box(&encoded), &mut out);
                     black_box(&out);
@@ -225,11 +239,17 @@ fn bench_batch(c: &mut Criterion) {
     }
     each_batch_codec!(g, dec);
     g.finish();
+}
+
+/// Group `batch_round_trip`: the f32 copy baseline, each codec's slices, and f16 × 3.
+fn bench_batch_round_trip(c: &mut Criterion, input: &[Vec3]) {
+    let mut out = vec![Vec3::ZERO; BATCH];
+    let mut words = vec![0u32; BATCH];
 
     let mut g = group(c, "batch_round_trip");
     g.bench_function("f32_copy_baseline", |b| {
         b.iter(|| {
-            out.copy_from_slice(black_box(&input));
+            out.copy_from_slice(black_box(input));
             black_box(&out);
         })
     });
@@ -238,7 +258,7 @@ fn bench_batch(c: &mut Criterion) {
             $g.bench_function($name, |b| {
                 let codec = $codec;
                 b.iter(|| {
-                    codec.encode_slice(black_box(&input), &mut words);
+                    codec.encode_slice(black_box(input), &mut words);
                     codec.decode_slice(black_box(&words), &mut out);
                     black_box(&out);
                 })
@@ -249,7 +269,7 @@ fn bench_batch(c: &mut Criterion) {
     let mut halves = vec![f16::ZERO; 3 * BATCH];
     g.bench_function("half_f16x3_peer", |b| {
         b.iter(|| {
-            halves.convert_from_f32_slice(bytemuck::cast_slice(black_box(&input)));
+            halves.convert_from_f32_slice(bytemuck::cast_slice(black_box(input)));
             black_box(&halves).convert_to_f32_slice(bytemuck::cast_slice_mut(&mut out));
             black_box(&out);
         })
