@@ -25,6 +25,7 @@ use glam::Vec3;
 use mcg_gpu_backend::sampling::{next_uniform, pcg_hash};
 use rayon::prelude::*;
 
+use super::bvh::Triangle;
 use super::material::{BsdfSample, Material};
 use super::scene::Scene;
 
@@ -234,40 +235,18 @@ pub fn trace_path<S: VertexSampler>(
     while let Some(hit) = scene.bvh.intersect(o, d, 0.0, f32::INFINITY) {
         let tri = scene.bvh.triangles[hit.triangle as usize];
         let material = scene.material_at(&hit);
-        let cross = tri.cross();
-        let area = 0.5 * cross.length();
-        let n_front = cross / (2.0 * area);
-        let cos_front = -n_front.dot(d);
+        let (area, n_front, cos_front) = front_face(&tri, d);
         let position = o + hit.t * d;
-        if let Some(Some(r)) = depth
-            .checked_sub(1)
-            .and_then(|d| recorded.get_mut(d as usize))
-        {
-            r.next = Some(NextHit {
-                position,
-                normal: if cos_front > 0.0 { n_front } else { -n_front },
-                emitted: if cos_front > 0.0 {
-                    material.emission()
-                } else {
-                    Vec3::ZERO
-                },
-            });
+        if let Some(r) = previous_record(&mut recorded, depth) {
+            r.next = Some(next_hit(position, n_front, cos_front, &material));
         }
         if cos_front > 0.0 && material.is_emitter() {
-            let weight = if method.samples_lights() && last_pdf > 0.0 {
-                let light_pdf = tri.emitter_pmf / area * hit.t * hit.t / cos_front;
-                power_heuristic(last_pdf, light_pdf)
-            } else {
-                1.0
-            };
+            let weight = emitter_weight(method, last_pdf, tri.emitter_pmf, area, hit.t, cos_front);
             radiance += throughput * material.emission() * weight;
             // The vertex whose sample found this emitter observes all of its emission: the
             // MIS weight splits the estimate of *its* direct light with its light sample,
             // not the radiance arriving along the sampled direction.
-            if let Some(Some(r)) = depth
-                .checked_sub(1)
-                .and_then(|d| recorded.get_mut(d as usize))
-            {
+            if let Some(r) = previous_record(&mut recorded, depth) {
                 r.discarded += throughput * material.emission() * (1.0 - weight);
             }
         }
@@ -298,16 +277,7 @@ pub fn trace_path<S: VertexSampler>(
         };
         let before = radiance;
         throughput *= sample.weight;
-        if let Some(slot) = recorded.get_mut(depth as usize) {
-            *slot = Some(Recorded {
-                vertex,
-                sample,
-                before,
-                throughput,
-                discarded: Vec3::ZERO,
-                next: None,
-            });
-        }
+        record_vertex(&mut recorded, depth, vertex, sample, before, throughput);
         last_pdf = sample.pdf;
         o = origin_next;
         d = sample.direction;
@@ -316,6 +286,90 @@ pub fn trace_path<S: VertexSampler>(
             break;
         }
     }
+    report_recorded(sampler, &recorded, radiance);
+    radiance
+}
+
+/// The record of the vertex whose sampled ray made the hit at `depth` (none for the camera
+/// ray, nor past [`MAX_RECORDED`]).
+fn previous_record(recorded: &mut [Option<Recorded>], depth: u32) -> Option<&mut Recorded> {
+    depth
+        .checked_sub(1)
+        .and_then(|d| recorded.get_mut(d as usize))
+        .and_then(Option::as_mut)
+}
+
+/// The area of `tri`, its front normal and the cosine between that normal and the reversed
+/// ray direction `d`.
+fn front_face(tri: &Triangle, d: Vec3) -> (f32, Vec3, f32) {
+    let cross = tri.cross();
+    let area = 0.5 * cross.length();
+    let n_front = cross / (2.0 * area);
+    let cos_front = -n_front.dot(d);
+    (area, n_front, cos_front)
+}
+
+/// Records the vertex at `depth` with its sample, the radiance before it and the throughput
+/// after it (vertices past [`MAX_RECORDED`] are not recorded).
+fn record_vertex(
+    recorded: &mut [Option<Recorded>],
+    depth: u32,
+    vertex: Vertex,
+    sample: BsdfSample,
+    before: Vec3,
+    throughput: Vec3,
+) {
+    if let Some(slot) = recorded.get_mut(depth as usize) {
+        *slot = Some(Recorded {
+            vertex,
+            sample,
+            before,
+            throughput,
+            discarded: Vec3::ZERO,
+            next: None,
+        });
+    }
+}
+
+/// The hit at `position` as the vertex that sampled it sees it: facing the ray, with the
+/// emission only of a front-facing surface.
+fn next_hit(position: Vec3, n_front: Vec3, cos_front: f32, material: &Material) -> NextHit {
+    NextHit {
+        position,
+        normal: if cos_front > 0.0 { n_front } else { -n_front },
+        emitted: if cos_front > 0.0 {
+            material.emission()
+        } else {
+            Vec3::ZERO
+        },
+    }
+}
+
+/// The MIS weight of an emitter hit at distance `t` by a sampled direction of density
+/// `last_pdf`; `emitter_pmf`, `area` and `cos_front` give the light sample's density of it.
+fn emitter_weight(
+    method: Method,
+    last_pdf: f32,
+    emitter_pmf: f32,
+    area: f32,
+    t: f32,
+    cos_front: f32,
+) -> f32 {
+    if method.samples_lights() && last_pdf > 0.0 {
+        let light_pdf = emitter_pmf / area * t * t / cos_front;
+        power_heuristic(last_pdf, light_pdf)
+    } else {
+        1.0
+    }
+}
+
+/// Reports every recorded vertex to the sampler with the radiance its sample gained, in
+/// path order, once the path's total `radiance` is known.
+fn report_recorded<S: VertexSampler>(
+    sampler: &mut S,
+    recorded: &[Option<Recorded>],
+    radiance: Vec3,
+) {
     for r in recorded.iter().flatten() {
         let Recorded {
             vertex,
@@ -338,7 +392,6 @@ pub fn trace_path<S: VertexSampler>(
             next: *next,
         });
     }
-    radiance
 }
 
 /// One light sample at `vertex` with MIS weight: `f·cos·L_e·w / p_light`, 0 when the point is

@@ -204,21 +204,7 @@ pub struct Rendered {
 pub fn render(args: &RenderArgs) -> Result<Rendered> {
     let file = SceneFile::open(&args.scene)?;
     let reference = read_reference(args)?;
-    if args.method == Method::Mcmm && args.bounces != 1 {
-        return Err(format!(
-            "--method mcmm guides direct light only: use --bounces 1 (got {})",
-            args.bounces
-        )
-        .into());
-    }
-    let settings = RenderSettings {
-        width: args.width,
-        height: args.height,
-        spp: args.spp,
-        bounces: args.bounces,
-        seed: (args.seed ^ (args.seed >> 32)) as u32,
-        method: args.method,
-    };
+    let settings = render_settings(args)?;
     let mut scene = file.build(frame_time(0))?;
     let warnings = scene.warnings.clone();
     let gpu = gpu_tracer(args.device, args.method)?;
@@ -247,15 +233,8 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             cpu_frame(&scene, &settings, frame, &mut guide, &mut times)?
         };
         progress.inc(1);
-        for (s, p) in sum.iter_mut().zip(&image) {
-            *s += *p;
-        }
-        if let Some(r) = &reference {
-            let scale = 1.0 / (frame + 1) as f32;
-            let mean: Vec<Vec3> = sum.iter().map(|s| *s * scale).collect();
-            errs.extend(errors(&mean, &r.pixels));
-            frame_errs.extend(errors(&image, &r.pixels));
-        }
+        let errors = (&mut errs, &mut frame_errs);
+        accumulate(&mut sum, &image, frame, reference.as_ref(), errors);
     }
     progress.finish_and_clear();
     let scale = 1.0 / args.frames as f32;
@@ -298,6 +277,45 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             CpuGuide::None | CpuGuide::Mcmm(_) => None,
         },
     })
+}
+
+/// The tracer's settings from the command's arguments, once they are checked to go together.
+fn render_settings(args: &RenderArgs) -> Result<RenderSettings> {
+    if args.method == Method::Mcmm && args.bounces != 1 {
+        return Err(format!(
+            "--method mcmm guides direct light only: use --bounces 1 (got {})",
+            args.bounces
+        )
+        .into());
+    }
+    Ok(RenderSettings {
+        width: args.width,
+        height: args.height,
+        spp: args.spp,
+        bounces: args.bounces,
+        seed: (args.seed ^ (args.seed >> 32)) as u32,
+        method: args.method,
+    })
+}
+
+/// Adds frame `frame`'s `image` to `sum` and, with a reference, the errors of the running
+/// mean and of the frame alone to `(errs, frame_errs)`.
+fn accumulate(
+    sum: &mut [Vec3],
+    image: &[Vec3],
+    frame: u32,
+    reference: Option<&RgbImage>,
+    (errs, frame_errs): (&mut Vec<Errors>, &mut Vec<Errors>),
+) {
+    for (s, p) in sum.iter_mut().zip(image) {
+        *s += *p;
+    }
+    if let Some(r) = reference {
+        let scale = 1.0 / (frame + 1) as f32;
+        let mean: Vec<Vec3> = sum.iter().map(|s| *s * scale).collect();
+        errs.extend(errors(&mean, &r.pixels));
+        frame_errs.extend(errors(image, &r.pixels));
+    }
 }
 
 /// The reference of `--reference`, checked to have the render's size.

@@ -366,6 +366,53 @@ impl SceneFile {
         let locals = self.local_transforms(time)?;
 
         let mut warnings = Vec::new();
+        let materials = self.materials(&mut warnings)?;
+
+        let mut triangles = Vec::new();
+        let mut uvs = Vec::new();
+        let mut camera = None;
+        let mut stack: Vec<(gltf::Node, Mat4)> =
+            scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+        stack.reverse();
+        while let Some((node, parent)) = stack.pop() {
+            let world = parent * locals[node.index()];
+            if !world.is_finite() {
+                return Err(SceneError::NonFinite {
+                    path: path.clone(),
+                    what: format!("the transform of node {}", node.index()),
+                });
+            }
+            if camera.is_none() {
+                camera = self.node_camera(&node, world)?;
+            }
+            if let Some(mesh) = node.mesh() {
+                self.push_mesh(&mesh, world, &materials, &mut triangles, &mut uvs)?;
+            }
+            for child in node.children().collect::<Vec<_>>().into_iter().rev() {
+                stack.push((child, world));
+            }
+        }
+        let camera = camera.ok_or_else(|| SceneError::NoCamera { path: path.clone() })?;
+        if triangles.is_empty() {
+            return Err(SceneError::NoTriangles { path: path.clone() });
+        }
+        let mut scene = Scene::new(camera, &triangles, materials, warnings)
+            .ok_or_else(|| SceneError::NoEmitters { path: path.clone() })?;
+        let depth = scene.bvh.depth();
+        if depth > super::bvh::STACK_SIZE {
+            return Err(SceneError::BvhTooDeep {
+                path: path.clone(),
+                depth,
+            });
+        }
+        self.attach_textures(&mut scene, &uvs);
+        Ok(scene)
+    }
+
+    /// The document's materials after the default one (index 0), checked finite; warns of
+    /// base-colour textures on other texture coordinates than `TEXCOORD_0`.
+    fn materials(&self, warnings: &mut Vec<String>) -> Result<Vec<Material>, SceneError> {
+        let path = &self.path;
         let mut materials = vec![Material::default()];
         for m in self.document.materials() {
             let pbr = m.pbr_metallic_roughness();
@@ -411,60 +458,36 @@ impl SceneFile {
             }
             materials.push(material);
         }
+        Ok(materials)
+    }
 
-        let mut triangles = Vec::new();
-        let mut uvs = Vec::new();
-        let mut camera = None;
-        let mut stack: Vec<(gltf::Node, Mat4)> =
-            scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
-        stack.reverse();
-        while let Some((node, parent)) = stack.pop() {
-            let world = parent * locals[node.index()];
-            if !world.is_finite() {
-                return Err(SceneError::NonFinite {
-                    path: path.clone(),
-                    what: format!("the transform of node {}", node.index()),
-                });
-            }
-            if camera.is_none()
-                && let Some(c) = node.camera()
-                && let gltf::camera::Projection::Perspective(p) = c.projection()
-            {
-                let yfov = p.yfov();
-                if !(yfov > 0.0 && yfov < core::f32::consts::PI) {
-                    return Err(SceneError::NonFinite {
-                        path: path.clone(),
-                        what: format!("the yfov of camera {}", c.index()),
-                    });
-                }
-                camera = Some(Camera {
-                    position: world.transform_point3(Vec3::ZERO),
-                    right: world.transform_vector3(Vec3::X).normalize(),
-                    up: world.transform_vector3(Vec3::Y).normalize(),
-                    forward: world.transform_vector3(Vec3::NEG_Z).normalize(),
-                    yfov,
-                });
-            }
-            if let Some(mesh) = node.mesh() {
-                self.push_mesh(&mesh, world, &materials, &mut triangles, &mut uvs)?;
-            }
-            for child in node.children().collect::<Vec<_>>().into_iter().rev() {
-                stack.push((child, world));
-            }
-        }
-        let camera = camera.ok_or_else(|| SceneError::NoCamera { path: path.clone() })?;
-        if triangles.is_empty() {
-            return Err(SceneError::NoTriangles { path: path.clone() });
-        }
-        let mut scene = Scene::new(camera, &triangles, materials, warnings)
-            .ok_or_else(|| SceneError::NoEmitters { path: path.clone() })?;
-        let depth = scene.bvh.depth();
-        if depth > super::bvh::STACK_SIZE {
-            return Err(SceneError::BvhTooDeep {
-                path: path.clone(),
-                depth,
+    /// The camera of `node` placed by its `world` transform, if it is a perspective one.
+    fn node_camera(&self, node: &gltf::Node, world: Mat4) -> Result<Option<Camera>, SceneError> {
+        let Some(c) = node.camera() else {
+            return Ok(None);
+        };
+        let gltf::camera::Projection::Perspective(p) = c.projection() else {
+            return Ok(None);
+        };
+        let yfov = p.yfov();
+        if !(yfov > 0.0 && yfov < core::f32::consts::PI) {
+            return Err(SceneError::NonFinite {
+                path: self.path.clone(),
+                what: format!("the yfov of camera {}", c.index()),
             });
         }
+        Ok(Some(Camera {
+            position: world.transform_point3(Vec3::ZERO),
+            right: world.transform_vector3(Vec3::X).normalize(),
+            up: world.transform_vector3(Vec3::Y).normalize(),
+            forward: world.transform_vector3(Vec3::NEG_Z).normalize(),
+            yfov,
+        }))
+    }
+
+    /// Gives `scene` the file's textures and the triangles' texture coordinates (in BVH
+    /// order), when the file has images.
+    fn attach_textures(&self, scene: &mut Scene, uvs: &[TriangleUv]) {
         if !self.images.is_empty() {
             scene.uvs = scene.bvh.source.iter().map(|&i| uvs[i as usize]).collect();
             for (width, height, texels) in &self.images {
@@ -477,7 +500,6 @@ impl SceneFile {
                 scene.texels.extend_from_slice(texels);
             }
         }
-        Ok(scene)
     }
 
     /// Appends the world-space triangles of `mesh` under the transform `world`, and their

@@ -812,7 +812,6 @@ fn results_table(
     slowest: Method,
     clock: &str,
 ) -> (Table, serde_json::Map<String, serde_json::Value>) {
-    let s = &study.settings;
     let device_name = runs[0].equal_samples.report.device;
     let guide = if study.methods.contains(&Method::Mcmm) {
         Method::Mcmm
@@ -824,36 +823,7 @@ fn results_table(
         last_error(&g.equal_samples).rel_mse,
         late_frame_error(&g.equal_samples),
     );
-    let per = format!("÷ {}", guide.name());
-    let mut table = Table::new(
-        &format!(
-            "{device_name}, {0}×{0}, {1} bounces, {2} spp per frame; relMSE of the mean \
-             against the reference; cost = {6}; equal time = the {3:.1} s that {4} took for {5} frames",
-            s.size,
-            s.bounces,
-            s.spp,
-            budget,
-            slowest.name(),
-            s.frames,
-            clock
-        ),
-        [
-            "method",
-            "device",
-            "ms per frame (wall)",
-            "cost per frame, ms",
-            "relMSE, equal samples",
-            &per,
-            "FLIP, equal samples",
-            "frames in equal time",
-            "relMSE, equal time",
-            &per,
-            "FLIP, equal time",
-            "relMSE of one late frame",
-            &per,
-            "of which end_frame, ms",
-        ],
-    );
+    let mut table = results_header(study, device_name, guide, budget, slowest, clock);
     let mut summary = serde_json::Map::new();
     for r in runs {
         let es = last_error(&r.equal_samples).rel_mse;
@@ -894,6 +864,49 @@ fn results_table(
         );
     }
     (table, summary)
+}
+
+/// The empty results table: its caption (device, settings, cost clock, equal-time budget) and
+/// its columns, with ratios to the `guide` method.
+fn results_header(
+    study: &Study,
+    device_name: &str,
+    guide: Method,
+    budget: f64,
+    slowest: Method,
+    clock: &str,
+) -> Table {
+    let s = &study.settings;
+    let per = format!("÷ {}", guide.name());
+    Table::new(
+        &format!(
+            "{device_name}, {0}×{0}, {1} bounces, {2} spp per frame; relMSE of the mean \
+             against the reference; cost = {6}; equal time = the {3:.1} s that {4} took for {5} frames",
+            s.size,
+            s.bounces,
+            s.spp,
+            budget,
+            slowest.name(),
+            s.frames,
+            clock
+        ),
+        [
+            "method",
+            "device",
+            "ms per frame (wall)",
+            "cost per frame, ms",
+            "relMSE, equal samples",
+            &per,
+            "FLIP, equal samples",
+            "frames in equal time",
+            "relMSE, equal time",
+            &per,
+            "FLIP, equal time",
+            "relMSE of one late frame",
+            &per,
+            "of which end_frame, ms",
+        ],
+    )
 }
 
 /// The relMSE of `m`'s mean, at equal samples or at equal time.

@@ -329,32 +329,7 @@ fn load_sweep_text(section: &mut Section, sweeps: &LoadSweeps, probe_file: &str,
              inserted since the previous load point; zero is drawn at {RATE_FLOOR:e}."
         ),
     );
-    let mut table = Table::new(
-        "Probe length and failed inserts at three load factors",
-        ["hash", "capacity", "α", "mean probe", "failed inserts"],
-    );
-    let rows = results
-        .iter()
-        .map(|(hash, cap, points)| (hash.name(), cap.name(), points))
-        .chain([(
-            "mix, random keys",
-            Capacity::Prime(*prime).name(),
-            reference,
-        )]);
-    for (hash, cap, points) in rows {
-        for target in [0.5, 0.75, 0.9] {
-            if let Some(p) = points.iter().find(|p| p.load >= target) {
-                table.push_row([
-                    hash.to_owned(),
-                    cap.to_owned(),
-                    format!("{:.2}", p.load),
-                    format!("{:.3}", p.mean_probe),
-                    format!("{:.2e}", p.failed_rate),
-                ]);
-            }
-        }
-    }
-    section.table(table);
+    section.table(load_table(sweeps));
     let rate_at = |points: &[LoadPoint], target: f64| {
         points
             .iter()
@@ -382,6 +357,43 @@ fn load_sweep_text(section: &mut Section, sweeps: &LoadSweeps, probe_file: &str,
         rate_at(reference, 0.5),
     ));
     section.paragraph(&summary);
+}
+
+/// The probe length and failed-insert rate of each sweep (and of random keys) at the first
+/// load points past α = 0.5, 0.75 and 0.9.
+fn load_table(sweeps: &LoadSweeps) -> Table {
+    let LoadSweeps {
+        prime,
+        results,
+        reference,
+        ..
+    } = sweeps;
+    let mut table = Table::new(
+        "Probe length and failed inserts at three load factors",
+        ["hash", "capacity", "α", "mean probe", "failed inserts"],
+    );
+    let rows = results
+        .iter()
+        .map(|(hash, cap, points)| (hash.name(), cap.name(), points))
+        .chain([(
+            "mix, random keys",
+            Capacity::Prime(*prime).name(),
+            reference,
+        )]);
+    for (hash, cap, points) in rows {
+        for target in [0.5, 0.75, 0.9] {
+            if let Some(p) = points.iter().find(|p| p.load >= target) {
+                table.push_row([
+                    hash.to_owned(),
+                    cap.to_owned(),
+                    format!("{:.2}", p.load),
+                    format!("{:.3}", p.mean_probe),
+                    format!("{:.2e}", p.failed_rate),
+                ]);
+            }
+        }
+    }
+    table
 }
 
 fn memory(section: &mut Section) {

@@ -438,31 +438,44 @@ fn slice_figure(
             draw(&mut buffer, x0, title_h + (r + 1) * (ih + gap), values);
         }
     }
-    {
-        let root = BitMapBackend::with_buffer(&mut buffer, (width as u32, height as u32))
-            .into_drawing_area();
-        let font = (FONT_FAMILY, 15).into_font();
-        let bold = (FONT_FAMILY, 15).into_font().style(FontStyle::Bold);
-        for (c, &frame) in snapshots.iter().enumerate() {
-            let x0 = (label_w + c * (iw + gap)) as i32;
-            let what = if frame < exp.config.event_frame {
-                "door closed"
-            } else {
-                "door open"
-            };
-            root.draw_text(
-                &format!("frame {frame} ({what})"),
-                &bold.color(&BLACK),
-                (x0, 8),
-            )?;
-        }
-        let mut labels = vec!["reference".to_owned()];
-        labels.extend(runs.iter().map(|r| r.policy.label().to_owned()));
-        for (r, label) in labels.iter().enumerate() {
-            let y = title_h + r * (ih + gap) + ih / 2 - 8;
-            root.draw_text(label, &font.color(&BLACK), (6, y as i32))?;
-        }
-        root.present()?;
-    }
+    let layout = (label_w, gap, title_h, iw, ih);
+    draw_slice_labels(&mut buffer, (width, height), exp, runs, snapshots, layout)?;
     crate::plot::write_rgb_png(&ctx.figure_path(file), &buffer, width as u32, height as u32)
+}
+
+/// Writes the column titles (frame, door state) and the row labels (reference, policies)
+/// over the slice figure's pixels; `layout` is `(label_w, gap, title_h, iw, ih)`.
+fn draw_slice_labels(
+    buffer: &mut [u8],
+    (width, height): (usize, usize),
+    exp: &Experiment,
+    runs: &[Run],
+    snapshots: &[u32],
+    (label_w, gap, title_h, iw, ih): (usize, usize, usize, usize, usize),
+) -> Result<()> {
+    let root =
+        BitMapBackend::with_buffer(buffer, (width as u32, height as u32)).into_drawing_area();
+    let font = (FONT_FAMILY, 15).into_font();
+    let bold = (FONT_FAMILY, 15).into_font().style(FontStyle::Bold);
+    for (c, &frame) in snapshots.iter().enumerate() {
+        let x0 = (label_w + c * (iw + gap)) as i32;
+        let what = if frame < exp.config.event_frame {
+            "door closed"
+        } else {
+            "door open"
+        };
+        root.draw_text(
+            &format!("frame {frame} ({what})"),
+            &bold.color(&BLACK),
+            (x0, 8),
+        )?;
+    }
+    let mut labels = vec!["reference".to_owned()];
+    labels.extend(runs.iter().map(|r| r.policy.label().to_owned()));
+    for (r, label) in labels.iter().enumerate() {
+        let y = title_h + r * (ih + gap) + ih / 2 - 8;
+        root.draw_text(label, &font.color(&BLACK), (6, y as i32))?;
+    }
+    root.present()?;
+    Ok(())
 }
