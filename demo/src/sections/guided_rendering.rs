@@ -232,19 +232,28 @@ struct Runs {
     equal_time: Option<Rendered>,
 }
 
+/// The least total CPU time (seconds) that [`frame_costs`] trusts: the process's CPU clock
+/// counts in 10 ms ticks, so much shorter runs read as 0 (which made the equal-time frame
+/// count unbounded) and runs of fewer than 10 ticks are mostly rounding.
+const MIN_CPU_SECONDS: f64 = 0.1;
+
+/// The most frames an equal-time render gets, as a multiple of the equal-samples frames.
+const MAX_EQUAL_TIME_FACTOR: u32 = 8;
+
 /// The cost of each frame: its CPU seconds where the system reports them (steadier than the
-/// wall clock on a shared machine), else its wall-clock seconds.
+/// wall clock on a shared machine) and they add up to at least [`MIN_CPU_SECONDS`], else its
+/// wall-clock seconds.
 fn frame_costs(r: &Rendered) -> &[f64] {
-    if r.report.frame_cpu_times_s.is_empty() {
-        &r.report.frame_times_s
-    } else {
+    if costs_are_cpu(r) {
         &r.report.frame_cpu_times_s
+    } else {
+        &r.report.frame_times_s
     }
 }
 
 /// Whether [`frame_costs`] are CPU seconds.
 fn costs_are_cpu(r: &Rendered) -> bool {
-    !r.report.frame_cpu_times_s.is_empty()
+    r.report.frame_cpu_times_s.iter().sum::<f64>() >= MIN_CPU_SECONDS
 }
 
 fn cumulative_seconds(r: &Rendered) -> Vec<f64> {
@@ -632,7 +641,9 @@ fn compute_runs(
         if run.method == slowest {
             continue;
         }
-        let frames = ((budget / seconds_per_frame(&run.equal_samples)).round() as u32).max(1);
+        let per_frame = seconds_per_frame(&run.equal_samples).max(1e-9);
+        let frames = ((budget / per_frame).round() as u32)
+            .clamp(1, MAX_EQUAL_TIME_FACTOR * study.settings.frames);
         run.equal_time = Some(render_on(
             device,
             &args(
