@@ -5,7 +5,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{assert_tiles_agree, furnace, scenes_dir};
+use common::{assert_pixel_mean, assert_spread, assert_tiles_agree, furnace, scenes_dir};
 use glam::Vec3;
 use mcg_demo::render::bvh::Hit;
 use mcg_demo::render::cpu::{
@@ -258,28 +258,12 @@ fn furnace_matches_the_truncated_neumann_series() {
             let image = render_frame(&scene, &settings, 3, || McpgSampler::new(&guide), || ());
             // BSDF sampling is exact here (each bounce multiplies by ρ): spread in the
             // pixels shows that guided lobes were sampled.
-            let spread: RunningStats = image.iter().map(|p| f64::from(p.x)).collect();
-            assert!(
-                spread.variance().sqrt() > 1e-3 * f64::from(expected.x),
-                "{method:?} sampled no lobe: {}",
-                spread.variance().sqrt()
-            );
+            assert_spread(&image, expected, &format!("{method:?}"));
             image
         } else {
             render_frame(&scene, &settings, 0, || BsdfSampler, || ())
         };
-        for c in 0..3 {
-            let stats: RunningStats = image.iter().map(|p| f64::from(p[c])).collect();
-            let diff = stats.mean() - f64::from(expected[c]);
-            let z = diff / stats.standard_error();
-            assert!(
-                z.abs() < 5.0 || diff.abs() < 1e-5 * f64::from(expected[c]),
-                "{method:?} channel {c}: mean {} expected {} (z = {z:.2}, n = {})",
-                stats.mean(),
-                expected[c],
-                stats.count()
-            );
-        }
+        assert_pixel_mean(&image, expected, 1e-5, &format!("{method:?}"));
     }
 }
 
@@ -432,22 +416,7 @@ fn mcpg_nee_weights_light_samples_with_the_samplers_density() {
         method: Method::McpgNee,
     };
     let image = render_frame(&scene, &settings, 0, UniformHemisphere::default, || ());
-    for c in 0..3 {
-        let stats: RunningStats = image.iter().map(|p| f64::from(p[c])).collect();
-        let z = (stats.mean() - f64::from(expected[c])) / stats.standard_error();
-        eprintln!(
-            "channel {c}: mean {} expected {} (z = {z:.2})",
-            stats.mean(),
-            expected[c]
-        );
-        assert!(
-            z.abs() < 5.0,
-            "channel {c}: mean {} expected {} (z = {z:.2}, n = {})",
-            stats.mean(),
-            expected[c],
-            stats.count()
-        );
-    }
+    assert_pixel_mean(&image, expected, 0.0, "mcpg-nee");
 }
 
 /// Hypothesis: `mcmm` estimates direct light without bias in the furnace: with B = 1 every
@@ -480,23 +449,8 @@ fn mcmm_furnace_matches_direct_light() {
             r.render_frame(&scene, &settings, frame).unwrap();
         }
         let image = r.render_frame(&scene, &settings, 3).unwrap();
-        let spread: RunningStats = image.iter().map(|p| f64::from(p.x)).collect();
-        assert!(
-            spread.variance().sqrt() > 1e-3 * f64::from(expected.x),
-            "{score:?}: mcmm sampled no lobe: {}",
-            spread.variance().sqrt()
-        );
-        for c in 0..3 {
-            let stats: RunningStats = image.iter().map(|p| f64::from(p[c])).collect();
-            let z = (stats.mean() - f64::from(expected[c])) / stats.standard_error();
-            eprintln!("mcmm furnace {score:?} channel {c}: z = {z:.2}");
-            assert!(
-                z.abs() < 5.0,
-                "{score:?} channel {c}: mean {} expected {} (z = {z:.2})",
-                stats.mean(),
-                expected[c]
-            );
-        }
+        assert_spread(&image, expected, &format!("{score:?}: mcmm"));
+        assert_pixel_mean(&image, expected, 0.0, &format!("mcmm furnace {score:?}"));
     }
     let mut r = McmmRenderer::new(16, 16, mcmm_params(McmmScore::TileMixture, 16)).unwrap();
     let three = RenderSettings {

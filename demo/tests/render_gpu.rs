@@ -6,7 +6,10 @@
 
 mod common;
 
-use common::{assert_tiles_agree, furnace, scenes_dir, tile_stats};
+use common::{
+    assert_lit_pixels_agree, assert_pixel_mean, assert_spread, assert_tiles_agree, furnace,
+    scenes_dir, tile_stats,
+};
 use glam::Vec3;
 use mcg_demo::render::cpu::{BsdfSampler, Method, RenderSettings, render_frame};
 use mcg_demo::render::gpu::{GpuHit, GpuRay, GpuTiming, GpuTracer};
@@ -16,7 +19,6 @@ use mcg_demo::render::scene::{Scene, SceneFile, TextureInfo, TriangleUv};
 use mcg_demo::render::{Device, RenderArgs, render};
 use mcg_gpu_backend::sampling::next_uniform;
 use mcg_gpu_backend::testing::gpu_or_skip;
-use mcg_tests::RunningStats;
 use statrs::distribution::{ContinuousCDF, Normal};
 
 /// A tracer on the shared test device with `scene` uploaded, or `None` (skip).
@@ -173,17 +175,7 @@ fn gpu_furnace_matches_the_truncated_neumann_series() {
         };
         let (image, seconds) = gpu.render_frame(&settings, 0).unwrap();
         assert!(seconds > 0.0);
-        for c in 0..3 {
-            let stats: RunningStats = image.iter().map(|p| f64::from(p[c])).collect();
-            let diff = stats.mean() - f64::from(expected[c]);
-            let z = diff / stats.standard_error();
-            assert!(
-                z.abs() < 5.0 || diff.abs() < 1e-5 * f64::from(expected[c]),
-                "{method:?} channel {c}: mean {} expected {} (z = {z:.2})",
-                stats.mean(),
-                expected[c]
-            );
-        }
+        assert_pixel_mean(&image, expected, 1e-5, &format!("GPU {method:?}"));
     }
 }
 
@@ -224,24 +216,8 @@ fn gpu_mcpg_furnace_matches_the_truncated_neumann_series() {
         }
         let (image, seconds) = gpu.render_frame(&settings, 3).unwrap();
         assert!(seconds > 0.0);
-        let spread: RunningStats = image.iter().map(|p| f64::from(p.x)).collect();
-        assert!(
-            spread.variance().sqrt() > 1e-3 * f64::from(expected.x),
-            "{method:?} sampled no lobe: {}",
-            spread.variance().sqrt()
-        );
-        for c in 0..3 {
-            let stats: RunningStats = image.iter().map(|p| f64::from(p[c])).collect();
-            let diff = stats.mean() - f64::from(expected[c]);
-            let z = diff / stats.standard_error();
-            eprintln!("GPU {method:?} furnace channel {c}: z = {z:.2}");
-            assert!(
-                z.abs() < 5.0,
-                "{method:?} channel {c}: mean {} expected {} (z = {z:.2})",
-                stats.mean(),
-                expected[c]
-            );
-        }
+        assert_spread(&image, expected, &format!("{method:?}"));
+        assert_pixel_mean(&image, expected, 0.0, &format!("GPU {method:?} furnace"));
     }
 }
 
@@ -310,23 +286,7 @@ fn gpu_follows_the_cpu_random_stream() {
     };
     let (g, _) = gpu.render_frame(&settings, 3).unwrap();
     let c = render_frame(&scene, &settings, 3, || BsdfSampler, || ());
-    let lit: Vec<(Vec3, Vec3)> = c
-        .iter()
-        .zip(&g)
-        .filter(|(c, _)| c.max_element() > 0.0)
-        .map(|(c, g)| (*c, *g))
-        .collect();
-    let same = lit
-        .iter()
-        .filter(|(c, g)| ((*c - *g).abs().cmple(c.abs() * 1e-3 + Vec3::splat(1e-7))).all())
-        .count();
-    eprintln!("{same} of {} lit pixels equal", lit.len());
-    assert!(lit.len() > 500, "the test needs lit pixels: {}", lit.len());
-    assert!(
-        same * 10 >= lit.len() * 9,
-        "only {same} of {} lit pixels agree",
-        lit.len()
-    );
+    assert_lit_pixels_agree(&c, &g, "nee");
 }
 
 /// Hypothesis: the GPU and the CPU tracer estimate the same image (in expectation), for `bsdf`
@@ -553,23 +513,8 @@ fn gpu_mcmm_furnace_matches_direct_light() {
     }
     let (image, seconds) = gpu.render_frame(&settings, 3).unwrap();
     assert!(seconds > 0.0);
-    let spread: RunningStats = image.iter().map(|p| f64::from(p.x)).collect();
-    assert!(
-        spread.variance().sqrt() > 1e-3 * f64::from(expected.x),
-        "mcmm sampled no lobe: {}",
-        spread.variance().sqrt()
-    );
-    for c in 0..3 {
-        let stats: RunningStats = image.iter().map(|p| f64::from(p[c])).collect();
-        let z = (stats.mean() - f64::from(expected[c])) / stats.standard_error();
-        eprintln!("GPU mcmm furnace channel {c}: z = {z:.2}");
-        assert!(
-            z.abs() < 5.0,
-            "channel {c}: mean {} expected {} (z = {z:.2})",
-            stats.mean(),
-            expected[c]
-        );
-    }
+    assert_spread(&image, expected, "mcmm");
+    assert_pixel_mean(&image, expected, 0.0, "GPU mcmm furnace");
 }
 
 /// The GPU's `mcmm` follows the CPU's: the same streams (pixel paths, neighbour offsets, the
@@ -601,23 +546,7 @@ fn gpu_mcmm_follows_the_cpu_mcmm() {
         c = cpu.render_frame(&scene, &settings, frame).unwrap();
         g = gpu.render_frame(&settings, frame).unwrap().0;
     }
-    let lit: Vec<(Vec3, Vec3)> = c
-        .iter()
-        .zip(&g)
-        .filter(|(c, _)| c.max_element() > 0.0)
-        .map(|(c, g)| (*c, *g))
-        .collect();
-    let same = lit
-        .iter()
-        .filter(|(c, g)| ((*c - *g).abs().cmple(c.abs() * 1e-3 + Vec3::splat(1e-7))).all())
-        .count();
-    eprintln!("mcmm: {same} of {} lit pixels equal", lit.len());
-    assert!(lit.len() > 500, "the test needs lit pixels: {}", lit.len());
-    assert!(
-        same * 10 >= lit.len() * 9,
-        "only {same} of {} lit pixels agree",
-        lit.len()
-    );
+    assert_lit_pixels_agree(&c, &g, "mcmm");
 }
 
 /// Hypothesis: `mcmm` on the GPU is unbiased — the mean of independent runs equals the GPU

@@ -128,3 +128,55 @@ pub fn assert_tiles_agree(
     eprintln!("{what}: worst |z| = {worst:.2} of threshold {threshold:.2}");
     worst
 }
+
+/// Asserts that a furnace image learned lobes: the standard deviation of its pixels' red
+/// channel exceeds 10⁻³ of the expected value (BSDF sampling alone is exact in the furnace, so
+/// spread means guided lobes were sampled).
+pub fn assert_spread(image: &[Vec3], expected: Vec3, what: &str) {
+    let spread: RunningStats = image.iter().map(|p| f64::from(p.x)).collect();
+    let sd = spread.variance().sqrt();
+    assert!(
+        sd > 1e-3 * f64::from(expected.x),
+        "{what} sampled no lobe: {sd}"
+    );
+}
+
+/// Asserts per channel that the mean over `image`'s pixels equals `expected` within 5 standard
+/// errors, or within `floor · expected` (for estimators without variance; 0 for none).
+pub fn assert_pixel_mean(image: &[Vec3], expected: Vec3, floor: f64, what: &str) {
+    for c in 0..3 {
+        let stats: RunningStats = image.iter().map(|p| f64::from(p[c])).collect();
+        let diff = stats.mean() - f64::from(expected[c]);
+        let z = diff / stats.standard_error();
+        eprintln!("{what} channel {c}: z = {z:.2}");
+        assert!(
+            z.abs() < 5.0 || diff.abs() < floor * f64::from(expected[c]),
+            "{what} channel {c}: mean {} expected {} (z = {z:.2}, n = {})",
+            stats.mean(),
+            expected[c],
+            stats.count()
+        );
+    }
+}
+
+/// Asserts that at least 90 % of the lit pixels of `cpu` (more than 500 of them) equal those
+/// of `gpu` to 10⁻³ relative (10⁻⁷ absolute) in every channel.
+pub fn assert_lit_pixels_agree(cpu: &[Vec3], gpu: &[Vec3], what: &str) {
+    let lit: Vec<(Vec3, Vec3)> = cpu
+        .iter()
+        .zip(gpu)
+        .filter(|(c, _)| c.max_element() > 0.0)
+        .map(|(c, g)| (*c, *g))
+        .collect();
+    let same = lit
+        .iter()
+        .filter(|(c, g)| ((*c - *g).abs().cmple(c.abs() * 1e-3 + Vec3::splat(1e-7))).all())
+        .count();
+    eprintln!("{what}: {same} of {} lit pixels equal", lit.len());
+    assert!(lit.len() > 500, "the test needs lit pixels: {}", lit.len());
+    assert!(
+        same * 10 >= lit.len() * 9,
+        "{what}: only {same} of {} lit pixels agree",
+        lit.len()
+    );
+}
