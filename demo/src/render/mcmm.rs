@@ -25,6 +25,37 @@
 //! At the end of the frame each chain's current state is written where it ended. The estimator
 //! is unbiased for any chain states: the states a step samples from are fixed before that
 //! step's samples are drawn, and the mixture density is exact (MCMM appendix A).
+//!
+//! # Where the error comes from (many-lights room)
+//!
+//! Issue target: relMSE ≤ ¼ of `bsdf` at equal samples after 64 frames. Measured with
+//! `cargo run --release -p mcg-demo --example mcmm_diagnostics -- REF.exr` (64 × 64, 64 frames
+//! of 4 spp, REF a 16 384-spp `nee` render), p_h = 0.2, 32-lane tiles:
+//! - `mcmm` ÷ `bsdf` = 0.557 (0.2257 / 0.4053), and 0.539 over the last 16 frames alone: the
+//!   error is not the chains' warm-up, the chains plateau.
+//! - Diffuse pixels carry 94 % of `mcmm`'s error (ratio 0.535 there); the 62 metal pixels 6 %
+//!   (ratio 1.50: worse than `bsdf`, whose sampling is near-optimal there); lights seen
+//!   directly nothing. By the pixel's effective number of lights (Σc)²/Σc²: 1–2 lights →
+//!   ratio 0.21, 4–8 → 0.42 (34 % of the error), ≥ 8 → 0.72 (47 %).
+//! - The chains after 64 frames: 4092 of 4096 valid, mean sample count N = 11, 23 % with
+//!   N ≤ 4, 75 % with a mean target within 0.25 m of a light. Per tile, the 32 states point
+//!   at 6.8 distinct lights, while 9.4 lights carry 90 % of the tile's pixels' light, and 5.9
+//!   of those 9.4 are covered. A light no lobe covers is sampled with density p_h · p_bsdf,
+//!   so its share of the variance is 1/p_h = 5 times what `bsdf` gives it.
+//! - Sweeps (64-frame ratio, one seed): window half width 8 → 0.64, 16 → 0.56, 32 → 0.60;
+//!   α_min 0.02 → 0.55, 0.3 → 0.56; neighbour candidates 2 → 0.61, 10 → 0.58; the paper's
+//!   score → 0.64; p_h 0.1 → 0.71, 0.4 → 0.50 ([`DEFENSIVE_PROBABILITY`], 4 seeds).
+//! - Tile size (a CPU experiment, not in the code): 64 lanes (8 × 8) → 0.44 (p_h 0.2) and
+//!   0.40 (p_h 0.4); 128 lanes (16 × 8) → 0.37 and 0.35, 10.0 of 10.6 needed lights covered,
+//!   and 0.19–0.21 over the last 16 frames alone — there the warm-up (valid chains after
+//!   frame 1, 4, 8, 16: 56, 415, 1712, 3438 of 4096 at 32 lanes) is what keeps the 64-frame
+//!   mean above ¼. But the mixture costs n pdf evaluations per sample: the diagnostics'
+//!   CPU seconds (both methods) grow from 3.0 (32 lanes) to 4.1 (64) and 6.0 (128), which
+//!   the GPU frame-time target (≤ 1.5 × `bsdf`) does not leave room for.
+//!
+//! So with 24 lights and one lobe per pixel, a 32-chain tile cannot hold a lobe for every
+//! light that matters, and the uncovered lights cost more than `bsdf` pays for them; what is
+//! left is MCMM's design limit on this scene at this cost, not a defect of the chains.
 
 use glam::{Vec2, Vec3};
 use mcg_gpu_backend::sampling::next_uniform;
@@ -55,10 +86,12 @@ pub const TILE_SALT: u32 = 0x7f4a_7c15;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum McmmScore {
-    /// [`ScoreDensity::TileMixture`]: the score is the pixel's one-sample SSMIS estimate.
+    /// [`ScoreDensity::TileMixture`]: the score is the pixel's one-sample SSMIS estimate, with
+    /// p_h = [`DEFENSIVE_PROBABILITY`] (mcg's extension).
     #[default]
     TileMixture,
-    /// [`ScoreDensity::Technique`]: the paper's score, divided by the chain's own density.
+    /// [`ScoreDensity::Technique`]: the paper's score, divided by the chain's own density, with
+    /// the paper's p_h = 0.2.
     Paper,
 }
 
@@ -68,12 +101,29 @@ pub enum McmmScore {
 /// 1080 rows scale to 3 pixels there: too few neighbours to spread what a chain finds.
 pub const MIN_WINDOW_HALF_WIDTH: f32 = 16.0;
 
-/// MCMM's constants for an image `height` pixels high: the paper's (MCMM sec. 5), the
-/// neighbour window scaled from 45 pixels at 1080 rows to the image (at least
-/// [`MIN_WINDOW_HALF_WIDTH`]), and the score density of `score`.
+/// The probability p_h of the defensive technique (the material's sampling) although the state
+/// holds a lobe: 0.4 instead of the paper's 0.2 (MCMM Alg. 2 line 2), mcg's choice for scenes
+/// with more lights than a tile's 32 chains cover.
+///
+/// A light that no lobe of the tile covers is sampled with density p_h · p_bsdf only, so its
+/// share of a pixel's variance is 1/p_h times what BSDF sampling alone gives it; on the
+/// many-lights room a tile's chains cover about 6 of the 9–10 lights that carry 90 % of its
+/// pixels' light (see the module docs). Measured on that room at 64 × 64, 64 frames of
+/// 4 spp, relMSE of `mcmm` ÷ `bsdf` over seeds 0x6d6367, 1, 2, 3: p_h = 0.2 → 0.557, 0.548,
+/// 0.519, 0.562; p_h = 0.4 → 0.498, 0.518, 0.505, 0.516; p_h = 0.1 → 0.711 (first seed);
+/// p_h = 0.5 → 0.536, 0.6 → 0.545 (first seed).
+pub const DEFENSIVE_PROBABILITY: f32 = 0.4;
+
+/// MCMM's constants for an image `height` pixels high: the paper's (MCMM sec. 5) with, for
+/// [`McmmScore::TileMixture`], p_h = [`DEFENSIVE_PROBABILITY`] ([`McmmScore::Paper`] keeps the
+/// paper's 0.2), the neighbour window scaled from 45 pixels at 1080 rows to
+/// the image (at least [`MIN_WINDOW_HALF_WIDTH`]), and the score density of `score`.
 #[must_use]
 pub fn mcmm_params(score: McmmScore, height: u32) -> McmmParams {
     let mut params = McmmParams::PAPER;
+    if score == McmmScore::TileMixture {
+        params.hemisphere_probability = DEFENSIVE_PROBABILITY;
+    }
     params.window_half_width = (45.0 * height as f32 / 1080.0).max(MIN_WINDOW_HALF_WIDTH);
     params.score_density = match score {
         McmmScore::TileMixture => ScoreDensity::TileMixture,

@@ -108,7 +108,8 @@ pub struct RenderArgs {
     #[arg(long)]
     pub no_irradiance_cache: bool,
     /// The score of `mcmm`'s chains (MCMM Alg. 3): the tile's mixture density (the pixel's
-    /// one-sample SSMIS estimate) or the paper's, the chain's own technique density.
+    /// one-sample SSMIS estimate, with the defensive probability p_h = 0.4) or the paper's,
+    /// the chain's own technique density (with the paper's p_h = 0.2).
     #[arg(long, value_enum, default_value_t = McmmScore::TileMixture)]
     pub mcmm_score: McmmScore,
 }

@@ -535,7 +535,8 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
          and weights each sample by the tile's mixture density (spatial SMIS, eq. 9); its \
          chains are scored by that mixture density (an extension of the paper, see \
          mcg_markov_guide::mcmm::ScoreDensity), its defensive technique is the material's \
-         sampling with p_h = 0.2. mcpg runs without its irradiance cache, as MCPG Fig. 8 \
+         sampling with p_h = 0.4 (the paper's 0.2 leaves the lights no lobe of a tile covers \
+         at a fifth of the BSDF's density; see mcg_demo::render::mcmm). mcpg runs without its irradiance cache, as MCPG Fig. 8 \
          compares on direct light. Neither guide knows where the lights are; nee does.",
         many.settings.bounces
     ));
