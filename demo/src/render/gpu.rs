@@ -18,7 +18,7 @@
 //!
 //! `mcmm` runs the entry point `render_mcmm` of the shader composed with [`MCMM_DEF`]: the chain
 //! states of [`GpuMcmmGuide`] at group [`GUIDE_GROUP`] (the MCPG module's bindings move to the
-//! unused group [`UNUSED_GROUP`]), workgroups of 8 × 4 invocations, one tile of 32 chains
+//! unused group [`UNUSED_GROUP`]), workgroups of 8 × 8 invocations, one tile of 64 chains
 //! each, the twin of [`super::mcmm::McmmRenderer`]; the guide's buffers swap after each frame.
 //!
 //! A frame is dispatched in square tiles of [`TILE`] pixels (one submission each, workgroups of
@@ -69,7 +69,7 @@ pub const MCPG_STORAGE_BUFFERS: u32 = 10;
 /// Invocations per workgroup side of the `render` kernel (`@workgroup_size(8, 8)`).
 const GROUP: u32 = 8;
 
-/// Invocations per workgroup of the `render_mcmm` kernel (`@workgroup_size(8, 4)`): one tile
+/// Invocations per workgroup of the `render_mcmm` kernel (`@workgroup_size(8, 8)`): one tile
 /// of [`super::mcmm::TILE_SIZE`] chains.
 const MCMM_GROUP: (u32, u32) = (super::mcmm::TILE_WIDTH, super::mcmm::TILE_HEIGHT);
 

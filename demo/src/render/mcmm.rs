@@ -2,8 +2,9 @@
 //! Direct Illumination"): [`McmmRenderer`], one chain per pixel over the screen, for direct
 //! light (`--bounces 1`).
 //!
-//! The image is cut into tiles of [`TILE_WIDTH`] × [`TILE_HEIGHT`] = 32 pixels (one GPU
-//! subgroup or workgroup in the WGSL twin). Each frame, every chain starts from the state its
+//! The image is cut into tiles of [`TILE_WIDTH`] × [`TILE_HEIGHT`] = 64 pixels (one GPU
+//! workgroup in the WGSL twin; the paper's tile is one subgroup of 32, see
+//! [`TILE_SIZE`]: 64 chains is mcg's choice). Each frame, every chain starts from the state its
 //! pixel wrote last frame; then, per sample (step) of the frame and per pixel:
 //! 1. collaborative discovery (MCMM Alg. 1): the chain's tentative state is resampled from
 //!    neighbour states of the previous frame at B-spline offsets (no motion: the built-in
@@ -17,7 +18,7 @@
 //!    state has no lobe, else the state's vMF lobe) samples ω; the ray along ω finds the
 //!    emitter;
 //! 4. the pixel's estimate is the one-sample SSMIS estimator (MCMM eq. 9)
-//!    f(ω) / ((1/n) Σⱼ p(ω | tⱼ)), the tile's n = 32 techniques reconstructed at x;
+//!    f(ω) / ((1/n) Σⱼ p(ω | tⱼ)), the tile's n = 64 techniques reconstructed at x;
 //! 5. the chain learns (Alg. 3) from the score f = lum(f_r cos L_e)/p, p the tile's mixture
 //!    density ([`ScoreDensity::TileMixture`], default) or the chain's own technique density
 //!    (the paper's [`ScoreDensity::Technique`]).
@@ -54,8 +55,14 @@
 //!   the GPU frame-time target (≤ 1.5 × `bsdf`) does not leave room for.
 //!
 //! So with 24 lights and one lobe per pixel, a 32-chain tile cannot hold a lobe for every
-//! light that matters, and the uncovered lights cost more than `bsdf` pays for them; what is
-//! left is MCMM's design limit on this scene at this cost, not a defect of the chains.
+//! light that matters, and the uncovered lights cost more than `bsdf` pays for them. mcg
+//! therefore uses tiles of 64 chains ([`TILE_SIZE`]) and p_h = 0.4: `mcmm` ÷ `bsdf` = 0.404,
+//! 0.413, 0.442, 0.433 over four seeds (8.1–8.5 of 9.7 needed lights covered per tile), at
+//! the same GPU cost as 32 lanes within the noise of this machine (lavapipe, process CPU
+//! seconds of 32 frames: `bsdf` 0.93, 32 lanes 1.34, 64 lanes 1.39, 128 lanes 2.06, medians
+//! of three). What is left above ¼: the uncovered lights (about 1.4 of 9.7 per tile), the
+//! warm-up (0.30–0.36 over the last 16 frames alone) and the metal box; 128-lane tiles
+//! would reach 0.35 at 2.2 × the `bsdf` frame, over the cost target.
 
 use glam::{Vec2, Vec3};
 use mcg_gpu_backend::sampling::next_uniform;
@@ -64,7 +71,7 @@ use mcg_markov_guide::mcmm::{
     choose_technique, collaborative_discovery, technique_pdf, update,
 };
 use mcg_markov_guide::mcpg::Scatter;
-use mcg_smis::XorPermutation;
+use mcg_smis::{select_uniform, xor_source_lane};
 use rayon::prelude::*;
 
 use super::cpu::{RenderSettings, offset, path_seed};
@@ -75,8 +82,12 @@ use crate::Result;
 /// Tile width in pixels (the population one xor permutation acts on).
 pub const TILE_WIDTH: u32 = 8;
 /// Tile height in pixels.
-pub const TILE_HEIGHT: u32 = 4;
-/// Pixels per tile: one subgroup of 32 lanes, the largest tile of `mcg-smis`.
+pub const TILE_HEIGHT: u32 = 8;
+/// Pixels per tile: 64 chains share one SSMIS mixture. The paper's tile is one subgroup of
+/// 32 lanes; on the many-lights room 32 chains hold lobes for about 6 of the 9–10 lights that
+/// matter to a tile, 64 chains for about 8 (module docs), so mcg's tile is one workgroup of 64
+/// invocations (an extension of the paper; the xor permutation of sec. 4.2 runs through
+/// workgroup memory).
 pub const TILE_SIZE: usize = (TILE_WIDTH * TILE_HEIGHT) as usize;
 
 /// The salt of the per-tile stream of the xor masks (the WGSL twin uses the same).
@@ -103,7 +114,7 @@ pub const MIN_WINDOW_HALF_WIDTH: f32 = 16.0;
 
 /// The probability p_h of the defensive technique (the material's sampling) although the state
 /// holds a lobe: 0.4 instead of the paper's 0.2 (MCMM Alg. 2 line 2), mcg's choice for scenes
-/// with more lights than a tile's 32 chains cover.
+/// with more lights than a tile's chains cover.
 ///
 /// A light that no lobe of the tile covers is sampled with density p_h · p_bsdf only, so its
 /// share of a pixel's variance is 1/p_h times what BSDF sampling alone gives it; on the
@@ -138,13 +149,14 @@ pub fn tile_grid(width: u32, height: u32) -> (u32, u32) {
     (width.div_ceil(TILE_WIDTH), height.div_ceil(TILE_HEIGHT))
 }
 
-/// The xor mask of tile `tile` at step `step` of `frame`: ⌊32 u⌋ of the first uniform of the
-/// tile's own stream.
+/// The xor mask of tile `tile` at step `step` of `frame`: ⌊n u⌋ (n = [`TILE_SIZE`]) of the
+/// first uniform of the tile's own stream. Lane l samples the chain of lane l ⊕ mask
+/// ([`xor_source_lane`]), a permutation of the tile ([`mcg_smis::XorPermutation`], which
+/// stops at 32 lanes, for a larger tile).
 #[must_use]
-pub fn tile_mask(seed: u32, frame: u32, tile: u32, step: u32) -> XorPermutation {
+pub fn tile_mask(seed: u32, frame: u32, tile: u32, step: u32) -> u32 {
     let mut rng = path_seed(seed ^ TILE_SALT, frame, tile, step);
-    XorPermutation::from_uniform(TILE_SIZE as u32, next_uniform(&mut rng))
-        .expect("32 is a power of two")
+    select_uniform(TILE_SIZE, next_uniform(&mut rng)) as u32
 }
 
 /// A pixel's chain: tentative state S and current state S_c (MCMM Table 2).
@@ -219,7 +231,7 @@ impl McmmRenderer {
         Ok(image)
     }
 
-    /// One frame of the 32 chains of `tile`: their radiance (mean over the steps) and the
+    /// One frame of the [`TILE_SIZE`] chains of `tile`: their radiance (mean over the steps) and the
     /// chains where they ended.
     fn tile_frame(
         &self,
@@ -250,7 +262,11 @@ impl McmmRenderer {
                         self.discover(chains[lane].tentative, (x, y), &mut rngs[lane]);
                 }
             }
-            tile_mask(settings.seed, frame, tile, step).apply(&mut chains);
+            let mask = tile_mask(settings.seed, frame, tile, step);
+            let before = chains;
+            for (lane, chain) in chains.iter_mut().enumerate() {
+                *chain = before[xor_source_lane(lane as u32, mask) as usize];
+            }
             // The streams stay with the pixels; only the chains move.
             let step_states: [PixelState; TILE_SIZE] =
                 core::array::from_fn(|lane| chains[lane].tentative);

@@ -14,7 +14,7 @@
 //! | [`cpu`] | the CPU path tracer (rayon), methods `bsdf` and `nee`, the per-vertex sampler seam of the guides |
 //! | [`gpu`] | the WGSL twin of the CPU tracer on wgpu, over the same BVH, triangle and material buffers; `mcpg` and `mcmm` with the GPU guides of `mcg-gpu-backend` |
 //! | [`guided`] | `mcpg` on the CPU: the MCPG guide behind the sampler seam |
-//! | [`mcmm`] | `mcmm` on the CPU: MCMM's screen-space chains for direct light, SSMIS over tiles of 32 pixels |
+//! | [`mcmm`] | `mcmm` on the CPU: MCMM's screen-space chains for direct light, SSMIS over tiles of 64 pixels |
 //! | [`output`] | EXR/PNG files, RMSE and relative MSE |
 //! | [`scene_generator`] | the built-in scenes |
 

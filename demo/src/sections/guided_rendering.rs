@@ -531,7 +531,8 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
          different colours on the ceiling and the walls, with a glossy metal block; direct \
          light only ({} scattering event): the case MCMM was made for. mcmm (MCMM, Dittebrandt \
          et al. 2023) keeps one chain per pixel on the screen, discovers lights from its \
-         neighbours (Alg. 1), shuffles the 32 chains of each 8 × 4 tile by a random xor mask \
+         neighbours (Alg. 1), shuffles the 64 chains of each 8 × 8 tile by a random xor mask (the paper's tile is a \
+         subgroup of 32; 64 chains hold lobes for more of the lights) \
          and weights each sample by the tile's mixture density (spatial SMIS, eq. 9); its \
          chains are scored by that mixture density (an extension of the paper, see \
          mcg_markov_guide::mcmm::ScoreDensity), its defensive technique is the material's \

@@ -25,7 +25,7 @@
 #import mcg::mcmm::{
     mcg_mcmm_params, mcmm_choose_technique, mcmm_collaborative_discovery, mcmm_empty_state,
     mcmm_load_previous, mcmm_ratio, mcmm_select_uniform, mcmm_store_current, mcmm_technique_pdf,
-    mcmm_tile, mcmm_tile_exchange, mcmm_tile_publish, mcmm_update, mcmm_xor_source_lane
+    mcmm_update, mcmm_xor_source_lane
 }
 #import mcg::vmf::{
     Vmf, VmfMapPrior, vmf_kappa_from_one_minus_mean_cosine, vmf_normalization,
@@ -702,14 +702,14 @@ fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>) {
 #ifdef MCG_DEMO_MCMM
 // ---------------------------------------------------------------------------------------------
 // MCMM (Dittebrandt et al. 2023) for direct light, the twin of `mcmm::McmmRenderer`: one
-// workgroup of 8 × 4 invocations is one tile of 32 chains (MCMM sec. 4.2), shuffled through
-// the workgroup memory of `mcg::mcmm` (the portable path; lavapipe's subgroup broadcast is
-// unreliable, so the subgroup path is not used).
+// workgroup of 8 × 8 invocations is one tile of 64 chains (MCMM sec. 4.2 uses a subgroup of
+// 32; 64 is mcg's choice, see `mcmm::TILE_SIZE`), shuffled through workgroup memory (the
+// portable path).
 
 // `mcmm::TILE_WIDTH`, `TILE_HEIGHT` and their product.
 const MCMM_TILE_WIDTH: u32 = 8u;
-const MCMM_TILE_HEIGHT: u32 = 4u;
-const MCMM_LANES: u32 = 32u;
+const MCMM_TILE_HEIGHT: u32 = 8u;
+const MCMM_LANES: u32 = 64u;
 // `mcmm::TILE_SALT`: the per-tile stream of the xor masks.
 const MCMM_TILE_SALT: u32 = 0x7f4a7c15u;
 
@@ -753,6 +753,21 @@ fn emitter_along(origin: vec3<f32>, w: vec3<f32>) -> EmitterHit {
 // own state between the exchanges' barriers and the publish's, read by the mixture.
 var<workgroup> tile_lobes: array<vec4<f32>, MCMM_LANES>;
 var<workgroup> tile_norms: array<f32, MCMM_LANES>;
+// The tile's states (`mcmm_tile` of `mcg::mcmm` holds at most the 32 lanes of a subgroup).
+var<workgroup> tile_states: array<MarkovPixelState, MCMM_LANES>;
+
+// `mcmm_tile_publish` over `tile_states`. Uniform control flow.
+fn tile_publish(lane: u32, state: MarkovPixelState) {
+    workgroupBarrier();
+    tile_states[lane] = state;
+    workgroupBarrier();
+}
+
+// `mcmm_tile_exchange` over `tile_states`. Uniform control flow.
+fn tile_exchange(lane: u32, source: u32, state: MarkovPixelState) -> MarkovPixelState {
+    tile_publish(lane, state);
+    return tile_states[source];
+}
 
 // Writes lane `lane`'s entry of `tile_lobes`/`tile_norms` for `state`: the κ of
 // `vmf_from_sufficient_stats` under the fixed prior (no lobe for an invalid or empty state).
@@ -780,7 +795,7 @@ fn tile_mixture_pdf(x: vec3<f32>, w: vec3<f32>, bsdf_pdf: f32, mp: McmmParams) -
     var sum = 0.0;
     if mp.prior_kind == MCMM_PRIOR_LIGHT_SIZE {
         for (var j = 0u; j < MCMM_LANES; j++) {
-            sum += mcmm_technique_pdf(mcmm_tile[j], x, w, bsdf_pdf, mp);
+            sum += mcmm_technique_pdf(tile_states[j], x, w, bsdf_pdf, mp);
         }
         return min(sum, MCG_F32_MAX) / f32(MCMM_LANES);
     }
@@ -848,13 +863,13 @@ fn mcmm_shade(x: u32, y: u32, tentative: ptr<function, MarkovPixelState>,
     return radiance;
 }
 
-// One workgroup per tile of 8 × 4 pixels of the dispatch tile, `spp` MCMM steps per pixel:
+// One workgroup per tile of 8 × 8 pixels of the dispatch tile, `spp` MCMM steps per pixel:
 // Alg. 1 from the previous frame's states (motion zero: the camera is static), the tile's xor
 // permutation of the chains (one mask per tile and step from its own stream), the states
 // published for the mixture, `mcmm_shade`; at the end the chain's S_c is stored where it ended
 // and the mean into `image`. Lanes past the image's edge hold empty chains and take part in
 // the shuffles (every barrier is reached by the whole workgroup).
-@compute @workgroup_size(8, 4)
+@compute @workgroup_size(8, 8)
 fn render_mcmm(@builtin(local_invocation_id) lid: vec3<u32>,
                @builtin(workgroup_id) wid: vec3<u32>) {
     let lane = lid.y * MCMM_TILE_WIDTH + lid.x;
@@ -884,12 +899,12 @@ fn render_mcmm(@builtin(local_invocation_id) lid: vec3<u32>,
         var trng = path_seed(params.seed ^ MCMM_TILE_SALT, params.frame, tile, s);
         let mask = mcmm_select_uniform(MCMM_LANES, mcg_rng_uniform(&trng));
         let source = mcmm_xor_source_lane(lane, mask);
-        tentative = mcmm_tile_exchange(lane, source, tentative);
-        current = mcmm_tile_exchange(lane, source, current);
+        tentative = tile_exchange(lane, source, tentative);
+        current = tile_exchange(lane, source, current);
         // After the exchanges' barriers (the last step's mixtures are read) and before the
         // publish's (this step's mixtures read them).
         publish_lobe(lane, tentative, mcg_mcmm_params);
-        mcmm_tile_publish(lane, tentative);
+        tile_publish(lane, tentative);
         if inside {
             sum += mcmm_shade(x, y, &tentative, &current, &rng);
         }
