@@ -541,9 +541,8 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
          compares on direct light. Neither guide knows where the lights are; nee does. \
          Where each wins: here, direct light from many small lights, mcmm pools the lobes of \
          a tile's 64 chains for every pixel of the tile, while mcpg's cells learn only from \
-         the emission their own rays happen to hit, so mcmm wins most tiles of the map \
-         (above all on the walls and floor lit by many lights; mcpg keeps some of the metal \
-         block, whose BSDF sampling is near-optimal); mcpg's case is scene (a), light that \
+         the emission their own rays happen to hit, so mcmm wins most tiles of the map; \
+         mcpg's case is scene (a), light that \
          arrives after scattering, which mcmm (direct light only) does not render at all.",
         many.settings.bounces
     ));
