@@ -253,6 +253,11 @@ pub enum ControlError {
     DynamicRaysZero,
     /// A probe update's DDGI moving-average window N_max is zero.
     MaxCountZero,
+    /// The refill weight κ of an ADGI probe update is NaN, infinite or negative.
+    RefillWeightOutOfRange {
+        /// The κ given.
+        weight: f32,
+    },
 }
 
 impl fmt::Display for ControlError {
@@ -285,6 +290,9 @@ impl fmt::Display for ControlError {
             }
             ControlError::DynamicRaysZero => f.write_str("dynamic samples trace zero rays"),
             ControlError::MaxCountZero => f.write_str("moving-average window N_max is zero"),
+            ControlError::RefillWeightOutOfRange { weight } => {
+                write!(f, "refill weight {weight} is not a finite number >= 0")
+            }
         }
     }
 }

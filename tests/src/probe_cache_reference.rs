@@ -30,8 +30,8 @@
 //! Each probe's irradiance E(p, n) is read back at the centre direction n of each interior
 //! irradiance texel with [`ProbeTexels::probe_irradiance`] — π × the texel for DDGI's texels
 //! (they hold E/π), the normalised cosine convolution over the texels for ADGI's (they hold
-//! mean radiance per texel, which costs a discretisation floor of ≈ 0.07 relative error on the
-//! 6 × 6 map) — and compared with [`reference_irradiance`] for the scene of that frame. The
+//! mean radiance per texel, which costs a discretisation floor of ≈ 0.10 relative error on the
+//! 6 × 6 map of this scene, [`Experiment::radiance_texel_floor`]) — and compared with [`reference_irradiance`] for the scene of that frame. The
 //! error of a set of probes is the relative RMS error √(Σ |E − E_ref|² / Σ |E_ref|²) over
 //! their texels.
 
@@ -269,6 +269,44 @@ impl Experiment {
             .collect()
     }
 
+    /// The discretisation floor of radiance texels ([`TexelContent::Radiance`], ADGI's
+    /// content) at frame `frame`: the relative RMS error (all probes, near probes) of the
+    /// irradiance from texels that hold the exact mean radiance over each texel, estimated
+    /// with `strata²` jittered rays per texel. No sampling policy can get below it (up to the
+    /// noise of those means); DDGI's texels (E/π at the centre direction) have no such floor.
+    #[must_use]
+    pub fn radiance_texel_floor(&self, frame: u32, strata: u32) -> (f64, f64) {
+        let mut rng = seeded_rng(self.config.seed ^ 0x0f1e_2d3c);
+        let scene = self.scene.at_frame(frame);
+        let grid = self.scene.grid;
+        let map = self.texel_config.irradiance_map;
+        let texels = ProbeTexels::new(grid, self.texel_config);
+        let full = self.texel_config.moving_average.max_count();
+        for p in 0..grid.probe_count() {
+            let pos = grid.probe_position(grid.probe_coords(p));
+            for &(index, _, _) in &self.texels {
+                let t = map.coords(index) - UVec2::ONE;
+                let mut sum = Vec3::ZERO;
+                for i in 0..strata * strata {
+                    let cell = Vec2::new((i % strata) as f32, (i / strata) as f32);
+                    let jitter = Vec2::new(rng.random(), rng.random());
+                    let uv = (t.as_vec2() + (cell + jitter) / strata as f32)
+                        * (2.0 / map.interior() as f32)
+                        - Vec2::ONE;
+                    let u = Vec2::new(rng.random(), rng.random());
+                    sum += scene.trace_probe_ray(pos, map.decode(uv), u).radiance;
+                }
+                texels.set_irradiance(p, index, sum / (strata * strata) as f32, full);
+            }
+        }
+        let estimate = self.estimate(&texels, TexelContent::Radiance);
+        let reference = self.reference(frame);
+        (
+            self.relative_rms(&estimate, reference, 0..grid.probe_count()),
+            self.relative_rms(&estimate, reference, self.near.iter().copied()),
+        )
+    }
+
     /// √(Σ |E − E_ref|² / Σ |E_ref|²) over the texels of `probes`.
     #[must_use]
     pub fn relative_rms(
@@ -384,6 +422,7 @@ fn policy_code(policy: UpdatePolicy) -> u64 {
     match policy {
         UpdatePolicy::Ddgi => 0,
         UpdatePolicy::Adgi => 1,
-        _ => 2,
+        UpdatePolicy::AdgiUnguided => 2,
+        _ => 3,
     }
 }
