@@ -20,7 +20,8 @@
 //! spends ADGI's rays through the same machinery with h ≡ 1, so the difference between it and
 //! ADGI is the guide alone.
 //!
-//! Hypotheses (deterministic: fixed seeds, single-threaded, so every number is exact):
+//! Hypotheses (deterministic: fixed seeds; the runs go on threads but each is sequential, so
+//! every number is exact):
 //! - H1: the (lower) median over the run seeds of the frames ADGI needs after the event to
 //!   first bring the near-event error below [`FRAMES_TO_ERROR_THRESHOLD`] (0.3; above both
 //!   policies' pre-event errors, 0.13-0.21) is smaller than uniform DDGI's. Measured: ADGI
@@ -30,30 +31,89 @@
 //!   is lower with ADGI than with uniform DDGI, and lower than with the constant guide.
 //!   Measured: ADGI 0.369 (0.306-0.439), DDGI 0.399 (0.363-0.417), constant guide 0.475.
 //!
-//! The claim holds on average, not for every seed: for seeds 2 and 8 ADGI's error near the
-//! event never gets below 0.3, and for 2, 4 and 8 its 10-frame mean is above DDGI's. The
-//! margins are modest (median 7 against 12 frames; 8 % lower mean error). ADGI puts 42-50 % of
-//! its rays near the event in those frames, DDGI 13 %.
+//! - H3 (issue 20 item 4, speed): with mcg's refill extension (`UpdatePolicy::AdgiRefill`,
+//!   documented in `mcg_probe_cache::probe_update`), the lower median of those frames is at
+//!   most 0.6 × DDGI's and ADGI is faster than DDGI on every seed; the paper's ADGI does not
+//!   meet this (asserted too, so the suite notices if that changes). Measured: refill 6, 4, 7,
+//!   4, 3, 6, 10, 4 (median 4 against 12); the paper's ADGI is faster on 5 of 8. The refill
+//!   weight κ = 2 was picked from 1, 2, 4 on these seeds (κ = 1: 5, 4, 10, 4, 3, 5, 16, 4,
+//!   slower for seed 7; κ = 4: 12, 4, 7, 4, 3, 6, 8, 4, slower for seed 1) and checked on the
+//!   held-out seeds 9-16: refill 2, 2, 5, 2, 5, 8, 5, 4 against DDGI 11, 12, 10, 10, 11, 9,
+//!   11, 13.
+//! - H4: refill ends with a lower near-event error than the paper's ADGI (mean over the seeds
+//!   of the last 10 frames). Measured: 0.171-0.269 against 0.254-0.394.
+//! - H5 (why the issue's "without ending with a higher all-probe error than DDGI" is not met):
+//!   the discretisation floor of radiance texels — the all-probe error of texels that hold the
+//!   exact mean radiance of their texel (256 jittered rays each), after the event — is above
+//!   DDGI's worst all-probe error over the last 10 frames. Measured: floor 0.102 (1024 rays per
+//!   texel give 0.102 too; exact clipped-cosine texel weights instead of centre cosines 0.111),
+//!   DDGI 0.086-0.099; ADGI ends at 0.129-0.139, refill at 0.124-0.131.
 //!
-//! What the suite does NOT claim: that ADGI's error *stays* lower. After its dynamic phase its
-//! near-event texels restart their moving average from N = 10 and take tens of frames to
-//! reach N = 63 again, while DDGI's cosine-weighted blend uses every ray for half the texels;
-//! over the last 10 frames DDGI's near-event error (0.18-0.28) is below ADGI's (0.25-0.39)
-//! for every seed, and over all probes DDGI's (0.086-0.099) is below ADGI's (0.129-0.139):
-//! ADGI spends its rays near the event and the rest of the grid ages.
+//! Why the paper's ADGI is slow and uneven (measured, seed 2): the dynamic rays reach only the
+//! (proxy, octant) pairs whose pilot rays saw the change; a closet probe's texels facing the
+//! doorway kept their dark pre-event value with N = 63 to frame 39 (green E 0.01-0.09 against
+//! a reference of 0.17-0.57), while its other octants were restarted at N = 10; 1442 of the 2664
+//! near-event texels were never restarted, and the static chains (f_s knows nothing of
+//! windows) give a texel under one ray per frame. The paper's version still wins on average:
+//! for seeds 2 and 8 its error near the event never gets below 0.3, and for 2, 4 and 8 its
+//! 10-frame mean is above DDGI's. ADGI puts 42-50 % of its rays near the event in those
+//! frames, DDGI 13 %. Over all probes DDGI's error (0.086-0.099) stays below ADGI's
+//! (0.129-0.139): the radiance-texel floor of H5.
 //! `cargo test -p mcg-tests --release --test probe_cache_adgi -- --nocapture` prints it all.
 //!
 //! Break tried: running the ADGI policy with constant guides (the chains uniform over (p, ω),
-//! `guided = false` for `Policy::Adgi`) made H1 fail with the three seeds 1-3 this suite used
-//! first: ADGI then needed never, 7 and 21 frames (median 21 against DDGI's 12).
+//! `guided = false` for `UpdatePolicy::Adgi`) made H1 fail with the three seeds 1-3 this suite used
+//! first: ADGI then needed never, 7 and 21 frames (median 21 against DDGI's 12). Turning off
+//! the refill's restart (part 1, with κ = 1) made H3 fail: refill then needed 8, never, 10,
+//! 10, 6, 6, 13, 6 frames (median 8 against 12, faster on 5 seeds).
 
 use mcg_tests::{
-    Experiment, ExperimentConfig, FRAMES_TO_ERROR_THRESHOLD, Policy, Run, frames_to_error,
+    Experiment, ExperimentConfig, FRAMES_TO_ERROR_THRESHOLD, Run, UpdatePolicy, frames_to_error,
     frames_to_first_below, mean_error,
 };
 
 /// The run seeds.
 const SEEDS: [u64; 8] = [1, 2, 3, 4, 5, 6, 7, 8];
+
+/// The policies, in the order of the result tables.
+const POLICIES: [UpdatePolicy; 4] = [
+    UpdatePolicy::Adgi,
+    UpdatePolicy::Ddgi,
+    UpdatePolicy::AdgiUnguided,
+    UpdatePolicy::AdgiRefill,
+];
+
+/// Every (policy, seed) run, on as many threads as the machine has (each run is
+/// deterministic and independent, so the order does not change a number).
+fn run_all(exp: &Experiment) -> Vec<Vec<Run>> {
+    let jobs: Vec<(usize, usize)> = (0..POLICIES.len())
+        .flat_map(|i| (0..SEEDS.len()).map(move |j| (i, j)))
+        .collect();
+    let threads = std::thread::available_parallelism().map_or(1, usize::from);
+    let mut done: Vec<(usize, usize, Run)> = std::thread::scope(|scope| {
+        let handles: Vec<_> = jobs
+            .chunks(jobs.len().div_ceil(threads))
+            .map(|chunk| {
+                scope.spawn(move || {
+                    chunk
+                        .iter()
+                        .map(|&(i, j)| (i, j, exp.run_with_seed(POLICIES[i], SEEDS[j], &[])))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().expect("a run panicked"))
+            .collect()
+    });
+    done.sort_by_key(|r| (r.0, r.1));
+    let mut runs: Vec<Vec<Run>> = vec![Vec::new(); POLICIES.len()];
+    for (i, _, run) in done {
+        runs[i].push(run);
+    }
+    runs
+}
 
 #[test]
 fn adaptive_sampling_brings_the_error_near_the_event_down_faster() {
@@ -63,22 +123,28 @@ fn adaptive_sampling_brings_the_error_near_the_event_down_faster() {
     let t = FRAMES_TO_ERROR_THRESHOLD;
     let e = cfg.event_frame;
     let window = e + 10;
-    let policies = [Policy::Adgi, Policy::UniformDdgi, Policy::AdgiUnguided];
-    // first[policy][seed], mean[policy][seed].
-    let mut first = [[u32::MAX; SEEDS.len()]; 3];
-    let mut mean = [[0.0_f64; SEEDS.len()]; 3];
-    for (i, &policy) in policies.iter().enumerate() {
-        for (j, &seed) in SEEDS.iter().enumerate() {
-            let run = exp.run_with_seed(policy, seed, &[]);
-            check_budget(&run, budget);
-            // Both start below the threshold, so it measures the recovery from the event.
+    let runs = run_all(&exp);
+    // first[policy][seed] (never = u32::MAX), mean[policy][seed], tail[policy][seed] (near
+    // error over the last 10 frames), tail_all[policy][seed] (all probes, last 10 frames).
+    let mut first = [[u32::MAX; SEEDS.len()]; POLICIES.len()];
+    let mut mean = [[0.0_f64; SEEDS.len()]; POLICIES.len()];
+    let mut tail = [[0.0_f64; SEEDS.len()]; POLICIES.len()];
+    let mut tail_all = [[0.0_f64; SEEDS.len()]; POLICIES.len()];
+    for (i, policy_runs) in runs.iter().enumerate() {
+        for (j, run) in policy_runs.iter().enumerate() {
+            let policy = run.policy;
+            let seed = SEEDS[j];
+            check_budget(run, budget);
+            // All start below the threshold, so it measures the recovery from the event.
             assert!(
                 mean_error(&run.error_near, 4, e) < t,
                 "{policy:?}, seed {seed}: pre-event error above the threshold"
             );
             first[i][j] = frames_to_first_below(&run.error_near, e, t).unwrap_or(u32::MAX);
             mean[i][j] = mean_error(&run.error_near, e, window);
-            report(&run, seed, cfg, t);
+            tail[i][j] = mean_error(&run.error_near, cfg.frames - 10, cfg.frames);
+            tail_all[i][j] = mean_error(&run.error_all, cfg.frames - 10, cfg.frames);
+            report(run, seed, cfg, t);
         }
     }
     // Lower median (never counts as u32::MAX).
@@ -88,7 +154,7 @@ fn adaptive_sampling_brings_the_error_near_the_event_down_faster() {
         v[(v.len() - 1) / 2]
     };
     let average = |v: [f64; SEEDS.len()]| v.iter().sum::<f64>() / v.len() as f64;
-    let (adgi, ddgi, unguided) = (0, 1, 2);
+    let (adgi, ddgi, unguided, refill) = (0, 1, 2, 3);
 
     // H1.
     assert!(
@@ -112,7 +178,51 @@ fn adaptive_sampling_brings_the_error_near_the_event_down_faster() {
         mean[adgi],
         mean[unguided]
     );
+    // H3: the refill extension meets the speed target; the paper's ADGI does not.
+    let meets_speed_target = |p: usize| {
+        let faster = (0..SEEDS.len())
+            .filter(|&j| first[p][j] < first[ddgi][j])
+            .count();
+        10 * u64::from(median(first[p])) <= 6 * u64::from(median(first[ddgi]))
+            && faster == SEEDS.len()
+    };
+    assert!(
+        meets_speed_target(refill),
+        "H3: ADGI + refill, frames to below {t}: {:?}, uniform DDGI {:?}",
+        first[refill],
+        first[ddgi]
+    );
+    assert!(
+        !meets_speed_target(adgi),
+        "H3: the paper's ADGI now meets the speed target too ({:?} against {:?}): \
+         update the suite's docs",
+        first[adgi],
+        first[ddgi]
+    );
+    // H4: refill ends with a lower near-event error than the paper's ADGI.
+    assert!(
+        average(tail[refill]) < average(tail[adgi]),
+        "H4: near-event error over the last 10 frames: ADGI + refill {:?}, ADGI {:?}",
+        tail[refill],
+        tail[adgi]
+    );
+    // H5: why ADGI cannot end below DDGI over all probes: the radiance texels' own floor.
+    let (floor_all, floor_near) = exp.radiance_texel_floor(cfg.frames - 1, FLOOR_STRATA);
+    let ddgi_worst = tail_all[ddgi].iter().fold(0.0_f64, |m, &v| m.max(v));
+    println!(
+        "radiance-texel floor ({} rays per texel): all probes {floor_all:.4}, near {floor_near:.4}; \
+         uniform DDGI all-probe error over the last 10 frames at most {ddgi_worst:.4}",
+        FLOOR_STRATA * FLOOR_STRATA
+    );
+    assert!(
+        floor_all > ddgi_worst,
+        "H5: radiance-texel floor {floor_all} is not above DDGI's end error {ddgi_worst}"
+    );
 }
+
+/// The floor of H5 uses `FLOOR_STRATA²` jittered rays per texel (its own noise is then well
+/// below its value: 64 rays per texel gave 0.106, 256 give 0.102, 1024 gave 0.102).
+const FLOOR_STRATA: u32 = 16;
 
 /// Equal budget: never more than DDGI's rays, and ADGI's cut sample lists use nearly all.
 fn check_budget(run: &Run, budget: u64) {

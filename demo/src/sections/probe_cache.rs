@@ -13,7 +13,8 @@
 use mcg_probe_cache::glam::Vec3;
 use mcg_probe_cache::{ProbeTexels, TexelConfig};
 use mcg_tests::{
-    Experiment, ExperimentConfig, Policy, Run, frames_to_error, frames_to_first_below, mean_error,
+    Experiment, ExperimentConfig, Run, UpdatePolicy, frames_to_error, frames_to_first_below,
+    mean_error,
 };
 use plotters::prelude::*;
 use plotters::style::FontStyle;
@@ -24,7 +25,12 @@ use crate::plot::{self, Axis, FONT_FAMILY, LineChart, PALETTE, Series, SeriesLab
 use crate::report::{Section, Table};
 
 /// The policies of the experiment, in chart order.
-const POLICIES: [Policy; 3] = [Policy::Adgi, Policy::AdgiUnguided, Policy::UniformDdgi];
+const POLICIES: [UpdatePolicy; 4] = [
+    UpdatePolicy::Adgi,
+    UpdatePolicy::AdgiRefill,
+    UpdatePolicy::AdgiUnguided,
+    UpdatePolicy::Ddgi,
+];
 
 /// The error threshold of the frames-to-error table (relative RMS error near the event).
 pub const THRESHOLD: f64 = mcg_tests::FRAMES_TO_ERROR_THRESHOLD;
@@ -87,7 +93,7 @@ impl Study {
     /// Runs every policy (with a progress bar).
     fn run(ctx: &Context<'_>) -> Self {
         let cfg = config(ctx);
-        let bar = ctx.progress(4, "Probe cache: experiments");
+        let bar = ctx.progress(1 + POLICIES.len() as u64, "Probe cache: experiments");
         let exp = Experiment::new(cfg);
         bar.inc(1);
         let after = (cfg.event_frame + cfg.transition_frames + 2).min(cfg.frames - 1);
@@ -174,7 +180,7 @@ fn slices(ctx: &Context<'_>, section: &mut Section, study: &Study) -> Result<()>
         ))
         .figure(
             file,
-            "Probe irradiance maps of one grid layer before and after the door opens: reference, ADGI, ADGI with a constant guide, uniform DDGI.",
+            "Probe irradiance maps of one grid layer before and after the door opens: reference, ADGI, ADGI + refill (mcg), ADGI with a constant guide, uniform DDGI.",
         );
     Ok(())
 }
@@ -197,14 +203,17 @@ fn error_over_frames(ctx: &Context<'_>, section: &mut Section, study: &Study) ->
              radiance change at the doorway, its dynamic chains send 64 rays per probe octant \
              into the changed octants of the 3×3×3 proxies around it with N_max = 10, and the \
              static chains refine the rest: its error near the event drops within a few frames. \
-             It does not stay there: after the dynamic phase the texels near the door restart \
-             their moving average from N = 10 and need tens of frames to reach N = 63 again, \
-             while DDGI's blend uses every ray for half of each probe's texels, so late in the \
-             run DDGI's error is the lower one. ADGI's texels also hold radiance per texel, and \
-             turning them into irradiance costs a discretisation floor (≈ 0.07) that DDGI's \
-             cosine-blended texels do not have. The constant-guide run spends ADGI's rays \
-             through the same machinery but uniformly over (p, ω): the gap between it and ADGI \
-             is what the guide buys.",
+             It does not stay there: the dynamic rays reach only the octants whose pilot rays saw \
+             the change, so texels of the same probes that face the doorway can keep their old, \
+             dark value with a full window (N = 63), and the static chains, which know nothing \
+             of windows, refresh them at under one ray per texel and frame. ADGI + refill (mcg's \
+             extension) restarts every texel of a probe whose change grows and steers the static \
+             chains toward texels whose window is not full: it falls below the threshold sooner \
+             and stays lower. Over all probes DDGI still ends lower: ADGI's texels hold radiance \
+             per texel, and turning that into irradiance has a floor of its own (≈ 0.10 with the \
+             exact mean radiance in every texel) that DDGI's cosine-blended texels do not have. \
+             The constant-guide run spends ADGI's rays through the same machinery but uniformly \
+             over (p, ω): the gap between it and ADGI is what the guide buys.",
             cfg.rays_per_probe
         ))
         .figure(
