@@ -32,12 +32,17 @@
 //! the pilot state it reads back, feeding the chains' samples to the GPU's per-sample update.
 
 #[cfg(feature = "runtime")]
+mod chains;
+#[cfg(feature = "runtime")]
 mod guide;
 mod params;
 
 #[cfg(feature = "runtime")]
+pub use chains::{GpuProbeChains, GpuTriggerSmoothing};
+#[cfg(feature = "runtime")]
 pub use guide::GpuProbeCache;
 pub use params::{
-    AdgiConfigError, AdgiGpuParams, GpuClipVolume, GpuClipVolumes, GpuIrradianceQuery,
-    GpuPilotStep, GpuRaySample, GpuStepParams, ProbeCacheConfig, rounding_code,
+    AdgiConfigError, AdgiGpuParams, GpuChainParams, GpuChainState, GpuClipVolume, GpuClipVolumes,
+    GpuGuideQuery, GpuIrradianceQuery, GpuPilotStep, GpuProbeSample, GpuRaySample,
+    GpuSmoothingPass, GpuStepParams, ProbeCacheConfig, chain_step_uniforms, rounding_code,
 };
