@@ -47,11 +47,7 @@ fn cache(ctx: &GpuContext, grid: ProbeGrid) -> GpuProbeCache {
 
 /// Heuristics words per probe and octant: `hot(coords, octant)` gives f_s and f_d's scale;
 /// f_v random; a tenth of the octants zero.
-fn words(
-    grid: &ProbeGrid,
-    rng: &mut Pcg64,
-    hot: impl Fn(UVec3, usize) -> f32,
-) -> Vec<u32> {
+fn words(grid: &ProbeGrid, rng: &mut Pcg64, hot: impl Fn(UVec3, usize) -> f32) -> Vec<u32> {
     (0..grid.probe_count() * 8)
         .map(|i| {
             let (probe, o) = (i / 8, i % 8);
@@ -72,7 +68,9 @@ fn words(
 }
 
 fn heuristic_words(w: &[u32]) -> Vec<mcg_color_codec::HeuristicsWord> {
-    w.iter().map(|&x| mcg_color_codec::HeuristicsWord(x)).collect()
+    w.iter()
+        .map(|&x| mcg_color_codec::HeuristicsWord(x))
+        .collect()
 }
 
 /// Distance in units in the last place between two non-negative finite floats.
@@ -98,7 +96,9 @@ fn guiding_values_match_the_cpu() {
         UVec3::new(7, 5, 4),
     )
     .unwrap();
-    let w = words(&grid, &mut rng, |c, o| if (c.x + o as u32) % 3 == 0 { 0.3 } else { 1.0 });
+    let w = words(&grid, &mut rng, |c, o| {
+        if (c.x + o as u32) % 3 == 0 { 0.3 } else { 1.0 }
+    });
     let queries: Vec<(Vec3, Vec3)> = (0..2000)
         .map(|i| {
             let lo = Vec3::new(-1.6, -0.1, -0.8);
@@ -112,15 +112,24 @@ fn guiding_values_match_the_cpu() {
             (p, d)
         })
         .collect();
-    let gpu_queries: Vec<GpuGuideQuery> =
-        queries.iter().map(|&(p, d)| GpuGuideQuery::new(p, d)).collect();
+    let gpu_queries: Vec<GpuGuideQuery> = queries
+        .iter()
+        .map(|&(p, d)| GpuGuideQuery::new(p, d))
+        .collect();
     for kind in [ChainKind::Static, ChainKind::Dynamic] {
         let (cells, field, params) = match kind {
-            ChainKind::Static => (ProxyGrid::probes(grid), HeuristicField::Static, GuideParams::STATIC),
-            ChainKind::Dynamic => (ProxyGrid::adgi(grid), HeuristicField::Dynamic, GuideParams::DYNAMIC),
+            ChainKind::Static => (
+                ProxyGrid::probes(grid),
+                HeuristicField::Static,
+                GuideParams::STATIC,
+            ),
+            ChainKind::Dynamic => (
+                ProxyGrid::adgi(grid),
+                HeuristicField::Dynamic,
+                GuideParams::DYNAMIC,
+            ),
         };
-        let chains =
-            ProbeChains::new(cells, kind, 4, FrameSchedule::DEFAULT, || [0.5; 5]).unwrap();
+        let chains = ProbeChains::new(cells, kind, 4, FrameSchedule::DEFAULT, || [0.5; 5]).unwrap();
         let gpu = GpuProbeChains::new(ctx, &chains, params).unwrap();
         // CPU tables.
         let mut per_probe = vec![0.0; grid.probe_count() * 8];
@@ -154,7 +163,10 @@ fn guiding_values_match_the_cpu() {
             // WGSL's exp is within 3 + 2|x| ULP (x ≤ cap = 1), the CPU's within 1, and the
             // product with f rounds once more: 7 ULP. The dynamic form has no exp.
             let bound = if kind == ChainKind::Static { 7 } else { 0 };
-            assert!(e <= bound, "{kind:?} h({p}, {d}): GPU {g} CPU {c} ({e} ULP)");
+            assert!(
+                e <= bound,
+                "{kind:?} h({p}, {d}): GPU {g} CPU {c} ({e} ULP)"
+            );
         }
         assert!(positive > 800, "{kind:?}: {positive} positive values");
         println!("{kind:?}: worst {worst} ULP over {} queries", queries.len());
@@ -162,7 +174,11 @@ fn guiding_values_match_the_cpu() {
 }
 
 /// One chain as the CPU runs it alone, from `state`, with its own uniforms.
-fn single_chain(cells: ProxyGrid, kind: ChainKind, state: mcg_probe_cache::ProbeChainState) -> ProbeChains {
+fn single_chain(
+    cells: ProxyGrid,
+    kind: ChainKind,
+    state: mcg_probe_cache::ProbeChainState,
+) -> ProbeChains {
     let mut c = ProbeChains::new(cells, kind, 1, FrameSchedule::DEFAULT, || [0.5; 5]).unwrap();
     c.states_mut()[0] = state;
     c
@@ -171,7 +187,9 @@ fn single_chain(cells: ProxyGrid, kind: ChainKind, state: mcg_probe_cache::Probe
 /// Chain states equal to f32 tolerance: positions within 10⁻⁴ spacing, z and φ (mod 2π) within
 /// 10⁻⁴, h within 2 ULP·8 (the static form's exp).
 fn assert_state_close(g: &GpuChainState, c: &mcg_probe_cache::ProbeChainState, what: &str) {
-    let dp = (g.position - Vec3::new(c.x[0], c.x[1], c.x[2])).abs().max_element();
+    let dp = (g.position - Vec3::new(c.x[0], c.x[1], c.x[2]))
+        .abs()
+        .max_element();
     let dz = (g.z - c.x[3]).abs();
     let dphi = (g.phi - c.x[4]).abs();
     let dphi = dphi.min(core::f32::consts::TAU - dphi);
@@ -255,7 +273,11 @@ fn run_chains(
                 .to_vec();
             let g = &states[j];
             assert_eq!(g.restarted, single.stats().restarts, "{what}: restart");
-            assert_eq!(g.accepted.count_ones(), single.stats().accepted, "{what}: accepted");
+            assert_eq!(
+                g.accepted.count_ones(),
+                single.stats().accepted,
+                "{what}: accepted"
+            );
             assert_state_close(g, &single.states()[0], &what);
             assert_state_close(g, &cpu.states()[j], &what);
             if kind == ChainKind::Static {
@@ -263,9 +285,19 @@ fn run_chains(
                 assert_eq!(mine.len(), own.len(), "{what}: samples");
                 for (i, (gs, cs)) in mine.iter().zip(&own).enumerate() {
                     let c = gs.to_cpu(&grid);
-                    assert_eq!((c.cell, c.probe, c.octant), (cs.cell, cs.probe, cs.octant), "{what}: sample {i}");
-                    assert!((c.position - cs.position).abs().max_element() < 1e-4, "{what}: sample {i}");
-                    assert!((c.direction - cs.direction).abs().max_element() < 1e-4, "{what}: sample {i}");
+                    assert_eq!(
+                        (c.cell, c.probe, c.octant),
+                        (cs.cell, cs.probe, cs.octant),
+                        "{what}: sample {i}"
+                    );
+                    assert!(
+                        (c.position - cs.position).abs().max_element() < 1e-4,
+                        "{what}: sample {i}"
+                    );
+                    assert!(
+                        (c.direction - cs.direction).abs().max_element() < 1e-4,
+                        "{what}: sample {i}"
+                    );
                 }
                 // The accept/reject of each emitted step after the first: did the state move?
                 let steps: Vec<u32> = mine.iter().map(|s| s.step).collect();
@@ -274,16 +306,27 @@ fn run_chains(
                         continue;
                     }
                     let moved = a.position != b.position;
-                    assert_eq!(g.accepted >> b.step & 1 == 1, moved, "{what}: step {}", b.step);
+                    assert_eq!(
+                        g.accepted >> b.step & 1 == 1,
+                        moved,
+                        "{what}: step {}",
+                        b.step
+                    );
                 }
                 assert!(steps.iter().all(|&s| (k as u32..m as u32).contains(&s)));
             }
         }
         if kind == ChainKind::Dynamic {
             let got: BTreeSet<(u32, u32)> = samples.iter().map(|s| (s.cell, s.octant)).collect();
-            let want: BTreeSet<(u32, u32)> =
-                cpu_samples.iter().map(|s| (s.cell, u32::from(s.octant))).collect();
-            assert_eq!(got.len(), samples.len(), "frame {frame}: a (proxy, octant) twice");
+            let want: BTreeSet<(u32, u32)> = cpu_samples
+                .iter()
+                .map(|s| (s.cell, u32::from(s.octant)))
+                .collect();
+            assert_eq!(
+                got.len(),
+                samples.len(),
+                "frame {frame}: a (proxy, octant) twice"
+            );
             assert_eq!(got, want, "frame {frame}: emitted (proxy, octant)");
         }
     }
@@ -298,14 +341,20 @@ fn static_chains_match_the_cpu() {
     let Some((ctx, mut rng)) = common::gpu_and_rng("static_chains_match_the_cpu", 31) else {
         return;
     };
-    let grid = ProbeGrid::new(Vec3::new(0.0, -1.0, 0.5), Vec3::new(0.5, 0.5, 0.75), UVec3::new(6, 4, 4))
-        .unwrap();
+    let grid = ProbeGrid::new(
+        Vec3::new(0.0, -1.0, 0.5),
+        Vec3::new(0.5, 0.5, 0.75),
+        UVec3::new(6, 4, 4),
+    )
+    .unwrap();
     let w = words(&grid, &mut rng, |c, o| match (c.x, o) {
         (4.., _) => 0.0,
         (_, 0..=3) => 1.0,
         _ => 0.25,
     });
-    let feedback: Vec<f32> = (0..grid.probe_count() * 8).map(|_| rng.random_range(0.0f32..0.6)).collect();
+    let feedback: Vec<f32> = (0..grid.probe_count() * 8)
+        .map(|_| rng.random_range(0.0f32..0.6))
+        .collect();
     let [proposals, accepted, restarts, emitted] = run_chains(
         ctx,
         grid,
@@ -317,9 +366,14 @@ fn static_chains_match_the_cpu() {
         40,
         &mut rng,
     );
-    println!("static: {proposals} proposals, {accepted} accepted, {restarts} restarts, {emitted} samples");
+    println!(
+        "static: {proposals} proposals, {accepted} accepted, {restarts} restarts, {emitted} samples"
+    );
     assert_eq!(proposals, 48 * 40 * 8);
-    assert!(accepted > proposals / 10 && accepted < proposals * 9 / 10, "{accepted}");
+    assert!(
+        accepted > proposals / 10 && accepted < proposals * 9 / 10,
+        "{accepted}"
+    );
     assert!(restarts > 0, "no chain restarted");
 }
 
@@ -332,7 +386,15 @@ fn dynamic_chains_match_the_cpu() {
         return;
     };
     let grid = ProbeGrid::new(Vec3::ZERO, Vec3::splat(0.5), UVec3::new(9, 7, 6)).unwrap();
-    let w = words(&grid, &mut rng, |c, o| if c.y < 3 && o % 2 == 0 { 1.0 } else if c.z > 3 { 0.4 } else { 0.0 });
+    let w = words(&grid, &mut rng, |c, o| {
+        if c.y < 3 && o % 2 == 0 {
+            1.0
+        } else if c.z > 3 {
+            0.4
+        } else {
+            0.0
+        }
+    });
     let [proposals, accepted, restarts, emitted] = run_chains(
         ctx,
         grid,
@@ -344,7 +406,9 @@ fn dynamic_chains_match_the_cpu() {
         30,
         &mut rng,
     );
-    println!("dynamic: {proposals} proposals, {accepted} accepted, {restarts} restarts, {emitted} samples");
+    println!(
+        "dynamic: {proposals} proposals, {accepted} accepted, {restarts} restarts, {emitted} samples"
+    );
     assert!(accepted > proposals / 20, "{accepted}");
     assert!(emitted > 30 * 4, "{emitted}");
 }
@@ -377,15 +441,27 @@ fn trigger_smoothing_matches_the_cpu() {
     let (tv, tr): (Vec<f32>, Vec<f32>) = state.iter().map(|s| (s[2], s[3])).unzip();
     for kernel in [
         SmoothingKernel::ADGI,
-        SmoothingKernel { spatial_radius: 1, directional: false },
-        SmoothingKernel { spatial_radius: 0, directional: true },
-        SmoothingKernel { spatial_radius: 9, directional: true },
+        SmoothingKernel {
+            spatial_radius: 1,
+            directional: false,
+        },
+        SmoothingKernel {
+            spatial_radius: 0,
+            directional: true,
+        },
+        SmoothingKernel {
+            spatial_radius: 9,
+            directional: true,
+        },
     ] {
         let (gv, gr) = smoothing.smooth(ctx, &gpu_cache, kernel).unwrap();
         for (input, got, what) in [(&tv, &gv, "f_Δv"), (&tr, &gr, "f_Δr")] {
             let (mut out, mut scratch) = (vec![0.0; n], vec![0.0; n]);
             spatial_smoothing(&grid, kernel, input, &mut out, &mut scratch).unwrap();
-            let first = got.iter().zip(&out).position(|(a, b)| a.to_bits() != b.to_bits());
+            let first = got
+                .iter()
+                .zip(&out)
+                .position(|(a, b)| a.to_bits() != b.to_bits());
             assert_eq!(
                 first.map(|i| (i, got[i], out[i])),
                 None,

@@ -28,8 +28,7 @@ fn build_pipelines<const N: usize>(
         message,
     };
     let device = ctx.device();
-    let source = shaders::compose(source, defs)
-        .map_err(|e| shader_error(e.to_string()))?;
+    let source = shaders::compose(source, defs).map_err(|e| shader_error(e.to_string()))?;
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(label),
@@ -195,8 +194,8 @@ impl GpuProbeChains {
         };
         let params = GpuChainParams::new(chains, guide, field, guide.alpha() > 0.0);
         let schedule = chains.schedule();
-        let samples = chains.states().len() as u64
-            * u64::from(schedule.iterations() - schedule.burn_in());
+        let samples =
+            chains.states().len() as u64 * u64::from(schedule.iterations() - schedule.burn_in());
         let maximum = ctx.device().limits().max_storage_buffer_binding_size;
         if samples > u64::from(u32::MAX) || 48 * samples > maximum {
             return Err(AdgiConfigError::TooManyChainSamples { samples });
@@ -299,7 +298,14 @@ impl GpuProbeChains {
             words: Some(words),
             ..ChainInputs::default()
         };
-        self.record(ctx, encoder, &p.table, &self.params, &inputs, self.cell_table);
+        self.record(
+            ctx,
+            encoder,
+            &p.table,
+            &self.params,
+            &inputs,
+            self.cell_table,
+        );
         Ok(())
     }
 
@@ -378,7 +384,9 @@ impl GpuProbeChains {
         let q = ctx.storage_buffer("adgi guide queries", queries);
         let v = ctx.zeroed_buffer::<f32>("adgi guide values", queries.len());
         let n = queries.len() as u32;
-        submit(ctx, |e| self.record_guide_values(ctx, e, q.raw(), v.raw(), n))?;
+        submit(ctx, |e| {
+            self.record_guide_values(ctx, e, q.raw(), v.raw(), n)
+        })?;
         ctx.read_back(&v)
     }
 
@@ -582,7 +590,13 @@ impl GpuTriggerSmoothing {
                 &self.layout,
                 &[uniform.raw(), src, dst, self.reciprocals.raw()],
             );
-            record_dispatch(ctx, encoder, pipeline, &[cache.bind_group(), &group], invocations);
+            record_dispatch(
+                ctx,
+                encoder,
+                pipeline,
+                &[cache.bind_group(), &group],
+                invocations,
+            );
         }
         Ok(())
     }
