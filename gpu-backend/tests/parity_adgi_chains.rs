@@ -97,7 +97,11 @@ fn guiding_values_match_the_cpu() {
     )
     .unwrap();
     let w = words(&grid, &mut rng, |c, o| {
-        if (c.x + o as u32) % 3 == 0 { 0.3 } else { 1.0 }
+        if (c.x + o as u32).is_multiple_of(3) {
+            0.3
+        } else {
+            1.0
+        }
     });
     let queries: Vec<(Vec3, Vec3)> = (0..2000)
         .map(|i| {
