@@ -12,7 +12,7 @@
 //! |---|---|
 //! | [`shaders`] | the library: [`Module`](shaders::Module)s, [`add_to_composer`](shaders::add_to_composer) (naga_oil), [`compose`](shaders::compose) / [`wgsl`](shaders::wgsl) (plain WGSL), the generated [`constants`](shaders::constants) |
 //! | [`types`] | `Pod` twins of the WGSL structs the host uploads ([`HashgridTableParams`](types::HashgridTableParams), queries, parameters) |
-//! | [`guides`] | the guides on the GPU: [`guides::mcpg`] (`mcg::mcpg` + [`GpuMcpgGuide`](guides::mcpg::GpuMcpgGuide)), [`guides::mcmm`] (`mcg::mcmm` + [`GpuMcmmGuide`](guides::mcmm::GpuMcmmGuide)), [`guides::adgi`] (`mcg::adgi` + [`GpuProbeCache`](guides::adgi::GpuProbeCache): ADGI's probe texels, update, query, DDGI's blend, clip volume, pilot rays) |
+//! | [`guides`] | the guides on the GPU: [`guides::mcpg`] (`mcg::mcpg` + [`GpuMcpgGuide`](guides::mcpg::GpuMcpgGuide)), [`guides::mcmm`] (`mcg::mcmm` + [`GpuMcmmGuide`](guides::mcmm::GpuMcmmGuide)), [`guides::adgi`] (`mcg::adgi` + [`GpuProbeCache`](guides::adgi::GpuProbeCache): ADGI's probe texels, update, query, DDGI's blend, clip volume, pilot rays; `mcg::adgi_chains` + [`GpuProbeChains`](guides::adgi::GpuProbeChains), [`GpuTriggerSmoothing`](guides::adgi::GpuTriggerSmoothing): guiding function, Metropolis probe chains, trigger smoothing) |
 //! | [`codes`] | the integer codes of Rust enums in WGSL, defined once |
 //! | [`sampling`] | the CPU twin of the GPU's random numbers |
 //! | [`GpuContext`] (feature `runtime`) | a headless context or one on your own device ([`GpuContext::from_device`]); pipelines, buffers, dispatch, read-back |

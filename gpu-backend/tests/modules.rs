@@ -498,6 +498,52 @@ fn wgsl_structs_match_the_rust_pod_types() {
             size_of::<GpuPilotStep>(),
             fields!(GpuPilotStep: voxel_diagonal, radiance_range, decay, detect),
         );
+        // The probe chains' module, kernels and the triggers' smoothing.
+        use mcg_gpu_backend::guides::adgi::{
+            GpuChainParams as C, GpuChainState, GpuGuideQuery, GpuProbeSample, GpuSmoothingPass,
+        };
+        check(
+            &m,
+            "AdgiChainState",
+            size_of::<GpuChainState>(),
+            fields!(GpuChainState: position, z, phi, target_value, accepted, restarted),
+        );
+        let chains = parse_and_validate(
+            "adgi chains",
+            &shaders::compose(kernels::ADGI_CHAINS, &[]).unwrap(),
+        );
+        check(
+            &chains,
+            "AdgiChainParams",
+            size_of::<C>(),
+            fields!(C: origin, probe_count, spacing, pad_d, counts, pad_e, lo, block, extent,
+                chain_count, position_step, direction_step, cell_counts, dedup, iterations,
+                burn_in, seed, capacity, alpha, exponent_cap, has_feedback, field, count, pad_a,
+                pad_b, pad_c),
+        );
+        check(
+            &chains,
+            "AdgiProbeSample",
+            size_of::<GpuProbeSample>(),
+            fields!(GpuProbeSample: position, cell, direction, guiding_value, probe, octant,
+                chain, step),
+        );
+        check(
+            &chains,
+            "AdgiGuideQuery",
+            size_of::<GpuGuideQuery>(),
+            fields!(GpuGuideQuery: position, direction),
+        );
+        let smoothing = parse_and_validate(
+            "adgi smoothing",
+            &shaders::compose(kernels::ADGI_SMOOTHING, &GpuProbeCache::shader_defs(0)).unwrap(),
+        );
+        check(
+            &smoothing,
+            "AdgiSmoothingPass",
+            size_of::<GpuSmoothingPass>(),
+            fields!(GpuSmoothingPass: axis, radius, directional, pad_a),
+        );
         // The float-texel variant (the benches' baseline) composes and validates too.
         let mut float_defs = DEFS.to_vec();
         float_defs.push((defs::ADGI_FLOAT_TEXELS, 1));

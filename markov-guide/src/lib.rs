@@ -85,7 +85,8 @@ pub mod toy_scene;
 pub use error::{BufferError, GuideError, ParamsError, WalkError};
 pub use hemisphere::{cosine_hemisphere, cosine_hemisphere_concentric, cosine_hemisphere_pdf};
 pub use metropolis::{
-    ADGI_DIRECTION_STEP, FrameSchedule, MetropolisChain, RandomWalk, StepUniforms,
+    ADGI_DIRECTION_STEP, FrameSchedule, MetropolisChain, NORMAL_QUANTILE_CENTRAL,
+    NORMAL_QUANTILE_SWITCH, NORMAL_QUANTILE_TAIL, NORMAL_QUANTILE_U_MIN, RandomWalk, StepUniforms,
     standard_normal_from_uniform,
 };
 pub use reservoir::Reservoir;

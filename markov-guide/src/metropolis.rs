@@ -23,7 +23,7 @@ use crate::math;
 #[inline]
 #[must_use]
 pub fn standard_normal_from_uniform(u: f32) -> f32 {
-    const LOW: f32 = 1.0 / 33_554_432.0; // 2⁻²⁵
+    const LOW: f32 = NORMAL_QUANTILE_U_MIN; // 2⁻²⁵
     const HIGH: f32 = 1.0 - 1.0 / 16_777_216.0; // 1 − 2⁻²⁴
     if u.is_nan() {
         return 0.0;
@@ -32,30 +32,57 @@ pub fn standard_normal_from_uniform(u: f32) -> f32 {
     // (1 − x)(1 + x) = 4u(1 − u) with x = 2u − 1 avoids the cancellation of 1 − x² near |x| = 1.
     let x = 2.0 * u - 1.0;
     let w = -math::ln(4.0 * u * (1.0 - u));
-    let p = if w < 5.0 {
-        let w = w - 2.5;
-        let mut p = 2.810_226_4e-8_f32;
-        p = 3.432_739_4e-7 + p * w;
-        p = -3.523_387_7e-6 + p * w;
-        p = -4.391_506_5e-6 + p * w;
-        p = 2.185_808_7e-4 + p * w;
-        p = -1.253_725e-3 + p * w;
-        p = -4.177_681_6e-3 + p * w;
-        p = 2.466_407_3e-1 + p * w;
-        1.501_409_4 + p * w
+    let p = if w < NORMAL_QUANTILE_SWITCH {
+        horner(&NORMAL_QUANTILE_CENTRAL, w - 2.5)
     } else {
-        let w = math::sqrt(w) - 3.0;
-        let mut p = -2.002_142_6e-4_f32;
-        p = 1.009_505_6e-4 + p * w;
-        p = 1.349_343_2e-3 + p * w;
-        p = -3.673_428_4e-3 + p * w;
-        p = 5.739_507_7e-3 + p * w;
-        p = -7.622_461_3e-3 + p * w;
-        p = 9.438_870_5e-3 + p * w;
-        p = 1.001_674 + p * w;
-        2.832_976_8 + p * w
+        horner(&NORMAL_QUANTILE_TAIL, math::sqrt(w) - 3.0)
     };
     core::f32::consts::SQRT_2 * p * x
+}
+
+/// Giles' erf⁻¹ polynomial in `w − 2.5` for `w = −ln(1 − x²) <` [`NORMAL_QUANTILE_SWITCH`]
+/// (the central region), highest degree first ([`standard_normal_from_uniform`]).
+pub const NORMAL_QUANTILE_CENTRAL: [f32; 9] = [
+    2.810_226_4e-8,
+    3.432_739_4e-7,
+    -3.523_387_7e-6,
+    -4.391_506_5e-6,
+    2.185_808_7e-4,
+    -1.253_725e-3,
+    -4.177_681_6e-3,
+    2.466_407_3e-1,
+    1.501_409_4,
+];
+
+/// Giles' erf⁻¹ polynomial in `√w − 3` for `w ≥` [`NORMAL_QUANTILE_SWITCH`] (the tails),
+/// highest degree first.
+pub const NORMAL_QUANTILE_TAIL: [f32; 9] = [
+    -2.002_142_6e-4,
+    1.009_505_6e-4,
+    1.349_343_2e-3,
+    -3.673_428_4e-3,
+    5.739_507_7e-3,
+    -7.622_461_3e-3,
+    9.438_870_5e-3,
+    1.001_674,
+    2.832_976_8,
+];
+
+/// Where Giles' erf⁻¹ switches from the central polynomial to the tail's: `w = 5`.
+pub const NORMAL_QUANTILE_SWITCH: f32 = 5.0;
+
+/// The smallest uniform [`standard_normal_from_uniform`] reads, 2⁻²⁵ (smaller ones are clamped
+/// to it; the largest is 1 − 2⁻²⁴).
+pub const NORMAL_QUANTILE_U_MIN: f32 = 1.0 / 33_554_432.0;
+
+/// `c[0]·tⁿ + … + c[n]` by Horner's rule, each step `c[i] + p · t` rounded twice (no FMA).
+#[inline(always)]
+fn horner(c: &[f32; 9], t: f32) -> f32 {
+    let mut p = c[0];
+    for &ci in &c[1..] {
+        p = ci + p * t;
+    }
+    p
 }
 
 /// The persisted state of one Metropolis chain: its position x ∈ ℝᴰ and the target value h(x)

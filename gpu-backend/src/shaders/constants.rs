@@ -95,6 +95,7 @@ pub fn generate() -> String {
     push_codec_constants(&mut out);
     out.push_str("\n// mcg-markov-guide: MCPG's parameters (`McpgParams::PAPER`).\n");
     push_mcpg_params(&mut out, &McpgParams::PAPER);
+    push_normal_quantile(&mut out);
 
     push_probe_cache_constants(&mut out);
     out
@@ -113,6 +114,8 @@ fn push_core_constants(out: &mut String) {
     push_f32(out, "MCG_LN_2", core::f32::consts::LN_2);
     push_f32(out, "MCG_LOG2_E", core::f32::consts::LOG2_E);
     push_f32(out, "MCG_PI", core::f32::consts::PI);
+    push_f32(out, "MCG_SQRT_2", core::f32::consts::SQRT_2);
+    push_f32(out, "MCG_TAU", core::f32::consts::TAU);
 
     out.push_str("\n// mcg-gpu-backend: the random-number convention (`sampling`).\n");
     push_u32(out, "MCG_PCG_HASH_MUL", sampling::PCG_HASH_MUL);
@@ -211,6 +214,27 @@ fn push_probe_cache_constants(out: &mut String) {
         "ADGI_WRAP_SHADING_OFFSET",
         mcg_probe_cache::WRAP_SHADING_OFFSET,
     );
+}
+
+/// The normal quantile of `mcg_markov_guide::standard_normal_from_uniform` (M. Giles' erf⁻¹
+/// polynomials, highest degree first as `_P0`, the switch point and the smallest uniform), for
+/// the random walk of ADGI's probe chains.
+fn push_normal_quantile(out: &mut String) {
+    use mcg_markov_guide::{
+        NORMAL_QUANTILE_CENTRAL, NORMAL_QUANTILE_SWITCH, NORMAL_QUANTILE_TAIL,
+        NORMAL_QUANTILE_U_MIN,
+    };
+    out.push_str("\n// mcg-markov-guide: the walk's normal quantile (Giles' erf⁻¹).\n");
+    for (name, c) in [
+        ("CENTRAL", NORMAL_QUANTILE_CENTRAL),
+        ("TAIL", NORMAL_QUANTILE_TAIL),
+    ] {
+        for (i, v) in c.iter().enumerate() {
+            push_f32(out, &format!("MARKOV_QUANTILE_{name}_P{i}"), *v);
+        }
+    }
+    push_f32(out, "MARKOV_QUANTILE_SWITCH", NORMAL_QUANTILE_SWITCH);
+    push_f32(out, "MARKOV_QUANTILE_U_MIN", NORMAL_QUANTILE_U_MIN);
 }
 
 /// MCPG's parameters as `MCPG_*` constants: N_mc, p_adaptive, p_bsdf, the fit's N_max and

@@ -28,6 +28,7 @@
 //! | `mcg::mcpg` | the whole MCPG guide: `mcpg_begin`, `mcpg_sample`, `mcpg_pdf`, `mcpg_finish`, the irradiance cache, the per-frame pass, on the group of [`defs::MCPG_GROUP`] (host: `GpuMcpgGuide`) | `mcg_markov_guide::mcpg::Guide` |
 //! | `mcg::mcmm` | MCMM's pixel chains: `McmmParams` and the guide's bindings, Alg. 1 (B-spline offsets, motion, reservoir), Alg. 2 (technique, pdf, sample), Alg. 3 (`mcmm_update`), tile shuffles and the tile-mixture density through workgroup memory | `mcg_markov_guide::mcmm`, `mcg_smis::{CyclicShift, XorPermutation}` |
 //! | `mcg::adgi` | ADGI's probe cache: texel words with the CAS moving average, `adgi_update_sample`, DDGI's `adgi_blend_texel`, `adgi_irradiance_at` with Chebyshev visibility, the clip-volume count reset, on the group of [`defs::ADGI_GROUP`] (host: `GpuProbeCache`) | `mcg_probe_cache::ProbeTexels` |
+//! | `mcg::adgi_chains` | ADGI's guiding function `adgi_guiding_value` (eq. 2), the chain state `AdgiChainState`, `adgi_locate` (nearest probe, cell, octant), `adgi_propose` (Alg. 5 with `adgi_normal_quantile`), `adgi_fold_direction`, `adgi_uniform_state`, the counter-based `adgi_chain_uniforms` (host: `GpuProbeChains`) | `mcg_probe_cache::{guiding_function, proxies, probe_chains}`, `mcg_markov_guide::RandomWalk` |
 //! | `mcg::dispatch` | `mcg_invocation_index` of a [`GpuContext::dispatch`](crate::GpuContext::dispatch) | — |
 //!
 //! # Names
@@ -142,11 +143,13 @@ pub enum Module {
     Mcmm,
     /// `mcg::adgi`: ADGI's probe cache (texels, per-sample update, DDGI's blend, the query).
     Adgi,
+    /// `mcg::adgi_chains`: ADGI's guiding function and Metropolis probe chains.
+    AdgiChains,
 }
 
 impl Module {
     /// Every module, each after the modules it imports.
-    pub const ALL: [Module; 15] = [
+    pub const ALL: [Module; 16] = [
         Module::Constants,
         Module::Math,
         Module::Dispatch,
@@ -162,6 +165,7 @@ impl Module {
         Module::Mcpg,
         Module::Mcmm,
         Module::Adgi,
+        Module::AdgiChains,
     ];
 
     /// The naga_oil import path, e.g. `"mcg::vmf"`.
@@ -183,6 +187,7 @@ impl Module {
             Module::Mcpg => "mcg::mcpg",
             Module::Mcmm => "mcg::mcmm",
             Module::Adgi => "mcg::adgi",
+            Module::AdgiChains => "mcg::adgi_chains",
         }
     }
 
@@ -205,6 +210,7 @@ impl Module {
             Module::Mcpg => "mcg/mcpg.wgsl",
             Module::Mcmm => "mcg/mcmm.wgsl",
             Module::Adgi => "mcg/adgi.wgsl",
+            Module::AdgiChains => "mcg/adgi_chains.wgsl",
         }
     }
 
@@ -227,6 +233,7 @@ impl Module {
             Module::Mcpg => include_str!("../guides/mcpg/mcpg.wgsl"),
             Module::Mcmm => include_str!("../guides/mcmm/mcmm.wgsl"),
             Module::Adgi => include_str!("../guides/adgi/adgi.wgsl"),
+            Module::AdgiChains => include_str!("../guides/adgi/adgi_chains.wgsl"),
         }
     }
 
@@ -384,6 +391,16 @@ pub mod kernels {
     /// steps of `GpuProbeCache`, the cache's group at group 0 and the step's inputs at group 1
     /// (run with the cache's own layouts, so not in [`ALL`]).
     pub const ADGI_STEPS: &str = include_str!("../guides/adgi/kernels.wgsl");
+
+    /// Entry points `adgi_guide_table`, `adgi_guide_values`, `adgi_chain_frame`: the steps of
+    /// `GpuProbeChains` on the chains' group at group 0 (run with its layout, so not in
+    /// [`ALL`]).
+    pub const ADGI_CHAINS: &str = include_str!("../guides/adgi/chains.wgsl");
+
+    /// Entry point `adgi_smooth_axis`: one axis of the triggers' smoothing
+    /// (`GpuProbeCache::record_smoothing`), the cache's group at group 0 and the pass at
+    /// group 1 (not in [`ALL`]).
+    pub const ADGI_SMOOTHING: &str = include_str!("../guides/adgi/smoothing.wgsl");
 
     /// Every kernel with its name and entry points, for validation loops.
     pub const ALL: &[(&str, &str, &[&str])] = &[

@@ -26,18 +26,28 @@
 //! V_out, and from their hits the heuristics f_v, f_r (eq. 11-12), the temporal gradient and
 //! the trigger (eq. 13-17), kept per probe and octant in the cache's pilot state.
 //!
-//! Not on the GPU yet: the 5 × 5 × 5 × octant smoothing of the trigger states, the guiding
-//! function and the Metropolis probe chains (`mcg_probe_cache::{temporal_gradient::
-//! spatial_smoothing, guiding_function, probe_chains}`), which a renderer runs on the CPU from
-//! the pilot state it reads back, feeding the chains' samples to the GPU's per-sample update.
+//! The sampling side is `mcg::adgi_chains` with its host objects: [`GpuProbeChains`], ADGI's
+//! guiding function h = exp(min(α ĝ/f, cap)) · f (eq. 2; static chains: f_s and the feedback ĝ
+//! with α = 1, cap 1, sec. 4.8; dynamic chains: f_d max-pooled into 3 × 3 × 3 virtual proxies
+//! with α = 0, sec. 4.9) and the static and dynamic Metropolis probe chains (Alg. 1 with the
+//! random walk of Alg. 5 over (p, cos θ, φ)), and [`GpuTriggerSmoothing`], the 5 × 5 × 5 ×
+//! octant smoothing of the triggers into f_Δv, f_Δr (eq. 15, 18). Their CPU twins are
+//! `mcg_probe_cache::{GuidingFunction, ProxyGrid::max_pool, ProbeChains,
+//! temporal_gradient::spatial_smoothing}`; fed the same uniforms
+//! ([`chain_step_uniforms`]), the chains make the CPU's decisions.
 
+#[cfg(feature = "runtime")]
+mod chains;
 #[cfg(feature = "runtime")]
 mod guide;
 mod params;
 
 #[cfg(feature = "runtime")]
+pub use chains::{GpuProbeChains, GpuTriggerSmoothing};
+#[cfg(feature = "runtime")]
 pub use guide::GpuProbeCache;
 pub use params::{
-    AdgiConfigError, AdgiGpuParams, GpuClipVolume, GpuClipVolumes, GpuIrradianceQuery,
-    GpuPilotStep, GpuRaySample, GpuStepParams, ProbeCacheConfig, rounding_code,
+    AdgiConfigError, AdgiGpuParams, GpuChainParams, GpuChainState, GpuClipVolume, GpuClipVolumes,
+    GpuGuideQuery, GpuIrradianceQuery, GpuPilotStep, GpuProbeSample, GpuRaySample,
+    GpuSmoothingPass, GpuStepParams, ProbeCacheConfig, chain_step_uniforms, rounding_code,
 };

@@ -8,9 +8,11 @@ use bytemuck::{Pod, Zeroable};
 use glam::{UVec3, Vec3, Vec4};
 use mcg_color_codec::{IrradianceLayout, VisibilityLayout};
 use mcg_probe_cache::clip_volume::{ClipVolume, SHELL_COUNT};
+use mcg_probe_cache::probe_chains::{ChainKind, ProbeChainState, ProbeSample, ProbeStepUniforms};
 use mcg_probe_cache::{
-    BlendWeights, ClipVolumes, HeuristicParams, MapKind, PilotPhase, ProbeGrid, ProbeTexels,
-    QueryConfig, RaySample, RoundingMode, TemporalTrigger, TexelConfig, TexelContent,
+    BlendWeights, ClipVolumes, GuideParams, HeuristicField, HeuristicParams, MapKind, PilotPhase,
+    ProbeChains, ProbeGrid, ProbeTexels, QueryConfig, RaySample, RoundingMode, SmoothingKernel,
+    TemporalTrigger, TexelConfig, TexelContent,
 };
 
 use crate::codes;
@@ -38,6 +40,12 @@ pub enum AdgiConfigError {
         /// Words the configuration needs.
         words: u64,
     },
+    /// The chains' samples of one frame (chains × emitted steps) exceed `u32::MAX` or the
+    /// device's binding size.
+    TooManyChainSamples {
+        /// Samples one frame can emit.
+        samples: u64,
+    },
 }
 
 impl fmt::Display for AdgiConfigError {
@@ -54,6 +62,9 @@ impl fmt::Display for AdgiConfigError {
             Self::QueryConstantInvalid => f.write_str("a query constant is invalid"),
             Self::RaysPerProbeZero => f.write_str("rays_per_probe is 0"),
             Self::TooManyWords { words } => write!(f, "{words} texel words are too many"),
+            Self::TooManyChainSamples { samples } => {
+                write!(f, "{samples} chain samples per frame are too many")
+            }
         }
     }
 }
@@ -400,6 +411,273 @@ impl GpuPilotStep {
             decay: trigger.decay(),
             detect: u32::from(phase == PilotPhase::Detect),
         }
+    }
+}
+
+/// One probe chain, WGSL `AdgiChainState` (32 bytes): the CPU's [`ProbeChainState`]
+/// (position, z = cos θ, φ and h) and what its last GPU frame did.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuChainState {
+    /// The chain's position `x[0..3]`.
+    pub position: Vec3,
+    /// `x[3]`, cos θ of the direction.
+    pub z: f32,
+    /// `x[4]`, φ of the direction.
+    pub phi: f32,
+    /// h at the state when it was last evaluated (`MetropolisChain::target`).
+    pub target_value: f32,
+    /// Bit i set when step i (< 32) of the last frame was accepted.
+    pub accepted: u32,
+    /// 1 when the chain restarted uniformly at the start of the last frame (its h was 0).
+    pub restarted: u32,
+}
+const _: () = assert!(size_of::<GpuChainState>() == 32);
+
+impl From<&ProbeChainState> for GpuChainState {
+    fn from(c: &ProbeChainState) -> Self {
+        Self {
+            position: Vec3::new(c.x[0], c.x[1], c.x[2]),
+            z: c.x[3],
+            phi: c.x[4],
+            target_value: c.target,
+            accepted: 0,
+            restarted: 0,
+        }
+    }
+}
+
+impl From<&GpuChainState> for ProbeChainState {
+    fn from(c: &GpuChainState) -> Self {
+        let mut s = ProbeChainState::new([c.position.x, c.position.y, c.position.z, c.z, c.phi]);
+        s.target = c.target_value;
+        s
+    }
+}
+
+/// One emitted chain sample, WGSL `AdgiProbeSample` (48 bytes): the CPU's [`ProbeSample`]
+/// (the probe as its linear index) and which chain emitted it at which step of the frame.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuProbeSample {
+    /// [`ProbeSample::position`].
+    pub position: Vec3,
+    /// [`ProbeSample::cell`]: the probe (static chains) or proxy (dynamic chains).
+    pub cell: u32,
+    /// [`ProbeSample::direction`].
+    pub direction: Vec3,
+    /// [`ProbeSample::guiding_value`].
+    pub guiding_value: f32,
+    /// The linear index of [`ProbeSample::probe`] ([`ProbeGrid::probe_index`]).
+    pub probe: u32,
+    /// [`ProbeSample::octant`].
+    pub octant: u32,
+    /// The chain that emitted it.
+    pub chain: u32,
+    /// The step of the frame (K ≤ step < M).
+    pub step: u32,
+}
+const _: () = assert!(size_of::<GpuProbeSample>() == 48);
+
+impl GpuProbeSample {
+    /// The CPU's [`ProbeSample`] on `grid`.
+    #[must_use]
+    pub fn to_cpu(&self, grid: &ProbeGrid) -> ProbeSample {
+        ProbeSample {
+            cell: self.cell,
+            probe: grid.probe_coords(self.probe as usize),
+            octant: self.octant as u8,
+            position: self.position,
+            direction: self.direction,
+            guiding_value: self.guiding_value,
+        }
+    }
+}
+
+/// A point and direction at which to evaluate the guiding function, WGSL `AdgiGuideQuery`
+/// (32 bytes; `w` unused).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuGuideQuery {
+    /// The world position p.
+    pub position: Vec4,
+    /// The direction ω (any length).
+    pub direction: Vec4,
+}
+const _: () = assert!(size_of::<GpuGuideQuery>() == 32);
+
+impl GpuGuideQuery {
+    /// The query h(`position`, `direction`).
+    #[must_use]
+    pub fn new(position: Vec3, direction: Vec3) -> Self {
+        Self {
+            position: position.extend(0.0),
+            direction: direction.extend(0.0),
+        }
+    }
+}
+
+/// The chains' constants, WGSL `AdgiChainParams` (uniform, 160 bytes), derived from a CPU
+/// [`ProbeChains`] and its [`GuideParams`] by [`GpuChainParams::new`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuChainParams {
+    /// [`ProbeGrid::origin`].
+    pub origin: Vec3,
+    /// [`ProbeGrid::probe_count`].
+    pub probe_count: u32,
+    /// [`ProbeGrid::spacing`].
+    pub spacing: Vec3,
+    /// Padding.
+    pub pad_d: u32,
+    /// [`ProbeGrid::counts`].
+    pub counts: UVec3,
+    /// Padding.
+    pub pad_e: u32,
+    /// The lower corner of the sampling domain (the probes' Voronoi box).
+    pub lo: Vec3,
+    /// Probes per cell edge: 1 (static chains) or the proxy block (dynamic chains).
+    pub block: u32,
+    /// The domain's extent.
+    pub extent: Vec3,
+    /// Number of chains.
+    pub chain_count: u32,
+    /// The walk's position steps σ_p.
+    pub position_step: Vec3,
+    /// The walk's direction step σ_ω (z and φ).
+    pub direction_step: f32,
+    /// Cells per axis ([`ProxyGrid::counts`](mcg_probe_cache::ProxyGrid::counts)).
+    pub cell_counts: UVec3,
+    /// 1 when each (cell, octant) is emitted at most once per frame (dynamic chains).
+    pub dedup: u32,
+    /// M, steps per frame.
+    pub iterations: u32,
+    /// K, the discarded steps.
+    pub burn_in: u32,
+    /// The frame's key of [`chain_step_uniforms`].
+    pub seed: u32,
+    /// Slots of the sample buffer (chains × (M − K)).
+    pub capacity: u32,
+    /// α of eq. 2.
+    pub alpha: f32,
+    /// The cap of the exponent α ĝ / f.
+    pub exponent_cap: f32,
+    /// 1 when the feedback ĝ table is read, 0 for ĝ = 0.
+    pub has_feedback: u32,
+    /// The decoded heuristic: 0 f_v, 1 f_s, 2 f_d ([`HeuristicField`]).
+    pub field: u32,
+    /// Queries of a guide-value step.
+    pub count: u32,
+    /// Padding.
+    pub pad_a: u32,
+    /// Padding.
+    pub pad_b: u32,
+    /// Padding.
+    pub pad_c: u32,
+}
+const _: () = assert!(size_of::<GpuChainParams>() == 160);
+
+impl GpuChainParams {
+    /// The constants of `chains` (grid, walk, schedule, kind) with the guide `guide` (eq. 2's
+    /// α and cap; `feedback`: whether ĝ is read) sampling heuristic `field`. Static chains
+    /// emit every sample, dynamic ones deduplicate (cell, octant) per frame.
+    #[must_use]
+    pub fn new(
+        chains: &ProbeChains,
+        guide: GuideParams,
+        field: HeuristicField,
+        feedback: bool,
+    ) -> Self {
+        let cells = chains.cells();
+        let grid = cells.grid();
+        let steps = chains.walk().step_sizes();
+        let schedule = chains.schedule();
+        let count = chains.states().len() as u32;
+        Self {
+            origin: grid.origin(),
+            probe_count: grid.probe_count() as u32,
+            spacing: grid.spacing(),
+            pad_d: 0,
+            counts: grid.counts(),
+            pad_e: 0,
+            // The expressions of `ProbeChains::new`, so the box is the CPU's bit for bit.
+            lo: grid.origin() - 0.5 * grid.spacing(),
+            block: cells.block(),
+            extent: grid.counts().as_vec3() * grid.spacing(),
+            chain_count: count,
+            position_step: Vec3::new(steps[0], steps[1], steps[2]),
+            direction_step: steps[3],
+            cell_counts: cells.counts(),
+            dedup: u32::from(chains.kind() == ChainKind::Dynamic),
+            iterations: schedule.iterations(),
+            burn_in: schedule.burn_in(),
+            seed: 0,
+            capacity: count.saturating_mul(schedule.iterations() - schedule.burn_in()),
+            alpha: guide.alpha(),
+            exponent_cap: guide.exponent_cap(),
+            has_feedback: u32::from(feedback),
+            field: match field {
+                HeuristicField::Visibility => 0,
+                HeuristicField::Static => 1,
+                HeuristicField::Dynamic => 2,
+            },
+            count: 0,
+            pad_a: 0,
+            pad_b: 0,
+            pad_c: 0,
+        }
+    }
+}
+
+/// The uniforms of draw `draw` (counted from 0 each frame, the restart draw included) of chain
+/// `chain` in the frame keyed `seed`: six uniforms of the `mcg::sampling` stream seeded with
+/// `pcg(pcg(pcg(seed) ^ chain) ^ draw)` — what `adgi_chain_uniforms` draws on the GPU. Pass
+/// `|j, k| chain_step_uniforms(seed, j as u32, k)` to `ProbeChains::step_frame_parallel` to run
+/// the CPU chains on the GPU's uniforms.
+///
+/// # Example
+/// ```
+/// use mcg_gpu_backend::guides::adgi::chain_step_uniforms;
+/// let u = chain_step_uniforms(7, 3, 0);
+/// assert!(u.proposal.iter().chain([&u.accept]).all(|x| (0.0..1.0).contains(x)));
+/// assert_ne!(u, chain_step_uniforms(7, 3, 1));
+/// ```
+#[must_use]
+pub fn chain_step_uniforms(seed: u32, chain: u32, draw: u32) -> ProbeStepUniforms {
+    use crate::sampling::{next_uniform, pcg_hash};
+    let mut state = pcg_hash(pcg_hash(pcg_hash(seed) ^ chain) ^ draw);
+    let proposal = core::array::from_fn(|_| next_uniform(&mut state));
+    ProbeStepUniforms {
+        proposal,
+        accept: next_uniform(&mut state),
+    }
+}
+
+/// One pass of the triggers' smoothing, WGSL `AdgiSmoothingPass` (uniform, 16 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct GpuSmoothingPass {
+    /// 0, 1, 2: the x, y, z pass.
+    pub axis: u32,
+    /// [`SmoothingKernel::spatial_radius`].
+    pub radius: u32,
+    /// [`SmoothingKernel::directional`] as 0 / 1 (read by the x pass).
+    pub directional: u32,
+    /// Padding.
+    pub pad_a: u32,
+}
+const _: () = assert!(size_of::<GpuSmoothingPass>() == 16);
+
+impl GpuSmoothingPass {
+    /// The three passes (x, y, z) of `kernel`.
+    #[must_use]
+    pub fn passes(kernel: SmoothingKernel) -> [Self; 3] {
+        core::array::from_fn(|axis| Self {
+            axis: axis as u32,
+            radius: kernel.spatial_radius,
+            directional: u32::from(kernel.directional),
+            pad_a: 0,
+        })
     }
 }
 

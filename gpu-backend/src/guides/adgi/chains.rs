@@ -1,0 +1,624 @@
+//! `GpuProbeChains` (ADGI's guiding function and Metropolis probe chains) and
+//! `GpuTriggerSmoothing` (the triggers' 5 × 5 × 5 × octant smoothing, on a `GpuProbeCache`).
+
+use std::sync::OnceLock;
+
+use mcg_probe_cache::{
+    ChainKind, FrameStats, GuideParams, HeuristicField, ProbeChainState, ProbeChains,
+    SmoothingKernel,
+};
+
+use super::{
+    AdgiConfigError, GpuChainParams, GpuChainState, GpuGuideQuery, GpuProbeCache, GpuProbeSample,
+    GpuSmoothingPass,
+};
+use crate::shaders::{self, kernels};
+use crate::{GpuBuffer, GpuContext, GpuError, WORKGROUP_SIZE, storage_entry};
+
+/// The pipelines of `entries` in one kernel file, composed with `defs`, with the bind group
+/// `layouts` (group i at i).
+fn build_pipelines<const N: usize>(
+    ctx: &GpuContext,
+    layouts: &[&wgpu::BindGroupLayout],
+    (label, source, defs): (&str, &str, &[(&str, u32)]),
+    entries: [&str; N],
+) -> Result<[wgpu::ComputePipeline; N], GpuError> {
+    let shader_error = |message: String| GpuError::Shader {
+        entry_point: label.to_owned(),
+        message,
+    };
+    let device = ctx.device();
+    let source = shaders::compose(source, defs).map_err(|e| shader_error(e.to_string()))?;
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &layouts.iter().map(|l| Some(*l)).collect::<Vec<_>>(),
+        immediate_size: 0,
+    });
+    let pipelines = entries.map(|entry| {
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: wgpu::PipelineCompilationOptions::default(),
+            cache: None,
+        })
+    });
+    if let Some(error) = pollster::block_on(scope.pop()) {
+        return Err(shader_error(error.to_string()));
+    }
+    Ok(pipelines)
+}
+
+/// Records one dispatch of `pipeline` over `invocations` with `groups[i]` at group i.
+fn record_dispatch(
+    ctx: &GpuContext,
+    encoder: &mut wgpu::CommandEncoder,
+    pipeline: &wgpu::ComputePipeline,
+    groups: &[&wgpu::BindGroup],
+    invocations: u32,
+) {
+    let max = ctx.device().limits().max_compute_workgroups_per_dimension;
+    let workgroups = invocations.div_ceil(WORKGROUP_SIZE).max(1);
+    let x = workgroups.min(max);
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some("adgi chains"),
+        timestamp_writes: None,
+    });
+    pass.set_pipeline(pipeline);
+    for (i, g) in (0..).zip(groups) {
+        pass.set_bind_group(i, *g, &[]);
+    }
+    pass.dispatch_workgroups(x, workgroups.div_ceil(x), 1);
+}
+
+/// A bind group of `layout` with `buffers[i]`, whole, at binding `i`.
+fn bind_group(
+    ctx: &GpuContext,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
+        .iter()
+        .zip(0..)
+        .map(|(b, binding)| wgpu::BindGroupEntry {
+            binding,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("adgi chains"),
+        layout,
+        entries: &entries,
+    })
+}
+
+fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    crate::buffer_entry(binding, wgpu::BufferBindingType::Uniform)
+}
+
+/// Runs `record` in an encoder of its own and submits it.
+fn submit(
+    ctx: &GpuContext,
+    record: impl FnOnce(&mut wgpu::CommandEncoder) -> Result<(), GpuError>,
+) -> Result<(), GpuError> {
+    let mut encoder = ctx
+        .device()
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+    record(&mut encoder)?;
+    ctx.queue().submit([encoder.finish()]);
+    Ok(())
+}
+
+/// The chains' pipelines.
+#[derive(Debug)]
+struct ChainPipelines {
+    table: wgpu::ComputePipeline,
+    values: wgpu::ComputePipeline,
+    frame: wgpu::ComputePipeline,
+}
+
+/// Counters before the claimed bits in the counter buffer (`chain_counters`).
+const COUNTERS: usize = 8;
+
+/// ADGI's static or dynamic Metropolis probe chains on the GPU (ADGI sec. 3.3, 4.8, 4.9,
+/// Alg. 1 and 5), the twin of `mcg_probe_cache::ProbeChains` with its `GuidingFunction`: one
+/// chain per invocation, persistent chain states, the guide tabulated per cell and octant, the
+/// frame's samples appended to a buffer through an atomic counter. Each step is one dispatch
+/// recorded into the caller's encoder:
+///
+/// | step | record | CPU twin |
+/// |---|---|---|
+/// | the guide's table: f_s or f_d of the heuristics words, max-pooled into the cells | [`record_guide`](Self::record_guide) | `guiding_function::decode_field` + `ProxyGrid::max_pool` |
+/// | h(p, ω) at given points | [`record_guide_values`](Self::record_guide_values) | `GuidingFunction::guiding_value` |
+/// | one frame of every chain | [`record_frame`](Self::record_frame) | `ProbeChains::step_frame_parallel` with [`chain_step_uniforms`](super::chain_step_uniforms) |
+///
+/// The guide is `GuidingFunction` over the chains' cells with the given [`GuideParams`]: the
+/// static chains (sec. 4.8) read f_s per probe and octant and the feedback ĝ
+/// ([`feedback`](Self::feedback), 0 until written) with `GuideParams::STATIC`, i.e.
+/// h = exp(min(ĝ/f_s, 1)) f_s; the dynamic chains (sec. 4.9) read f_d max-pooled into ADGI's
+/// 3 × 3 × 3 virtual proxies with α = 0, i.e. h = f_d, and emit each (proxy, octant) at most
+/// once per frame (the first invocation to claim it, an atomic bit per texel).
+///
+/// Samples: up to chains × (M − K) [`GpuProbeSample`]s per frame in [`samples`](Self::samples),
+/// their number in `counters()[0]`, in the order the invocations claimed slots. Trace them as
+/// the CPU's `ProbeSample`s (see `mcg_probe_cache::probe_chains`), e.g. into
+/// `GpuProbeCache::record_update_samples`. Bit i of a state's `accepted` records step i of the
+/// last frame for i < 32.
+#[derive(Debug)]
+pub struct GpuProbeChains {
+    params: GpuChainParams,
+    cell_table: u32,
+    guide: GpuBuffer<f32>,
+    feedback: GpuBuffer<f32>,
+    states: GpuBuffer<GpuChainState>,
+    samples: GpuBuffer<GpuProbeSample>,
+    counters: GpuBuffer<u32>,
+    unused_words: GpuBuffer<u32>,
+    unused_queries: GpuBuffer<GpuGuideQuery>,
+    unused_values: GpuBuffer<f32>,
+    layout: wgpu::BindGroupLayout,
+    pipelines: OnceLock<ChainPipelines>,
+}
+
+/// The buffers of one chain step at bindings 1, 7, 8 (`None`: the unused stand-in).
+#[derive(Default)]
+struct ChainInputs<'a> {
+    words: Option<&'a wgpu::Buffer>,
+    queries: Option<&'a wgpu::Buffer>,
+    values: Option<&'a wgpu::Buffer>,
+}
+
+impl GpuProbeChains {
+    /// The chains of `chains` (its kind, cells, walk, schedule and current states) on the GPU,
+    /// sampling the guide `guide`: f_s for static chains, f_d for dynamic ones, the feedback ĝ
+    /// read when α > 0.
+    ///
+    /// # Errors
+    /// [`AdgiConfigError::TooManyChainSamples`] when a frame's samples exceed what one binding
+    /// holds.
+    pub fn new(
+        ctx: &GpuContext,
+        chains: &ProbeChains,
+        guide: GuideParams,
+    ) -> Result<Self, AdgiConfigError> {
+        let cells = chains.cells();
+        let field = match chains.kind() {
+            ChainKind::Static => HeuristicField::Static,
+            ChainKind::Dynamic => HeuristicField::Dynamic,
+        };
+        let params = GpuChainParams::new(chains, guide, field, guide.alpha() > 0.0);
+        let schedule = chains.schedule();
+        let samples =
+            chains.states().len() as u64 * u64::from(schedule.iterations() - schedule.burn_in());
+        let maximum = ctx.device().limits().max_storage_buffer_binding_size;
+        if samples > u64::from(u32::MAX) || 48 * samples > maximum {
+            return Err(AdgiConfigError::TooManyChainSamples { samples });
+        }
+        let cell_table = cells.table_len() as u32;
+        let states: Vec<GpuChainState> = chains.states().iter().map(Into::into).collect();
+        let layout = ctx
+            .device()
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("adgi chains"),
+                entries: &[
+                    uniform_entry(0),
+                    storage_entry(1, true),
+                    storage_entry(2, false),
+                    storage_entry(3, true),
+                    storage_entry(4, false),
+                    storage_entry(5, false),
+                    storage_entry(6, false),
+                    storage_entry(7, true),
+                    storage_entry(8, false),
+                ],
+            });
+        let claimed = cell_table.div_ceil(32) as usize;
+        Ok(Self {
+            params,
+            cell_table,
+            guide: ctx.zeroed_buffer("adgi chains guide", cell_table as usize),
+            feedback: ctx.zeroed_buffer("adgi chains feedback", cell_table as usize),
+            states: ctx.storage_buffer("adgi chain states", &states),
+            samples: ctx.zeroed_buffer("adgi chain samples", samples as usize),
+            counters: ctx.zeroed_buffer("adgi chain counters", COUNTERS + claimed),
+            unused_words: ctx.zeroed_buffer("adgi chains unused words", 1),
+            unused_queries: ctx.zeroed_buffer("adgi chains unused queries", 1),
+            unused_values: ctx.zeroed_buffer("adgi chains unused values", 1),
+            layout,
+            pipelines: OnceLock::new(),
+        })
+    }
+
+    fn pipelines(&self, ctx: &GpuContext) -> Result<&ChainPipelines, GpuError> {
+        if let Some(p) = self.pipelines.get() {
+            return Ok(p);
+        }
+        let [table, values, frame] = build_pipelines(
+            ctx,
+            &[&self.layout],
+            ("adgi chains", kernels::ADGI_CHAINS, &[]),
+            ["adgi_guide_table", "adgi_guide_values", "adgi_chain_frame"],
+        )?;
+        Ok(self.pipelines.get_or_init(|| ChainPipelines {
+            table,
+            values,
+            frame,
+        }))
+    }
+
+    /// Records one dispatch of `pipeline` over `invocations` with `params` and `inputs`.
+    fn record(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        pipeline: &wgpu::ComputePipeline,
+        params: &GpuChainParams,
+        inputs: &ChainInputs<'_>,
+        invocations: u32,
+    ) {
+        let uniform = ctx.uniform_buffer("adgi chain params", params);
+        let group = bind_group(
+            ctx,
+            &self.layout,
+            &[
+                uniform.raw(),
+                inputs.words.unwrap_or(self.unused_words.raw()),
+                self.guide.raw(),
+                self.feedback.raw(),
+                self.states.raw(),
+                self.samples.raw(),
+                self.counters.raw(),
+                inputs.queries.unwrap_or(self.unused_queries.raw()),
+                inputs.values.unwrap_or(self.unused_values.raw()),
+            ],
+        );
+        record_dispatch(ctx, encoder, pipeline, &[&group], invocations);
+    }
+
+    /// Records the guide's table from the heuristics words `words` (one `HeuristicsWord` per
+    /// `probe · 8 + octant`, ADGI sec. 4.3): the chains' heuristic (f_s or f_d) of every probe,
+    /// max-pooled into the cells (sec. 4.9; the static chains' cells are single probes).
+    ///
+    /// # Errors
+    /// [`GpuError::Shader`] if the pipelines fail to build (a bug of this crate).
+    pub fn record_guide(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        words: &wgpu::Buffer,
+    ) -> Result<(), GpuError> {
+        let p = self.pipelines(ctx)?;
+        let inputs = ChainInputs {
+            words: Some(words),
+            ..ChainInputs::default()
+        };
+        self.record(
+            ctx,
+            encoder,
+            &p.table,
+            &self.params,
+            &inputs,
+            self.cell_table,
+        );
+        Ok(())
+    }
+
+    /// Records h(p, ω) of the first `count` [`GpuGuideQuery`]s of `queries` into `values`
+    /// (one `f32` each), from the guide's current table and feedback.
+    ///
+    /// # Errors
+    /// [`GpuError::Shader`] if the pipelines fail to build (a bug of this crate).
+    pub fn record_guide_values(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        queries: &wgpu::Buffer,
+        values: &wgpu::Buffer,
+        count: u32,
+    ) -> Result<(), GpuError> {
+        let p = self.pipelines(ctx)?;
+        let params = GpuChainParams {
+            count,
+            ..self.params
+        };
+        let inputs = ChainInputs {
+            queries: Some(queries),
+            values: Some(values),
+            ..ChainInputs::default()
+        };
+        self.record(ctx, encoder, &p.values, &params, &inputs, count);
+        Ok(())
+    }
+
+    /// Records one frame of every chain (ADGI Alg. 1): clears the counters and the claimed
+    /// texels, then one dispatch; chain `j` draws its `k`-th uniforms as
+    /// [`chain_step_uniforms`](super::chain_step_uniforms)`(seed, j, k)` (use a new `seed`
+    /// every frame).
+    ///
+    /// # Errors
+    /// [`GpuError::Shader`] if the pipelines fail to build (a bug of this crate).
+    pub fn record_frame(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        seed: u32,
+    ) -> Result<(), GpuError> {
+        let p = self.pipelines(ctx)?;
+        encoder.clear_buffer(self.counters.raw(), 0, None);
+        let params = GpuChainParams {
+            seed,
+            ..self.params
+        };
+        let n = self.params.chain_count;
+        self.record(ctx, encoder, &p.frame, &params, &ChainInputs::default(), n);
+        Ok(())
+    }
+
+    /// [`record_guide`](Self::record_guide) from host words, submitted.
+    ///
+    /// # Errors
+    /// [`GpuError::LengthMismatch`] unless there is one word per probe and octant; as
+    /// [`record_guide`](Self::record_guide).
+    pub fn guide_from_words(&self, ctx: &GpuContext, words: &[u32]) -> Result<(), GpuError> {
+        GpuError::check_len(8 * self.params.probe_count as usize, words.len())?;
+        let w = ctx.storage_buffer("adgi heuristics words", words);
+        submit(ctx, |e| self.record_guide(ctx, e, w.raw()))
+    }
+
+    /// [`record_guide_values`](Self::record_guide_values) of host queries, read back.
+    ///
+    /// # Errors
+    /// As [`record_guide_values`](Self::record_guide_values); [`GpuError::Map`] when the
+    /// read-back fails.
+    pub fn guide_values(
+        &self,
+        ctx: &GpuContext,
+        queries: &[GpuGuideQuery],
+    ) -> Result<Vec<f32>, GpuError> {
+        let q = ctx.storage_buffer("adgi guide queries", queries);
+        let v = ctx.zeroed_buffer::<f32>("adgi guide values", queries.len());
+        let n = queries.len() as u32;
+        submit(ctx, |e| {
+            self.record_guide_values(ctx, e, q.raw(), v.raw(), n)
+        })?;
+        ctx.read_back(&v)
+    }
+
+    /// [`record_frame`](Self::record_frame), submitted.
+    ///
+    /// # Errors
+    /// As [`record_frame`](Self::record_frame).
+    pub fn step_frame(&self, ctx: &GpuContext, seed: u32) -> Result<(), GpuError> {
+        submit(ctx, |e| self.record_frame(ctx, e, seed))
+    }
+
+    /// Overwrites the feedback ĝ per cell and octant (e.g. `guiding_function::octant_feedback`
+    /// of the previous frame's irradiance).
+    ///
+    /// # Errors
+    /// [`GpuError::LengthMismatch`] unless `feedback` has one value per cell and octant.
+    pub fn write_feedback(&self, ctx: &GpuContext, feedback: &[f32]) -> Result<(), GpuError> {
+        ctx.write(&self.feedback, feedback)
+    }
+
+    /// Overwrites the guide's table f per cell and octant (instead of
+    /// [`record_guide`](Self::record_guide)).
+    ///
+    /// # Errors
+    /// [`GpuError::LengthMismatch`] unless `f` has one value per cell and octant.
+    pub fn write_guide_table(&self, ctx: &GpuContext, f: &[f32]) -> Result<(), GpuError> {
+        ctx.write(&self.guide, f)
+    }
+
+    /// The guide's table f per cell and octant, read back.
+    ///
+    /// # Errors
+    /// [`GpuError::Map`] when the read-back fails.
+    pub fn read_guide_table(&self, ctx: &GpuContext) -> Result<Vec<f32>, GpuError> {
+        ctx.read_back(&self.guide)
+    }
+
+    /// Overwrites the chain states (h is re-evaluated at the next frame anyway).
+    ///
+    /// # Errors
+    /// [`GpuError::LengthMismatch`] unless there is one state per chain.
+    pub fn write_states(
+        &self,
+        ctx: &GpuContext,
+        states: &[ProbeChainState],
+    ) -> Result<(), GpuError> {
+        let s: Vec<GpuChainState> = states.iter().map(Into::into).collect();
+        ctx.write(&self.states, &s)
+    }
+
+    /// The chain states after the last frame, read back.
+    ///
+    /// # Errors
+    /// [`GpuError::Map`] when the read-back fails.
+    pub fn read_states(&self, ctx: &GpuContext) -> Result<Vec<GpuChainState>, GpuError> {
+        ctx.read_back(&self.states)
+    }
+
+    /// The last frame's samples, read back (in slot order).
+    ///
+    /// # Errors
+    /// [`GpuError::Map`] when the read-back fails.
+    pub fn read_samples(&self, ctx: &GpuContext) -> Result<Vec<GpuProbeSample>, GpuError> {
+        let n = ctx.read_back(&self.counters)?[0] as usize;
+        let mut all = ctx.read_back(&self.samples)?;
+        all.truncate(n.min(self.samples.len()));
+        Ok(all)
+    }
+
+    /// The last frame's counters, as the CPU's [`FrameStats`].
+    ///
+    /// # Errors
+    /// [`GpuError::Map`] when the read-back fails.
+    pub fn read_stats(&self, ctx: &GpuContext) -> Result<FrameStats, GpuError> {
+        let c = ctx.read_back(&self.counters)?;
+        Ok(FrameStats {
+            emitted: c[0],
+            proposals: c[1],
+            accepted: c[2],
+            restarts: c[3],
+            dropped: c[4],
+        })
+    }
+
+    /// The chains' constants.
+    #[must_use]
+    pub const fn params(&self) -> &GpuChainParams {
+        &self.params
+    }
+
+    /// The chain states ([`GpuChainState`] per chain).
+    #[must_use]
+    pub fn states(&self) -> &GpuBuffer<GpuChainState> {
+        &self.states
+    }
+
+    /// The samples of the last frame (the first `counters()[0]` are written).
+    #[must_use]
+    pub fn samples(&self) -> &GpuBuffer<GpuProbeSample> {
+        &self.samples
+    }
+
+    /// The counters of the last frame: samples written, proposals, accepted, restarts,
+    /// dropped, three unused words, then the claimed bits of the (cell, octant) texels.
+    #[must_use]
+    pub fn counters(&self) -> &GpuBuffer<u32> {
+        &self.counters
+    }
+
+    /// The feedback ĝ per cell and octant.
+    #[must_use]
+    pub fn feedback(&self) -> &GpuBuffer<f32> {
+        &self.feedback
+    }
+
+    /// The guide's table f per cell and octant.
+    #[must_use]
+    pub fn guide_table(&self) -> &GpuBuffer<f32> {
+        &self.guide
+    }
+}
+
+/// The smoothing of the temporal triggers on the GPU (ADGI sec. 4.1.4, eq. 15 and 18): the
+/// twin of `temporal_gradient::spatial_smoothing` applied to the trigger states that
+/// `GpuProbeCache::record_pilot_hits` keeps (f_1 and f_3 of eq. 14, 17), writing f_Δv and f_Δr
+/// per probe and octant into [`delta`](Self::delta), equal to the CPU's bit for bit. Three
+/// dispatches (x, y, z; the octant average rides in the x pass).
+#[derive(Debug)]
+pub struct GpuTriggerSmoothing {
+    delta: GpuBuffer<[f32; 2]>,
+    scratch: GpuBuffer<[f32; 2]>,
+    reciprocals: GpuBuffer<f32>,
+    layout: wgpu::BindGroupLayout,
+    pipeline: OnceLock<wgpu::ComputePipeline>,
+}
+
+impl GpuTriggerSmoothing {
+    /// The smoothing's buffers for `cache`'s grid.
+    #[must_use]
+    pub fn new(ctx: &GpuContext, cache: &GpuProbeCache) -> Self {
+        let p = cache.params();
+        let n = 8 * p.probe_count as usize;
+        let longest = p.counts.max_element();
+        // 1/n as the CPU rounds it (index 0 unused).
+        let reciprocals: Vec<f32> = (0..=longest)
+            .map(|k| if k == 0 { 0.0 } else { 1.0 / k as f32 })
+            .collect();
+        let layout = ctx
+            .device()
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("adgi smoothing"),
+                entries: &[
+                    uniform_entry(0),
+                    storage_entry(1, true),
+                    storage_entry(2, false),
+                    storage_entry(3, true),
+                ],
+            });
+        Self {
+            delta: ctx.zeroed_buffer("adgi smoothed triggers", n),
+            scratch: ctx.zeroed_buffer("adgi smoothing scratch", n),
+            reciprocals: ctx.storage_buffer("adgi smoothing reciprocals", &reciprocals),
+            layout,
+            pipeline: OnceLock::new(),
+        }
+    }
+
+    /// Records the smoothing of `cache`'s trigger states with `kernel` into
+    /// [`delta`](Self::delta): three dispatches.
+    ///
+    /// # Errors
+    /// [`GpuError::Shader`] if the pipeline fails to build (a bug of this crate).
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        cache: &GpuProbeCache,
+        kernel: SmoothingKernel,
+    ) -> Result<(), GpuError> {
+        let pipeline = match self.pipeline.get() {
+            Some(p) => p,
+            None => {
+                let defs = GpuProbeCache::shader_defs(0);
+                let [p] = build_pipelines(
+                    ctx,
+                    &[cache.bind_group_layout(), &self.layout],
+                    ("adgi smoothing", kernels::ADGI_SMOOTHING, &defs),
+                    ["adgi_smooth_axis"],
+                )?;
+                self.pipeline.get_or_init(|| p)
+            }
+        };
+        // x: triggers → delta, y: delta → scratch, z: scratch → delta.
+        let (d, s) = (self.delta.raw(), self.scratch.raw());
+        let routes = [(s, d), (d, s), (s, d)];
+        let invocations = self.delta.len() as u32;
+        for (pass, (src, dst)) in GpuSmoothingPass::passes(kernel).iter().zip(routes) {
+            let uniform = ctx.uniform_buffer("adgi smoothing pass", pass);
+            let group = bind_group(
+                ctx,
+                &self.layout,
+                &[uniform.raw(), src, dst, self.reciprocals.raw()],
+            );
+            record_dispatch(
+                ctx,
+                encoder,
+                pipeline,
+                &[cache.bind_group(), &group],
+                invocations,
+            );
+        }
+        Ok(())
+    }
+
+    /// [`record`](Self::record), submitted, and f_Δv, f_Δr read back.
+    ///
+    /// # Errors
+    /// As [`record`](Self::record); [`GpuError::Map`] when the read-back fails.
+    pub fn smooth(
+        &self,
+        ctx: &GpuContext,
+        cache: &GpuProbeCache,
+        kernel: SmoothingKernel,
+    ) -> Result<(Vec<f32>, Vec<f32>), GpuError> {
+        submit(ctx, |e| self.record(ctx, e, cache, kernel))?;
+        let d = ctx.read_back(&self.delta)?;
+        Ok(d.iter().map(|v| (v[0], v[1])).unzip())
+    }
+
+    /// f_Δv, f_Δr per `probe · 8 + octant` as `[f_Δv, f_Δr]` (after [`record`](Self::record)).
+    #[must_use]
+    pub fn delta(&self) -> &GpuBuffer<[f32; 2]> {
+        &self.delta
+    }
+}
