@@ -44,7 +44,7 @@ use crate::render::guided::MaterialScatter;
 use crate::render::mcmm::McmmScore;
 use crate::render::output::{Errors, RgbImage, srgb_encode};
 use crate::render::scene::{SceneFile, frame_time};
-use crate::render::{Device, RenderArgs, Rendered, render};
+use crate::render::{Device, ProbeOptions, RenderArgs, Rendered, render};
 use crate::report::{Section, Table};
 
 /// The scene of the section: a room lit through a slit around a panel (GI, MCPG's case).
@@ -191,6 +191,7 @@ fn args(
         no_progress: true,
         no_irradiance_cache: !study.mcpg_cache,
         mcmm_score: McmmScore::TileMixture,
+        probes: ProbeOptions::default(),
     }
 }
 
@@ -718,6 +719,8 @@ fn colour(m: Method) -> plot::RGBColor {
         Method::Mcpg => PALETTE[1],
         Method::Mcmm => PALETTE[3],
         Method::McpgNee => PALETTE[4],
+        Method::Ddgi => PALETTE[5],
+        Method::Adgi => PALETTE[3],
     }
 }
 
