@@ -234,6 +234,25 @@ pub enum ControlError {
         /// The hold given, in frames.
         hold: u32,
     },
+    /// An ADGI probe update gets no more rays per probe than its pilot rays
+    /// ([`crate::ProbeUpdater::new`]).
+    RayBudgetBelowPilots {
+        /// The rays per probe given.
+        rays_per_probe: u32,
+        /// The pilot rays per probe (8).
+        pilots: u32,
+    },
+    /// A probe update gets zero rays per probe.
+    RayBudgetZero,
+    /// The dynamic share of an ADGI probe update is NaN or outside [0, 1].
+    DynamicShareOutOfRange {
+        /// The share given.
+        share: f32,
+    },
+    /// An ADGI probe update traces zero rays per dynamic sample octant.
+    DynamicRaysZero,
+    /// A probe update's DDGI moving-average window N_max is zero.
+    MaxCountZero,
 }
 
 impl fmt::Display for ControlError {
@@ -253,6 +272,19 @@ impl fmt::Display for ControlError {
                 f,
                 "pilot directions are held for {hold} frames, at least 2 are needed"
             ),
+            ControlError::RayBudgetBelowPilots {
+                rays_per_probe,
+                pilots,
+            } => write!(
+                f,
+                "{rays_per_probe} rays per probe leave none after the {pilots} pilot rays"
+            ),
+            ControlError::RayBudgetZero => f.write_str("ray budget is zero rays per probe"),
+            ControlError::DynamicShareOutOfRange { share } => {
+                write!(f, "dynamic share {share} is not in [0, 1]")
+            }
+            ControlError::DynamicRaysZero => f.write_str("dynamic samples trace zero rays"),
+            ControlError::MaxCountZero => f.write_str("moving-average window N_max is zero"),
         }
     }
 }

@@ -33,17 +33,7 @@ use mcg_markov_guide::cosine_hemisphere_concentric;
 use crate::TexelMap;
 use crate::scene::{MISS_DISTANCE, Scene, Surface};
 
-/// A deterministic uniform in [0, 1) from a 64-bit counter (SplitMix64 finaliser; Steele et
-/// al. 2014), top 24 bits.
-#[inline]
-#[must_use]
-pub fn hash_uniform(counter: u64) -> f32 {
-    let mut z = counter.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^= z >> 31;
-    (z >> 40) as f32 * (1.0 / 16_777_216.0)
-}
+pub use crate::probe_update::hash_uniform;
 
 /// Reference irradiance E(p, n) for each unit direction in `directions` at the probe position
 /// `position`, from `strata × strata` stratified cosine-weighted rays per direction (see the

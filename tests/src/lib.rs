@@ -14,7 +14,7 @@
 //! | [`vmf_pdf`], [`vmf_one_minus_cos_cdf`], [`one_minus_cos`], [`vmf_mean_cosine`], … | f64 reference formulas of the vMF lobe | every suite that tests vMF code |
 //! | [`LineTechnique`], [`SphereTechnique`], [`line_integrands`], [`sphere_integrands`], [`AdaptiveTile`], [`convergence_run`], [`fig1_estimate`], [`variance_with_error`], … | techniques, integrands with closed-form integrals, MCMM Fig. 16 and MMIS Fig. 1 in miniature | the `smis_*` suites and the demo's smis section |
 //! | [`plane_keys`], [`line_keys`], [`sphere_shell_keys`], [`floor_view_keys`], [`occupancy`] | structured grid-key streams and bucket counts | hash-grid occupancy and checksum suites |
-//! | [`Experiment`], [`ExperimentConfig`], [`Policy`], [`Run`], [`frames_to_error`] | ADGI vs uniform DDGI at equal ray budget on the two-room door scene, errors against the reference | the `probe_cache_adgi` suite and the demo's probe-cache section |
+//! | [`Experiment`], [`ExperimentConfig`], [`Run`], [`frames_to_error`] | ADGI vs uniform DDGI at equal ray budget on the two-room door scene, errors against the reference | the `probe_cache_adgi` suite and the demo's probe-cache section |
 //! | [`seeded_rng`], [`uniform_vec2`], [`uniform_sphere_direction`] | deterministic random numbers | every suite, one fixed seed per test |
 //! | [`assert_close!`], [`proptest_config`], [`hit_room`] | from `mcg-test-support` (the crates' own tests use it too): tolerance assertions that print both values, the fixed-seed proptest configuration, the key streams' box room | every suite; the demo's hash-grid section |
 //!
@@ -44,11 +44,12 @@ pub use hashgrid_reference::{
     floor_view_keys, line_keys, occupancy, plane_keys, sphere_shell_keys,
 };
 pub use ks::{KsResult, assert_ks, kolmogorov_critical_value, kolmogorov_survival, ks_test};
+/// The probe-update policies of the ADGI experiment (re-exported from `mcg-probe-cache`).
+pub use mcg_probe_cache::UpdatePolicy;
 pub use mcg_test_support::{ROOM_MAX, ROOM_MIN, assert_close, hit_room, proptest_config};
 pub use probe_cache_reference::{
-    DYNAMIC_CHAINS, DYNAMIC_RAYS_PER_OCTANT, DYNAMIC_SHARE, Experiment, ExperimentConfig,
-    FRAMES_TO_ERROR_THRESHOLD, Policy, QDDGI_MAX_COUNT, Run, SMOOTHING_RADIUS, TRIGGER_DECAY,
-    WARM_START_RAYS_PER_TEXEL, frames_to_error, frames_to_first_below, mean_error,
+    Experiment, ExperimentConfig, FRAMES_TO_ERROR_THRESHOLD, Run, WARM_START_RAYS_PER_TEXEL,
+    frames_to_error, frames_to_first_below, mean_error,
 };
 pub use quadrature::{GaussLegendre, graded_theta_breaks, integrate_sphere, orthonormal_basis};
 pub use rng::{Pcg64Mcg, seeded_rng, uniform_sphere_direction, uniform_vec2};

@@ -44,11 +44,11 @@
 //! `cargo test -p mcg-tests --release --test probe_cache_adgi -- --nocapture` prints it all.
 //!
 //! Break tried: running the ADGI policy with constant guides (the chains uniform over (p, ω),
-//! `guided = false` for `Policy::Adgi`) made H1 fail with the three seeds 1-3 this suite used
+//! `guided = false` for `UpdatePolicy::Adgi`) made H1 fail with the three seeds 1-3 this suite used
 //! first: ADGI then needed never, 7 and 21 frames (median 21 against DDGI's 12).
 
 use mcg_tests::{
-    Experiment, ExperimentConfig, FRAMES_TO_ERROR_THRESHOLD, Policy, Run, frames_to_error,
+    Experiment, ExperimentConfig, FRAMES_TO_ERROR_THRESHOLD, Run, UpdatePolicy, frames_to_error,
     frames_to_first_below, mean_error,
 };
 
@@ -63,7 +63,11 @@ fn adaptive_sampling_brings_the_error_near_the_event_down_faster() {
     let t = FRAMES_TO_ERROR_THRESHOLD;
     let e = cfg.event_frame;
     let window = e + 10;
-    let policies = [Policy::Adgi, Policy::UniformDdgi, Policy::AdgiUnguided];
+    let policies = [
+        UpdatePolicy::Adgi,
+        UpdatePolicy::Ddgi,
+        UpdatePolicy::AdgiUnguided,
+    ];
     // first[policy][seed], mean[policy][seed].
     let mut first = [[u32::MAX; SEEDS.len()]; 3];
     let mut mean = [[0.0_f64; SEEDS.len()]; 3];

@@ -13,7 +13,8 @@
 use mcg_probe_cache::glam::Vec3;
 use mcg_probe_cache::{ProbeTexels, TexelConfig};
 use mcg_tests::{
-    Experiment, ExperimentConfig, Policy, Run, frames_to_error, frames_to_first_below, mean_error,
+    Experiment, ExperimentConfig, Run, UpdatePolicy, frames_to_error, frames_to_first_below,
+    mean_error,
 };
 use plotters::prelude::*;
 use plotters::style::FontStyle;
@@ -24,7 +25,11 @@ use crate::plot::{self, Axis, FONT_FAMILY, LineChart, PALETTE, Series, SeriesLab
 use crate::report::{Section, Table};
 
 /// The policies of the experiment, in chart order.
-const POLICIES: [Policy; 3] = [Policy::Adgi, Policy::AdgiUnguided, Policy::UniformDdgi];
+const POLICIES: [UpdatePolicy; 3] = [
+    UpdatePolicy::Adgi,
+    UpdatePolicy::AdgiUnguided,
+    UpdatePolicy::Ddgi,
+];
 
 /// The error threshold of the frames-to-error table (relative RMS error near the event).
 pub const THRESHOLD: f64 = mcg_tests::FRAMES_TO_ERROR_THRESHOLD;
