@@ -123,7 +123,8 @@ pub struct RenderArgs {
     pub probes: ProbeOptions,
 }
 
-/// The options of `adgi`/`ddgi` and of the per-state references (`--reference-spp`).
+/// The options of `adgi`/`ddgi`, of the per-state references (`--reference-spp`) and of the
+/// frames kept besides the mean (`--keep-frames`).
 #[derive(Clone, Debug, clap::Args)]
 pub struct ProbeOptions {
     /// `adgi`/`ddgi`: the spacing of the probe grid in metres (fitted to the scene's bounds,
@@ -144,6 +145,10 @@ pub struct ProbeOptions {
     /// The event region's relMSE that `frames_to_threshold` waits for (`--reference-spp`).
     #[arg(long, default_value_t = states::DEFAULT_EVENT_ERROR_THRESHOLD)]
     pub event_error_threshold: f64,
+    /// Frames whose own images are kept besides the mean (comma-separated); written as
+    /// `<method>_frame<N>.png` and `.exr`.
+    #[arg(long, value_delimiter = ',')]
+    pub keep_frames: Vec<u32>,
 }
 
 impl Default for ProbeOptions {
@@ -155,6 +160,7 @@ impl Default for ProbeOptions {
             reference_spp: None,
             reference_bounces: DEFAULT_REFERENCE_BOUNCES,
             event_error_threshold: states::DEFAULT_EVENT_ERROR_THRESHOLD,
+            keep_frames: Vec::new(),
         }
     }
 }
@@ -252,6 +258,8 @@ pub struct Rendered {
     pub report: RenderReport,
     /// The CPU guide as the last frame left it (`mcpg` on the CPU only).
     pub guide: Option<Arc<Guide>>,
+    /// The images of the frames of `--keep-frames`, in frame order.
+    pub frames: Vec<(u32, RgbImage)>,
 }
 
 /// Renders as `args` say, without writing files.
@@ -278,7 +286,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         CpuGuide::Probes(p) => Some(p.shading().texels.grid().probe_count()),
         _ => None,
     };
-    let (mut errs, mut frame_errs) = (Vec::new(), Vec::new());
+    let (mut errs, mut frame_errs, mut kept) = (Vec::new(), Vec::new(), Vec::new());
     for frame in 0..args.frames {
         if frame > 0 && file.is_animated() {
             scene = file.build(frame_time(frame))?;
@@ -299,6 +307,11 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         accumulate(&mut sum, &image, frame, reference.as_ref(), errors);
         if let Some(s) = states.as_mut() {
             frame_errs.extend(s.frame_errors(frame, &image));
+        }
+        if args.probes.keep_frames.contains(&frame) {
+            let (width, height) = (args.width, args.height);
+            let pixels = image.clone();
+            kept.push((frame, RgbImage { width, height, pixels }));
         }
     }
     progress.finish_and_clear();
@@ -344,6 +357,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             CpuGuide::Mcpg(g) => Some(Arc::new(*g)),
             CpuGuide::None | CpuGuide::Mcmm(_) | CpuGuide::Probes(_) => None,
         },
+        frames: kept,
     })
 }
 
@@ -643,7 +657,8 @@ pub fn run_render(args: &RenderArgs) -> Result<Vec<PathBuf>> {
     write_outputs(&args.out, &rendered)
 }
 
-/// Writes `<dir>/<method>.{exr,png,json}`; returns the three paths.
+/// Writes `<dir>/<method>.{exr,png,json}` and the kept frames'
+/// `<dir>/<method>_frame<N>.{exr,png}`; returns the paths (the three first).
 ///
 /// # Errors
 /// When the folder or a file cannot be written.
@@ -658,5 +673,13 @@ pub fn write_outputs(dir: &Path, rendered: &Rendered) -> Result<Vec<PathBuf>> {
     let text = serde_json::to_string_pretty(&rendered.report)?;
     std::fs::write(&json, text + "\n")
         .map_err(|e| format!("cannot write {}: {e}", json.display()))?;
-    Ok(vec![exr, png, json])
+    let mut paths = vec![exr, png, json];
+    for (frame, image) in &rendered.frames {
+        let stem = dir.join(format!("{name}_frame{frame}"));
+        let (exr, png) = (stem.with_extension("exr"), stem.with_extension("png"));
+        image.write_exr(&exr)?;
+        image.write_png(&png)?;
+        paths.extend([exr, png]);
+    }
+    Ok(paths)
 }

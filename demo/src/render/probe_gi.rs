@@ -2,6 +2,10 @@
 //! every frame by probe rays traced in the scene's BVH, and read by the camera's first hit.
 //!
 //! # What is computed
+//! - **Probe update.** Which rays the probes trace each frame, and how they land in the
+//!   texels, is `mcg-probe-cache`'s [`ProbeUpdater`]: DDGI's uniform rays and blend for
+//!   `ddgi`, ADGI's pilot rays → heuristics → dynamic chains → static chains within the same
+//!   budget for `adgi`. This module traces the batches it asks for ([`ShadingProbes::trace_batch`]).
 //! - **Probe rays.** A ray from a probe that hits a front face at `x` brings back the radiance
 //!   *reflected* there toward the probe: `ρ/π · (E_direct + E_probes(x))`, with `E_direct`
 //!   estimated by one light sample (as `nee`'s light sample, [`super::cpu`], without MIS
@@ -29,11 +33,11 @@
 
 use core::f32::consts::FRAC_1_PI;
 
-use glam::{Quat, UVec3, Vec3};
-use mcg_color_codec::MovingAverage;
+use glam::{UVec3, Vec3};
 use mcg_gpu_backend::sampling::{next_uniform, pcg_hash};
 use mcg_probe_cache::{
-    BlendWeights, GridError, ProbeGrid, ProbeTexels, QueryConfig, RaySample, TexelConfig,
+    GridError, ProbeGrid, ProbeRayRequest, ProbeTexels, ProbeUpdater, QueryConfig, RaySample,
+    TexelContent, UpdateConfig, UpdatePolicy,
 };
 use rayon::prelude::*;
 
@@ -46,8 +50,9 @@ use crate::Result;
 /// usual density for rooms.
 pub const DEFAULT_PROBE_SPACING: f32 = 0.5;
 
-/// Default rays per probe per frame of `ddgi` (`--probe-rays`); `adgi` spends the same total.
-pub const DEFAULT_PROBE_RAYS: u32 = 64;
+/// Default rays per probe per frame of `ddgi` (`--probe-rays`; ADGI sec. 5 gives Q-DDGI 32);
+/// `adgi` spends at most the same total.
+pub const DEFAULT_PROBE_RAYS: u32 = 32;
 
 /// A back-face hit of a probe ray is recorded at this fraction of its distance (after the
 /// RTXGI SDK's probe tracing, which shortens back-face hits so that Chebyshev visibility
@@ -195,17 +200,19 @@ impl ShadingProbes {
         )
     }
 
-    /// Traces a batch of probe rays `(probe position, unit direction, light-sample seed)` on
-    /// rayon into `out` (one [`RaySample`] each, in order).
+    /// Traces a batch of probe rays on rayon into `out` (one [`RaySample`] each, in order):
+    /// the trace callback of [`ProbeUpdater::frame`]. A request's two uniforms seed the
+    /// three of the light sample at its hit.
     ///
     /// # Panics
-    /// If `out` is shorter than `rays`.
-    pub fn trace_batch(&self, scene: &Scene, rays: &[(Vec3, Vec3, u32)], out: &mut [RaySample]) {
-        out[..rays.len()]
+    /// If `out` is shorter than `requests`.
+    pub fn trace_batch(&self, scene: &Scene, requests: &[ProbeRayRequest], out: &mut [RaySample]) {
+        out[..requests.len()]
             .par_iter_mut()
-            .zip(rays.par_iter())
-            .for_each(|(o, &(origin, direction, u))| {
-                *o = self.probe_ray(scene, origin, direction, u);
+            .zip(requests.par_iter())
+            .for_each(|(o, r)| {
+                let u = pcg_hash(r.u.x.to_bits() ^ pcg_hash(r.u.y.to_bits()));
+                *o = self.probe_ray(scene, r.origin, r.direction, u);
             });
     }
 }
@@ -218,49 +225,46 @@ pub fn probe_ray_seed(seed: u32, frame: u32, probe: u32, ray: u32) -> u32 {
     super::cpu::path_seed(seed ^ PROBE_SALT, frame, probe, ray) ^ pcg_hash(PROBE_SALT)
 }
 
-/// N_max of `ddgi`'s moving average: Q-DDGI's hysteresis 0.94 (ADGI Table 3) is a moving
-/// average over about 1 / (1 − 0.94) ≈ 17 frames.
-pub const DDGI_MAX_COUNT: u32 = 17;
-
-/// The probe GI of one render: the texels the update writes, the probes the renderer reads
-/// (the texels as the last update left them) and the frame's ray count.
+/// The probe GI of one render: mcg-probe-cache's per-frame probe update
+/// ([`ProbeUpdater`], DDGI's or ADGI's policy) whose rays this module traces, the probes the
+/// renderer reads (the texels as the last update left them, as `E/π`) and the frame's ray
+/// count.
 #[derive(Debug)]
 pub struct ProbeGi {
-    method: Method,
-    rays_per_probe: u32,
-    seed: u32,
-    texels: ProbeTexels,
+    updater: ProbeUpdater,
     shading: ShadingProbes,
+    seed: u32,
     rays_last_frame: u64,
 }
 
 impl ProbeGi {
-    /// Probe GI of `method` (`adgi` or `ddgi`) on `grid`, `rays_per_probe` rays per probe per
-    /// frame (`ddgi`; `adgi` spends the same total), seeded by `seed`.
+    /// Probe GI of `method` (`adgi` or `ddgi`) on `grid`: `ddgi` traces `rays_per_probe` rays
+    /// per probe per frame, `adgi` at most the same total ([`UpdateConfig::rays_per_probe`]);
+    /// every random decision comes from the counter-based stream seeded by `seed`.
     ///
     /// # Errors
-    /// When `method` is not a probe method or `rays_per_probe` is 0.
+    /// When `method` is not a probe method, or the updater refuses the budget (`adgi` needs
+    /// more than its 8 pilot rays per probe).
     pub fn new(method: Method, grid: ProbeGrid, rays_per_probe: u32, seed: u32) -> Result<Self> {
-        if !method.uses_probes() {
-            return Err(format!("{} does not shade from probes", method.name()).into());
-        }
-        if method == Method::Adgi {
-            return Err("--method adgi: ADGI's per-frame probe update is not in this build".into());
-        }
-        if rays_per_probe == 0 {
-            return Err("--probe-rays must be at least 1".into());
-        }
-        let mut config = TexelConfig::ADGI;
-        config.moving_average = MovingAverage::new(DDGI_MAX_COUNT).map_err(|e| format!("{e:?}"))?;
+        let policy = match method {
+            Method::Adgi => UpdatePolicy::Adgi,
+            Method::Ddgi => UpdatePolicy::Ddgi,
+            _ => return Err(format!("{} does not shade from probes", method.name()).into()),
+        };
+        let mut config = UpdateConfig::DEFAULT;
+        config.rays_per_probe = rays_per_probe;
+        config.pilot_seed = u64::from(seed);
+        let mut rng = probe_ray_seed(seed, u32::MAX, u32::MAX, u32::MAX);
+        let updater = ProbeUpdater::new(grid, policy, config, || next_uniform(&mut rng))
+            .map_err(|e| format!("--method {} --probe-rays {rays_per_probe}: {e:?}", method.name()))?;
+        let texels = ProbeTexels::new(grid, config.texels);
         Ok(Self {
-            method,
-            rays_per_probe,
-            seed,
-            texels: ProbeTexels::new(grid, config),
+            updater,
             shading: ShadingProbes {
-                texels: ProbeTexels::new(grid, config),
+                texels,
                 query: QueryConfig::DDGI,
             },
+            seed,
             rays_last_frame: 0,
         })
     }
@@ -271,90 +275,46 @@ impl ProbeGi {
         &self.shading
     }
 
+    /// The per-frame update.
+    #[must_use]
+    pub fn updater(&self) -> &ProbeUpdater {
+        &self.updater
+    }
+
     /// Probe rays traced by the last [`Self::frame`].
     #[must_use]
     pub fn rays_last_frame(&self) -> u64 {
         self.rays_last_frame
     }
 
-    /// The ray budget of a frame: rays per probe × probes.
-    #[must_use]
-    pub fn ray_budget(&self) -> u64 {
-        u64::from(self.rays_per_probe) * self.texels.grid().probe_count() as u64
-    }
-
     /// One frame: updates the probes with this frame's rays (which read the probes of the
     /// previous frame), then renders the camera's image from the updated probes.
     ///
     /// # Errors
-    /// When the update fails.
+    /// When the updated texels cannot be copied (never for a grid of this object's layout).
     pub fn frame(
         &mut self,
         scene: &Scene,
         settings: &RenderSettings,
         frame: u32,
     ) -> Result<Vec<Vec3>> {
-        self.update(scene, frame)?;
+        let mut rng = probe_ray_seed(self.seed, frame, u32::MAX, u32::MAX);
+        let shading = &self.shading;
+        let rays = self.updater.frame(
+            u64::from(frame),
+            scene.camera.position,
+            || next_uniform(&mut rng),
+            |requests, samples| shading.trace_batch(scene, requests, samples),
+        );
+        self.rays_last_frame = rays.rays;
+        let texels = self.updater.texels();
+        match self.updater.content() {
+            TexelContent::Irradiance => self
+                .shading
+                .texels
+                .load_words(&texels.irradiance_words(), &texels.visibility_words())?,
+            TexelContent::Radiance => self.shading.texels = texels.convolved(),
+        }
         Ok(self.shading.render_frame(scene, settings, frame))
     }
-
-    /// DDGI's uniform update: `rays_per_probe` spherical-Fibonacci directions under one random
-    /// rotation per frame for every probe, blended into its texels (DDGI sec. 4).
-    fn update(&mut self, scene: &Scene, frame: u32) -> Result<()> {
-        let _ = self.method;
-        let grid = *self.texels.grid();
-        let r = self.rays_per_probe;
-        let mut rng = probe_ray_seed(self.seed, frame, u32::MAX, u32::MAX);
-        let rotation = Quat::from_xyzw(
-            next_uniform(&mut rng) - 0.5,
-            next_uniform(&mut rng) - 0.5,
-            next_uniform(&mut rng) - 0.5,
-            next_uniform(&mut rng) - 0.5,
-        )
-        .normalize();
-        let dirs: Vec<Vec3> = (0..r)
-            .map(|i| rotation * spherical_fibonacci(i, r))
-            .collect();
-        let rays: Vec<(Vec3, Vec3, u32)> = (0..grid.probe_count() as u32)
-            .flat_map(|p| {
-                let pos = grid.probe_position(grid.probe_coords(p as usize));
-                let seed = self.seed;
-                dirs.iter()
-                    .enumerate()
-                    .map(move |(i, &d)| (pos, d, probe_ray_seed(seed, frame, p, i as u32)))
-            })
-            .collect();
-        let mut out = vec![
-            RaySample {
-                direction: Vec3::ZERO,
-                radiance: Vec3::ZERO,
-                distance: 0.0,
-            };
-            rays.len()
-        ];
-        self.shading.trace_batch(scene, &rays, &mut out);
-        let texels = &self.texels;
-        out.par_chunks(r as usize)
-            .enumerate()
-            .for_each(|(p, rays)| {
-                let mut u = probe_ray_seed(self.seed, frame, p as u32, u32::MAX);
-                texels.blend_rays(p, rays, &BlendWeights::DDGI, next_uniform(&mut u));
-            });
-        self.rays_last_frame = rays.len() as u64;
-        self.shading.texels.load_words(
-            &self.texels.irradiance_words(),
-            &self.texels.visibility_words(),
-        )?;
-        Ok(())
-    }
-}
-
-/// The i-th of n spherical Fibonacci directions (DDGI's ray set before its random rotation;
-/// Keinert et al. 2015, "Spherical Fibonacci Mapping").
-fn spherical_fibonacci(i: u32, n: u32) -> Vec3 {
-    const GOLDEN: f32 = 0.618_034;
-    let phi = core::f32::consts::TAU * ((i as f32 * GOLDEN).fract());
-    let z = 1.0 - (2.0 * i as f32 + 1.0) / n as f32;
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
 }

@@ -36,8 +36,9 @@ pub const DOOR_OPENS_AT_FRAME: u32 = 32;
 /// The frame at which the moving light of `dynamic_room` reaches its end position.
 pub const LIGHT_STOPS_AT_FRAME: u32 = 64;
 
-/// The frame at which the door of `door_room` opens (its only change).
-pub const DOOR_ROOM_OPENS_AT_FRAME: u32 = 16;
+/// The frame at which the door of `door_room` opens (its only change; late enough that the
+/// probes of `adgi` and `ddgi` have converged on the closed room before it).
+pub const DOOR_ROOM_OPENS_AT_FRAME: u32 = 32;
 /// Half the side of `door_room`'s ceiling light.
 pub const DOOR_ROOM_LIGHT_HALF: f32 = 0.25;
 /// `KHR_materials_emissive_strength` of `door_room`'s ceiling light.

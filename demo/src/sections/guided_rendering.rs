@@ -313,7 +313,7 @@ fn last_error(r: &Rendered) -> Errors {
 }
 
 /// Images side by side, each scaled up `zoom`× (nearest), sRGB-encoded and clipped.
-fn image_strip(path: &Path, images: &[&RgbImage], zoom: u32) -> Result<()> {
+pub(crate) fn image_strip(path: &Path, images: &[&RgbImage], zoom: u32) -> Result<()> {
     let (w, h) = (images[0].width * zoom, images[0].height * zoom);
     let gap = 4;
     let total_w = images.len() as u32 * (w + gap) - gap;
