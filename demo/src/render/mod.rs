@@ -311,7 +311,14 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         if args.probes.keep_frames.contains(&frame) {
             let (width, height) = (args.width, args.height);
             let pixels = image.clone();
-            kept.push((frame, RgbImage { width, height, pixels }));
+            kept.push((
+                frame,
+                RgbImage {
+                    width,
+                    height,
+                    pixels,
+                },
+            ));
         }
     }
     progress.finish_and_clear();

@@ -255,8 +255,13 @@ impl ProbeGi {
         config.rays_per_probe = rays_per_probe;
         config.pilot_seed = u64::from(seed);
         let mut rng = probe_ray_seed(seed, u32::MAX, u32::MAX, u32::MAX);
-        let updater = ProbeUpdater::new(grid, policy, config, || next_uniform(&mut rng))
-            .map_err(|e| format!("--method {} --probe-rays {rays_per_probe}: {e:?}", method.name()))?;
+        let updater =
+            ProbeUpdater::new(grid, policy, config, || next_uniform(&mut rng)).map_err(|e| {
+                format!(
+                    "--method {} --probe-rays {rays_per_probe}: {e:?}",
+                    method.name()
+                )
+            })?;
         let texels = ProbeTexels::new(grid, config.texels);
         Ok(Self {
             updater,
