@@ -49,12 +49,14 @@ pub enum Method {
     /// only (`--bounces 1`), no light sampling: rendered by [`super::mcmm::McmmRenderer`] on
     /// the CPU, not by [`render_frame`] (which would treat it as `bsdf`).
     Mcmm,
-    /// ADGI's adaptive probe GI (Majercik-style irradiance probes updated where ADGI's guide
-    /// says, at DDGI's ray budget): the first hit lit by one light sample plus the probes'
-    /// diffuse irradiance; rendered by [`super::probe_gi::ProbeGi`] on the CPU.
+    /// ADGI's adaptive probe GI (DDGI's irradiance probes, their rays placed by ADGI's
+    /// guide within DDGI's ray budget): the first hit lit by one light sample plus the probes'
+    /// diffuse irradiance; rendered by [`super::probe_gi::ProbeGi`] on the CPU (`--bounces`
+    /// is not used: the probes gather all bounces).
     Adgi,
     /// DDGI (Majercik et al. 2019): the same shading as `adgi`, probes updated by uniform rays
-    /// and DDGI's blend; rendered by [`super::probe_gi::ProbeGi`] on the CPU.
+    /// and DDGI's blend; rendered by [`super::probe_gi::ProbeGi`] on the CPU (`--bounces` is
+    /// not used).
     Ddgi,
 }
 

@@ -334,7 +334,8 @@ fn curves(ctx: &Context<'_>, s: &Settings, all: &[Runs], section: &mut Section) 
             &file,
             &format!(
                 "relMSE of each frame against its state's reference over the {title}; the door \
-                 opens at frame {DOOR_ROOM_OPENS_AT_FRAME}."
+                 opens at frame {DOOR_ROOM_OPENS_AT_FRAME}. Both methods use each seed's camera \
+                 stream, so a firefly of the camera's light sample shows in both curves alike."
             ),
         );
     }
