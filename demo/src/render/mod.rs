@@ -282,11 +282,8 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     let progress = progress_bar(args)?;
     let mut sum = vec![Vec3::ZERO; (args.width * args.height) as usize];
     let mut times = FrameTimes::default();
-    let probe_count = match &guide {
-        CpuGuide::Probes(p) => Some(p.shading().texels.grid().probe_count()),
-        _ => None,
-    };
-    let (mut errs, mut frame_errs, mut kept) = (Vec::new(), Vec::new(), Vec::new());
+    let probe_count = guide.probe_count();
+    let mut collected = Collected::default();
     for frame in 0..args.frames {
         if frame > 0 && file.is_animated() {
             scene = file.build(frame_time(frame))?;
@@ -303,24 +300,17 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             cpu_frame(&scene, &settings, frame, &mut guide, &mut times)?
         };
         progress.inc(1);
-        let errors = (&mut errs, &mut frame_errs);
-        accumulate(&mut sum, &image, frame, reference.as_ref(), errors);
-        if let Some(s) = states.as_mut() {
-            frame_errs.extend(s.frame_errors(frame, &image));
-        }
+        let checks = (reference.as_ref(), states.as_mut());
+        accumulate(&mut sum, &image, frame, checks, &mut collected);
         if args.probes.keep_frames.contains(&frame) {
-            let (width, height) = (args.width, args.height);
-            let pixels = image.clone();
-            kept.push((
-                frame,
-                RgbImage {
-                    width,
-                    height,
-                    pixels,
-                },
-            ));
+            collected.keep(frame, args, image);
         }
     }
+    let Collected {
+        errs,
+        frame_errs,
+        kept,
+    } = collected;
     progress.finish_and_clear();
     let scale = 1.0 / args.frames as f32;
     let image = RgbImage {
@@ -411,15 +401,47 @@ fn render_settings(args: &RenderArgs) -> Result<RenderSettings> {
     })
 }
 
+/// What the frame loop of [`render`] collects besides the times: the errors of the running
+/// mean and of each frame, and the kept frames.
+#[derive(Default)]
+struct Collected {
+    errs: Vec<Errors>,
+    frame_errs: Vec<Errors>,
+    kept: Vec<(u32, RgbImage)>,
+}
+
+impl Collected {
+    /// Keeps frame `frame`'s `image` (of the size `args` give).
+    fn keep(&mut self, frame: u32, args: &RenderArgs, image: Vec<Vec3>) {
+        let (width, height) = (args.width, args.height);
+        let pixels = image;
+        self.kept.push((
+            frame,
+            RgbImage {
+                width,
+                height,
+                pixels,
+            },
+        ));
+    }
+}
+
 /// Adds frame `frame`'s `image` to `sum` and, with a reference, the errors of the running
-/// mean and of the frame alone to `(errs, frame_errs)`.
+/// mean and of the frame alone to `collected`; with per-state references, the frame's errors
+/// against its state's reference.
 fn accumulate(
     sum: &mut [Vec3],
     image: &[Vec3],
     frame: u32,
-    reference: Option<&RgbImage>,
-    (errs, frame_errs): (&mut Vec<Errors>, &mut Vec<Errors>),
+    (reference, states): (Option<&RgbImage>, Option<&mut SceneStates>),
+    collected: &mut Collected,
 ) {
+    let Collected {
+        errs, frame_errs, ..
+    } = collected;
+    if let Some(s) = states {
+        frame_errs.extend(s.frame_errors(frame, image));
+    }
     for (s, p) in sum.iter_mut().zip(image) {
         *s += *p;
     }
@@ -481,6 +503,16 @@ enum CpuGuide {
     Mcpg(Box<Guide>),
     Mcmm(McmmRenderer),
     Probes(Box<ProbeGi>),
+}
+
+impl CpuGuide {
+    /// Probes of the grid of a probe method.
+    fn probe_count(&self) -> Option<usize> {
+        match self {
+            Self::Probes(p) => Some(p.shading().texels.grid().probe_count()),
+            Self::None | Self::Mcpg(_) | Self::Mcmm(_) => None,
+        }
+    }
 }
 
 /// MCPG's configuration for `args` on `scene`: [`guide_config`], without the irradiance
