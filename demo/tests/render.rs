@@ -17,7 +17,7 @@ use mcg_demo::render::material::BsdfSample;
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
 use mcg_demo::render::scene::{SceneError, SceneFile, frame_time};
 use mcg_demo::render::scene_generator::{DOOR_OPENS_AT_FRAME, SCENE_NAMES, built_in_scenes};
-use mcg_demo::render::{Device, RenderArgs, render, write_outputs};
+use mcg_demo::render::{Device, ProbeOptions, RenderArgs, render, write_outputs};
 use mcg_tests::RunningStats;
 
 fn temp_dir(name: &str) -> PathBuf {
@@ -573,6 +573,7 @@ fn render_command_writes_exr_png_and_json() {
         no_progress: true,
         no_irradiance_cache: false,
         mcmm_score: McmmScore::TileMixture,
+        probes: ProbeOptions::default(),
     };
     let first = render(&args).unwrap();
     let paths = write_outputs(&dir, &first).unwrap();

@@ -16,7 +16,7 @@ use mcg_demo::render::gpu::{GpuHit, GpuRay, GpuTiming, GpuTracer};
 use mcg_demo::render::guided::guide_config;
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
 use mcg_demo::render::scene::{Scene, SceneFile, TextureInfo, TriangleUv};
-use mcg_demo::render::{Device, RenderArgs, render};
+use mcg_demo::render::{Device, ProbeOptions, RenderArgs, render};
 use mcg_gpu_backend::sampling::next_uniform;
 use mcg_gpu_backend::testing::gpu_or_skip;
 use statrs::distribution::{ContinuousCDF, Normal};
@@ -464,6 +464,7 @@ fn render_on_the_gpu(method: Method) {
         no_progress: true,
         no_irradiance_cache: false,
         mcmm_score: McmmScore::TileMixture,
+        probes: ProbeOptions::default(),
     };
     let rendered = render(&args).unwrap();
     let report = &rendered.report;

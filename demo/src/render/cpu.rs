@@ -49,6 +49,15 @@ pub enum Method {
     /// only (`--bounces 1`), no light sampling: rendered by [`super::mcmm::McmmRenderer`] on
     /// the CPU, not by [`render_frame`] (which would treat it as `bsdf`).
     Mcmm,
+    /// ADGI's adaptive probe GI (DDGI's irradiance probes, their rays placed by ADGI's
+    /// guide within DDGI's ray budget): the first hit lit by one light sample plus the probes'
+    /// diffuse irradiance; rendered by [`super::probe_gi::ProbeGi`] on the CPU (`--bounces`
+    /// is not used: the probes gather all bounces).
+    Adgi,
+    /// DDGI (Majercik et al. 2019): the same shading as `adgi`, probes updated by uniform rays
+    /// and DDGI's blend; rendered by [`super::probe_gi::ProbeGi`] on the CPU (`--bounces` is
+    /// not used).
+    Ddgi,
 }
 
 impl Method {
@@ -61,6 +70,8 @@ impl Method {
             Self::Mcpg => "mcpg",
             Self::McpgNee => "mcpg-nee",
             Self::Mcmm => "mcmm",
+            Self::Adgi => "adgi",
+            Self::Ddgi => "ddgi",
         }
     }
 
@@ -68,6 +79,12 @@ impl Method {
     #[must_use]
     pub fn samples_lights(self) -> bool {
         matches!(self, Self::Nee | Self::McpgNee)
+    }
+
+    /// Whether the method shades from a probe grid (`adgi`, `ddgi`) instead of tracing paths.
+    #[must_use]
+    pub fn uses_probes(self) -> bool {
+        matches!(self, Self::Adgi | Self::Ddgi)
     }
 
     /// Whether the method draws its directions from an MCPG guide.
@@ -301,7 +318,7 @@ fn previous_record(recorded: &mut [Option<Recorded>], depth: u32) -> Option<&mut
 
 /// The area of `tri`, its front normal and the cosine between that normal and the reversed
 /// ray direction `d`.
-fn front_face(tri: &Triangle, d: Vec3) -> (f32, Vec3, f32) {
+pub(crate) fn front_face(tri: &Triangle, d: Vec3) -> (f32, Vec3, f32) {
     let cross = tri.cross();
     let area = 0.5 * cross.length();
     let n_front = cross / (2.0 * area);
@@ -403,6 +420,24 @@ fn light_sample<S: VertexSampler>(
     origin: Vec3,
     u: [f32; 3],
 ) -> Vec3 {
+    let Some((estimate, light_pdf, wi)) = direct_light(scene, vertex, origin, u) else {
+        return Vec3::ZERO;
+    };
+    estimate * power_heuristic(light_pdf, sampler.pdf(vertex, wi))
+}
+
+/// One light sample at `vertex` without MIS weight: the estimate `f·cos·L_e / p_light` of the
+/// light scattered at `vertex` toward `wo` straight from the emitters, the light sample's
+/// solid-angle density and its direction; `None` when the sample carries nothing (occluded,
+/// on the emitter's back face, or below the surface). An emitter triangle is picked in
+/// proportion to its power ([`Scene::pick_emitter`], `u[0]`) and a uniform point on it
+/// (`u[1]`, `u[2]`).
+pub(crate) fn direct_light(
+    scene: &Scene,
+    vertex: &Vertex,
+    origin: Vec3,
+    u: [f32; 3],
+) -> Option<(Vec3, f32, Vec3)> {
     let (t, pmf) = scene.pick_emitter(u[0]);
     let tri = scene.bvh.triangles[t as usize];
     let su = u[1].sqrt();
@@ -415,18 +450,18 @@ fn light_sample<S: VertexSampler>(
     let area = 0.5 * cross.length();
     let cos_light = -(cross / (2.0 * area)).dot(wi);
     if !(cos_light > 0.0) || vertex.normal.dot(wi) <= 0.0 {
-        return Vec3::ZERO;
+        return None;
     }
     let f_cos = vertex.material.eval(vertex.normal, vertex.wo, wi);
-    if f_cos == Vec3::ZERO {
-        return Vec3::ZERO;
-    }
-    if scene.bvh.occluded(origin, wi, 0.0, dist * (1.0 - 1e-4)) {
-        return Vec3::ZERO;
+    if f_cos == Vec3::ZERO || scene.bvh.occluded(origin, wi, 0.0, dist * (1.0 - 1e-4)) {
+        return None;
     }
     let light_pdf = pmf / area * dist2 / cos_light;
-    let w = power_heuristic(light_pdf, sampler.pdf(vertex, wi));
-    f_cos * scene.material(t).emission() * (w / light_pdf)
+    Some((
+        f_cos * scene.material(t).emission() / light_pdf,
+        light_pdf,
+        wi,
+    ))
 }
 
 /// Renders one frame: `spp` paths per pixel, returns the per-pixel mean radiance, row-major
@@ -439,20 +474,53 @@ pub fn render_frame<S: VertexSampler>(
     new_sampler: impl Fn() -> S + Sync,
     row_done: impl Fn() + Sync,
 ) -> Vec<Vec3> {
+    let (method, bounces) = (settings.method, settings.bounces);
+    render_pixels(
+        scene,
+        settings,
+        frame,
+        new_sampler,
+        |sampler, d, rng| {
+            trace_path(
+                scene,
+                sampler,
+                method,
+                bounces,
+                scene.camera.position,
+                d,
+                rng,
+            )
+        },
+        row_done,
+    )
+}
+
+/// The pixel loop of a frame: for each pixel and each of `spp` samples, a camera ray through a
+/// uniformly jittered point of the pixel (box filter), its radiance from `radiance(state,
+/// direction, rng)` with the path's random stream ([`path_seed`]); returns the per-pixel means,
+/// row-major from the top-left. One `new_state()` per row task (rayon); `row_done` after each
+/// row.
+pub fn render_pixels<S>(
+    scene: &Scene,
+    settings: &RenderSettings,
+    frame: u32,
+    new_state: impl Fn() -> S + Sync,
+    radiance: impl Fn(&mut S, Vec3, &mut u32) -> Vec3 + Sync,
+    row_done: impl Fn() + Sync,
+) -> Vec<Vec3> {
     let RenderSettings {
         width,
         height,
         spp,
-        bounces,
         seed,
-        method,
+        ..
     } = *settings;
     let mut image = vec![Vec3::ZERO; (width * height) as usize];
     image
         .par_chunks_mut(width as usize)
         .enumerate()
         .for_each(|(y, row)| {
-            let mut sampler = new_sampler();
+            let mut state = new_state();
             for (x, pixel) in row.iter_mut().enumerate() {
                 let index = y as u32 * width + x as u32;
                 let mut sum = Vec3::ZERO;
@@ -463,15 +531,7 @@ pub fn render_frame<S: VertexSampler>(
                     let d = scene
                         .camera
                         .direction(x as f32 + jx, y as f32 + jy, width, height);
-                    sum += trace_path(
-                        scene,
-                        &mut sampler,
-                        method,
-                        bounces,
-                        scene.camera.position,
-                        d,
-                        &mut rng,
-                    );
+                    sum += radiance(&mut state, d, &mut rng);
                 }
                 *pixel = sum / spp as f32;
             }

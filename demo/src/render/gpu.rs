@@ -856,7 +856,8 @@ impl GpuTracer {
                     .swap();
                 Ok(0.0)
             }
-            Method::Bsdf | Method::Nee => Ok(0.0),
+            // The probe methods never reach the GPU tracer (`gpu_tracer` refuses them).
+            Method::Bsdf | Method::Nee | Method::Adgi | Method::Ddgi => Ok(0.0),
         }
     }
 

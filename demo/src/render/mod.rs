@@ -1,9 +1,10 @@
 //! The renderer: glTF 2.0 scenes path traced with and without mcg's guides.
 //!
-//! `mcg-demo render --scene FILE --method bsdf|nee|mcpg|mcmm …` renders a scene and writes
-//! `<out>/<method>.exr` (the mean over all frames, linear RGB), `<out>/<method>.png`
+//! `mcg-demo render --scene FILE --method bsdf|nee|mcpg|mcmm|adgi|ddgi …` renders a scene and
+//! writes `<out>/<method>.exr` (the mean over all frames, linear RGB), `<out>/<method>.png`
 //! (sRGB-encoded, clipped) and `<out>/<method>.json` (settings, device, per-frame times and,
-//! with `--reference`, per-frame errors of the running mean). `mcg-demo scenes` rewrites the
+//! with `--reference`, per-frame errors of the running mean; with `--reference-spp`, each
+//! frame's errors against the reference of its scene state, [`states`]). `mcg-demo scenes` rewrites the
 //! built-in scenes of `demo/scenes/`.
 //!
 //! | module | what it does |
@@ -15,6 +16,8 @@
 //! | [`gpu`] | the WGSL twin of the CPU tracer on wgpu, over the same BVH, triangle and material buffers; `mcpg` and `mcmm` with the GPU guides of `mcg-gpu-backend` |
 //! | [`guided`] | `mcpg` on the CPU: the MCPG guide behind the sampler seam |
 //! | [`mcmm`] | `mcmm` on the CPU: MCMM's screen-space chains for direct light, SSMIS over tiles of 64 pixels |
+//! | [`probe_gi`] | `adgi` and `ddgi` on the CPU: a probe grid fitted to the scene, probe rays in the BVH, first hits shaded with a light sample plus probe irradiance |
+//! | [`states`] | per-state references of animated scenes and per-frame errors against them, over the image and the event region |
 //! | [`output`] | EXR/PNG files, RMSE and relative MSE |
 //! | [`scene_generator`] | the built-in scenes |
 
@@ -28,8 +31,10 @@ pub mod guided;
 pub mod material;
 pub mod mcmm;
 pub mod output;
+pub mod probe_gi;
 pub mod scene;
 pub mod scene_generator;
+pub mod states;
 
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, OnceLock};
@@ -45,7 +50,9 @@ use gpu::{GpuTiming, GpuTracer};
 use guided::{McpgSampler, guide_config};
 use mcmm::{McmmRenderer, McmmScore, mcmm_params};
 use output::{Errors, RgbImage, errors};
+use probe_gi::{DEFAULT_PROBE_RAYS, DEFAULT_PROBE_SPACING, ProbeGi, fit_grid};
 use scene::{Scene, SceneFile, frame_time};
+use states::{DynamicErrors, ReferenceSettings, SceneStates};
 
 /// Where the tracer runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
@@ -112,7 +119,55 @@ pub struct RenderArgs {
     /// the chain's own technique density (with the paper's p_h = 0.2).
     #[arg(long, value_enum, default_value_t = McmmScore::TileMixture)]
     pub mcmm_score: McmmScore,
+    /// Probe GI and per-state reference options.
+    #[command(flatten)]
+    pub probes: ProbeOptions,
 }
+
+/// The options of `adgi`/`ddgi`, of the per-state references (`--reference-spp`) and of the
+/// frames kept besides the mean (`--keep-frames`).
+#[derive(Clone, Debug, clap::Args)]
+pub struct ProbeOptions {
+    /// `adgi`/`ddgi`: the spacing of the probe grid in metres (fitted to the scene's bounds,
+    /// [`probe_gi::fit_grid`]).
+    #[arg(long, default_value_t = DEFAULT_PROBE_SPACING)]
+    pub probe_spacing: f32,
+    /// `adgi`/`ddgi`: probe rays per probe per frame of `ddgi`; `adgi` spends the same total.
+    #[arg(long, default_value_t = DEFAULT_PROBE_RAYS, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub probe_rays: u32,
+    /// Renders a `nee` reference of each scene state with this many samples per pixel
+    /// (cached in `<out>/reference/`) and records each frame's errors against its state's
+    /// reference, over the image and the event region (not with `--reference`).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub reference_spp: Option<u32>,
+    /// Scattering events per path of the `--reference-spp` references.
+    #[arg(long, default_value_t = DEFAULT_REFERENCE_BOUNCES, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub reference_bounces: u32,
+    /// The event region's relMSE that `frames_to_threshold` waits for (`--reference-spp`).
+    #[arg(long, default_value_t = states::DEFAULT_EVENT_ERROR_THRESHOLD)]
+    pub event_error_threshold: f64,
+    /// Frames whose own images are kept besides the mean (comma-separated); written as
+    /// `<method>_frame<N>.png` and `.exr`.
+    #[arg(long, value_delimiter = ',')]
+    pub keep_frames: Vec<u32>,
+}
+
+impl Default for ProbeOptions {
+    /// The command line's defaults.
+    fn default() -> Self {
+        Self {
+            probe_spacing: DEFAULT_PROBE_SPACING,
+            probe_rays: DEFAULT_PROBE_RAYS,
+            reference_spp: None,
+            reference_bounces: DEFAULT_REFERENCE_BOUNCES,
+            event_error_threshold: states::DEFAULT_EVENT_ERROR_THRESHOLD,
+            keep_frames: Vec::new(),
+        }
+    }
+}
+
+/// The default of `--reference-bounces`.
+pub const DEFAULT_REFERENCE_BOUNCES: u32 = 8;
 
 fn parse_seed(v: &str) -> Result<u64, String> {
     match v.strip_prefix("0x") {
@@ -183,6 +238,14 @@ pub struct RenderReport {
     /// Mean LDR-FLIP of the output image (the mean over all frames) against the reference
     /// ([`output::flip`]); `None` without a reference.
     pub flip: Option<f64>,
+    /// Probe rays traced in each frame (`adgi`, `ddgi`; empty for the other methods).
+    pub probe_rays_per_frame: Vec<u64>,
+    /// Probes of the grid (`adgi`, `ddgi`).
+    pub probe_count: Option<usize>,
+    /// With `--reference-spp`: the state references, the event and the event region's errors
+    /// per frame ([`DynamicErrors`]); `frame_errors` then holds each frame's errors against
+    /// its state's reference.
+    pub dynamic: Option<DynamicErrors>,
     /// What the scene loader ignored.
     pub warnings: Vec<String>,
 }
@@ -196,6 +259,8 @@ pub struct Rendered {
     pub report: RenderReport,
     /// The CPU guide as the last frame left it (`mcpg` on the CPU only).
     pub guide: Option<Arc<Guide>>,
+    /// The images of the frames of `--keep-frames`, in frame order.
+    pub frames: Vec<(u32, RgbImage)>,
 }
 
 /// Renders as `args` say, without writing files.
@@ -206,6 +271,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     let file = SceneFile::open(&args.scene)?;
     let reference = read_reference(args)?;
     let settings = render_settings(args)?;
+    let mut states = scene_states(&file, args)?;
     let mut scene = file.build(frame_time(0))?;
     let warnings = scene.warnings.clone();
     let gpu = gpu_tracer(args.device, args.method)?;
@@ -217,7 +283,8 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     let progress = progress_bar(args)?;
     let mut sum = vec![Vec3::ZERO; (args.width * args.height) as usize];
     let mut times = FrameTimes::default();
-    let (mut errs, mut frame_errs) = (Vec::new(), Vec::new());
+    let probe_count = guide.probe_count();
+    let mut collected = Collected::default();
     for frame in 0..args.frames {
         if frame > 0 && file.is_animated() {
             scene = file.build(frame_time(frame))?;
@@ -234,9 +301,17 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             cpu_frame(&scene, &settings, frame, &mut guide, &mut times)?
         };
         progress.inc(1);
-        let errors = (&mut errs, &mut frame_errs);
-        accumulate(&mut sum, &image, frame, reference.as_ref(), errors);
+        let checks = (reference.as_ref(), states.as_mut());
+        accumulate(&mut sum, &image, frame, checks, &mut collected);
+        if args.probes.keep_frames.contains(&frame) {
+            collected.keep(frame, args, image);
+        }
     }
+    let Collected {
+        errs,
+        frame_errs,
+        kept,
+    } = collected;
     progress.finish_and_clear();
     let scale = 1.0 / args.frames as f32;
     let image = RgbImage {
@@ -268,6 +343,9 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         reference: args.reference.clone(),
         errors: errs,
         frame_errors: frame_errs,
+        probe_rays_per_frame: times.probe_rays,
+        probe_count,
+        dynamic: states.map(SceneStates::finish),
         warnings,
     };
     Ok(Rendered {
@@ -275,9 +353,34 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         report,
         guide: match guide {
             CpuGuide::Mcpg(g) => Some(Arc::new(*g)),
-            CpuGuide::None | CpuGuide::Mcmm(_) => None,
+            CpuGuide::None | CpuGuide::Mcmm(_) | CpuGuide::Probes(_) => None,
         },
+        frames: kept,
     })
+}
+
+/// The per-state references of `--reference-spp`, or `None` without it.
+fn scene_states(file: &SceneFile, args: &RenderArgs) -> Result<Option<SceneStates>> {
+    let Some(spp) = args.probes.reference_spp else {
+        return Ok(None);
+    };
+    if args.reference.is_some() {
+        return Err("give --reference or --reference-spp, not both".into());
+    }
+    let settings = ReferenceSettings {
+        width: args.width,
+        height: args.height,
+        spp,
+        bounces: args.probes.reference_bounces,
+    };
+    let threshold = args.probes.event_error_threshold;
+    Ok(Some(SceneStates::new(
+        file,
+        args.frames,
+        settings,
+        &args.out,
+        threshold,
+    )?))
 }
 
 /// The tracer's settings from the command's arguments, once they are checked to go together.
@@ -299,15 +402,47 @@ fn render_settings(args: &RenderArgs) -> Result<RenderSettings> {
     })
 }
 
+/// What the frame loop of [`render`] collects besides the times: the errors of the running
+/// mean and of each frame, and the kept frames.
+#[derive(Default)]
+struct Collected {
+    errs: Vec<Errors>,
+    frame_errs: Vec<Errors>,
+    kept: Vec<(u32, RgbImage)>,
+}
+
+impl Collected {
+    /// Keeps frame `frame`'s `image` (of the size `args` give).
+    fn keep(&mut self, frame: u32, args: &RenderArgs, image: Vec<Vec3>) {
+        let (width, height) = (args.width, args.height);
+        let pixels = image;
+        self.kept.push((
+            frame,
+            RgbImage {
+                width,
+                height,
+                pixels,
+            },
+        ));
+    }
+}
+
 /// Adds frame `frame`'s `image` to `sum` and, with a reference, the errors of the running
-/// mean and of the frame alone to `(errs, frame_errs)`.
+/// mean and of the frame alone to `collected`; with per-state references, the frame's errors
+/// against its state's reference.
 fn accumulate(
     sum: &mut [Vec3],
     image: &[Vec3],
     frame: u32,
-    reference: Option<&RgbImage>,
-    (errs, frame_errs): (&mut Vec<Errors>, &mut Vec<Errors>),
+    (reference, states): (Option<&RgbImage>, Option<&mut SceneStates>),
+    collected: &mut Collected,
 ) {
+    let Collected {
+        errs, frame_errs, ..
+    } = collected;
+    if let Some(s) = states {
+        frame_errs.extend(s.frame_errors(frame, image));
+    }
     for (s, p) in sum.iter_mut().zip(image) {
         *s += *p;
     }
@@ -359,6 +494,7 @@ struct FrameTimes {
     frame: Vec<f64>,
     cpu: Vec<f64>,
     end_frame: Vec<f64>,
+    probe_rays: Vec<u64>,
 }
 
 /// The CPU side of a guided method: its guide, or nothing (`bsdf`, `nee`, or a guide that
@@ -367,6 +503,17 @@ enum CpuGuide {
     None,
     Mcpg(Box<Guide>),
     Mcmm(McmmRenderer),
+    Probes(Box<ProbeGi>),
+}
+
+impl CpuGuide {
+    /// Probes of the grid of a probe method.
+    fn probe_count(&self) -> Option<usize> {
+        match self {
+            Self::Probes(p) => Some(p.shading().texels.grid().probe_count()),
+            Self::None | Self::Mcpg(_) | Self::Mcmm(_) => None,
+        }
+    }
 }
 
 /// MCPG's configuration for `args` on `scene`: [`guide_config`], without the irradiance
@@ -393,6 +540,7 @@ fn start_guide(
             Method::Mcpg | Method::McpgNee => g.start_mcpg(&mcpg_config(scene, args)),
             Method::Mcmm => g.start_mcmm(&mcmm(), args.width, args.height),
             Method::Bsdf | Method::Nee => Ok(()),
+            Method::Adgi | Method::Ddgi => Err("no WGSL probe GI".to_owned().into()),
         };
         match started {
             Ok(()) => return Ok(CpuGuide::None),
@@ -415,6 +563,17 @@ fn start_guide(
         }
         Method::Mcmm => CpuGuide::Mcmm(McmmRenderer::new(args.width, args.height, mcmm())?),
         Method::Bsdf | Method::Nee => CpuGuide::None,
+        Method::Adgi | Method::Ddgi => {
+            let grid = fit_grid(scene, args.probes.probe_spacing)
+                .map_err(|e| format!("--probe-spacing {}: {e:?}", args.probes.probe_spacing))?;
+            let seed = (args.seed ^ (args.seed >> 32)) as u32;
+            CpuGuide::Probes(Box::new(ProbeGi::new(
+                args.method,
+                grid,
+                args.probes.probe_rays,
+                seed,
+            )?))
+        }
     })
 }
 
@@ -438,6 +597,11 @@ fn cpu_frame(
             image
         }
         CpuGuide::Mcmm(r) => r.render_frame(scene, settings, frame)?,
+        CpuGuide::Probes(p) => {
+            let image = p.frame(scene, settings, frame)?;
+            times.probe_rays.push(p.rays_last_frame());
+            image
+        }
         CpuGuide::None => render_frame(scene, settings, frame, || BsdfSampler, || ()),
     };
     times.frame.push(started.elapsed().as_secs_f64());
@@ -489,6 +653,14 @@ fn gpu_tracer(device: Device, method: Method) -> Result<Option<&'static Mutex<Gp
     if device == Device::Cpu {
         return Ok(None);
     }
+    if method.uses_probes() && device == Device::Gpu {
+        return Err(format!(
+            "--device gpu: the WGSL renderer for --method {} does not exist yet (its probe GI \
+             runs on the CPU only): use --device cpu or auto",
+            method.name()
+        )
+        .into());
+    }
     if gpu::method_code(method).is_none() {
         if device == Device::Gpu {
             return Err(format!(
@@ -525,7 +697,8 @@ pub fn run_render(args: &RenderArgs) -> Result<Vec<PathBuf>> {
     write_outputs(&args.out, &rendered)
 }
 
-/// Writes `<dir>/<method>.{exr,png,json}`; returns the three paths.
+/// Writes `<dir>/<method>.{exr,png,json}` and the kept frames'
+/// `<dir>/<method>_frame<N>.{exr,png}`; returns the paths (the three first).
 ///
 /// # Errors
 /// When the folder or a file cannot be written.
@@ -540,5 +713,13 @@ pub fn write_outputs(dir: &Path, rendered: &Rendered) -> Result<Vec<PathBuf>> {
     let text = serde_json::to_string_pretty(&rendered.report)?;
     std::fs::write(&json, text + "\n")
         .map_err(|e| format!("cannot write {}: {e}", json.display()))?;
-    Ok(vec![exr, png, json])
+    let mut paths = vec![exr, png, json];
+    for (frame, image) in &rendered.frames {
+        let stem = dir.join(format!("{name}_frame{frame}"));
+        let (exr, png) = (stem.with_extension("exr"), stem.with_extension("png"));
+        image.write_exr(&exr)?;
+        image.write_png(&png)?;
+        paths.extend([exr, png]);
+    }
+    Ok(paths)
 }

@@ -1,7 +1,7 @@
 //! The generator of the built-in scenes in `demo/scenes/` (`mcg-demo scenes` rewrites them;
 //! a test checks that the committed files equal its output byte for byte).
 //!
-//! All three are closed rooms, 4 m wide (x ∈ [−2, 2]), 3 m high (y ∈ [0, 3]) and 5 m deep
+//! All four are closed rooms, 4 m wide (x ∈ [−2, 2]), 3 m high (y ∈ [0, 3]) and 5 m deep
 //! (z ∈ [−2.5, 2.5]), seen by a 60° camera at (0, 1.5, 2.3) looking down −z, with a red left
 //! wall, a green right wall and two boxes. Each is a `.gltf` with its geometry in a `.bin`
 //! next to it (non-indexed triangles, counter-clockwise seen from the front).
@@ -17,6 +17,11 @@
 //!   second): the hidden light and its panel slide along x from −1 m to +1 m over frames 0–64
 //!   (LINEAR), and the door turns open by 90° about its hinge at frame [`DOOR_OPENS_AT_FRAME`]
 //!   (STEP). The scene's `extras.mcg` repeats both facts for readers of the file.
+//! - `door_room`: ADGI's Fig. 1 case in miniature — the room lit directly by one
+//!   [`DOOR_ROOM_LIGHT_HALF`]·2 m square ceiling light, and behind the closed door of the
+//!   right wall a side room lit brightly by a warm light. The door turns open by 90° at frame
+//!   [`DOOR_ROOM_OPENS_AT_FRAME`] (STEP) and nothing else moves, so the scene has exactly two
+//!   states (door closed, door open).
 
 use std::path::Path;
 
@@ -31,8 +36,26 @@ pub const DOOR_OPENS_AT_FRAME: u32 = 32;
 /// The frame at which the moving light of `dynamic_room` reaches its end position.
 pub const LIGHT_STOPS_AT_FRAME: u32 = 64;
 
+/// The frame at which the door of `door_room` opens (its only change; late enough that the
+/// probes of `adgi` and `ddgi` have converged on the closed room before it).
+pub const DOOR_ROOM_OPENS_AT_FRAME: u32 = 32;
+/// Half the side of `door_room`'s ceiling light.
+pub const DOOR_ROOM_LIGHT_HALF: f32 = 0.25;
+/// `KHR_materials_emissive_strength` of `door_room`'s ceiling light.
+const DOOR_ROOM_LIGHT_STRENGTH: f32 = 30.0;
+/// `KHR_materials_emissive_strength` of `door_room`'s side-room light (the side room is lit
+/// more brightly than the main room, so opening the door changes it visibly).
+const DOOR_ROOM_SIDE_STRENGTH: f32 = 150.0;
+/// `KHR_materials_emissive_strength` of `dynamic_room`'s side-room light.
+const DYNAMIC_ROOM_SIDE_STRENGTH: f32 = 60.0;
+
 /// Names of the built-in scenes (file stems under `demo/scenes/`).
-pub const SCENE_NAMES: [&str; 3] = ["hidden_light_room", "many_lights_room", "dynamic_room"];
+pub const SCENE_NAMES: [&str; 4] = [
+    "hidden_light_room",
+    "many_lights_room",
+    "dynamic_room",
+    "door_room",
+];
 
 /// A material of the generator: glTF metallic-roughness factors and emission.
 #[derive(Clone, Copy)]
@@ -456,10 +479,12 @@ pub fn built_in_scenes() -> Vec<(&'static str, String, Vec<u8>)> {
     let (a_json, a_bin) = hidden_light_scene();
     let (b_json, b_bin) = many_lights_scene();
     let (c_json, c_bin) = dynamic_scene();
+    let (d_json, d_bin) = door_scene();
     vec![
         (SCENE_NAMES[0], a_json, a_bin),
         (SCENE_NAMES[1], b_json, b_bin),
         (SCENE_NAMES[2], c_json, c_bin),
+        (SCENE_NAMES[3], d_json, d_bin),
     ]
 }
 
@@ -536,10 +561,9 @@ fn many_lights_scene() -> (String, Vec<u8>) {
     )
 }
 
-/// (c) Dynamic: the moving hidden light and a door to a lit side room opening at a known frame.
-fn dynamic_scene() -> (String, Vec<u8>) {
-    let mut parts = room(true);
-    parts.push(part(WHITE, side_room()));
+/// The lit side room behind the doorway (walls and a light of `strength`) and the door, a
+/// node hinged at (2, 0, −0.5) that [`door_channel`] turns open.
+fn side_room_and_door(strength: f32) -> (Vec<Part>, Node) {
     let mut lamp = Vec::new();
     quad(
         &mut lamp,
@@ -547,13 +571,43 @@ fn dynamic_scene() -> (String, Vec<u8>) {
         Vec3::X * 0.4,
         Vec3::Z * 0.4,
     );
-    parts.push(part(light("side_light", [1.0, 0.7, 0.4], 60.0), lamp));
+    let parts = vec![
+        part(WHITE, side_room()),
+        part(light("side_light", [1.0, 0.7, 0.4], strength), lamp),
+    ];
     let mut door = Vec::new();
     cuboid(
         &mut door,
         Vec3::new(-0.025, 0.0, 0.0),
         Vec3::new(0.025, 2.2, 1.0),
     );
+    let node = Node {
+        name: "door",
+        parts: vec![part(PANEL, door)],
+        translation: Vec3::new(2.0, 0.0, -0.5),
+    };
+    (parts, node)
+}
+
+/// The STEP channel that turns node `node` (the door) by 90° about +y at frame `frame`.
+fn door_channel(node: usize, frame: u32) -> Channel {
+    let open = Quat::from_rotation_y(core::f32::consts::FRAC_PI_2)
+        .to_array()
+        .to_vec();
+    Channel {
+        node,
+        path: "rotation",
+        step: true,
+        times: vec![0.0, frame as f32 / FRAME_RATE],
+        values: vec![vec![0.0, 0.0, 0.0, 1.0], open],
+    }
+}
+
+/// (c) Dynamic: the moving hidden light and a door to a lit side room opening at a known frame.
+fn dynamic_scene() -> (String, Vec<u8>) {
+    let mut parts = room(true);
+    let (side, door) = side_room_and_door(DYNAMIC_ROOM_SIDE_STRENGTH);
+    parts.extend(side);
     let nodes = [
         static_node(parts),
         Node {
@@ -561,15 +615,8 @@ fn dynamic_scene() -> (String, Vec<u8>) {
             parts: hidden_light(),
             translation: Vec3::new(-1.0, 0.0, 0.0),
         },
-        Node {
-            name: "door",
-            parts: vec![part(PANEL, door)],
-            translation: Vec3::new(2.0, 0.0, -0.5),
-        },
+        door,
     ];
-    let open = Quat::from_rotation_y(core::f32::consts::FRAC_PI_2)
-        .to_array()
-        .to_vec();
     let channels = [
         Channel {
             node: 1,
@@ -578,13 +625,7 @@ fn dynamic_scene() -> (String, Vec<u8>) {
             times: vec![0.0, LIGHT_STOPS_AT_FRAME as f32 / FRAME_RATE],
             values: vec![vec![-1.0, 0.0, 0.0], vec![1.0, 0.0, 0.0]],
         },
-        Channel {
-            node: 2,
-            path: "rotation",
-            step: true,
-            times: vec![0.0, DOOR_OPENS_AT_FRAME as f32 / FRAME_RATE],
-            values: vec![vec![0.0, 0.0, 0.0, 1.0], open],
-        },
+        door_channel(2, DOOR_OPENS_AT_FRAME),
     ];
     write_gltf(
         SCENE_NAMES[2],
@@ -599,7 +640,37 @@ fn dynamic_scene() -> (String, Vec<u8>) {
     )
 }
 
-/// The white side room of scene (c) behind the door: floor, ceiling and three walls.
+/// (d) Door: a room lit directly by one ceiling light, and a door to a brightly lit side room
+/// that opens at [`DOOR_ROOM_OPENS_AT_FRAME`] — the only change (ADGI Fig. 1's gate).
+fn door_scene() -> (String, Vec<u8>) {
+    let mut parts = room(true);
+    let (side, door) = side_room_and_door(DOOR_ROOM_SIDE_STRENGTH);
+    parts.extend(side);
+    let l = DOOR_ROOM_LIGHT_HALF;
+    let mut lamp = Vec::new();
+    quad(
+        &mut lamp,
+        Vec3::new(-l, 2.999, -0.5 - l),
+        Vec3::X * 2.0 * l,
+        Vec3::Z * 2.0 * l,
+    ); // faces down
+    parts.push(part(
+        light("ceiling_light", [1.0, 0.95, 0.85], DOOR_ROOM_LIGHT_STRENGTH),
+        lamp,
+    ));
+    write_gltf(
+        SCENE_NAMES[3],
+        &[static_node(parts), door],
+        &[door_channel(1, DOOR_ROOM_OPENS_AT_FRAME)],
+        json!({
+            "description": "a room lit by one ceiling light and a door to a brightly lit side room",
+            "frame_rate": FRAME_RATE,
+            "door_opens_at_frame": DOOR_ROOM_OPENS_AT_FRAME,
+        }),
+    )
+}
+
+/// The white side room of scenes (c) and (d) behind the door: floor, ceiling and three walls.
 fn side_room() -> Vec<[Vec3; 3]> {
     let mut side = Vec::new();
     let (x0, x1, z0, z1, h) = (2.0, 3.5, -1.0, 1.0, 3.0);

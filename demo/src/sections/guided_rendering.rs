@@ -44,7 +44,7 @@ use crate::render::guided::MaterialScatter;
 use crate::render::mcmm::McmmScore;
 use crate::render::output::{Errors, RgbImage, srgb_encode};
 use crate::render::scene::{SceneFile, frame_time};
-use crate::render::{Device, RenderArgs, Rendered, render};
+use crate::render::{Device, ProbeOptions, RenderArgs, Rendered, render};
 use crate::report::{Section, Table};
 
 /// The scene of the section: a room lit through a slit around a panel (GI, MCPG's case).
@@ -191,6 +191,7 @@ fn args(
         no_progress: true,
         no_irradiance_cache: !study.mcpg_cache,
         mcmm_score: McmmScore::TileMixture,
+        probes: ProbeOptions::default(),
     }
 }
 
@@ -312,7 +313,7 @@ fn last_error(r: &Rendered) -> Errors {
 }
 
 /// Images side by side, each scaled up `zoom`× (nearest), sRGB-encoded and clipped.
-fn image_strip(path: &Path, images: &[&RgbImage], zoom: u32) -> Result<()> {
+pub(crate) fn image_strip(path: &Path, images: &[&RgbImage], zoom: u32) -> Result<()> {
     let (w, h) = (images[0].width * zoom, images[0].height * zoom);
     let gap = 4;
     let total_w = images.len() as u32 * (w + gap) - gap;
@@ -725,6 +726,8 @@ fn colour(m: Method) -> plot::RGBColor {
         Method::Mcpg => PALETTE[1],
         Method::Mcmm => PALETTE[3],
         Method::McpgNee => PALETTE[4],
+        Method::Ddgi => PALETTE[5],
+        Method::Adgi => PALETTE[3],
     }
 }
 

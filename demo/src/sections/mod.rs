@@ -5,6 +5,7 @@
 //! and tables as a [`Section`]. [`ALL`] lists them in page order; [`crate::run`] calls each once.
 
 pub mod color_codec;
+pub mod dynamic_gi;
 pub mod gpu_backend;
 pub mod guided_rendering;
 pub mod hashgrid;
@@ -27,6 +28,7 @@ pub type BuildFn = fn(&Context<'_>) -> Result<Section>;
 /// Every section of the report, in page order. Append new sections here.
 pub const ALL: &[BuildFn] = &[
     guided_rendering::build,
+    dynamic_gi::build,
     vmf::build,
     color_codec::build,
     smis::build,
