@@ -31,7 +31,7 @@ use super::scene::Scene;
 
 /// How directions are chosen and lights are found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
+#[serde(rename_all = "kebab-case")]
 pub enum Method {
     /// BSDF sampling only; lights are found by chance.
     Bsdf,
@@ -58,6 +58,12 @@ pub enum Method {
     /// and DDGI's blend; rendered by [`super::probe_gi::ProbeGi`] on the CPU (`--bounces` is
     /// not used).
     Ddgi,
+    /// `adgi` with mcg's refill extension ([`mcg_probe_cache::UpdatePolicy::AdgiRefill`]):
+    /// texels of a probe whose change signal rises restart at a short window that later
+    /// samples extend, and the static chains favour probe octants whose windows are not
+    /// full — ADGI's paper recovers slowly where its dynamic rays miss the octants that
+    /// changed.
+    AdgiRefill,
 }
 
 impl Method {
@@ -72,6 +78,7 @@ impl Method {
             Self::Mcmm => "mcmm",
             Self::Adgi => "adgi",
             Self::Ddgi => "ddgi",
+            Self::AdgiRefill => "adgi-refill",
         }
     }
 
@@ -81,10 +88,11 @@ impl Method {
         matches!(self, Self::Nee | Self::McpgNee)
     }
 
-    /// Whether the method shades from a probe grid (`adgi`, `ddgi`) instead of tracing paths.
+    /// Whether the method shades from a probe grid (`adgi`, `adgi-refill`, `ddgi`) instead of
+    /// tracing paths.
     #[must_use]
     pub fn uses_probes(self) -> bool {
-        matches!(self, Self::Adgi | Self::Ddgi)
+        matches!(self, Self::Adgi | Self::AdgiRefill | Self::Ddgi)
     }
 
     /// Whether the method draws its directions from an MCPG guide.

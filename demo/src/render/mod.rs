@@ -1,6 +1,6 @@
 //! The renderer: glTF 2.0 scenes path traced with and without mcg's guides.
 //!
-//! `mcg-demo render --scene FILE --method bsdf|nee|mcpg|mcmm|adgi|ddgi …` renders a scene and
+//! `mcg-demo render --scene FILE --method bsdf|nee|mcpg|mcmm|adgi|adgi-refill|ddgi …` renders a scene and
 //! writes `<out>/<method>.exr` (the mean over all frames, linear RGB), `<out>/<method>.png`
 //! (sRGB-encoded, clipped) and `<out>/<method>.json` (settings, device, per-frame times and,
 //! with `--reference`, per-frame errors of the running mean; with `--reference-spp`, each
@@ -540,7 +540,9 @@ fn start_guide(
             Method::Mcpg | Method::McpgNee => g.start_mcpg(&mcpg_config(scene, args)),
             Method::Mcmm => g.start_mcmm(&mcmm(), args.width, args.height),
             Method::Bsdf | Method::Nee => Ok(()),
-            Method::Adgi | Method::Ddgi => Err("no WGSL probe GI".to_owned().into()),
+            Method::Adgi | Method::AdgiRefill | Method::Ddgi => {
+                Err("no WGSL probe GI".to_owned().into())
+            }
         };
         match started {
             Ok(()) => return Ok(CpuGuide::None),
@@ -563,7 +565,7 @@ fn start_guide(
         }
         Method::Mcmm => CpuGuide::Mcmm(McmmRenderer::new(args.width, args.height, mcmm())?),
         Method::Bsdf | Method::Nee => CpuGuide::None,
-        Method::Adgi | Method::Ddgi => {
+        Method::Adgi | Method::AdgiRefill | Method::Ddgi => {
             let grid = fit_grid(scene, args.probes.probe_spacing)
                 .map_err(|e| format!("--probe-spacing {}: {e:?}", args.probes.probe_spacing))?;
             let seed = (args.seed ^ (args.seed >> 32)) as u32;

@@ -248,6 +248,7 @@ impl ProbeGi {
     pub fn new(method: Method, grid: ProbeGrid, rays_per_probe: u32, seed: u32) -> Result<Self> {
         let policy = match method {
             Method::Adgi => UpdatePolicy::Adgi,
+            Method::AdgiRefill => UpdatePolicy::AdgiRefill,
             Method::Ddgi => UpdatePolicy::Ddgi,
             _ => return Err(format!("{} does not shade from probes", method.name()).into()),
         };

@@ -728,6 +728,7 @@ fn colour(m: Method) -> plot::RGBColor {
         Method::McpgNee => PALETTE[4],
         Method::Ddgi => PALETTE[5],
         Method::Adgi => PALETTE[3],
+        Method::AdgiRefill => PALETTE[1],
     }
 }
 
