@@ -63,6 +63,20 @@ impl Config {
     pub const QUICK_SAMPLES: usize = 100_000;
     /// The fixed seed used unless `--seed` says otherwise ("mcg" in ASCII).
     pub const DEFAULT_SEED: u64 = 0x6d_63_67;
+
+    /// Of a section's three sizes, the one for a report of `samples` samples per experiment:
+    /// `full` from [`Self::DEFAULT_SAMPLES`] on, `quick` from [`Self::QUICK_SAMPLES`] on,
+    /// `smoke` below (the tests' tiny runs).
+    #[must_use]
+    pub fn tier<T>(samples: usize, full: T, quick: T, smoke: T) -> T {
+        if samples >= Self::DEFAULT_SAMPLES {
+            full
+        } else if samples >= Self::QUICK_SAMPLES {
+            quick
+        } else {
+            smoke
+        }
+    }
 }
 
 impl Default for Config {

@@ -4,6 +4,7 @@
 mod common;
 
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 
 use common::{assert_pixel_mean, assert_spread, assert_tiles_agree, furnace, scenes_dir};
 use glam::Vec3;
@@ -15,7 +16,7 @@ use mcg_demo::render::cpu::{
 use mcg_demo::render::guided::{McpgSampler, new_guide};
 use mcg_demo::render::material::BsdfSample;
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
-use mcg_demo::render::scene::{SceneError, SceneFile, frame_time};
+use mcg_demo::render::scene::{Scene, SceneError, SceneFile, frame_time};
 use mcg_demo::render::scene_generator::{DOOR_OPENS_AT_FRAME, SCENE_NAMES, built_in_scenes};
 use mcg_demo::render::{Device, ProbeOptions, RenderArgs, render, write_outputs};
 use mcg_tests::RunningStats;
@@ -467,6 +468,37 @@ fn mcmm_furnace_matches_direct_light() {
     );
 }
 
+/// Per 16×16 tile and channel, the mean and the variance of the mean ([`common::tile_stats`]).
+type TileStats = Vec<[(f64, f64); 3]>;
+
+/// The case of both `mcmm` per-tile tests: the many-lights room, 32×32 pixels, 4 spp, B = 1.
+fn direct_settings(method: Method, seed: u32) -> RenderSettings {
+    RenderSettings {
+        width: 32,
+        height: 32,
+        spp: 4,
+        bounces: 1,
+        seed,
+        method,
+    }
+}
+
+/// The many-lights room and its `nee` tile statistics (128 independent frames of
+/// [`direct_settings`], seed 12, tiles of 16×16): the reference of both `mcmm` per-tile
+/// tests, rendered once.
+fn many_lights_direct() -> &'static (Scene, TileStats) {
+    static CASE: OnceLock<(Scene, TileStats)> = OnceLock::new();
+    CASE.get_or_init(|| {
+        let file = SceneFile::open(scenes_dir().join("many_lights_room.gltf")).unwrap();
+        let scene = file.build(0.0).unwrap();
+        let nee = direct_settings(Method::Nee, 12);
+        let reference = common::tile_stats((32, 32, 16, 128), |f| {
+            render_frame(&scene, &nee, f, || BsdfSampler, || ())
+        });
+        (scene, reference)
+    })
+}
+
 /// Hypothesis: `mcmm` is unbiased — the mean of independent runs equals the `nee` image of
 /// direct light. Scene: the built-in many-lights room (its small lights are MCMM's case),
 /// 32×32 pixels (4 tiles of 16×16), B = 1. `mcmm`: 32 independent runs (seeds 100–131), each
@@ -477,34 +509,21 @@ fn mcmm_furnace_matches_direct_light() {
 /// share in the densities fails it at z = 5.0 in the first tile (checked once).
 #[test]
 fn mcmm_agrees_with_nee_per_tile() {
-    let file = SceneFile::open(scenes_dir().join("many_lights_room.gltf")).unwrap();
-    let scene = file.build(0.0).unwrap();
+    let (scene, reference) = many_lights_direct();
     let (w, h) = (32u32, 32u32);
-    let settings = |method, seed| RenderSettings {
-        width: w,
-        height: h,
-        spp: 4,
-        bounces: 1,
-        seed,
-        method,
-    };
-    let nee = settings(Method::Nee, 12);
-    let reference = common::tile_stats((w, h, 16, 128), |f| {
-        render_frame(&scene, &nee, f, || BsdfSampler, || ())
-    });
     let guided = common::tile_stats((w, h, 16, 32), |run| {
-        let s = settings(Method::Mcmm, 100 + run);
+        let s = direct_settings(Method::Mcmm, 100 + run);
         let mut r = McmmRenderer::new(w, h, mcmm_params(McmmScore::TileMixture, h)).unwrap();
         let mut sum = vec![Vec3::ZERO; (w * h) as usize];
         for f in 0..4 {
-            let image = r.render_frame(&scene, &s, f).unwrap();
+            let image = r.render_frame(scene, &s, f).unwrap();
             for (a, p) in sum.iter_mut().zip(image) {
                 *a += p / 4.0;
             }
         }
         sum
     });
-    assert_tiles_agree(&guided, &reference, 1e-4, "mcmm vs nee");
+    assert_tiles_agree(&guided, reference, 1e-4, "mcmm vs nee");
 }
 
 /// Hypothesis: one `mcmm` frame is unbiased given any chain states, in particular learned
@@ -519,21 +538,12 @@ fn mcmm_agrees_with_nee_per_tile() {
 /// worst |z| is 2.5.
 #[test]
 fn mcmm_is_unbiased_given_learned_chains() {
-    let file = SceneFile::open(scenes_dir().join("many_lights_room.gltf")).unwrap();
-    let scene = file.build(0.0).unwrap();
+    let (scene, reference) = many_lights_direct();
     let (w, h) = (32u32, 32u32);
-    let settings = |method, seed| RenderSettings {
-        width: w,
-        height: h,
-        spp: 4,
-        bounces: 1,
-        seed,
-        method,
-    };
     let mut learned = McmmRenderer::new(w, h, mcmm_params(McmmScore::TileMixture, h)).unwrap();
     for f in 0..24 {
         learned
-            .render_frame(&scene, &settings(Method::Mcmm, 5), f)
+            .render_frame(scene, &direct_settings(Method::Mcmm, 5), f)
             .unwrap();
     }
     let valid = learned.states().iter().filter(|s| s.is_valid()).count();
@@ -541,16 +551,12 @@ fn mcmm_is_unbiased_given_learned_chains() {
         valid * 2 > (w * h) as usize,
         "the chains learned: {valid} valid"
     );
-    let nee = settings(Method::Nee, 12);
-    let reference = common::tile_stats((w, h, 16, 128), |f| {
-        render_frame(&scene, &nee, f, || BsdfSampler, || ())
-    });
     let guided = common::tile_stats((w, h, 16, 128), |run| {
         let mut r = learned.clone();
-        r.render_frame(&scene, &settings(Method::Mcmm, 1000 + run), 24)
+        r.render_frame(scene, &direct_settings(Method::Mcmm, 1000 + run), 24)
             .unwrap()
     });
-    assert_tiles_agree(&guided, &reference, 1e-4, "learned mcmm vs nee");
+    assert_tiles_agree(&guided, reference, 1e-4, "learned mcmm vs nee");
 }
 
 /// `render` + `write_outputs`: the three files exist, the JSON carries one time and one error

@@ -26,7 +26,7 @@ use mcg_gpu_backend::guides::adgi::{
 };
 use mcg_gpu_backend::shaders::{self, defs};
 use mcg_gpu_backend::{GpuBuffer, GpuContext, wgpu};
-use mcg_probe_cache::{BlendWeights, ProbeGrid, QueryConfig, TexelConfig};
+use mcg_probe_cache::{ProbeGrid, QueryConfig};
 use rand::{RngExt, SeedableRng};
 
 const KERNEL: &str = include_str!("adgi_baseline.wgsl");
@@ -287,11 +287,8 @@ impl Fixture {
         eprintln!("adapter: {:?}", ctx.adapter_info());
         let grid = ProbeGrid::new(Vec3::ZERO, Vec3::ONE, UVec3::new(16, 8, 16)).unwrap();
         let config = ProbeCacheConfig {
-            grid,
-            texels: TexelConfig::ADGI,
             query: QueryConfig::ADGI_RADIANCE,
-            blend: BlendWeights::DDGI,
-            rays_per_probe: RAYS_PER_PROBE,
+            ..ProbeCacheConfig::adgi(grid, RAYS_PER_PROBE)
         };
         let cache = GpuProbeCache::new(&ctx, &config).unwrap();
         let probes = grid.probe_count() as u32;

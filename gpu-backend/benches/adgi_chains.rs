@@ -20,10 +20,7 @@ use mcg_color_codec::Heuristics;
 use mcg_gpu_backend::guides::adgi::{GpuProbeCache, GpuProbeChains, ProbeCacheConfig};
 use mcg_gpu_backend::{GpuBuffer, GpuContext, wgpu};
 use mcg_markov_guide::FrameSchedule;
-use mcg_probe_cache::{
-    BlendWeights, ChainKind, ClipVolumes, GuideParams, ProbeChains, ProbeGrid, ProxyGrid,
-    QueryConfig, TexelConfig,
-};
+use mcg_probe_cache::{ChainKind, ClipVolumes, GuideParams, ProbeChains, ProbeGrid, ProxyGrid};
 use rand::{RngExt, SeedableRng};
 
 /// Everything the group dispatches.
@@ -46,14 +43,7 @@ impl Fixture {
             }
         };
         let grid = ProbeGrid::new(Vec3::ZERO, Vec3::splat(0.5), UVec3::new(16, 8, 16)).unwrap();
-        let config = ProbeCacheConfig {
-            grid,
-            texels: TexelConfig::ADGI,
-            query: QueryConfig::DDGI,
-            blend: BlendWeights::DDGI,
-            rays_per_probe: 1,
-        };
-        let cache = GpuProbeCache::new(&ctx, &config).unwrap();
+        let cache = GpuProbeCache::new(&ctx, &ProbeCacheConfig::adgi(grid, 1)).unwrap();
         let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
         let n = grid.probe_count() * 8;
         // Heuristics: a third of the octants zero, the rest random.

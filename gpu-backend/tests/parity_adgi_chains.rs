@@ -28,21 +28,14 @@ use mcg_probe_cache::guiding_function::decode_field;
 use mcg_probe_cache::heuristics::encode;
 use mcg_probe_cache::temporal_gradient::spatial_smoothing;
 use mcg_probe_cache::{
-    BlendWeights, ChainKind, GuideParams, GuidingFunction, HeuristicField, ProbeChains, ProbeGrid,
-    ProxyGrid, QueryConfig, SmoothingKernel, TexelConfig,
+    ChainKind, GuideParams, GuidingFunction, HeuristicField, ProbeChains, ProbeGrid, ProxyGrid,
+    SmoothingKernel,
 };
 use rand::RngExt;
 use rand_pcg::Pcg64;
 
 fn cache(ctx: &GpuContext, grid: ProbeGrid) -> GpuProbeCache {
-    let config = ProbeCacheConfig {
-        grid,
-        texels: TexelConfig::ADGI,
-        query: QueryConfig::DDGI,
-        blend: BlendWeights::DDGI,
-        rays_per_probe: 1,
-    };
-    GpuProbeCache::new(ctx, &config).unwrap()
+    GpuProbeCache::new(ctx, &ProbeCacheConfig::adgi(grid, 1)).unwrap()
 }
 
 /// Heuristics words per probe and octant: `hot(coords, octant)` gives f_s and f_d's scale;

@@ -95,13 +95,7 @@ impl Settings {
     /// The settings for a report of `samples` samples per experiment.
     #[must_use]
     pub fn for_samples(samples: usize) -> Self {
-        if samples >= crate::Config::DEFAULT_SAMPLES {
-            Self::FULL
-        } else if samples >= crate::Config::QUICK_SAMPLES {
-            Self::QUICK
-        } else {
-            Self::SMOKE
-        }
+        crate::Config::tier(samples, Self::FULL, Self::QUICK, Self::SMOKE)
     }
 
     /// Frames of a run.

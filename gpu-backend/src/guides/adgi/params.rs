@@ -156,6 +156,22 @@ pub struct ProbeCacheConfig {
     pub rays_per_probe: u32,
 }
 
+impl ProbeCacheConfig {
+    /// ADGI's texels ([`TexelConfig::ADGI`]) on `grid`, queried with DDGI's constants
+    /// ([`QueryConfig::DDGI`]) and blended with DDGI's exponents ([`BlendWeights::DDGI`]),
+    /// with room for `rays_per_probe` blend rays per probe.
+    #[must_use]
+    pub fn adgi(grid: ProbeGrid, rays_per_probe: u32) -> Self {
+        Self {
+            grid,
+            texels: TexelConfig::ADGI,
+            query: QueryConfig::DDGI,
+            blend: BlendWeights::DDGI,
+            rays_per_probe,
+        }
+    }
+}
+
 impl AdgiGpuParams {
     /// The parameters of `config`, validated, and the number of texel words (irradiance, then
     /// visibility).
@@ -687,13 +703,10 @@ mod tests {
     use mcg_probe_cache::TexelMap;
 
     fn config() -> ProbeCacheConfig {
-        ProbeCacheConfig {
-            grid: ProbeGrid::new(Vec3::ZERO, Vec3::ONE, UVec3::new(4, 3, 2)).unwrap(),
-            texels: TexelConfig::ADGI,
-            query: QueryConfig::DDGI,
-            blend: BlendWeights::DDGI,
-            rays_per_probe: 64,
-        }
+        ProbeCacheConfig::adgi(
+            ProbeGrid::new(Vec3::ZERO, Vec3::ONE, UVec3::new(4, 3, 2)).unwrap(),
+            64,
+        )
     }
 
     /// ADGI's texels: 24 probes × (64 + 256) words, visibility after 24 × 64.
