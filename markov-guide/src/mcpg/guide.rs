@@ -5,8 +5,6 @@ use mcg_hashgrid::{
     AdaptiveGrid, CellKey, LevelParams, StaticGrid, cell_and_fraction, geometric_jitter,
     normal_class, stochastic_corner, stochastic_trilinear,
 };
-use std::vec::Vec;
-
 use mcg_vmf::glam::{IVec3, Vec2, Vec3};
 use mcg_vmf::{MapPrior, SufficientStats, Vmf, VmfLanes};
 
@@ -21,10 +19,6 @@ use crate::{cosine_hemisphere, cosine_hemisphere_pdf};
 
 /// The most candidates a vertex loads; [`McpgParams::candidates`] is clamped to it.
 pub const MAX_CANDIDATES: usize = 8;
-
-/// Vertices per step of [`Guide::begin_many`] (their candidates' lookups go to the tables
-/// in one batch per grid).
-pub const BEGIN_BATCH: usize = 8;
 
 /// The extent, in Quake units, that [`GuideConfig::for_scene`] takes the paper's scenes to
 /// span (a room of a Quake map, where the player is 56 units tall). Our choice, not the
@@ -664,101 +658,10 @@ impl Guide {
         scatter: S,
         u: &BeginUniforms,
     ) -> GuidedVertex<'_, S> {
-        let mut v = self.start(vertex, scatter);
-        if !crate::math::all_finite(vertex.position) {
-            return v;
-        }
-        let count = self.candidate_count();
-        let keys = self.candidate_keys(vertex.position, v.class, v.target_level, u, count);
-        // One batch: every lookup, then every state, so that the lookups' memory accesses
-        // overlap instead of waiting on each other.
-        for (slot, (kind, key)) in v.slots.iter_mut().zip(&keys).take(count) {
-            *slot = self.grid(*kind).find(key).map(|s| (*kind, s));
-        }
-        self.load_candidates(&mut v, &keys, u, count);
-        v
-    }
-
-    /// [`begin`](Self::begin) for many vertices at once, the same [`GuidedVertex`]es bit for
-    /// bit: appends one to `out` per entry of `vertices` (with `scatter` and `uniforms` of the
-    /// same index), in order. Per step of [`BEGIN_BATCH`] vertices, every candidate key is
-    /// computed first, then each grid's keys are looked up in one
-    /// [`ConcurrentTable::find_many`](mcg_hashgrid::ConcurrentTable::find_many) (their cache
-    /// misses overlap across vertices), then the states are loaded, prepared, offered and
-    /// their lobes built vertex by vertex. For a renderer's wavefront of hit points, or a
-    /// thread's handful of paths advanced together; `out` keeps its capacity between calls.
-    ///
-    /// # Panics
-    /// When `vertices`, `scatter` and `uniforms` differ in length.
-    pub fn begin_many<'g, S: Scatter + Copy>(
-        &'g self,
-        vertices: &[Vertex],
-        scatter: &[S],
-        uniforms: &[BeginUniforms],
-        out: &mut Vec<GuidedVertex<'g, S>>,
-    ) {
-        assert!(
-            vertices.len() == scatter.len() && vertices.len() == uniforms.len(),
-            "begin_many: vertices, scatter and uniforms differ in length"
-        );
-        const KEYS: usize = BEGIN_BATCH * MAX_CANDIDATES;
-        let count = self.candidate_count();
-        let empty_key = (GridKind::Static, CellKey::unclassed(IVec3::ZERO));
-        let mut keys = [[empty_key; MAX_CANDIDATES]; BEGIN_BATCH];
-        // Per grid (0 adaptive, 1 static): the keys in lookup order, their slots, and which
-        // vertex and candidate each belongs to.
-        let mut grid_keys = [[CellKey::unclassed(IVec3::ZERO); KEYS]; 2];
-        let mut grid_slots = [[None; KEYS]; 2];
-        let mut owners = [[(0_u8, 0_u8); KEYS]; 2];
-        for ((vertices, scatter), uniforms) in vertices
-            .chunks(BEGIN_BATCH)
-            .zip(scatter.chunks(BEGIN_BATCH))
-            .zip(uniforms.chunks(BEGIN_BATCH))
-        {
-            let first = out.len();
-            let mut lens = [0_usize; 2];
-            for (i, ((vertex, s), u)) in vertices.iter().zip(scatter).zip(uniforms).enumerate() {
-                let v = self.start(*vertex, *s);
-                if crate::math::all_finite(vertex.position) {
-                    keys[i] =
-                        self.candidate_keys(vertex.position, v.class, v.target_level, u, count);
-                    for (k, (kind, key)) in keys[i].iter().enumerate().take(count) {
-                        let g = usize::from(*kind == GridKind::Static);
-                        grid_keys[g][lens[g]] = *key;
-                        owners[g][lens[g]] = (i as u8, k as u8);
-                        lens[g] += 1;
-                    }
-                }
-                out.push(v);
-            }
-            let batch = &mut out[first..];
-            for (g, kind) in [GridKind::Adaptive, GridKind::Static].into_iter().enumerate() {
-                let n = lens[g];
-                self.grid(kind)
-                    .table()
-                    .find_many(&grid_keys[g][..n], &mut grid_slots[g][..n]);
-                for (&(i, k), slot) in owners[g][..n].iter().zip(&grid_slots[g][..n]) {
-                    batch[usize::from(i)].slots[usize::from(k)] = slot.map(|s| (kind, s));
-                }
-            }
-            for ((v, keys), u) in batch.iter_mut().zip(&keys).zip(uniforms) {
-                if crate::math::all_finite(v.vertex.position) {
-                    self.load_candidates(v, keys, u, count);
-                }
-            }
-        }
-    }
-
-    /// N_mc, clamped to [`MAX_CANDIDATES`].
-    #[inline]
-    fn candidate_count(&self) -> usize {
-        (self.config.params.candidates as usize).min(MAX_CANDIDATES)
-    }
-
-    /// A vertex with no candidates loaded yet: its key class and target level.
-    #[inline(always)]
-    fn start<S: Scatter>(&self, vertex: Vertex, scatter: S) -> GuidedVertex<'_, S> {
-        GuidedVertex {
+        let params = &self.config.params;
+        let x = vertex.position;
+        let count = (params.candidates as usize).min(MAX_CANDIDATES);
+        let mut v = GuidedVertex {
             guide: self,
             vertex,
             scatter,
@@ -767,23 +670,17 @@ impl Guide {
             lobes: VmfLanes::EMPTY,
             scatter_share: 0.0,
             class: normal_class(vertex.key_direction),
-            target_level: self.adaptive.target_level(self.camera.distance(vertex.position)),
+            target_level: self.adaptive.target_level(self.camera.distance(x)),
+        };
+        if !crate::math::all_finite(x) {
+            return v;
         }
-    }
-
-    /// The second half of [`begin`](Self::begin), once `v.slots` holds the lookups of `keys`:
-    /// the states loaded (a torn read clears its slot), prepared, offered in load order, and
-    /// the lobes built.
-    #[inline(always)]
-    fn load_candidates<S: Scatter>(
-        &self,
-        v: &mut GuidedVertex<'_, S>,
-        keys: &[(GridKind, CellKey); MAX_CANDIDATES],
-        u: &BeginUniforms,
-        count: usize,
-    ) {
-        let params = &self.config.params;
-        let x = v.vertex.position;
+        let keys = self.candidate_keys(x, v.class, v.target_level, u, count);
+        // One batch: every lookup, then every state, so that the lookups' memory accesses
+        // overlap instead of waiting on each other.
+        for (slot, (kind, key)) in v.slots.iter_mut().zip(&keys).take(count) {
+            *slot = self.grid(*kind).find(key).map(|s| (*kind, s));
+        }
         // The states go straight into the candidate set's storage (all `EMPTY` so far, which
         // a slot without a state, a hash collision or a torn read leaves there), are
         // prepared there, then offered in load order.
@@ -796,14 +693,15 @@ impl Guide {
             }
         }
         let now = self.frame as f32;
-        for (state, (kind, _)) in states.iter_mut().zip(keys).take(count) {
+        for (state, (kind, _)) in states.iter_mut().zip(&keys).take(count) {
             // An `EMPTY` state is invalid: prepared to w̄ = 0 like a collision (Alg. 1 line 6).
-            prepare_in_place(state, false, *kind, x, v.vertex.normal, now, params);
+            prepare_in_place(state, false, *kind, x, vertex.normal, now, params);
         }
         for c in u.candidates.iter().take(count) {
             v.set.offer_stored(c.reservoir);
         }
         v.build_lobes();
+        v
     }
 }
 
@@ -1019,62 +917,6 @@ impl<S: Scatter> GuidedVertex<'_, S> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// `begin_many` must give `begin`'s vertices bit for bit (slots, states, choice, lobes,
-    /// scatter share) on a trained guide: 8 frames of 700 vertices on a floor below a light
-    /// patch, then 203 vertices (not a multiple of [`BEGIN_BATCH`]) with a NaN position, a
-    /// point far outside the grid and a zero normal among them.
-    #[test]
-    fn begin_many_equals_begin() {
-        let mut config = GuideConfig::for_scene(Vec3::ZERO, Vec3::ONE);
-        config.adaptive_capacity = 1 << 14;
-        let mut guide = Guide::new(config).unwrap();
-        guide.set_camera(Vec3::new(0.5, 0.5, 1.5));
-        let mut state = 0x9e37_79b9_u32;
-        let mut next = move || {
-            state = state.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
-            (state >> 8) as f32 / (1u32 << 24) as f32
-        };
-        let floor = |a: f32, b: f32| Vertex::surface(Vec3::new(a, 0.0, b), Vec3::Y);
-        let scatter = Lambertian { normal: Vec3::Y };
-        for _ in 0..8 {
-            for _ in 0..700 {
-                let v = guide.begin(
-                    floor(next(), next()),
-                    scatter,
-                    &BeginUniforms::from_fn(5, &mut next),
-                );
-                let s = v.sample(&SampleUniforms::from_fn(&mut next));
-                let hit = Vec3::new(0.4 + 0.2 * next(), 1.0, 0.4 + 0.2 * next());
-                let obs = VertexObservation::hit(hit, -Vec3::Y, Vec3::splat(5.0), Vec3::ONE);
-                v.finish(&s, &obs, &FinishUniforms::from_fn(&mut next));
-            }
-            guide.end_frame();
-        }
-        let mut vertices: Vec<Vertex> = (0..203).map(|_| floor(next(), next())).collect();
-        vertices[5].position = Vec3::NAN;
-        vertices[70].position = Vec3::splat(1.0e30);
-        vertices[71] = Vertex::surface(Vec3::new(0.5, 0.0, 0.5), Vec3::ZERO);
-        let uniforms: Vec<BeginUniforms> = (0..203)
-            .map(|_| BeginUniforms::from_fn(5, &mut next))
-            .collect();
-        let scatters = [scatter; 203];
-        let mut many = Vec::new();
-        guide.begin_many(&vertices, &scatters, &uniforms, &mut many);
-        assert_eq!(many.len(), 203);
-        let mut chosen = 0;
-        for (i, (b, (x, u))) in many.iter().zip(vertices.iter().zip(&uniforms)).enumerate() {
-            let a = guide.begin(*x, scatter, u);
-            assert_eq!(a.slots, b.slots, "vertex {i}");
-            assert_eq!(a.set, b.set, "vertex {i}");
-            assert_eq!(a.lobes, b.lobes, "vertex {i}");
-            assert_eq!(a.scatter_share.to_bits(), b.scatter_share.to_bits(), "vertex {i}");
-            assert_eq!((a.class, a.target_level), (b.class, b.target_level));
-            chosen += usize::from(a.selected().is_some());
-        }
-        // The comparison means something only if most vertices found states.
-        assert!(chosen > 150, "{chosen} of 203 vertices chose a state");
-    }
 
     /// `candidate_keys` memoises cells per grid and level; it must give [`Guide::key`]'s
     /// keys bit for bit, for every grid choice, level jitter and corner (here a 4096-vertex

@@ -68,7 +68,7 @@ pub use grid::{GridEnsemble, GridSlot, GridUniforms};
 #[cfg(feature = "std")]
 pub use guide::{
     BeginUniforms, CandidateUniforms, FinishUniforms, Guide, GuideConfig, GuidedSample,
-    BEGIN_BATCH, GuidedVertex, Hemisphere, IsotropicPhase, Lambertian, MAX_CANDIDATES, PAPER_SCENE_EXTENT,
+    GuidedVertex, Hemisphere, IsotropicPhase, Lambertian, MAX_CANDIDATES, PAPER_SCENE_EXTENT,
     SampleUniforms, Scatter, Traced, Transition, Vertex, VertexObservation, luminance,
 };
 #[cfg(feature = "std")]
