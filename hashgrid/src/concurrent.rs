@@ -307,6 +307,11 @@ impl ConcurrentTable {
                 on_evict(slot as u32);
             }
         }
+        // Only an eviction makes tombstones, and only `trim_tombstones` and `clear` make
+        // empty slots: with nothing evicted, the last trim left nothing to trim.
+        if evicted == 0 {
+            return 0;
+        }
         let mut words: Vec<u32> = self.checksums.iter_mut().map(|w| *w.get_mut()).collect();
         trim_tombstones(&mut words);
         for (a, w) in self.checksums.iter_mut().zip(words) {
