@@ -49,7 +49,7 @@ mod pool;
 #[path = "common/stream.rs"]
 mod stream;
 
-use lookups::{State, find_many_pass, find_pass, get_pass};
+use lookups::{State, find_many_pass, find_pass, get_pass, hashbrown_pass, hashmap_pass};
 use stream::{Sized, bench_hash, pack, sized, slot_bits};
 
 const MAX_PROBES: u32 = 16;
@@ -78,15 +78,6 @@ fn map<S: BuildHasher + Default>(s: &Sized) -> HashMap<u64, State, S> {
 
 fn hashbrown_map(s: &Sized) -> hashbrown::HashMap<u64, State> {
     s.fill.iter().map(|k| (pack(k), [1.0; 8])).collect()
-}
-
-/// One lookup pass of a map: `get` per packed key, one value word read per hit.
-#[inline]
-fn map_pass<M: Fn(&u64) -> Option<f32>>(get: M, packed: &[u64]) -> f32 {
-    black_box(packed)
-        .iter()
-        .map(|k| get(k).unwrap_or(0.0))
-        .sum()
 }
 
 /// Flushes every cache line of `bytes` from all cache levels.
@@ -189,13 +180,13 @@ fn bench_lookup_warm(c: &mut Criterion, bits: u32, l: &Lookups, slots: &mut [Opt
         b.iter(|| find_pass(&l.t, &l.s.queries))
     });
     g.bench_function(id("hashbrown_foldhash"), |b| {
-        b.iter(|| map_pass(|k| l.brown.get(k).map(|v| v[0]), &l.packed))
+        b.iter(|| hashbrown_pass(&l.brown, &l.packed))
     });
     g.bench_function(id("fxhashmap"), |b| {
-        b.iter(|| map_pass(|k| l.fx.get(k).map(|v| v[0]), &l.packed))
+        b.iter(|| hashmap_pass(&l.fx, &l.packed))
     });
     g.bench_function(id("std_hashmap"), |b| {
-        b.iter(|| map_pass(|k| l.std_map.get(k).map(|v| v[0]), &l.packed))
+        b.iter(|| hashmap_pass(&l.std_map, &l.packed))
     });
     g.finish();
 }
@@ -250,7 +241,7 @@ fn bench_lookup_cold(c: &mut Criterion, bits: u32, l: &Lookups, slots: &mut [Opt
                 &mut (),
                 |_| flush_entries(l.brown.iter(), l.brown.capacity()),
                 |_| {
-                    black_box(map_pass(|k| l.brown.get(k).map(|v| v[0]), &l.packed));
+                    black_box(hashbrown_pass(&l.brown, &l.packed));
                 },
             )
         })
@@ -262,7 +253,7 @@ fn bench_lookup_cold(c: &mut Criterion, bits: u32, l: &Lookups, slots: &mut [Opt
                 &mut (),
                 |_| flush_entries(l.fx.iter(), l.fx.capacity()),
                 |_| {
-                    black_box(map_pass(|k| l.fx.get(k).map(|v| v[0]), &l.packed));
+                    black_box(hashmap_pass(&l.fx, &l.packed));
                 },
             )
         })
