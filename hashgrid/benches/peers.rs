@@ -49,7 +49,10 @@ mod pool;
 #[path = "common/stream.rs"]
 mod stream;
 
-use lookups::{State, find_many_pass, find_pass, get_pass, hashbrown_pass, hashmap_pass};
+use lookups::{
+    State, find_many_pass, find_pass, get_pass, hashbrown_insert_pass, hashbrown_pass,
+    hashmap_insert_pass, hashmap_pass, insert_pass,
+};
 use stream::{Sized, bench_hash, pack, sized, slot_bits};
 
 const MAX_PROBES: u32 = 16;
@@ -274,43 +277,27 @@ fn bench_insert(c: &mut Criterion) {
         let mut t = HashTable::<State>::new(1 << bits, MAX_PROBES, bench_hash()).unwrap();
         g.bench_function(id("mcg_entry"), |b| {
             b.iter_custom(|n| {
-                timed(n, &mut t, HashTable::clear, |t| {
-                    for k in black_box(keys) {
-                        if let Some((v, _)) = t.entry(k) {
-                            v[0] += 1.0;
-                        }
-                    }
-                })
+                timed(n, &mut t, HashTable::clear, |t| insert_pass(t, keys))
             })
         });
         let mut brown = hashbrown::HashMap::<u64, State>::with_capacity(keys.len());
         g.bench_function(id("hashbrown_foldhash"), |b| {
             b.iter_custom(|n| {
                 timed(n, &mut brown, hashbrown::HashMap::clear, |m| {
-                    for &k in black_box(&packed) {
-                        m.entry(k).or_insert([0.0; 8])[0] += 1.0;
-                    }
+                    hashbrown_insert_pass(m, &packed)
                 })
             })
         });
         let mut fx = FxHashMap::<u64, State>::with_capacity_and_hasher(keys.len(), FxBuildHasher);
         g.bench_function(id("fxhashmap"), |b| {
             b.iter_custom(|n| {
-                timed(n, &mut fx, HashMap::clear, |m| {
-                    for &k in black_box(&packed) {
-                        m.entry(k).or_insert([0.0; 8])[0] += 1.0;
-                    }
-                })
+                timed(n, &mut fx, HashMap::clear, |m| hashmap_insert_pass(m, &packed))
             })
         });
         let mut std_map = HashMap::<u64, State>::with_capacity(keys.len());
         g.bench_function(id("std_hashmap"), |b| {
             b.iter_custom(|n| {
-                timed(n, &mut std_map, HashMap::clear, |m| {
-                    for &k in black_box(&packed) {
-                        m.entry(k).or_insert([0.0; 8])[0] += 1.0;
-                    }
-                })
+                timed(n, &mut std_map, HashMap::clear, |m| hashmap_insert_pass(m, &packed))
             })
         });
         g.finish();

@@ -1,7 +1,8 @@
-//! The lookup passes that the criterion benches (`benches/hashgrid.rs`, `benches/peers.rs`) and
+//! The lookup and insert passes that the criterion benches (`benches/hashgrid.rs`, `benches/peers.rs`) and
 //! the min-of-runs probes (`examples/speed.rs`, `examples/instructions.rs`) time, written once.
 //! Each pass looks up every query and reads one value word per hit (0 for a miss), so both
-//! sides of a comparison touch their values.
+//! sides of a comparison touch their values; each insert pass inserts every key (or finds it)
+//! and adds 1 to the first word of its value.
 //!
 //! Every pass is `#[inline(never)]`: compiled on its own, each loop gets the registers it
 //! needs. Inlined into a large caller (the `instructions` example's `main`), the table's `get`
@@ -71,4 +72,31 @@ pub fn find_many_pass(
         .iter()
         .map(|s| s.map_or(0.0, |s| table.values()[s as usize][0]))
         .sum()
+}
+
+/// `HashTable::entry` per key, adding 1 to the value's first word.
+#[inline(never)]
+pub fn insert_pass(table: &mut HashTable<State>, keys: &[CellKey]) {
+    for k in black_box(keys) {
+        if let Some((v, _)) = table.entry(k) {
+            v[0] += 1.0;
+        }
+    }
+}
+
+/// hashbrown's `entry().or_insert` per packed key, adding 1 to the value's first word.
+#[inline(never)]
+pub fn hashbrown_insert_pass(map: &mut hashbrown::HashMap<u64, State>, packed: &[u64]) {
+    for &k in black_box(packed) {
+        map.entry(k).or_insert([0.0; 8])[0] += 1.0;
+    }
+}
+
+/// std's `HashMap::entry().or_insert` per packed key (any hasher), adding 1 to the value's
+/// first word.
+#[inline(never)]
+pub fn hashmap_insert_pass<S: BuildHasher>(map: &mut HashMap<u64, State, S>, packed: &[u64]) {
+    for &k in black_box(packed) {
+        map.entry(k).or_insert([0.0; 8])[0] += 1.0;
+    }
 }
