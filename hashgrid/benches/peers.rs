@@ -276,9 +276,7 @@ fn bench_insert(c: &mut Criterion) {
         g.measurement_time(Duration::from_secs(3));
         let mut t = HashTable::<State>::new(1 << bits, MAX_PROBES, bench_hash()).unwrap();
         g.bench_function(id("mcg_entry"), |b| {
-            b.iter_custom(|n| {
-                timed(n, &mut t, HashTable::clear, |t| insert_pass(t, keys))
-            })
+            b.iter_custom(|n| timed(n, &mut t, HashTable::clear, |t| insert_pass(t, keys)))
         });
         let mut brown = hashbrown::HashMap::<u64, State>::with_capacity(keys.len());
         g.bench_function(id("hashbrown_foldhash"), |b| {
@@ -291,13 +289,17 @@ fn bench_insert(c: &mut Criterion) {
         let mut fx = FxHashMap::<u64, State>::with_capacity_and_hasher(keys.len(), FxBuildHasher);
         g.bench_function(id("fxhashmap"), |b| {
             b.iter_custom(|n| {
-                timed(n, &mut fx, HashMap::clear, |m| hashmap_insert_pass(m, &packed))
+                timed(n, &mut fx, HashMap::clear, |m| {
+                    hashmap_insert_pass(m, &packed)
+                })
             })
         });
         let mut std_map = HashMap::<u64, State>::with_capacity(keys.len());
         g.bench_function(id("std_hashmap"), |b| {
             b.iter_custom(|n| {
-                timed(n, &mut std_map, HashMap::clear, |m| hashmap_insert_pass(m, &packed))
+                timed(n, &mut std_map, HashMap::clear, |m| {
+                    hashmap_insert_pass(m, &packed)
+                })
             })
         });
         g.finish();

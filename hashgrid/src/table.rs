@@ -666,6 +666,37 @@ mod tests {
     }
 
     #[test]
+    fn get_on_the_default_path() {
+        // `Fold` with a power-of-two capacity: `get`'s inline path without bounds checks. A
+        // nearly full table, so keys sit past their home slots and windows wrap past the
+        // last slot; every key's value is its own index.
+        let mut t = HashTable::<u32>::new(64, 8, BucketHash::Fold).unwrap();
+        let keys: Vec<CellKey> = (0..56).map(key).collect();
+        let mut stored = Vec::new();
+        for (i, k) in keys.iter().enumerate() {
+            if let Some((v, _)) = t.entry(k) {
+                *v = i as u32;
+                stored.push(i);
+            }
+        }
+        assert!(stored.len() > 48);
+        let displaced = stored
+            .iter()
+            .filter(|&&i| t.find(&keys[i]) != Some(t.home_slot(&keys[i])))
+            .count();
+        assert!(displaced > 10, "{displaced}");
+        let wrapped = (0..2)
+            .map(|s| key_at_home(&t, 63, s + 100))
+            .collect::<Vec<_>>();
+        for &i in &stored {
+            assert_eq!(t.get(&keys[i]), Some(&(i as u32)), "key {i}");
+        }
+        for k in (1000..1100).map(key).chain(wrapped) {
+            assert_eq!(t.get(&k), t.find(&k).map(|s| &t.values()[s as usize]));
+        }
+    }
+
+    #[test]
     #[should_panic(expected = "differ in length")]
     fn find_many_checks_lengths() {
         let t = HashTable::<u32>::new(16, 4, BucketHash::Mix).unwrap();
