@@ -49,7 +49,10 @@ mod pool;
 #[path = "common/stream.rs"]
 mod stream;
 
-use lookups::{State, find_many_pass, find_pass, get_pass};
+use lookups::{
+    State, find_many_pass, find_pass, get_pass, hashbrown_insert_pass, hashbrown_pass,
+    hashmap_insert_pass, hashmap_pass, insert_pass,
+};
 use stream::{Sized, bench_hash, pack, sized, slot_bits};
 
 const MAX_PROBES: u32 = 16;
@@ -78,15 +81,6 @@ fn map<S: BuildHasher + Default>(s: &Sized) -> HashMap<u64, State, S> {
 
 fn hashbrown_map(s: &Sized) -> hashbrown::HashMap<u64, State> {
     s.fill.iter().map(|k| (pack(k), [1.0; 8])).collect()
-}
-
-/// One lookup pass of a map: `get` per packed key, one value word read per hit.
-#[inline]
-fn map_pass<M: Fn(&u64) -> Option<f32>>(get: M, packed: &[u64]) -> f32 {
-    black_box(packed)
-        .iter()
-        .map(|k| get(k).unwrap_or(0.0))
-        .sum()
 }
 
 /// Flushes every cache line of `bytes` from all cache levels.
@@ -189,13 +183,13 @@ fn bench_lookup_warm(c: &mut Criterion, bits: u32, l: &Lookups, slots: &mut [Opt
         b.iter(|| find_pass(&l.t, &l.s.queries))
     });
     g.bench_function(id("hashbrown_foldhash"), |b| {
-        b.iter(|| map_pass(|k| l.brown.get(k).map(|v| v[0]), &l.packed))
+        b.iter(|| hashbrown_pass(&l.brown, &l.packed))
     });
     g.bench_function(id("fxhashmap"), |b| {
-        b.iter(|| map_pass(|k| l.fx.get(k).map(|v| v[0]), &l.packed))
+        b.iter(|| hashmap_pass(&l.fx, &l.packed))
     });
     g.bench_function(id("std_hashmap"), |b| {
-        b.iter(|| map_pass(|k| l.std_map.get(k).map(|v| v[0]), &l.packed))
+        b.iter(|| hashmap_pass(&l.std_map, &l.packed))
     });
     g.finish();
 }
@@ -250,7 +244,7 @@ fn bench_lookup_cold(c: &mut Criterion, bits: u32, l: &Lookups, slots: &mut [Opt
                 &mut (),
                 |_| flush_entries(l.brown.iter(), l.brown.capacity()),
                 |_| {
-                    black_box(map_pass(|k| l.brown.get(k).map(|v| v[0]), &l.packed));
+                    black_box(hashbrown_pass(&l.brown, &l.packed));
                 },
             )
         })
@@ -262,7 +256,7 @@ fn bench_lookup_cold(c: &mut Criterion, bits: u32, l: &Lookups, slots: &mut [Opt
                 &mut (),
                 |_| flush_entries(l.fx.iter(), l.fx.capacity()),
                 |_| {
-                    black_box(map_pass(|k| l.fx.get(k).map(|v| v[0]), &l.packed));
+                    black_box(hashmap_pass(&l.fx, &l.packed));
                 },
             )
         })
@@ -282,23 +276,13 @@ fn bench_insert(c: &mut Criterion) {
         g.measurement_time(Duration::from_secs(3));
         let mut t = HashTable::<State>::new(1 << bits, MAX_PROBES, bench_hash()).unwrap();
         g.bench_function(id("mcg_entry"), |b| {
-            b.iter_custom(|n| {
-                timed(n, &mut t, HashTable::clear, |t| {
-                    for k in black_box(keys) {
-                        if let Some((v, _)) = t.entry(k) {
-                            v[0] += 1.0;
-                        }
-                    }
-                })
-            })
+            b.iter_custom(|n| timed(n, &mut t, HashTable::clear, |t| insert_pass(t, keys)))
         });
         let mut brown = hashbrown::HashMap::<u64, State>::with_capacity(keys.len());
         g.bench_function(id("hashbrown_foldhash"), |b| {
             b.iter_custom(|n| {
                 timed(n, &mut brown, hashbrown::HashMap::clear, |m| {
-                    for &k in black_box(&packed) {
-                        m.entry(k).or_insert([0.0; 8])[0] += 1.0;
-                    }
+                    hashbrown_insert_pass(m, &packed)
                 })
             })
         });
@@ -306,9 +290,7 @@ fn bench_insert(c: &mut Criterion) {
         g.bench_function(id("fxhashmap"), |b| {
             b.iter_custom(|n| {
                 timed(n, &mut fx, HashMap::clear, |m| {
-                    for &k in black_box(&packed) {
-                        m.entry(k).or_insert([0.0; 8])[0] += 1.0;
-                    }
+                    hashmap_insert_pass(m, &packed)
                 })
             })
         });
@@ -316,9 +298,7 @@ fn bench_insert(c: &mut Criterion) {
         g.bench_function(id("std_hashmap"), |b| {
             b.iter_custom(|n| {
                 timed(n, &mut std_map, HashMap::clear, |m| {
-                    for &k in black_box(&packed) {
-                        m.entry(k).or_insert([0.0; 8])[0] += 1.0;
-                    }
+                    hashmap_insert_pass(m, &packed)
                 })
             })
         });

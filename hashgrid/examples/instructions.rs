@@ -10,7 +10,6 @@
 //! min-of-runs check; the criterion bench is the reference).
 
 use std::collections::HashMap;
-use std::hint::black_box;
 use std::time::Instant;
 
 use mcg_hashgrid::HashTable;
@@ -95,11 +94,7 @@ fn mcg_case(
             for _ in 0..passes {
                 table.clear();
                 let t0 = Instant::now();
-                for k in black_box(&s.fill) {
-                    if let Some((v, _)) = table.entry(k) {
-                        v[0] += 1.0;
-                    }
-                }
+                lookups::insert_pass(table, &s.fill);
                 lap(t0, s.fill.len());
             }
             sum += table.len() as f32;
@@ -123,10 +118,7 @@ fn get_case(
             let m: hashbrown::HashMap<u64, State> = fill.iter().map(|&k| (k, [1.0; 8])).collect();
             for _ in 0..passes {
                 let t0 = Instant::now();
-                sum += black_box(packed)
-                    .iter()
-                    .map(|k| m.get(k).map_or(0.0, |v| v[0]))
-                    .sum::<f32>();
+                sum += lookups::hashbrown_pass(&m, packed);
                 lap(t0, packed.len());
             }
         }
@@ -135,10 +127,7 @@ fn get_case(
                 fill.iter().map(|&k| (k, [1.0; 8])).collect();
             for _ in 0..passes {
                 let t0 = Instant::now();
-                sum += black_box(packed)
-                    .iter()
-                    .map(|k| m.get(k).map_or(0.0, |v| v[0]))
-                    .sum::<f32>();
+                sum += lookups::hashmap_pass(&m, packed);
                 lap(t0, packed.len());
             }
         }
@@ -146,10 +135,7 @@ fn get_case(
             let m: HashMap<u64, State> = fill.iter().map(|&k| (k, [1.0; 8])).collect();
             for _ in 0..passes {
                 let t0 = Instant::now();
-                sum += black_box(packed)
-                    .iter()
-                    .map(|k| m.get(k).map_or(0.0, |v| v[0]))
-                    .sum::<f32>();
+                sum += lookups::hashmap_pass(&m, packed);
                 lap(t0, packed.len());
             }
         }
@@ -172,9 +158,7 @@ fn insert_case(
             for _ in 0..passes {
                 m.clear();
                 let t0 = Instant::now();
-                for &k in black_box(fill) {
-                    m.entry(k).or_insert([0.0; 8])[0] += 1.0;
-                }
+                lookups::hashbrown_insert_pass(&mut m, fill);
                 lap(t0, fill.len());
             }
             sum += m.len() as f32;
@@ -187,9 +171,7 @@ fn insert_case(
             for _ in 0..passes {
                 m.clear();
                 let t0 = Instant::now();
-                for &k in black_box(fill) {
-                    m.entry(k).or_insert([0.0; 8])[0] += 1.0;
-                }
+                lookups::hashmap_insert_pass(&mut m, fill);
                 lap(t0, fill.len());
             }
             sum += m.len() as f32;

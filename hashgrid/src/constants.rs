@@ -36,13 +36,16 @@ pub const MIX_WORD: usize = 3;
 pub const FOLD_X: u32 = 0x9E37_79B1;
 /// Multiplier of y in the first fold of [`hash_fold`](crate::hash_fold) (xxHash's 4th prime).
 pub const FOLD_Y: u32 = 0x27D4_EB2F;
-/// Multiplier of z in the second fold of [`hash_fold`](crate::hash_fold) (xxHash's 2nd prime).
-/// With [`FOLD_META`], the fold `z·FOLD_Z + meta·FOLD_META` maps no nonzero (Δz, Δmeta) of
-/// length below ≈ 60 400 to 0 mod 2³².
+/// Multiplier of z in the second fold of [`hash_fold`](crate::hash_fold),
+/// `z·FOLD_Z + rotl(meta, FOLD_META_ROTATE)` (xxHash's 2nd prime). For keys with equal extra
+/// bits (meta bits 16..32) the rotated meta words differ by a multiple of 2¹⁶, which
+/// `Δz·FOLD_Z` (FOLD_Z odd) matches only when 2¹⁶ divides Δz: the fold is injective on every
+/// range of z shorter than 65 536.
 pub const FOLD_Z: u32 = 0x85EB_CA77;
-/// Multiplier of the meta word in the second fold of [`hash_fold`](crate::hash_fold)
-/// (xxHash's 3rd prime).
-pub const FOLD_META: u32 = 0xC2B2_AE3D;
+/// Left rotation of the meta word in the second fold of [`hash_fold`](crate::hash_fold)
+/// (in place of a multiply): the level and class (meta bits 0..16) move to the high half,
+/// which the finisher's `t ⊕ (t >> 16)` brings back down before its multiply.
+pub const FOLD_META_ROTATE: u32 = 16;
 /// Multiplier of the finisher of [`hash_fold`](crate::hash_fold) (the first multiplier of
 /// Wellons' `lowbias32`).
 pub const FOLD_FINISH: u32 = 0x7FEB_352D;
@@ -119,7 +122,7 @@ pub const U32_CONSTANTS: &[(&str, u32)] = &[
     ("HASHGRID_FOLD_X", FOLD_X),
     ("HASHGRID_FOLD_Y", FOLD_Y),
     ("HASHGRID_FOLD_Z", FOLD_Z),
-    ("HASHGRID_FOLD_META", FOLD_META),
+    ("HASHGRID_FOLD_META_ROTATE", FOLD_META_ROTATE),
     ("HASHGRID_FOLD_FINISH", FOLD_FINISH),
     ("HASHGRID_EMPTY", EMPTY),
     ("HASHGRID_TOMBSTONE", TOMBSTONE),

@@ -8,14 +8,14 @@
 //! so the level and the normal class are part of both.
 //!
 //! The default bucket hash [`hash_fold`] and the [`checksum`] come from one short pass
-//! ([`fold_and_checksum`]: four independent multiplies and one finishing multiply); the
+//! ([`fold_and_checksum`]: three independent multiplies and one finishing multiply); the
 //! paper's [`pcg4d`] (Jarzynski and Olano 2020) stays available as [`BucketHash::Mix`].
 //! Everything is wrapping `u32` arithmetic, which WGSL has, so the GPU twin reproduces every
 //! value bit for bit.
 
 use crate::constants::{
-    COHERENT_RUN_BITS, FIRST_CHECKSUM, FOLD_FINISH, FOLD_META, FOLD_X, FOLD_Y, FOLD_Z, MIX_WORD,
-    PCG_INC, PCG_MUL, PRIME_META, PRIME_X, PRIME_Y, PRIME_Z,
+    COHERENT_RUN_BITS, FIRST_CHECKSUM, FOLD_FINISH, FOLD_META_ROTATE, FOLD_X, FOLD_Y, FOLD_Z,
+    MIX_WORD, PCG_INC, PCG_MUL, PRIME_META, PRIME_X, PRIME_Y, PRIME_Z,
 };
 use crate::key::CellKey;
 
@@ -43,7 +43,7 @@ pub enum BucketHash {
     MixCoherent,
     /// Two multiply–add folds of the words, xor'ed and finished by one multiply–xorshift
     /// ([`hash_fold`]); the [`checksum`] is the fold of `z, meta` plus this hash, so one short
-    /// pass gives both ([`fold_and_checksum`]: 5 multiplies, none dependent on another
+    /// pass gives both ([`fold_and_checksum`]: 4 multiplies, none dependent on another
     /// multiply of the key). Passes the same occupancy and checksum suites as
     /// [`BucketHash::Mix`]. The default.
     #[default]
@@ -167,14 +167,14 @@ pub const fn mix_and_checksum(key: &CellKey) -> (u32, u32) {
     (hash_mix(key), checksum(key))
 }
 
-/// The two folds of [`hash_fold`]: `(x·FOLD_X + y·FOLD_Y, z·FOLD_Z + meta·FOLD_META)`.
+/// The two folds of [`hash_fold`]: `(x·FOLD_X + y·FOLD_Y, z·FOLD_Z + rotl(meta, 16))`.
 #[inline(always)]
 const fn folds(key: &CellKey) -> (u32, u32) {
     let [x, y, z, meta] = key.words();
     (
         x.wrapping_mul(FOLD_X).wrapping_add(y.wrapping_mul(FOLD_Y)),
         z.wrapping_mul(FOLD_Z)
-            .wrapping_add(meta.wrapping_mul(FOLD_META)),
+            .wrapping_add(meta.rotate_left(FOLD_META_ROTATE)),
     )
 }
 
@@ -189,17 +189,20 @@ const fn finish(t: u32) -> u32 {
 /// The fold bucket hash (the default, [`BucketHash::Fold`]):
 ///
 /// ```text
-/// a = x·FOLD_X + y·FOLD_Y,   b = z·FOLD_Z + meta·FOLD_META   (wrapping u32)
+/// a = x·FOLD_X + y·FOLD_Y,   b = z·FOLD_Z + rotl(meta, 16)   (wrapping u32)
 /// t = a ⊕ b;   t ⊕= t >> 16;   t ·= FOLD_FINISH;   hash = t ⊕ (t >> 15)
 /// ```
 ///
-/// Each fold is a linear map of two words mod 2³², injective on every box of keys of sides
-/// below ≈ 42 000 cells (the shortest vector of its kernel lattice is ≈ 60 000 long, see
-/// [`FOLD_X`](crate::constants::FOLD_X)); xor'ing two folds is not linear mod 2³², and the
-/// multiply–xorshift finisher (Wellons' `lowbias32`, first round) carries every bit into the
-/// low bits that a power-of-two mask reads. Five multiplies, the first four independent: a
-/// third of the instructions of [`hash_mix`], which the `hashgrid_occupancy` suite shows no
-/// better on planes, lines, spheres and a renderer's multi-level stream.
+/// Each fold is injective on every box of keys of sides below ≈ 44 000 cells (see
+/// [`FOLD_X`](crate::constants::FOLD_X) and [`FOLD_Z`](crate::constants::FOLD_Z); the meta
+/// word, whose level and class are small, is rotated into the high half instead of
+/// multiplied); xor'ing two folds is not linear mod 2³², and the multiply–xorshift finisher
+/// (Wellons' `lowbias32`, first round) carries every bit into the low bits that a power-of-two
+/// mask reads. Four multiplies, the first three independent: under a third of the
+/// instructions of [`hash_mix`], which the `hashgrid_occupancy` suite shows no better on
+/// planes, lines, spheres and a renderer's multi-level stream. (Leaving x unmultiplied as
+/// well, `x + y·FOLD_Y`, failed that suite on a plane with a power-of-two capacity:
+/// X²/df = 1.094, p = 1.8·10⁻⁵.)
 #[inline]
 #[must_use]
 pub const fn hash_fold(key: &CellKey) -> u32 {
@@ -212,8 +215,8 @@ pub const fn hash_fold(key: &CellKey) -> u32 {
 ///
 /// `(a, b) ↦ (hash, b + hash)` is a bijection (the finisher is one, and `a = (t ⊕ b)` is
 /// recovered from `t` and `b`), so two distinct keys share both the bucket hash and the
-/// checksum only if they share both folds, which no two keys within ≈ 42 000 of each other
-/// in every word do. Keys sharing a checksum have different bucket hashes.
+/// checksum only if they share both folds, which no two keys within ≈ 44 000 of each other
+/// in every coordinate (and with equal extra bits) do. Keys sharing a checksum have different bucket hashes.
 #[inline]
 #[must_use]
 pub const fn fold_and_checksum(key: &CellKey) -> (u32, u32) {
@@ -238,7 +241,7 @@ pub const fn hash_mix_coherent(key: &CellKey) -> u32 {
 }
 
 /// The checksum stored in a slot, for every [`BucketHash`]: `b + hash_fold(key)` with the
-/// second fold `b = z·FOLD_Z + meta·FOLD_META` ([`fold_and_checksum`]), never
+/// second fold `b = z·FOLD_Z + rotl(meta, 16)` ([`fold_and_checksum`]), never
 /// [`EMPTY`](crate::constants::EMPTY) (0) or [`TOMBSTONE`](crate::constants::TOMBSTONE) (1): a
 /// raw value below [`FIRST_CHECKSUM`] is or'ed with 2.
 ///
@@ -375,7 +378,8 @@ mod tests {
         // also from an independent Python transcription of the paper's listing.
         assert_eq!(pcg4d(key.words())[1], 0x16f3_86d9);
         // The fold pair, also from an independent Python transcription of the formulas:
-        // a = 0x9e3779b1 − 2·0x27d4eb2f, b = 3·0x85ebca77 + 0x307·0xc2b2ae3d (mod 2³²).
-        assert_eq!(pinned, [0xced1_1e4b, 0x9a86_9f9e, 0x6ea7_0669, 0x6b57_e079]);
+        // a = 0x9e3779b1 − 2·0x27d4eb2f = 0x4e8da353,
+        // b = 3·0x85ebca77 + rotl(0x307, 16) = 0x94ca5f65 (mod 2³²).
+        assert_eq!(pinned, [0xced1_1e4b, 0x9a86_9f9e, 0x7232_c2b9, 0x06fd_221e]);
     }
 }

@@ -50,12 +50,14 @@
 //!
 //! ## Performance
 //! Against hashbrown (foldhash) holding the same keys (fastest of repeated passes on a shared
-//! 2-vCPU VM, baseline x86-64, 2¹⁶ / 2¹⁹ slots at load 1/4): [`HashTable::get`] takes 1.9–2.1× /
-//! 1.6–1.9× hashbrown's time with warm caches (45 instructions against 33),
-//! [`HashTable::find_many`] 2.2–2.5× / 1.4–1.6×, an insert 1.2× / 1.35×; [`ConcurrentTable`] inserts
-//! from two threads 5.7× faster than `DashMap` at 2¹⁹ (criterion means). The lookup gap is
-//! the second cache line per lookup (checksum and value live in separate arrays, the GPU
-//! layout): `find` without the value read comes within 7 % of hashbrown's `get` at 2¹⁹. Run
+//! 2-vCPU VM, baseline x86-64, 2¹⁶ / 2¹⁹ slots at load 1/4; peer ÷ mcg, > 1: mcg faster):
+//! [`HashTable::get`] 0.54–0.65 / 0.73–0.74 with warm caches (34 instructions against 33),
+//! [`HashTable::find_many`] plus the value reads 0.51–0.56 / 0.69, an insert 0.87–1.06 /
+//! 0.71–0.75; [`ConcurrentTable`] inserted from two threads 5.7× faster than `DashMap` at 2¹⁹
+//! in a criterion run at moderate load (1.45–2.84× on two cores shared with four builds). The rest of the lookup gap is the
+//! second cache line per lookup (checksum and value live in separate arrays, the GPU layout)
+//! and, at 2¹⁶, a footprint above the L2 cache at the load the user chose. Run
+//! `cargo run --release -p mcg-hashgrid --example instructions -- CASE BITS PASSES time`,
 //! `cargo bench -p mcg-hashgrid --bench peers` and `scripts/hashgrid-instructions`; numbers
 //! and diary: `benches/README.md`.
 //!

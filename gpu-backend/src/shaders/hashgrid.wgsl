@@ -7,7 +7,7 @@
 
 #import mcg::constants::{
     HASHGRID_CLASS_BITS, HASHGRID_CLASS_NONE, HASHGRID_CLASS_SHIFT, HASHGRID_COHERENT_RUN_BITS,
-    HASHGRID_FIRST_CHECKSUM, HASHGRID_FOLD_FINISH, HASHGRID_FOLD_META, HASHGRID_FOLD_X,
+    HASHGRID_FIRST_CHECKSUM, HASHGRID_FOLD_FINISH, HASHGRID_FOLD_META_ROTATE, HASHGRID_FOLD_X,
     HASHGRID_FOLD_Y, HASHGRID_FOLD_Z, HASHGRID_HASH_FOLD, HASHGRID_HASH_MIX_COHERENT,
     HASHGRID_HASH_XOR_PRIMES, HASHGRID_LEVEL_BITS, HASHGRID_LEVEL_SHIFT, HASHGRID_MIX_WORD,
     HASHGRID_ONE_MINUS_EPSILON, HASHGRID_PCG_INC, HASHGRID_PCG_MUL, HASHGRID_PRIME_META,
@@ -113,10 +113,11 @@ fn hashgrid_hash_mix_coherent(key: HashgridCellKey) -> u32 {
     return hashgrid_pcg4d(vec4<u32>(run, w.y, w.z, w.w))[HASHGRID_MIX_WORD] ^ low;
 }
 
-// The two folds of the fold hash: (x·FOLD_X + y·FOLD_Y, z·FOLD_Z + meta·FOLD_META); `hash.rs::folds`.
+// The two folds of the fold hash: (x·FOLD_X + y·FOLD_Y, z·FOLD_Z + rotl(meta, 16)); `hash.rs::folds`.
 fn hashgrid_folds(key: HashgridCellKey) -> vec2<u32> {
     let w = hashgrid_key_words(key);
-    return vec2<u32>(w.x * HASHGRID_FOLD_X + w.y * HASHGRID_FOLD_Y, w.z * HASHGRID_FOLD_Z + w.w * HASHGRID_FOLD_META);
+    let rotated = (w.w << HASHGRID_FOLD_META_ROTATE) | (w.w >> (32u - HASHGRID_FOLD_META_ROTATE));
+    return vec2<u32>(w.x * HASHGRID_FOLD_X + w.y * HASHGRID_FOLD_Y, w.z * HASHGRID_FOLD_Z + rotated);
 }
 
 // The fold bucket hash (the default): t = a ^ b; t ^= t >> 16; t *= FOLD_FINISH; t ^ (t >> 15).
