@@ -114,6 +114,12 @@ pub enum UpdatePolicy {
     /// ([`UpdateConfig::refill_weight`]), so stale and restarted texels refill within a few
     /// frames.
     AdgiRefill,
+    /// ADGI's change detection steering DDGI's blend, mcg's extension (not in the paper; see
+    /// the [module docs](self#mcgs-extension-blend-updatepolicyadgiblend)): staggered pilot
+    /// pairs detect a change on the frame after it whatever its parity, and a changed probe
+    /// restarts its window and gets extra uniform rays that are blended into all its texels
+    /// with DDGI's cosine weights (texels hold E/π).
+    AdgiBlend,
 }
 
 impl UpdatePolicy {
@@ -125,6 +131,7 @@ impl UpdatePolicy {
             UpdatePolicy::Adgi => "ADGI (guided chains)",
             UpdatePolicy::AdgiUnguided => "ADGI, constant guide",
             UpdatePolicy::AdgiRefill => "ADGI + refill (mcg)",
+            UpdatePolicy::AdgiBlend => "ADGI + blend (mcg)",
         }
     }
 
@@ -133,7 +140,7 @@ impl UpdatePolicy {
     #[must_use]
     pub fn content(self) -> TexelContent {
         match self {
-            UpdatePolicy::Ddgi => TexelContent::Irradiance,
+            UpdatePolicy::Ddgi | UpdatePolicy::AdgiBlend => TexelContent::Irradiance,
             UpdatePolicy::Adgi | UpdatePolicy::AdgiUnguided | UpdatePolicy::AdgiRefill => {
                 TexelContent::Radiance
             }
@@ -196,13 +203,23 @@ pub struct UpdateConfig {
     /// texels. Our choice: 2 (of 1, 2 and 4 on the door scene's run seeds 1-8, the only one
     /// faster than DDGI on every seed; confirmed on the held-out seeds 9-16).
     pub refill_weight: f32,
+    /// The moving-average window N_max of [`UpdatePolicy::AdgiBlend`]'s unchanged probes
+    /// (mcg's extension; unused by the other policies). Our choice: 24 — its probes get the
+    /// 24 rays per probe left after the pilots, against DDGI's 32 with N_max = 17, and
+    /// 24 × 24 ≈ 32 × 17 rays per window.
+    pub blend_max_count: u32,
+    /// Extra rays per frame of an [`UpdatePolicy::AdgiBlend`] probe whose f_d is 1 (f_d · this
+    /// for smaller f_d), within [`UpdateConfig::dynamic_share`] of the rays after the pilots.
+    /// Our choice: 96.
+    pub blend_dynamic_rays: u32,
 }
 
 impl UpdateConfig {
     /// The defaults (see each field): 32 rays per probe (ADGI sec. 5 gives Q-DDGI 32),
     /// ADGI's texels, Q-DDGI's N_max = 17, DDGI's blend, dynamic N_max = 10, share 0.75, 64
     /// rays per dynamic octant, 64 dynamic chains, trigger decay 0.5, 3 × 3 × 3 smoothing, no
-    /// camera falloff, pilot pairs, pilot seed 0, refill weight 2.
+    /// camera falloff, pilot pairs, pilot seed 0, refill weight 2, blend window 24 and 96
+    /// blend dynamic rays.
     pub const DEFAULT: Self = Self {
         rays_per_probe: 32,
         texels: TexelConfig::ADGI,
@@ -221,6 +238,8 @@ impl UpdateConfig {
         pilot_schedule: PilotSchedule::ADGI,
         pilot_seed: 0,
         refill_weight: 2.0,
+        blend_max_count: 24,
+        blend_dynamic_rays: 96,
     };
 }
 
@@ -251,6 +270,10 @@ pub struct FrameRays {
 struct AdgiState {
     guided: bool,
     refill: bool,
+    /// [`UpdatePolicy::AdgiBlend`]: staggered pilots, per-probe uniform rays, DDGI's blend.
+    blend: bool,
+    /// Whether the blend's detector holds references yet (its first frame only sets them).
+    started: bool,
     params: HeuristicParams,
     static_chains: ProbeChains,
     dynamic_chains: ProbeChains,
@@ -270,6 +293,8 @@ struct AdgiState {
     last_change: Vec<f32>,
     /// For each octant, the interior irradiance texels whose centre lies in it.
     octant_texels: Vec<Vec<usize>>,
+    /// The blend's rays for changed probes in the last frame (before rounding).
+    dynamic_total: f64,
 }
 
 /// One probe grid's texels and the per-frame update that fills them (see the
@@ -371,7 +396,22 @@ impl ProbeUpdater {
         }
         let ddgi_average =
             MovingAverage::new(config.ddgi_max_count).map_err(|_| ControlError::MaxCountZero)?;
-        let trigger = TemporalTrigger::new(config.trigger_decay)?;
+        let blend_average =
+            MovingAverage::new(config.blend_max_count).map_err(|_| ControlError::MaxCountZero)?;
+        let blend = policy == UpdatePolicy::AdgiBlend;
+        // The staggered pilots detect on every frame, each probe octant on h − 1 of h frames
+        // as in the paper's schedule: θ per detection of the paper's schedule is
+        // θ^((h − 1)/h) per frame.
+        let hold = config.pilot_schedule.hold() as f32;
+        let decay = if blend {
+            config.trigger_decay.powf((hold - 1.0) / hold)
+        } else {
+            config.trigger_decay
+        };
+        let trigger =
+            TemporalTrigger::new(decay).map_err(|_| ControlError::TriggerDecayOutOfRange {
+                decay: config.trigger_decay,
+            })?;
         let params = HeuristicParams::new(config.camera_threshold, grid.cell_diagonal())?;
 
         let map = config.texels.irradiance_map;
@@ -384,6 +424,8 @@ impl ProbeUpdater {
         let mut texel_config = config.texels;
         if !policy.is_adgi() {
             texel_config.moving_average = ddgi_average;
+        } else if blend {
+            texel_config.moving_average = blend_average;
         }
         let texels = ProbeTexels::new(grid, texel_config);
 
@@ -405,6 +447,8 @@ impl ProbeUpdater {
             Some(AdgiState {
                 guided: policy != UpdatePolicy::AdgiUnguided,
                 refill: policy == UpdatePolicy::AdgiRefill,
+                blend,
+                started: false,
                 params,
                 static_chains,
                 dynamic_chains,
@@ -419,6 +463,7 @@ impl ProbeUpdater {
                 f_refill: vec![0.0; n],
                 last_change: vec![0.0; grid.probe_count()],
                 octant_texels,
+                dynamic_total: 0.0,
             })
         } else {
             None
@@ -577,13 +622,7 @@ impl ProbeUpdater {
     ) -> FrameRays {
         let r = self.config.rays_per_probe;
         // One random rotation per frame for all probes (DDGI sec. 4).
-        let (x, y, z, w) = (
-            uniform() - 0.5,
-            uniform() - 0.5,
-            uniform() - 0.5,
-            uniform() - 0.5,
-        );
-        let rotation = Quat::from_xyzw(x, y, z, w).normalize();
+        let rotation = random_rotation(uniform);
         let dirs: Vec<Vec3> = (0..r)
             .map(|i| rotation * spherical_fibonacci(i, r))
             .collect();
@@ -622,6 +661,9 @@ impl ProbeUpdater {
         uniform: &mut impl FnMut() -> f32,
         trace: &mut impl FnMut(&[ProbeRayRequest], &mut [RaySample]),
     ) -> FrameRays {
+        if a.blend {
+            return self.blend_frame(a, frame, camera, uniform, trace);
+        }
         let budget = self.budget();
         let pilot = self.config.pilot_schedule.frame(frame);
         let mut rays = FrameRays {
@@ -715,6 +757,13 @@ impl ProbeUpdater {
         } else {
             a.detector.set_reference(&a.f_v, &a.f_r).expect(sizes);
         }
+        self.compose(a, camera);
+    }
+
+    /// The 6-10-10 words (sec. 4.3) of f_v, the detector's last f_Δv and f_Δr and f_c of
+    /// `camera` (eq. 10, 19, 20), decoded into `a.f_s` and `a.f_d`.
+    fn compose(&self, a: &mut AdgiState, camera: Vec3) {
+        let sizes = "tables sized to the grid in `new`";
         heuristics::compose_grid(
             &self.grid,
             &a.params,
@@ -841,6 +890,180 @@ impl ProbeUpdater {
         }
     }
 
+    /// One frame of [`UpdatePolicy::AdgiBlend`] (module docs): staggered pilot rays and their
+    /// detection, the heuristics words, then per probe `n_p` rays along a rotated spherical
+    /// Fibonacci set, blended into all its texels.
+    fn blend_frame(
+        &mut self,
+        a: &mut AdgiState,
+        frame: u64,
+        camera: Vec3,
+        uniform: &mut impl FnMut() -> f32,
+        trace: &mut impl FnMut(&[ProbeRayRequest], &mut [RaySample]),
+    ) -> FrameRays {
+        let budget = self.budget();
+        let rays_pilot = self.staggered_pilot_phase(a, frame, trace);
+        self.compose(a, camera);
+        let non_pilot = budget.saturating_sub(rays_pilot);
+        let counts = self.blend_allocation(a, non_pilot, uniform());
+        let rotation = random_rotation(uniform);
+        self.requests.clear();
+        self.rounding.clear();
+        for (p, &n) in counts.iter().enumerate() {
+            let origin = self.grid.probe_position(self.grid.probe_coords(p));
+            for i in 0..n {
+                let direction = rotation * spherical_fibonacci(i, n);
+                self.push_request(p, origin, direction, uniform);
+            }
+            self.rounding.push(uniform());
+        }
+        self.trace_batch(trace);
+        let restart = 0;
+        let mut start = 0;
+        let mut dynamic_probes = false;
+        for (p, &n) in counts.iter().enumerate() {
+            let change = max_octant(&a.f_d[p * OCTANTS..][..OCTANTS]);
+            if change > 0.0 && !(a.last_change[p] > 0.0) {
+                // A probe whose change signal turns on forgets its window.
+                self.texels.cap_counts(p, restart);
+            }
+            a.last_change[p] = change;
+            dynamic_probes |= change > 0.0;
+            let average = if change > 0.0 {
+                self.config.dynamic_moving_average
+            } else {
+                self.texels.config().moving_average
+            };
+            let end = start + n as usize;
+            self.texels.blend_rays_with(
+                p,
+                &self.samples[start..end],
+                &self.config.blend_weights,
+                self.rounding[p],
+                average,
+            );
+            start = end;
+        }
+        let traced = self.requests.len() as u64;
+        let rays_dynamic = (a.dynamic_total.round() as u64).min(traced);
+        FrameRays {
+            rays: rays_pilot + traced,
+            rays_pilot,
+            rays_dynamic,
+            rays_static: traced - rays_dynamic,
+            dynamic_phase: dynamic_probes,
+        }
+    }
+
+    /// The blend's pilot rays: probe octant (p, o) follows the pilot schedule shifted by
+    /// `(p + popcount(o)) mod h` frames, so on every frame some octants of every probe detect
+    /// against the frame before (ADGI sec. 4.4's pairs, staggered; the detecting octants of a
+    /// frame are 4 of 8 that meet every axis in both signs). Fills `a.f_v`, `a.f_r` and runs
+    /// the detector: detecting octants get gradients, the others become references. Returns
+    /// the rays traced.
+    fn staggered_pilot_phase(
+        &mut self,
+        a: &mut AdgiState,
+        frame: u64,
+        trace: &mut impl FnMut(&[ProbeRayRequest], &mut [RaySample]),
+    ) -> u64 {
+        let seed = self.config.pilot_seed;
+        let schedule = self.config.pilot_schedule;
+        let hold = u64::from(schedule.hold());
+        let of = |p: usize, o: usize| {
+            let shift = (p as u64 + u64::from((o as u32).count_ones())) % hold;
+            schedule.frame(frame + shift)
+        };
+        let requests = &mut self.requests;
+        requests.clear();
+        pilot_rays(
+            &self.grid,
+            of(0, 0),
+            |_| true,
+            |_, p, o| Self::pilot_uniforms(seed, of(p, o).pattern, p, o, 0),
+            |ray| {
+                let (p, o) = (ray.probe as usize, usize::from(ray.octant));
+                requests.push(ProbeRayRequest {
+                    probe: ray.probe,
+                    origin: ray.origin,
+                    direction: ray.direction,
+                    u: Self::pilot_uniforms(seed, of(p, o).pattern, p, o, 2),
+                });
+            },
+        );
+        self.trace_batch(trace);
+        let mut hits = [PilotHit {
+            distance: 0.0,
+            luminance: 0.0,
+        }; OCTANTS];
+        for (i, (ray, sample)) in self.requests.iter().zip(&self.samples).enumerate() {
+            let p = ray.probe as usize;
+            hits[i % OCTANTS] = PilotHit {
+                distance: sample.distance,
+                luminance: sample.radiance.dot(crate::guiding_function::LUMINANCE),
+            };
+            if i % OCTANTS == OCTANTS - 1 {
+                let (f_v, f_r) = octant_heuristics(&hits, &a.params);
+                a.f_v[p * OCTANTS..][..OCTANTS].copy_from_slice(&f_v);
+                a.f_r[p * OCTANTS..][..OCTANTS].copy_from_slice(&f_r);
+            }
+        }
+        let sizes = "tables sized to the grid in `new`";
+        if a.started {
+            // NaN is "no measurement": no gradient there, and the reference keeps its value.
+            let mask = |detect: bool, table: &[f32]| -> Vec<f32> {
+                table
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &v)| {
+                        let measures = of(i / OCTANTS, i % OCTANTS).measures_gradient();
+                        if measures == detect { v } else { f32::NAN }
+                    })
+                    .collect()
+            };
+            let (dv, dr) = (mask(true, &a.f_v), mask(true, &a.f_r));
+            a.detector.detect(&dv, &dr).expect(sizes);
+            let (rv, rr) = (mask(false, &a.f_v), mask(false, &a.f_r));
+            a.detector.set_reference(&rv, &rr).expect(sizes);
+        } else {
+            a.detector.set_reference(&a.f_v, &a.f_r).expect(sizes);
+            a.started = true;
+        }
+        self.requests.len() as u64
+    }
+
+    /// Rays per probe of a blend frame, `non_pilot` in all: the same share for every probe,
+    /// plus [`UpdateConfig::blend_dynamic_rays`] · f_d for probes whose largest f_d is above
+    /// 0, their total scaled down to at most [`UpdateConfig::dynamic_share`] of `non_pilot`.
+    /// Rounded by systematic sampling with the uniform `u`, so the counts add up to
+    /// `non_pilot` exactly. Sets `a.dynamic_total`.
+    fn blend_allocation(&self, a: &mut AdgiState, non_pilot: u64, u: f32) -> Vec<u32> {
+        let probes = self.grid.probe_count();
+        let change: Vec<f64> = (0..probes)
+            .map(|p| f64::from(max_octant(&a.f_d[p * OCTANTS..][..OCTANTS])))
+            .collect();
+        let total = non_pilot as f64;
+        let wanted: f64 = change.iter().sum::<f64>() * f64::from(self.config.blend_dynamic_rays);
+        let dynamic = wanted.min(f64::from(self.config.dynamic_share) * total);
+        a.dynamic_total = dynamic;
+        let scale = if wanted > 0.0 { dynamic / wanted } else { 0.0 };
+        let base = (total - dynamic) / probes as f64;
+        let extra = scale * f64::from(self.config.blend_dynamic_rays);
+        let u = f64::from(u);
+        let mut cumulative = 0.0;
+        let mut before = u.floor();
+        change
+            .iter()
+            .map(|&c| {
+                cumulative += base + extra * c;
+                let after = (cumulative + u).floor().min(total + u.floor());
+                let n = (after - before).max(0.0) as u32;
+                before = after;
+                n
+            })
+            .collect()
+    }
+
     /// 4. Static chains (sec. 4.8): h = exp(min(ĝ/f_s, 1)) f_s, ĝ = the octant's mean cached
     ///    luminance, with `budget` rays; one texel update per sample. Returns the rays traced.
     fn static_phase(
@@ -914,6 +1137,24 @@ fn step_uniforms(uniform: &mut impl FnMut() -> f32) -> ProbeStepUniforms {
     }
 }
 
+/// A random rotation from four uniforms (a normalised quaternion of uniform components, as
+/// DDGI's per-frame ray rotation; not exactly uniform over rotations, which the ray set's
+/// spread does not need).
+fn random_rotation(uniform: &mut impl FnMut() -> f32) -> Quat {
+    let (x, y, z, w) = (
+        uniform() - 0.5,
+        uniform() - 0.5,
+        uniform() - 0.5,
+        uniform() - 0.5,
+    );
+    Quat::from_xyzw(x, y, z, w).normalize()
+}
+
+/// The largest of a probe's octant values (0 for none above 0 or NaN).
+fn max_octant(values: &[f32]) -> f32 {
+    values.iter().fold(0.0_f32, |m, &v| m.max(v))
+}
+
 /// The i-th of n spherical Fibonacci directions (DDGI's ray set before its random rotation;
 /// DDGI sec. 4, after Keinert et al. 2015).
 fn spherical_fibonacci(i: u32, n: u32) -> Vec3 {
@@ -944,11 +1185,12 @@ mod tests {
 
     use super::*;
 
-    const POLICIES: [UpdatePolicy; 4] = [
+    const POLICIES: [UpdatePolicy; 5] = [
         UpdatePolicy::Ddgi,
         UpdatePolicy::Adgi,
         UpdatePolicy::AdgiUnguided,
         UpdatePolicy::AdgiRefill,
+        UpdatePolicy::AdgiBlend,
     ];
 
     fn grid() -> ProbeGrid {
@@ -1047,6 +1289,7 @@ mod tests {
             UpdatePolicy::Adgi,
             UpdatePolicy::AdgiUnguided,
             UpdatePolicy::AdgiRefill,
+            UpdatePolicy::AdgiBlend,
         ] {
             let mut rng = Pcg64Mcg::seed_from_u64(11);
             let mut u = updater(policy, &mut rng);
@@ -1102,6 +1345,82 @@ mod tests {
         // Probes with x < 2 changed; smoothing (radius 1) and the 3-probe proxies
         // (x ∈ {0, 1, 2}, {3, 4, 5}) reach x = 3 at most.
         assert!(near > 0 && far == 0, "near {near}, far {far}");
+    }
+
+    /// The first frame whose dynamic phase ran, of frames `0..frames` with the world changing
+    /// at `change`.
+    fn first_dynamic_frame(policy: UpdatePolicy, change: u64, frames: u64) -> Option<u64> {
+        let mut rng = Pcg64Mcg::seed_from_u64(13);
+        let mut u = updater(policy, &mut rng);
+        (0..frames).find(|&frame| {
+            u.frame(frame, Vec3::ZERO, || rng.random(), world(frame, change))
+                .dynamic_phase
+        })
+    }
+
+    #[test]
+    fn a_step_between_pilot_pairs_is_seen_by_the_staggered_pilots_only() {
+        // A change between frames 9 and 10 falls between the pairs (8, 9) and (10, 11): the
+        // paper's pairs compare 11 with 10, both after it, and never see it.
+        assert_eq!(first_dynamic_frame(UpdatePolicy::Adgi, 10, 16), None);
+        assert_eq!(first_dynamic_frame(UpdatePolicy::AdgiRefill, 10, 16), None);
+        // The blend's staggered pilots see it on its own frame, at either parity.
+        assert_eq!(
+            first_dynamic_frame(UpdatePolicy::AdgiBlend, 10, 16),
+            Some(10)
+        );
+        assert_eq!(first_dynamic_frame(UpdatePolicy::AdgiBlend, 9, 16), Some(9));
+    }
+
+    #[test]
+    fn blend_gives_changed_probes_more_rays_and_restarts_their_windows() {
+        let g = grid();
+        let changed = g.probe_index(UVec3::new(0, 1, 2));
+        let unchanged = g.probe_index(UVec3::new(8, 1, 2));
+        let mut rng = Pcg64Mcg::seed_from_u64(17);
+        let mut u = updater(UpdatePolicy::AdgiBlend, &mut rng);
+        let texel = u.interior_texels()[0].0;
+        let layout = u.texels().config().irradiance_layout;
+        let count = |u: &ProbeUpdater, p| layout.count(u.texels().irradiance_word(p, texel));
+        let change = 9;
+        for frame in 0..=change {
+            let mut per_probe = vec![0_u32; g.probe_count()];
+            let mut batch = 0;
+            let mut world = world(frame, change);
+            let rays = u.frame(
+                frame,
+                Vec3::ZERO,
+                || rng.random(),
+                |q, s| {
+                    // Batch 0: the pilots; batch 1: the blended rays.
+                    if batch == 1 {
+                        for r in q {
+                            per_probe[r.probe as usize] += 1;
+                        }
+                    }
+                    batch += 1;
+                    world(q, s);
+                },
+            );
+            assert_eq!(batch, 2);
+            if frame < change {
+                // Every probe gets the 24 rays left after its 8 pilots.
+                assert!(!rays.dynamic_phase);
+                assert!(per_probe.iter().all(|&n| n == 24), "{per_probe:?}");
+                assert_eq!(count(&u, changed), frame as u32 + 1);
+            } else {
+                assert!(rays.dynamic_phase && rays.rays_dynamic > 0, "{rays:?}");
+                assert!(
+                    per_probe[changed] > per_probe[unchanged],
+                    "{} rays at the change, {} away from it",
+                    per_probe[changed],
+                    per_probe[unchanged]
+                );
+                // Restarted (count 0), then this frame's blend: count 1.
+                assert_eq!(count(&u, changed), 1);
+                assert_eq!(count(&u, unchanged), change as u32 + 1);
+            }
+        }
     }
 
     #[test]
@@ -1204,6 +1523,10 @@ mod tests {
         let mut config = UpdateConfig::DEFAULT;
         config.ddgi_max_count = 0;
         let e = ProbeUpdater::new(grid(), UpdatePolicy::Ddgi, config, || 0.5).unwrap_err();
+        assert_eq!(e, ProbeError::Control(ControlError::MaxCountZero));
+        let mut config = UpdateConfig::DEFAULT;
+        config.blend_max_count = 0;
+        let e = ProbeUpdater::new(grid(), UpdatePolicy::AdgiBlend, config, || 0.5).unwrap_err();
         assert_eq!(e, ProbeError::Control(ControlError::MaxCountZero));
         let mut config = UpdateConfig::DEFAULT;
         config.dynamic_rays_per_octant = 0;

@@ -76,11 +76,12 @@ use mcg_tests::{
 const SEEDS: [u64; 8] = [1, 2, 3, 4, 5, 6, 7, 8];
 
 /// The policies, in the order of the result tables.
-const POLICIES: [UpdatePolicy; 4] = [
+const POLICIES: [UpdatePolicy; 5] = [
     UpdatePolicy::Adgi,
     UpdatePolicy::Ddgi,
     UpdatePolicy::AdgiUnguided,
     UpdatePolicy::AdgiRefill,
+    UpdatePolicy::AdgiBlend,
 ];
 
 /// Every (policy, seed) run, on as many threads as the machine has (each run is
@@ -154,7 +155,11 @@ fn adaptive_sampling_brings_the_error_near_the_event_down_faster() {
         v[(v.len() - 1) / 2]
     };
     let average = |v: [f64; SEEDS.len()]| v.iter().sum::<f64>() / v.len() as f64;
-    let (adgi, ddgi, unguided, refill) = (0, 1, 2, 3);
+    let (adgi, ddgi, unguided, refill, blend) = (0, 1, 2, 3, 4);
+    println!(
+        "blend first {:?} ddgi {:?} blend tail_all {:?} ddgi tail_all {:?}",
+        first[blend], first[ddgi], tail_all[blend], tail_all[ddgi]
+    );
 
     // H1.
     assert!(
