@@ -35,6 +35,8 @@
 //!   machinery, budget and update rules, with the samples spread uniformly over (p, ω); the
 //!   ablation that isolates what the guide buys.
 //! - [`UpdatePolicy::AdgiRefill`]: ADGI with mcg's refill extension (below).
+//! - [`UpdatePolicy::AdgiBlend`]: ADGI's change detection steering DDGI's blend, mcg's blend
+//!   extension (below).
 //!
 //! # mcg's extension: refill ([`UpdatePolicy::AdgiRefill`])
 //! Not in the paper. Measured on the crate's door scene (18 × 4 × 8 probes, 32 rays per
@@ -60,6 +62,55 @@
 //! over the last 10 frames falls from 0.25-0.39 to 0.17-0.27. Over all probes neither ADGI
 //! form ends below DDGI (0.124-0.139 against 0.086-0.099): radiance texels convolved to
 //! irradiance have a floor of 0.10 there even when every texel holds its exact mean radiance.
+//!
+//! # mcg's extension: blend ([`UpdatePolicy::AdgiBlend`])
+//! Not in the paper. Measured in the demo renderer (door room, 196 probes of 0.75 m, 32 rays
+//! per probe, 64 × 64 at 8 spp, the door opening at frame 32; `mcg-demo`'s
+//! `probe_gi_diagnostics` example), the paper's ADGI loses to DDGI for two reasons:
+//! - **Its pilot pairs miss a step change at a pair boundary.** A pair compares frames 2k and
+//!   2k + 1; a change between 2k − 1 and 2k (the door opens at the even frame 32) lies
+//!   between two pairs and gives no gradient. What the dynamic chains saw instead was the
+//!   flicker of the pilot hits' radiance, which reads last frame's (noisy) probes at the hit:
+//!   f_d > 0 on 25-27 of the 196 probes on every frame before the event, 40 after it.
+//! - **Per-texel samples are too few.** 24 rays per probe after the pilots over 64 radiance
+//!   texels is about 0.4 samples per texel per frame, while DDGI's blend lets every ray of a
+//!   probe update every texel it faces; a 16 × 16 map made ADGI worse (relMSE 0.125 against
+//!   0.063), so noise, not discretisation, decides.
+//!
+//! The blend policy keeps ADGI's pilot rays, heuristics words, trigger and smoothing, and
+//! 1. staggers the pilot pairs: probe octant (p, o) follows [`UpdateConfig::pilot_schedule`]
+//!    shifted by `(p + c(o)) mod h` frames, c(o) = bit 0 ⊕ bit 1 of o, so every frame detects
+//!    about half the octants against the frame before and a step at either parity is seen on
+//!    its own frame (o and o ⊕ 7 share a class: f_v of o is read from the ray of o ⊕ 7, eq.
+//!    11; with a class rule that splits them, f_v compared rays of different directions and
+//!    f_d was above 0 on every probe of every frame). The trigger decays by θ^((h−1)/h) per
+//!    frame, the paper's θ per detection;
+//! 2. ignores gradients below [`UpdateConfig::blend_pulse_threshold`] (0.05; f_v, f_r ∈
+//!    [0, 1]): with it f_d > 0 on 4-5 probes before the event instead of 36-40, on 134 at
+//!    frame 32, and on none from frame 44;
+//! 3. traces per probe a spherical Fibonacci set under the frame's random rotation (DDGI's):
+//!    the rays left after the pilots shared equally, plus
+//!    [`UpdateConfig::blend_dynamic_rays`] · f_d for changed probes (within
+//!    [`UpdateConfig::dynamic_share`]), and blends them into all of the probe's texels with
+//!    DDGI's cosine weights (texels hold E/π, [`TexelContent::Irradiance`]);
+//! 4. restarts the window of a probe whose change signal turns on (count 0: the next blend
+//!    replaces the texels), uses the dynamic N_max = 10 while it is on and
+//!    [`UpdateConfig::blend_max_count`] (24) otherwise.
+//!
+//! Renderer, `render` seeds 1-8, frames from the event until the event region's relMSE
+//! falls to 0.07: blend 1, 1, 1, 1, 1, 1, 0, 1 (median 1); DDGI 11, 9, 10, 11, 11, 9, 11, 9
+//! (median 10). Mean relMSE over the last 14 frames: event region 0.030-0.038 against
+//! 0.050-0.056, whole image 0.039-0.042 against 0.047-0.050. The restart does the work: the
+//! smoothed f_d stays small, so the extra rays are ≈ 60 of 6272 at the event. DDGI with a
+//! window of 10 instead of 17 reaches 0.07 after 5, 2, 4 frames (seeds 1-3; the blend: 1, 1,
+//! 1). Split of the event region's relMSE 8 frames after the event over seeds 1-3 (bias² of
+//! the seed-mean image + the rest): DDGI 0.058 + 0.016, ADGI 0.070 + 0.019, blend 0.018 +
+//! 0.019 — DDGI's error there is the lag of its hysteresis.
+//!
+//! On the `probe_cache_adgi` fixture of `mcg-tests` (door sliding open over frames 16-17,
+//! within a pair) the blend does *not* win: frames to 0.3 near the event 17, never, 13, 18,
+//! 19, 20, 15, 13 against DDGI's 11, 12, 12, 10, 14, 13, 12, 11, all-probe end error
+//! 0.092-0.115 against 0.086-0.099; refill stays the policy for that fixture.
 //!
 //! # Budget
 //! A frame traces at most `rays_per_probe × probe count` probe rays under every policy
@@ -212,6 +263,9 @@ pub struct UpdateConfig {
     /// for smaller f_d), within [`UpdateConfig::dynamic_share`] of the rays after the pilots.
     /// Our choice: 96.
     pub blend_dynamic_rays: u32,
+    /// The gradient magnitude below which [`UpdatePolicy::AdgiBlend`]'s detector sees no
+    /// change ([`ChangeDetector::with_pulse_threshold`]; f_v, f_r ∈ [0, 1]).
+    pub blend_pulse_threshold: f32,
 }
 
 impl UpdateConfig {
@@ -240,6 +294,7 @@ impl UpdateConfig {
         refill_weight: 2.0,
         blend_max_count: 24,
         blend_dynamic_rays: 96,
+        blend_pulse_threshold: 0.05,
     };
 }
 
@@ -452,7 +507,12 @@ impl ProbeUpdater {
                 params,
                 static_chains,
                 dynamic_chains,
-                detector: ChangeDetector::new(grid, trigger, config.smoothing),
+                detector: ChangeDetector::new(grid, trigger, config.smoothing)
+                    .with_pulse_threshold(if blend {
+                        config.blend_pulse_threshold
+                    } else {
+                        0.0
+                    })?,
                 f_v: vec![0.0; n],
                 f_r: vec![0.0; n],
                 words: vec![HeuristicsWord(0); n],
@@ -956,9 +1016,8 @@ impl ProbeUpdater {
     }
 
     /// The blend's pilot rays: probe octant (p, o) follows the pilot schedule shifted by
-    /// `(p + popcount(o)) mod h` frames, so on every frame some octants of every probe detect
-    /// against the frame before (ADGI sec. 4.4's pairs, staggered; the detecting octants of a
-    /// frame are 4 of 8 that meet every axis in both signs). Fills `a.f_v`, `a.f_r` and runs
+    /// `(p + c(o)) mod h` frames ([`stagger_class`] c), so on every frame some octants of
+    /// every probe detect against the frame before (ADGI sec. 4.4's pairs, staggered). Fills `a.f_v`, `a.f_r` and runs
     /// the detector: detecting octants get gradients, the others become references. Returns
     /// the rays traced.
     fn staggered_pilot_phase(
@@ -971,7 +1030,7 @@ impl ProbeUpdater {
         let schedule = self.config.pilot_schedule;
         let hold = u64::from(schedule.hold());
         let of = |p: usize, o: usize| {
-            let shift = (p as u64 + u64::from((o as u32).count_ones())) % hold;
+            let shift = (p as u64 + stagger_class(o)) % hold;
             schedule.frame(frame + shift)
         };
         let requests = &mut self.requests;
@@ -1148,6 +1207,14 @@ fn random_rotation(uniform: &mut impl FnMut() -> f32) -> Quat {
         uniform() - 0.5,
     );
     Quat::from_xyzw(x, y, z, w).normalize()
+}
+
+/// The blend's stagger class of octant `o` (bit 0 xor bit 1): {0, 3, 4, 7} and {1, 2, 5,
+/// 6}. Each class holds both signs of every axis, and octant o and o ^ 7 share a class, so
+/// f_v of o (read from the pilot ray of o ^ 7, eq. 11) and f_r of o (its own ray) come from
+/// rays of the same phase.
+fn stagger_class(o: usize) -> u64 {
+    ((o ^ (o >> 1)) & 1) as u64
 }
 
 /// The largest of a probe's octant values (0 for none above 0 or NaN).
@@ -1524,6 +1591,14 @@ mod tests {
         config.ddgi_max_count = 0;
         let e = ProbeUpdater::new(grid(), UpdatePolicy::Ddgi, config, || 0.5).unwrap_err();
         assert_eq!(e, ProbeError::Control(ControlError::MaxCountZero));
+        let mut config = UpdateConfig::DEFAULT;
+        config.blend_pulse_threshold = f32::NAN;
+        let e = ProbeUpdater::new(grid(), UpdatePolicy::AdgiBlend, config, || 0.5).unwrap_err();
+        assert!(matches!(
+            e,
+            ProbeError::Control(ControlError::PulseThresholdOutOfRange { threshold })
+                if threshold.is_nan()
+        ));
         let mut config = UpdateConfig::DEFAULT;
         config.blend_max_count = 0;
         let e = ProbeUpdater::new(grid(), UpdatePolicy::AdgiBlend, config, || 0.5).unwrap_err();
