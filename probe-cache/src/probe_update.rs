@@ -917,9 +917,7 @@ impl ProbeUpdater {
     fn restart_changed_probes(&self, a: &mut AdgiState) {
         let cap = self.config.dynamic_moving_average.max_count();
         for p in 0..self.grid.probe_count() {
-            let m = a.f_d[p * OCTANTS..][..OCTANTS]
-                .iter()
-                .fold(0.0_f32, |m, &v| m.max(v));
+            let m = max_octant(&a.f_d[p * OCTANTS..][..OCTANTS]);
             if m > a.last_change[p] {
                 self.texels.cap_counts(p, cap);
             }
