@@ -149,7 +149,7 @@ fn event_region_is_where_the_references_differ() {
     assert!(masked_errors(&image, &b, &[false; 4]).is_none());
 }
 
-/// `ddgi`, `adgi` and `adgi-refill` render the door room (event included) at equal ray budgets
+/// `ddgi`, `adgi`, `adgi-refill` and `adgi-blend` render the door room (event included) at equal ray budgets
 /// ([`assert_equal_budgets`]), and their JSON holds each frame's errors against its state's
 /// reference, the event frame, the event region's errors and frames-to-threshold.
 #[test]
@@ -157,7 +157,12 @@ fn ddgi_and_adgi_run_at_equal_rays_with_per_frame_errors() {
     let out = temp_dir("door");
     let frames = DOOR_ROOM_OPENS_AT_FRAME + 4;
     let mut rays = Vec::new();
-    for method in [Method::Ddgi, Method::Adgi, Method::AdgiRefill] {
+    for method in [
+        Method::Ddgi,
+        Method::Adgi,
+        Method::AdgiRefill,
+        Method::AdgiBlend,
+    ] {
         let rendered = render(&door_args(method, out.clone(), frames)).unwrap();
         let r = &rendered.report;
         assert_eq!(r.frame_errors.len(), frames as usize);
@@ -188,6 +193,7 @@ fn ddgi_and_adgi_run_at_equal_rays_with_per_frame_errors() {
     }
     assert_equal_budgets(&rays[0], &rays[1]);
     assert_equal_budgets(&rays[0], &rays[2]);
+    assert_equal_budgets(&rays[0], &rays[3]);
     std::fs::remove_dir_all(&out).unwrap();
 }
 

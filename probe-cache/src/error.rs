@@ -258,6 +258,11 @@ pub enum ControlError {
         /// The κ given.
         weight: f32,
     },
+    /// The pulse threshold of a change detector is NaN, infinite or negative.
+    PulseThresholdOutOfRange {
+        /// The threshold given.
+        threshold: f32,
+    },
 }
 
 impl fmt::Display for ControlError {
@@ -292,6 +297,9 @@ impl fmt::Display for ControlError {
             ControlError::MaxCountZero => f.write_str("moving-average window N_max is zero"),
             ControlError::RefillWeightOutOfRange { weight } => {
                 write!(f, "refill weight {weight} is not a finite number >= 0")
+            }
+            ControlError::PulseThresholdOutOfRange { threshold } => {
+                write!(f, "pulse threshold {threshold} is not a finite number >= 0")
             }
         }
     }

@@ -22,7 +22,7 @@
 //! | [`ProbeTexels`], [`TexelConfig`], [`RoundingMode`] | a grid's irradiance and visibility words in `AtomicU32` (GPU layout), moving average N_max 63/10 | ADGI sec. 4.5-4.7, Alg. 3-4, Table 3, App. B |
 //! | [`RaySample`], [`BlendWeights`], [`ProbeTexels::update_sample`], [`ProbeTexels::update_sample_at`], [`ProbeTexels::blend_rays`] | ADGI's per-sample CAS update (at a probe or the nearest one); DDGI's cosine-weighted blend | ADGI Alg. 2-4; DDGI sec. 4 |
 //! | [`QueryConfig`], [`TexelContent`], [`ProbeTexels::irradiance_at`], [`ProbeTexels::convolved`] | irradiance from 8 probes: trilinear, wrap, Chebyshev, biases, bilinear; radiance texels → irradiance texels | DDGI sec. 4-5; RTXGI; ADGI sec. 4.8 |
-//! | [`ProbeUpdater`], [`UpdatePolicy`], [`UpdateConfig`], [`ProbeRayRequest`], [`FrameRays`] | the per-frame update a renderer calls: DDGI's uniform rays + blend, or ADGI's pilot rays → heuristics → dynamic → static chains in one ray budget; tracing through a batch callback | ADGI sec. 4, Fig. 4; DDGI sec. 4 |
+//! | [`ProbeUpdater`], [`UpdatePolicy`], [`UpdateConfig`], [`ProbeRayRequest`], [`FrameRays`] | the per-frame update a renderer calls: DDGI's uniform rays + blend, or ADGI's pilot rays → heuristics → dynamic → static chains in one ray budget, or mcg's extensions (refill; blend: staggered pilot pairs steering DDGI's blend); tracing through a batch callback | ADGI sec. 4, Fig. 4; DDGI sec. 4 |
 //! | [`clip_volume`], [`ClipVolumes`], [`Frustum`] | inner / outer clip volumes, shell count reset N ≤ 16 | ADGI Fig. 6b, sec. 4.4, 4.8 |
 //!
 //! ## Conventions

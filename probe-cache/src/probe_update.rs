@@ -35,6 +35,8 @@
 //!   machinery, budget and update rules, with the samples spread uniformly over (p, ω); the
 //!   ablation that isolates what the guide buys.
 //! - [`UpdatePolicy::AdgiRefill`]: ADGI with mcg's refill extension (below).
+//! - [`UpdatePolicy::AdgiBlend`]: ADGI's change detection steering DDGI's blend, mcg's blend
+//!   extension (below).
 //!
 //! # mcg's extension: refill ([`UpdatePolicy::AdgiRefill`])
 //! Not in the paper. Measured on the crate's door scene (18 × 4 × 8 probes, 32 rays per
@@ -60,6 +62,55 @@
 //! over the last 10 frames falls from 0.25-0.39 to 0.17-0.27. Over all probes neither ADGI
 //! form ends below DDGI (0.124-0.139 against 0.086-0.099): radiance texels convolved to
 //! irradiance have a floor of 0.10 there even when every texel holds its exact mean radiance.
+//!
+//! # mcg's extension: blend ([`UpdatePolicy::AdgiBlend`])
+//! Not in the paper. Measured in the demo renderer (door room, 196 probes of 0.75 m, 32 rays
+//! per probe, 64 × 64 at 8 spp, the door opening at frame 32; `mcg-demo`'s
+//! `probe_gi_diagnostics` example), the paper's ADGI loses to DDGI for two reasons:
+//! - **Its pilot pairs miss a step change at a pair boundary.** A pair compares frames 2k and
+//!   2k + 1; a change between 2k − 1 and 2k (the door opens at the even frame 32) lies
+//!   between two pairs and gives no gradient. What the dynamic chains saw instead was the
+//!   flicker of the pilot hits' radiance, which reads last frame's (noisy) probes at the hit:
+//!   f_d > 0 on 25-27 of the 196 probes on every frame before the event, 40 after it.
+//! - **Per-texel samples are too few.** 24 rays per probe after the pilots over 64 radiance
+//!   texels is about 0.4 samples per texel per frame, while DDGI's blend lets every ray of a
+//!   probe update every texel it faces; a 16 × 16 map made ADGI worse (relMSE 0.125 against
+//!   0.063), so noise, not discretisation, decides.
+//!
+//! The blend policy keeps ADGI's pilot rays, heuristics words, trigger and smoothing, and
+//! 1. staggers the pilot pairs: probe octant (p, o) follows [`UpdateConfig::pilot_schedule`]
+//!    shifted by `(p + c(o)) mod h` frames, c(o) = bit 0 ⊕ bit 1 of o, so every frame detects
+//!    about half the octants against the frame before and a step at either parity is seen on
+//!    its own frame (o and o ⊕ 7 share a class: f_v of o is read from the ray of o ⊕ 7, eq.
+//!    11; with a class rule that splits them, f_v compared rays of different directions and
+//!    f_d was above 0 on every probe of every frame). The trigger decays by θ^((h−1)/h) per
+//!    frame, the paper's θ per detection;
+//! 2. ignores gradients below [`UpdateConfig::blend_pulse_threshold`] (0.05; f_v, f_r ∈
+//!    [0, 1]): with it f_d > 0 on 4-5 probes before the event instead of 36-40, on 134 at
+//!    frame 32, and on none from frame 44;
+//! 3. traces per probe a spherical Fibonacci set under the frame's random rotation (DDGI's):
+//!    the rays left after the pilots shared equally, plus
+//!    [`UpdateConfig::blend_dynamic_rays`] · f_d for changed probes (within
+//!    [`UpdateConfig::dynamic_share`]), and blends them into all of the probe's texels with
+//!    DDGI's cosine weights (texels hold E/π, [`TexelContent::Irradiance`]);
+//! 4. restarts the window of a probe whose change signal turns on (count 0: the next blend
+//!    replaces the texels), uses the dynamic N_max = 10 while it is on and
+//!    [`UpdateConfig::blend_max_count`] (24) otherwise.
+//!
+//! Renderer, `render` seeds 1-8, frames from the event until the event region's relMSE
+//! falls to 0.07: blend 1, 1, 1, 1, 1, 1, 0, 1 (median 1); DDGI 11, 9, 10, 11, 11, 9, 11, 9
+//! (median 10). Mean relMSE over the last 14 frames: event region 0.030-0.038 against
+//! 0.050-0.056, whole image 0.039-0.042 against 0.047-0.050. The restart does the work: the
+//! smoothed f_d stays small, so the extra rays are ≈ 60 of 6272 at the event. DDGI with a
+//! window of 10 instead of 17 reaches 0.07 after 5, 2, 4 frames (seeds 1-3; the blend: 1, 1,
+//! 1). Split of the event region's relMSE 8 frames after the event over seeds 1-3 (bias² of
+//! the seed-mean image + the rest): DDGI 0.058 + 0.016, ADGI 0.070 + 0.019, blend 0.018 +
+//! 0.019 — DDGI's error there is the lag of its hysteresis.
+//!
+//! On the `probe_cache_adgi` fixture of `mcg-tests` (door sliding open over frames 16-17,
+//! within a pair) the blend does *not* win: frames to 0.3 near the event 17, never, 13, 18,
+//! 19, 20, 15, 13 against DDGI's 11, 12, 12, 10, 14, 13, 12, 11, all-probe end error
+//! 0.092-0.115 against 0.086-0.099; refill stays the policy for that fixture.
 //!
 //! # Budget
 //! A frame traces at most `rays_per_probe × probe count` probe rays under every policy
@@ -114,6 +165,12 @@ pub enum UpdatePolicy {
     /// ([`UpdateConfig::refill_weight`]), so stale and restarted texels refill within a few
     /// frames.
     AdgiRefill,
+    /// ADGI's change detection steering DDGI's blend, mcg's extension (not in the paper; see
+    /// the [module docs](self#mcgs-extension-blend-updatepolicyadgiblend)): staggered pilot
+    /// pairs detect a change on the frame after it whatever its parity, and a changed probe
+    /// restarts its window and gets extra uniform rays that are blended into all its texels
+    /// with DDGI's cosine weights (texels hold E/π).
+    AdgiBlend,
 }
 
 impl UpdatePolicy {
@@ -125,6 +182,7 @@ impl UpdatePolicy {
             UpdatePolicy::Adgi => "ADGI (guided chains)",
             UpdatePolicy::AdgiUnguided => "ADGI, constant guide",
             UpdatePolicy::AdgiRefill => "ADGI + refill (mcg)",
+            UpdatePolicy::AdgiBlend => "ADGI + blend (mcg)",
         }
     }
 
@@ -133,7 +191,7 @@ impl UpdatePolicy {
     #[must_use]
     pub fn content(self) -> TexelContent {
         match self {
-            UpdatePolicy::Ddgi => TexelContent::Irradiance,
+            UpdatePolicy::Ddgi | UpdatePolicy::AdgiBlend => TexelContent::Irradiance,
             UpdatePolicy::Adgi | UpdatePolicy::AdgiUnguided | UpdatePolicy::AdgiRefill => {
                 TexelContent::Radiance
             }
@@ -196,13 +254,26 @@ pub struct UpdateConfig {
     /// texels. Our choice: 2 (of 1, 2 and 4 on the door scene's run seeds 1-8, the only one
     /// faster than DDGI on every seed; confirmed on the held-out seeds 9-16).
     pub refill_weight: f32,
+    /// The moving-average window N_max of [`UpdatePolicy::AdgiBlend`]'s unchanged probes
+    /// (mcg's extension; unused by the other policies). Our choice: 24 — its probes get the
+    /// 24 rays per probe left after the pilots, against DDGI's 32 with N_max = 17, and
+    /// 24 × 24 ≈ 32 × 17 rays per window.
+    pub blend_max_count: u32,
+    /// Extra rays per frame of an [`UpdatePolicy::AdgiBlend`] probe whose f_d is 1 (f_d · this
+    /// for smaller f_d), within [`UpdateConfig::dynamic_share`] of the rays after the pilots.
+    /// Our choice: 96.
+    pub blend_dynamic_rays: u32,
+    /// The gradient magnitude below which [`UpdatePolicy::AdgiBlend`]'s detector sees no
+    /// change ([`ChangeDetector::with_pulse_threshold`]; f_v, f_r ∈ [0, 1]).
+    pub blend_pulse_threshold: f32,
 }
 
 impl UpdateConfig {
     /// The defaults (see each field): 32 rays per probe (ADGI sec. 5 gives Q-DDGI 32),
     /// ADGI's texels, Q-DDGI's N_max = 17, DDGI's blend, dynamic N_max = 10, share 0.75, 64
     /// rays per dynamic octant, 64 dynamic chains, trigger decay 0.5, 3 × 3 × 3 smoothing, no
-    /// camera falloff, pilot pairs, pilot seed 0, refill weight 2.
+    /// camera falloff, pilot pairs, pilot seed 0, refill weight 2, blend window 24 and 96
+    /// blend dynamic rays.
     pub const DEFAULT: Self = Self {
         rays_per_probe: 32,
         texels: TexelConfig::ADGI,
@@ -221,6 +292,9 @@ impl UpdateConfig {
         pilot_schedule: PilotSchedule::ADGI,
         pilot_seed: 0,
         refill_weight: 2.0,
+        blend_max_count: 24,
+        blend_dynamic_rays: 96,
+        blend_pulse_threshold: 0.05,
     };
 }
 
@@ -251,6 +325,10 @@ pub struct FrameRays {
 struct AdgiState {
     guided: bool,
     refill: bool,
+    /// [`UpdatePolicy::AdgiBlend`]: staggered pilots, per-probe uniform rays, DDGI's blend.
+    blend: bool,
+    /// Whether the blend's detector holds references yet (its first frame only sets them).
+    started: bool,
     params: HeuristicParams,
     static_chains: ProbeChains,
     dynamic_chains: ProbeChains,
@@ -270,6 +348,8 @@ struct AdgiState {
     last_change: Vec<f32>,
     /// For each octant, the interior irradiance texels whose centre lies in it.
     octant_texels: Vec<Vec<usize>>,
+    /// The blend's rays for changed probes in the last frame (before rounding).
+    dynamic_total: f64,
 }
 
 /// One probe grid's texels and the per-frame update that fills them (see the
@@ -371,7 +451,22 @@ impl ProbeUpdater {
         }
         let ddgi_average =
             MovingAverage::new(config.ddgi_max_count).map_err(|_| ControlError::MaxCountZero)?;
-        let trigger = TemporalTrigger::new(config.trigger_decay)?;
+        let blend_average =
+            MovingAverage::new(config.blend_max_count).map_err(|_| ControlError::MaxCountZero)?;
+        let blend = policy == UpdatePolicy::AdgiBlend;
+        // The staggered pilots detect on every frame, each probe octant on h − 1 of h frames
+        // as in the paper's schedule: θ per detection of the paper's schedule is
+        // θ^((h − 1)/h) per frame.
+        let hold = config.pilot_schedule.hold() as f32;
+        let decay = if blend {
+            config.trigger_decay.powf((hold - 1.0) / hold)
+        } else {
+            config.trigger_decay
+        };
+        let trigger =
+            TemporalTrigger::new(decay).map_err(|_| ControlError::TriggerDecayOutOfRange {
+                decay: config.trigger_decay,
+            })?;
         let params = HeuristicParams::new(config.camera_threshold, grid.cell_diagonal())?;
 
         let map = config.texels.irradiance_map;
@@ -384,6 +479,8 @@ impl ProbeUpdater {
         let mut texel_config = config.texels;
         if !policy.is_adgi() {
             texel_config.moving_average = ddgi_average;
+        } else if blend {
+            texel_config.moving_average = blend_average;
         }
         let texels = ProbeTexels::new(grid, texel_config);
 
@@ -405,10 +502,17 @@ impl ProbeUpdater {
             Some(AdgiState {
                 guided: policy != UpdatePolicy::AdgiUnguided,
                 refill: policy == UpdatePolicy::AdgiRefill,
+                blend,
+                started: false,
                 params,
                 static_chains,
                 dynamic_chains,
-                detector: ChangeDetector::new(grid, trigger, config.smoothing),
+                detector: ChangeDetector::new(grid, trigger, config.smoothing)
+                    .with_pulse_threshold(if blend {
+                        config.blend_pulse_threshold
+                    } else {
+                        0.0
+                    })?,
                 f_v: vec![0.0; n],
                 f_r: vec![0.0; n],
                 words: vec![HeuristicsWord(0); n],
@@ -419,6 +523,7 @@ impl ProbeUpdater {
                 f_refill: vec![0.0; n],
                 last_change: vec![0.0; grid.probe_count()],
                 octant_texels,
+                dynamic_total: 0.0,
             })
         } else {
             None
@@ -577,13 +682,7 @@ impl ProbeUpdater {
     ) -> FrameRays {
         let r = self.config.rays_per_probe;
         // One random rotation per frame for all probes (DDGI sec. 4).
-        let (x, y, z, w) = (
-            uniform() - 0.5,
-            uniform() - 0.5,
-            uniform() - 0.5,
-            uniform() - 0.5,
-        );
-        let rotation = Quat::from_xyzw(x, y, z, w).normalize();
+        let rotation = random_rotation(uniform);
         let dirs: Vec<Vec3> = (0..r)
             .map(|i| rotation * spherical_fibonacci(i, r))
             .collect();
@@ -622,6 +721,9 @@ impl ProbeUpdater {
         uniform: &mut impl FnMut() -> f32,
         trace: &mut impl FnMut(&[ProbeRayRequest], &mut [RaySample]),
     ) -> FrameRays {
+        if a.blend {
+            return self.blend_frame(a, frame, camera, uniform, trace);
+        }
         let budget = self.budget();
         let pilot = self.config.pilot_schedule.frame(frame);
         let mut rays = FrameRays {
@@ -715,6 +817,13 @@ impl ProbeUpdater {
         } else {
             a.detector.set_reference(&a.f_v, &a.f_r).expect(sizes);
         }
+        self.compose(a, camera);
+    }
+
+    /// The 6-10-10 words (sec. 4.3) of f_v, the detector's last f_Δv and f_Δr and f_c of
+    /// `camera` (eq. 10, 19, 20), decoded into `a.f_s` and `a.f_d`.
+    fn compose(&self, a: &mut AdgiState, camera: Vec3) {
+        let sizes = "tables sized to the grid in `new`";
         heuristics::compose_grid(
             &self.grid,
             &a.params,
@@ -808,9 +917,7 @@ impl ProbeUpdater {
     fn restart_changed_probes(&self, a: &mut AdgiState) {
         let cap = self.config.dynamic_moving_average.max_count();
         for p in 0..self.grid.probe_count() {
-            let m = a.f_d[p * OCTANTS..][..OCTANTS]
-                .iter()
-                .fold(0.0_f32, |m, &v| m.max(v));
+            let m = max_octant(&a.f_d[p * OCTANTS..][..OCTANTS]);
             if m > a.last_change[p] {
                 self.texels.cap_counts(p, cap);
             }
@@ -839,6 +946,179 @@ impl ProbeUpdater {
                 a.f_refill[i] = f + (1.0 - f) * (kappa * d).min(1.0);
             }
         }
+    }
+
+    /// One frame of [`UpdatePolicy::AdgiBlend`] (module docs): staggered pilot rays and their
+    /// detection, the heuristics words, then per probe `n_p` rays along a rotated spherical
+    /// Fibonacci set, blended into all its texels.
+    fn blend_frame(
+        &mut self,
+        a: &mut AdgiState,
+        frame: u64,
+        camera: Vec3,
+        uniform: &mut impl FnMut() -> f32,
+        trace: &mut impl FnMut(&[ProbeRayRequest], &mut [RaySample]),
+    ) -> FrameRays {
+        let budget = self.budget();
+        let rays_pilot = self.staggered_pilot_phase(a, frame, trace);
+        self.compose(a, camera);
+        let non_pilot = budget.saturating_sub(rays_pilot);
+        let counts = self.blend_allocation(a, non_pilot, uniform());
+        let rotation = random_rotation(uniform);
+        self.requests.clear();
+        self.rounding.clear();
+        for (p, &n) in counts.iter().enumerate() {
+            let origin = self.grid.probe_position(self.grid.probe_coords(p));
+            for i in 0..n {
+                let direction = rotation * spherical_fibonacci(i, n);
+                self.push_request(p, origin, direction, uniform);
+            }
+            self.rounding.push(uniform());
+        }
+        self.trace_batch(trace);
+        let restart = 0;
+        let mut start = 0;
+        let mut dynamic_probes = false;
+        for (p, &n) in counts.iter().enumerate() {
+            let change = max_octant(&a.f_d[p * OCTANTS..][..OCTANTS]);
+            if change > 0.0 && !(a.last_change[p] > 0.0) {
+                // A probe whose change signal turns on forgets its window.
+                self.texels.cap_counts(p, restart);
+            }
+            a.last_change[p] = change;
+            dynamic_probes |= change > 0.0;
+            let average = if change > 0.0 {
+                self.config.dynamic_moving_average
+            } else {
+                self.texels.config().moving_average
+            };
+            let end = start + n as usize;
+            self.texels.blend_rays_with(
+                p,
+                &self.samples[start..end],
+                &self.config.blend_weights,
+                self.rounding[p],
+                average,
+            );
+            start = end;
+        }
+        let traced = self.requests.len() as u64;
+        let rays_dynamic = (a.dynamic_total.round() as u64).min(traced);
+        FrameRays {
+            rays: rays_pilot + traced,
+            rays_pilot,
+            rays_dynamic,
+            rays_static: traced - rays_dynamic,
+            dynamic_phase: dynamic_probes,
+        }
+    }
+
+    /// The blend's pilot rays: probe octant (p, o) follows the pilot schedule shifted by
+    /// `(p + c(o)) mod h` frames ([`stagger_class`] c), so on every frame some octants of
+    /// every probe detect against the frame before (ADGI sec. 4.4's pairs, staggered). Fills `a.f_v`, `a.f_r` and runs
+    /// the detector: detecting octants get gradients, the others become references. Returns
+    /// the rays traced.
+    fn staggered_pilot_phase(
+        &mut self,
+        a: &mut AdgiState,
+        frame: u64,
+        trace: &mut impl FnMut(&[ProbeRayRequest], &mut [RaySample]),
+    ) -> u64 {
+        let seed = self.config.pilot_seed;
+        let schedule = self.config.pilot_schedule;
+        let hold = u64::from(schedule.hold());
+        let of = |p: usize, o: usize| {
+            let shift = (p as u64 + stagger_class(o)) % hold;
+            schedule.frame(frame + shift)
+        };
+        let requests = &mut self.requests;
+        requests.clear();
+        pilot_rays(
+            &self.grid,
+            of(0, 0),
+            |_| true,
+            |_, p, o| Self::pilot_uniforms(seed, of(p, o).pattern, p, o, 0),
+            |ray| {
+                let (p, o) = (ray.probe as usize, usize::from(ray.octant));
+                requests.push(ProbeRayRequest {
+                    probe: ray.probe,
+                    origin: ray.origin,
+                    direction: ray.direction,
+                    u: Self::pilot_uniforms(seed, of(p, o).pattern, p, o, 2),
+                });
+            },
+        );
+        self.trace_batch(trace);
+        let mut hits = [PilotHit {
+            distance: 0.0,
+            luminance: 0.0,
+        }; OCTANTS];
+        for (i, (ray, sample)) in self.requests.iter().zip(&self.samples).enumerate() {
+            let p = ray.probe as usize;
+            hits[i % OCTANTS] = PilotHit {
+                distance: sample.distance,
+                luminance: sample.radiance.dot(crate::guiding_function::LUMINANCE),
+            };
+            if i % OCTANTS == OCTANTS - 1 {
+                let (f_v, f_r) = octant_heuristics(&hits, &a.params);
+                a.f_v[p * OCTANTS..][..OCTANTS].copy_from_slice(&f_v);
+                a.f_r[p * OCTANTS..][..OCTANTS].copy_from_slice(&f_r);
+            }
+        }
+        let sizes = "tables sized to the grid in `new`";
+        if a.started {
+            // NaN is "no measurement": no gradient there, and the reference keeps its value.
+            let mask = |detect: bool, table: &[f32]| -> Vec<f32> {
+                table
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &v)| {
+                        let measures = of(i / OCTANTS, i % OCTANTS).measures_gradient();
+                        if measures == detect { v } else { f32::NAN }
+                    })
+                    .collect()
+            };
+            let (dv, dr) = (mask(true, &a.f_v), mask(true, &a.f_r));
+            a.detector.detect(&dv, &dr).expect(sizes);
+            let (rv, rr) = (mask(false, &a.f_v), mask(false, &a.f_r));
+            a.detector.set_reference(&rv, &rr).expect(sizes);
+        } else {
+            a.detector.set_reference(&a.f_v, &a.f_r).expect(sizes);
+            a.started = true;
+        }
+        self.requests.len() as u64
+    }
+
+    /// Rays per probe of a blend frame, `non_pilot` in all: the same share for every probe,
+    /// plus [`UpdateConfig::blend_dynamic_rays`] · f_d for probes whose largest f_d is above
+    /// 0, their total scaled down to at most [`UpdateConfig::dynamic_share`] of `non_pilot`.
+    /// Rounded by systematic sampling with the uniform `u`, so the counts add up to
+    /// `non_pilot` exactly. Sets `a.dynamic_total`.
+    fn blend_allocation(&self, a: &mut AdgiState, non_pilot: u64, u: f32) -> Vec<u32> {
+        let probes = self.grid.probe_count();
+        let change: Vec<f64> = (0..probes)
+            .map(|p| f64::from(max_octant(&a.f_d[p * OCTANTS..][..OCTANTS])))
+            .collect();
+        let total = non_pilot as f64;
+        let wanted: f64 = change.iter().sum::<f64>() * f64::from(self.config.blend_dynamic_rays);
+        let dynamic = wanted.min(f64::from(self.config.dynamic_share) * total);
+        a.dynamic_total = dynamic;
+        let scale = if wanted > 0.0 { dynamic / wanted } else { 0.0 };
+        let base = (total - dynamic) / probes as f64;
+        let extra = scale * f64::from(self.config.blend_dynamic_rays);
+        let u = f64::from(u);
+        let mut cumulative = 0.0;
+        let mut before = u.floor();
+        change
+            .iter()
+            .map(|&c| {
+                cumulative += base + extra * c;
+                let after = (cumulative + u).floor().min(total + u.floor());
+                let n = (after - before).max(0.0) as u32;
+                before = after;
+                n
+            })
+            .collect()
     }
 
     /// 4. Static chains (sec. 4.8): h = exp(min(ĝ/f_s, 1)) f_s, ĝ = the octant's mean cached
@@ -914,6 +1194,32 @@ fn step_uniforms(uniform: &mut impl FnMut() -> f32) -> ProbeStepUniforms {
     }
 }
 
+/// A random rotation from four uniforms (a normalised quaternion of uniform components, as
+/// DDGI's per-frame ray rotation; not exactly uniform over rotations, which the ray set's
+/// spread does not need).
+fn random_rotation(uniform: &mut impl FnMut() -> f32) -> Quat {
+    let (x, y, z, w) = (
+        uniform() - 0.5,
+        uniform() - 0.5,
+        uniform() - 0.5,
+        uniform() - 0.5,
+    );
+    Quat::from_xyzw(x, y, z, w).normalize()
+}
+
+/// The blend's stagger class of octant `o` (bit 0 xor bit 1): {0, 3, 4, 7} and {1, 2, 5,
+/// 6}. Each class holds both signs of every axis, and octant o and o ^ 7 share a class, so
+/// f_v of o (read from the pilot ray of o ^ 7, eq. 11) and f_r of o (its own ray) come from
+/// rays of the same phase.
+fn stagger_class(o: usize) -> u64 {
+    ((o ^ (o >> 1)) & 1) as u64
+}
+
+/// The largest of a probe's octant values (0 for none above 0 or NaN).
+fn max_octant(values: &[f32]) -> f32 {
+    values.iter().fold(0.0_f32, |m, &v| m.max(v))
+}
+
 /// The i-th of n spherical Fibonacci directions (DDGI's ray set before its random rotation;
 /// DDGI sec. 4, after Keinert et al. 2015).
 fn spherical_fibonacci(i: u32, n: u32) -> Vec3 {
@@ -944,11 +1250,12 @@ mod tests {
 
     use super::*;
 
-    const POLICIES: [UpdatePolicy; 4] = [
+    const POLICIES: [UpdatePolicy; 5] = [
         UpdatePolicy::Ddgi,
         UpdatePolicy::Adgi,
         UpdatePolicy::AdgiUnguided,
         UpdatePolicy::AdgiRefill,
+        UpdatePolicy::AdgiBlend,
     ];
 
     fn grid() -> ProbeGrid {
@@ -1047,6 +1354,7 @@ mod tests {
             UpdatePolicy::Adgi,
             UpdatePolicy::AdgiUnguided,
             UpdatePolicy::AdgiRefill,
+            UpdatePolicy::AdgiBlend,
         ] {
             let mut rng = Pcg64Mcg::seed_from_u64(11);
             let mut u = updater(policy, &mut rng);
@@ -1102,6 +1410,82 @@ mod tests {
         // Probes with x < 2 changed; smoothing (radius 1) and the 3-probe proxies
         // (x ∈ {0, 1, 2}, {3, 4, 5}) reach x = 3 at most.
         assert!(near > 0 && far == 0, "near {near}, far {far}");
+    }
+
+    /// The first frame whose dynamic phase ran, of frames `0..frames` with the world changing
+    /// at `change`.
+    fn first_dynamic_frame(policy: UpdatePolicy, change: u64, frames: u64) -> Option<u64> {
+        let mut rng = Pcg64Mcg::seed_from_u64(13);
+        let mut u = updater(policy, &mut rng);
+        (0..frames).find(|&frame| {
+            u.frame(frame, Vec3::ZERO, || rng.random(), world(frame, change))
+                .dynamic_phase
+        })
+    }
+
+    #[test]
+    fn a_step_between_pilot_pairs_is_seen_by_the_staggered_pilots_only() {
+        // A change between frames 9 and 10 falls between the pairs (8, 9) and (10, 11): the
+        // paper's pairs compare 11 with 10, both after it, and never see it.
+        assert_eq!(first_dynamic_frame(UpdatePolicy::Adgi, 10, 16), None);
+        assert_eq!(first_dynamic_frame(UpdatePolicy::AdgiRefill, 10, 16), None);
+        // The blend's staggered pilots see it on its own frame, at either parity.
+        assert_eq!(
+            first_dynamic_frame(UpdatePolicy::AdgiBlend, 10, 16),
+            Some(10)
+        );
+        assert_eq!(first_dynamic_frame(UpdatePolicy::AdgiBlend, 9, 16), Some(9));
+    }
+
+    #[test]
+    fn blend_gives_changed_probes_more_rays_and_restarts_their_windows() {
+        let g = grid();
+        let changed = g.probe_index(UVec3::new(0, 1, 2));
+        let unchanged = g.probe_index(UVec3::new(8, 1, 2));
+        let mut rng = Pcg64Mcg::seed_from_u64(17);
+        let mut u = updater(UpdatePolicy::AdgiBlend, &mut rng);
+        let texel = u.interior_texels()[0].0;
+        let layout = u.texels().config().irradiance_layout;
+        let count = |u: &ProbeUpdater, p| layout.count(u.texels().irradiance_word(p, texel));
+        let change = 9;
+        for frame in 0..=change {
+            let mut per_probe = vec![0_u32; g.probe_count()];
+            let mut batch = 0;
+            let mut world = world(frame, change);
+            let rays = u.frame(
+                frame,
+                Vec3::ZERO,
+                || rng.random(),
+                |q, s| {
+                    // Batch 0: the pilots; batch 1: the blended rays.
+                    if batch == 1 {
+                        for r in q {
+                            per_probe[r.probe as usize] += 1;
+                        }
+                    }
+                    batch += 1;
+                    world(q, s);
+                },
+            );
+            assert_eq!(batch, 2);
+            if frame < change {
+                // Every probe gets the 24 rays left after its 8 pilots.
+                assert!(!rays.dynamic_phase);
+                assert!(per_probe.iter().all(|&n| n == 24), "{per_probe:?}");
+                assert_eq!(count(&u, changed), frame as u32 + 1);
+            } else {
+                assert!(rays.dynamic_phase && rays.rays_dynamic > 0, "{rays:?}");
+                assert!(
+                    per_probe[changed] > per_probe[unchanged],
+                    "{} rays at the change, {} away from it",
+                    per_probe[changed],
+                    per_probe[unchanged]
+                );
+                // Restarted (count 0), then this frame's blend: count 1.
+                assert_eq!(count(&u, changed), 1);
+                assert_eq!(count(&u, unchanged), change as u32 + 1);
+            }
+        }
     }
 
     #[test]
@@ -1204,6 +1588,18 @@ mod tests {
         let mut config = UpdateConfig::DEFAULT;
         config.ddgi_max_count = 0;
         let e = ProbeUpdater::new(grid(), UpdatePolicy::Ddgi, config, || 0.5).unwrap_err();
+        assert_eq!(e, ProbeError::Control(ControlError::MaxCountZero));
+        let mut config = UpdateConfig::DEFAULT;
+        config.blend_pulse_threshold = f32::NAN;
+        let e = ProbeUpdater::new(grid(), UpdatePolicy::AdgiBlend, config, || 0.5).unwrap_err();
+        assert!(matches!(
+            e,
+            ProbeError::Control(ControlError::PulseThresholdOutOfRange { threshold })
+                if threshold.is_nan()
+        ));
+        let mut config = UpdateConfig::DEFAULT;
+        config.blend_max_count = 0;
+        let e = ProbeUpdater::new(grid(), UpdatePolicy::AdgiBlend, config, || 0.5).unwrap_err();
         assert_eq!(e, ProbeError::Control(ControlError::MaxCountZero));
         let mut config = UpdateConfig::DEFAULT;
         config.dynamic_rays_per_octant = 0;

@@ -247,6 +247,8 @@ pub struct ChangeDetector {
     grid: ProbeGrid,
     trigger: TemporalTrigger,
     kernel: SmoothingKernel,
+    /// Gradients of a smaller magnitude count as 0 ([`Self::with_pulse_threshold`]).
+    pulse_threshold: f32,
     reference_v: Vec<f32>,
     reference_r: Vec<f32>,
     state_v: Vec<f32>,
@@ -272,7 +274,24 @@ impl ChangeDetector {
             delta_v: vec![0.0; n],
             delta_r: vec![0.0; n],
             scratch: vec![0.0; n],
+            pulse_threshold: 0.0,
         }
+    }
+
+    /// This detector with gradients (eq. 13, 16) of a magnitude below `threshold` counted as
+    /// 0 before the trigger — mcg's extension for probes whose pilot rays read a noisy cache
+    /// (multi-bounce: the pilot hit's radiance includes last frame's probe irradiance there,
+    /// so f_r changes a little on every frame). The paper's detector has none (0, the
+    /// default of [`Self::new`]).
+    ///
+    /// # Errors
+    /// [`ControlError::PulseThresholdOutOfRange`] unless `threshold` is finite and ≥ 0.
+    pub fn with_pulse_threshold(mut self, threshold: f32) -> Result<Self, ControlError> {
+        if !(threshold >= 0.0 && threshold.is_finite()) {
+            return Err(ControlError::PulseThresholdOutOfRange { threshold });
+        }
+        self.pulse_threshold = threshold;
+        Ok(self)
     }
 
     /// Stores the reference f_v, f_r tables (the first frame of a pilot pair). A NaN or
@@ -324,6 +343,11 @@ impl ChangeDetector {
             ),
         ] {
             temporal_gradient(current, reference, delta)?;
+            for d in delta.iter_mut() {
+                if !(d.abs() >= self.pulse_threshold) {
+                    *d = 0.0;
+                }
+            }
             self.trigger.apply_slice(delta, state)?;
             spatial_smoothing(&self.grid, self.kernel, state, delta, &mut self.scratch)?;
             keep_finite(reference, current);
@@ -500,6 +524,41 @@ mod tests {
         mcg_test_support::assert_close!(d.trigger_states().0[9], 0.3, 1e-6);
         assert!(d.delta_radiance().iter().all(|&x| x == 0.0));
         assert!(d.detect(&v1[1..], &r0).is_err());
+    }
+
+    #[test]
+    fn pulse_threshold_ignores_small_gradients_only() {
+        let kernel = SmoothingKernel {
+            spatial_radius: 0,
+            directional: false,
+        };
+        let trigger = TemporalTrigger::new(0.5).unwrap();
+        let mut d = ChangeDetector::new(line(2), trigger, kernel)
+            .with_pulse_threshold(0.05)
+            .unwrap();
+        let v0 = vec![0.3; 16];
+        let r0 = vec![0.1; 16];
+        d.set_reference(&v0, &r0).unwrap();
+        let mut r1 = r0.clone();
+        r1[2] = 0.14; // a flicker of 0.04: below the threshold
+        r1[12] = 0.05; // a change of −0.05: at it
+        let (dv, dr) = d.detect(&v0, &r1).unwrap();
+        assert!(dv.iter().all(|&x| x == 0.0));
+        assert_eq!(dr[2], 0.0);
+        mcg_test_support::assert_close!(dr[12], 0.05, 1e-6);
+        // Without a threshold (the paper's detector) the flicker fires.
+        let mut d = ChangeDetector::new(line(2), trigger, kernel);
+        d.set_reference(&v0, &r0).unwrap();
+        mcg_test_support::assert_close!(d.detect(&v0, &r1).unwrap().1[2], 0.04, 1e-6);
+        for bad in [-0.1, f32::NAN, f32::INFINITY] {
+            let e = ChangeDetector::new(line(2), trigger, kernel)
+                .with_pulse_threshold(bad)
+                .unwrap_err();
+            assert!(
+                matches!(e, ControlError::PulseThresholdOutOfRange { .. }),
+                "{e:?}"
+            );
+        }
     }
 
     #[test]

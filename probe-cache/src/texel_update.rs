@@ -148,6 +148,19 @@ impl ProbeTexels {
     /// with [`crate::TexelContent::Irradiance`]. Border texels are not written: call
     /// [`Self::refresh_probe_borders`] before a GPU upload.
     pub fn blend_rays(&self, probe: usize, rays: &[RaySample], weights: &BlendWeights, u: f32) {
+        self.blend_rays_with(probe, rays, weights, u, self.config().moving_average);
+    }
+
+    /// [`Self::blend_rays`] with another N_max for this blend (a probe whose lighting changed
+    /// may forget faster than the others, [`crate::UpdatePolicy::AdgiBlend`]).
+    pub fn blend_rays_with(
+        &self,
+        probe: usize,
+        rays: &[RaySample],
+        weights: &BlendWeights,
+        u: f32,
+        average: MovingAverage,
+    ) {
         let cap = self.config().irradiance_layout.codec().max_value();
         let mut dirs = Vec::with_capacity(rays.len());
         let mut radiance = Vec::with_capacity(rays.len());
@@ -178,11 +191,12 @@ impl ProbeTexels {
                 }
             }
             if wsum > BLEND_WEIGHT_EPSILON {
-                self.update_irradiance(
+                self.update_irradiance_with(
                     probe,
                     texel as usize,
                     sum / wsum,
                     rotate_uniform(u, k as u32),
+                    average,
                 );
             }
         }
@@ -200,11 +214,12 @@ impl ProbeTexels {
                 }
             }
             if wsum > BLEND_WEIGHT_EPSILON {
-                self.update_visibility(
+                self.update_visibility_with(
                     probe,
                     texel as usize,
                     sum / wsum,
                     rotate_uniform(u, offset + k as u32),
+                    average,
                 );
             }
         }

@@ -194,9 +194,9 @@ impl Experiment {
             rng.random::<f32>()
         })
         .expect("valid update settings");
-        let values = match policy {
-            UpdatePolicy::Ddgi => &self.warm_start.0,
-            _ => &self.warm_start.1,
+        let values = match policy.content() {
+            TexelContent::Irradiance => &self.warm_start.0,
+            TexelContent::Radiance => &self.warm_start.1,
         };
         updater.warm_start(values).expect("one value per texel");
         let mut run = Run {
@@ -423,6 +423,7 @@ fn policy_code(policy: UpdatePolicy) -> u64 {
         UpdatePolicy::Ddgi => 0,
         UpdatePolicy::Adgi => 1,
         UpdatePolicy::AdgiUnguided => 2,
+        UpdatePolicy::AdgiBlend => 4,
         _ => 3,
     }
 }

@@ -64,6 +64,12 @@ pub enum Method {
     /// full — ADGI's paper recovers slowly where its dynamic rays miss the octants that
     /// changed.
     AdgiRefill,
+    /// `adgi` with mcg's blend extension ([`mcg_probe_cache::UpdatePolicy::AdgiBlend`]):
+    /// ADGI's pilot rays, staggered so that a change is seen on the frame after it, restart
+    /// the windows of the probes it touches and send them extra rays, which DDGI's blend
+    /// spreads over all their texels — ADGI's per-texel samples are too few per frame in
+    /// the renderer to beat DDGI's blend after a change.
+    AdgiBlend,
 }
 
 impl Method {
@@ -79,6 +85,7 @@ impl Method {
             Self::Adgi => "adgi",
             Self::Ddgi => "ddgi",
             Self::AdgiRefill => "adgi-refill",
+            Self::AdgiBlend => "adgi-blend",
         }
     }
 
@@ -88,11 +95,14 @@ impl Method {
         matches!(self, Self::Nee | Self::McpgNee)
     }
 
-    /// Whether the method shades from a probe grid (`adgi`, `adgi-refill`, `ddgi`) instead of
+    /// Whether the method shades from a probe grid (`adgi`, `adgi-refill`, `adgi-blend`, `ddgi`) instead of
     /// tracing paths.
     #[must_use]
     pub fn uses_probes(self) -> bool {
-        matches!(self, Self::Adgi | Self::AdgiRefill | Self::Ddgi)
+        matches!(
+            self,
+            Self::Adgi | Self::AdgiRefill | Self::AdgiBlend | Self::Ddgi
+        )
     }
 
     /// Whether the method draws its directions from an MCPG guide.

@@ -857,9 +857,12 @@ impl GpuTracer {
                 Ok(0.0)
             }
             // The probe methods never reach the GPU tracer (`gpu_tracer` refuses them).
-            Method::Bsdf | Method::Nee | Method::Adgi | Method::AdgiRefill | Method::Ddgi => {
-                Ok(0.0)
-            }
+            Method::Bsdf
+            | Method::Nee
+            | Method::Adgi
+            | Method::AdgiRefill
+            | Method::AdgiBlend
+            | Method::Ddgi => Ok(0.0),
         }
     }
 

@@ -540,7 +540,7 @@ fn start_guide(
             Method::Mcpg | Method::McpgNee => g.start_mcpg(&mcpg_config(scene, args)),
             Method::Mcmm => g.start_mcmm(&mcmm(), args.width, args.height),
             Method::Bsdf | Method::Nee => Ok(()),
-            Method::Adgi | Method::AdgiRefill | Method::Ddgi => {
+            Method::Adgi | Method::AdgiRefill | Method::AdgiBlend | Method::Ddgi => {
                 Err("no WGSL probe GI".to_owned().into())
             }
         };
@@ -565,7 +565,7 @@ fn start_guide(
         }
         Method::Mcmm => CpuGuide::Mcmm(McmmRenderer::new(args.width, args.height, mcmm())?),
         Method::Bsdf | Method::Nee => CpuGuide::None,
-        Method::Adgi | Method::AdgiRefill | Method::Ddgi => {
+        Method::Adgi | Method::AdgiRefill | Method::AdgiBlend | Method::Ddgi => {
             let grid = fit_grid(scene, args.probes.probe_spacing)
                 .map_err(|e| format!("--probe-spacing {}: {e:?}", args.probes.probe_spacing))?;
             let seed = (args.seed ^ (args.seed >> 32)) as u32;

@@ -36,8 +36,8 @@ use core::f32::consts::FRAC_1_PI;
 use glam::{UVec3, Vec3};
 use mcg_gpu_backend::sampling::{next_uniform, pcg_hash};
 use mcg_probe_cache::{
-    GridError, ProbeGrid, ProbeRayRequest, ProbeTexels, ProbeUpdater, QueryConfig, RaySample,
-    TexelContent, UpdateConfig, UpdatePolicy,
+    FrameRays, GridError, ProbeGrid, ProbeRayRequest, ProbeTexels, ProbeUpdater, QueryConfig,
+    RaySample, TexelContent, UpdateConfig, UpdatePolicy,
 };
 use rayon::prelude::*;
 
@@ -234,7 +234,7 @@ pub struct ProbeGi {
     updater: ProbeUpdater,
     shading: ShadingProbes,
     seed: u32,
-    rays_last_frame: u64,
+    last_frame: FrameRays,
 }
 
 impl ProbeGi {
@@ -249,6 +249,7 @@ impl ProbeGi {
         let policy = match method {
             Method::Adgi => UpdatePolicy::Adgi,
             Method::AdgiRefill => UpdatePolicy::AdgiRefill,
+            Method::AdgiBlend => UpdatePolicy::AdgiBlend,
             Method::Ddgi => UpdatePolicy::Ddgi,
             _ => return Err(format!("{} does not shade from probes", method.name()).into()),
         };
@@ -271,7 +272,7 @@ impl ProbeGi {
                 query: QueryConfig::DDGI,
             },
             seed,
-            rays_last_frame: 0,
+            last_frame: FrameRays::default(),
         })
     }
 
@@ -290,7 +291,13 @@ impl ProbeGi {
     /// Probe rays traced by the last [`Self::frame`].
     #[must_use]
     pub fn rays_last_frame(&self) -> u64 {
-        self.rays_last_frame
+        self.last_frame.rays
+    }
+
+    /// What the last [`Self::frame`] traced, by phase.
+    #[must_use]
+    pub fn last_frame(&self) -> FrameRays {
+        self.last_frame
     }
 
     /// One frame: updates the probes with this frame's rays (which read the probes of the
@@ -312,7 +319,7 @@ impl ProbeGi {
             || next_uniform(&mut rng),
             |requests, samples| shading.trace_batch(scene, requests, samples),
         );
-        self.rays_last_frame = rays.rays;
+        self.last_frame = rays;
         let texels = self.updater.texels();
         match self.updater.content() {
             TexelContent::Irradiance => self

@@ -234,6 +234,17 @@ impl SceneStates {
         errors(image, reference)
     }
 
+    /// The reference pixels of frame `frame`'s state and the event region's mask (empty for
+    /// a scene without an event).
+    ///
+    /// # Panics
+    /// If `frame` is not below the frame count given to [`Self::new`].
+    #[must_use]
+    pub fn reference_and_mask(&self, frame: u32) -> (&[Vec3], &[bool]) {
+        let state = self.state_of_frame[frame as usize] as usize;
+        (&self.references[state].pixels, &self.mask)
+    }
+
     /// What was recorded, with `frames_to_threshold` filled in.
     #[must_use]
     pub fn finish(mut self) -> DynamicErrors {

@@ -723,6 +723,7 @@ fn colour(m: Method) -> plot::RGBColor {
         Method::Ddgi => PALETTE[5],
         Method::Adgi => PALETTE[3],
         Method::AdgiRefill => PALETTE[1],
+        Method::AdgiBlend => PALETTE[0],
     }
 }
 
