@@ -192,7 +192,8 @@ fn ddgi_and_adgi_run_at_equal_rays_with_per_frame_errors() {
 }
 
 /// The report section "Dynamic GI" in smoke mode writes its figures and its JSON, with both
-/// methods, one entry per seed, and equal ray budgets ([`common::assert_equal_budgets`]).
+/// methods, one entry per seed, and equal ray budgets ([`common::assert_equal_budgets`]); on
+/// the GPU too when the report renders there.
 #[test]
 fn dynamic_gi_section_smoke() {
     let out = temp_dir("section");
@@ -226,6 +227,15 @@ fn dynamic_gi_section_smoke() {
     };
     for k in 0..seeds {
         assert_equal_budgets(&rays("ddgi", k), &rays("adgi", k));
+    }
+    // With a GPU in the report's device list (MCG_REPORT_GPU=1 for lavapipe) the section
+    // runs every method there too.
+    if mcg_demo::sections::guided_rendering::devices().contains(&Device::Gpu) {
+        for m in ["ddgi-gpu", "adgi-gpu", "adgi-refill-gpu"] {
+            assert_eq!(runs(m).len(), seeds, "{m}");
+            assert_eq!(runs(m)[0]["device"], "gpu", "{m}");
+        }
+        assert_equal_budgets(&rays("ddgi-gpu", 0), &rays("adgi-gpu", 0));
     }
     std::fs::remove_dir_all(&out).unwrap();
 }

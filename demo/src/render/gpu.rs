@@ -21,6 +21,11 @@
 //! unused group [`UNUSED_GROUP`]), workgroups of 8 × 8 invocations, one tile of 64 chains
 //! each, the twin of [`super::mcmm::McmmRenderer`]; the guide's buffers swap after each frame.
 //!
+//! `ddgi`, `adgi` and `adgi-refill` run `render` of the shader composed with [`PROBE_GI_DEF`]
+//! (each first hit shaded from the probe cache `mcg::adgi` at group [`GUIDE_GROUP`]) and the
+//! kernel `trace_probe_rays`, after a probe update per frame ([`GpuTracer::start_probes`]; frame times
+//! on the wall clock).
+//!
 //! A frame is dispatched in square tiles of [`TILE`] pixels (one submission each, workgroups of
 //! 8 × 8 invocations, far below the 65 535 workgroups per dimension of WebGPU), so a large image
 //! never becomes one long-running submission. Frame times come from timestamp queries around
