@@ -67,7 +67,7 @@ pub use vmf_reference::{
     vmf_mean_cosine_derivative, vmf_normalization, vmf_one_minus_cos_cdf,
     vmf_one_minus_mean_cosine, vmf_pdf,
 };
-pub use z_test::{RunningStats, ZTestResult, assert_z_test, z_test};
+pub use z_test::{RunningStats, WelchResult, ZTestResult, assert_z_test, welch_t_test, z_test};
 
 /// The workspace README's usage example, compiled and run as a doctest.
 #[cfg(doctest)]

@@ -200,3 +200,55 @@ mod tests {
         let _ = assert_z_test("off", &stats, 2.0, 5.0);
     }
 }
+
+/// Result of Welch's two-sample t-test of equal means.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WelchResult {
+    /// t = (x̄_a − x̄_b) / √(s²_a/n_a + s²_b/n_b).
+    pub t: f64,
+    /// The Welch–Satterthwaite degrees of freedom
+    /// ν = (s²_a/n_a + s²_b/n_b)² / ((s²_a/n_a)²/(n_a − 1) + (s²_b/n_b)²/(n_b − 1)).
+    pub degrees_of_freedom: f64,
+}
+
+impl WelchResult {
+    /// The two-sided critical value for a per-test level `alpha`: the (1 − α/2) quantile of
+    /// Student's t with [`degrees_of_freedom`](Self::degrees_of_freedom) (the normal quantile
+    /// when ν is infinite or undefined, as for two exact samples).
+    #[must_use]
+    pub fn critical_value(&self, alpha: f64) -> f64 {
+        use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
+        let p = 1.0 - alpha / 2.0;
+        match StudentsT::new(0.0, 1.0, self.degrees_of_freedom) {
+            Ok(t) if self.degrees_of_freedom.is_finite() => t.inverse_cdf(p),
+            _ => Normal::standard().inverse_cdf(p),
+        }
+    }
+}
+
+/// Welch's t-test that two independent samples have the same mean, their variances
+/// estimated separately (Welch 1947). Use it instead of a z-test when a sample is small
+/// (tens of values, e.g. independent renderer runs): the t quantile accounts for the noise of
+/// the estimated variances, which a normal quantile ignores.
+///
+/// # Example
+/// ```
+/// use mcg_tests::{RunningStats, welch_t_test};
+/// let a: RunningStats = [1.0, 2.0, 3.0, 4.0].into_iter().collect();
+/// let b: RunningStats = [2.0, 3.0, 4.0, 5.0].into_iter().collect();
+/// let r = welch_t_test(&a, &b);
+/// assert!((r.t + 1.0954).abs() < 1e-4 && (r.degrees_of_freedom - 6.0).abs() < 1e-9);
+/// assert!(r.t.abs() < r.critical_value(0.05));
+/// ```
+#[must_use]
+pub fn welch_t_test(a: &RunningStats, b: &RunningStats) -> WelchResult {
+    let va = a.variance() / a.count() as f64;
+    let vb = b.variance() / b.count() as f64;
+    let dof_term = |v: f64, n: u64| {
+        if n > 1 { v * v / (n - 1) as f64 } else { 0.0 }
+    };
+    WelchResult {
+        t: (a.mean() - b.mean()) / (va + vb).sqrt(),
+        degrees_of_freedom: (va + vb).powi(2) / (dof_term(va, a.count()) + dof_term(vb, b.count())),
+    }
+}

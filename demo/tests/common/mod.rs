@@ -8,8 +8,7 @@ use glam::Vec3;
 use mcg_demo::render::bvh::Triangle;
 use mcg_demo::render::material::Material;
 use mcg_demo::render::scene::{Camera, Scene};
-use mcg_tests::RunningStats;
-use statrs::distribution::{ContinuousCDF, Normal};
+use mcg_tests::{RunningStats, welch_t_test};
 
 /// `demo/scenes/`.
 pub fn scenes_dir() -> PathBuf {
@@ -64,68 +63,74 @@ pub fn furnace(rho: Vec3, le: Vec3) -> Scene {
     .unwrap()
 }
 
-/// Per `tile × tile` tile (row-major) and channel of a `w × h` image: the mean over the tile's
-/// pixels and `frames` independent frames, and the variance of that mean, Σ_pixels s²_pixel /
-/// (frames · n²) with s² the pixel's sample variance over the frames and n the tile's pixel
-/// count. `frame(f)` renders frame `f`.
+/// Per `tile × tile` tile (row-major) and channel of a `w × h` image, over `samples`
+/// independent images: the running statistics of the tile's mean pixel value, one value per
+/// image. `image(i)` renders independent image `i` (one frame, or one run's mean image).
+///
+/// The tile mean of each image is the sample, not each pixel: the pixels of one image may be
+/// correlated (a guide, chains or a tile mixture that they share), so a variance summed over
+/// pixels would understate the variance of the tile mean; only the images are independent.
 pub fn tile_stats(
-    (w, h, tile, frames): (u32, u32, u32, u32),
-    mut frame: impl FnMut(u32) -> Vec<Vec3>,
-) -> Vec<[(f64, f64); 3]> {
-    let mut pixels = vec![
-        [
-            RunningStats::new(),
-            RunningStats::new(),
-            RunningStats::new()
-        ];
-        (w * h) as usize
-    ];
-    for f in 0..frames {
-        for (s, p) in pixels.iter_mut().zip(frame(f)) {
+    (w, h, tile, samples): (u32, u32, u32, u32),
+    mut image: impl FnMut(u32) -> Vec<Vec3>,
+) -> TileStats {
+    let tiles = ((w / tile) * (h / tile)) as usize;
+    let n = f64::from(tile * tile);
+    let mut out = vec![[RunningStats::new(); 3]; tiles];
+    for i in 0..samples {
+        let mut sums = vec![[0.0f64; 3]; tiles];
+        for (p, value) in image(i).into_iter().enumerate() {
+            let (x, y) = (p as u32 % w, p as u32 / w);
+            let t = ((y / tile) * (w / tile) + x / tile) as usize;
             for c in 0..3 {
-                s[c].push(f64::from(p[c]));
+                sums[t][c] += f64::from(value[c]) / n;
             }
         }
-    }
-    let tiles = (w / tile) * (h / tile);
-    let mut out = vec![[(0.0, 0.0); 3]; tiles as usize];
-    for (i, s) in pixels.iter().enumerate() {
-        let (x, y) = (i as u32 % w, i as u32 / w);
-        let t = ((y / tile) * (w / tile) + x / tile) as usize;
-        let n = f64::from(tile * tile);
-        for c in 0..3 {
-            out[t][c].0 += s[c].mean() / n;
-            out[t][c].1 += s[c].variance() / (f64::from(frames) * n * n);
+        for (stats, sum) in out.iter_mut().zip(&sums) {
+            for c in 0..3 {
+                stats[c].push(sum[c]);
+            }
         }
     }
     out
 }
 
-/// Asserts that two sets of [`tile_stats`] agree: per tile and channel |z| below the
-/// Bonferroni threshold Φ⁻¹(1 − α/(2·tests)) at family-wise `alpha`; returns the worst |z|.
-pub fn assert_tiles_agree(
-    a: &[[(f64, f64); 3]],
-    b: &[[(f64, f64); 3]],
-    alpha: f64,
-    what: &str,
-) -> f64 {
-    let tests = (a.len() * 3) as f64;
-    let threshold = Normal::standard().inverse_cdf(1.0 - alpha / (2.0 * tests));
+/// [`tile_stats`]' result: per tile, per channel, the statistics of the tile mean over
+/// independent images.
+pub type TileStats = Vec<[RunningStats; 3]>;
+
+/// Asserts that two sets of [`tile_stats`] agree: per tile and channel, Welch's t-test
+/// ([`welch_t_test`]) below the Bonferroni critical value at family-wise `alpha` over all
+/// tile-channel tests — the (1 − α/(2·tests)) quantile of Student's t with the test's
+/// Welch–Satterthwaite degrees of freedom. Returns the worst |t| ÷ critical value.
+pub fn assert_tiles_agree(a: &TileStats, b: &TileStats, alpha: f64, what: &str) -> f64 {
+    let per_test = alpha / (a.len() * 3) as f64;
     let mut worst: f64 = 0.0;
+    let mut worst_test = (0.0, 0.0, 0.0);
     for (t, (ta, tb)) in a.iter().zip(b).enumerate() {
         for c in 0..3 {
-            let z = (ta[c].0 - tb[c].0) / (ta[c].1 + tb[c].1).sqrt();
+            let r = welch_t_test(&ta[c], &tb[c]);
+            let critical = r.critical_value(per_test);
             assert!(
-                z.abs() < threshold,
-                "{what}: tile {t} channel {c}: {} vs {} z = {z:.2} (threshold {threshold:.2})",
-                ta[c].0,
-                tb[c].0
+                r.t.abs() < critical,
+                "{what}: tile {t} channel {c}: {} vs {} t = {:.2} (critical {critical:.2}, {:.0} dof)",
+                ta[c].mean(),
+                tb[c].mean(),
+                r.t,
+                r.degrees_of_freedom
             );
-            worst = worst.max(z.abs());
+            if r.t.abs() / critical > worst {
+                worst = r.t.abs() / critical;
+                worst_test = (r.t, critical, r.degrees_of_freedom);
+            }
         }
     }
-    assert!(a.iter().flatten().all(|m| m.0 > 0.0), "every tile is lit");
-    eprintln!("{what}: worst |z| = {worst:.2} of threshold {threshold:.2}");
+    assert!(
+        a.iter().flatten().all(|m| m.mean() > 0.0),
+        "every tile is lit"
+    );
+    let (t, critical, dof) = worst_test;
+    eprintln!("{what}: worst t = {t:.2} (critical {critical:.2} at {dof:.0} dof)");
     worst
 }
 

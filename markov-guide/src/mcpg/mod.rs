@@ -33,6 +33,17 @@
 //! - **Hemisphere.** Lobes live on the whole sphere; [`Hemisphere::CosineProduct`] multiplies
 //!   each by a vMF fit of the clamped cosine, so fewer directions go below the surface.
 //!
+//! # Performance
+//! One full guided vertex without tracing (`begin` with N_mc = 5, `sample`, one more `pdf`,
+//! `finish`) executes about 4,700 instructions, 53 times a cosine-hemisphere sample (89); with
+//! the irradiance cache about 5,750 (65 times); on an idle 2-core machine that was about
+//! 0.86 µs (1.1 µs with the cache) against 9.7 ns. No single step dominates: the five keys,
+//! lookups and seqlocked loads, the five lobes (μ, posterior κ, cosine product, C(κ)), the
+//! densities and the transition with its store each take 10-25 %. Two threads sharing one
+//! `&Guide` ran 2.13 times as fast as one. In a 3-bounce CPU path tracer of a small room
+//! (128 × 128, 8 samples per pixel, no light sampling) a guided frame costs about 3.5 times a
+//! BSDF-sampled one and reaches 0.21 of its MSE: 0.75 at equal CPU time.
+//!
 //! # The parts
 //! Per path vertex x with normal n at time T:
 //! 1. Load N_mc candidates (adaptive grid with p = 0.7, else static), each with
