@@ -1,12 +1,12 @@
 //! `--method adgi|ddgi`: probe irradiance in a furnace converges to the analytic value, both
-//! methods run on the door scene at equal ray budgets with per-frame errors in the JSON, the
-//! door scene has exactly two states, and `--device gpu` is refused.
+//! methods run on the door scene at equal ray budgets with per-frame errors in the JSON, and
+//! the door scene has exactly two states (the GPU's probe GI: `probe_gi_gpu.rs`).
 
 mod common;
 
 use std::path::PathBuf;
 
-use common::{furnace, scenes_dir};
+use common::{assert_equal_budgets, furnace, scenes_dir};
 use glam::Vec3;
 use mcg_demo::render::cpu::{Method, RenderSettings};
 use mcg_demo::render::mcmm::McmmScore;
@@ -149,8 +149,9 @@ fn event_region_is_where_the_references_differ() {
     assert!(masked_errors(&image, &b, &[false; 4]).is_none());
 }
 
-/// `ddgi`, `adgi`, `adgi-refill` and `adgi-blend` render the door room (event included) at equal ray budgets
-/// ([`assert_equal_budgets`]), and their JSON holds each frame's errors against its state's
+/// `ddgi`, `adgi`, `adgi-refill` and `adgi-blend` render the door room (event included) at
+/// equal ray budgets ([`common::assert_equal_budgets`]), and their JSON holds each frame's
+/// errors against its state's
 /// reference, the event frame, the event region's errors and frames-to-threshold.
 #[test]
 fn ddgi_and_adgi_run_at_equal_rays_with_per_frame_errors() {
@@ -197,46 +198,9 @@ fn ddgi_and_adgi_run_at_equal_rays_with_per_frame_errors() {
     std::fs::remove_dir_all(&out).unwrap();
 }
 
-/// Equal ray budgets: `ddgi` traces the same positive number of probe rays in every frame,
-/// and `adgi` never more than that in any frame and at least 99 % of it over the run (its
-/// updater cuts its last sample list at the budget, so a frame may fall a few rays short).
-fn assert_equal_budgets(ddgi: &[u64], adgi: &[u64]) {
-    assert_eq!(ddgi.len(), adgi.len());
-    assert!(
-        ddgi[0] > 0 && ddgi.iter().all(|&r| r == ddgi[0]),
-        "{ddgi:?}"
-    );
-    assert!(
-        adgi.iter().all(|&r| r <= ddgi[0]),
-        "{adgi:?} above {}",
-        ddgi[0]
-    );
-    let (a, d): (u64, u64) = (adgi.iter().sum(), ddgi.iter().sum());
-    assert!(a * 100 >= d * 99, "adgi traced {a} rays, ddgi {d}");
-}
-
-/// `--device gpu` with a probe method is an error that says the WGSL renderer does not
-/// exist yet; `--device auto` renders on the CPU.
-#[test]
-fn device_gpu_is_refused_for_probe_methods() {
-    let out = temp_dir("gpu");
-    for method in [Method::Adgi, Method::AdgiRefill, Method::Ddgi] {
-        let mut args = door_args(method, out.clone(), 1);
-        args.probes.reference_spp = None;
-        args.device = Device::Gpu;
-        let e = render(&args).unwrap_err().to_string();
-        assert!(
-            e.contains("does not exist yet") && e.contains(method.name()),
-            "{e}"
-        );
-        args.device = Device::Auto;
-        assert_eq!(render(&args).unwrap().report.device, "cpu");
-    }
-    std::fs::remove_dir_all(&out).unwrap();
-}
-
 /// The report section "Dynamic GI" in smoke mode writes its figures and its JSON, with both
-/// methods, one entry per seed, and equal ray budgets ([`assert_equal_budgets`]).
+/// methods, one entry per seed, and equal ray budgets ([`common::assert_equal_budgets`]); on
+/// the GPU too when the report renders there.
 #[test]
 fn dynamic_gi_section_smoke() {
     let out = temp_dir("section");
@@ -270,6 +234,15 @@ fn dynamic_gi_section_smoke() {
     };
     for k in 0..seeds {
         assert_equal_budgets(&rays("ddgi", k), &rays("adgi", k));
+    }
+    // With a GPU in the report's device list (MCG_REPORT_GPU=1 for lavapipe) the section
+    // runs every method there too.
+    if mcg_demo::sections::guided_rendering::devices().contains(&Device::Gpu) {
+        for m in ["ddgi-gpu", "adgi-gpu", "adgi-refill-gpu"] {
+            assert_eq!(runs(m).len(), seeds, "{m}");
+            assert_eq!(runs(m)[0]["device"], "gpu", "{m}");
+        }
+        assert_equal_budgets(&rays("ddgi-gpu", 0), &rays("adgi-gpu", 0));
     }
     std::fs::remove_dir_all(&out).unwrap();
 }

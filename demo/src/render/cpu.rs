@@ -95,8 +95,8 @@ impl Method {
         matches!(self, Self::Nee | Self::McpgNee)
     }
 
-    /// Whether the method shades from a probe grid (`adgi`, `adgi-refill`, `adgi-blend`, `ddgi`) instead of
-    /// tracing paths.
+    /// Whether the method shades from a probe grid (`adgi`, `adgi-refill`, `adgi-blend`,
+    /// `ddgi`) instead of tracing paths.
     #[must_use]
     pub fn uses_probes(self) -> bool {
         matches!(

@@ -21,6 +21,11 @@
 //! unused group [`UNUSED_GROUP`]), workgroups of 8 × 8 invocations, one tile of 64 chains
 //! each, the twin of [`super::mcmm::McmmRenderer`]; the guide's buffers swap after each frame.
 //!
+//! `ddgi`, `adgi` and `adgi-refill` run `render` of the shader composed with [`PROBE_GI_DEF`]
+//! (each first hit shaded from the probe cache `mcg::adgi` at group [`GUIDE_GROUP`]) and the
+//! kernel `trace_probe_rays`, after a probe update per frame ([`GpuTracer::start_probes`]; frame times
+//! on the wall clock).
+//!
 //! A frame is dispatched in square tiles of [`TILE`] pixels (one submission each, workgroups of
 //! 8 × 8 invocations, far below the 65 535 workgroups per dimension of WebGPU), so a large image
 //! never becomes one long-running submission. Frame times come from timestamp queries around
@@ -31,11 +36,18 @@ use std::time::Instant;
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
+use mcg_gpu_backend::guides::adgi::GpuProbeCache;
 use mcg_gpu_backend::guides::mcmm::GpuMcmmGuide;
 use mcg_gpu_backend::guides::mcpg::GpuMcpgGuide;
 use mcg_gpu_backend::{ComputeKernel, GpuBuffer, GpuContext, GpuError, shaders, wgpu};
 use mcg_markov_guide::mcmm::McmmParams;
 use mcg_markov_guide::mcpg::GuideConfig;
+
+mod probes;
+
+pub use probes::{
+    GpuProbeFrame, GpuProbeRequest, PROBE_GI_DEF, PROBE_STORAGE_BUFFERS, composed_probe_shader,
+};
 
 use super::bvh::{BvhNode, Triangle};
 use super::cpu::{Method, RenderSettings};
@@ -62,6 +74,10 @@ pub const MCMM_DEF: &str = "MCG_DEMO_MCMM";
 /// The group a shader composes the other guide's module at (no pipeline binds it).
 pub const UNUSED_GROUP: u32 = 2;
 
+/// The group the `bsdf`/`nee`, `mcpg` and `mcmm` shaders compose the probe cache `mcg::adgi` at
+/// (no pipeline of theirs binds it).
+pub const PROBE_UNUSED_GROUP: u32 = 3;
+
 /// Storage buffers the `mcpg` pipeline binds: the tracer's 8 and the guide's 2 (more than
 /// WebGPU's default of 8; [`GpuTracer::new`] asks the adapter for its own maximum).
 pub const MCPG_STORAGE_BUFFERS: u32 = 10;
@@ -87,6 +103,7 @@ pub fn method_code(method: Method) -> Option<u32> {
         Method::Mcpg => Some(2),
         Method::McpgNee => Some(4),
         Method::Mcmm => Some(3),
+        m if m.uses_probes() => Some(5),
         _ => None,
     }
 }
@@ -240,6 +257,10 @@ pub struct GpuTracer {
     mcmm: Option<Guided<GpuMcmmGuide>>,
     /// The compiled `mcmm` shader.
     mcmm_module: Option<wgpu::ShaderModule>,
+    /// The probe GI of `ddgi`/`adgi` and its camera pipeline (`render` of the probe shader).
+    probes: Option<Guided<Box<probes::GpuProbes>>>,
+    /// The compiled probe shader.
+    probe_module: Option<wgpu::ShaderModule>,
     /// Wall-clock seconds of the last `mcpg` frame's guide pass.
     last_end_frame_s: Option<f64>,
 }
@@ -261,14 +282,16 @@ impl std::fmt::Debug for GpuTracer {
 pub fn composed_shader() -> Result<String> {
     Ok(shaders::compose(
         SHADER,
-        &guide_defs(GUIDE_GROUP, UNUSED_GROUP),
+        &guide_defs(GUIDE_GROUP, UNUSED_GROUP, PROBE_UNUSED_GROUP),
     )?)
 }
 
-/// The shader defs placing `mcg::mcpg` at group `mcpg` and `mcg::mcmm` at group `mcmm`.
-fn guide_defs(mcpg: u32, mcmm: u32) -> Vec<(&'static str, u32)> {
+/// The shader defs placing `mcg::mcpg` at group `mcpg`, `mcg::mcmm` at group `mcmm` and
+/// `mcg::adgi` at group `adgi`.
+fn guide_defs(mcpg: u32, mcmm: u32, adgi: u32) -> Vec<(&'static str, u32)> {
     let mut defs = GpuMcpgGuide::shader_defs(mcpg).to_vec();
     defs.extend(GpuMcmmGuide::shader_defs(mcmm));
+    defs.extend(GpuProbeCache::shader_defs(adgi));
     defs
 }
 
@@ -278,7 +301,7 @@ fn guide_defs(mcpg: u32, mcmm: u32) -> Vec<(&'static str, u32)> {
 /// # Errors
 /// When composition fails (an unknown import).
 pub fn composed_mcmm_shader() -> Result<String> {
-    let mut defs = guide_defs(UNUSED_GROUP, GUIDE_GROUP);
+    let mut defs = guide_defs(UNUSED_GROUP, GUIDE_GROUP, PROBE_UNUSED_GROUP);
     defs.push((MCMM_DEF, 1));
     Ok(shaders::compose(SHADER, &defs)?)
 }
@@ -288,7 +311,7 @@ pub fn composed_mcmm_shader() -> Result<String> {
 /// # Errors
 /// When composition fails (an unknown import).
 pub fn composed_mcpg_shader() -> Result<String> {
-    let mut defs = guide_defs(GUIDE_GROUP, UNUSED_GROUP);
+    let mut defs = guide_defs(GUIDE_GROUP, UNUSED_GROUP, PROBE_UNUSED_GROUP);
     defs.push((MCPG_DEF, 1));
     Ok(shaders::compose(SHADER, &defs)?)
 }
@@ -359,6 +382,8 @@ impl GpuTracer {
             guided_module: None,
             mcmm: None,
             mcmm_module: None,
+            probes: None,
+            probe_module: None,
             last_end_frame_s: None,
         })
     }
@@ -380,7 +405,7 @@ impl GpuTracer {
             g.guide.reset(&self.ctx);
             return Ok(());
         }
-        self.check_storage_buffers("mcpg")?;
+        self.check_storage_buffers("mcpg", MCPG_STORAGE_BUFFERS)?;
         let mut guide = GpuMcpgGuide::new(&self.ctx, config)?;
         // Builds the per-frame pass's pipelines now (seconds on a software adapter), not in
         // the first frame's time; `reset` then empties the guide again.
@@ -417,7 +442,7 @@ impl GpuTracer {
             g.guide.clear(&self.ctx)?;
             return Ok(());
         }
-        self.check_storage_buffers("mcmm")?;
+        self.check_storage_buffers("mcmm", MCPG_STORAGE_BUFFERS)?;
         let guide = GpuMcmmGuide::new(&self.ctx, width, height, params)?;
         if self.mcmm_module.is_none() {
             self.mcmm_module = Some(self.module("mcg-demo render mcmm", composed_mcmm_shader()?));
@@ -439,17 +464,17 @@ impl GpuTracer {
         self.mcmm.as_ref().map(|g| &g.guide)
     }
 
-    /// An error unless the device binds the [`MCPG_STORAGE_BUFFERS`] storage buffers per stage
-    /// that a guided pipeline (`method`) needs.
-    fn check_storage_buffers(&self, method: &str) -> Result<()> {
+    /// An error unless the device binds the `needed` storage buffers per stage that a guided
+    /// pipeline (`method`) needs.
+    fn check_storage_buffers(&self, method: &str, needed: u32) -> Result<()> {
         let available = self
             .ctx
             .device()
             .limits()
             .max_storage_buffers_per_shader_stage;
-        if available < MCPG_STORAGE_BUFFERS {
+        if available < needed {
             return Err(format!(
-                "{method} on the GPU binds {MCPG_STORAGE_BUFFERS} storage buffers per stage; \
+                "{method} on the GPU binds {needed} storage buffers per stage; \
                  this device allows {available}"
             )
             .into());
@@ -475,22 +500,38 @@ impl GpuTracer {
         entry: &str,
         guide: &wgpu::BindGroupLayout,
     ) -> Result<(wgpu::ComputePipeline, wgpu::BindGroupLayout)> {
-        let device = self.ctx.device();
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let entry_layout = |binding: u32| match binding {
             0 => mcg_gpu_backend::buffer_entry(binding, wgpu::BufferBindingType::Uniform),
             8 => mcg_gpu_backend::storage_entry(binding, false),
             _ => mcg_gpu_backend::storage_entry(binding, true),
         };
         let entries: Vec<wgpu::BindGroupLayoutEntry> = (0..=8).map(entry_layout).collect();
+        let layout = self
+            .ctx
+            .device()
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(entry),
+                entries: &entries,
+            });
+        let pipeline = self.pipeline_with(module, entry, &[&layout, guide])?;
+        Ok((pipeline, layout))
+    }
+
+    /// The pipeline of `entry` in `module` with `groups[i]` at group i.
+    fn pipeline_with(
+        &self,
+        module: &wgpu::ShaderModule,
+        entry: &str,
+        groups: &[&wgpu::BindGroupLayout],
+    ) -> Result<wgpu::ComputePipeline> {
+        let device = self.ctx.device();
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let label = Some(entry);
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label,
-            entries: &entries,
-        });
+        let layouts: Vec<Option<&wgpu::BindGroupLayout>> =
+            groups.iter().map(|&g| Some(g)).collect();
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label,
-            bind_group_layouts: &[Some(&layout), Some(guide)],
+            bind_group_layouts: &layouts,
             immediate_size: 0,
         });
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -508,7 +549,7 @@ impl GpuTracer {
             }
             .into());
         }
-        Ok((pipeline, layout))
+        Ok(pipeline)
     }
 
     /// The guide of `mcpg` ([`GpuTracer::start_mcpg`]), e.g. for
@@ -553,6 +594,18 @@ impl GpuTracer {
     pub fn adapter_name(&self) -> String {
         let info = self.ctx.adapter_info();
         format!("{} ({:?})", info.name, info.backend)
+    }
+
+    /// How frame times of `method` are measured on this device: the probe methods always on
+    /// the wall clock (their frames include the probe update's submissions and, for `adgi`,
+    /// its host work and read-backs).
+    #[must_use]
+    pub fn timing_of(&self, method: Method) -> GpuTiming {
+        if method.uses_probes() {
+            GpuTiming::Wall
+        } else {
+            self.timing()
+        }
     }
 
     /// How frame times are measured on this device.
@@ -638,6 +691,10 @@ impl GpuTracer {
             .device()
             .push_error_scope(wgpu::ErrorFilter::Validation);
         let started = Instant::now();
+        if settings.method.uses_probes() {
+            self.ctx.write(&self.params, &[base])?;
+            self.update_probes(frame)?;
+        }
         let (timed_tiles, tiles) = self.dispatch_tiles(settings.method, &base)?;
         let end_frame_s = self.end_guide_frame(settings.method)?;
         self.wait()?;
@@ -646,7 +703,10 @@ impl GpuTracer {
             return Err(format!("the GPU tracer failed: {error}").into());
         }
         let seconds = match &self.timer {
-            Some(timer) if timed_tiles == tiles => {
+            Some(timer)
+                if timed_tiles == tiles
+                    && self.timing_of(settings.method) == GpuTiming::Timestamps =>
+            {
                 timer.read(&self.ctx, timed_tiles)? + end_frame_s
             }
             _ => wall,
@@ -684,6 +744,9 @@ impl GpuTracer {
         match settings.method {
             Method::Mcpg | Method::McpgNee if self.guided.is_none() => {
                 return Err("GpuTracer: mcpg needs GpuTracer::start_mcpg first".into());
+            }
+            m if m.uses_probes() && self.probes.is_none() => {
+                return Err("GpuTracer: probe GI needs GpuTracer::start_probes first".into());
             }
             Method::Mcmm => match &self.mcmm {
                 None => return Err("GpuTracer: mcmm needs GpuTracer::start_mcmm first".into()),
@@ -731,6 +794,14 @@ impl GpuTracer {
         Option<&wgpu::BindGroup>,
         (u32, u32),
     ) {
+        if let Some(g) = self.probes.as_ref().filter(|_| method.uses_probes()) {
+            return (
+                &g.pipeline,
+                &g.layout,
+                Some(g.guide.cache.bind_group()),
+                (GROUP, GROUP),
+            );
+        }
         match (method, &self.guided, &self.mcmm) {
             (Method::Mcpg | Method::McpgNee, Some(g), _) => (
                 &g.pipeline,
@@ -856,7 +927,7 @@ impl GpuTracer {
                     .swap();
                 Ok(0.0)
             }
-            // The probe methods never reach the GPU tracer (`gpu_tracer` refuses them).
+            // The probe methods update their probes before the tiles (`update_probes`).
             Method::Bsdf
             | Method::Nee
             | Method::Adgi

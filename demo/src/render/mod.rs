@@ -13,7 +13,7 @@
 //! | [`bvh`] | the flattened `#[repr(C)]` BVH and triangle layout, built by `obvhs`, walked by the CPU tracer and its WGSL twin |
 //! | [`material`] | Lambertian + GGX conductor materials with emission |
 //! | [`cpu`] | the CPU path tracer (rayon), methods `bsdf` and `nee`, the per-vertex sampler seam of the guides |
-//! | [`gpu`] | the WGSL twin of the CPU tracer on wgpu, over the same BVH, triangle and material buffers; `mcpg` and `mcmm` with the GPU guides of `mcg-gpu-backend` |
+//! | [`gpu`] | the WGSL twin of the CPU tracer on wgpu, over the same BVH, triangle and material buffers; `mcpg` and `mcmm` with the GPU guides of `mcg-gpu-backend`; `ddgi`, `adgi`, `adgi-refill` with its probe cache |
 //! | [`guided`] | `mcpg` on the CPU: the MCPG guide behind the sampler seam |
 //! | [`mcmm`] | `mcmm` on the CPU: MCMM's screen-space chains for direct light, SSMIS over tiles of 64 pixels |
 //! | [`probe_gi`] | `adgi` and `ddgi` on the CPU: a probe grid fitted to the scene, probe rays in the BVH, first hits shaded with a light sample plus probe irradiance |
@@ -43,6 +43,7 @@ use std::time::Instant;
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use mcg_markov_guide::mcpg::{Guide, GuideConfig};
+use mcg_probe_cache::ProbeGrid;
 
 use crate::Result;
 use cpu::{BsdfSampler, Method, RenderSettings, render_frame};
@@ -283,7 +284,10 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     let progress = progress_bar(args)?;
     let mut sum = vec![Vec3::ZERO; (args.width * args.height) as usize];
     let mut times = FrameTimes::default();
-    let probe_count = guide.probe_count();
+    let probe_count = guide.probe_count().or_else(|| {
+        let g = gpu.as_deref()?;
+        Some(g.probe_cache()?.config().grid.probe_count())
+    });
     let mut collected = Collected::default();
     for frame in 0..args.frames {
         if frame > 0 && file.is_animated() {
@@ -296,6 +300,9 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             let (image, seconds) = g.render_frame(&settings, frame)?;
             times.frame.push(seconds);
             times.end_frame.extend(g.last_end_frame_s());
+            if args.method.uses_probes() {
+                times.probe_rays.extend(g.probe_rays_last_frame());
+            }
             image
         } else {
             cpu_frame(&scene, &settings, frame, &mut guide, &mut times)?
@@ -326,7 +333,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         device: if gpu.is_some() { "gpu" } else { "cpu" },
         threads: rayon::current_num_threads(),
         adapter: gpu.as_deref().map(GpuTracer::adapter_name),
-        gpu_timing: gpu.as_deref().map(GpuTracer::timing),
+        gpu_timing: gpu.as_deref().map(|g| g.timing_of(args.method)),
         width: args.width,
         height: args.height,
         spp: args.spp,
@@ -541,7 +548,9 @@ fn start_guide(
             Method::Mcmm => g.start_mcmm(&mcmm(), args.width, args.height),
             Method::Bsdf | Method::Nee => Ok(()),
             Method::Adgi | Method::AdgiRefill | Method::AdgiBlend | Method::Ddgi => {
-                Err("no WGSL probe GI".to_owned().into())
+                probe_setup(args, scene).and_then(|(grid, seed)| {
+                    g.start_probes(args.method, grid, args.probes.probe_rays, seed)
+                })
             }
         };
         match started {
@@ -566,9 +575,7 @@ fn start_guide(
         Method::Mcmm => CpuGuide::Mcmm(McmmRenderer::new(args.width, args.height, mcmm())?),
         Method::Bsdf | Method::Nee => CpuGuide::None,
         Method::Adgi | Method::AdgiRefill | Method::AdgiBlend | Method::Ddgi => {
-            let grid = fit_grid(scene, args.probes.probe_spacing)
-                .map_err(|e| format!("--probe-spacing {}: {e:?}", args.probes.probe_spacing))?;
-            let seed = (args.seed ^ (args.seed >> 32)) as u32;
+            let (grid, seed) = probe_setup(args, scene)?;
             CpuGuide::Probes(Box::new(ProbeGi::new(
                 args.method,
                 grid,
@@ -577,6 +584,14 @@ fn start_guide(
             )?))
         }
     })
+}
+
+/// The probe grid of `--probe-spacing` fitted to `scene` and the probe GI's 32-bit seed of
+/// `--seed` (the same on both devices).
+fn probe_setup(args: &RenderArgs, scene: &Scene) -> Result<(ProbeGrid, u32)> {
+    let grid = fit_grid(scene, args.probes.probe_spacing)
+        .map_err(|e| format!("--probe-spacing {}: {e:?}", args.probes.probe_spacing))?;
+    Ok((grid, (args.seed ^ (args.seed >> 32)) as u32))
 }
 
 /// One frame on the CPU with `guide`; its times go into `times`.
@@ -654,14 +669,6 @@ pub fn gpu_adapter_info() -> Option<mcg_gpu_backend::wgpu::AdapterInfo> {
 fn gpu_tracer(device: Device, method: Method) -> Result<Option<&'static Mutex<GpuTracer>>> {
     if device == Device::Cpu {
         return Ok(None);
-    }
-    if method.uses_probes() && device == Device::Gpu {
-        return Err(format!(
-            "--device gpu: the WGSL renderer for --method {} does not exist yet (its probe GI \
-             runs on the CPU only): use --device cpu or auto",
-            method.name()
-        )
-        .into());
     }
     if gpu::method_code(method).is_none() {
         if device == Device::Gpu {

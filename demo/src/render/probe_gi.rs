@@ -211,10 +211,16 @@ impl ShadingProbes {
             .par_iter_mut()
             .zip(requests.par_iter())
             .for_each(|(o, r)| {
-                let u = pcg_hash(r.u.x.to_bits() ^ pcg_hash(r.u.y.to_bits()));
-                *o = self.probe_ray(scene, r.origin, r.direction, u);
+                *o = self.probe_ray(scene, r.origin, r.direction, request_seed(r));
             });
     }
+}
+
+/// The 32-bit seed of the light sample at the hit of `request`, from its two uniforms (both
+/// devices seed the same light sample from it).
+#[must_use]
+pub fn request_seed(request: &ProbeRayRequest) -> u32 {
+    pcg_hash(request.u.x.to_bits() ^ pcg_hash(request.u.y.to_bits()))
 }
 
 /// The seed of the light sample of probe ray `ray` of probe `probe` in frame `frame` (a
@@ -311,13 +317,36 @@ impl ProbeGi {
         settings: &RenderSettings,
         frame: u32,
     ) -> Result<Vec<Vec3>> {
+        self.update(
+            scene.camera.position,
+            frame,
+            |shading, requests, samples| {
+                shading.trace_batch(scene, requests, samples);
+            },
+        )?;
+        Ok(self.shading.render_frame(scene, settings, frame))
+    }
+
+    /// The probe update of frame `frame` with the camera at `camera`: the updater's batches
+    /// traced by `trace(probes, requests, samples)` (`probes` as the previous frame left
+    /// them), then the probes the renderer reads refreshed from the texels. [`Self::frame`]
+    /// traces on the CPU; the GPU renderer traces the same batches in WGSL.
+    ///
+    /// # Errors
+    /// When the updated texels cannot be copied (never for a grid of this object's layout).
+    pub fn update(
+        &mut self,
+        camera: Vec3,
+        frame: u32,
+        mut trace: impl FnMut(&ShadingProbes, &[ProbeRayRequest], &mut [RaySample]),
+    ) -> Result<()> {
         let mut rng = probe_ray_seed(self.seed, frame, u32::MAX, u32::MAX);
         let shading = &self.shading;
         let rays = self.updater.frame(
             u64::from(frame),
-            scene.camera.position,
+            camera,
             || next_uniform(&mut rng),
-            |requests, samples| shading.trace_batch(scene, requests, samples),
+            |requests, samples| trace(shading, requests, samples),
         );
         self.last_frame = rays;
         let texels = self.updater.texels();
@@ -328,6 +357,12 @@ impl ProbeGi {
                 .load_words(&texels.irradiance_words(), &texels.visibility_words())?,
             TexelContent::Radiance => self.shading.texels = texels.convolved(),
         }
-        Ok(self.shading.render_frame(scene, settings, frame))
+        Ok(())
+    }
+
+    /// The seed of every random decision of this probe GI.
+    #[must_use]
+    pub fn seed(&self) -> u32 {
+        self.seed
     }
 }

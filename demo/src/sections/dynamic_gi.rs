@@ -11,12 +11,17 @@
 //!    event (first seed);
 //! 2. the relMSE per frame, over the event region and the whole image, averaged over seeds;
 //! 3. per seed, the frames from the event until the event region's relMSE falls to the
-//!    threshold, and the errors at the end.
+//!    threshold, and the errors at the end;
+//! 4. the median frame time of each method and device.
+//!
+//! Every method runs on the CPU, and again on the GPU when the report's device list
+//! ([`super::guided_rendering::devices`]: hardware adapters only, unless `MCG_REPORT_GPU=1`)
+//! has one; the GPU's runs are labelled `<method> (gpu)`.
 
 use std::path::PathBuf;
 
 use super::Context;
-use super::guided_rendering::image_strip;
+use super::guided_rendering::{devices, image_strip};
 use crate::Result;
 use crate::plot::{self, Axis, LineChart, PALETTE, Series, SeriesLabelPosition};
 use crate::render::cpu::Method;
@@ -115,11 +120,16 @@ impl Settings {
 }
 
 /// The arguments of one render.
-fn args(ctx: &Context<'_>, s: &Settings, method: Method, seed: u64) -> RenderArgs {
+fn args(
+    ctx: &Context<'_>,
+    s: &Settings,
+    (method, device): (Method, Device),
+    seed: u64,
+) -> RenderArgs {
     RenderArgs {
         scene: PathBuf::from(SCENE),
         method,
-        device: Device::Cpu,
+        device,
         width: s.size,
         height: s.size,
         spp: s.spp,
@@ -142,10 +152,37 @@ fn args(ctx: &Context<'_>, s: &Settings, method: Method, seed: u64) -> RenderArg
     }
 }
 
-/// One method's runs, one per seed.
+/// One method's runs on one device, one per seed.
 struct Runs {
     method: Method,
+    device: Device,
     runs: Vec<Rendered>,
+}
+
+impl Runs {
+    /// The method's name, with ` (gpu)` for the GPU's runs.
+    fn label(&self) -> String {
+        match self.device {
+            Device::Gpu => format!("{} (gpu)", self.method.name()),
+            Device::Cpu | Device::Auto => self.method.name().to_owned(),
+        }
+    }
+
+    /// The label as a file-name part and JSON key (`adgi`, `adgi-gpu`).
+    fn key(&self) -> String {
+        self.label().replace(" (gpu)", "-gpu")
+    }
+
+    /// The median frame time over all frames of all seeds, in seconds.
+    fn median_frame_time(&self) -> f64 {
+        let mut t: Vec<f64> = self
+            .runs
+            .iter()
+            .flat_map(|r| r.report.frame_times_s.iter().copied())
+            .collect();
+        t.sort_by(f64::total_cmp);
+        t.get(t.len() / 2).copied().unwrap_or(f64::NAN)
+    }
 }
 
 /// The event region's errors of a run.
@@ -241,24 +278,33 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
         s.reference_spp,
         s.reference_bounces,
     ));
+    let devices = devices();
     let bar = ctx.progress(
-        u64::from(s.seeds) * METHODS.len() as u64,
+        u64::from(s.seeds) * (METHODS.len() * devices.len()) as u64,
         "dynamic GI: adgi vs ddgi",
     );
     let mut all = Vec::new();
-    for method in METHODS {
-        let mut runs = Vec::new();
-        for k in 0..s.seeds {
-            let seed = ctx.config.seed ^ (0x9e37_79b9_7f4a_7c15u64.wrapping_mul(u64::from(k) + 1));
-            runs.push(render(&args(ctx, &s, method, seed))?);
-            bar.inc(1);
+    for &device in &devices {
+        for method in METHODS {
+            let mut runs = Vec::new();
+            for k in 0..s.seeds {
+                let seed =
+                    ctx.config.seed ^ (0x9e37_79b9_7f4a_7c15u64.wrapping_mul(u64::from(k) + 1));
+                runs.push(render(&args(ctx, &s, (method, device), seed))?);
+                bar.inc(1);
+            }
+            all.push(Runs {
+                method,
+                device,
+                runs,
+            });
         }
-        all.push(Runs { method, runs });
     }
     bar.finish_and_clear();
     images(ctx, &s, &all, &mut section)?;
     curves(ctx, &s, &all, &mut section)?;
     table(&s, &all, &mut section);
+    times_table(&all, &mut section);
     summary(ctx, &s, &all)?;
     Ok(section)
 }
@@ -292,7 +338,7 @@ fn images(ctx: &Context<'_>, s: &Settings, all: &[Runs], section: &mut Section) 
         "The nee references of the two states: door closed (left), door open (right).",
     );
     for r in all {
-        let file = format!("dynamic-gi-{}.png", r.method.name());
+        let file = format!("dynamic-gi-{}.png", r.key());
         let frames: Vec<&RgbImage> = r.runs[0].frames.iter().map(|(_, i)| i).collect();
         image_strip(&ctx.figure_path(&file), &frames, zoom)?;
         let [a, b, c, d] = s.shown_frames();
@@ -301,7 +347,7 @@ fn images(ctx: &Context<'_>, s: &Settings, all: &[Runs], section: &mut Section) 
             &format!(
                 "{}: frames {a} (just before the door opens), {b}, {c} and {d}, each frame's \
                  own image (first seed).",
-                r.method.name()
+                r.label()
             ),
         );
     }
@@ -310,7 +356,10 @@ fn images(ctx: &Context<'_>, s: &Settings, all: &[Runs], section: &mut Section) 
 
 /// The error-per-frame charts (event region and whole image), averaged over the seeds.
 fn curves(ctx: &Context<'_>, s: &Settings, all: &[Runs], section: &mut Section) -> Result<()> {
-    let colours = [PALETTE[5], PALETTE[3], PALETTE[1]];
+    // The GPU's runs (after the CPU's) take the palette's other three colours.
+    let colours = [
+        PALETTE[5], PALETTE[3], PALETTE[1], PALETTE[0], PALETTE[2], PALETTE[4],
+    ];
     for (key, title, pick) in [
         (
             "event",
@@ -324,7 +373,7 @@ fn curves(ctx: &Context<'_>, s: &Settings, all: &[Runs], section: &mut Section) 
         let series: Vec<Series> = all
             .iter()
             .zip(colours)
-            .map(|(r, c)| Series::line(r.method.name(), c, mean_curve(&r.runs, pick)))
+            .map(|(r, c)| Series::line(&r.label(), c, mean_curve(&r.runs, pick)))
             .collect();
         let top = series
             .iter()
@@ -354,10 +403,10 @@ fn curves(ctx: &Context<'_>, s: &Settings, all: &[Runs], section: &mut Section) 
 /// The table of frames-to-threshold and final errors per seed.
 fn table(s: &Settings, all: &[Runs], section: &mut Section) {
     let mut columns = vec!["seed".to_owned()];
-    columns.extend(all.iter().map(|r| format!("{} frames", r.method.name())));
+    columns.extend(all.iter().map(|r| format!("{} frames", r.label())));
     columns.extend(
         all.iter()
-            .map(|r| format!("{} final (event / image)", r.method.name())),
+            .map(|r| format!("{} final (event / image)", r.label())),
     );
     let mut t = Table::new(
         &format!(
@@ -391,6 +440,34 @@ fn table(s: &Settings, all: &[Runs], section: &mut Section) {
     section.table(t);
 }
 
+/// The table of median frame times per method and device, with each one's ratio to `ddgi`'s
+/// on the same device.
+fn times_table(all: &[Runs], section: &mut Section) {
+    let mut t = Table::new(
+        "Median frame time over all frames and seeds (probe update and camera; the GPU's on \
+         the wall clock, adgi's including its host-side decisions and read-backs), and its \
+         ratio to ddgi's on the same device.",
+        vec![
+            "method".to_owned(),
+            "frame time (ms)".to_owned(),
+            "× ddgi".to_owned(),
+        ],
+    );
+    for r in all {
+        let ddgi = all
+            .iter()
+            .find(|d| d.device == r.device && d.method == Method::Ddgi)
+            .map_or(f64::NAN, Runs::median_frame_time);
+        let time = r.median_frame_time();
+        t = t.row(vec![
+            r.label(),
+            format!("{:.1}", 1e3 * time),
+            format!("{:.2}", time / ddgi),
+        ]);
+    }
+    section.table(t);
+}
+
 /// `dynamic-gi.json`: settings and every run's numbers.
 fn summary(ctx: &Context<'_>, s: &Settings, all: &[Runs]) -> Result<()> {
     let methods: serde_json::Map<String, serde_json::Value> = all
@@ -406,12 +483,14 @@ fn summary(ctx: &Context<'_>, s: &Settings, all: &[Runs]) -> Result<()> {
                         "final_event_rel_mse": final_error(event_errors(x)),
                         "final_image_rel_mse": final_error(&x.report.frame_errors),
                         "probe_rays_per_frame": x.report.probe_rays_per_frame,
+                        "device": x.report.device,
+                        "frame_times_s": x.report.frame_times_s,
                         "event_rel_mse": event_errors(x).iter().map(|e| e.rel_mse).collect::<Vec<_>>(),
                         "image_rel_mse": x.report.frame_errors.iter().map(|e| e.rel_mse).collect::<Vec<_>>(),
                     })
                 })
                 .collect();
-            (r.method.name().to_owned(), runs.into())
+            (r.key(), runs.into())
         })
         .collect();
     let json = serde_json::json!({

@@ -185,3 +185,21 @@ pub fn assert_lit_pixels_agree(cpu: &[Vec3], gpu: &[Vec3], what: &str) {
         lit.len()
     );
 }
+
+/// Equal ray budgets: `ddgi` traces the same positive number of probe rays in every frame,
+/// and `adgi` never more than that in any frame and at least 99 % of it over the run (its
+/// updater cuts its last sample list at the budget, so a frame may fall a few rays short).
+pub fn assert_equal_budgets(ddgi: &[u64], adgi: &[u64]) {
+    assert_eq!(ddgi.len(), adgi.len());
+    assert!(
+        ddgi[0] > 0 && ddgi.iter().all(|&r| r == ddgi[0]),
+        "{ddgi:?}"
+    );
+    assert!(
+        adgi.iter().all(|&r| r <= ddgi[0]),
+        "{adgi:?} above {}",
+        ddgi[0]
+    );
+    let (a, d): (u64, u64) = (adgi.iter().sum(), ddgi.iter().sum());
+    assert!(a * 100 >= d * 99, "adgi traced {a} rays, ddgi {d}");
+}

@@ -36,6 +36,7 @@
     mcpg_choose, mcpg_finish, mcpg_observation_escaped, mcpg_observation_hit, mcpg_params,
     mcpg_pdf_with, mcpg_sample_lobe
 }
+#import mcg::adgi::{AdgiRaySample, adgi_irradiance_at}
 #import mcg::sampling::{
     mcg_cosine_hemisphere_pdf, mcg_cosine_hemisphere_sample, mcg_frame_to_world, mcg_pcg_hash,
     mcg_rng_uniform
@@ -684,7 +685,11 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
         let jx = mcg_rng_uniform(&rng);
         let jy = mcg_rng_uniform(&rng);
         let d = camera_direction(f32(x) + jx, f32(y) + jy);
+#ifdef MCG_DEMO_PROBE_GI
+        sum += probe_camera_ray(d, &rng);
+#else
         sum += trace_path(params.camera_position, d, &rng);
+#endif
     }
     image[index] = vec4<f32>(sum / f32(params.spp), 1.0);
 }
@@ -698,6 +703,106 @@ fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>) {
     let r = rays[id.x];
     ray_hits[id.x] = bvh_walk(r.origin, r.direction, 0.0, r.t_max, r.any_hit != 0u);
 }
+
+#ifdef MCG_DEMO_PROBE_GI
+// ---------------------------------------------------------------------------------------------
+// Probe GI (`adgi`, `ddgi`): the twin of `probe_gi::ShadingProbes`, composed with the shader def
+// MCG_DEMO_PROBE_GI and `GpuProbeCache::shader_defs(1)` (the probe cache `mcg::adgi` at group 1).
+// `render` then shades each camera ray's first hit with its emission, one light sample and
+// albedo/π · the probes' irradiance (`probe_camera_ray`); `trace_probe_rays` traces probe rays
+// whose hits bring back albedo/π · (one light sample + the probes' irradiance), never the hit's
+// emission (the camera samples the lights itself), 0 at a fifth of the distance for a back face
+// and 0 at "infinity" for a miss — every frame adds one bounce (DDGI's multi-bounce).
+
+// `gpu::GpuProbeRequest`: one probe ray, with the 32-bit seed of the light sample at its hit.
+struct ProbeRequest {
+    origin: vec3<f32>,
+    seed: u32,
+    direction: vec3<f32>,
+    probe: u32,
+}
+
+// `gpu::GpuProbeFrame`: the dispatch of `trace_probe_rays`.
+struct ProbeFrame {
+    count: u32,
+    // Invocations per row of the 2D dispatch.
+    row: u32,
+    pad_a: u32,
+    pad_b: u32,
+}
+
+@group(0) @binding(11) var<storage, read> probe_requests: array<ProbeRequest>;
+@group(0) @binding(12) var<storage, read_write> probe_samples: array<AdgiRaySample>;
+@group(0) @binding(13) var<uniform> probe_frame: ProbeFrame;
+
+// `probe_gi::BACK_FACE_DISTANCE_SCALE`.
+const BACK_FACE_DISTANCE_SCALE: f32 = 0.2;
+
+// `ShadingProbes::reflected`: one light sample (uniforms u, no MIS weight: nothing else samples
+// the lights) plus the diffuse albedo (1 − metallic)·base colour over π times the probes'
+// irradiance at the vertex (DDGI's query, `mcg::adgi`).
+fn probe_reflected(v: Vertex, u: vec3<f32>) -> vec3<f32> {
+    let l = light_sample(v, offset_origin(v.position, v.normal), u);
+    let direct = select(vec3<f32>(0.0), l.value, l.pdf > 0.0);
+    let albedo = (1.0 - v.material.metallic) * v.material.base_color;
+    if all(albedo == vec3<f32>(0.0)) {
+        return direct;
+    }
+    return direct + albedo * MCG_FRAC_1_PI * adgi_irradiance_at(v.position, v.normal, v.wo);
+}
+
+// `ShadingProbes::probe_ray`: what a probe ray from `origin` along the unit `direction` brings
+// back; `seed` seeds the three uniforms of the light sample at its hit.
+fn probe_ray(origin: vec3<f32>, direction: vec3<f32>, seed: u32, probe: u32) -> AdgiRaySample {
+    var out = AdgiRaySample(direction, FAR, vec3<f32>(0.0), probe);
+    let hit = bvh_walk(origin, direction, 0.0, FAR, false);
+    if hit.triangle == NO_HIT {
+        return out;
+    }
+    let tri = triangles[hit.triangle];
+    let c = cross(tri.e1, tri.e2);
+    let n_front = c / (2.0 * (0.5 * length(c)));
+    if !(-dot(n_front, direction) > 0.0) {
+        out.distance = BACK_FACE_DISTANCE_SCALE * hit.t;
+        return out;
+    }
+    var rng = seed;
+    let u = vec3<f32>(mcg_rng_uniform(&rng), mcg_rng_uniform(&rng), mcg_rng_uniform(&rng));
+    let v = Vertex(origin + hit.t * direction, n_front, -direction, material_at(hit), 1u);
+    out.distance = hit.t;
+    out.radiance = probe_reflected(v, u);
+    return out;
+}
+
+// `ShadingProbes::camera_ray`: the first hit's emission (front faces) plus `probe_reflected`;
+// draws three uniforms from `rng` before tracing.
+fn probe_camera_ray(d: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
+    let u = vec3<f32>(mcg_rng_uniform(rng), mcg_rng_uniform(rng), mcg_rng_uniform(rng));
+    let o = params.camera_position;
+    let hit = bvh_walk(o, d, 0.0, FAR, false);
+    if hit.triangle == NO_HIT {
+        return vec3<f32>(0.0);
+    }
+    let tri = triangles[hit.triangle];
+    let c = cross(tri.e1, tri.e2);
+    let n_front = c / (2.0 * (0.5 * length(c)));
+    let front = -dot(n_front, d) > 0.0;
+    let material = material_at(hit);
+    let v = Vertex(o + hit.t * d, select(-n_front, n_front, front), -d, material, 0u);
+    return select(vec3<f32>(0.0), material.emission, front) + probe_reflected(v, u);
+}
+
+// One invocation per probe ray of `probe_frame`: its `AdgiRaySample` into `probe_samples`.
+@compute @workgroup_size(64)
+fn trace_probe_rays(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x + id.y * probe_frame.row;
+    if i >= probe_frame.count {
+        return;
+    }
+    let r = probe_requests[i];
+    probe_samples[i] = probe_ray(r.origin, r.direction, r.seed, r.probe);
+}
+#endif
 
 #ifdef MCG_DEMO_MCMM
 // ---------------------------------------------------------------------------------------------
