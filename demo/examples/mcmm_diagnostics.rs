@@ -7,7 +7,7 @@
 //!   centre);
 //! - the running relMSE at frames 1, 2, 4, …, 64 (do the chains converge or plateau?);
 //! - chain statistics at those frames: valid states, mean sample count N, the distinct lights
-//!   the 32 states of a tile point at (a state's mean target within 0.25 m of a light's
+//!   the 64 states of a tile point at (a state's mean target within 0.25 m of a light's
 //!   centre), against the lights that matter at the tile's pixels.
 //!
 //! ```text
@@ -16,7 +16,9 @@
 //!
 //! The MCMM constants come from `mcmm_params` and may be overridden by the environment:
 //! `MCMM_WINDOW` (half width, pixels), `MCMM_PH` (p_h), `MCMM_ALPHA` (α_min), `MCMM_NMAX`,
-//! `MCMM_CANDIDATES`, `MCMM_SCORE` (`paper` or `tile-mixture`). `MCMM_SKIP_BSDF=1` skips the
+//! `MCMM_CANDIDATES`, `MCMM_SCORE` (`paper` or `tile-mixture`), the prior's `MCMM_PRIOR_COS`
+//! and `MCMM_PRIOR_WEIGHT` (a fixed prior, both needed) or `MCMM_PRIOR_RADIUS` and
+//! `MCMM_PRIOR_WEIGHT` (the light-size prior), `MCMM_SEED`. `MCMM_SKIP_BSDF=1` skips the
 //! `bsdf` render.
 
 use std::path::PathBuf;
@@ -225,6 +227,19 @@ fn main() -> mcg_demo::Result<()> {
     }
     if let Some(v) = env_f32("MCMM_CANDIDATES") {
         params.neighbour_candidates = v as u32;
+    }
+    if let (Some(c), Some(w)) = (env_f32("MCMM_PRIOR_COS"), env_f32("MCMM_PRIOR_WEIGHT")) {
+        params.prior = mcg_markov_guide::mcmm::McmmPrior::Fixed(mcg_vmf::MapPrior {
+            mean_cosine: c,
+            weight: w,
+            decay: mcg_vmf::PriorDecay::SquaredCount,
+        });
+    }
+    if let (Some(r), Some(w)) = (env_f32("MCMM_PRIOR_RADIUS"), env_f32("MCMM_PRIOR_WEIGHT")) {
+        params.prior = mcg_markov_guide::mcmm::McmmPrior::LightSize {
+            radius: r,
+            weight: w,
+        };
     }
     println!("params: {params:?}");
 

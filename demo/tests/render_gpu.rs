@@ -510,8 +510,9 @@ fn gpu_mcmm_furnace_matches_direct_light() {
 /// other side of a rounding error decorrelates from then on). Sample: the many-lights room,
 /// 40×36 (partial tiles at the right and bottom edges), 16 spp, B = 1, seed 9. Threshold: at
 /// least 90 % of the lit pixels agree to 10⁻³ relative in every channel. Today all 670 lit
-/// pixels agree; another mask stream on the GPU (the tile salt + 1) leaves 12 of 670 equal
-/// (checked once).
+/// pixels agree; another mask stream on the GPU (the tile salt + 1) leaves 12 of 670 equal,
+/// and a GPU mixture that leaves out the BSDF share p_h·p_bsdf of the lanes with a lobe fails
+/// it too (checked once each).
 #[test]
 fn gpu_mcmm_follows_the_cpu_mcmm() {
     let scene = built_in("many_lights_room.gltf");

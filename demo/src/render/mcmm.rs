@@ -63,15 +63,54 @@
 //! of three). What is left above ¼: the uncovered lights (about 1.4 of 9.7 per tile), the
 //! warm-up (0.30–0.36 over the last 16 frames alone) and the metal box; 128-lane tiles
 //! would reach 0.35 at 2.2 × the `bsdf` frame, over the cost target.
+//!
+//! # Warm-up and coverage: the prior and the window
+//!
+//! The same diagnostics with the 64-lane tiles and p_h = 0.4 (seed 0x6d6367, REF 4096-spp
+//! `nee`): the running ratio is 0.70 after 16 frames, 0.52 after 32, 0.41 after 64, and 0.30
+//! over the last 16 frames alone; valid chains after frame 1, 2, 4, 8, 16, 32: 56, 123, 356,
+//! 1392, 2653, 3729 of 4096. The warm-up is slow because a state with one sample has a wide
+//! lobe under the uninformed prior (κ ≈ 6), so a neighbour that adopts it seldom hits the
+//! light again and never confirms it ([`CHAIN_PRIOR`]). Three changes, none of them a cost
+//! per sample (the GPU runs them through the same [`McmmParams`]):
+//! - [`CHAIN_PRIOR`] (r_p = 0.9, N_p = 0.05): young lobes as narrow as a small light;
+//!   ratio 0.406 → 0.288 (p_h 0.4, one seed);
+//! - p_h = 0.5 ([`DEFENSIVE_PROBABILITY`]): 0.286 (mean of four seeds);
+//! - a neighbour window of 0.75 × the image height ([`WINDOW_HALF_WIDTH_FRACTION`]) instead
+//!   of 16 pixels: 0.208 (seeds 0x6d6367, 1, 2, 3: 0.202, 0.215, 0.219, 0.195).
+//!
+//! With all three (seed 0x6d6367): valid chains after frame 2, 4, 8, 16: 207, 1739, 3516,
+//! 4029; a tile's chains point at 12.9 lights and cover 9.2 of the 9.7 that carry 90 % of its
+//! light (8.1 before); running ratio 0.34 after 16 frames, 0.24 after 32, 0.20 after 64 and
+//! 0.15 over the last 16 frames alone. Diffuse pixels carry 97 % of the error (ratio 0.20),
+//! the metal box 3 % (ratio 0.27: better than `bsdf` now); by effective light count 1–2 →
+//! 0.14, 2–4 → 0.17, 4–8 → 0.17, ≥ 8 → 0.26 (46 % of the error). What is left is the warm-up
+//! (the first 16 frames average 0.34) and the pixels lit by many lights. Tried and not kept:
+//! a chain without a lobe adopting a random state of its tile within the frame (0.284 against
+//! 0.286 without, four seeds), and the same as a reservoir candidate for every chain (0.50: the
+//! tile's chains collapse onto its brightest lights).
+//!
+//! With [`NEIGHBOUR_CANDIDATES`] = 3 (the defaults of [`mcmm_params`]), `mcg-demo render
+//! --scene demo/scenes/many_lights_room.gltf --method bsdf|mcmm --device cpu|gpu --bounces 1
+//! --width 64 --height 64 --spp 4 --frames 64 --seed S --reference REF.exr` (REF a 4096-spp
+//! `nee` render), `mcmm` ÷ `bsdf` for S = 0x6d6367, 1, 2, 3: CPU 0.215, 0.231, 0.212, 0.189;
+//! GPU (lavapipe) 0.214, 0.231, 0.214, 0.201. Cost on lavapipe, process CPU seconds of 60
+//! frames (a 64-frame run less a 4-frame run), five interleaved repetitions: `bsdf` 26.7 ms
+//! per frame, `mcmm` 38.0 ms (medians; 1.42 ×, repetitions 1.37–1.55 ×), the same as before
+//! these changes (38.2 ms): the faster warm-up evaluates more lobes per mixture (1.57 × with
+//! the prior, p_h and window alone), paid for by the two fewer candidates (1.51 ×) and by
+//! `render_mcmm`'s three workgroup barriers per step instead of six (1.46 ×; those three
+//! steps are medians of three repetitions on a busier machine).
 
 use glam::{Vec2, Vec3};
 use mcg_gpu_backend::sampling::next_uniform;
 use mcg_markov_guide::mcmm::{
-    McmmParams, PixelState, PixelStateBuffers, SampleChoice, ScoreDensity, bspline_offset,
-    choose_technique, collaborative_discovery, technique_pdf, update,
+    McmmParams, McmmPrior, PixelState, PixelStateBuffers, SampleChoice, ScoreDensity,
+    bspline_offset, choose_technique, collaborative_discovery, technique_pdf, update,
 };
 use mcg_markov_guide::mcpg::Scatter;
 use mcg_smis::{select_uniform, xor_source_lane};
+use mcg_vmf::{MapPrior, PriorDecay};
 use rayon::prelude::*;
 
 use super::cpu::{RenderSettings, offset, path_seed};
@@ -98,48 +137,98 @@ pub const TILE_SALT: u32 = 0x7f4a_7c15;
 #[serde(rename_all = "kebab-case")]
 pub enum McmmScore {
     /// [`ScoreDensity::TileMixture`]: the score is the pixel's one-sample SSMIS estimate, with
-    /// p_h = [`DEFENSIVE_PROBABILITY`] (mcg's extension).
+    /// p_h = [`DEFENSIVE_PROBABILITY`], the prior [`CHAIN_PRIOR`] and the screen-wide window
+    /// of [`WINDOW_HALF_WIDTH_FRACTION`] (mcg's extension).
     #[default]
     TileMixture,
     /// [`ScoreDensity::Technique`]: the paper's score, divided by the chain's own density, with
-    /// the paper's p_h = 0.2.
+    /// the paper's p_h = 0.2 and uninformed prior.
     Paper,
 }
 
-/// The smallest half width of the neighbour window, in pixels. Measured on the many-lights
-/// room at 64 × 64, 64 frames of 4 spp, relMSE of `mcmm` (tile-mixture score): half width 2 →
-/// 0.35, 4 → 0.34, 8 → 0.26, 16 → 0.23, 32 → 0.24 (`bsdf`: 0.41). The paper's 45 pixels at
-/// 1080 rows scale to 3 pixels there: too few neighbours to spread what a chain finds.
+/// The smallest half width of the neighbour window of [`McmmScore::Paper`], in pixels. Measured
+/// on the many-lights room at 64 × 64, 64 frames of 4 spp, relMSE of `mcmm` (tile-mixture
+/// score, uninformed prior): half width 2 → 0.35, 4 → 0.34, 8 → 0.26, 16 → 0.23, 32 → 0.24
+/// (`bsdf`: 0.41). The paper's 45 pixels at 1080 rows scale to 3 pixels there: too few
+/// neighbours to spread what a chain finds.
 pub const MIN_WINDOW_HALF_WIDTH: f32 = 16.0;
 
+/// The half width of the neighbour window of [`McmmScore::TileMixture`] as a fraction of the
+/// image height (at least the paper's 45 pixels at 1080 rows): 0.75, so that Alg. 1's
+/// candidates come from anywhere on the screen, not from the tile's neighbourhood alone (mcg's
+/// choice). A light that no chain of a tile covers is found by a BSDF sample (density
+/// p_h · p_bsdf, rare for a small light) or by a neighbour that covers it; neighbours from
+/// afar carry lights the nearby tiles lack. With [`CHAIN_PRIOR`] and p_h = 0.5, `mcmm` ÷
+/// `bsdf` on the many-lights room (64 × 64, 64 frames of 4 spp, mean of seeds 0x6d6367, 1, 2,
+/// 3): half width 8 px → 0.352, 24 → 0.245, 32 → 0.236, 40 → 0.220, 48 (0.75 h) → 0.208,
+/// 64 → 0.225, 96 → 0.244.
+pub const WINDOW_HALF_WIDTH_FRACTION: f32 = 0.75;
+
 /// The probability p_h of the defensive technique (the material's sampling) although the state
-/// holds a lobe: 0.4 instead of the paper's 0.2 (MCMM Alg. 2 line 2), mcg's choice for scenes
+/// holds a lobe: 0.5 instead of the paper's 0.2 (MCMM Alg. 2 line 2), mcg's choice for scenes
 /// with more lights than a tile's chains cover.
 ///
 /// A light that no lobe of the tile covers is sampled with density p_h · p_bsdf only, so its
-/// share of a pixel's variance is 1/p_h times what BSDF sampling alone gives it; on the
-/// many-lights room a tile's chains cover about 6 of the 9–10 lights that carry 90 % of its
-/// pixels' light (see the module docs). Measured on that room at 64 × 64, 64 frames of
-/// 4 spp, relMSE of `mcmm` ÷ `bsdf` over seeds 0x6d6367, 1, 2, 3: p_h = 0.2 → 0.557, 0.548,
-/// 0.519, 0.562; p_h = 0.4 → 0.498, 0.518, 0.505, 0.516; p_h = 0.1 → 0.711 (first seed);
-/// p_h = 0.5 → 0.536, 0.6 → 0.545 (first seed).
-pub const DEFENSIVE_PROBABILITY: f32 = 0.4;
+/// share of a pixel's variance is 1/p_h times what BSDF sampling alone gives it. Measured on
+/// the many-lights room at 64 × 64, 64 frames of 4 spp, `mcmm` ÷ `bsdf` (mean of seeds
+/// 0x6d6367, 1, 2, 3), with [`CHAIN_PRIOR`] and the window of
+/// [`WINDOW_HALF_WIDTH_FRACTION`]: p_h = 0.4 → 0.246 (window 64 px), 0.5 → 0.208,
+/// 0.6 → 0.218. Before the prior and the window (uninformed prior, 16-pixel window):
+/// p_h = 0.2 → 0.557, 0.548, 0.519, 0.562 (seeds 0x6d6367, 1, 2, 3, 32-lane tiles);
+/// 0.4 → 0.498, 0.518, 0.505, 0.516.
+pub const DEFENSIVE_PROBABILITY: f32 = 0.5;
 
-/// MCMM's constants for an image `height` pixels high: the paper's (MCMM sec. 5) with, for
-/// [`McmmScore::TileMixture`], p_h = [`DEFENSIVE_PROBABILITY`] ([`McmmScore::Paper`] keeps the
-/// paper's 0.2), the neighbour window scaled from 45 pixels at 1080 rows to
-/// the image (at least [`MIN_WINDOW_HALF_WIDTH`]), and the score density of `score`.
+/// The MAP prior of the chains' lobes for [`McmmScore::TileMixture`]: mean cosine r_p = 0.9 with
+/// N_p = 0.05 virtual samples, decaying with N² (MCMM sec. 5 "Uninformed vs. informed priors";
+/// the paper's Falcor scenes use r_p = 0, [`McmmParams::PAPER`]). mcg's choice for small
+/// lights, without knowing their size (the paper's informed prior, `McmmPrior::LightSize`,
+/// needs it).
+///
+/// A state with one sample has r̄ = 1; the uninformed prior (r_p = 0, N_p = 0.2) widens its lobe
+/// to κ ≈ 6 (mean cosine 0.83), in which a neighbour that adopts the state (Alg. 1) seldom
+/// hits the light again, so the state is not confirmed (S_c stays empty) and discovery spreads
+/// slowly: 1392 of 4096 chains valid after 8 frames, 2653 after 16. With r_p = 0.9 (κ ≈ 200 at
+/// N = 1) the young lobe is a few degrees wide, about as wide as the small light it found: the adopters hit it, and the chains warm
+/// up twice as fast (3917 valid after 8 frames, 4084 after 16, p_h = 0.5, 16-pixel window).
+/// Measured `mcmm` ÷ `bsdf` on the many-lights room (64 × 64, 64 frames of 4 spp, one seed,
+/// p_h = 0.4, 16-pixel window): r_p 0 / N_p 0.2 → 0.406; r_p 0.8 → 0.319, 0.9 → 0.288,
+/// 0.95 → 0.297 (N_p 0.2); 0.9 with N_p 1 → 0.355, 4 → 0.470; at p_h = 0.5 (four seeds)
+/// N_p 0.05 → 0.286, 0.2 → 0.295.
+pub const CHAIN_PRIOR: MapPrior = MapPrior {
+    mean_cosine: 0.9,
+    weight: 0.05,
+    decay: PriorDecay::SquaredCount,
+};
+
+/// Neighbour candidates per step of Alg. 1 for [`McmmScore::TileMixture`]: 3 instead of vkdt's 5
+/// (mcg's choice for cost). Each candidate costs 13 uniforms and a load, 4 times per frame;
+/// with [`CHAIN_PRIOR`], p_h = [`DEFENSIVE_PROBABILITY`] and the window of
+/// [`WINDOW_HALF_WIDTH_FRACTION`], `mcmm` ÷ `bsdf` on the many-lights room (64 × 64, 64 frames
+/// of 4 spp, mean of seeds 0x6d6367, 1, 2, 3) is 0.212 with 3 candidates and 0.208 with 5.
+pub const NEIGHBOUR_CANDIDATES: u32 = 3;
+
+/// MCMM's constants for an image `height` pixels high: the paper's (MCMM sec. 5) for
+/// [`McmmScore::Paper`] with the neighbour window scaled from 45 pixels at 1080 rows to the
+/// image (at least [`MIN_WINDOW_HALF_WIDTH`]); for [`McmmScore::TileMixture`] mcg's choices:
+/// the tile-mixture score, p_h = [`DEFENSIVE_PROBABILITY`], the prior [`CHAIN_PRIOR`] and a
+/// window of [`WINDOW_HALF_WIDTH_FRACTION`] of the height.
 #[must_use]
 pub fn mcmm_params(score: McmmScore, height: u32) -> McmmParams {
     let mut params = McmmParams::PAPER;
-    if score == McmmScore::TileMixture {
-        params.hemisphere_probability = DEFENSIVE_PROBABILITY;
+    let paper_window = 45.0 * height as f32 / 1080.0;
+    match score {
+        McmmScore::TileMixture => {
+            params.hemisphere_probability = DEFENSIVE_PROBABILITY;
+            params.prior = McmmPrior::Fixed(CHAIN_PRIOR);
+            params.window_half_width = paper_window.max(WINDOW_HALF_WIDTH_FRACTION * height as f32);
+            params.score_density = ScoreDensity::TileMixture;
+            params.neighbour_candidates = NEIGHBOUR_CANDIDATES;
+        }
+        McmmScore::Paper => {
+            params.window_half_width = paper_window.max(MIN_WINDOW_HALF_WIDTH);
+            params.score_density = ScoreDensity::Technique;
+        }
     }
-    params.window_half_width = (45.0 * height as f32 / 1080.0).max(MIN_WINDOW_HALF_WIDTH);
-    params.score_density = match score {
-        McmmScore::TileMixture => ScoreDensity::TileMixture,
-        McmmScore::Paper => ScoreDensity::Technique,
-    };
     params
 }
 

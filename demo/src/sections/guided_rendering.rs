@@ -531,8 +531,11 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
          and weights each sample by the tile's mixture density (spatial SMIS, eq. 9); its \
          chains are scored by that mixture density (an extension of the paper, see \
          mcg_markov_guide::mcmm::ScoreDensity), its defensive technique is the material's \
-         sampling with p_h = 0.4 (the paper's 0.2 leaves the lights no lobe of a tile covers \
-         at a fifth of the BSDF's density; see mcg_demo::render::mcmm). mcpg runs without its irradiance cache, as MCPG Fig. 8 \
+         sampling with p_h = 0.5 (the paper's 0.2 leaves the lights no lobe of a tile covers \
+         at a fifth of the BSDF's density), its lobes' prior has mean cosine 0.9 (young lobes \
+         as narrow as a small light, so the chains warm up twice as fast as with the paper's \
+         uninformed prior) and Alg. 1 draws neighbours from a window of 0.75 × the image \
+         height (see mcg_demo::render::mcmm). mcpg runs without its irradiance cache, as MCPG Fig. 8 \
          compares on direct light. Neither guide knows where the lights are; nee does. \
          Where each wins: here, direct light from many small lights, mcmm pools the lobes of \
          a tile's 64 chains for every pixel of the tile, while mcpg's cells learn only from \

@@ -855,23 +855,28 @@ fn emitter_along(origin: vec3<f32>, w: vec3<f32>) -> EmitterHit {
 
 // The x-independent part of each published state's lobe (fixed prior): ȳ and κ in `.xyz`,
 // `.w` (κ < 0: no lobe), and the normalisation C(κ) of `vmf_pdf`. Written by each lane for its
-// own state between the exchanges' barriers and the publish's, read by the mixture.
+// own state between the exchange's barriers and the publish's, read by the mixture.
 var<workgroup> tile_lobes: array<vec4<f32>, MCMM_LANES>;
 var<workgroup> tile_norms: array<f32, MCMM_LANES>;
-// The tile's states (`mcmm_tile` of `mcg::mcmm` holds at most the 32 lanes of a subgroup).
+// The tile's published tentative states, read by the mixture of the light-size prior
+// (`mcmm_tile` of `mcg::mcmm` holds at most the 32 lanes of a subgroup).
 var<workgroup> tile_states: array<MarkovPixelState, MCMM_LANES>;
+// The chains (tentative, current) in flight during the xor exchange: arrays of their own, so
+// that the exchange and the publish of one step need three barriers in all.
+var<workgroup> tile_tentatives: array<MarkovPixelState, MCMM_LANES>;
+var<workgroup> tile_currents: array<MarkovPixelState, MCMM_LANES>;
 
-// `mcmm_tile_publish` over `tile_states`. Uniform control flow.
-fn tile_publish(lane: u32, state: MarkovPixelState) {
+// `mcmm_tile_exchange` of both states of a chain over `tile_tentatives`/`tile_currents`: lane
+// `lane` receives the chain of lane `source`. The first barrier ends the last step's reads of
+// the tile (the mixture's and the exchange's). Uniform control flow.
+fn tile_exchange_chain(lane: u32, source: u32, tentative: ptr<function, MarkovPixelState>,
+                       current: ptr<function, MarkovPixelState>) {
     workgroupBarrier();
-    tile_states[lane] = state;
+    tile_tentatives[lane] = *tentative;
+    tile_currents[lane] = *current;
     workgroupBarrier();
-}
-
-// `mcmm_tile_exchange` over `tile_states`. Uniform control flow.
-fn tile_exchange(lane: u32, source: u32, state: MarkovPixelState) -> MarkovPixelState {
-    tile_publish(lane, state);
-    return tile_states[source];
+    *tentative = tile_tentatives[source];
+    *current = tile_currents[source];
 }
 
 // Writes lane `lane`'s entry of `tile_lobes`/`tile_norms` for `state`: the κ of
@@ -904,19 +909,21 @@ fn tile_mixture_pdf(x: vec3<f32>, w: vec3<f32>, bsdf_pdf: f32, mp: McmmParams) -
         }
         return min(sum, MCG_F32_MAX) / f32(MCMM_LANES);
     }
+    // Σⱼ over the lanes with a lobe of p_h p_bsdf + (1 − p_h) vmfⱼ, and p_bsdf for the others:
+    // the lobes' sum and their count in the loop, the BSDF's share after it.
     let p = mp.hemisphere_probability;
+    var lobes = 0.0;
     for (var j = 0u; j < MCMM_LANES; j++) {
         let lobe = tile_lobes[j];
         var mu: vec3<f32>;
         if lobe.w >= 0.0 && vmf_try_normalize(lobe.xyz - x, &mu) {
             let d = w - mu;
             let distance_squared = d.x * d.x + d.y * d.y + d.z * d.z;
-            let vmf = tile_norms[j] * exp(-0.5 * lobe.w * distance_squared);
-            sum += p * bsdf_pdf + (1.0 - p) * vmf;
-        } else {
-            sum += bsdf_pdf;
+            sum += tile_norms[j] * exp(-0.5 * lobe.w * distance_squared);
+            lobes += 1.0;
         }
     }
+    sum = (1.0 - p) * sum + (f32(MCMM_LANES) - (1.0 - p) * lobes) * bsdf_pdf;
     return min(sum, MCG_F32_MAX) / f32(MCMM_LANES);
 }
 
@@ -1004,12 +1011,12 @@ fn render_mcmm(@builtin(local_invocation_id) lid: vec3<u32>,
         var trng = path_seed(params.seed ^ MCMM_TILE_SALT, params.frame, tile, s);
         let mask = mcmm_select_uniform(MCMM_LANES, mcg_rng_uniform(&trng));
         let source = mcmm_xor_source_lane(lane, mask);
-        tentative = tile_exchange(lane, source, tentative);
-        current = tile_exchange(lane, source, current);
-        // After the exchanges' barriers (the last step's mixtures are read) and before the
-        // publish's (this step's mixtures read them).
+        tile_exchange_chain(lane, source, &tentative, &current);
+        // After the exchange's barriers (the last step's mixtures are read) and before the
+        // publish's barrier (this step's mixtures read them).
         publish_lobe(lane, tentative, mcg_mcmm_params);
-        tile_publish(lane, tentative);
+        tile_states[lane] = tentative;
+        workgroupBarrier();
         if inside {
             sum += mcmm_shade(x, y, &tentative, &current, &rng);
         }
