@@ -316,7 +316,7 @@ fn bsdf_and_nee_agree_per_tile() {
 /// ([`common::tile_stats`]: the pixels of one run share the guide, so only runs are
 /// independent); threshold: Bonferroni over the 12 tests of a method at family-wise
 /// α = 10⁻⁴, the Student-t quantile of 1 − α/24 at the test's Welch degrees of freedom
-/// (today `mcpg` 4.9 at 55 dof, worst |t| 1.4; `mcpg-nee` 4.6 at 130 dof, worst |t| 1.8). Dividing the guided samples by the material's density instead
+/// (today `mcpg` 5.0 at 50 dof, worst |t| 2.2; `mcpg-nee` 4.65 at 123 dof, worst |t| 2.0). Dividing the guided samples by the material's density instead
 /// of the guided mixture's fails it for `mcpg` at t = 42 (checked once). Weighting `mcpg-nee`'s light
 /// samples with the material's density instead of the guide's is not visible here (worst
 /// |z| 1.7: the lights are small, so the light sample's weight is near 1 either way); the
@@ -508,7 +508,7 @@ fn many_lights_direct() -> &'static (Scene, TileStats) {
 /// 128 independent frames of 4 spp (seed 12). Per tile and channel the means are compared
 /// by Welch's t-test ([`common::tile_stats`]); threshold: Bonferroni over the 12 tests at
 /// family-wise α = 10⁻⁴, the Student-t quantile of 1 − α/24 at the test's degrees of freedom
-/// (4.7 at 87 dof). Today the worst |t| is 1.0. Halving the material's share in the
+/// (4.7 at 107 dof). Today the worst |t| is 2.1. Halving the material's share in the
 /// densities is not seen here (t = 1.5 at 33 dof: a run's pixels share its chains, and the
 /// runs' spread hides a few per cent; the learned-chains test below reaches t = 3.7 of
 /// 4.6); `mcmm_furnace_matches_direct_light` catches it (checked once). The z = 5.0 this test
@@ -540,9 +540,9 @@ fn mcmm_agrees_with_nee_per_tile() {
 /// clones of that renderer each render frame 24 with their own seed (1000–1127): the samples
 /// are independent given the learned states. `nee`: 128 frames of 4 spp (seed 12). Per tile
 /// of 16×16 and channel, Welch's t-test; threshold: Bonferroni over the 12 tests at
-/// family-wise α = 10⁻⁴, the Student-t quantile of 1 − α/24 (4.55 at 249 dof). Dividing
+/// family-wise α = 10⁻⁴, the Student-t quantile of 1 − α/24 (4.55 at 254 dof). Dividing
 /// by the mixture of only the first 32 of the 64 lanes fails it at t = 7.1 (checked once);
-/// `mcmm_agrees_with_nee_per_tile` passes that break. Today the worst |t| is 2.6.
+/// `mcmm_agrees_with_nee_per_tile` passes that break. Today the worst |t| is 2.1.
 #[test]
 fn mcmm_is_unbiased_given_learned_chains() {
     let (scene, reference) = many_lights_direct();
