@@ -543,7 +543,8 @@ fn gpu_mcmm_follows_the_cpu_mcmm() {
 /// independent runs (seeds 100–131), each fresh chains learning over 4 frames of 4 spp; a
 /// run's sample is its mean image. `nee`: 128 independent frames of 4 spp (seed 12).
 /// Welch's t-test per tile and channel; threshold: Bonferroni over the 12 tests at
-/// family-wise α = 10⁻⁴, the Student-t quantile of 1 − α/24. Today the worst |t| is 2.1 (the GPU draws the CPU's streams, so this and the CPU test see nearly
+/// family-wise α = 10⁻⁴, the Student-t quantile of 1 − α/24. Today the worst |t| is 2.1
+/// (the GPU draws the CPU's streams, so this and the CPU test see nearly
 /// the same numbers; `gpu_mcmm_follows_the_cpu_mcmm` pins that).
 #[test]
 fn gpu_mcmm_agrees_with_gpu_nee_per_tile() {
