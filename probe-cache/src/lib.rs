@@ -105,6 +105,7 @@ pub use probe_texels::{
 };
 pub use probe_update::{
     FrameRays, ProbeRayRequest, ProbeUpdater, UpdateConfig, UpdatePolicy, hash_uniform,
+    spherical_fibonacci,
 };
 pub use proxies::ProxyGrid;
 #[cfg(feature = "scene")]

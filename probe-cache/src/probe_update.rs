@@ -1221,8 +1221,17 @@ fn max_octant(values: &[f32]) -> f32 {
 }
 
 /// The i-th of n spherical Fibonacci directions (DDGI's ray set before its random rotation;
-/// DDGI sec. 4, after Keinert et al. 2015).
-fn spherical_fibonacci(i: u32, n: u32) -> Vec3 {
+/// DDGI sec. 4, after Keinert et al. 2015): z = 1 − (2i + 1)/n, φ = 2π·frac(i·(√5 − 1)/2).
+/// The directions [`ProbeUpdater`]'s uniform rays are rotated from, for a renderer that lays
+/// out the same rays itself (e.g. on a GPU).
+///
+/// ```
+/// use mcg_probe_cache::spherical_fibonacci;
+/// let d = spherical_fibonacci(0, 32);
+/// assert!((d.length() - 1.0).abs() < 1e-6 && d.z > 0.9);
+/// ```
+#[must_use]
+pub fn spherical_fibonacci(i: u32, n: u32) -> Vec3 {
     const GOLDEN: f32 = 0.618_034;
     let phi = core::f32::consts::TAU * ((i as f32 * GOLDEN).fract());
     let z = 1.0 - (2.0 * i as f32 + 1.0) / n as f32;

@@ -262,16 +262,6 @@ impl GpuTracer {
     }
 }
 
-/// The i-th of n spherical Fibonacci directions (DDGI's ray set before its random rotation;
-/// DDGI sec. 4, after Keinert et al. 2015), as `mcg_probe_cache::ProbeUpdater` makes them.
-fn spherical_fibonacci(i: u32, n: u32) -> Vec3 {
-    const GOLDEN: f32 = 0.618_034;
-    let phi = core::f32::consts::TAU * ((i as f32 * GOLDEN).fract());
-    let z = 1.0 - (2.0 * i as f32 + 1.0) / n as f32;
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
-}
-
 /// The pipeline, group 0 layout, cache, requests and samples of `trace_probe_rays`.
 type TraceParts<'a> = (
     &'a wgpu::ComputePipeline,
@@ -364,7 +354,7 @@ impl ProbeTracer<'_> {
         self.ctx.write(&p.rounding, &rounding)?;
         let n = p.gi.updater().config().rays_per_probe;
         let directions: Vec<Vec3> = (0..n)
-            .map(|i| rotation * spherical_fibonacci(i, n))
+            .map(|i| rotation * mcg_probe_cache::spherical_fibonacci(i, n))
             .collect();
         let grid = *p.gi.updater().grid();
         let requests: Vec<GpuProbeRequest> = (0..grid.probe_count())
