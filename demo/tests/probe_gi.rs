@@ -4,50 +4,14 @@
 
 mod common;
 
-use std::path::PathBuf;
-
-use common::{assert_equal_budgets, furnace, scenes_dir};
+use common::{assert_equal_budgets, door_args, furnace, scenes_dir, temp_dir};
 use glam::Vec3;
 use mcg_demo::render::cpu::{Method, RenderSettings};
-use mcg_demo::render::mcmm::McmmScore;
 use mcg_demo::render::probe_gi::{ProbeGi, fit_grid};
 use mcg_demo::render::scene::{SceneFile, frame_time};
 use mcg_demo::render::scene_generator::DOOR_ROOM_OPENS_AT_FRAME;
 use mcg_demo::render::states::{event_mask, masked_errors};
-use mcg_demo::render::{Device, ProbeOptions, RenderArgs, render, write_outputs};
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mcg-probe-gi-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-/// Settings of a small render of the door room with per-state references.
-fn door_args(method: Method, out: PathBuf, frames: u32) -> RenderArgs {
-    RenderArgs {
-        scene: scenes_dir().join("door_room.gltf"),
-        method,
-        device: Device::Cpu,
-        width: 24,
-        height: 24,
-        spp: 1,
-        frames,
-        bounces: 3,
-        seed: 7,
-        out,
-        reference: None,
-        no_progress: true,
-        no_irradiance_cache: false,
-        mcmm_score: McmmScore::TileMixture,
-        probes: ProbeOptions {
-            probe_spacing: 1.0,
-            probe_rays: 16,
-            reference_spp: Some(16),
-            reference_bounces: 4,
-            ..ProbeOptions::default()
-        },
-    }
-}
+use mcg_demo::render::{Device, render, write_outputs};
 
 /// Furnace: a closed cube of albedo ρ = 0.3 emitting L_e = 0.5 from every inner face has
 /// radiance L_e/(1 − ρ) everywhere, so the indirect irradiance the probes must hold (light
@@ -155,7 +119,7 @@ fn event_region_is_where_the_references_differ() {
 /// reference, the event frame, the event region's errors and frames-to-threshold.
 #[test]
 fn ddgi_and_adgi_run_at_equal_rays_with_per_frame_errors() {
-    let out = temp_dir("door");
+    let out = temp_dir("mcg-probe-gi", "door");
     let frames = DOOR_ROOM_OPENS_AT_FRAME + 4;
     let mut rays = Vec::new();
     for method in [
@@ -203,7 +167,7 @@ fn ddgi_and_adgi_run_at_equal_rays_with_per_frame_errors() {
 /// the GPU too when the report renders there.
 #[test]
 fn dynamic_gi_section_smoke() {
-    let out = temp_dir("section");
+    let out = temp_dir("mcg-probe-gi", "section");
     let config = mcg_demo::Config {
         out_dir: out.clone(),
         samples: 20_000,

@@ -7,17 +7,16 @@
 
 mod common;
 
-use std::path::PathBuf;
-
-use common::{assert_equal_budgets, assert_tiles_agree, furnace, scenes_dir, tile_stats};
+use common::{
+    assert_equal_budgets, assert_tiles_agree, door_args, furnace, scenes_dir, temp_dir, tile_stats,
+};
 use glam::Vec3;
 use mcg_demo::render::cpu::{Method, RenderSettings};
 use mcg_demo::render::gpu::GpuTracer;
-use mcg_demo::render::mcmm::McmmScore;
 use mcg_demo::render::probe_gi::{ProbeGi, fit_grid};
 use mcg_demo::render::scene::{Scene, SceneFile};
 use mcg_demo::render::scene_generator::DOOR_ROOM_OPENS_AT_FRAME;
-use mcg_demo::render::{Device, ProbeOptions, RenderArgs, render, write_outputs};
+use mcg_demo::render::{Device, RenderArgs, render, write_outputs};
 use mcg_gpu_backend::guides::adgi::GpuIrradianceQuery;
 use mcg_gpu_backend::testing::gpu_or_skip;
 
@@ -212,12 +211,6 @@ fn gpu_and_cpu_probe_gi_agree_per_tile() {
     }
 }
 
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mcg-probe-gpu-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 /// `ddgi`, `adgi` and `adgi-refill` on the GPU render the door room through its event at equal
 /// ray budgets (`ddgi` the same positive count every frame, the others never more and at
 /// least 99 % of it over the run), and the JSON of each holds `device: gpu`, each frame's
@@ -229,36 +222,19 @@ fn gpu_probe_methods_run_at_equal_rays_with_per_frame_errors() {
     if gpu_or_skip(test).is_none() {
         return;
     }
-    let out = temp_dir("door");
+    let out = temp_dir("mcg-probe-gpu", "door");
     let frames = DOOR_ROOM_OPENS_AT_FRAME + 4;
     let mut rays: Vec<Vec<u64>> = Vec::new();
     for method in [Method::Ddgi, Method::Adgi, Method::AdgiRefill] {
+        // The CPU test's door render, on the GPU (`adgi` through `--device auto`), B = 1.
         let args = RenderArgs {
-            scene: scenes_dir().join("door_room.gltf"),
-            method,
             device: if method == Method::Adgi {
                 Device::Auto
             } else {
                 Device::Gpu
             },
-            width: 24,
-            height: 24,
-            spp: 1,
-            frames,
             bounces: 1,
-            seed: 7,
-            out: out.clone(),
-            reference: None,
-            no_progress: true,
-            no_irradiance_cache: false,
-            mcmm_score: McmmScore::TileMixture,
-            probes: ProbeOptions {
-                probe_spacing: 1.0,
-                probe_rays: 16,
-                reference_spp: Some(16),
-                reference_bounces: 4,
-                ..ProbeOptions::default()
-            },
+            ..door_args(method, out.clone(), frames)
         };
         let rendered = render(&args).unwrap();
         let r = &rendered.report;

@@ -6,8 +6,11 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use mcg_demo::render::bvh::Triangle;
+use mcg_demo::render::cpu::Method;
 use mcg_demo::render::material::Material;
+use mcg_demo::render::mcmm::McmmScore;
 use mcg_demo::render::scene::{Camera, Scene};
+use mcg_demo::render::{Device, ProbeOptions, RenderArgs};
 use mcg_tests::{RunningStats, welch_t_test};
 
 /// `demo/scenes/`.
@@ -202,4 +205,38 @@ pub fn assert_equal_budgets(ddgi: &[u64], adgi: &[u64]) {
     );
     let (a, d): (u64, u64) = (adgi.iter().sum(), ddgi.iter().sum());
     assert!(a * 100 >= d * 99, "adgi traced {a} rays, ddgi {d}");
+}
+
+/// A fresh folder `<prefix>-<name>-<pid>` under the system's temporary directory.
+pub fn temp_dir(prefix: &str, name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("{prefix}-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Settings of a small render of the door room with per-state references.
+pub fn door_args(method: Method, out: PathBuf, frames: u32) -> RenderArgs {
+    RenderArgs {
+        scene: scenes_dir().join("door_room.gltf"),
+        method,
+        device: Device::Cpu,
+        width: 24,
+        height: 24,
+        spp: 1,
+        frames,
+        bounces: 3,
+        seed: 7,
+        out,
+        reference: None,
+        no_progress: true,
+        no_irradiance_cache: false,
+        mcmm_score: McmmScore::TileMixture,
+        probes: ProbeOptions {
+            probe_spacing: 1.0,
+            probe_rays: 16,
+            reference_spp: Some(16),
+            reference_bounces: 4,
+            ..ProbeOptions::default()
+        },
+    }
 }
