@@ -7,7 +7,7 @@ use core::sync::atomic::{AtomicU32, Ordering};
 use crate::capacity::SlotIndexer;
 use crate::constants::{EMPTY, TOMBSTONE};
 use crate::error::TableError;
-use crate::hash::{BucketHash, fold_and_checksum, mix_and_checksum};
+use crate::hash::BucketHash;
 use crate::key::CellKey;
 use crate::probe::{self, Insert, Slots};
 use crate::table::{trim_tombstones, validate};
@@ -167,73 +167,26 @@ impl ConcurrentTable {
     /// # Panics
     /// When `keys` and `out` differ in length.
     pub fn find_many(&self, keys: &[CellKey], out: &mut [Option<u32>]) {
-        assert_eq!(
-            keys.len(),
-            out.len(),
-            "find_many: keys and out differ in length"
+        let load = |w: &AtomicU32| w.load(Ordering::Acquire);
+        probe::find_many::<AtomicU32, { Self::BATCH }>(
+            &self.checksums,
+            load,
+            self.hash,
+            &self.indexer,
+            keys,
+            out,
+            |home, c| {
+                probe::find(
+                    &self.checksums,
+                    load,
+                    &self.indexer,
+                    self.max_probes,
+                    home,
+                    c,
+                )
+            },
+            |slot| self.touch(slot),
         );
-        let ix = self.indexer;
-        match (self.hash, ix.is_mask()) {
-            (BucketHash::Fold, true) => {
-                let mask = ix.capacity() - 1;
-                self.find_many_with(keys, out, fold_and_checksum, |h| h & mask);
-            }
-            (BucketHash::Fold, false) => {
-                self.find_many_with(keys, out, fold_and_checksum, |h| ix.modulo(h));
-            }
-            (BucketHash::Mix, true) => {
-                let mask = ix.capacity() - 1;
-                self.find_many_with(keys, out, mix_and_checksum, |h| h & mask);
-            }
-            (hash, _) => {
-                self.find_many_with(keys, out, |k| hash.hash_and_checksum(k), |h| ix.index(h));
-            }
-        }
-    }
-
-    /// The loop of [`find_many`](Self::find_many) with the hash (`(bucket hash, checksum)`)
-    /// and the slot index of a bucket hash given.
-    #[inline(always)]
-    fn find_many_with(
-        &self,
-        keys: &[CellKey],
-        out: &mut [Option<u32>],
-        hash_and_checksum: impl Fn(&CellKey) -> (u32, u32),
-        index: impl Fn(u32) -> u32,
-    ) {
-        let mut homes = [(0_u32, 0_u32); Self::BATCH];
-        let mut first = [0_u32; Self::BATCH];
-        for (keys, out) in keys.chunks(Self::BATCH).zip(out.chunks_mut(Self::BATCH)) {
-            for (hc, key) in homes.iter_mut().zip(keys) {
-                let (h, c) = hash_and_checksum(key);
-                *hc = (index(h), c);
-            }
-            for (f, &(home, _)) in first.iter_mut().zip(&homes[..keys.len()]) {
-                *f = self
-                    .checksums
-                    .get(home as usize)
-                    .map_or(EMPTY, |w| w.load(Ordering::Acquire));
-            }
-            for ((o, &(home, c)), &f) in out.iter_mut().zip(&homes).zip(&first) {
-                *o = if f == c {
-                    Some(home)
-                } else if f == EMPTY {
-                    None
-                } else {
-                    probe::find(
-                        &self.checksums,
-                        |w| w.load(Ordering::Acquire),
-                        &self.indexer,
-                        self.max_probes,
-                        home,
-                        c,
-                    )
-                };
-                if let Some(slot) = *o {
-                    self.touch(slot);
-                }
-            }
-        }
     }
 
     /// Finds `key` or claims a slot for it by compare-and-swap; touches its age. Safe to call

@@ -3,6 +3,8 @@
 
 use crate::capacity::SlotIndexer;
 use crate::constants::{EMPTY, TOMBSTONE};
+use crate::hash::{BucketHash, fold_and_checksum, mix_and_checksum};
+use crate::key::CellKey;
 
 /// What [`insert_or_get`](crate::HashTable::insert_or_get) did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -86,6 +88,108 @@ pub(crate) fn find<E>(
         slot = indexer.next(slot);
     }
     None
+}
+
+/// [`find`] for a batch of keys, written once for both tables: `out[i]` is the slot of
+/// `keys[i]` in `words` (read by `load`), and `found(slot)` is called for every key found.
+/// `walk(home, checksum)` decides a key whose home slot holds another key (the plain table
+/// compares a group of slots at once, the concurrent one walks its atomics).
+///
+/// Per step of `BATCH` keys: (1) every key hashed (pure arithmetic); (2) the home word of
+/// every key read (independent loads with no branch on their values, so their cache misses
+/// overlap); (3) each key decided from its home word, walking on only where needed. The loop
+/// is compiled once per hash and kind of capacity, so that it branches on neither per key
+/// (and LLVM can vectorise the hashing of the mask copies).
+///
+/// # Panics
+/// When `keys` and `out` differ in length.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)] // a table's fields, passed apart so that both tables share it
+pub(crate) fn find_many<E, const BATCH: usize>(
+    words: &[E],
+    load: impl Fn(&E) -> u32,
+    hash: BucketHash,
+    indexer: &SlotIndexer,
+    keys: &[CellKey],
+    out: &mut [Option<u32>],
+    walk: impl Fn(u32, u32) -> Option<u32>,
+    found: impl FnMut(u32),
+) {
+    assert_eq!(
+        keys.len(),
+        out.len(),
+        "find_many: keys and out differ in length"
+    );
+    let ix = *indexer;
+    let (load, walk) = (&load, &walk);
+    // One monomorphic copy of the loop per arm (the hash and index closures are its type
+    // parameters).
+    macro_rules! batch {
+        ($hash_and_checksum:expr, $index:expr) => {
+            find_many_with::<E, BATCH>(
+                words,
+                load,
+                walk,
+                keys,
+                out,
+                $hash_and_checksum,
+                $index,
+                found,
+            )
+        };
+    }
+    match (hash, ix.is_mask()) {
+        (BucketHash::Fold, true) => {
+            let mask = ix.capacity() - 1;
+            batch!(fold_and_checksum, |h| h & mask)
+        }
+        (BucketHash::Fold, false) => batch!(fold_and_checksum, |h| ix.modulo(h)),
+        (BucketHash::Mix, true) => {
+            let mask = ix.capacity() - 1;
+            batch!(mix_and_checksum, |h| h & mask)
+        }
+        (BucketHash::Mix, false) => batch!(mix_and_checksum, |h| ix.modulo(h)),
+        (hash, _) => batch!(|k: &CellKey| hash.hash_and_checksum(k), |h| ix.index(h)),
+    }
+}
+
+/// The loop of [`find_many`] with the hash (`(bucket hash, checksum)`) and the slot index of
+/// a bucket hash given.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)] // as `find_many`, plus the hash and the index
+fn find_many_with<E, const BATCH: usize>(
+    words: &[E],
+    load: impl Fn(&E) -> u32,
+    walk: impl Fn(u32, u32) -> Option<u32>,
+    keys: &[CellKey],
+    out: &mut [Option<u32>],
+    hash_and_checksum: impl Fn(&CellKey) -> (u32, u32),
+    index: impl Fn(u32) -> u32,
+    mut found: impl FnMut(u32),
+) {
+    let mut homes = [(0_u32, 0_u32); BATCH];
+    let mut first = [0_u32; BATCH];
+    for (keys, out) in keys.chunks(BATCH).zip(out.chunks_mut(BATCH)) {
+        for (hc, key) in homes.iter_mut().zip(keys) {
+            let (h, c) = hash_and_checksum(key);
+            *hc = (index(h), c);
+        }
+        for (f, &(home, _)) in first.iter_mut().zip(&homes[..keys.len()]) {
+            *f = words.get(home as usize).map_or(EMPTY, &load);
+        }
+        for ((o, &(home, c)), &f) in out.iter_mut().zip(&homes).zip(&first) {
+            *o = if f == c {
+                Some(home)
+            } else if f == EMPTY {
+                None
+            } else {
+                walk(home, c)
+            };
+            if let Some(slot) = *o {
+                found(slot);
+            }
+        }
+    }
 }
 
 /// Slots compared at once by [`group`].
