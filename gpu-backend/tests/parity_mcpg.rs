@@ -38,8 +38,9 @@ fn close(a: f32, b: f32, rel: f32) -> bool {
 }
 
 /// The configurations compared: the scene-scaled default (cosine product, engine discard,
-/// cache, ages) and the paper's whole-sphere lobes with the paper's discard rule, no cache and
-/// no ages. Small tables, so eviction and full neighbourhoods happen.
+/// cache, ages) with young chains' confidence N_c = 16 (mcg's extension, as mcg-demo's
+/// renderer uses it), and the paper's whole-sphere lobes with the paper's discard rule and
+/// Alg. 2, no cache and no ages. Small tables, so eviction and full neighbourhoods happen.
 fn configs() -> Vec<(&'static str, GuideConfig)> {
     let mut scene = GuideConfig::for_scene(Vec3::ZERO, Vec3::new(1.0, 1.0, 2.0));
     scene.adaptive_capacity = 512;
@@ -50,7 +51,9 @@ fn configs() -> Vec<(&'static str, GuideConfig)> {
         ..CacheConfig::DEFAULT
     });
     scene.max_state_age = Some(2);
+    scene.params.confidence_samples = 16.0;
     let mut paper = scene;
+    paper.params.confidence_samples = 0.0;
     paper.hemisphere = Hemisphere::Sphere;
     paper.params.discard = DiscardRule::Paper { ratio: 0.5 };
     paper.cache = None;

@@ -598,3 +598,81 @@ fn three_bounce_furnace_is_unbiased_with_the_cache() {
     assert!(z.abs() < 3.5, "mean {mean}, z = {z}");
     assert!(lobes > 20_000, "{lobes} lobe samples");
 }
+
+/// mcg's extension `McpgParams::confidence_samples` (N_c), checked at one static-grid vertex
+/// whose every uniform is fixed, so that each `begin` reads and each `finish` stores the same
+/// state. A first scatter sample stores a one-sample chain; then, while that state is chosen:
+/// - its lobe gets the part (1 − p_bsdf)·(1 − y) of the choices, y = `young_share(1)` = 15/16
+///   (a sweep of 10 000 choice uniforms, ±0.01 %), and the pdf still integrates to 1;
+/// - a scatter sample continues its chain (N = 2 after the next accepted `finish`), where the
+///   paper (N_c = 0) restarts it (N = 1).
+///
+/// Breaking any of the three (the lobe choice, the scatter share of the pdf, the continued
+/// chain) fails this test.
+#[test]
+fn young_chains_lend_their_share_and_continue() {
+    let x = Vec3::new(0.3, 0.2, 0.0);
+    // Static grid only; corner 0 picks the same vertex in `begin` and in `finish`.
+    let begin_u = BeginUniforms::from_fn(1, || 0.0);
+    let finish_u = FinishUniforms::from_fn(|| 0.0);
+    let hit = VertexObservation::hit(
+        Vec3::new(0.5, 0.4, 3.0),
+        -Vec3::Z,
+        Vec3::splat(10.0),
+        Vec3::ONE,
+    );
+    for confidence in [16.0, 0.0] {
+        let mut config = GuideConfig::for_scene(Vec3::splat(-5.0), Vec3::splat(5.0));
+        config.cache = None;
+        config.params.candidates = 1;
+        config.params.adaptive_probability = 0.0;
+        config.params.confidence_samples = confidence;
+        let guide = Guide::new(config).unwrap();
+        let begin = || {
+            guide.begin(
+                Vertex::surface(x, TOY_NORMAL),
+                Lambertian { normal: TOY_NORMAL },
+                &begin_u,
+            )
+        };
+        let scatter = SampleUniforms {
+            choice: 0.0,
+            direction: Vec2::new(0.3, 0.7),
+        };
+        // The empty grid: a scatter sample, accepted, stores a one-sample state.
+        let v = begin();
+        let s = v.sample(&scatter);
+        assert_eq!(v.finish(&s, &hit, &finish_u), Transition::Stored);
+        let v = begin();
+        assert_eq!(v.candidates()[0].sample_count(), 1, "N_c {confidence}");
+        assert_eq!(v.selected(), Some(0));
+        let p = guide.params().bsdf_probability;
+        let young = guide.params().young_share(1);
+        let n = 10_000;
+        let lobes = (0..n)
+            .filter(|i| {
+                let u = SampleUniforms {
+                    choice: (*i as f32 + 0.5) / n as f32,
+                    direction: Vec2::new(0.3, 0.7),
+                };
+                v.sample(&u).lobe.is_some()
+            })
+            .count();
+        let expected = (1.0 - p) * (1.0 - young);
+        mcg_test_support::assert_close!(
+            lobes as f32 / n as f32,
+            expected,
+            1e-4,
+            "N_c {confidence}"
+        );
+        let total = integral(&v);
+        mcg_test_support::assert_close!(total, 1.0, 5e-3, "N_c {confidence}: {total}");
+        // A scatter sample (choice below p_bsdf), accepted: continued or restarted.
+        let s = v.sample(&scatter);
+        assert_eq!(s.lobe, None);
+        assert_eq!(v.finish(&s, &hit, &finish_u), Transition::Stored);
+        let after = begin().candidates()[0].sample_count();
+        let want = if confidence > 0.0 { 2 } else { 1 };
+        assert_eq!(after, want, "N_c {confidence}");
+    }
+}

@@ -60,14 +60,25 @@ impl Scatter for MaterialScatter {
     }
 }
 
+/// N_c of the renderer's guide ([`McpgParams::confidence_samples`](mcg_markov_guide::mcpg::McpgParams::confidence_samples),
+/// mcg's extension of MCPG Alg. 2): a chain of fewer samples lends part of its mixture share
+/// to the material and continues after the material's samples. Measured with
+/// `mcg-demo render --method mcpg --device cpu --seed S --reference REF` (seeds 1-6, relMSE
+/// after 64 frames; the paper's rule, N_c = 0, in brackets): `hidden_light_room` 128², 8 spp,
+/// 3 bounces 0.028-0.030 (0.030-0.041); `many_lights_room` 64², 4 spp, 1 bounce,
+/// `--no-irradiance-cache` 0.41-0.46 (1.60-1.91). 8 and 32 gave the same within noise.
+pub const CONFIDENCE_SAMPLES: f32 = 16.0;
+
 /// The guide's configuration for `scene` rendered `height` pixels high (both devices):
-/// [`GuideConfig::for_scene`] over the scene's bounds and [`GuideConfig::for_camera`] for its
-/// field of view.
+/// [`GuideConfig::for_scene`] over the scene's bounds, [`GuideConfig::for_camera`] for its
+/// field of view, and young chains' confidence [`CONFIDENCE_SAMPLES`].
 #[must_use]
 pub fn guide_config(scene: &Scene, height: u32) -> GuideConfig {
     let root = scene.bvh.nodes[0];
-    GuideConfig::for_scene(Vec3::from(root.min), Vec3::from(root.max))
-        .for_camera(scene.camera.yfov, height)
+    let mut config = GuideConfig::for_scene(Vec3::from(root.min), Vec3::from(root.max))
+        .for_camera(scene.camera.yfov, height);
+    config.params.confidence_samples = CONFIDENCE_SAMPLES;
+    config
 }
 
 /// The guide for `scene` rendered `height` pixels high: [`GuideConfig::for_scene`] over the

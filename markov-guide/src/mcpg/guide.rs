@@ -740,11 +740,12 @@ impl<S: Scatter> GuidedVertex<'_, S> {
         };
         let states = self.set.states();
         let lane = |k: usize| match states.get(k) {
-            // `prepare_in_place` zeroed w̄ of every invalid state: w̄ > 0 is valid here.
+            // `prepare_in_place` zeroed w̄ of every invalid state: w̄ > 0 is valid here. A young
+            // state lends the part `young_share` of its share to the scatter technique.
             Some(s) if s.weight_sum > 0.0 => (
                 s.stats(),
                 distance_prior(s, x, params),
-                s.weight_sum / total,
+                (s.weight_sum / total) * (1.0 - params.young_share(s.sample_count())),
             ),
             _ => (SufficientStats::EMPTY, MapPrior::NONE, 0.0),
         };
@@ -752,8 +753,14 @@ impl<S: Scatter> GuidedVertex<'_, S> {
         // μ' ∝ κμ + κ_c n, κ' = |κμ + κ_c n|), lane-wise, bit-identical to building each.
         self.lobes = VmfLanes::from_stats(x, cosine.as_ref(), lane);
         for (k, s) in states.iter().enumerate() {
-            if s.weight_sum > 0.0 && !self.lobes.is_set(k) {
-                self.scatter_share += s.weight_sum / total;
+            if !(s.weight_sum > 0.0) {
+                continue;
+            }
+            let share = s.weight_sum / total;
+            if self.lobes.is_set(k) {
+                self.scatter_share += share * params.young_share(s.sample_count());
+            } else {
+                self.scatter_share += share;
             }
         }
     }
@@ -776,6 +783,12 @@ impl<S: Scatter> GuidedVertex<'_, S> {
     ///
     /// p_bsdf is also the rate at which chains restart: a scatter sample continues from the
     /// empty state (Alg. 2 line 4), so an accepted one stores a fresh single-sample state.
+    ///
+    /// With [`McpgParams::confidence_samples`] (mcg's extension) a chosen state with N < N_c
+    /// samples gives its lobe only the part 1 − y of the remaining choices, y =
+    /// [`McpgParams::young_share`] (`u.choice − p_bsdf < y·(1 − p_bsdf)` takes the scatter
+    /// technique), and [`finish`](Self::finish) continues that young chain after any scatter
+    /// sample rather than restarting it.
     #[inline]
     #[must_use]
     pub fn sample(&self, u: &SampleUniforms) -> GuidedSample {
@@ -794,16 +807,33 @@ impl<S: Scatter> GuidedVertex<'_, S> {
     #[inline]
     fn lobe_choice(&self, choice: f32) -> Option<usize> {
         let k = self.set.selected_index()?;
-        if choice < self.guide.config.params.bsdf_probability || !self.lobes.is_set(k) {
+        let params = &self.guide.config.params;
+        let p = params.bsdf_probability;
+        if choice < p || !self.lobes.is_set(k) {
+            return None;
+        }
+        let young = params.young_share(self.set.states()[k].sample_count());
+        if choice - p < young * (1.0 - p) {
             return None;
         }
         Some(k)
     }
 
+    /// The chosen state when it is young ([`McpgParams::young_share`] > 0) and has a lobe
+    /// at x: the chain a scatter sample continues.
+    fn young_chain(&self) -> Option<&GridState> {
+        let k = self.set.selected_index()?;
+        let state = &self.set.states()[k];
+        let young = self.guide.config.params.young_share(state.sample_count());
+        (young > 0.0 && self.lobes.is_set(k)).then_some(state)
+    }
+
     /// The density of ω given the accessed states (MCPG eq. 6-7 with the exact mixture of
     /// [`CandidateSet::pdf`]): p_bsdf·p_s(ω) + (1 − p_bsdf)·Σ_k (w̄_k/Σw̄)·V_k(ω), the share of
     /// a state without a lobe at x going to p_s; p_s(ω) alone when Σw̄ = 0. With the cosine
-    /// product, V_k is the product lobe.
+    /// product, V_k is the product lobe. With [`McpgParams::confidence_samples`], state k's
+    /// term is (w̄_k/Σw̄)·((1 − y_k)·V_k(ω) + y_k·p_s(ω)), y_k = [`McpgParams::young_share`]
+    /// of its N: the density [`sample`](Self::sample) draws from, exactly.
     #[inline]
     #[must_use]
     pub fn pdf(&self, w: Vec3) -> f32 {
@@ -825,7 +855,8 @@ impl<S: Scatter> GuidedVertex<'_, S> {
     ///    reflected there (exact for Lambertian surfaces, whose reflected radiance does not
     ///    depend on the outgoing direction).
     /// 3. Acceptance against the mean candidate score (eq. 8); the MLE update of the chosen
-    ///    state (or the empty state after a scatter sample), T ← now and v from the hit's
+    ///    state (or the empty state after a scatter sample, unless the chosen state is young:
+    ///    [`McpgParams::confidence_samples`]), T ← now and v from the hit's
     ///    previous position (eq. 9); the new state stored at a freshly chosen vertex
     ///    (line 12).
     /// 4. A rejected lobe sample may discard the state it came from (sec. 5).
@@ -881,7 +912,7 @@ impl<S: Scatter> GuidedVertex<'_, S> {
         let now = guide.frame as f32;
         let chosen = match sample.lobe {
             Some(k) => self.set.states()[k as usize],
-            None => GridState::EMPTY,
+            None => self.young_chain().copied().unwrap_or(GridState::EMPTY),
         };
         let obs = Observation {
             x,

@@ -50,10 +50,10 @@
 #import mcg::markov::{
     MarkovGridState, markov_grid_state_is_valid, markov_grid_state_lobe,
     markov_grid_state_pack, markov_grid_state_predicted, markov_grid_state_resampling_weight,
-    markov_grid_state_stats
+    markov_grid_state_sample_count, markov_grid_state_stats
 }
 
-// Everything the guide's functions read (`McpgGpuParams` on the host, 1 280 bytes): MCPG's
+// Everything the guide's functions read (`McpgGpuParams` on the host, 1 296 bytes): MCPG's
 // constants (`McpgParams`), the grids' geometry, the three tables in `mcg_hashgrid_words`,
 // where each array starts in `mcpg_words`, the camera, and every adaptive level's cell width
 // (the CPU guide's table of `AdaptiveGrid::width`, so keys match bit for bit).
@@ -89,6 +89,7 @@ struct McpgParams {
     static_guards: u32,
     cache_cells: u32,
     cache_sums: u32,
+    confidence_inverse: f32,
     widths: array<vec4<f32>, 64>,
 }
 
@@ -447,6 +448,7 @@ fn mcpg_begin(vertex: McpgVertex, u: McpgBeginUniforms) -> McpgGuidedVertex {
     // makes Σw̄ > 0, when the CPU builds them all); `shares` holds w̄ until Σw̄ is known,
     // `lobeless` marks the candidates without a lobe at x.
     var lobeless = 0u;
+    var young_counts: array<u32, 8>;
     for (var k = 0u; k < count; k += 1u) {
         let c = u.candidates[k];
         let key = mcpg_key(x, v.normal_class, v.target_level, c.x, c.y, c.z);
@@ -470,6 +472,7 @@ fn mcpg_begin(vertex: McpgVertex, u: McpgBeginUniforms) -> McpgGuidedVertex {
             continue;
         }
         v.shares[k] = w;
+        young_counts[k] = markov_grid_state_sample_count(candidate);
         var lobe: Vmf;
         if markov_grid_state_lobe(candidate, x, mcpg_distance_prior(candidate, x), &lobe) {
             if has_cosine {
@@ -483,6 +486,8 @@ fn mcpg_begin(vertex: McpgVertex, u: McpgBeginUniforms) -> McpgGuidedVertex {
     }
     // A fixed trip count here and in `mcpg_pdf_with`: small loops unroll, and the arrays are
     // read at constant indices (a loop over N_mc made the whole guide 1.3x slower on llvmpipe).
+    // A young candidate lends the part `mcpg_young_share` of its share to the scatter
+    // technique (`confidence_samples`, mcg's extension; 0 without it).
     let total = v.weight_sum;
     for (var k = 0u; k < MCPG_MAX_CANDIDATES; k += 1u) {
         let w = v.shares[k];
@@ -494,17 +499,48 @@ fn mcpg_begin(vertex: McpgVertex, u: McpgBeginUniforms) -> McpgGuidedVertex {
             v.scatter_share += share;
             v.shares[k] = 0.0;
         } else {
-            v.shares[k] = share;
+            let young = mcpg_young_share(young_counts[k]);
+            v.scatter_share += share * young;
+            v.shares[k] = share * (1.0 - young);
         }
     }
     return v;
+}
+
+// `McpgParams::young_share`: the part of a state's mixture share that goes to the scatter
+// technique, max(0, 1 − N·(1/N_c)) for N ≥ 1 samples; 0 without `confidence_samples` or for
+// N = 0.
+fn mcpg_young_share(sample_count: u32) -> f32 {
+    if !(mcpg_params.confidence_inverse > 0.0) || sample_count == 0u {
+        return 0.0;
+    }
+    return max(1.0 - f32(sample_count) * mcpg_params.confidence_inverse, 0.0);
+}
+
+// The chosen candidate when it is young and has a lobe (`GuidedVertex::young_chain`): the
+// chain a scatter sample continues; MCPG_NO_LOBE otherwise.
+fn mcpg_young_chain(v: ptr<function, McpgGuidedVertex>) -> u32 {
+    let k = (*v).selected;
+    if k == MCPG_NO_LOBE || !((*v).shares[k] > 0.0) {
+        return MCPG_NO_LOBE;
+    }
+    if !(mcpg_young_share(markov_grid_state_sample_count((*v).chosen)) > 0.0) {
+        return MCPG_NO_LOBE;
+    }
+    return k;
 }
 
 // Alg. 2's technique (`GuidedVertex::sample`'s choice): the chosen candidate's index, or
 // MCPG_NO_LOBE for the scatter technique (no candidate chosen, `choice` < p_bsdf, or no lobe).
 fn mcpg_choose(v: ptr<function, McpgGuidedVertex>, choice: f32) -> u32 {
     let k = (*v).selected;
-    if k == MCPG_NO_LOBE || choice < mcpg_params.bsdf_probability || !((*v).shares[k] > 0.0) {
+    let p = mcpg_params.bsdf_probability;
+    if k == MCPG_NO_LOBE || choice < p || !((*v).shares[k] > 0.0) {
+        return MCPG_NO_LOBE;
+    }
+    // A young chosen state's lobe gets the part 1 − y of the remaining choices.
+    let young = mcpg_young_share(markov_grid_state_sample_count((*v).chosen));
+    if choice - p < young * (1.0 - p) {
         return MCPG_NO_LOBE;
     }
     return k;
@@ -716,8 +752,10 @@ fn mcpg_finish(v: ptr<function, McpgGuidedVertex>, sample: McpgSample, obs: Mcpg
     }
     let estimate = mcpg_luminance(carried);
     let now = f32(frame);
+    // The chain the transition continues: the sampled lobe's, a young chosen state's after a
+    // scatter sample, else the empty state (Alg. 2 line 4).
     var chosen: MarkovGridState;
-    if sample.lobe != MCPG_NO_LOBE {
+    if sample.lobe != MCPG_NO_LOBE || mcpg_young_chain(v) != MCPG_NO_LOBE {
         chosen = (*v).chosen;
     }
     var mean_weight = 0.0;

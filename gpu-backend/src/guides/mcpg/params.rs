@@ -13,7 +13,7 @@ use crate::types::{HashgridLevelParams, HashgridTableParams, VmfFitParamsGpu};
 /// The probe limit of every table of the guide (the CPU guide's `SharedGrid` and cache).
 pub const MCPG_MAX_PROBES: u32 = 8;
 
-/// Everything `mcg::mcpg` reads, WGSL `McpgParams` (uniform, 1 280 bytes): MCPG's constants,
+/// Everything `mcg::mcpg` reads, WGSL `McpgParams` (uniform, 1 296 bytes): MCPG's constants,
 /// the grids' geometry, the three tables' places in the hash words, where each array starts in
 /// the guide's words, the camera, and every adaptive level's cell width (the CPU guide's own
 /// table, so keys match bit for bit). Built by [`McpgGpuParams::new`] from the same
@@ -83,10 +83,15 @@ pub struct McpgGpuParams {
     pub cache_cells: u32,
     /// Word offset of the cache's per-frame sums (R, G, B as f32 bits, count; 4 per slot).
     pub cache_sums: u32,
+    /// 1/N_c of `McpgParams::confidence_samples` (the f32 reciprocal the CPU's
+    /// `McpgParams::young_share` multiplies by), 0 for the paper's Alg. 2.
+    pub confidence_inverse: f32,
+    /// Padding to the 16-byte row of `widths`.
+    pub _padding: [u32; 3],
     /// `AdaptiveGrid::width(level)` for levels 0..256, four per row.
     pub widths: [[f32; 4]; 64],
 }
-const _: () = assert!(size_of::<McpgGpuParams>() == 1280);
+const _: () = assert!(size_of::<McpgGpuParams>() == 1296);
 
 /// Sizes of the guide's two buffers, in `u32` words.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -184,6 +189,12 @@ impl McpgGpuParams {
             static_guards: static_guards as u32,
             cache_cells: cache_cells as u32,
             cache_sums: cache_sums as u32,
+            confidence_inverse: if p.confidence_samples > 0.0 {
+                1.0 / p.confidence_samples
+            } else {
+                0.0
+            },
+            _padding: [0; 3],
             widths,
         };
         Ok((
