@@ -585,6 +585,7 @@ fn render_command_writes_exr_png_and_json() {
         reference: None,
         no_progress: true,
         no_irradiance_cache: false,
+        mcpg_confidence: mcg_demo::render::guided::CONFIDENCE_SAMPLES,
         mcmm_score: McmmScore::TileMixture,
         probes: ProbeOptions::default(),
     };

@@ -449,6 +449,7 @@ fn render_on_the_gpu(method: Method) {
         reference: None,
         no_progress: true,
         no_irradiance_cache: false,
+        mcpg_confidence: mcg_demo::render::guided::CONFIDENCE_SAMPLES,
         mcmm_score: McmmScore::TileMixture,
         probes: ProbeOptions::default(),
     };

@@ -115,6 +115,11 @@ pub struct RenderArgs {
     /// only (as MCPG Fig. 8 compares on direct light).
     #[arg(long)]
     pub no_irradiance_cache: bool,
+    /// `mcpg`'s young-chain confidence N_c (mcg's extension of MCPG Alg. 2: a chain of fewer
+    /// samples lends part of its share to the material and continues after the material's
+    /// samples); 0 is the paper's rule.
+    #[arg(long, default_value_t = guided::CONFIDENCE_SAMPLES)]
+    pub mcpg_confidence: f32,
     /// The score of `mcmm`'s chains (MCMM Alg. 3): the tile's mixture density (the pixel's
     /// one-sample SSMIS estimate, with the defensive probability p_h = 0.4) or the paper's,
     /// the chain's own technique density (with the paper's p_h = 0.2).
@@ -524,10 +529,11 @@ impl CpuGuide {
 }
 
 /// MCPG's configuration for `args` on `scene`: [`guide_config`], without the irradiance
-/// cache under `--no-irradiance-cache`.
+/// cache under `--no-irradiance-cache`, N_c from `--mcpg-confidence`.
 #[must_use]
 pub fn mcpg_config(scene: &Scene, args: &RenderArgs) -> GuideConfig {
     let mut config = guide_config(scene, args.height);
+    config.params.confidence_samples = args.mcpg_confidence;
     if args.no_irradiance_cache {
         config.cache = None;
     }

@@ -140,6 +140,7 @@ fn args(
         reference: None,
         no_progress: true,
         no_irradiance_cache: false,
+        mcpg_confidence: crate::render::guided::CONFIDENCE_SAMPLES,
         mcmm_score: McmmScore::TileMixture,
         probes: ProbeOptions {
             probe_spacing: s.probe_spacing,

@@ -184,6 +184,7 @@ fn args(
         reference: reference.map(Path::to_path_buf),
         no_progress: true,
         no_irradiance_cache: !study.mcpg_cache,
+        mcpg_confidence: crate::render::guided::CONFIDENCE_SAMPLES,
         mcmm_score: McmmScore::TileMixture,
         probes: ProbeOptions::default(),
     }

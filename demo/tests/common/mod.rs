@@ -230,6 +230,7 @@ pub fn door_args(method: Method, out: PathBuf, frames: u32) -> RenderArgs {
         reference: None,
         no_progress: true,
         no_irradiance_cache: false,
+        mcpg_confidence: mcg_demo::render::guided::CONFIDENCE_SAMPLES,
         mcmm_score: McmmScore::TileMixture,
         probes: ProbeOptions {
             probe_spacing: 1.0,
