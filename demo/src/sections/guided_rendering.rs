@@ -511,9 +511,15 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
          after it bounced off the ceiling above the tray. A light sample (nee) from the floor or \
          the walls is occluded; what reaches the camera has scattered at least twice. \
          Paths of {} scattering events, no Russian roulette, no light information for mcpg. \
+         mcpg's young chains (fewer than {} samples) lend part of their share to the material \
+         and continue after its samples (mcg's extension of MCPG Alg. 2, \
+         McpgParams::confidence_samples; `render --mcpg-confidence 0` gives the paper's rule, \
+         whose one-sample lobes cost this scene 10-20 % more error and occasional frames of \
+         3-5× the usual error). \
          FLIP is NVIDIA's LDR-FLIP of the sRGB images (the PNGs) at 67 pixels per degree. \
          The reference is cached in {}.",
         hidden.settings.bounces,
+        crate::render::guided::CONFIDENCE_SAMPLES,
         reference_path
             .strip_prefix(ctx.out_dir())
             .unwrap_or(&reference_path)
@@ -537,7 +543,9 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
          as narrow as a small light, so the chains warm up twice as fast as with the paper's \
          uninformed prior) and Alg. 1 draws neighbours from a window of 0.75 × the image \
          height (see mcg_demo::render::mcmm). mcpg runs without its irradiance cache, as MCPG Fig. 8 \
-         compares on direct light. Neither guide knows where the lights are; nee does. \
+         compares on direct light (with the young-chain confidence of scene (a): the paper's rule \
+         degrades over the frames here, to about 4× this error). Neither guide knows where \
+         the lights are; nee does. \
          Where each wins: here, direct light from many small lights, mcmm pools the lobes of \
          a tile's 64 chains for every pixel of the tile, while mcpg's cells learn only from \
          the emission their own rays happen to hit, so mcmm wins most tiles of the map; \
