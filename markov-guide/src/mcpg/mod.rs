@@ -47,9 +47,11 @@
 //! 0.86 µs (1.1 µs with the cache) against 9.7 ns. No single step dominates: the five keys,
 //! lookups and seqlocked loads, the five lobes (μ, posterior κ, cosine product, C(κ)), the
 //! densities and the transition with its store each take 10-25 %. Two threads sharing one
-//! `&Guide` ran 2.13 times as fast as one. In a 3-bounce CPU path tracer of a small room
-//! (128 × 128, 8 samples per pixel, no light sampling) a guided frame costs about 3.5 times a
-//! BSDF-sampled one and reaches 0.21 of its MSE: 0.75 at equal CPU time.
+//! `&Guide` ran 2.13 times as fast as one. In mcg-demo's 3-bounce CPU path tracer of a small
+//! room lit from behind a panel (128 × 128, 8 samples per pixel × 64 frames, no light
+//! sampling, [`McpgParams::confidence_samples`] 16) a guided frame costs about 3.3 times a
+//! BSDF-sampled one and reaches 0.18-0.19 of its relative MSE: 0.61-0.65 at equal CPU time
+//! (`benches/README.md` has the commands).
 //!
 //! # The parts
 //! Per path vertex x with normal n at time T:
