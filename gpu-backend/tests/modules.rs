@@ -544,6 +544,23 @@ fn wgsl_structs_match_the_rust_pod_types() {
             size_of::<GpuSmoothingPass>(),
             fields!(GpuSmoothingPass: axis, radius, directional, pad_a),
         );
+        // The feedback ĝ and the heuristics' composition on the cache's group.
+        parse_and_validate(
+            "adgi feedback",
+            &shaders::compose(kernels::ADGI_FEEDBACK, &GpuProbeCache::shader_defs(0)).unwrap(),
+        );
+        let compose = parse_and_validate(
+            "adgi compose",
+            &shaders::compose(kernels::ADGI_COMPOSE, &GpuProbeCache::shader_defs(0)).unwrap(),
+        );
+        use mcg_gpu_backend::guides::adgi::GpuComposeParams;
+        check(
+            &compose,
+            "AdgiCompose",
+            size_of::<GpuComposeParams>(),
+            fields!(GpuComposeParams: camera, camera_threshold, lighting_weight, pad_a, pad_b,
+                pad_c),
+        );
         // The float-texel variant (the benches' baseline) composes and validates too.
         let mut float_defs = DEFS.to_vec();
         float_defs.push((defs::ADGI_FLOAT_TEXELS, 1));
