@@ -437,7 +437,7 @@ fn wgsl_structs_match_the_rust_pod_types() {
                 camera, max_state_age, levels, adaptive_table, static_table, cache_table,
                 cache_enabled, cache_accumulation, cache_coarser_levels, cache_level_bias,
                 cache_max_age, cache_max_weight, adaptive_states, static_states, adaptive_guards,
-                static_guards, cache_cells, cache_sums, widths),
+                static_guards, cache_cells, cache_sums, confidence_inverse, widths),
         );
     }
     // ADGI's probe cache: the parameters (a uniform) and the structs its steps exchange.
@@ -543,6 +543,23 @@ fn wgsl_structs_match_the_rust_pod_types() {
             "AdgiSmoothingPass",
             size_of::<GpuSmoothingPass>(),
             fields!(GpuSmoothingPass: axis, radius, directional, pad_a),
+        );
+        // The feedback ĝ and the heuristics' composition on the cache's group.
+        parse_and_validate(
+            "adgi feedback",
+            &shaders::compose(kernels::ADGI_FEEDBACK, &GpuProbeCache::shader_defs(0)).unwrap(),
+        );
+        let compose = parse_and_validate(
+            "adgi compose",
+            &shaders::compose(kernels::ADGI_COMPOSE, &GpuProbeCache::shader_defs(0)).unwrap(),
+        );
+        use mcg_gpu_backend::guides::adgi::GpuComposeParams;
+        check(
+            &compose,
+            "AdgiCompose",
+            size_of::<GpuComposeParams>(),
+            fields!(GpuComposeParams: camera, camera_threshold, lighting_weight, pad_a, pad_b,
+                pad_c),
         );
         // The float-texel variant (the benches' baseline) composes and validates too.
         let mut float_defs = DEFS.to_vec();

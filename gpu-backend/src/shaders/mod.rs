@@ -402,6 +402,16 @@ pub mod kernels {
     /// group 1 (not in [`ALL`]).
     pub const ADGI_SMOOTHING: &str = include_str!("../guides/adgi/smoothing.wgsl");
 
+    /// Entry point `adgi_octant_feedback`: the feedback ĝ of ADGI eq. 2 per probe and octant
+    /// from the irradiance words (`GpuProbeChains::record_feedback`), the cache's group at
+    /// group 0 and the chains' feedback table at group 1 (not in [`ALL`]).
+    pub const ADGI_FEEDBACK: &str = include_str!("../guides/adgi/feedback.wgsl");
+
+    /// Entry point `adgi_compose_heuristics`: the heuristics words of ADGI sec. 4.1-4.3
+    /// (`GpuTriggerSmoothing::record_compose`), the cache's group at group 0 and the
+    /// composition's inputs at group 1 (not in [`ALL`]).
+    pub const ADGI_COMPOSE: &str = include_str!("../guides/adgi/compose.wgsl");
+
     /// Every kernel with its name and entry points, for validation loops.
     pub const ALL: &[(&str, &str, &[&str])] = &[
         ("vmf", VMF, &["vmf_pdf_and_sample"]),

@@ -3,14 +3,15 @@
 
 use std::sync::OnceLock;
 
+use glam::Vec3;
 use mcg_probe_cache::{
-    ChainKind, FrameStats, GuideParams, HeuristicField, ProbeChainState, ProbeChains,
-    SmoothingKernel,
+    ChainKind, FrameStats, GuideParams, HeuristicField, HeuristicParams, ProbeChainState,
+    ProbeChains, SmoothingKernel,
 };
 
 use super::{
-    AdgiConfigError, GpuChainParams, GpuChainState, GpuGuideQuery, GpuProbeCache, GpuProbeSample,
-    GpuSmoothingPass,
+    AdgiConfigError, GpuChainParams, GpuChainState, GpuComposeParams, GpuGuideQuery, GpuProbeCache,
+    GpuProbeSample, GpuSmoothingPass,
 };
 use crate::shaders::{self, kernels};
 use crate::{GpuBuffer, GpuContext, GpuError, WORKGROUP_SIZE, storage_entry};
@@ -53,6 +54,29 @@ fn build_pipelines<const N: usize>(
         return Err(shader_error(error.to_string()));
     }
     Ok(pipelines)
+}
+
+/// The pipeline in `cell`, built on first use from entry point `entry` of a kernel that reads
+/// `cache`'s group (`mcg::adgi`) at group 0 and `layout` at group 1.
+fn cache_pipeline<'a>(
+    ctx: &GpuContext,
+    cell: &'a OnceLock<wgpu::ComputePipeline>,
+    cache: &GpuProbeCache,
+    layout: &wgpu::BindGroupLayout,
+    (label, source): (&str, &str),
+    entry: &str,
+) -> Result<&'a wgpu::ComputePipeline, GpuError> {
+    if let Some(p) = cell.get() {
+        return Ok(p);
+    }
+    let defs = GpuProbeCache::shader_defs(0);
+    let [p] = build_pipelines(
+        ctx,
+        &[cache.bind_group_layout(), layout],
+        (label, source, &defs),
+        [entry],
+    )?;
+    Ok(cell.get_or_init(|| p))
 }
 
 /// Records one dispatch of `pipeline` over `invocations` with `groups[i]` at group i.
@@ -137,10 +161,11 @@ const COUNTERS: usize = 8;
 /// | the guide's table: f_s or f_d of the heuristics words, max-pooled into the cells | [`record_guide`](Self::record_guide) | `guiding_function::decode_field` + `ProxyGrid::max_pool` |
 /// | h(p, ω) at given points | [`record_guide_values`](Self::record_guide_values) | `GuidingFunction::guiding_value` |
 /// | one frame of every chain | [`record_frame`](Self::record_frame) | `ProbeChains::step_frame_parallel` with [`chain_step_uniforms`](super::chain_step_uniforms) |
+/// | the feedback ĝ from a cache's irradiance words | [`record_feedback`](Self::record_feedback) | `guiding_function::octant_feedback` per probe |
 ///
 /// The guide is `GuidingFunction` over the chains' cells with the given [`GuideParams`]: the
 /// static chains (sec. 4.8) read f_s per probe and octant and the feedback ĝ
-/// ([`feedback`](Self::feedback), 0 until written) with `GuideParams::STATIC`, i.e.
+/// ([`feedback`](Self::feedback), 0 until recorded or written) with `GuideParams::STATIC`, i.e.
 /// h = exp(min(ĝ/f_s, 1)) f_s; the dynamic chains (sec. 4.9) read f_d max-pooled into ADGI's
 /// 3 × 3 × 3 virtual proxies with α = 0, i.e. h = f_d, and emit each (proxy, octant) at most
 /// once per frame (the first invocation to claim it, an atomic bit per texel).
@@ -164,6 +189,8 @@ pub struct GpuProbeChains {
     unused_values: GpuBuffer<f32>,
     layout: wgpu::BindGroupLayout,
     pipelines: OnceLock<ChainPipelines>,
+    feedback_layout: wgpu::BindGroupLayout,
+    feedback_pipeline: OnceLock<wgpu::ComputePipeline>,
 }
 
 /// The buffers of one chain step at bindings 1, 7, 8 (`None`: the unused stand-in).
@@ -218,6 +245,12 @@ impl GpuProbeChains {
                     storage_entry(8, false),
                 ],
             });
+        let feedback_layout =
+            ctx.device()
+                .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some("adgi feedback"),
+                    entries: &[storage_entry(0, false)],
+                });
         let claimed = cell_table.div_ceil(32) as usize;
         Ok(Self {
             params,
@@ -232,6 +265,8 @@ impl GpuProbeChains {
             unused_values: ctx.zeroed_buffer("adgi chains unused values", 1),
             layout,
             pipelines: OnceLock::new(),
+            feedback_layout,
+            feedback_pipeline: OnceLock::new(),
         })
     }
 
@@ -398,8 +433,57 @@ impl GpuProbeChains {
         submit(ctx, |e| self.record_frame(ctx, e, seed))
     }
 
+    /// Records the feedback ĝ of ADGI eq. 2 (sec. 4.8: the static chains' target "from a higher
+    /// mip-level") from `cache`'s irradiance words into [`feedback`](Self::feedback), one
+    /// dispatch: per probe and octant the mean Rec. 709 luminance of the probe's interior
+    /// irradiance texels whose centre lies in the octant, non-finite or non-positive luminances
+    /// counted as 0 (`guiding_function::octant_feedback` of every probe, as the CPU's
+    /// `ProbeUpdater` computes it). Record it before the frame's texel updates so the target
+    /// stays fixed within the frame. The sums are the CPU's bit for bit, the mean's division
+    /// WGSL's (within 2.5 ULP).
+    ///
+    /// # Errors
+    /// [`GpuError::LengthMismatch`] unless the chains' cells are `cache`'s probes (static
+    /// chains on the same grid); [`GpuError::Shader`] if the pipeline fails to build (a bug of
+    /// this crate).
+    pub fn record_feedback(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        cache: &GpuProbeCache,
+    ) -> Result<(), GpuError> {
+        let n = 8 * cache.params().probe_count;
+        GpuError::check_len(self.cell_table as usize, n as usize)?;
+        let pipeline = cache_pipeline(
+            ctx,
+            &self.feedback_pipeline,
+            cache,
+            &self.feedback_layout,
+            ("adgi feedback", kernels::ADGI_FEEDBACK),
+            "adgi_octant_feedback",
+        )?;
+        let group = bind_group(ctx, &self.feedback_layout, &[self.feedback.raw()]);
+        record_dispatch(ctx, encoder, pipeline, &[cache.bind_group(), &group], n);
+        Ok(())
+    }
+
+    /// [`record_feedback`](Self::record_feedback), submitted, and ĝ read back.
+    ///
+    /// # Errors
+    /// As [`record_feedback`](Self::record_feedback); [`GpuError::Map`] when the read-back
+    /// fails.
+    pub fn feedback_from_cache(
+        &self,
+        ctx: &GpuContext,
+        cache: &GpuProbeCache,
+    ) -> Result<Vec<f32>, GpuError> {
+        submit(ctx, |e| self.record_feedback(ctx, e, cache))?;
+        ctx.read_back(&self.feedback)
+    }
+
     /// Overwrites the feedback ĝ per cell and octant (e.g. `guiding_function::octant_feedback`
-    /// of the previous frame's irradiance).
+    /// of the previous frame's irradiance computed on the host; on the GPU:
+    /// [`record_feedback`](Self::record_feedback)).
     ///
     /// # Errors
     /// [`GpuError::LengthMismatch`] unless `feedback` has one value per cell and octant.
@@ -514,6 +598,10 @@ impl GpuProbeChains {
 /// `GpuProbeCache::record_pilot_hits` keeps (f_1 and f_3 of eq. 14, 17), writing f_Δv and f_Δr
 /// per probe and octant into [`delta`](Self::delta), equal to the CPU's bit for bit. Three
 /// dispatches (x, y, z; the octant average rides in the x pass).
+///
+/// From those, [`record_compose`](Self::record_compose) composes the heuristics words (ADGI
+/// sec. 4.1-4.3, eq. 10, 19, 20; the twin of `heuristics::compose_grid`) that
+/// [`GpuProbeChains::record_guide`] reads: one dispatch.
 #[derive(Debug)]
 pub struct GpuTriggerSmoothing {
     delta: GpuBuffer<[f32; 2]>,
@@ -521,6 +609,8 @@ pub struct GpuTriggerSmoothing {
     reciprocals: GpuBuffer<f32>,
     layout: wgpu::BindGroupLayout,
     pipeline: OnceLock<wgpu::ComputePipeline>,
+    compose_layout: wgpu::BindGroupLayout,
+    compose_pipeline: OnceLock<wgpu::ComputePipeline>,
 }
 
 impl GpuTriggerSmoothing {
@@ -545,12 +635,24 @@ impl GpuTriggerSmoothing {
                     storage_entry(3, true),
                 ],
             });
+        let compose_layout =
+            ctx.device()
+                .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some("adgi compose"),
+                    entries: &[
+                        uniform_entry(0),
+                        storage_entry(1, true),
+                        storage_entry(2, false),
+                    ],
+                });
         Self {
             delta: ctx.zeroed_buffer("adgi smoothed triggers", n),
             scratch: ctx.zeroed_buffer("adgi smoothing scratch", n),
             reciprocals: ctx.storage_buffer("adgi smoothing reciprocals", &reciprocals),
             layout,
             pipeline: OnceLock::new(),
+            compose_layout,
+            compose_pipeline: OnceLock::new(),
         }
     }
 
@@ -566,19 +668,14 @@ impl GpuTriggerSmoothing {
         cache: &GpuProbeCache,
         kernel: SmoothingKernel,
     ) -> Result<(), GpuError> {
-        let pipeline = match self.pipeline.get() {
-            Some(p) => p,
-            None => {
-                let defs = GpuProbeCache::shader_defs(0);
-                let [p] = build_pipelines(
-                    ctx,
-                    &[cache.bind_group_layout(), &self.layout],
-                    ("adgi smoothing", kernels::ADGI_SMOOTHING, &defs),
-                    ["adgi_smooth_axis"],
-                )?;
-                self.pipeline.get_or_init(|| p)
-            }
-        };
+        let pipeline = cache_pipeline(
+            ctx,
+            &self.pipeline,
+            cache,
+            &self.layout,
+            ("adgi smoothing", kernels::ADGI_SMOOTHING),
+            "adgi_smooth_axis",
+        )?;
         // x: triggers → delta, y: delta → scratch, z: scratch → delta.
         let (d, s) = (self.delta.raw(), self.scratch.raw());
         let routes = [(s, d), (d, s), (s, d)];
@@ -614,6 +711,70 @@ impl GpuTriggerSmoothing {
         submit(ctx, |e| self.record(ctx, e, cache, kernel))?;
         let d = ctx.read_back(&self.delta)?;
         Ok(d.iter().map(|v| (v[0], v[1])).unzip())
+    }
+
+    /// Records the composition of the heuristics words (ADGI sec. 4.1-4.3) into `words` (one
+    /// `HeuristicsWord` per `probe · 8 + octant`, read and written; their flag bits are kept),
+    /// one dispatch: per probe f_c of its distance to `camera` (eq. 10, `heuristics`'
+    /// threshold), per octant f_v of the pilot rays (eq. 11, the cache's pilot state, see
+    /// `GpuProbeCache::record_pilot_hits`), f_s = f_c f_v (eq. 19) and
+    /// f_d = f_c f_v (f_Δv + μ f_Δr)/(1 + μ) (eq. 20 over its bound) from [`delta`](Self::delta)
+    /// (after [`record`](Self::record)), packed into the 6-10-10 word rounded to nearest: the
+    /// twin of `heuristics::compose_grid`. Equal to the CPU's word bit for bit except that
+    /// WGSL's `sqrt`, `exp` and division (a few ULP) can move a field's code by one where the
+    /// CPU's value lies within those ULP of a rounding tie.
+    ///
+    /// # Errors
+    /// [`GpuError::Shader`] if the pipeline fails to build (a bug of this crate).
+    pub fn record_compose(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        cache: &GpuProbeCache,
+        heuristics: &HeuristicParams,
+        camera: Vec3,
+        words: &wgpu::Buffer,
+    ) -> Result<(), GpuError> {
+        let pipeline = cache_pipeline(
+            ctx,
+            &self.compose_pipeline,
+            cache,
+            &self.compose_layout,
+            ("adgi compose", kernels::ADGI_COMPOSE),
+            "adgi_compose_heuristics",
+        )?;
+        let params = GpuComposeParams::new(heuristics, camera);
+        let uniform = ctx.uniform_buffer("adgi compose params", &params);
+        let group = bind_group(
+            ctx,
+            &self.compose_layout,
+            &[uniform.raw(), self.delta.raw(), words],
+        );
+        let n = self.delta.len() as u32;
+        record_dispatch(ctx, encoder, pipeline, &[cache.bind_group(), &group], n);
+        Ok(())
+    }
+
+    /// [`record_compose`](Self::record_compose) on host words (their flags are kept),
+    /// submitted, and the words read back.
+    ///
+    /// # Errors
+    /// [`GpuError::LengthMismatch`] unless there is one word per probe and octant; as
+    /// [`record_compose`](Self::record_compose); [`GpuError::Map`] when the read-back fails.
+    pub fn compose(
+        &self,
+        ctx: &GpuContext,
+        cache: &GpuProbeCache,
+        heuristics: &HeuristicParams,
+        camera: Vec3,
+        words: &[u32],
+    ) -> Result<Vec<u32>, GpuError> {
+        GpuError::check_len(self.delta.len(), words.len())?;
+        let w = ctx.storage_buffer("adgi heuristics words", words);
+        submit(ctx, |e| {
+            self.record_compose(ctx, e, cache, heuristics, camera, w.raw())
+        })?;
+        ctx.read_back(&w)
     }
 
     /// f_Δv, f_Δr per `probe · 8 + octant` as `[f_Δv, f_Δr]` (after [`record`](Self::record)).

@@ -34,7 +34,11 @@
 //! octant smoothing of the triggers into f_Δv, f_Δr (eq. 15, 18). Their CPU twins are
 //! `mcg_probe_cache::{GuidingFunction, ProxyGrid::max_pool, ProbeChains,
 //! temporal_gradient::spatial_smoothing}`; fed the same uniforms
-//! ([`chain_step_uniforms`]), the chains make the CPU's decisions.
+//! ([`chain_step_uniforms`]), the chains make the CPU's decisions. The guide's inputs are
+//! computed on the GPU too: the feedback ĝ from the cache's irradiance words
+//! ([`GpuProbeChains::record_feedback`], `guiding_function::octant_feedback`) and the
+//! heuristics words from the pilot state's f_v and the smoothed triggers
+//! ([`GpuTriggerSmoothing::record_compose`], `heuristics::compose_grid`).
 
 #[cfg(feature = "runtime")]
 mod chains;
@@ -48,6 +52,7 @@ pub use chains::{GpuProbeChains, GpuTriggerSmoothing};
 pub use guide::GpuProbeCache;
 pub use params::{
     AdgiConfigError, AdgiGpuParams, GpuChainParams, GpuChainState, GpuClipVolume, GpuClipVolumes,
-    GpuGuideQuery, GpuIrradianceQuery, GpuPilotStep, GpuProbeSample, GpuRaySample,
-    GpuSmoothingPass, GpuStepParams, ProbeCacheConfig, chain_step_uniforms, rounding_code,
+    GpuComposeParams, GpuGuideQuery, GpuIrradianceQuery, GpuPilotStep, GpuProbeSample,
+    GpuRaySample, GpuSmoothingPass, GpuStepParams, ProbeCacheConfig, chain_step_uniforms,
+    rounding_code,
 };

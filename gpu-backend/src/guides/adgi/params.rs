@@ -697,6 +697,41 @@ impl GpuSmoothingPass {
     }
 }
 
+/// The constants of the heuristics' composition, WGSL `AdgiCompose` (uniform, 32 bytes): the
+/// camera and [`HeuristicParams`]' threshold k (eq. 10) and lighting weight μ (eq. 20).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuComposeParams {
+    /// The camera position c of eq. 10.
+    pub camera: Vec3,
+    /// [`HeuristicParams::camera_threshold`] (k).
+    pub camera_threshold: f32,
+    /// [`HeuristicParams::lighting_weight`] (μ).
+    pub lighting_weight: f32,
+    /// Padding.
+    pub pad_a: u32,
+    /// Padding.
+    pub pad_b: u32,
+    /// Padding.
+    pub pad_c: u32,
+}
+const _: () = assert!(size_of::<GpuComposeParams>() == 32);
+
+impl GpuComposeParams {
+    /// The composition of `heuristics` seen from `camera`.
+    #[must_use]
+    pub fn new(heuristics: &HeuristicParams, camera: Vec3) -> Self {
+        Self {
+            camera,
+            camera_threshold: heuristics.camera_threshold(),
+            lighting_weight: heuristics.lighting_weight(),
+            pad_a: 0,
+            pad_b: 0,
+            pad_c: 0,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
