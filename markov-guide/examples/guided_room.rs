@@ -12,6 +12,7 @@
 //!     [--spp 8] [--reference-spp 2048] [--threads 2] [--bounces 3] [--seed 1]
 //!     [--hemisphere sphere|product] [--bsdf-probability 0.1] [--no-cache]
 //!     [--cache-level-bias 2] [--candidates 5] [--adaptive-capacity 1048576]
+//!     [--confidence-samples 0]
 //! ```
 //!
 //! The reference image is kept in the temporary directory between runs (keyed by size,
@@ -481,6 +482,7 @@ struct GuideOptions {
     level_bias: Option<u32>,
     candidates: Option<u32>,
     adaptive_capacity: Option<u32>,
+    confidence_samples: Option<f32>,
 }
 
 impl GuideOptions {
@@ -497,6 +499,9 @@ impl GuideOptions {
         }
         if let Some(n) = self.adaptive_capacity {
             config.adaptive_capacity = n;
+        }
+        if let Some(n) = self.confidence_samples {
+            config.params.confidence_samples = n;
         }
         if !self.cache {
             config.cache = None;
@@ -526,6 +531,7 @@ fn parse_args() -> (Settings, GuideOptions) {
         level_bias: None,
         candidates: None,
         adaptive_capacity: None,
+        confidence_samples: None,
     };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
@@ -548,6 +554,10 @@ fn parse_args() -> (Settings, GuideOptions) {
                 options.bsdf_probability = Some(value().parse().expect("--bsdf-probability P"))
             }
             "--candidates" => options.candidates = Some(value().parse().expect("--candidates N")),
+            "--confidence-samples" => {
+                options.confidence_samples =
+                    Some(value().parse().expect("--confidence-samples N_c"))
+            }
             "--adaptive-capacity" => {
                 options.adaptive_capacity = Some(value().parse().expect("--adaptive-capacity N"))
             }
