@@ -16,8 +16,16 @@
 //!   each batch is uploaded, traced by `trace_probe_rays` on the GPU and read back, and the
 //!   updater updates its texels on the host. The convolved irradiance texels are then uploaded
 //!   into the cache for the camera's query. (The GPU twins of those steps exist in
-//!   `mcg_gpu_backend::guides::adgi`, but not yet the heuristics-composing and ĝ-feedback
-//!   kernels that would chain them into a frame without the host.)
+//!   `mcg_gpu_backend::guides::adgi`, heuristics composition and feedback ĝ included, and
+//!   [`GpuTracer::record_chain_rays`] traces a `GpuProbeChains`' samples in the scene's BVH
+//!   without a read-back; the `adgi` frame is not yet chained from them.)
+//!
+//! - **Chain samples, traced on the GPU:** [`GpuTracer::record_chain_rays`] records the kernel
+//!   `trace_chain_samples`, which traces the samples a `GpuProbeChains` emitted (ADGI sec. 4.8:
+//!   a static chain's sample is one probe ray) from their probes, up to a ray budget, into
+//!   [`GpuRaySample`]s with their rounding uniforms, ready for
+//!   [`GpuProbeCache::record_update_samples`] in the same encoder; empty slots name
+//!   [`NO_PROBE`], which the update skips.
 //!
 //! The camera's `render` shades each first hit with its emission, one light sample and
 //! albedo/π · `adgi_irradiance_at` — the CPU's conventions ([`super::super::probe_gi`]), so
@@ -26,7 +34,11 @@
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Quat, Vec3};
-use mcg_gpu_backend::guides::adgi::{GpuProbeCache, GpuRaySample, ProbeCacheConfig};
+use std::sync::OnceLock;
+
+use mcg_gpu_backend::guides::adgi::{
+    GpuProbeCache, GpuProbeChains, GpuRaySample, ProbeCacheConfig,
+};
 use mcg_gpu_backend::sampling::next_uniform;
 use mcg_gpu_backend::{GpuBuffer, GpuContext, wgpu};
 use mcg_probe_cache::{ProbeGrid, ProbeRayRequest, RaySample};
@@ -47,7 +59,16 @@ const MCMM_UNUSED_GROUP: u32 = 3;
 /// samples, and the cache's 4.
 pub const PROBE_STORAGE_BUFFERS: u32 = 13;
 
-/// Invocations per workgroup of `trace_probe_rays`.
+/// Storage buffers per stage of the `trace_chain_samples` pipeline: the scene's 7, the
+/// chains' samples and counters, the traced samples and their rounding uniforms, and the
+/// cache's 4.
+pub const CHAIN_TRACE_STORAGE_BUFFERS: u32 = 15;
+
+/// The probe of an empty slot of [`GpuTracer::record_chain_rays`]: outside every grid, so
+/// [`GpuProbeCache::record_update_samples`] skips it (WGSL `NO_PROBE`).
+pub const NO_PROBE: u32 = u32::MAX;
+
+/// Invocations per workgroup of `trace_probe_rays` and `trace_chain_samples`.
 const PROBE_GROUP: u32 = 64;
 
 /// One probe ray for `trace_probe_rays` (WGSL `ProbeRequest`, 32 bytes): a request of
@@ -88,6 +109,20 @@ pub struct GpuProbeFrame {
     pub pad: [u32; 2],
 }
 
+/// The dispatch of `trace_chain_samples` (WGSL `ChainTrace`, 16 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuChainTrace {
+    /// Slots traced: the phase's ray budget, at most the chains' sample capacity.
+    pub limit: u32,
+    /// Invocations per row of the 2D dispatch.
+    pub row: u32,
+    /// The render's seed (keys the light samples and rounding uniforms, [`probe_ray_seed`]).
+    pub seed: u32,
+    /// The frame (keys them too).
+    pub frame: u32,
+}
+
 /// The probe GI of a GPU render: the CPU object (the updater and its seed), the cache, the
 /// tracing pipeline and its buffers.
 pub(super) struct GpuProbes {
@@ -100,6 +135,8 @@ pub(super) struct GpuProbes {
     frame: GpuBuffer<GpuProbeFrame>,
     rounding: GpuBuffer<f32>,
     rays_last_frame: u64,
+    /// `trace_chain_samples` and its group 0 layout, built on first use.
+    chain_trace: OnceLock<(wgpu::ComputePipeline, wgpu::BindGroupLayout)>,
 }
 
 /// The tracer's WGSL for the probe methods: `render` and `trace_probe_rays` with
@@ -112,6 +149,24 @@ pub fn composed_probe_shader() -> Result<String> {
     let mut defs = guide_defs(UNUSED_GROUP, MCMM_UNUSED_GROUP, GUIDE_GROUP);
     defs.push((PROBE_GI_DEF, 1));
     Ok(mcg_gpu_backend::shaders::compose(super::SHADER, &defs)?)
+}
+
+/// The group 0 layout of `trace_chain_samples`: the parameters, the scene (1–7), the traced
+/// samples (12), the chains' samples (14) and counters (15), the rounding uniforms (16) and the
+/// dispatch (17).
+fn chain_trace_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let uniform = |b| mcg_gpu_backend::buffer_entry(b, wgpu::BufferBindingType::Uniform);
+    let mut entries = vec![uniform(0)];
+    entries.extend((1..=7).map(|b| mcg_gpu_backend::storage_entry(b, true)));
+    entries.push(mcg_gpu_backend::storage_entry(12, false));
+    entries.push(mcg_gpu_backend::storage_entry(14, true));
+    entries.push(mcg_gpu_backend::storage_entry(15, true));
+    entries.push(mcg_gpu_backend::storage_entry(16, false));
+    entries.push(uniform(17));
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("trace_chain_samples"),
+        entries: &entries,
+    })
 }
 
 /// The group 0 layout of `trace_probe_rays`: the parameters, the scene (1–7), the requests
@@ -191,6 +246,7 @@ impl GpuTracer {
             trace,
             trace_layout,
             rays_last_frame: 0,
+            chain_trace: OnceLock::new(),
         });
         self.probes = Some(Guided {
             guide: probes,
@@ -211,6 +267,143 @@ impl GpuTracer {
     #[must_use]
     pub fn probe_cache(&self) -> Option<&GpuProbeCache> {
         self.probes.as_ref().map(|p| &p.guide.cache)
+    }
+
+    /// Records into `encoder` the tracing of the samples that `chains` emitted in their last
+    /// recorded frame (ADGI sec. 4.8-4.9: a chain sample is a probe ray), one dispatch of the
+    /// kernel `trace_chain_samples` over slots `0..limit` (the phase's ray budget; the CPU's
+    /// `ProbeUpdater` takes the static samples in order up to it): slot i below the chains'
+    /// sample count (`counters()[0]`, read on the GPU) traces its sample from its probe's
+    /// position along its direction, with the light seed [`probe_ray_seed`]`(seed, frame,
+    /// probe, i)`, into `rays[i]`, as `trace_probe_rays` traces a request; an empty slot gets
+    /// probe [`NO_PROBE`]. `rounding[i]` gets the slot's rounding uniform
+    /// (`uniform_float(probe_ray_seed(seed, frame, NO_PROBE, i))`). Then
+    /// [`GpuProbeCache::record_update_samples`]`(rays, rounding, limit, …)` updates the texels
+    /// with the traced samples and skips the empty slots — no read-back in between. `seed` is
+    /// the render's seed ([`GpuTracer::start_probes`]).
+    ///
+    /// # Errors
+    /// Before [`GpuTracer::start_probes`] or an upload; when `limit` exceeds the chains'
+    /// sample capacity, `rays` or `rounding`; when the device binds fewer than
+    /// [`CHAIN_TRACE_STORAGE_BUFFERS`] storage buffers per stage or the pipeline fails.
+    pub fn record_chain_rays(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        chains: &GpuProbeChains,
+        (rays, rounding): (&GpuBuffer<GpuRaySample>, &GpuBuffer<f32>),
+        limit: u32,
+        frame: u32,
+    ) -> Result<()> {
+        let probes = &self
+            .probes
+            .as_ref()
+            .ok_or("GpuTracer: no probes started")?
+            .guide;
+        let scene = self.scene.as_ref().ok_or("GpuTracer: no scene uploaded")?;
+        let capacity = chains.samples().len().min(rays.len()).min(rounding.len());
+        if limit as usize > capacity {
+            return Err(format!(
+                "record_chain_rays: {limit} slots, but the chains, rays and rounding hold {capacity}"
+            )
+            .into());
+        }
+        let (pipeline, layout) = self.chain_trace_pipeline(probes)?;
+        let groups = limit.div_ceil(PROBE_GROUP).max(1);
+        let x = groups.min(
+            self.ctx
+                .device()
+                .limits()
+                .max_compute_workgroups_per_dimension,
+        );
+        let dispatch = GpuChainTrace {
+            limit,
+            row: x * PROBE_GROUP,
+            seed: probes.gi.seed(),
+            frame,
+        };
+        // A uniform of its own per call, so two calls in one encoder keep their dispatches.
+        let dispatch = self.ctx.uniform_buffer("trace_chain_samples", &dispatch);
+        let s = scene;
+        let buffers = [
+            (0, self.params.raw()),
+            (1, s.nodes.raw()),
+            (2, s.triangles.raw()),
+            (3, s.materials.raw()),
+            (4, s.emitters.raw()),
+            (5, s.uvs.raw()),
+            (6, s.textures.raw()),
+            (7, s.texels.raw()),
+            (12, rays.raw()),
+            (14, chains.samples().raw()),
+            (15, chains.counters().raw()),
+            (16, rounding.raw()),
+            (17, dispatch.raw()),
+        ];
+        let group = bind_buffers(&self.ctx, "trace_chain_samples", layout, &buffers);
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("trace_chain_samples"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.set_bind_group(GUIDE_GROUP, probes.cache.bind_group(), &[]);
+        pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
+        Ok(())
+    }
+
+    /// `trace_chain_samples` and its layout, built on the first call.
+    fn chain_trace_pipeline<'p>(
+        &self,
+        probes: &'p GpuProbes,
+    ) -> Result<&'p (wgpu::ComputePipeline, wgpu::BindGroupLayout)> {
+        if let Some(built) = probes.chain_trace.get() {
+            return Ok(built);
+        }
+        self.check_storage_buffers("trace_chain_samples", CHAIN_TRACE_STORAGE_BUFFERS)?;
+        let module = self
+            .probe_module
+            .as_ref()
+            .ok_or("GpuTracer: no probe shader")?;
+        let layout = chain_trace_layout(self.ctx.device());
+        let pipeline = self.pipeline_with(
+            module,
+            "trace_chain_samples",
+            &[&layout, probes.cache.bind_group_layout()],
+        )?;
+        Ok(probes.chain_trace.get_or_init(|| (pipeline, layout)))
+    }
+
+    /// Traces `requests` with `trace_probe_rays` (as a frame traces its probe rays), submitted
+    /// and read back: the reference of [`record_chain_rays`](Self::record_chain_rays).
+    ///
+    /// # Errors
+    /// Before [`GpuTracer::start_probes`] or an upload; when `requests` exceed the probes' ray
+    /// budget; when the read-back fails.
+    pub fn trace_probe_requests(&self, requests: &[GpuProbeRequest]) -> Result<Vec<GpuRaySample>> {
+        let scene = self.scene.as_ref().ok_or("GpuTracer: no scene uploaded")?;
+        let p = &self
+            .probes
+            .as_ref()
+            .ok_or("GpuTracer: no probes started")?
+            .guide;
+        if requests.len() > p.requests.len() {
+            return Err(format!(
+                "trace_probe_requests: {} requests, the budget is {}",
+                requests.len(),
+                p.requests.len()
+            )
+            .into());
+        }
+        let tracer = ProbeTracer {
+            ctx: &self.ctx,
+            params: self.params.raw(),
+            scene,
+        };
+        let parts = (&p.trace, &p.trace_layout, &p.cache, &p.requests, &p.samples);
+        tracer.trace_requests(parts, &p.frame, requests);
+        let mut traced = self.ctx.read_back(&p.samples)?;
+        traced.truncate(requests.len());
+        Ok(traced)
     }
 
     /// The probe update of frame `frame` before the camera's tiles (the tracer's parameters
@@ -260,6 +453,27 @@ impl GpuTracer {
         probes.rays_last_frame = probes.gi.rays_last_frame();
         Ok(())
     }
+}
+
+/// A bind group of `layout` with each `(binding, buffer)` of `buffers`, whole.
+fn bind_buffers(
+    ctx: &GpuContext,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[(u32, &wgpu::Buffer)],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
+        .iter()
+        .map(|&(binding, b)| wgpu::BindGroupEntry {
+            binding,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
 }
 
 /// The pipeline, group 0 layout, cache, requests and samples of `trace_probe_rays`.
@@ -313,21 +527,7 @@ impl ProbeTracer<'_> {
             (12, samples.raw()),
             (13, frame.raw()),
         ];
-        let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
-            .iter()
-            .map(|&(binding, b)| wgpu::BindGroupEntry {
-                binding,
-                resource: b.as_entire_binding(),
-            })
-            .collect();
-        let group = self
-            .ctx
-            .device()
-            .create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("trace_probe_rays"),
-                layout,
-                entries: &entries,
-            });
+        let group = bind_buffers(self.ctx, "trace_probe_rays", layout, &buffers);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("trace_probe_rays"),
             timestamp_writes: None,
@@ -395,6 +595,28 @@ impl ProbeTracer<'_> {
         Ok(())
     }
 
+    /// `requests` uploaded into `parts`' requests, traced into its samples, submitted.
+    fn trace_requests(
+        &self,
+        parts: TraceParts<'_>,
+        frame: &GpuBuffer<GpuProbeFrame>,
+        requests: &[GpuProbeRequest],
+    ) {
+        self.ctx
+            .queue()
+            .write_buffer(parts.3.raw(), 0, bytemuck::cast_slice(requests));
+        let dispatch = GpuProbeFrame {
+            count: requests.len() as u32,
+            ..GpuProbeFrame::default()
+        };
+        let mut encoder = self
+            .ctx
+            .device()
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        self.record(&mut encoder, parts, frame, dispatch);
+        self.ctx.queue().submit([encoder.finish()]);
+    }
+
     /// One batch of the host updater: `batch` uploaded, traced, read back into `out`.
     fn trace_batch(
         &self,
@@ -404,19 +626,7 @@ impl ProbeTracer<'_> {
         out: &mut [RaySample],
     ) -> Result<()> {
         let requests: Vec<GpuProbeRequest> = batch.iter().map(GpuProbeRequest::from).collect();
-        self.ctx
-            .queue()
-            .write_buffer(parts.3.raw(), 0, bytemuck::cast_slice(&requests));
-        let dispatch = GpuProbeFrame {
-            count: batch.len() as u32,
-            ..GpuProbeFrame::default()
-        };
-        let mut encoder = self
-            .ctx
-            .device()
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-        self.record(&mut encoder, parts, frame, dispatch);
-        self.ctx.queue().submit([encoder.finish()]);
+        self.trace_requests(parts, frame, &requests);
         let traced = self.ctx.read_back(parts.4)?;
         for (o, s) in out.iter_mut().zip(&traced) {
             o.radiance = s.radiance;
@@ -434,10 +644,13 @@ impl ProbeTracer<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use mcg_gpu_backend::guides::adgi::GpuProbeSample;
 
     /// The probe shader parses and validates with naga (no adapter needed): `render` binds
     /// the tracer's 8 storage buffers and the cache's words and table, `trace_probe_rays` the
-    /// scene's 7, requests, samples, words and table; the host structs have the WGSL sizes.
+    /// scene's 7, requests, samples, words and table, `trace_chain_samples` the scene's 7, the
+    /// traced samples, the chains' samples and counters, the rounding uniforms, words and
+    /// table; the host structs have the WGSL sizes.
     #[test]
     fn probe_shader_validates_without_an_adapter() {
         let source = composed_probe_shader().unwrap();
@@ -468,5 +681,9 @@ mod tests {
         assert_eq!(storage("trace_probe_rays"), 11);
         assert_eq!(size_of::<GpuProbeRequest>(), 32);
         assert_eq!(size_of::<GpuProbeFrame>(), 16);
+        assert_eq!(storage("trace_chain_samples"), 13);
+        assert_eq!(size_of::<GpuChainTrace>(), 16);
+        // WGSL `ChainSample` mirrors it.
+        assert_eq!(size_of::<GpuProbeSample>(), 48);
     }
 }

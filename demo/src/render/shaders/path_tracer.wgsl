@@ -36,10 +36,10 @@
     mcpg_choose, mcpg_finish, mcpg_observation_escaped, mcpg_observation_hit, mcpg_params,
     mcpg_pdf_with, mcpg_sample_lobe
 }
-#import mcg::adgi::{AdgiRaySample, adgi_irradiance_at}
+#import mcg::adgi::{AdgiRaySample, adgi_irradiance_at, adgi_probe_position}
 #import mcg::sampling::{
     mcg_cosine_hemisphere_pdf, mcg_cosine_hemisphere_sample, mcg_frame_to_world, mcg_pcg_hash,
-    mcg_rng_uniform
+    mcg_rng_uniform, mcg_uniform_float
 }
 
 // `bvh::BvhNode`: inner node (count 0) with children index, index + 1; or a leaf over
@@ -801,6 +801,70 @@ fn trace_probe_rays(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let r = probe_requests[i];
     probe_samples[i] = probe_ray(r.origin, r.direction, r.seed, r.probe);
+}
+
+// `gpu::GpuChainTrace`: the dispatch of `trace_chain_samples`.
+struct ChainTrace {
+    // Slots traced (the phase's ray budget, at most the chains' sample capacity).
+    limit: u32,
+    // Invocations per row of the 2D dispatch.
+    row: u32,
+    // The render's seed and the frame, keying `probe_ray_seed`.
+    seed: u32,
+    frame: u32,
+}
+
+// `mcg_gpu_backend::guides::adgi::GpuProbeSample` (WGSL `AdgiProbeSample` of
+// `mcg::adgi_chains`, 48 bytes): one sample emitted by ADGI's Metropolis probe chains.
+struct ChainSample {
+    position: vec3<f32>,
+    cell: u32,
+    direction: vec3<f32>,
+    guiding_value: f32,
+    probe: u32,
+    octant: u32,
+    chain: u32,
+    step: u32,
+}
+
+@group(0) @binding(14) var<storage, read> chain_samples: array<ChainSample>;
+// `GpuProbeChains::counters`: [0] the samples the chains wrote this frame.
+@group(0) @binding(15) var<storage, read> chain_counters: array<u32>;
+@group(0) @binding(16) var<storage, read_write> chain_rounding: array<f32>;
+@group(0) @binding(17) var<uniform> chain_trace: ChainTrace;
+
+// `gpu::NO_PROBE`: the probe of an empty slot, outside every grid (the cache's per-sample update
+// skips it).
+const NO_PROBE: u32 = 0xffffffffu;
+
+// `probe_gi::probe_ray_seed`: the seed of the light sample of ray `ray` of probe `probe` in frame
+// `frame` (a stream apart from the camera's paths).
+fn probe_ray_seed(seed: u32, frame: u32, probe: u32, ray: u32) -> u32 {
+    let salt = 0x70726f62u;
+    return path_seed(seed ^ salt, frame, probe, ray) ^ mcg_pcg_hash(salt);
+}
+
+// One invocation per slot below `chain_trace.limit` of the chains' samples (ADGI sec. 4.8: the
+// static chains' samples are the probe rays, taken in slot order up to the budget): slot i below
+// the chains' count traces its sample from its probe along its direction (light seed
+// `probe_ray_seed(seed, frame, probe, i)`), an empty slot gets probe NO_PROBE; every slot gets
+// its rounding uniform (`probe_ray_seed(seed, frame, NO_PROBE, i)` as a uniform float) for
+// `GpuProbeCache::record_update_samples`.
+@compute @workgroup_size(64)
+fn trace_chain_samples(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x + id.y * chain_trace.row;
+    if i >= chain_trace.limit {
+        return;
+    }
+    let t = chain_trace;
+    chain_rounding[i] = mcg_uniform_float(probe_ray_seed(t.seed, t.frame, NO_PROBE, i));
+    if i >= chain_counters[0] {
+        probe_samples[i] = AdgiRaySample(vec3<f32>(0.0), FAR, vec3<f32>(0.0), NO_PROBE);
+        return;
+    }
+    let s = chain_samples[i];
+    let seed = probe_ray_seed(t.seed, t.frame, s.probe, i);
+    probe_samples[i] = probe_ray(adgi_probe_position(s.probe), s.direction, seed, s.probe);
 }
 #endif
 
