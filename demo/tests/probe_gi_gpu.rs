@@ -119,19 +119,24 @@ fn gpu_ddgi_furnace_converges_to_the_analytic_value() {
     assert_furnace("gpu ddgi", result, 0.05, 0.12);
 }
 
-/// GPU `adgi` furnace: as the `ddgi` test, with ADGI's updater (pilot rays, chains, per-sample
-/// radiance texels of N_max 63 convolved to irradiance) tracing on the GPU.
+/// GPU `adgi` furnace: as the `ddgi` test, with ADGI's whole update on the GPU (pilot rays,
+/// trigger, heuristics, feedback ĝ, static and dynamic chains, per-sample radiance texels of
+/// N_max 63 convolved to irradiance).
 ///
-/// Hypothesis: after 120 frames the mean query is within 5 % of E, each within 15 % (the
+/// Hypothesis: after 120 frames the mean query is within 5 % of E, each within 20 % (the
 /// chains give the probes uneven sample counts, so single texels are noisier than DDGI's
-/// blend), the mean pixel within 3 %. Fixed seeds; a wrong bounce count fails it as above.
+/// blend; the cache's query convolves the per-sample radiance texels), the mean pixel within
+/// 3 %. Fixed seeds, but the chains' slot order follows the GPU's atomics, so runs differ:
+/// over 5 runs the mean query 0.979-0.993, the queries within 0.90-1.17. A wrong bounce count
+/// fails it as above, and so does skipping the static chains' texel updates (a query at
+/// 0.81 E).
 #[test]
 fn gpu_adgi_furnace_converges_to_the_analytic_value() {
     let test = "gpu_adgi_furnace_converges_to_the_analytic_value";
     let Some(result) = gpu_furnace(test, Method::Adgi, 120) else {
         return;
     };
-    assert_furnace("gpu adgi", result, 0.05, 0.15);
+    assert_furnace("gpu adgi", result, 0.05, 0.2);
 }
 
 /// The door room before its event (door closed), 24 × 24 pixels, 1 spp, 1 m probes, 16 rays.
@@ -193,7 +198,11 @@ fn door_run(scene: &Scene, method: Method, seed: u32, gpu: Option<&mut GpuTracer
 /// device for `ddgi` and `adgi`; fixed seeds. Breaking the GPU's probe rays (dropping the
 /// probes' irradiance at their hits, i.e. one bounce less) fails it: `ddgi` tile 0 red
 /// 0.107 (CPU) vs 0.068 (GPU), t = 10.9 against the critical 5.17 (21 dof). Measured: worst
-/// t −1.54 (critical 5.17) for `ddgi`, −1.69 (critical 5.72) for `adgi`.
+/// t −1.54 (critical 5.17) for `ddgi`; for `adgi`, whose update runs wholly on the GPU with its
+/// own random streams, −1.91 (critical 5.49). Skipping the GPU `adgi` frame's static texel
+/// updates fails it: tile 6 red 0.0743 (CPU) vs 0.0584 (GPU), t = 6.49 (critical 5.28); so
+/// did querying its radiance texels as irradiance texels (a bilinear lookup instead of the
+/// cosine convolution): red 10-30 % darker in tiles 0, 3, 6, worst t 3.5-5.1 over 5 runs.
 #[test]
 fn gpu_and_cpu_probe_gi_agree_per_tile() {
     let test = "gpu_and_cpu_probe_gi_agree_per_tile";
@@ -315,19 +324,25 @@ fn gpu_chain_samples_trace_as_probe_requests() {
     assert!(expected.iter().any(|r| r.radiance.max_element() > 0.0));
     let rays = ctx.zeroed_buffer::<GpuRaySample>("chain rays", capacity);
     let rounding = ctx.zeroed_buffer::<f32>("chain rounding", capacity);
-    for limit in [capacity, count / 2] {
+    for (limit, spent) in [
+        (capacity, 0),
+        (count / 2, 0),
+        (capacity, capacity - count / 3),
+    ] {
+        let spent_buffer = ctx.storage_buffer("spent", &[0, spent as u32]);
         let mut encoder = ctx.device().create_command_encoder(&Default::default());
+        let budget = (limit as u32, Some(spent_buffer.raw()));
         tracer
-            .record_chain_rays(&mut encoder, &gpu, (&rays, &rounding), limit as u32, frame)
+            .record_chain_rays(&mut encoder, &gpu, (&rays, &rounding), budget, frame)
             .unwrap();
         ctx.queue().submit([encoder.finish()]);
         let traced = ctx.read_back(&rays).unwrap();
         let uniforms = ctx.read_back(&rounding).unwrap();
-        let traced_slots = count.min(limit);
+        let traced_slots = count.min(limit - spent);
         assert_eq!(
             traced[..traced_slots],
             expected[..traced_slots],
-            "limit {limit}"
+            "limit {limit}, spent {spent}"
         );
         assert!(
             traced[traced_slots..limit]
@@ -345,7 +360,7 @@ fn gpu_chain_samples_trace_as_probe_requests() {
                 &mut ctx.device().create_command_encoder(&Default::default()),
                 &gpu,
                 (&rays, &rounding),
-                capacity as u32 + 1,
+                (capacity as u32 + 1, None),
                 frame,
             )
             .is_err()
