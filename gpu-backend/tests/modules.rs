@@ -522,7 +522,7 @@ fn wgsl_structs_match_the_rust_pod_types() {
                 pad_b, pad_c),
         );
         check(
-            &chains,
+            &m,
             "AdgiProbeSample",
             size_of::<GpuProbeSample>(),
             fields!(GpuProbeSample: position, cell, direction, guiding_value, probe, octant,

@@ -1022,7 +1022,6 @@ impl ProbeTracer<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mcg_gpu_backend::guides::adgi::GpuProbeSample;
 
     /// The probe shader parses and validates with naga (no adapter needed): `render` binds
     /// the tracer's 8 storage buffers and the cache's words and table, `trace_probe_rays` the
@@ -1065,7 +1064,5 @@ mod tests {
         assert_eq!(storage("expand_dynamic_samples"), 6);
         assert_eq!(size_of::<GpuDynamicFrame>(), 16);
         assert_eq!(size_of::<GpuChainTrace>(), 16);
-        // WGSL `ChainSample` mirrors it.
-        assert_eq!(size_of::<GpuProbeSample>(), 48);
     }
 }

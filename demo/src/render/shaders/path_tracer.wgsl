@@ -39,6 +39,7 @@
 #import mcg::adgi::{
     AdgiRaySample, adgi_irradiance_at, adgi_params, adgi_probe_position, adgi_sign_not_zero
 }
+#import mcg::adgi_chains::AdgiProbeSample
 #import mcg::sampling::{
     mcg_cosine_hemisphere_pdf, mcg_cosine_hemisphere_sample, mcg_frame_to_world, mcg_pcg_hash,
     mcg_rng_uniform, mcg_uniform_float
@@ -820,20 +821,8 @@ struct ChainTrace {
     frame: u32,
 }
 
-// `mcg_gpu_backend::guides::adgi::GpuProbeSample` (WGSL `AdgiProbeSample` of
-// `mcg::adgi_chains`, 48 bytes): one sample emitted by ADGI's Metropolis probe chains.
-struct ChainSample {
-    position: vec3<f32>,
-    cell: u32,
-    direction: vec3<f32>,
-    guiding_value: f32,
-    probe: u32,
-    octant: u32,
-    chain: u32,
-    step: u32,
-}
-
-@group(0) @binding(14) var<storage, read> chain_samples: array<ChainSample>;
+// The samples ADGI's Metropolis probe chains emitted (`GpuProbeChains::samples`).
+@group(0) @binding(14) var<storage, read> chain_samples: array<AdgiProbeSample>;
 // `GpuProbeChains::counters`: [0] the samples the chains wrote this frame.
 @group(0) @binding(15) var<storage, read> chain_counters: array<u32>;
 @group(0) @binding(16) var<storage, read_write> chain_rounding: array<f32>;

@@ -39,6 +39,19 @@ struct AdgiChainState {
     restarted: u32,
 }
 
+// One emitted sample (`GpuProbeSample`, 48 bytes): `ProbeSample`'s position, cell, direction,
+// h, the probe's linear index and the octant, and which chain emitted it at which step.
+struct AdgiProbeSample {
+    position: vec3<f32>,
+    cell: u32,
+    direction: vec3<f32>,
+    guiding_value: f32,
+    probe: u32,
+    octant: u32,
+    chain: u32,
+    step: u32,
+}
+
 // The grid the chains walk on: the probe grid and its cells (`ProxyGrid`), and the box the
 // uniform restarts cover (`lo`, `extent`: the probes' Voronoi cells).
 struct AdgiChainGrid {

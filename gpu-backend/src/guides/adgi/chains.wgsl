@@ -5,7 +5,7 @@
 #import mcg::math::{mcg_is_finite3, mcg_is_nan}
 #import mcg::color_codec::codec_heuristics_decode
 #import mcg::adgi_chains::{
-    AdgiChainGrid, AdgiChainState, AdgiLocated, adgi_chain_uniforms, adgi_guiding_value,
+    AdgiChainGrid, AdgiChainState, AdgiLocated, AdgiProbeSample, adgi_chain_uniforms, adgi_guiding_value,
     adgi_locate, adgi_octant, adgi_propose, adgi_uniform_state
 }
 
@@ -37,19 +37,6 @@ struct AdgiChainParams {
     pad_a: u32,
     pad_b: u32,
     pad_c: u32,
-}
-
-// One emitted sample (`GpuProbeSample`, 48 bytes): `ProbeSample`'s position, cell, direction,
-// h, the probe's linear index and the octant, and which chain emitted it at which step.
-struct AdgiProbeSample {
-    position: vec3<f32>,
-    cell: u32,
-    direction: vec3<f32>,
-    guiding_value: f32,
-    probe: u32,
-    octant: u32,
-    chain: u32,
-    step: u32,
 }
 
 // A point and direction at which to evaluate h (`GpuGuideQuery`, 32 bytes; `w` unused).
