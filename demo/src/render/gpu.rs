@@ -46,8 +46,7 @@ use mcg_markov_guide::mcpg::GuideConfig;
 mod probes;
 
 pub use probes::{
-    CHAIN_TRACE_STORAGE_BUFFERS, GpuChainTrace, GpuProbeFrame, GpuProbeRequest, NO_PROBE,
-    PROBE_GI_DEF, PROBE_STORAGE_BUFFERS, composed_probe_shader,
+    GpuProbeFrame, GpuProbeRequest, PROBE_GI_DEF, PROBE_STORAGE_BUFFERS, composed_probe_shader,
 };
 
 use super::bvh::{BvhNode, Triangle};
