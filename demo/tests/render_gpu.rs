@@ -450,6 +450,7 @@ fn render_on_the_gpu(method: Method) {
         no_progress: true,
         no_irradiance_cache: false,
         mcpg_confidence: mcg_demo::render::guided::CONFIDENCE_SAMPLES,
+        mcpg_alpha_min: mcg_demo::render::guided::ALPHA_MIN,
         mcmm_score: McmmScore::TileMixture,
         probes: ProbeOptions::default(),
     };

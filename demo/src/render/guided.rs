@@ -69,15 +69,34 @@ impl Scatter for MaterialScatter {
 /// `--no-irradiance-cache` 0.41-0.46 (1.60-1.91). 8 and 32 gave the same within noise.
 pub const CONFIDENCE_SAMPLES: f32 = 16.0;
 
+/// α_min of the renderer's guide, the smallest blend factor of MCPG Alg. 3's maximum-likelihood
+/// update ([`FitParams::alpha_min`](mcg_markov_guide::mcg_vmf::FitParams::alpha_min)): a chain
+/// averages its last ~1/α_min = 10 samples once it has that many. MCPG Alg. 3 line 5 takes the
+/// blend factor from Dittebrandt et al. \[2023\], whose α_min this is (MCMM Alg. 3 line 12:
+/// 0.1); the MCPG authors' engine uses 0.01, which [`McpgParams::PAPER`](mcg_markov_guide::mcpg::McpgParams::PAPER)
+/// keeps. With 0.01 the guide gets *worse* as it trains in `hidden_light_room`: the per-frame
+/// relMSE falls to 1.4 by frames 8-23 and climbs back to 1.55-1.64 after frame 32, so each
+/// state's long memory of its target point ȳ and mean cosine r̄ (weighted by the cache's
+/// early, noisy radiance) costs more than it averages. Measured with `mcg-demo render --scene
+/// demo/scenes/hidden_light_room.gltf --method mcpg --device cpu --width 128 --height 128 --spp
+/// 8 --frames 64 --bounces 3 --seed S --reference REF --mcpg-alpha-min A` (REF: 4 096 spp of
+/// `nee` at another seed; relMSE after 64 frames, seeds 7-9): 0.01 gives 0.0278-0.0299 (late
+/// frames 1.55-1.64), 0.05 0.0266-0.0270, 0.1 0.0250-0.0271 (late frames 1.31-1.36), 0.2
+/// 0.0254. Neutral on `many_lights_room` (64², 4 spp, 1 bounce, no cache, seeds 1-2: 0.426 and
+/// 0.468 against 0.439 and 0.456).
+pub const ALPHA_MIN: f32 = 0.1;
+
 /// The guide's configuration for `scene` rendered `height` pixels high (both devices):
 /// [`GuideConfig::for_scene`] over the scene's bounds, [`GuideConfig::for_camera`] for its
-/// field of view, and young chains' confidence [`CONFIDENCE_SAMPLES`].
+/// field of view, young chains' confidence [`CONFIDENCE_SAMPLES`] and the update's
+/// [`ALPHA_MIN`].
 #[must_use]
 pub fn guide_config(scene: &Scene, height: u32) -> GuideConfig {
     let root = scene.bvh.nodes[0];
     let mut config = GuideConfig::for_scene(Vec3::from(root.min), Vec3::from(root.max))
         .for_camera(scene.camera.yfov, height);
     config.params.confidence_samples = CONFIDENCE_SAMPLES;
+    config.params.fit.alpha_min = ALPHA_MIN;
     config
 }
 

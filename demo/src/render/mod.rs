@@ -120,6 +120,11 @@ pub struct RenderArgs {
     /// samples); 0 is the paper's rule.
     #[arg(long, default_value_t = guided::CONFIDENCE_SAMPLES)]
     pub mcpg_confidence: f32,
+    /// `mcpg`'s α_min, the smallest blend factor of the chains' update (MCPG Alg. 3 line 5;
+    /// [`guided::ALPHA_MIN`]); 0.01 is the MCPG authors' engine value, which the crate's
+    /// `McpgParams::PAPER` keeps.
+    #[arg(long, default_value_t = guided::ALPHA_MIN, value_parser = parse_alpha_min)]
+    pub mcpg_alpha_min: f32,
     /// The score of `mcmm`'s chains (MCMM Alg. 3): the tile's mixture density (the pixel's
     /// one-sample SSMIS estimate, with the defensive probability p_h = 0.4) or the paper's,
     /// the chain's own technique density (with the paper's p_h = 0.2).
@@ -181,6 +186,15 @@ fn parse_seed(v: &str) -> Result<u64, String> {
         None => v.parse(),
     }
     .map_err(|_| format!("not a number: {v}"))
+}
+
+/// `--mcpg-alpha-min`: a blend factor in [0, 1] (0 gives a plain running mean up to N_max).
+fn parse_alpha_min(v: &str) -> Result<f32, String> {
+    match v.parse::<f32>() {
+        Ok(a) if (0.0..=1.0).contains(&a) => Ok(a),
+        Ok(a) => Err(format!("{a} is outside [0, 1]")),
+        Err(_) => Err(format!("not a number: {v}")),
+    }
 }
 
 /// The arguments of `mcg-demo scenes`.
@@ -529,11 +543,13 @@ impl CpuGuide {
 }
 
 /// MCPG's configuration for `args` on `scene`: [`guide_config`], without the irradiance
-/// cache under `--no-irradiance-cache`, N_c from `--mcpg-confidence`.
+/// cache under `--no-irradiance-cache`, N_c from `--mcpg-confidence`, α_min from
+/// `--mcpg-alpha-min`.
 #[must_use]
 pub fn mcpg_config(scene: &Scene, args: &RenderArgs) -> GuideConfig {
     let mut config = guide_config(scene, args.height);
     config.params.confidence_samples = args.mcpg_confidence;
+    config.params.fit.alpha_min = args.mcpg_alpha_min;
     if args.no_irradiance_cache {
         config.cache = None;
     }

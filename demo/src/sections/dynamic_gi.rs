@@ -141,6 +141,7 @@ fn args(
         no_progress: true,
         no_irradiance_cache: false,
         mcpg_confidence: crate::render::guided::CONFIDENCE_SAMPLES,
+        mcpg_alpha_min: crate::render::guided::ALPHA_MIN,
         mcmm_score: McmmScore::TileMixture,
         probes: ProbeOptions {
             probe_spacing: s.probe_spacing,

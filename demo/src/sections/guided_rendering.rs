@@ -185,6 +185,7 @@ fn args(
         no_progress: true,
         no_irradiance_cache: !study.mcpg_cache,
         mcpg_confidence: crate::render::guided::CONFIDENCE_SAMPLES,
+        mcpg_alpha_min: crate::render::guided::ALPHA_MIN,
         mcmm_score: McmmScore::TileMixture,
         probes: ProbeOptions::default(),
     }
@@ -515,11 +516,16 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
          and continue after its samples (mcg's extension of MCPG Alg. 2, \
          McpgParams::confidence_samples; `render --mcpg-confidence 0` gives the paper's rule, \
          whose one-sample lobes cost this scene 10-20 % more error and occasional frames of \
-         3-5× the usual error). \
+         3-5× the usual error), and each chain averages its last ~{:.0} samples (α_min {}, \
+         the blend factor of Dittebrandt et al. that MCPG Alg. 3 cites; the MCPG authors' \
+         engine value 0.01, `render --mcpg-alpha-min 0.01`, lets the error climb back by \
+         15-20 % after 32 frames here). \
          FLIP is NVIDIA's LDR-FLIP of the sRGB images (the PNGs) at 67 pixels per degree. \
          The reference is cached in {}.",
         hidden.settings.bounces,
         crate::render::guided::CONFIDENCE_SAMPLES,
+        1.0 / crate::render::guided::ALPHA_MIN,
+        crate::render::guided::ALPHA_MIN,
         reference_path
             .strip_prefix(ctx.out_dir())
             .unwrap_or(&reference_path)

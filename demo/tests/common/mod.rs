@@ -231,6 +231,7 @@ pub fn door_args(method: Method, out: PathBuf, frames: u32) -> RenderArgs {
         no_progress: true,
         no_irradiance_cache: false,
         mcpg_confidence: mcg_demo::render::guided::CONFIDENCE_SAMPLES,
+        mcpg_alpha_min: mcg_demo::render::guided::ALPHA_MIN,
         mcmm_score: McmmScore::TileMixture,
         probes: ProbeOptions {
             probe_spacing: 1.0,
