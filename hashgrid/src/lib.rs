@@ -42,8 +42,9 @@
 //! - Probing is linear and bounded by `max_probes` ([`Insert::Full`] beyond): size tables for
 //!   a load ≲ 0.25 or raise the limit.
 //! - [`ConcurrentTable`] claims slots by compare-and-swap on the checksum word; the caller owns
-//!   the values. The crate's two `unsafe` blocks: its `&[AtomicU32]` → `&[u32]` upload view and
-//!   three SSE2 compare intrinsics in the probe loop.
+//!   the values. The crate's three `unsafe` blocks: its `&[AtomicU32]` → `&[u32]` upload view,
+//!   three SSE2 compare intrinsics in the probe loop, and the prefetch (`_mm_prefetch`, a hint)
+//!   of [`HashTable::find_many`] and [`HashTable::get_many`].
 //!
 //! The measurements behind these choices, the peer benchmarks (hashbrown, `FxHashMap`,
 //! `DashMap`, std's `HashMap`) and how to run them are in `benches/README.md`.
@@ -88,8 +89,9 @@
 //! # Ok::<(), mcg_hashgrid::TableError>(())
 //! ```
 #![no_std]
-// Two `unsafe` blocks: `ConcurrentTable::checksums` views `&[AtomicU32]` as `&[u32]` for upload
-// (documented there), and `probe::group_masks` calls SSE2 compare intrinsics (no pointers);
+// Three `unsafe` blocks: `ConcurrentTable::checksums` views `&[AtomicU32]` as `&[u32]` for upload
+// (documented there), `probe::group_masks` calls SSE2 compare intrinsics (no pointers), and
+// `probe::prefetch` calls `_mm_prefetch` (a hint that never faults, whatever the address);
 // everything else is safe code. Hence `unsafe_code = "deny"` (not "forbid") in Cargo.toml.
 #![cfg_attr(docsrs, feature(doc_cfg))]
 
