@@ -267,13 +267,17 @@ fn find_ahead_with(
     for (r, key) in ring.iter_mut().zip(keys) {
         *r = start(key);
     }
-    for i in 0..keys.len() {
+    // Key `i + AHEAD` started as key `i` is decided, then the last `AHEAD` keys decided. (One
+    // loop with a test for a key to start measured 12 % slower in `find_many` at 2¹⁶ slots.)
+    let ahead = keys.get(AHEAD..).unwrap_or_default();
+    for (i, key) in ahead.iter().enumerate() {
         let r = &mut ring[i % AHEAD];
         let current = *r;
-        if let Some(key) = keys.get(i + AHEAD) {
-            *r = start(key);
-        }
+        *r = start(key);
         emit(i, decide(current));
+    }
+    for i in ahead.len()..keys.len() {
+        emit(i, decide(ring[i % AHEAD]));
     }
 }
 
