@@ -242,9 +242,9 @@ impl<T: Pod> HashTable<T> {
     /// slots at once. The loop is compiled once per hash and kind of capacity (no per-key
     /// branch on either), and keeps 16 `(home, checksum)` pairs on the stack. Measured
     /// (`benches/README.md`, 2¹⁹ slots, load 1/4, fastest passes, then the value reads):
-    /// ≈ 4.9 ns per key with warm caches, ≈ 14 ns with the table flushed from the caches, where
-    /// `get` takes ≈ 5.3 and ≈ 22 ns. To read the values, [`get_many`](Self::get_many) is
-    /// faster still.
+    /// 4.9–5.2 ns per key with warm caches, 14.2–14.4 ns with the table flushed from the
+    /// caches, where `get` takes 5.3–6.7 and 22–23 ns (hashbrown's `get`: 3.6–4.4 and 16–19).
+    /// To read the values right away, [`get_many`](Self::get_many) is faster from memory.
     ///
     /// # Panics
     /// When `keys` and `out` differ in length.
@@ -266,8 +266,11 @@ impl<T: Pod> HashTable<T> {
     /// value line a second time, after the stream has evicted it. Use it for a wavefront of
     /// hit points whose states are read (or accumulated) right away, `find_many` where the
     /// slots themselves are wanted. Measured against hashbrown's `get` per key
-    /// (`benches/README.md`, 2¹⁶ / 2¹⁹ slots at load 1/4, fastest passes): 0.75 / 0.71 of its
-    /// speed with warm caches, 1.04 / 1.26 with the structures flushed from the caches.
+    /// (`benches/README.md`, 2¹⁶ / 2¹⁹ slots at load 1/4, fastest passes): 0.74–0.77 /
+    /// 0.64–0.80 of its speed with warm caches, 0.99–1.05 / 1.24–1.40 with the structures
+    /// flushed from the caches (`get`: 0.69–0.70 / 0.78–0.83). With warm caches on a table
+    /// well above the L2 cache, `find_many` followed by a value pass measured faster (0.81–0.84
+    /// at 2¹⁹): two prefetched lines per key in flight, where `find_many` has one.
     ///
     /// The prefetch is `_mm_prefetch` on x86-64 (a hint, which never faults and changes no
     /// result) and nothing elsewhere.
