@@ -206,7 +206,7 @@ pub(crate) fn find_ahead(
     let ix = *indexer;
     let prefetch = &prefetch;
     macro_rules! ahead {
-        ($words:expr, $hash_and_checksum:expr, $index:expr) => {
+        ($words:expr, $hash_and_checksum:expr, $index:expr, $in_bounds:expr) => {
             find_ahead_with(
                 $words,
                 &ix,
@@ -214,6 +214,7 @@ pub(crate) fn find_ahead(
                 keys,
                 $hash_and_checksum,
                 $index,
+                $in_bounds,
                 prefetch,
                 emit,
             )
@@ -223,17 +224,21 @@ pub(crate) fn find_ahead(
         (BucketHash::Fold, true) => {
             let mask = ix.capacity() - 1;
             let cut = &words[..=mask as usize]; // all of them: the capacity is `mask + 1`
-            ahead!(cut, fold_and_checksum, |h| h & mask)
+            ahead!(cut, fold_and_checksum, |h| h & mask, |s| s & mask)
         }
-        (BucketHash::Fold, false) => ahead!(words, fold_and_checksum, |h| ix.modulo(h)),
+        (BucketHash::Fold, false) => ahead!(words, fold_and_checksum, |h| ix.modulo(h), |s| s),
         (BucketHash::Mix, true) => {
             let mask = ix.capacity() - 1;
             let cut = &words[..=mask as usize]; // all of them: the capacity is `mask + 1`
-            ahead!(cut, mix_and_checksum, |h| h & mask)
+            ahead!(cut, mix_and_checksum, |h| h & mask, |s| s & mask)
         }
-        (BucketHash::Mix, false) => ahead!(words, mix_and_checksum, |h| ix.modulo(h)),
-        (hash, _) => ahead!(words, |k: &CellKey| hash.hash_and_checksum(k), |h| ix
-            .index(h)),
+        (BucketHash::Mix, false) => ahead!(words, mix_and_checksum, |h| ix.modulo(h), |s| s),
+        (hash, _) => ahead!(
+            words,
+            |k: &CellKey| hash.hash_and_checksum(k),
+            |h| ix.index(h),
+            |s| s
+        ),
     }
 }
 
@@ -247,6 +252,7 @@ fn find_ahead_with(
     keys: &[CellKey],
     hash_and_checksum: impl Fn(&CellKey) -> (u32, u32),
     index: impl Fn(u32) -> u32,
+    in_bounds: impl Fn(u32) -> u32,
     prefetch_value: impl Fn(u32),
     mut emit: impl FnMut(usize, Option<u32>),
 ) {
@@ -259,10 +265,15 @@ fn find_ahead_with(
         prefetch_value(home);
         (home, c)
     };
-    let decide = |(home, c): (u32, u32)| match words.get(home as usize) {
-        Some(&w) if w == c => Some(home),
-        Some(&EMPTY) => None,
-        _ => find_plain(words, indexer, max_probes, home, c),
+    let decide = |(home, c): (u32, u32)| {
+        // A no-op on a home slot (an `& mask` again, or nothing), which shows the compiler
+        // that the home slot from the ring is in bounds of the words cut to the capacity.
+        let home = in_bounds(home);
+        match words.get(home as usize) {
+            Some(&w) if w == c => Some(home),
+            Some(&EMPTY) => None,
+            _ => find_plain(words, indexer, max_probes, home, c),
+        }
     };
     for (r, key) in ring.iter_mut().zip(keys) {
         *r = start(key);
