@@ -54,7 +54,7 @@
 //! 2-vCPU VM, baseline x86-64, 2¹⁶ / 2¹⁹ slots at load 1/4; peer ÷ mcg, > 1: mcg faster):
 //! with warm caches [`HashTable::get`] 0.73–0.75 / 0.62–0.74 (34 instructions against 33),
 //! [`HashTable::find_many`] plus the value reads 0.73–0.74 / 0.81–0.84,
-//! [`HashTable::get_many`] 0.76–0.77 / 0.64–0.80; with the structures flushed from the caches
+//! [`HashTable::get_many`] 0.76–0.82 / 0.64–0.80; with the structures flushed from the caches
 //! `get` 0.69–0.70 / 0.78–0.83, `get_many` 0.99–1.05 / 1.38–1.40 and `find_many` 1.02–1.06 /
 //! 1.28–1.32 (both prefetch the lines of the key 16 places ahead); an insert 0.87–1.06 /
 //! 0.71–0.75; [`ConcurrentTable`] inserted from two threads 5.7× faster than `DashMap` at 2¹⁹

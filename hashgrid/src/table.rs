@@ -266,7 +266,7 @@ impl<T: Pod> HashTable<T> {
     /// value line a second time, after the stream has evicted it. Use it for a wavefront of
     /// hit points whose states are read (or accumulated) right away, `find_many` where the
     /// slots themselves are wanted. Measured against hashbrown's `get` per key
-    /// (`benches/README.md`, 2¹⁶ / 2¹⁹ slots at load 1/4, fastest passes): 0.74–0.77 /
+    /// (`benches/README.md`, 2¹⁶ / 2¹⁹ slots at load 1/4, fastest passes): 0.74–0.82 /
     /// 0.64–0.80 of its speed with warm caches, 0.99–1.05 / 1.24–1.40 with the structures
     /// flushed from the caches (`get`: 0.69–0.70 / 0.78–0.83). With warm caches on a table
     /// well above the L2 cache, `find_many` followed by a value pass measured faster (0.81–0.84
