@@ -244,7 +244,7 @@ pub(crate) fn find_ahead(
 
 /// The loop of [`find_ahead`] with the hash and the slot index given.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)] // as `find_ahead`, plus the hash and the index
+#[allow(clippy::too_many_arguments)] // as `find_ahead`, plus the hash, the index and its re-mask
 fn find_ahead_with(
     words: &[u32],
     indexer: &SlotIndexer,
