@@ -13,12 +13,13 @@
 //!
 //! - `peers_lookup/2^b`: warm (criterion repeats the pass, so what fits stays in the caches):
 //!   `mcg_get` (`HashTable::get` per key), `mcg_find_many` (one `find_many` over the pass, then
-//!   the value reads), and `get` of each map; every lookup reads one value word.
+//!   the value reads), `mcg_get_many` (one `get_many` over the pass, the values summed as they
+//!   come), and `get` of each map; every lookup reads one value word.
 //!   `mcg_find_no_value` (`HashTable::find` alone, no value read) is a diagnostic: one cache
 //!   line per lookup, what a slot layout with the checksum beside the value would approach.
 //! - `peers_lookup_cold/2^b`: the same passes, each after flushing the structure's memory from
 //!   every cache level (`clflush` over the table's two arrays; over every entry of a map and
-//!   its control bytes), untimed.
+//!   its control bytes, `common/flush.rs`), untimed.
 //! - `peers_insert/2^b`: the distinct keys into an emptied table / map (emptying not timed).
 //! - `peers_concurrent_insert/2^b`: 2 threads of a persistent pool (`common/pool.rs`, what is
 //!   timed is documented there), each inserting a contiguous half of the distinct keys:
@@ -27,9 +28,6 @@
 //!
 //! Instruction counts of the same passes (robust on a noisy machine):
 //! `scripts/hashgrid-instructions`.
-// The cold-cache passes flush cache lines with `clflush` over raw addresses (SAFETY notes at
-// each block); the crate lints deny unsafe code elsewhere.
-#![allow(unsafe_code)]
 
 use std::collections::HashMap;
 use std::hash::BuildHasher;
@@ -42,6 +40,8 @@ use dashmap::DashMap;
 use mcg_hashgrid::{ConcurrentTable, HashTable};
 use rustc_hash::{FxBuildHasher, FxHashMap};
 
+#[path = "common/flush.rs"]
+mod flush;
 #[path = "common/lookups.rs"]
 mod lookups;
 #[path = "common/pool.rs"]
@@ -49,9 +49,10 @@ mod pool;
 #[path = "common/stream.rs"]
 mod stream;
 
+use flush::{flush_entries, flush_table};
 use lookups::{
-    State, find_many_pass, find_pass, get_pass, hashbrown_insert_pass, hashbrown_pass,
-    hashmap_insert_pass, hashmap_pass, insert_pass,
+    State, find_many_pass, find_pass, get_many_pass, get_pass, hashbrown_insert_pass,
+    hashbrown_pass, hashmap_insert_pass, hashmap_pass, insert_pass,
 };
 use stream::{Sized, bench_hash, pack, sized, slot_bits};
 
@@ -81,49 +82,6 @@ fn map<S: BuildHasher + Default>(s: &Sized) -> HashMap<u64, State, S> {
 
 fn hashbrown_map(s: &Sized) -> hashbrown::HashMap<u64, State> {
     s.fill.iter().map(|k| (pack(k), [1.0; 8])).collect()
-}
-
-/// Flushes every cache line of `bytes` from all cache levels.
-fn flush(bytes: &[u8]) {
-    for line in bytes.chunks(64) {
-        // SAFETY: `clflush` of an address inside a live allocation (the slice); SSE2 is part
-        // of the x86-64 baseline.
-        #[cfg(target_arch = "x86_64")]
-        unsafe {
-            std::arch::x86_64::_mm_clflush(line.as_ptr());
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        black_box(line);
-    }
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: a fence has no memory-safety preconditions.
-    unsafe {
-        std::arch::x86_64::_mm_mfence();
-    }
-}
-
-fn flush_table(t: &HashTable<State>) {
-    flush(bytemuck::cast_slice(t.checksums()));
-    flush(bytemuck::cast_slice(t.values()));
-}
-
-/// Flushes a hashbrown-layout map (std's `HashMap` is hashbrown): every entry, and the
-/// control bytes, which follow the entry of bucket 0, the highest entry address: from the
-/// end of the highest occupied entry on, one byte per bucket (buckets: the power of two
-/// above 8/7 of the capacity).
-fn flush_entries<'a>(entries: impl Iterator<Item = (&'a u64, &'a State)>, capacity: usize) {
-    let mut top = 0_usize;
-    for (k, _) in entries {
-        let p = std::ptr::from_ref(k).cast::<u8>();
-        // SAFETY: one entry (`(u64, State)`, 40 bytes) of the live map starts at `p`.
-        flush(unsafe { std::slice::from_raw_parts(p, 40) });
-        top = top.max(p as usize);
-    }
-    let buckets = (capacity * 8 / 7).next_power_of_two();
-    let ctrl = (top + 40) as *const u8;
-    // SAFETY: the control bytes start at or after the end of the highest entry and span
-    // `buckets + 16` bytes, so these `buckets` bytes lie inside the map's allocation.
-    flush(unsafe { std::slice::from_raw_parts(ctrl, buckets) });
 }
 
 /// Times `run` after an untimed `reset`, `iters` times.
@@ -179,6 +137,9 @@ fn bench_lookup_warm(c: &mut Criterion, bits: u32, l: &Lookups, slots: &mut [Opt
     g.bench_function(id("mcg_find_many"), |b| {
         b.iter(|| find_many_pass(&l.t, &l.s.queries, slots))
     });
+    g.bench_function(id("mcg_get_many"), |b| {
+        b.iter(|| get_many_pass(&l.t, &l.s.queries))
+    });
     g.bench_function(id("mcg_find_no_value"), |b| {
         b.iter(|| find_pass(&l.t, &l.s.queries))
     });
@@ -233,6 +194,18 @@ fn bench_lookup_cold(c: &mut Criterion, bits: u32, l: &Lookups, slots: &mut [Opt
                 |_| flush_table(&l.t),
                 |sl| {
                     black_box(find_many_pass(&l.t, &l.s.queries, sl));
+                },
+            )
+        })
+    });
+    g.bench_function(id("mcg_get_many"), |b| {
+        b.iter_custom(|n| {
+            timed(
+                n,
+                &mut (),
+                |_| flush_table(&l.t),
+                |_| {
+                    black_box(get_many_pass(&l.t, &l.s.queries));
                 },
             )
         })

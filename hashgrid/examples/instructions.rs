@@ -4,10 +4,12 @@
 //! totals by 2 · queries, so building the stream and the tables cancels out.
 //!
 //! `cargo run --release -p mcg-hashgrid --example instructions -- CASE BITS PASSES`, with
-//! `MCG_BENCH_HASH` picks the table's hash as in the benches. CASE one of `mcg_get`, `mcg_find_many`, `hashbrown_get`, `fx_get`, `std_get`,
+//! `MCG_BENCH_HASH` picks the table's hash as in the benches. CASE one of `mcg_get`, `mcg_find_many`, `mcg_get_many`, `hashbrown_get`, `fx_get`, `std_get`,
 //! `mcg_insert`, `hashbrown_insert`, `fx_insert`; BITS the log₂ of the slot count. With a
 //! fourth argument `time`, it also prints the fastest pass in ns per operation (a quick
-//! min-of-runs check; the criterion bench is the reference).
+//! min-of-runs check; the criterion bench is the reference); with `cold` instead, every
+//! lookup pass starts with the structure flushed from the caches (`common/flush.rs`, untimed),
+//! as in the bench's `peers_lookup_cold`.
 
 use std::collections::HashMap;
 use std::time::Instant;
@@ -15,12 +17,14 @@ use std::time::Instant;
 use mcg_hashgrid::HashTable;
 use rustc_hash::FxBuildHasher;
 
+#[path = "../benches/common/flush.rs"]
+mod flush;
 #[path = "../benches/common/lookups.rs"]
 mod lookups;
 #[path = "../benches/common/stream.rs"]
 mod stream;
 
-use lookups::{State, find_many_pass, get_pass};
+use lookups::{State, find_many_pass, get_many_pass, get_pass};
 use stream::{pack, sized};
 
 fn main() {
@@ -33,17 +37,20 @@ fn main() {
     let packed: Vec<u64> = s.queries.iter().map(pack).collect();
     let fill: Vec<u64> = s.fill.iter().map(pack).collect();
     let mut table = HashTable::<State>::new(1 << bits, 16, stream::bench_hash()).unwrap();
-    let timing = args.get(4).is_some_and(|a| a == "time");
+    let timing = args.get(4).is_some_and(|a| a == "time" || a == "cold");
+    let cold = args.get(4).is_some_and(|a| a == "cold");
     let mut best = f64::INFINITY;
     // Called after each pass with its start: keeps the fastest pass.
     let mut lap = |t0: Instant, ops: usize| {
         best = best.min(t0.elapsed().as_secs_f64() * 1e9 / ops as f64);
     };
     let sum = match case {
-        "mcg_get" | "mcg_find_many" | "mcg_insert" => {
-            mcg_case(case, &s, &mut table, passes, &mut lap)
+        "mcg_get" | "mcg_find_many" | "mcg_get_many" | "mcg_insert" => {
+            mcg_case(case, &s, &mut table, passes, cold, &mut lap)
         }
-        "hashbrown_get" | "fx_get" | "std_get" => get_case(case, &packed, &fill, passes, &mut lap),
+        "hashbrown_get" | "fx_get" | "std_get" => {
+            get_case(case, &packed, &fill, passes, cold, &mut lap)
+        }
         "hashbrown_insert" | "fx_insert" => insert_case(case, &fill, passes, &mut lap),
         _ => panic!("unknown case {case}; {usage}"),
     };
@@ -53,7 +60,8 @@ fn main() {
         s.queries.len()
     };
     if timing {
-        println!("{case} {bits}: fastest pass {best:.2} ns per operation");
+        let caches = if cold { "cold" } else { "warm" };
+        println!("{case} {bits} ({caches}): fastest pass {best:.2} ns per operation");
     }
     println!("{case} {bits} {passes} {per_pass} {sum}");
 }
@@ -64,11 +72,12 @@ fn mcg_case(
     s: &stream::Sized,
     table: &mut HashTable<State>,
     passes: usize,
+    cold: bool,
     lap: &mut impl FnMut(Instant, usize),
 ) -> f32 {
     let mut sum = 0.0_f32;
     match case {
-        "mcg_get" | "mcg_find_many" => {
+        "mcg_get" | "mcg_find_many" | "mcg_get_many" => {
             let mut full = 0;
             for k in &s.fill {
                 match table.entry(k) {
@@ -79,11 +88,14 @@ fn mcg_case(
             eprintln!("{} keys, {full} did not fit", s.fill.len());
             let mut slots = vec![None; s.queries.len()];
             for _ in 0..passes {
+                if cold {
+                    flush::flush_table(table);
+                }
                 let t0 = Instant::now();
-                sum += if case == "mcg_get" {
-                    get_pass(table, &s.queries)
-                } else {
-                    find_many_pass(table, &s.queries, &mut slots)
+                sum += match case {
+                    "mcg_get" => get_pass(table, &s.queries),
+                    "mcg_get_many" => get_many_pass(table, &s.queries),
+                    _ => find_many_pass(table, &s.queries, &mut slots),
                 };
                 lap(t0, s.queries.len());
             }
@@ -110,6 +122,7 @@ fn get_case(
     packed: &[u64],
     fill: &[u64],
     passes: usize,
+    cold: bool,
     lap: &mut impl FnMut(Instant, usize),
 ) -> f32 {
     let mut sum = 0.0_f32;
@@ -117,6 +130,9 @@ fn get_case(
         "hashbrown_get" => {
             let m: hashbrown::HashMap<u64, State> = fill.iter().map(|&k| (k, [1.0; 8])).collect();
             for _ in 0..passes {
+                if cold {
+                    flush::flush_entries(m.iter(), m.capacity());
+                }
                 let t0 = Instant::now();
                 sum += lookups::hashbrown_pass(&m, packed);
                 lap(t0, packed.len());
@@ -126,6 +142,9 @@ fn get_case(
             let m: HashMap<u64, State, FxBuildHasher> =
                 fill.iter().map(|&k| (k, [1.0; 8])).collect();
             for _ in 0..passes {
+                if cold {
+                    flush::flush_entries(m.iter(), m.capacity());
+                }
                 let t0 = Instant::now();
                 sum += lookups::hashmap_pass(&m, packed);
                 lap(t0, packed.len());

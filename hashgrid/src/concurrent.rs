@@ -167,6 +167,11 @@ impl ConcurrentTable {
     /// # Panics
     /// When `keys` and `out` differ in length.
     pub fn find_many(&self, keys: &[CellKey], out: &mut [Option<u32>]) {
+        assert_eq!(
+            keys.len(),
+            out.len(),
+            "find_many: keys and out differ in length"
+        );
         let load = |w: &AtomicU32| w.load(Ordering::Acquire);
         probe::find_many::<AtomicU32, { Self::BATCH }>(
             &self.checksums,
@@ -174,7 +179,6 @@ impl ConcurrentTable {
             self.hash,
             &self.indexer,
             keys,
-            out,
             |home, c| {
                 probe::find(
                     &self.checksums,
@@ -185,7 +189,12 @@ impl ConcurrentTable {
                     c,
                 )
             },
-            |slot| self.touch(slot),
+            |first, slots| {
+                out[first..first + slots.len()].copy_from_slice(slots);
+                for &slot in slots.iter().flatten() {
+                    self.touch(slot);
+                }
+            },
         );
     }
 

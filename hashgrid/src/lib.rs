@@ -42,8 +42,9 @@
 //! - Probing is linear and bounded by `max_probes` ([`Insert::Full`] beyond): size tables for
 //!   a load ≲ 0.25 or raise the limit.
 //! - [`ConcurrentTable`] claims slots by compare-and-swap on the checksum word; the caller owns
-//!   the values. The crate's two `unsafe` blocks: its `&[AtomicU32]` → `&[u32]` upload view and
-//!   three SSE2 compare intrinsics in the probe loop.
+//!   the values. The crate's three `unsafe` blocks: its `&[AtomicU32]` → `&[u32]` upload view,
+//!   three SSE2 compare intrinsics in the probe loop, and the prefetch (`_mm_prefetch`, a hint)
+//!   of [`HashTable::find_many`] and [`HashTable::get_many`].
 //!
 //! The measurements behind these choices, the peer benchmarks (hashbrown, `FxHashMap`,
 //! `DashMap`, std's `HashMap`) and how to run them are in `benches/README.md`.
@@ -51,13 +52,18 @@
 //! ## Performance
 //! Against hashbrown (foldhash) holding the same keys (fastest of repeated passes on a shared
 //! 2-vCPU VM, baseline x86-64, 2¹⁶ / 2¹⁹ slots at load 1/4; peer ÷ mcg, > 1: mcg faster):
-//! [`HashTable::get`] 0.54–0.65 / 0.73–0.74 with warm caches (34 instructions against 33),
-//! [`HashTable::find_many`] plus the value reads 0.51–0.56 / 0.69, an insert 0.87–1.06 /
+//! with warm caches [`HashTable::get`] 0.73–0.75 / 0.62–0.74 (34 instructions against 33),
+//! [`HashTable::find_many`] plus the value reads 0.73–0.74 / 0.81–0.84,
+//! [`HashTable::get_many`] 0.76–0.82 / 0.64–0.80; with the structures flushed from the caches
+//! `get` 0.69–0.70 / 0.78–0.83, `get_many` 0.99–1.05 / 1.38–1.40 and `find_many` 1.02–1.06 /
+//! 1.28–1.32 (both prefetch the lines of the key 16 places ahead); an insert 0.87–1.06 /
 //! 0.71–0.75; [`ConcurrentTable`] inserted from two threads 5.7× faster than `DashMap` at 2¹⁹
-//! in a criterion run at moderate load (1.45–2.84× on two cores shared with four builds). The rest of the lookup gap is the
-//! second cache line per lookup (checksum and value live in separate arrays, the GPU layout)
-//! and, at 2¹⁶, a footprint above the L2 cache at the load the user chose. Run
-//! `cargo run --release -p mcg-hashgrid --example instructions -- CASE BITS PASSES time`,
+//! in a criterion run at moderate load (1.45–2.84× on two cores shared with four builds). The
+//! rest of the gap is the 4-word key's hash (20 instructions; foldhash hashes a packed `u64`
+//! in ≈ 5) and the second cache line per lookup (checksum and value live in separate arrays,
+//! the GPU layout). Run
+//! `cargo run --release -p mcg-hashgrid --example instructions -- CASE BITS PASSES time`
+//! (`cold` instead of `time` flushes the caches first),
 //! `cargo bench -p mcg-hashgrid --bench peers` and `scripts/hashgrid-instructions`; numbers
 //! and diary: `benches/README.md`.
 //!
@@ -88,8 +94,9 @@
 //! # Ok::<(), mcg_hashgrid::TableError>(())
 //! ```
 #![no_std]
-// Two `unsafe` blocks: `ConcurrentTable::checksums` views `&[AtomicU32]` as `&[u32]` for upload
-// (documented there), and `probe::group_masks` calls SSE2 compare intrinsics (no pointers);
+// Three `unsafe` blocks: `ConcurrentTable::checksums` views `&[AtomicU32]` as `&[u32]` for upload
+// (documented there), `probe::group_masks` calls SSE2 compare intrinsics (no pointers), and
+// `probe::prefetch` calls `_mm_prefetch` (a hint that never faults, whatever the address);
 // everything else is safe code. Hence `unsafe_code = "deny"` (not "forbid") in Cargo.toml.
 #![cfg_attr(docsrs, feature(doc_cfg))]
 

@@ -12,9 +12,6 @@ use crate::hash::{BucketHash, fold_and_checksum};
 use crate::key::CellKey;
 use crate::probe::{self, Insert, Slots};
 
-/// Keys hashed per step of [`HashTable::find_many`].
-const FIND_BATCH: usize = 256;
-
 /// Checks the parameters shared by both tables.
 pub(crate) fn validate(capacity: u32, max_probes: u32) -> Result<SlotIndexer, TableError> {
     let indexer = SlotIndexer::new(capacity).ok_or(TableError::CapacityZero)?;
@@ -235,39 +232,84 @@ impl<T: Pod> HashTable<T> {
 
     /// [`find`](Self::find) for a batch of keys: `out[i] = find(&keys[i])`.
     ///
-    /// The same slots as `find`, faster on large tables. Per batch of [`BATCH`](Self::BATCH)
-    /// keys: (1) hash all keys (pure arithmetic); (2) read the home slot's checksum word of
-    /// every key (independent loads with no branch on their values, so their cache misses
-    /// overlap); (3) decide each key from its home word, walking on only for keys whose home
-    /// slot holds another key (≈ α/2 of them at load α). A per-key `find` mispredicts its
-    /// probe loop on those keys, and each misprediction discards the loads the CPU had
-    /// started for the following keys; here they have already been issued, and the keys not
-    /// in their home slot are decided from one compare of 4 slots at once (no loop branch to
-    /// mispredict). The loop is compiled once per hash and kind of capacity (no per-key branch
-    /// on either). Measured with value reads (`benches/README.md`, 2¹⁹ slots, load 1/4,
-    /// minimum of runs): ≈ 8 ns per key against ≈ 10 ns for `get` with warm caches, and
-    /// ≈ 19 ns against ≈ 24 ns for `get` when every pass starts with the table flushed from
-    /// the caches; batches of 256 keep more misses in flight than batches of 16. The batch arrays
-    /// live on the stack (≈ 3 KiB, zeroed once per call). A renderer's wavefront of hit
-    /// points (or a GPU-style pass over a tile) has such batches.
+    /// The same slots as `find`, faster on large tables: software-pipelined. While it decides
+    /// key `i` it has already hashed key `i +` [`BATCH`](Self::BATCH) and prefetched the cache
+    /// line of that key's home checksum word, so every decision reads the L1 cache and
+    /// [`BATCH`](Self::BATCH) keys' misses are in flight at once, whatever the branches do. A
+    /// per-key `find` instead mispredicts on the ≈ α/2 of keys (at load α) not in their home
+    /// slot, and each misprediction that waits on a missed checksum line stalls the loads of
+    /// the following keys. Keys not in their home slot are decided from one compare of 4
+    /// slots at once. The loop is compiled once per hash and kind of capacity (no per-key
+    /// branch on either), and keeps 16 `(home, checksum)` pairs on the stack. Measured
+    /// (`benches/README.md`, 2¹⁹ slots, load 1/4, fastest passes, then the value reads):
+    /// 4.9–5.2 ns per key with warm caches, 14.2–14.4 ns with the table flushed from the
+    /// caches, where `get` takes 5.3–6.7 and 22–23 ns (hashbrown's `get`: 3.6–4.4 and 16–19).
+    /// To read the values right away, [`get_many`](Self::get_many) is faster from memory.
     ///
     /// # Panics
     /// When `keys` and `out` differ in length.
     pub fn find_many(&self, keys: &[CellKey], out: &mut [Option<u32>]) {
-        probe::find_many::<u32, FIND_BATCH>(
-            &self.checksums,
-            |&w| w,
-            self.hash,
-            &self.indexer,
+        assert_eq!(
+            keys.len(),
+            out.len(),
+            "find_many: keys and out differ in length"
+        );
+        self.ahead(keys, |_| {}, |i, slot| out[i] = slot);
+    }
+
+    /// The values of a batch of keys: `f(i, self.get(&keys[i]))` for every `i`, in order.
+    ///
+    /// [`find_many`](Self::find_many) with the value reads inside: with the home checksum
+    /// word's line it also prefetches the home slot's value line, and it calls `f` for key
+    /// `i` right after deciding it, [`BATCH`](Self::BATCH) keys after both lines were asked
+    /// for; a `find_many` over a long stream followed by a pass over the values fetches every
+    /// value line a second time, after the stream has evicted it. Use it for a wavefront of
+    /// hit points whose states are read (or accumulated) right away, `find_many` where the
+    /// slots themselves are wanted. Measured against hashbrown's `get` per key
+    /// (`benches/README.md`, 2¹⁶ / 2¹⁹ slots at load 1/4, fastest passes): 0.74–0.82 /
+    /// 0.64–0.80 of its speed with warm caches, 0.99–1.05 / 1.24–1.40 with the structures
+    /// flushed from the caches (`get`: 0.69–0.70 / 0.78–0.83). With warm caches on a table
+    /// well above the L2 cache, `find_many` followed by a value pass measured faster (0.81–0.84
+    /// at 2¹⁹): two prefetched lines per key in flight, where `find_many` has one.
+    ///
+    /// The prefetch is `_mm_prefetch` on x86-64 (a hint, which never faults and changes no
+    /// result) and nothing elsewhere.
+    #[inline]
+    pub fn get_many<'a>(&'a self, keys: &[CellKey], mut f: impl FnMut(usize, Option<&'a T>)) {
+        // Cut to the capacity like the checksums, so that a home slot (`h & mask` on the
+        // default path) indexes the values without a bounds check.
+        let values = &self.values[..self.checksums.len()];
+        self.ahead(
             keys,
-            out,
-            |home, c| probe::find_plain(&self.checksums, &self.indexer, self.max_probes, home, c),
-            |_| {},
+            |home| probe::prefetch(values.as_ptr().wrapping_add(home as usize)),
+            |i, slot| f(i, slot.and_then(|s| values.get(s as usize))),
         );
     }
 
-    /// Keys hashed per step of [`find_many`](Self::find_many).
-    pub const BATCH: usize = FIND_BATCH;
+    /// The pipelined lookup behind [`find_many`](Self::find_many) and
+    /// [`get_many`](Self::get_many) (see `probe::find_ahead`).
+    #[inline(always)]
+    fn ahead(
+        &self,
+        keys: &[CellKey],
+        prefetch: impl Fn(u32),
+        emit: impl FnMut(usize, Option<u32>),
+    ) {
+        probe::find_ahead(
+            &self.checksums,
+            self.hash,
+            &self.indexer,
+            self.max_probes,
+            keys,
+            prefetch,
+            emit,
+        );
+    }
+
+    /// Keys in flight in [`find_many`](Self::find_many) and [`get_many`](Self::get_many):
+    /// each hashes (and prefetches the lines of) the key this many places ahead of the one it
+    /// decides. (Before they were pipelined, the batch of keys hashed per step: 256.)
+    pub const BATCH: usize = probe::AHEAD;
 
     /// The value of `key`, if the table holds it.
     #[inline]
@@ -543,7 +585,7 @@ mod tests {
     #[test]
     fn find_many_equals_find() {
         // Every hash with a modulo (97) and a mask (128) capacity: each has its own copy of
-        // the batch loop.
+        // the pipelined loop.
         for (hash, cap) in BucketHash::ALL
             .into_iter()
             .flat_map(|h| [(h, 97), (h, 128)])
@@ -552,16 +594,54 @@ mod tests {
             for i in 0..40 {
                 t.insert_or_get(&key(i));
             }
-            // 0..40 are (mostly) in, the rest not; two full batches and a partial one (whose
-            // unused batch entries still hold the previous batch's homes), and a small
-            // capacity puts some windows across the wrap-around.
-            let n = 2 * HashTable::<u32>::BATCH + 75;
-            let keys: Vec<CellKey> = (0..n as i32).map(key).collect();
-            let mut out = vec![Some(u32::MAX); keys.len()];
-            t.find_many(&keys, &mut out);
-            let want: Vec<Option<u32>> = keys.iter().map(|k| t.find(k)).collect();
-            assert_eq!(out, want, "{hash:?} {cap}");
-            assert!(want[..40].iter().filter(|s| s.is_some()).count() > 30);
+            // 0..40 are (mostly) in, the rest not. Streams shorter than, as long as and longer
+            // than the keys in flight, up to several rounds of the ring plus a partial one
+            // (whose ring entries still hold earlier keys' homes); a small capacity puts some
+            // windows across the wrap-around.
+            let b = HashTable::<u32>::BATCH;
+            for n in [0, 1, b - 1, b, b + 1, 2 * b + 75] {
+                let keys: Vec<CellKey> = (0..n as i32).map(key).collect();
+                let mut out = vec![Some(u32::MAX); keys.len()];
+                t.find_many(&keys, &mut out);
+                let want: Vec<Option<u32>> = keys.iter().map(|k| t.find(k)).collect();
+                assert_eq!(out, want, "{hash:?} {cap} {n} keys");
+                if n > 40 {
+                    assert!(want[..40].iter().filter(|s| s.is_some()).count() > 30);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn get_many_equals_get() {
+        // As `find_many_equals_find`, for the values: each key's value is its index, every
+        // key is handed to `f` once, in order.
+        for (hash, cap) in BucketHash::ALL
+            .into_iter()
+            .flat_map(|h| [(h, 97), (h, 128)])
+        {
+            let mut t = HashTable::<[u32; 8]>::new(cap, 8, hash).unwrap();
+            for i in 0..60 {
+                if let Some((v, _)) = t.entry(&key(i)) {
+                    v[3] = i as u32;
+                }
+            }
+            let b = HashTable::<u32>::BATCH;
+            for n in [0, 1, b - 1, b, b + 1, 3 * b + 75] {
+                let keys: Vec<CellKey> = (0..n as i32).map(key).collect();
+                let mut got = Vec::new();
+                t.get_many(&keys, |i, v| got.push((i, v.copied())));
+                let want: Vec<(usize, Option<[u32; 8]>)> = keys
+                    .iter()
+                    .enumerate()
+                    .map(|(i, k)| (i, t.get(k).copied()))
+                    .collect();
+                assert_eq!(got, want, "{hash:?} {cap} {n} keys");
+                if n > 60 {
+                    assert!(want[..60].iter().filter(|(_, v)| v.is_some()).count() > 45);
+                    assert!(want[60..].iter().any(|(_, v)| v.is_none()));
+                }
+            }
         }
     }
 

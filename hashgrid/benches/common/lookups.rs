@@ -74,6 +74,14 @@ pub fn find_many_pass(
         .sum()
 }
 
+/// `HashTable::get_many` over all queries, summing the values' first words as they come.
+#[inline(never)]
+pub fn get_many_pass(table: &HashTable<State>, queries: &[CellKey]) -> f32 {
+    let mut sum = 0.0;
+    table.get_many(black_box(queries), |_, v| sum += v.map_or(0.0, |s| s[0]));
+    sum
+}
+
 /// `HashTable::entry` per key, adding 1 to the value's first word.
 #[inline(never)]
 pub fn insert_pass(table: &mut HashTable<State>, keys: &[CellKey]) {
