@@ -12,7 +12,7 @@
 //!     [--spp 8] [--reference-spp 2048] [--threads 2] [--bounces 3] [--seed 1]
 //!     [--hemisphere sphere|product] [--bsdf-probability 0.1] [--no-cache]
 //!     [--cache-level-bias 2] [--candidates 5] [--adaptive-capacity 1048576]
-//!     [--confidence-samples 0]
+//!     [--confidence-samples 0] [--alpha-min 0.01]
 //! ```
 //!
 //! The reference image is kept in the temporary directory between runs (keyed by size,
@@ -483,6 +483,7 @@ struct GuideOptions {
     candidates: Option<u32>,
     adaptive_capacity: Option<u32>,
     confidence_samples: Option<f32>,
+    alpha_min: Option<f32>,
 }
 
 impl GuideOptions {
@@ -502,6 +503,9 @@ impl GuideOptions {
         }
         if let Some(n) = self.confidence_samples {
             config.params.confidence_samples = n;
+        }
+        if let Some(a) = self.alpha_min {
+            config.params.fit.alpha_min = a;
         }
         if !self.cache {
             config.cache = None;
@@ -532,6 +536,7 @@ fn parse_args() -> (Settings, GuideOptions) {
         candidates: None,
         adaptive_capacity: None,
         confidence_samples: None,
+        alpha_min: None,
     };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
@@ -558,6 +563,7 @@ fn parse_args() -> (Settings, GuideOptions) {
                 options.confidence_samples =
                     Some(value().parse().expect("--confidence-samples N_c"))
             }
+            "--alpha-min" => options.alpha_min = Some(value().parse().expect("--alpha-min A")),
             "--adaptive-capacity" => {
                 options.adaptive_capacity = Some(value().parse().expect("--adaptive-capacity N"))
             }

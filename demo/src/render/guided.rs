@@ -83,7 +83,9 @@ pub const CONFIDENCE_SAMPLES: f32 = 16.0;
 /// `nee` at another seed; relMSE after 64 frames, seeds 7-9): 0.01 gives 0.0278-0.0299 (late
 /// frames 1.55-1.64), 0.05 0.0266-0.0270, 0.1 0.0250-0.0271 (late frames 1.31-1.36), 0.2
 /// 0.0254. Neutral on `many_lights_room` (64², 4 spp, 1 bounce, no cache, seeds 1-2: 0.426 and
-/// 0.468 against 0.439 and 0.456).
+/// 0.468 against 0.439 and 0.456). Not a general rule: in mcg-markov-guide's `guided_room`
+/// example (the paper's N_c = 0, `--alpha-min`) 0.1 was neutral to worse (per-frame MSE
+/// 0.52/0.63 → 0.55/0.74, seeds 1-2), which is why the crate keeps the engine's value.
 pub const ALPHA_MIN: f32 = 0.1;
 
 /// The guide's configuration for `scene` rendered `height` pixels high (both devices):
