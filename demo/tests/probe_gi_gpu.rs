@@ -12,13 +12,15 @@ use common::{
 };
 use glam::Vec3;
 use mcg_demo::render::cpu::{Method, RenderSettings};
-use mcg_demo::render::gpu::GpuTracer;
-use mcg_demo::render::probe_gi::{ProbeGi, fit_grid};
+use mcg_demo::render::gpu::{GpuProbeRequest, GpuTracer, NO_PROBE};
+use mcg_demo::render::probe_gi::{ProbeGi, fit_grid, probe_ray_seed};
 use mcg_demo::render::scene::{Scene, SceneFile};
 use mcg_demo::render::scene_generator::DOOR_ROOM_OPENS_AT_FRAME;
 use mcg_demo::render::{Device, RenderArgs, render, write_outputs};
-use mcg_gpu_backend::guides::adgi::GpuIrradianceQuery;
+use mcg_gpu_backend::guides::adgi::{GpuIrradianceQuery, GpuProbeChains, GpuRaySample};
+use mcg_gpu_backend::sampling::{pcg_hash, uniform_float};
 use mcg_gpu_backend::testing::gpu_or_skip;
+use mcg_probe_cache::{GuideParams, ProbeChains};
 
 /// A tracer on a device of its own with the adapter's limits (the probe pipelines bind 13
 /// storage buffers, more than the shared test device's WebGPU defaults), `scene` uploaded and
@@ -117,19 +119,25 @@ fn gpu_ddgi_furnace_converges_to_the_analytic_value() {
     assert_furnace("gpu ddgi", result, 0.05, 0.12);
 }
 
-/// GPU `adgi` furnace: as the `ddgi` test, with ADGI's updater (pilot rays, chains, per-sample
-/// radiance texels of N_max 63 convolved to irradiance) tracing on the GPU.
+/// GPU `adgi` furnace: as the `ddgi` test, with ADGI's whole update on the GPU (pilot rays,
+/// trigger, heuristics, feedback ĝ, static and dynamic chains, per-sample radiance texels of
+/// N_max 63 convolved to irradiance).
 ///
-/// Hypothesis: after 120 frames the mean query is within 5 % of E, each within 15 % (the
+/// Hypothesis: after 120 frames the mean query is within 5 % of E, each within 25 % (the
 /// chains give the probes uneven sample counts, so single texels are noisier than DDGI's
-/// blend), the mean pixel within 3 %. Fixed seeds; a wrong bounce count fails it as above.
+/// blend; the cache's query convolves the per-sample radiance texels), the mean pixel within
+/// 3 %. Fixed seeds, but the chains' slot order follows the GPU's atomics, so runs differ:
+/// over 5 runs the mean query 0.979-0.993, the queries within 0.90-1.17 — the single-query
+/// bound is a sanity check with room for that spread (the largest of many noisy queries);
+/// the mean decides. A wrong bounce count fails it as above, and so does skipping the static
+/// chains' texel updates (mean 0.938 E).
 #[test]
 fn gpu_adgi_furnace_converges_to_the_analytic_value() {
     let test = "gpu_adgi_furnace_converges_to_the_analytic_value";
     let Some(result) = gpu_furnace(test, Method::Adgi, 120) else {
         return;
     };
-    assert_furnace("gpu adgi", result, 0.05, 0.15);
+    assert_furnace("gpu adgi", result, 0.05, 0.25);
 }
 
 /// The door room before its event (door closed), 24 × 24 pixels, 1 spp, 1 m probes, 16 rays.
@@ -191,7 +199,12 @@ fn door_run(scene: &Scene, method: Method, seed: u32, gpu: Option<&mut GpuTracer
 /// device for `ddgi` and `adgi`; fixed seeds. Breaking the GPU's probe rays (dropping the
 /// probes' irradiance at their hits, i.e. one bounce less) fails it: `ddgi` tile 0 red
 /// 0.107 (CPU) vs 0.068 (GPU), t = 10.9 against the critical 5.17 (21 dof). Measured: worst
-/// t −1.54 (critical 5.17) for `ddgi`, −1.69 (critical 5.72) for `adgi`.
+/// t −1.54 (critical 5.17) for `ddgi`; for `adgi`, whose update runs wholly on the GPU with its
+/// own random streams, −1.91 (critical 5.49). Querying its radiance texels as irradiance
+/// texels (a bilinear lookup instead of the cosine convolution) failed it or came close: red
+/// 10-30 % darker in tiles 0, 3, 6, worst t 3.5-5.1 over 5 runs. (Skipping its static texel
+/// updates does not fail it here, t 1.73: at frames 12-15 the pilot and dynamic rays carry
+/// these tiles; the furnace test catches that break.)
 #[test]
 fn gpu_and_cpu_probe_gi_agree_per_tile() {
     let test = "gpu_and_cpu_probe_gi_agree_per_tile";
@@ -260,4 +273,98 @@ fn gpu_probe_methods_run_at_equal_rays_with_per_frame_errors() {
     assert_equal_budgets(&rays[0], &rays[1]);
     assert_equal_budgets(&rays[0], &rays[2]);
     std::fs::remove_dir_all(&out).unwrap();
+}
+
+/// The static chains' samples traced on the GPU (`GpuTracer::record_chain_rays`, kernel
+/// `trace_chain_samples`) are the rays `trace_probe_rays` traces for the same probes,
+/// directions and light seeds, bit for bit: 24 static chains on the door room's 1 m grid, f_s 1
+/// on even probes and 0 on odd ones, ĝ 0, one frame. Slot i below the chains' count traces from its probe with light
+/// seed `probe_ray_seed(seed, frame, probe, i)`; the slots of a budget above the count are
+/// empty (probe `NO_PROBE`), a budget below it drops the later slots (the CPU's `take(budget)`);
+/// every slot's rounding uniform is `uniform_float(probe_ray_seed(seed, frame, NO_PROBE, i))`.
+#[test]
+fn gpu_chain_samples_trace_as_probe_requests() {
+    let test = "gpu_chain_samples_trace_as_probe_requests";
+    let scene = door_scene();
+    let (seed, frame) = (7, 5);
+    let Some(tracer) = probe_tracer(test, &scene, Method::Adgi, (1.0, 16, seed)) else {
+        return;
+    };
+    let ctx = tracer.context();
+    let grid = fit_grid(&scene, 1.0).unwrap();
+    let mut k = 0_u32;
+    let chains = ProbeChains::new_static(grid, 24, || {
+        k += 1;
+        core::array::from_fn(|d| uniform_float(pcg_hash(5 * k + d as u32)))
+    })
+    .unwrap();
+    let gpu = GpuProbeChains::new(ctx, &chains, GuideParams::STATIC).unwrap();
+    let cells = 8 * grid.probe_count();
+    // f_s 1 on even probes, 0 on odd ones: chains there drop their samples (h = 0), so the
+    // frame fills fewer slots than it has.
+    let table: Vec<f32> = (0..cells).map(|i| ((i / 8) % 2 == 0).into()).collect();
+    gpu.write_guide_table(ctx, &table).unwrap();
+    gpu.write_feedback(ctx, &vec![0.0; cells]).unwrap();
+    gpu.step_frame(ctx, 0x5eed).unwrap();
+    let samples = gpu.read_samples(ctx).unwrap();
+    let count = samples.len();
+    let capacity = gpu.samples().len();
+    assert!(count > 8 && count < capacity, "{count} of {capacity}");
+    let requests: Vec<GpuProbeRequest> = samples
+        .iter()
+        .enumerate()
+        .map(|(i, s)| GpuProbeRequest {
+            origin: grid
+                .probe_position(grid.probe_coords(s.probe as usize))
+                .to_array(),
+            seed: probe_ray_seed(seed, frame, s.probe, i as u32),
+            direction: s.direction.to_array(),
+            probe: s.probe,
+        })
+        .collect();
+    let expected = tracer.trace_probe_requests(&requests).unwrap();
+    assert!(expected.iter().any(|r| r.radiance.max_element() > 0.0));
+    let rays = ctx.zeroed_buffer::<GpuRaySample>("chain rays", capacity);
+    let rounding = ctx.zeroed_buffer::<f32>("chain rounding", capacity);
+    for (limit, spent) in [
+        (capacity, 0),
+        (count / 2, 0),
+        (capacity, capacity - count / 3),
+    ] {
+        let spent_buffer = ctx.storage_buffer("spent", &[0, spent as u32]);
+        let mut encoder = ctx.device().create_command_encoder(&Default::default());
+        let budget = (limit as u32, Some(spent_buffer.raw()));
+        tracer
+            .record_chain_rays(&mut encoder, &gpu, (&rays, &rounding), budget, frame)
+            .unwrap();
+        ctx.queue().submit([encoder.finish()]);
+        let traced = ctx.read_back(&rays).unwrap();
+        let uniforms = ctx.read_back(&rounding).unwrap();
+        let traced_slots = count.min(limit - spent);
+        assert_eq!(
+            traced[..traced_slots],
+            expected[..traced_slots],
+            "limit {limit}, spent {spent}"
+        );
+        assert!(
+            traced[traced_slots..limit]
+                .iter()
+                .all(|r| r.probe == NO_PROBE)
+        );
+        for (i, &u) in uniforms[..limit].iter().enumerate() {
+            let want = uniform_float(probe_ray_seed(seed, frame, NO_PROBE, i as u32));
+            assert_eq!(u.to_bits(), want.to_bits(), "slot {i}");
+        }
+    }
+    assert!(
+        tracer
+            .record_chain_rays(
+                &mut ctx.device().create_command_encoder(&Default::default()),
+                &gpu,
+                (&rays, &rounding),
+                (capacity as u32 + 1, None),
+                frame,
+            )
+            .is_err()
+    );
 }
