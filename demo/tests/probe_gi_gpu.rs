@@ -20,7 +20,7 @@ use mcg_demo::render::{Device, RenderArgs, render, write_outputs};
 use mcg_gpu_backend::guides::adgi::{GpuIrradianceQuery, GpuProbeChains, GpuRaySample};
 use mcg_gpu_backend::sampling::{pcg_hash, uniform_float};
 use mcg_gpu_backend::testing::gpu_or_skip;
-use mcg_probe_cache::{GuideParams, ProbeChains};
+use mcg_probe_cache::{GuideParams, ProbeChains, ProbeTexels};
 
 /// A tracer on a device of its own with the adapter's limits (the probe pipelines bind 13
 /// storage buffers, more than the shared test device's WebGPU defaults), `scene` uploaded and
@@ -39,16 +39,29 @@ fn probe_tracer(
     Some(tracer)
 }
 
+/// The furnace's probes after a GPU run, each value relative to its analytic one.
+struct Furnace {
+    /// The 48 queries of the GPU cache at the 8 inner probes × 6 axis normals, over
+    /// E = π·L_e·ρ/(1 − ρ).
+    queries: Vec<f32>,
+    /// The mean of every interior irradiance texel of all 64 probes over L_e·ρ/(1 − ρ): the
+    /// reflected radiance every probe ray carries in expectation, which is also E/π (what a
+    /// `ddgi` texel holds).
+    texel_mean: f32,
+    /// The mean sample count of those texels (the moving average's window, at most N_max).
+    count_mean: f32,
+    /// The mean pixel of the last frame over L_e/(1 − ρ).
+    pixel: f32,
+}
+
 /// Runs `frames` frames of `method` on the GPU in the furnace of ρ = 0.3, L_e = 0.5 (4 × 4 × 4
-/// probes, 64 rays per probe); returns the 48 queries of the GPU cache at the 8 inner probes ×
-/// 6 axis normals divided by E = π·L_e·ρ/(1 − ρ), and the mean pixel of the last frame divided by
-/// L_e/(1 − ρ).
-fn gpu_furnace(test: &str, method: Method, frames: u32) -> Option<(Vec<f32>, f32)> {
+/// probes, 64 rays per probe, probe seed `seed`).
+fn gpu_furnace(test: &str, method: Method, frames: u32, seed: u32) -> Option<Furnace> {
     let (rho, le) = (0.3f32, 0.5f32);
     let scene = furnace(Vec3::splat(rho), Vec3::splat(le));
     let grid = fit_grid(&scene, 0.5).unwrap();
     assert_eq!(grid.counts(), glam::UVec3::splat(4));
-    let mut tracer = probe_tracer(test, &scene, method, (0.5, 64, 0x5eed))?;
+    let mut tracer = probe_tracer(test, &scene, method, (0.5, 64, seed))?;
     let settings = RenderSettings {
         width: 16,
         height: 16,
@@ -77,26 +90,52 @@ fn gpu_furnace(test: &str, method: Method, frames: u32) -> Option<(Vec<f32>, f32
     let cache = tracer.probe_cache().unwrap();
     let e = cache.query(tracer.context(), &queries).unwrap();
     let expected = core::f32::consts::PI * le * rho / (1.0 - rho);
+    let (irradiance, visibility) = cache.read_words(tracer.context()).unwrap();
+    let config = cache.config().texels;
+    let texels = ProbeTexels::from_words(grid, config, &irradiance, &visibility).unwrap();
+    let map = config.irradiance_map;
+    let interior: Vec<usize> = (0..map.texel_count())
+        .filter(|&t| !map.is_border(map.coords(t)))
+        .collect();
+    let layout = config.irradiance_layout;
+    let (sum, counts) = (0..grid.probe_count())
+        .flat_map(|p| interior.iter().map(move |&t| (p, t)))
+        .fold((0.0f32, 0u32), |(s, c), (p, t)| {
+            let count = layout.count(texels.irradiance_word(p, t));
+            (s + texels.irradiance(p, t).x, c + count)
+        });
+    let n = (grid.probe_count() * interior.len()) as f32;
+    let texel_mean = sum / n / (le * rho / (1.0 - rho));
     let pixel = image.iter().map(|p| p.x).sum::<f32>() / image.len() as f32;
-    Some((
-        e.iter().map(|e| e.x / expected).collect(),
-        pixel / (le / (1.0 - rho)),
-    ))
+    Some(Furnace {
+        queries: e.iter().map(|e| e.x / expected).collect(),
+        texel_mean,
+        count_mean: counts as f32 / n,
+        pixel: pixel / (le / (1.0 - rho)),
+    })
 }
 
 /// Asserts that the furnace's probe queries (relative to the analytic E) have a mean within
 /// `mean_tol` of 1 and each within `each_tol`, and the mean pixel (relative) within 3 %.
-fn assert_furnace(what: &str, (queries, pixel): (Vec<f32>, f32), mean_tol: f32, each_tol: f32) {
+fn assert_furnace(what: &str, f: &Furnace, mean_tol: f32, each_tol: f32) {
+    let queries = &f.queries;
     let mean = queries.iter().sum::<f32>() / queries.len() as f32;
     let (lo, hi) = queries
         .iter()
         .fold((f32::MAX, f32::MIN), |(a, b), &q| (a.min(q), b.max(q)));
-    eprintln!("{what}: mean {mean:.4}, queries {lo:.4} … {hi:.4}, pixel {pixel:.4}");
+    eprintln!(
+        "{what}: mean {mean:.4}, queries {lo:.4} … {hi:.4}, pixel {:.4}",
+        f.pixel
+    );
     assert!((mean - 1.0).abs() < mean_tol, "{what}: mean E/E₀ = {mean}");
     for (i, q) in queries.iter().enumerate() {
         assert!((q - 1.0).abs() < each_tol, "{what}: query {i}: E/E₀ = {q}");
     }
-    assert!((pixel - 1.0).abs() < 0.03, "{what}: pixel/L = {pixel}");
+    assert!(
+        (f.pixel - 1.0).abs() < 0.03,
+        "{what}: pixel/L = {}",
+        f.pixel
+    );
 }
 
 /// GPU `ddgi` furnace: a closed cube of albedo ρ = 0.3 emitting L_e = 0.5 from every inner
@@ -113,31 +152,80 @@ fn assert_furnace(what: &str, (queries, pixel): (Vec<f32>, f32), mean_tol: f32, 
 #[test]
 fn gpu_ddgi_furnace_converges_to_the_analytic_value() {
     let test = "gpu_ddgi_furnace_converges_to_the_analytic_value";
-    let Some(result) = gpu_furnace(test, Method::Ddgi, 120) else {
+    let Some(result) = gpu_furnace(test, Method::Ddgi, 120, 0x5eed) else {
         return;
     };
-    assert_furnace("gpu ddgi", result, 0.05, 0.12);
+    assert_furnace("gpu ddgi", &result, 0.05, 0.12);
 }
 
 /// GPU `adgi` furnace: as the `ddgi` test, with ADGI's whole update on the GPU (pilot rays,
 /// trigger, heuristics, feedback ĝ, static and dynamic chains, per-sample radiance texels of
 /// N_max 63 convolved to irradiance).
 ///
-/// Hypothesis: after 120 frames the mean query is within 5 % of E, each within 25 % (the
-/// chains give the probes uneven sample counts, so single texels are noisier than DDGI's
-/// blend; the cache's query convolves the per-sample radiance texels), the mean pixel within
-/// 3 %. Fixed seeds, but the chains' slot order follows the GPU's atomics, so runs differ:
-/// over 5 runs the mean query 0.979-0.993, the queries within 0.90-1.17 — the single-query
-/// bound is a sanity check with room for that spread (the largest of many noisy queries);
-/// the mean decides. A wrong bounce count fails it as above, and so does skipping the static
-/// chains' texel updates (mean 0.938 E).
+/// No bound on a single query holds here: ADGI's texels are moving averages of single probe
+/// rays (N_max 63, 10 after a dynamic update, which the flicker of the pilot hits triggers on
+/// some probes every frame), and a probe ray's light sample is heavy-tailed near the cube's
+/// edges (up to the codec's maximum 9.8, 46 × its mean), so one such ray lifts its texel
+/// several-fold and with it the up to three axis queries facing it, however many frames run.
+/// Largest of the 48 queries per run, measured: GPU, 48 runs, 1.02-1.37 E (above 1.25 E in 3);
+/// the host's ADGI (`ProbeGi`, the decisions the GPU takes here; deterministic per seed), 118
+/// seeds, up to 1.95 E (above 1.25 E in 23), and their mean up to 1.053 E. The test bounds the
+/// statistics the tail does not reach instead.
+///
+/// Hypothesis: after 120 frames (probe seed 0x5eed; the chains' slot order follows the GPU's
+/// atomics, so runs differ)
+/// - the mean sample count of the 4096 interior texels of all 64 probes is above 40: the
+///   static chains' texel updates keep the windows near N_max 63. Measured 59.2-61.0 over 12
+///   runs; skipping the static texel updates gives 16.5-17.7 (3 runs) and fails it;
+/// - the mean of those texels is within 10 % of L_e·ρ/(1 − ρ): measured 0.969-0.996 (26
+///   runs, sd 0.007); one ray at the codec's maximum moves it by 1.1 %;
+/// - the median of the 48 queries is within 10 % of E: GPU 0.960-0.990 (26 runs, sd 0.009),
+///   host 0.949-1.014 (118 seeds, sd 0.011), the bound 6.5 sd below their mean;
+/// - every query is above 0.80 E (no probe or direction left dark; the lower tail is light):
+///   the smallest query per run, GPU 0.886-0.933 (48 runs, mean 0.913, sd 0.014), host
+///   0.874-0.941 (118 seeds), the bound 8 sd below;
+/// - the mean pixel is within 3 % of L_e/(1 − ρ) (measured 0.989-1.000, 60 runs).
+///
+/// A wrong bounce count fails the texel mean and the median (−30 %, +230 %). The furnace cannot
+/// see the lookup's radiance-vs-irradiance confusion (uniform radiance L gives E = πL either
+/// way); `gpu_and_cpu_probe_gi_agree_per_tile` is the test for that.
 #[test]
 fn gpu_adgi_furnace_converges_to_the_analytic_value() {
     let test = "gpu_adgi_furnace_converges_to_the_analytic_value";
-    let Some(result) = gpu_furnace(test, Method::Adgi, 120) else {
+    let Some(f) = gpu_furnace(test, Method::Adgi, 120, 0x5eed) else {
         return;
     };
-    assert_furnace("gpu adgi", result, 0.05, 0.25);
+    let mut sorted = f.queries.clone();
+    sorted.sort_by(f32::total_cmp);
+    let median = 0.5 * (sorted[23] + sorted[24]);
+    let (lo, hi) = (sorted[0], sorted[47]);
+    eprintln!(
+        "gpu adgi: texels {:.4} (count {:.2}), queries median {median:.4}, {lo:.4} … {hi:.4}, \
+         pixel {:.4}",
+        f.texel_mean, f.count_mean, f.pixel
+    );
+    assert!(
+        f.count_mean > 40.0,
+        "gpu adgi: mean texel count {}",
+        f.count_mean
+    );
+    assert!(
+        (f.texel_mean - 1.0).abs() < 0.10,
+        "gpu adgi: texel mean {}",
+        f.texel_mean
+    );
+    assert!(
+        (median - 1.0).abs() < 0.10,
+        "gpu adgi: median E/E₀ = {median}"
+    );
+    for (i, q) in f.queries.iter().enumerate() {
+        assert!(*q > 0.80, "gpu adgi: query {i}: E/E₀ = {q}");
+    }
+    assert!(
+        (f.pixel - 1.0).abs() < 0.03,
+        "gpu adgi: pixel/L = {}",
+        f.pixel
+    );
 }
 
 /// The door room before its event (door closed), 24 × 24 pixels, 1 spp, 1 m probes, 16 rays.
