@@ -20,7 +20,7 @@ use mcg_demo::render::{Device, RenderArgs, render, write_outputs};
 use mcg_gpu_backend::guides::adgi::{GpuIrradianceQuery, GpuProbeChains, GpuRaySample};
 use mcg_gpu_backend::sampling::{pcg_hash, uniform_float};
 use mcg_gpu_backend::testing::gpu_or_skip;
-use mcg_probe_cache::{GuideParams, ProbeChains, ProbeTexels};
+use mcg_probe_cache::{GuideParams, ProbeChains, ProbeTexels, TexelContent};
 
 /// A tracer on a device of its own with the adapter's limits (the probe pipelines bind 13
 /// storage buffers, more than the shared test device's WebGPU defaults), `scene` uploaded and
@@ -88,6 +88,14 @@ fn gpu_furnace(test: &str, method: Method, frames: u32, seed: u32) -> Option<Fur
         }
     }
     let cache = tracer.probe_cache().unwrap();
+    // The GPU `adgi` frame keeps ADGI's per-sample radiance texels in the cache, so its query
+    // must convolve them; the furnace's uniform radiance L gives E = πL either way and cannot
+    // tell (reading them as irradiance texels made the door room 10-30 % dark in places).
+    let content = match method {
+        Method::Adgi => TexelContent::Radiance,
+        _ => TexelContent::Irradiance,
+    };
+    assert_eq!(cache.config().query.content, content, "{}", method.name());
     let e = cache.query(tracer.context(), &queries).unwrap();
     let expected = core::f32::consts::PI * le * rho / (1.0 - rho);
     let (irradiance, visibility) = cache.read_words(tracer.context()).unwrap();
@@ -168,27 +176,27 @@ fn gpu_ddgi_furnace_converges_to_the_analytic_value() {
 /// edges (up to the codec's maximum 9.8, 46 × its mean), so one such ray lifts its texel
 /// several-fold and with it the up to three axis queries facing it, however many frames run.
 /// Largest of the 48 queries per run, measured: GPU, 48 runs, 1.02-1.37 E (above 1.25 E in 3);
-/// the host's ADGI (`ProbeGi`, the decisions the GPU takes here; deterministic per seed), 118
-/// seeds, up to 1.95 E (above 1.25 E in 23), and their mean up to 1.053 E. The test bounds the
-/// statistics the tail does not reach instead.
+/// the CPU's ADGI (`ProbeGi`: the same steps with every decision on the host, deterministic per
+/// seed), 118 seeds, up to 1.95 E (above 1.25 E in 23), and their mean up to 1.053 E. The test
+/// bounds the statistics the tail does not reach instead.
 ///
 /// Hypothesis: after 120 frames (probe seed 0x5eed; the chains' slot order follows the GPU's
 /// atomics, so runs differ)
 /// - the mean sample count of the 4096 interior texels of all 64 probes is above 40: the
-///   static chains' texel updates keep the windows near N_max 63. Measured 59.2-61.0 over 12
-///   runs; skipping the static texel updates gives 16.5-17.7 (3 runs) and fails it;
-/// - the mean of those texels is within 10 % of L_e·ρ/(1 − ρ): measured 0.969-0.996 (26
-///   runs, sd 0.007); one ray at the codec's maximum moves it by 1.1 %;
-/// - the median of the 48 queries is within 10 % of E: GPU 0.960-0.990 (26 runs, sd 0.009),
+///   static chains' texel updates keep the windows near N_max 63. Measured 59.2-61.0 over 18
+///   runs (sd 0.4); skipping the static texel updates gives 16.5-17.7 (3 runs) and fails it;
+/// - the mean of those texels is within 10 % of L_e·ρ/(1 − ρ): measured 0.964-0.996 (32
+///   runs, sd 0.008); one ray at the codec's maximum moves it by 1.1 %;
+/// - the median of the 48 queries is within 10 % of E: GPU 0.960-0.990 (32 runs, sd 0.008),
 ///   host 0.949-1.014 (118 seeds, sd 0.011), the bound 6.5 sd below their mean;
 /// - every query is above 0.80 E (no probe or direction left dark; the lower tail is light):
-///   the smallest query per run, GPU 0.886-0.933 (48 runs, mean 0.913, sd 0.014), host
+///   the smallest query per run, GPU 0.886-0.952 (66 runs, mean 0.913, sd 0.013), host
 ///   0.874-0.941 (118 seeds), the bound 8 sd below;
-/// - the mean pixel is within 3 % of L_e/(1 − ρ) (measured 0.989-1.000, 60 runs).
+/// - the mean pixel is within 3 % of L_e/(1 − ρ) (measured 0.989-1.000, 66 runs).
 ///
-/// A wrong bounce count fails the texel mean and the median (−30 %, +230 %). The furnace cannot
-/// see the lookup's radiance-vs-irradiance confusion (uniform radiance L gives E = πL either
-/// way); `gpu_and_cpu_probe_gi_agree_per_tile` is the test for that.
+/// A wrong bounce count fails the texel mean and the median (both move by −30 % or +230 %).
+/// The furnace's queries cannot see the lookup's radiance-vs-irradiance confusion (uniform
+/// radiance L gives E = πL either way): `gpu_furnace` asserts the cache's texel content.
 #[test]
 fn gpu_adgi_furnace_converges_to_the_analytic_value() {
     let test = "gpu_adgi_furnace_converges_to_the_analytic_value";
@@ -283,16 +291,19 @@ fn door_run(scene: &Scene, method: Method, seed: u32, gpu: Option<&mut GpuTracer
 /// same conventions for probe rays and camera shading), so the run means differ by noise
 /// only. Test: per tile and channel Welch's t-test on the 12 runs' tile means of each device
 /// (a run's pixels share its probes, so only the runs are independent samples), below the
-/// Bonferroni critical value at family-wise α = 10⁻³ over 9 tiles × 3 channels. 12 runs per
+/// Bonferroni critical value over 9 tiles × 3 channels at family-wise α = 10⁻³ for `ddgi`
+/// (deterministic on both devices) and 10⁻⁴ for `adgi` (its GPU runs differ: the chains' slot
+/// order follows the GPU's atomics, so α is its false-failure rate per run). 12 runs per
 /// device for `ddgi` and `adgi`; fixed seeds. Breaking the GPU's probe rays (dropping the
 /// probes' irradiance at their hits, i.e. one bounce less) fails it: `ddgi` tile 0 red
 /// 0.107 (CPU) vs 0.068 (GPU), t = 10.9 against the critical 5.17 (21 dof). Measured: worst
 /// t −1.54 (critical 5.17) for `ddgi`; for `adgi`, whose update runs wholly on the GPU with its
-/// own random streams, −1.91 (critical 5.49). Querying its radiance texels as irradiance
-/// texels (a bilinear lookup instead of the cosine convolution) failed it or came close: red
-/// 10-30 % darker in tiles 0, 3, 6, worst t 3.5-5.1 over 5 runs. (Skipping its static texel
-/// updates does not fail it here, t 1.73: at frames 12-15 the pilot and dynamic rays carry
-/// these tiles; the furnace test catches that break.)
+/// own random streams, −1.91 and −2.02 (critical 6.69 at 17 dof). Querying its radiance
+/// texels as irradiance texels (a bilinear lookup instead of the cosine convolution) made red
+/// 10-30 % darker in tiles 0, 3, 6, worst t 3.5-5.1 over 5 runs: this test does not reliably
+/// catch that break. (Skipping its static texel updates does not fail it either, t 1.73: at
+/// frames 12-15 the pilot and dynamic rays carry these tiles; the furnace test's texel count
+/// catches that break.)
 #[test]
 fn gpu_and_cpu_probe_gi_agree_per_tile() {
     let test = "gpu_and_cpu_probe_gi_agree_per_tile";
@@ -301,14 +312,14 @@ fn gpu_and_cpu_probe_gi_agree_per_tile() {
         return;
     };
     const RUNS: u32 = 12;
-    for method in [Method::Ddgi, Method::Adgi] {
+    for (method, alpha) in [(Method::Ddgi, 1e-3), (Method::Adgi, 1e-4)] {
         let cpu = tile_stats((24, 24, 8, RUNS), |k| {
             door_run(&scene, method, 100 + k, None)
         });
         let gpu = tile_stats((24, 24, 8, RUNS), |k| {
             door_run(&scene, method, 200 + k, Some(&mut tracer))
         });
-        assert_tiles_agree(&cpu, &gpu, 1e-3, &format!("{} cpu vs gpu", method.name()));
+        assert_tiles_agree(&cpu, &gpu, alpha, &format!("{} cpu vs gpu", method.name()));
     }
 }
 
