@@ -104,7 +104,7 @@ pub use probe_texels::{
     ProbeTexels, RoundingMode, TEXEL_UNIFORM_PERIOD, TEXEL_UNIFORM_STEP, TexelConfig,
 };
 pub use probe_update::{
-    FrameRays, ProbeRayRequest, ProbeUpdater, UpdateConfig, UpdatePolicy, hash_uniform,
+    AdgiParts, FrameRays, ProbeRayRequest, ProbeUpdater, UpdateConfig, UpdatePolicy, hash_uniform,
     spherical_fibonacci,
 };
 pub use proxies::ProxyGrid;

@@ -330,6 +330,7 @@ struct AdgiState {
     /// Whether the blend's detector holds references yet (its first frame only sets them).
     started: bool,
     params: HeuristicParams,
+    trigger: TemporalTrigger,
     static_chains: ProbeChains,
     dynamic_chains: ProbeChains,
     detector: ChangeDetector,
@@ -350,6 +351,21 @@ struct AdgiState {
     octant_texels: Vec<Vec<usize>>,
     /// The blend's rays for changed probes in the last frame (before rounding).
     dynamic_total: f64,
+}
+
+/// ADGI's parts of a [`ProbeUpdater`] ([`ProbeUpdater::adgi_parts`]).
+#[derive(Clone, Copy, Debug)]
+pub struct AdgiParts<'a> {
+    /// The heuristics' parameters (ADGI eq. 10-12).
+    pub params: &'a HeuristicParams,
+    /// The temporal trigger of the change detection (eq. 14, 17).
+    pub trigger: TemporalTrigger,
+    /// The static chains (sec. 4.8).
+    pub static_chains: &'a ProbeChains,
+    /// The dynamic chains on the proxies (sec. 4.9).
+    pub dynamic_chains: &'a ProbeChains,
+    /// Per octant, the interior irradiance texels (map indices) whose centre lies in it.
+    pub octant_texels: &'a [Vec<usize>],
 }
 
 /// One probe grid's texels and the per-frame update that fills them (see the
@@ -505,6 +521,7 @@ impl ProbeUpdater {
                 blend,
                 started: false,
                 params,
+                trigger,
                 static_chains,
                 dynamic_chains,
                 detector: ChangeDetector::new(grid, trigger, config.smoothing)
@@ -608,6 +625,21 @@ impl ProbeUpdater {
             }
         }
         Ok(())
+    }
+
+    /// What a twin of the ADGI frame on another device starts from (`None` for DDGI): the
+    /// heuristics' parameters (eq. 10-12), the temporal trigger (eq. 14, 17), the static and
+    /// dynamic chains as they stand (sec. 4.8, 4.9) and, per octant, the interior irradiance
+    /// texels whose centre lies in it (the dynamic phase's rays spread over them).
+    #[must_use]
+    pub fn adgi_parts(&self) -> Option<AdgiParts<'_>> {
+        self.adgi.as_ref().map(|a| AdgiParts {
+            params: &a.params,
+            trigger: a.trigger,
+            static_chains: &a.static_chains,
+            dynamic_chains: &a.dynamic_chains,
+            octant_texels: &a.octant_texels,
+        })
     }
 
     /// The f_s and f_d (ADGI eq. 19, 20) of the last ADGI frame, per probe octant (indexed
@@ -741,9 +773,11 @@ impl ProbeUpdater {
         rays
     }
 
-    /// The pilot-ray hash: uniforms of (pattern, probe, octant, k), the same on both frames of
-    /// a pair (SplitMix64 of a counter, [`hash_uniform`]).
-    fn pilot_uniforms(seed: u64, pattern: u64, probe: usize, o: usize, k: u64) -> Vec2 {
+    /// The pilot-ray hash of [`UpdateConfig::pilot_seed`] `seed`: uniforms of (pattern, probe,
+    /// octant, k), the same on both frames of a pair (SplitMix64 of a counter,
+    /// [`hash_uniform`]). The pilot directions use k = 0 (and 1), their light samples k = 2.
+    #[must_use]
+    pub fn pilot_uniforms(seed: u64, pattern: u64, probe: usize, o: usize, k: u64) -> Vec2 {
         let c = (seed ^ 0x5bd1_e995)
             .wrapping_add(pattern.wrapping_mul(0x9e37_79b9_7f4a_7c15))
             .wrapping_add(((probe * OCTANTS + o) as u64) << 3)

@@ -52,7 +52,9 @@ pub enum Method {
     /// ADGI's adaptive probe GI (DDGI's irradiance probes, their rays placed by ADGI's
     /// guide within DDGI's ray budget): the first hit lit by one light sample plus the probes'
     /// diffuse irradiance; rendered by [`super::probe_gi::ProbeGi`] on the CPU (`--bounces`
-    /// is not used: the probes gather all bounces).
+    /// is not used: the probes gather all bounces). On the GPU its whole per-frame update
+    /// runs there (pilot rays, heuristics, feedback ĝ, static and dynamic chains, their rays
+    /// and texel updates), recorded into the frame's encoder.
     Adgi,
     /// DDGI (Majercik et al. 2019): the same shading as `adgi`, probes updated by uniform rays
     /// and DDGI's blend; rendered by [`super::probe_gi::ProbeGi`] on the CPU (`--bounces` is
@@ -62,7 +64,8 @@ pub enum Method {
     /// texels of a probe whose change signal rises restart at a short window that later
     /// samples extend, and the static chains favour probe octants whose windows are not
     /// full — ADGI's paper recovers slowly where its dynamic rays miss the octants that
-    /// changed.
+    /// changed. On the GPU its decisions run on the host (the CPU's updater) and only its
+    /// rays and the shading on the GPU.
     AdgiRefill,
     /// `adgi` with mcg's blend extension ([`mcg_probe_cache::UpdatePolicy::AdgiBlend`]):
     /// ADGI's pilot rays, staggered so that a change is seen on the frame after it, restart

@@ -46,7 +46,8 @@ use mcg_markov_guide::mcpg::GuideConfig;
 mod probes;
 
 pub use probes::{
-    GpuProbeFrame, GpuProbeRequest, PROBE_GI_DEF, PROBE_STORAGE_BUFFERS, composed_probe_shader,
+    CHAIN_TRACE_STORAGE_BUFFERS, GpuChainTrace, GpuProbeFrame, GpuProbeRequest, NO_PROBE,
+    PROBE_GI_DEF, PROBE_STORAGE_BUFFERS, composed_probe_shader,
 };
 
 use super::bvh::{BvhNode, Triangle};

@@ -13,7 +13,7 @@
 //! | [`bvh`] | the flattened `#[repr(C)]` BVH and triangle layout, built by `obvhs`, walked by the CPU tracer and its WGSL twin |
 //! | [`material`] | Lambertian + GGX conductor materials with emission |
 //! | [`cpu`] | the CPU path tracer (rayon), methods `bsdf` and `nee`, the per-vertex sampler seam of the guides |
-//! | [`gpu`] | the WGSL twin of the CPU tracer on wgpu, over the same BVH, triangle and material buffers; `mcpg` and `mcmm` with the GPU guides of `mcg-gpu-backend`; `ddgi`, `adgi`, `adgi-refill` with its probe cache |
+//! | [`gpu`] | the WGSL twin of the CPU tracer on wgpu, over the same BVH, triangle and material buffers; `mcpg` and `mcmm` with the GPU guides of `mcg-gpu-backend`; `ddgi`, `adgi`, `adgi-refill` with its probe cache (`ddgi`'s and `adgi`'s updates wholly on the GPU, `adgi-refill`'s and `adgi-blend`'s decisions on the host) |
 //! | [`guided`] | `mcpg` on the CPU: the MCPG guide behind the sampler seam |
 //! | [`mcmm`] | `mcmm` on the CPU: MCMM's screen-space chains for direct light, SSMIS over tiles of 64 pixels |
 //! | [`probe_gi`] | `adgi` and `ddgi` on the CPU: a probe grid fitted to the scene, probe rays in the BVH, first hits shaded with a light sample plus probe irradiance |

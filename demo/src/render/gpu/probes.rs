@@ -10,25 +10,47 @@
 //!   the cache's rays and blended into its texel words by [`GpuProbeCache::record_blend`]
 //!   (DDGI sec. 4, N_max 17) — one submission, no read-back. (Making the rays in the kernel
 //!   instead stalled lavapipe for seconds on some frames.)
-//! - **`adgi`, `adgi-refill`:** the decisions run on the host. mcg-probe-cache's
-//!   `ProbeUpdater` (the same object and seed as `--device cpu`: pilot rays, temporal trigger,
-//!   heuristics, dynamic and static Metropolis chains, refill) asks for its batches of rays;
-//!   each batch is uploaded, traced by `trace_probe_rays` on the GPU and read back, and the
-//!   updater updates its texels on the host. The convolved irradiance texels are then uploaded
-//!   into the cache for the camera's query. (The GPU twins of those steps exist in
-//!   `mcg_gpu_backend::guides::adgi`, but not yet the heuristics-composing and ĝ-feedback
-//!   kernels that would chain them into a frame without the host.)
+//! - **`adgi`, the update on the GPU:** ADGI's frame (`UpdatePolicy::Adgi`, the twin of
+//!   `ProbeUpdater::frame`, same budget and order of steps) in one submission, no read-back
+//!   (`GpuTracer::adgi_frame`): the pilot rays (laid out by the host as DDGI's, with the CPU's
+//!   directions and light seeds) traced by `trace_probe_rays`, their hits into the texels on
+//!   the first frame of a pair and into the temporal trigger
+//!   ([`GpuProbeCache::record_pilot_hits`]); the triggers smoothed and the heuristics words
+//!   composed ([`GpuTriggerSmoothing`]); the dynamic chains on the proxies, each sample
+//!   expanded by the kernel `expand_dynamic_samples` into rays for every probe of its proxy
+//!   within the dynamic budget, traced (their count copied on the GPU) and averaged with the
+//!   dynamic N_max; the feedback ĝ, the static chains and their samples traced by
+//!   `trace_chain_samples` ([`GpuTracer::record_chain_rays`]) on the rays left, each averaged
+//!   into its texel ([`GpuProbeCache::record_update_samples`]). The chains start from the CPU
+//!   updater's states; the GPU draws its own uniforms, so the devices agree in expectation.
+//! - **`adgi-refill`:** the decisions run on the host. mcg-probe-cache's `ProbeUpdater` (the
+//!   same object and seed as `--device cpu`: pilot rays, temporal trigger, heuristics, dynamic
+//!   and static Metropolis chains, refill) asks for its batches of rays; each batch is
+//!   uploaded, traced by `trace_probe_rays` on the GPU and read back, and the updater updates
+//!   its texels on the host. The convolved irradiance texels are then uploaded into the cache
+//!   for the camera's query (the refill's decisions have no GPU twin).
 //!
 //! The camera's `render` shades each first hit with its emission, one light sample and
 //! albedo/π · `adgi_irradiance_at` — the CPU's conventions ([`super::super::probe_gi`]), so
 //! both devices agree in expectation (`ddgi`: the same rotations, other light-sample seeds;
-//! `adgi`: the same rays and seeds, traced in f32 on either device).
+//! `adgi`: the same pilot rays, the chains' own random streams; `adgi-refill`: the same rays
+//! and seeds, traced in f32 on either device).
 
 use bytemuck::{Pod, Zeroable};
-use glam::{Quat, Vec3};
-use mcg_gpu_backend::guides::adgi::{GpuProbeCache, GpuRaySample, ProbeCacheConfig};
+use std::sync::OnceLock;
+
+use glam::{Quat, UVec2, Vec3};
+
+use mcg_gpu_backend::guides::adgi::{
+    GpuProbeCache, GpuProbeChains, GpuRaySample, GpuTriggerSmoothing, ProbeCacheConfig,
+};
 use mcg_gpu_backend::sampling::next_uniform;
 use mcg_gpu_backend::{GpuBuffer, GpuContext, wgpu};
+use mcg_probe_cache::pilot_rays::pilot_rays;
+use mcg_probe_cache::{
+    AdgiParts, ClipVolume, ClipVolumes, Frustum, GuideParams, PilotPhase, ProbeUpdater,
+    UpdatePolicy,
+};
 use mcg_probe_cache::{ProbeGrid, ProbeRayRequest, RaySample};
 
 use super::{GUIDE_GROUP, GpuTracer, Guided, SceneBuffers, UNUSED_GROUP, guide_defs};
@@ -47,7 +69,16 @@ const MCMM_UNUSED_GROUP: u32 = 3;
 /// samples, and the cache's 4.
 pub const PROBE_STORAGE_BUFFERS: u32 = 13;
 
-/// Invocations per workgroup of `trace_probe_rays`.
+/// Storage buffers per stage of the `trace_chain_samples` pipeline: the scene's 7, the
+/// chains' samples and counters, the traced samples, their rounding uniforms and the spent
+/// slots, and the cache's 4.
+pub const CHAIN_TRACE_STORAGE_BUFFERS: u32 = 16;
+
+/// The probe of an empty slot of [`GpuTracer::record_chain_rays`]: outside every grid, so
+/// [`GpuProbeCache::record_update_samples`] skips it (WGSL `NO_PROBE`).
+pub const NO_PROBE: u32 = u32::MAX;
+
+/// Invocations per workgroup of `trace_probe_rays` and `trace_chain_samples`.
 const PROBE_GROUP: u32 = 64;
 
 /// One probe ray for `trace_probe_rays` (WGSL `ProbeRequest`, 32 bytes): a request of
@@ -84,8 +115,164 @@ pub struct GpuProbeFrame {
     pub count: u32,
     /// Invocations per row of the 2D dispatch.
     pub row: u32,
+    /// Slots `count..limit` are emptied (probe [`NO_PROBE`]); at most `count` traces nothing
+    /// else.
+    pub limit: u32,
     /// Padding to 16 bytes.
-    pub pad: [u32; 2],
+    pub pad: u32,
+}
+
+/// The dispatch of `trace_chain_samples` (WGSL `ChainTrace`, 16 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuChainTrace {
+    /// Slots traced: the phase's ray budget, at most the chains' sample capacity.
+    pub limit: u32,
+    /// Invocations per row of the 2D dispatch.
+    pub row: u32,
+    /// The render's seed (keys the light samples and rounding uniforms, [`probe_ray_seed`]).
+    pub seed: u32,
+    /// The frame (keys them too).
+    pub frame: u32,
+}
+
+/// The dispatch of `expand_dynamic_samples` (WGSL `DynamicFrame`, 16 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuDynamicFrame {
+    /// The dynamic phase's ray budget.
+    pub budget: u32,
+    /// `UpdateConfig::dynamic_rays_per_octant` (ADGI sec. 4.9).
+    pub rays_per_octant: u32,
+    /// The render's seed ([`probe_ray_seed`] keys the rays' jitter, light samples and rounding).
+    pub seed: u32,
+    /// The frame.
+    pub frame: u32,
+}
+
+/// ADGI's frame on the GPU (`--method adgi`, `UpdatePolicy::Adgi`): the twin of
+/// `ProbeUpdater::frame`'s ADGI branch, every step recorded into one encoder, no read-back.
+struct GpuAdgi {
+    /// The static chains (sec. 4.8), from the CPU updater's initial states.
+    static_chains: GpuProbeChains,
+    /// The dynamic chains on the 3 × 3 × 3 proxies (sec. 4.9).
+    dynamic_chains: GpuProbeChains,
+    /// f_Δv, f_Δr (eq. 15, 18) and the heuristics words' composition.
+    smoothing: GpuTriggerSmoothing,
+    /// The heuristics words (sec. 4.3), one per probe octant.
+    words: GpuBuffer<u32>,
+    /// [`dynamic_tables`].
+    tables: GpuBuffer<u32>,
+    /// The dynamic slots claimed and the dynamic rays written this frame.
+    spent: GpuBuffer<u32>,
+    /// The dynamic, then the static rays of the frame, and their rounding uniforms.
+    rays: GpuBuffer<GpuRaySample>,
+    rounding: GpuBuffer<f32>,
+    /// The pilot rays' rounding uniforms (frames that update the texels with them).
+    pilot_rounding: GpuBuffer<f32>,
+    /// V_in = V_out = every probe: the CPU's ADGI frame traces the pilots of every probe.
+    volumes: ClipVolumes,
+    /// `expand_dynamic_samples` and its group 0 layout.
+    expand: (wgpu::ComputePipeline, wgpu::BindGroupLayout),
+    /// The pilot rays of the last frame (for its ray count).
+    pilots: u32,
+}
+
+/// The tables of `expand_dynamic_samples`: `[0]` where the proxy offsets start, `[1..10]` the
+/// offsets of each octant's interior irradiance texels (`x | y << 16`, interior coordinates;
+/// `parts.octant_texels`), then from `[0]` the offsets of each proxy's probes (one more than
+/// the proxies), then the probes' linear indices.
+fn dynamic_tables(grid: &ProbeGrid, parts: &AdgiParts<'_>, side: u32) -> Vec<u32> {
+    let mut t = vec![0_u32; 10];
+    for (o, texels) in parts.octant_texels.iter().enumerate() {
+        t[1 + o] = t.len() as u32;
+        t.extend(texels.iter().map(|&i| {
+            let c = UVec2::new(i as u32 % side, i as u32 / side) - UVec2::ONE;
+            c.x | c.y << 16
+        }));
+    }
+    t[9] = t.len() as u32;
+    let proxies = parts.dynamic_chains.cells();
+    let count = proxies.proxy_count();
+    t[0] = t.len() as u32;
+    let offsets = t.len();
+    t.resize(offsets + count + 1, 0);
+    for cell in 0..count {
+        t[offsets + cell] = t.len() as u32;
+        t.extend(proxies.probes_of(cell).map(|c| grid.probe_index(c) as u32));
+    }
+    t[offsets + count] = t.len() as u32;
+    t
+}
+
+/// Clip volumes whose V_in and V_out hold every probe of `grid` (a box one unit around it,
+/// no frustum cut).
+fn all_probes(grid: &ProbeGrid) -> Result<ClipVolumes> {
+    let lo = grid.probe_position(glam::UVec3::ZERO) - glam::Vec3::ONE;
+    let hi = grid.probe_position(grid.counts() - glam::UVec3::ONE) + glam::Vec3::ONE;
+    let far = 1e30;
+    let planes = [
+        glam::Vec4::new(1.0, 0.0, 0.0, far),
+        glam::Vec4::new(-1.0, 0.0, 0.0, far),
+        glam::Vec4::new(0.0, 1.0, 0.0, far),
+        glam::Vec4::new(0.0, -1.0, 0.0, far),
+        glam::Vec4::new(0.0, 0.0, 1.0, far),
+        glam::Vec4::new(0.0, 0.0, -1.0, far),
+    ];
+    let volume = ClipVolume::new(Frustum::from_planes(planes)?, lo, hi)?;
+    Ok(ClipVolumes::new(volume, volume))
+}
+
+/// The group 0 layout of `expand_dynamic_samples`: the chains' samples (14) and counters
+/// (15), the rounding uniforms (16), the requests (18), the spent slots (19), the tables (20)
+/// and the dispatch (21).
+fn expand_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let entries = [
+        mcg_gpu_backend::storage_entry(14, true),
+        mcg_gpu_backend::storage_entry(15, true),
+        mcg_gpu_backend::storage_entry(16, false),
+        mcg_gpu_backend::storage_entry(18, false),
+        mcg_gpu_backend::storage_entry(19, false),
+        mcg_gpu_backend::storage_entry(20, true),
+        mcg_gpu_backend::buffer_entry(21, wgpu::BufferBindingType::Uniform),
+    ];
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("expand_dynamic_samples"),
+        entries: &entries,
+    })
+}
+
+impl GpuAdgi {
+    /// ADGI's frame for `probes` (an `adgi` updater) with ADGI's `parts`.
+    fn new(
+        ctx: &GpuContext,
+        probes: &GpuProbes,
+        parts: &AdgiParts<'_>,
+        expand: (wgpu::ComputePipeline, wgpu::BindGroupLayout),
+    ) -> Result<Self> {
+        let updater = probes.gi.updater();
+        let grid = updater.grid();
+        let n = 8 * grid.probe_count();
+        let side = updater.texels().config().irradiance_map.side();
+        let slots = updater.budget() as usize - n;
+        Ok(Self {
+            static_chains: GpuProbeChains::new(ctx, parts.static_chains, GuideParams::STATIC)?,
+            dynamic_chains: GpuProbeChains::new(ctx, parts.dynamic_chains, GuideParams::DYNAMIC)?,
+            smoothing: GpuTriggerSmoothing::new(ctx, &probes.cache),
+            words: ctx.zeroed_buffer("mcg-demo adgi words", n),
+            tables: ctx.storage_buffer(
+                "mcg-demo adgi dynamic tables",
+                &dynamic_tables(grid, parts, side),
+            ),
+            spent: ctx.zeroed_buffer("mcg-demo adgi spent", 2),
+            rays: ctx.zeroed_buffer("mcg-demo adgi rays", slots.max(1)),
+            rounding: ctx.zeroed_buffer("mcg-demo adgi rounding", slots.max(1)),
+            pilot_rounding: ctx.zeroed_buffer("mcg-demo adgi pilot rounding", n),
+            volumes: all_probes(grid)?,
+            expand,
+            pilots: 0,
+        })
+    }
 }
 
 /// The probe GI of a GPU render: the CPU object (the updater and its seed), the cache, the
@@ -97,9 +284,14 @@ pub(super) struct GpuProbes {
     trace_layout: wgpu::BindGroupLayout,
     requests: GpuBuffer<GpuProbeRequest>,
     samples: GpuBuffer<GpuRaySample>,
-    frame: GpuBuffer<GpuProbeFrame>,
     rounding: GpuBuffer<f32>,
     rays_last_frame: u64,
+    /// `trace_chain_samples` and its group 0 layout, built on first use.
+    chain_trace: OnceLock<(wgpu::ComputePipeline, wgpu::BindGroupLayout)>,
+    /// Two zero words: no slots spent ([`GpuTracer::record_chain_rays`] without `spent`).
+    no_spent: GpuBuffer<u32>,
+    /// ADGI's frame on the GPU (`--method adgi`).
+    adgi: Option<GpuAdgi>,
 }
 
 /// The tracer's WGSL for the probe methods: `render` and `trace_probe_rays` with
@@ -112,6 +304,25 @@ pub fn composed_probe_shader() -> Result<String> {
     let mut defs = guide_defs(UNUSED_GROUP, MCMM_UNUSED_GROUP, GUIDE_GROUP);
     defs.push((PROBE_GI_DEF, 1));
     Ok(mcg_gpu_backend::shaders::compose(super::SHADER, &defs)?)
+}
+
+/// The group 0 layout of `trace_chain_samples`: the parameters, the scene (1–7), the traced
+/// samples (12), the chains' samples (14) and counters (15), the rounding uniforms (16), the
+/// dispatch (17) and the spent slots (22).
+fn chain_trace_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let uniform = |b| mcg_gpu_backend::buffer_entry(b, wgpu::BufferBindingType::Uniform);
+    let mut entries = vec![uniform(0)];
+    entries.extend((1..=7).map(|b| mcg_gpu_backend::storage_entry(b, true)));
+    entries.push(mcg_gpu_backend::storage_entry(12, false));
+    entries.push(mcg_gpu_backend::storage_entry(14, true));
+    entries.push(mcg_gpu_backend::storage_entry(15, true));
+    entries.push(mcg_gpu_backend::storage_entry(16, false));
+    entries.push(uniform(17));
+    entries.push(mcg_gpu_backend::storage_entry(22, true));
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("trace_chain_samples"),
+        entries: &entries,
+    })
 }
 
 /// The group 0 layout of `trace_probe_rays`: the parameters, the scene (1–7), the requests
@@ -148,10 +359,21 @@ impl GpuTracer {
     ) -> Result<()> {
         let gi = ProbeGi::new(method, grid, rays_per_probe, seed)?;
         self.check_storage_buffers(method.name(), PROBE_STORAGE_BUFFERS)?;
+        // The GPU ADGI frame keeps ADGI's per-sample radiance texels in the cache, so the query
+        // convolves them (the host paths upload convolved irradiance texels instead).
+        let gpu_adgi = gi.updater().policy() == UpdatePolicy::Adgi;
+        let content = if gpu_adgi {
+            gi.updater().content()
+        } else {
+            gi.shading().query.content
+        };
         let config = ProbeCacheConfig {
             grid,
             texels: *gi.updater().texels().config(),
-            query: gi.shading().query,
+            query: mcg_probe_cache::QueryConfig {
+                content,
+                ..gi.shading().query
+            },
             blend: gi.updater().config().blend_weights,
             rays_per_probe,
         };
@@ -164,7 +386,7 @@ impl GpuTracer {
             p.guide.cache.reset(&self.ctx);
             p.guide.gi = gi;
             p.guide.rays_last_frame = 0;
-            return Ok(());
+            return self.start_adgi();
         }
         let ctx = &self.ctx;
         let cache = GpuProbeCache::new(ctx, &config)?;
@@ -184,26 +406,93 @@ impl GpuTracer {
         let probes = Box::new(GpuProbes {
             requests: ctx.zeroed_buffer("mcg-demo probe requests", budget),
             samples: ctx.zeroed_buffer("mcg-demo probe samples", budget),
-            frame: ctx.uniform_buffer("mcg-demo probe frame", &GpuProbeFrame::default()),
             rounding: ctx.zeroed_buffer("mcg-demo probe rounding", grid.probe_count()),
             gi,
             cache,
             trace,
             trace_layout,
             rays_last_frame: 0,
+            chain_trace: OnceLock::new(),
+            no_spent: ctx.zeroed_buffer("mcg-demo no spent slots", 2),
+            adgi: None,
         });
         self.probes = Some(Guided {
             guide: probes,
             pipeline,
             layout,
         });
+        self.start_adgi()
+    }
+
+    /// ADGI's frame on the GPU for `--method adgi` (`UpdatePolicy::Adgi`; none for the other
+    /// probe methods): its chains from the CPU updater's (the same initial states), the
+    /// tables of the dynamic rays and the frame's buffers; an existing one is reused with the
+    /// new chain states and cleared words.
+    fn start_adgi(&mut self) -> Result<()> {
+        let probes = &self
+            .probes
+            .as_ref()
+            .ok_or("GpuTracer: no probes started")?
+            .guide;
+        let updater = probes.gi.updater();
+        if updater.policy() != UpdatePolicy::Adgi {
+            return Ok(());
+        }
+        let parts = updater.adgi_parts().ok_or("adgi: no ADGI state")?;
+        let ctx = &self.ctx;
+        if let Some(a) = &probes.adgi {
+            a.static_chains
+                .write_states(ctx, parts.static_chains.states())?;
+            a.dynamic_chains
+                .write_states(ctx, parts.dynamic_chains.states())?;
+            a.static_chains
+                .write_feedback(ctx, &vec![0.0; a.words.len()])?;
+            ctx.write(&a.words, &vec![0; a.words.len()])?;
+            return Ok(());
+        }
+        self.check_storage_buffers("adgi", CHAIN_TRACE_STORAGE_BUFFERS)?;
+        let module = self
+            .probe_module
+            .as_ref()
+            .ok_or("GpuTracer: no probe shader")?;
+        let expand_layout = expand_layout(ctx.device());
+        let expand = self.pipeline_with(
+            module,
+            "expand_dynamic_samples",
+            &[&expand_layout, probes.cache.bind_group_layout()],
+        )?;
+        let adgi = GpuAdgi::new(ctx, probes, &parts, (expand, expand_layout))?;
+        self.probes
+            .as_mut()
+            .ok_or("GpuTracer: no probes started")?
+            .guide
+            .adgi = Some(adgi);
         Ok(())
     }
 
     /// Probe rays traced in the last frame of a probe method (`None` before one).
     #[must_use]
     pub fn probe_rays_last_frame(&self) -> Option<u64> {
-        self.probes.as_ref().map(|p| p.guide.rays_last_frame)
+        let p = &self.probes.as_ref()?.guide;
+        match &p.adgi {
+            Some(a) if p.gi.updater().policy() == UpdatePolicy::Adgi => {
+                Some(self.adgi_rays(p, a).unwrap_or(p.rays_last_frame))
+            }
+            _ => Some(p.rays_last_frame),
+        }
+    }
+
+    /// The rays of the last GPU ADGI frame: its pilots, the dynamic rays written and the
+    /// static samples traced (read back from the frame's counters when asked; the frame
+    /// itself reads nothing back).
+    fn adgi_rays(&self, p: &GpuProbes, a: &GpuAdgi) -> Result<u64> {
+        let spent = self.ctx.read_back(&a.spent)?;
+        let emitted = self.ctx.read_back(a.static_chains.counters())?[0];
+        let non_pilot = (p.gi.updater().budget() as u32).saturating_sub(a.pilots);
+        let statics = emitted
+            .min(a.static_chains.samples().len() as u32)
+            .min(non_pilot.saturating_sub(spent[1]));
+        Ok(u64::from(a.pilots) + u64::from(spent[1]) + u64::from(statics))
     }
 
     /// The probe cache of a probe method ([`GpuTracer::start_probes`]), e.g. to read its
@@ -211,6 +500,263 @@ impl GpuTracer {
     #[must_use]
     pub fn probe_cache(&self) -> Option<&GpuProbeCache> {
         self.probes.as_ref().map(|p| &p.guide.cache)
+    }
+
+    /// Records into `encoder` the tracing of the samples that `chains` emitted in their last
+    /// recorded frame (ADGI sec. 4.8-4.9: a chain sample is a probe ray), one dispatch of the
+    /// kernel `trace_chain_samples` over slots `0..limit` (the phase's ray budget; the CPU's
+    /// `ProbeUpdater` takes the static samples in order up to it): slot i below the chains'
+    /// sample count (`counters()[0]`, read on the GPU) traces its sample from its probe's
+    /// position along its direction, with the light seed [`probe_ray_seed`]`(seed, frame,
+    /// probe, i)`, into `rays[i]`, as `trace_probe_rays` traces a request; an empty slot gets
+    /// probe [`NO_PROBE`]; with `spent` (a buffer whose second `u32` holds the slots of the
+    /// budget already spent, the dynamic rays of ADGI's frame) only `limit − spent[1]` slots
+    /// are traced, the rest emptied. `rounding[i]` gets the slot's rounding uniform
+    /// (`uniform_float(probe_ray_seed(seed, frame, NO_PROBE, i))`). Then
+    /// [`GpuProbeCache::record_update_samples`]`(rays, rounding, limit, …)` updates the texels
+    /// with the traced samples and skips the empty slots — no read-back in between. `seed` is
+    /// the render's seed ([`GpuTracer::start_probes`]).
+    ///
+    /// # Errors
+    /// Before [`GpuTracer::start_probes`] or an upload; when `limit` exceeds the chains'
+    /// sample capacity, `rays` or `rounding`; when the device binds fewer than
+    /// [`CHAIN_TRACE_STORAGE_BUFFERS`] storage buffers per stage or the pipeline fails.
+    pub fn record_chain_rays(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        chains: &GpuProbeChains,
+        (rays, rounding): (&GpuBuffer<GpuRaySample>, &GpuBuffer<f32>),
+        (limit, spent): (u32, Option<&wgpu::Buffer>),
+        frame: u32,
+    ) -> Result<()> {
+        let probes = &self
+            .probes
+            .as_ref()
+            .ok_or("GpuTracer: no probes started")?
+            .guide;
+        let scene = self.scene.as_ref().ok_or("GpuTracer: no scene uploaded")?;
+        let capacity = chains.samples().len().min(rays.len()).min(rounding.len());
+        if limit as usize > capacity {
+            return Err(format!(
+                "record_chain_rays: {limit} slots, but the chains, rays and rounding hold {capacity}"
+            )
+            .into());
+        }
+        let (pipeline, layout) = self.chain_trace_pipeline(probes)?;
+        let (x, y) = workgroups_2d(&self.ctx, limit);
+        let dispatch = GpuChainTrace {
+            limit,
+            row: x * PROBE_GROUP,
+            seed: probes.gi.seed(),
+            frame,
+        };
+        // A uniform of its own per call, so two calls in one encoder keep their dispatches.
+        let dispatch = self.ctx.uniform_buffer("trace_chain_samples", &dispatch);
+        let mut buffers = scene_bindings(self.params.raw(), scene).to_vec();
+        buffers.extend([
+            (12, rays.raw()),
+            (14, chains.samples().raw()),
+            (15, chains.counters().raw()),
+            (16, rounding.raw()),
+            (17, dispatch.raw()),
+            (22, spent.unwrap_or(probes.no_spent.raw())),
+        ]);
+        let kernel = ("trace_chain_samples", pipeline, layout);
+        record_pass(&self.ctx, encoder, kernel, &buffers, &probes.cache, (x, y));
+        Ok(())
+    }
+
+    /// `trace_chain_samples` and its layout, built on the first call.
+    fn chain_trace_pipeline<'p>(
+        &self,
+        probes: &'p GpuProbes,
+    ) -> Result<&'p (wgpu::ComputePipeline, wgpu::BindGroupLayout)> {
+        if let Some(built) = probes.chain_trace.get() {
+            return Ok(built);
+        }
+        self.check_storage_buffers("trace_chain_samples", CHAIN_TRACE_STORAGE_BUFFERS)?;
+        let module = self
+            .probe_module
+            .as_ref()
+            .ok_or("GpuTracer: no probe shader")?;
+        let layout = chain_trace_layout(self.ctx.device());
+        let pipeline = self.pipeline_with(
+            module,
+            "trace_chain_samples",
+            &[&layout, probes.cache.bind_group_layout()],
+        )?;
+        Ok(probes.chain_trace.get_or_init(|| (pipeline, layout)))
+    }
+
+    /// Traces `requests` with `trace_probe_rays` (as a frame traces its probe rays), submitted
+    /// and read back: the reference of [`record_chain_rays`](Self::record_chain_rays).
+    ///
+    /// # Errors
+    /// Before [`GpuTracer::start_probes`] or an upload; when `requests` exceed the probes' ray
+    /// budget; when the read-back fails.
+    pub fn trace_probe_requests(&self, requests: &[GpuProbeRequest]) -> Result<Vec<GpuRaySample>> {
+        let scene = self.scene.as_ref().ok_or("GpuTracer: no scene uploaded")?;
+        let p = &self
+            .probes
+            .as_ref()
+            .ok_or("GpuTracer: no probes started")?
+            .guide;
+        if requests.len() > p.requests.len() {
+            return Err(format!(
+                "trace_probe_requests: {} requests, the budget is {}",
+                requests.len(),
+                p.requests.len()
+            )
+            .into());
+        }
+        let tracer = ProbeTracer {
+            ctx: &self.ctx,
+            params: self.params.raw(),
+            scene,
+        };
+        let parts = (&p.trace, &p.trace_layout, &p.cache, &p.requests, &p.samples);
+        tracer.trace_requests(parts, requests);
+        let mut traced = self.ctx.read_back(&p.samples)?;
+        traced.truncate(requests.len());
+        Ok(traced)
+    }
+
+    /// ADGI's frame (`ProbeUpdater::frame` with `UpdatePolicy::Adgi`) on the GPU, one
+    /// submission, no read-back; returns the pilot rays traced. In the CPU's order:
+    ///
+    /// 1. pilot rays (sec. 4.4): every probe's 8, along the CPU's directions with the CPU's
+    ///    light seeds (keyed by pattern, probe and octant, so both frames of a pair trace the
+    ///    same rays; laid out on the host, as DDGI's), traced; on the first frame of a pair
+    ///    they also update the texels (N_max of the texels); their hits drive f_v, f_r, the
+    ///    temporal gradient and the trigger (eq. 11-17) on the second;
+    /// 2. the triggers smoothed (eq. 15, 18) and the heuristics words composed with f_c of the
+    ///    camera (eq. 10, 19, 20);
+    /// 3. dynamic chains (sec. 4.9) on f_d max-pooled into the proxies, each sample expanded
+    ///    into `dynamic_rays_per_octant` rays for every probe of its proxy within the dynamic
+    ///    budget, `dynamic_share` of the rays after the pilots, traced and averaged with the
+    ///    dynamic N_max (none when every f_d is 0: the chains then emit nothing);
+    /// 4. the feedback ĝ (eq. 2) from the texels as the dynamic rays left them, the static
+    ///    chains (sec. 4.8) on h = exp(min(ĝ/f_s, 1)) f_s, their first samples up to the rays
+    ///    left traced and averaged with the texels' N_max.
+    fn adgi_frame(&self, frame: u32, camera: Vec3) -> Result<u32> {
+        let scene = self.scene.as_ref().ok_or("GpuTracer: no scene uploaded")?;
+        let p = &self.probes.as_ref().ok_or("GpuTracer: no probes")?.guide;
+        let a = p.adgi.as_ref().ok_or("GpuTracer: no adgi frame")?;
+        let (ctx, cache) = (&self.ctx, &p.cache);
+        let updater = p.gi.updater();
+        let config = updater.config();
+        let parts = updater.adgi_parts().ok_or("adgi: no ADGI state")?;
+        let seed = p.gi.seed();
+        let grid = updater.grid();
+        let pilot = config.pilot_schedule.frame(u64::from(frame));
+        let pilot_seed = config.pilot_seed;
+        let mut requests = Vec::with_capacity(8 * grid.probe_count());
+        pilot_rays(
+            grid,
+            pilot,
+            |_| true,
+            |pattern, probe, o| ProbeUpdater::pilot_uniforms(pilot_seed, pattern, probe, o, 0),
+            |ray| {
+                let (probe, o) = (ray.probe as usize, usize::from(ray.octant));
+                requests.push(GpuProbeRequest::from(&ProbeRayRequest {
+                    probe: ray.probe,
+                    origin: ray.origin,
+                    direction: ray.direction,
+                    u: ProbeUpdater::pilot_uniforms(pilot_seed, pilot.pattern, probe, o, 2),
+                }));
+            },
+        );
+        let pilots = requests.len() as u32;
+        ctx.queue()
+            .write_buffer(p.requests.raw(), 0, bytemuck::cast_slice(&requests));
+        let tracer = ProbeTracer {
+            ctx,
+            params: self.params.raw(),
+            scene,
+        };
+        let mut encoder = ctx
+            .device()
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        let e = &mut encoder;
+        let pilot_parts = (&p.trace, &p.trace_layout, cache, &p.requests, &p.samples);
+        let count = |n| GpuProbeFrame {
+            count: n,
+            limit: n,
+            ..GpuProbeFrame::default()
+        };
+        tracer.record(e, pilot_parts, count(pilots), None);
+        let texel_average = updater.texels().config().moving_average;
+        if pilot.updates_caches() {
+            let mut rng = probe_ray_seed(seed, frame, u32::MAX, u32::MAX);
+            let rounding: Vec<f32> = (0..pilots).map(|_| next_uniform(&mut rng)).collect();
+            ctx.write(&a.pilot_rounding, &rounding)?;
+            let (hits, u) = (p.samples.raw(), a.pilot_rounding.raw());
+            cache.record_update_samples(ctx, e, hits, u, pilots, texel_average)?;
+        }
+        let phase = if pilot.measures_gradient() {
+            PilotPhase::Detect
+        } else {
+            PilotPhase::Reference
+        };
+        let (volumes, params) = (&a.volumes, parts.params);
+        cache.record_pilot_hits(
+            ctx,
+            e,
+            p.samples.raw(),
+            volumes,
+            params,
+            parts.trigger,
+            phase,
+        )?;
+        a.smoothing.record(ctx, e, cache, config.smoothing)?;
+        a.smoothing
+            .record_compose(ctx, e, cache, params, camera, a.words.raw())?;
+        // Dynamic chains, their rays within `dynamic_share` of the rays after the pilots.
+        let non_pilot = (updater.budget() as u32).saturating_sub(pilots);
+        let dynamic_budget = (non_pilot as f32 * config.dynamic_share) as u32;
+        e.clear_buffer(a.spent.raw(), 0, None);
+        let chains = &a.dynamic_chains;
+        chains.record_guide(ctx, e, a.words.raw())?;
+        chains.record_frame(ctx, e, probe_ray_seed(seed, frame, u32::MAX - 2, 0))?;
+        let dispatch = GpuDynamicFrame {
+            budget: dynamic_budget,
+            rays_per_octant: config.dynamic_rays_per_octant,
+            seed,
+            frame,
+        };
+        let dispatch = ctx.uniform_buffer("expand_dynamic_samples", &dispatch);
+        let buffers = [
+            (14, chains.samples().raw()),
+            (15, chains.counters().raw()),
+            (16, a.rounding.raw()),
+            (18, p.requests.raw()),
+            (19, a.spent.raw()),
+            (20, a.tables.raw()),
+            (21, dispatch.raw()),
+        ];
+        let kernel = ("expand_dynamic_samples", &a.expand.0, &a.expand.1);
+        let groups = (chains.samples().len() as u32).div_ceil(PROBE_GROUP);
+        record_pass(ctx, e, kernel, &buffers, cache, (groups, 1));
+        let dynamic_parts = (&p.trace, &p.trace_layout, cache, &p.requests, &a.rays);
+        let dynamic = GpuProbeFrame {
+            limit: dynamic_budget,
+            ..GpuProbeFrame::default()
+        };
+        // The rays written (`spent[1]`) become the dispatch's count on the GPU.
+        tracer.record(e, dynamic_parts, dynamic, Some((a.spent.raw(), 4)));
+        let (rays, u) = (a.rays.raw(), a.rounding.raw());
+        let dynamic_average = config.dynamic_moving_average;
+        cache.record_update_samples(ctx, e, rays, u, dynamic_budget, dynamic_average)?;
+        // Static chains on the rays left.
+        let chains = &a.static_chains;
+        chains.record_feedback(ctx, e, cache)?;
+        chains.record_guide(ctx, e, a.words.raw())?;
+        chains.record_frame(ctx, e, probe_ray_seed(seed, frame, u32::MAX - 3, 0))?;
+        let buffers = (&a.rays, &a.rounding);
+        self.record_chain_rays(e, chains, buffers, (non_pilot, Some(a.spent.raw())), frame)?;
+        cache.record_update_samples(ctx, e, rays, u, non_pilot, texel_average)?;
+        ctx.queue().submit([encoder.finish()]);
+        Ok(pilots)
     }
 
     /// The probe update of frame `frame` before the camera's tiles (the tracer's parameters
@@ -228,8 +774,14 @@ impl GpuTracer {
             params: self.params.raw(),
             scene,
         };
-        if probes.gi.updater().policy() == mcg_probe_cache::UpdatePolicy::Ddgi {
+        if probes.gi.updater().policy() == UpdatePolicy::Ddgi {
             return tracer.ddgi_frame(probes, frame);
+        }
+        if probes.adgi.is_some() && probes.gi.updater().policy() == UpdatePolicy::Adgi {
+            let pilots = self.adgi_frame(frame, camera)?;
+            let probes = &mut self.probes.as_mut().ok_or("no probes")?.guide;
+            probes.adgi.as_mut().ok_or("no adgi")?.pilots = pilots;
+            return Ok(());
         }
         let GpuProbes {
             gi,
@@ -238,13 +790,12 @@ impl GpuTracer {
             trace_layout,
             requests,
             samples,
-            frame: frame_buffer,
             ..
         } = &mut **probes;
         let mut failed = None;
         gi.update(camera, frame, |_, batch, out| {
             let parts = (&*trace, &*trace_layout, &*cache, &*requests, &*samples);
-            if let Err(e) = tracer.trace_batch(parts, frame_buffer, batch, out) {
+            if let Err(e) = tracer.trace_batch(parts, batch, out) {
                 failed.get_or_insert(e);
             }
         })?;
@@ -260,6 +811,74 @@ impl GpuTracer {
         probes.rays_last_frame = probes.gi.rays_last_frame();
         Ok(())
     }
+}
+
+/// The tracer's parameters (binding 0) and the scene's buffers (1–7), as the probe kernels
+/// bind them.
+fn scene_bindings<'a>(
+    params: &'a wgpu::Buffer,
+    s: &'a SceneBuffers,
+) -> [(u32, &'a wgpu::Buffer); 8] {
+    [
+        (0, params),
+        (1, s.nodes.raw()),
+        (2, s.triangles.raw()),
+        (3, s.materials.raw()),
+        (4, s.emitters.raw()),
+        (5, s.uvs.raw()),
+        (6, s.textures.raw()),
+        (7, s.texels.raw()),
+    ]
+}
+
+/// Workgroups of [`PROBE_GROUP`] for `invocations` as a 2D dispatch `(x, y)` within the
+/// device's per-dimension limit (at least one).
+fn workgroups_2d(ctx: &GpuContext, invocations: u32) -> (u32, u32) {
+    let groups = invocations.div_ceil(PROBE_GROUP).max(1);
+    let x = groups.min(ctx.device().limits().max_compute_workgroups_per_dimension);
+    (x, groups.div_ceil(x))
+}
+
+/// Records one compute pass of `kernel` (label, pipeline, group 0 layout) over `groups`, with
+/// `buffers` at group 0 and `cache`'s group at [`GUIDE_GROUP`].
+fn record_pass(
+    ctx: &GpuContext,
+    encoder: &mut wgpu::CommandEncoder,
+    (label, pipeline, layout): (&str, &wgpu::ComputePipeline, &wgpu::BindGroupLayout),
+    buffers: &[(u32, &wgpu::Buffer)],
+    cache: &GpuProbeCache,
+    (x, y): (u32, u32),
+) {
+    let group = bind_buffers(ctx, label, layout, buffers);
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(label),
+        timestamp_writes: None,
+    });
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, &group, &[]);
+    pass.set_bind_group(GUIDE_GROUP, cache.bind_group(), &[]);
+    pass.dispatch_workgroups(x, y, 1);
+}
+
+/// A bind group of `layout` with each `(binding, buffer)` of `buffers`, whole.
+fn bind_buffers(
+    ctx: &GpuContext,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[(u32, &wgpu::Buffer)],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
+        .iter()
+        .map(|&(binding, b)| wgpu::BindGroupEntry {
+            binding,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
 }
 
 /// The pipeline, group 0 layout, cache, requests and samples of `trace_probe_rays`.
@@ -279,63 +898,28 @@ struct ProbeTracer<'a> {
 }
 
 impl ProbeTracer<'_> {
-    /// Records `trace_probe_rays` over `dispatch.count` rays of `probes`' buffers.
+    /// Records `trace_probe_rays` over `dispatch.count` rays of `parts`' buffers (emptying
+    /// the slots up to `dispatch.limit`), its dispatch in a uniform of its own; with
+    /// `count_from` (a buffer and byte offset) the count is copied from there on the GPU.
     fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         parts: TraceParts<'_>,
-        frame: &GpuBuffer<GpuProbeFrame>,
         mut dispatch: GpuProbeFrame,
+        count_from: Option<(&wgpu::Buffer, u64)>,
     ) {
         let (pipeline, layout, cache, requests, samples) = parts;
-        let groups = dispatch.count.div_ceil(PROBE_GROUP).max(1);
-        let x = groups.min(
-            self.ctx
-                .device()
-                .limits()
-                .max_compute_workgroups_per_dimension,
-        );
+        dispatch.limit = dispatch.limit.max(dispatch.count);
+        let (x, y) = workgroups_2d(self.ctx, dispatch.limit);
         dispatch.row = x * PROBE_GROUP;
-        self.ctx
-            .queue()
-            .write_buffer(frame.raw(), 0, bytemuck::bytes_of(&dispatch));
-        let s = self.scene;
-        let buffers = [
-            (0, self.params),
-            (1, s.nodes.raw()),
-            (2, s.triangles.raw()),
-            (3, s.materials.raw()),
-            (4, s.emitters.raw()),
-            (5, s.uvs.raw()),
-            (6, s.textures.raw()),
-            (7, s.texels.raw()),
-            (11, requests.raw()),
-            (12, samples.raw()),
-            (13, frame.raw()),
-        ];
-        let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
-            .iter()
-            .map(|&(binding, b)| wgpu::BindGroupEntry {
-                binding,
-                resource: b.as_entire_binding(),
-            })
-            .collect();
-        let group = self
-            .ctx
-            .device()
-            .create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("trace_probe_rays"),
-                layout,
-                entries: &entries,
-            });
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("trace_probe_rays"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.set_bind_group(GUIDE_GROUP, cache.bind_group(), &[]);
-        pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
+        let frame = self.ctx.uniform_buffer("trace_probe_rays", &dispatch);
+        if let Some((source, offset)) = count_from {
+            encoder.copy_buffer_to_buffer(source, offset, frame.raw(), 0, 4);
+        }
+        let mut buffers = scene_bindings(self.params, self.scene).to_vec();
+        buffers.extend([(11, requests.raw()), (12, samples.raw()), (13, frame.raw())]);
+        let kernel = ("trace_probe_rays", pipeline, layout);
+        record_pass(self.ctx, encoder, kernel, &buffers, cache, (x, y));
     }
 
     /// DDGI's frame: the frame's rotation and the probes' rounding uniforms from the host
@@ -385,7 +969,7 @@ impl ProbeTracer<'_> {
             .device()
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
         let parts = (&p.trace, &p.trace_layout, &p.cache, &p.requests, &p.samples);
-        self.record(&mut encoder, parts, &p.frame, dispatch);
+        self.record(&mut encoder, parts, dispatch, None);
         let bytes = u64::from(count) * size_of::<GpuRaySample>() as u64;
         encoder.copy_buffer_to_buffer(p.samples.raw(), 0, p.cache.rays().raw(), 0, bytes);
         p.cache
@@ -395,28 +979,32 @@ impl ProbeTracer<'_> {
         Ok(())
     }
 
-    /// One batch of the host updater: `batch` uploaded, traced, read back into `out`.
-    fn trace_batch(
-        &self,
-        parts: TraceParts<'_>,
-        frame: &GpuBuffer<GpuProbeFrame>,
-        batch: &[ProbeRayRequest],
-        out: &mut [RaySample],
-    ) -> Result<()> {
-        let requests: Vec<GpuProbeRequest> = batch.iter().map(GpuProbeRequest::from).collect();
+    /// `requests` uploaded into `parts`' requests, traced into its samples, submitted.
+    fn trace_requests(&self, parts: TraceParts<'_>, requests: &[GpuProbeRequest]) {
         self.ctx
             .queue()
-            .write_buffer(parts.3.raw(), 0, bytemuck::cast_slice(&requests));
+            .write_buffer(parts.3.raw(), 0, bytemuck::cast_slice(requests));
         let dispatch = GpuProbeFrame {
-            count: batch.len() as u32,
+            count: requests.len() as u32,
             ..GpuProbeFrame::default()
         };
         let mut encoder = self
             .ctx
             .device()
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-        self.record(&mut encoder, parts, frame, dispatch);
+        self.record(&mut encoder, parts, dispatch, None);
         self.ctx.queue().submit([encoder.finish()]);
+    }
+
+    /// One batch of the host updater: `batch` uploaded, traced, read back into `out`.
+    fn trace_batch(
+        &self,
+        parts: TraceParts<'_>,
+        batch: &[ProbeRayRequest],
+        out: &mut [RaySample],
+    ) -> Result<()> {
+        let requests: Vec<GpuProbeRequest> = batch.iter().map(GpuProbeRequest::from).collect();
+        self.trace_requests(parts, &requests);
         let traced = self.ctx.read_back(parts.4)?;
         for (o, s) in out.iter_mut().zip(&traced) {
             o.radiance = s.radiance;
@@ -437,7 +1025,11 @@ mod tests {
 
     /// The probe shader parses and validates with naga (no adapter needed): `render` binds
     /// the tracer's 8 storage buffers and the cache's words and table, `trace_probe_rays` the
-    /// scene's 7, requests, samples, words and table; the host structs have the WGSL sizes.
+    /// scene's 7, requests, samples, words and table, `trace_chain_samples` the scene's 7, the
+    /// traced samples, the chains' samples and counters, the rounding uniforms, the spent
+    /// slots, words and table, `expand_dynamic_samples` the chains' samples and counters, the
+    /// rounding uniforms, the requests, the spent slots and its tables; the host structs have
+    /// the WGSL sizes.
     #[test]
     fn probe_shader_validates_without_an_adapter() {
         let source = composed_probe_shader().unwrap();
@@ -468,5 +1060,9 @@ mod tests {
         assert_eq!(storage("trace_probe_rays"), 11);
         assert_eq!(size_of::<GpuProbeRequest>(), 32);
         assert_eq!(size_of::<GpuProbeFrame>(), 16);
+        assert_eq!(storage("trace_chain_samples"), 14);
+        assert_eq!(storage("expand_dynamic_samples"), 6);
+        assert_eq!(size_of::<GpuDynamicFrame>(), 16);
+        assert_eq!(size_of::<GpuChainTrace>(), 16);
     }
 }

@@ -36,10 +36,13 @@
     mcpg_choose, mcpg_finish, mcpg_observation_escaped, mcpg_observation_hit, mcpg_params,
     mcpg_pdf_with, mcpg_sample_lobe
 }
-#import mcg::adgi::{AdgiRaySample, adgi_irradiance_at}
+#import mcg::adgi::{
+    AdgiRaySample, adgi_irradiance_at, adgi_params, adgi_probe_position, adgi_sign_not_zero
+}
+#import mcg::adgi_chains::AdgiProbeSample
 #import mcg::sampling::{
     mcg_cosine_hemisphere_pdf, mcg_cosine_hemisphere_sample, mcg_frame_to_world, mcg_pcg_hash,
-    mcg_rng_uniform
+    mcg_rng_uniform, mcg_uniform_float
 }
 
 // `bvh::BvhNode`: inner node (count 0) with children index, index + 1; or a leaf over
@@ -727,8 +730,9 @@ struct ProbeFrame {
     count: u32,
     // Invocations per row of the 2D dispatch.
     row: u32,
-    pad_a: u32,
-    pad_b: u32,
+    // Slots [count, limit) are emptied (probe NO_PROBE).
+    limit: u32,
+    pad: u32,
 }
 
 @group(0) @binding(11) var<storage, read> probe_requests: array<ProbeRequest>;
@@ -797,10 +801,145 @@ fn probe_camera_ray(d: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
 fn trace_probe_rays(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = id.x + id.y * probe_frame.row;
     if i >= probe_frame.count {
+        if i < probe_frame.limit {
+            probe_samples[i] = AdgiRaySample(vec3<f32>(0.0), FAR, vec3<f32>(0.0), NO_PROBE);
+        }
         return;
     }
     let r = probe_requests[i];
     probe_samples[i] = probe_ray(r.origin, r.direction, r.seed, r.probe);
+}
+
+// `gpu::GpuChainTrace`: the dispatch of `trace_chain_samples`.
+struct ChainTrace {
+    // Slots traced (the phase's ray budget, at most the chains' sample capacity).
+    limit: u32,
+    // Invocations per row of the 2D dispatch.
+    row: u32,
+    // The render's seed and the frame, keying `probe_ray_seed`.
+    seed: u32,
+    frame: u32,
+}
+
+// The samples ADGI's Metropolis probe chains emitted (`GpuProbeChains::samples`).
+@group(0) @binding(14) var<storage, read> chain_samples: array<AdgiProbeSample>;
+// `GpuProbeChains::counters`: [0] the samples the chains wrote this frame.
+@group(0) @binding(15) var<storage, read> chain_counters: array<u32>;
+@group(0) @binding(16) var<storage, read_write> chain_rounding: array<f32>;
+@group(0) @binding(17) var<uniform> chain_trace: ChainTrace;
+// [1]: the slots of the budget already spent this frame (the dynamic rays, `dynamic_spent`).
+@group(0) @binding(22) var<storage, read> chain_spent: array<u32>;
+
+// `gpu::NO_PROBE`: the probe of an empty slot, outside every grid (the cache's per-sample update
+// skips it).
+const NO_PROBE: u32 = 0xffffffffu;
+
+// `probe_gi::probe_ray_seed`: the seed of the light sample of ray `ray` of probe `probe` in frame
+// `frame` (a stream apart from the camera's paths).
+fn probe_ray_seed(seed: u32, frame: u32, probe: u32, ray: u32) -> u32 {
+    let salt = 0x70726f62u;
+    return path_seed(seed ^ salt, frame, probe, ray) ^ mcg_pcg_hash(salt);
+}
+
+// One invocation per slot below `chain_trace.limit` − `chain_spent[1]` of the chains' samples (ADGI sec. 4.8: the
+// static chains' samples are the probe rays, taken in slot order up to the budget): slot i below
+// the chains' count traces its sample from its probe along its direction (light seed
+// `probe_ray_seed(seed, frame, probe, i)`), an empty slot gets probe NO_PROBE; every slot gets
+// its rounding uniform (`probe_ray_seed(seed, frame, NO_PROBE, i)` as a uniform float) for
+// `GpuProbeCache::record_update_samples`.
+@compute @workgroup_size(64)
+fn trace_chain_samples(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x + id.y * chain_trace.row;
+    if i >= chain_trace.limit {
+        return;
+    }
+    let t = chain_trace;
+    chain_rounding[i] = mcg_uniform_float(probe_ray_seed(t.seed, t.frame, NO_PROBE, i));
+    let left = t.limit - min(t.limit, chain_spent[1]);
+    if i >= min(chain_counters[0], left) {
+        probe_samples[i] = AdgiRaySample(vec3<f32>(0.0), FAR, vec3<f32>(0.0), NO_PROBE);
+        return;
+    }
+    let s = chain_samples[i];
+    let seed = probe_ray_seed(t.seed, t.frame, s.probe, i);
+    probe_samples[i] = probe_ray(adgi_probe_position(s.probe), s.direction, seed, s.probe);
+}
+
+// `gpu::GpuDynamicFrame`: the dispatch of `expand_dynamic_samples`.
+struct DynamicFrame {
+    // The dynamic phase's ray budget.
+    budget: u32,
+    // `UpdateConfig::dynamic_rays_per_octant`.
+    rays_per_octant: u32,
+    seed: u32,
+    frame: u32,
+}
+
+@group(0) @binding(18) var<storage, read_write> dynamic_requests: array<ProbeRequest>;
+// [0] the slots claimed, [1] the rays written (a prefix of the slots).
+@group(0) @binding(19) var<storage, read_write> dynamic_spent: array<atomic<u32>>;
+// `gpu::dynamic_tables`: [0] where the proxy offsets start; [1..10] the offsets of each octant's
+// interior texels (x | y << 16 interior coordinates); at [0] the offsets of each proxy's probes
+// (one more than the proxies), then the probes.
+@group(0) @binding(20) var<storage, read> dynamic_tables: array<u32>;
+@group(0) @binding(21) var<uniform> dynamic_frame: DynamicFrame;
+
+// `octahedral::octahedral_decode`: the unit direction at square coordinates p (clamped).
+fn probe_octahedral_decode(p_in: vec2<f32>) -> vec3<f32> {
+    let p = clamp(p_in, vec2<f32>(-1.0), vec2<f32>(1.0));
+    let z = 1.0 - abs(p.x) - abs(p.y);
+    var v = vec3<f32>(p, z);
+    if z < 0.0 {
+        v = vec3<f32>((vec2<f32>(1.0) - abs(p.yx)) * adgi_sign_not_zero(p), z);
+    }
+    return normalize(v);
+}
+
+// ADGI sec. 4.9, the twin of `ProbeUpdater::dynamic_phase`'s rays: one invocation per dynamic
+// chain sample (a proxy and an octant) lays `dynamic_rays_per_octant` rays (rounded up to a whole
+// number per texel) over the octant's interior irradiance texels, uniform within each texel's
+// square, for every probe of the proxy, into `dynamic_requests` with their rounding uniforms; a
+// probe whose rays would pass the budget is left out (the CPU stops at the first such probe, in
+// sample order; here in the order the slots are claimed).
+@compute @workgroup_size(64)
+fn expand_dynamic_samples(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= min(chain_counters[0], arrayLength(&chain_samples)) {
+        return;
+    }
+    let s = chain_samples[i];
+    let f = dynamic_frame;
+    let t0 = dynamic_tables[1u + s.octant];
+    let texels = dynamic_tables[2u + s.octant] - t0;
+    let per_texel = (f.rays_per_octant + texels - 1u) / texels;
+    let cost = per_texel * texels;
+    let proxies = dynamic_tables[0];
+    let q0 = dynamic_tables[proxies + s.cell];
+    let q1 = dynamic_tables[proxies + s.cell + 1u];
+    let start = atomicAdd(&dynamic_spent[0], cost * (q1 - q0));
+    let scale = 2.0 / f32(adgi_params.irradiance_interior);
+    var written = 0u;
+    for (var q = q0; q < q1; q++) {
+        let base = start + (q - q0) * cost;
+        if base + cost > f.budget {
+            break;
+        }
+        let probe = dynamic_tables[q];
+        let origin = adgi_probe_position(probe);
+        for (var j = 0u; j < cost; j++) {
+            let slot = base + j;
+            let packed = dynamic_tables[t0 + j / per_texel];
+            let t = vec2<f32>(f32(packed & 0xffffu), f32(packed >> 16u));
+            var rng = probe_ray_seed(f.seed, f.frame, NO_PROBE - 1u, slot);
+            let jitter = vec2<f32>(mcg_rng_uniform(&rng), mcg_rng_uniform(&rng));
+            let direction = probe_octahedral_decode((t + jitter) * scale - vec2<f32>(1.0));
+            let seed = probe_ray_seed(f.seed, f.frame, probe, slot);
+            dynamic_requests[slot] = ProbeRequest(origin, seed, direction, probe);
+            chain_rounding[slot] = mcg_rng_uniform(&rng);
+        }
+        written += cost;
+    }
+    atomicAdd(&dynamic_spent[1], written);
 }
 #endif
 
