@@ -778,8 +778,8 @@ impl ProbeUpdater {
     /// [`hash_uniform`]). The pilot directions use k = 0 (and 1), their light samples k = 2.
     #[must_use]
     pub fn pilot_uniforms(seed: u64, pattern: u64, probe: usize, o: usize, k: u64) -> Vec2 {
-        let c = (seed ^ 0x5bd1_e995)
-            .wrapping_add(pattern.wrapping_mul(0x9e37_79b9_7f4a_7c15))
+        let c = (seed ^ PILOT_SEED_SALT)
+            .wrapping_add(pattern.wrapping_mul(HASH_UNIFORM_GAMMA))
             .wrapping_add(((probe * OCTANTS + o) as u64) << 3)
             .wrapping_add(k);
         Vec2::new(hash_uniform(c), hash_uniform(c + 1))
@@ -1273,14 +1273,26 @@ pub fn spherical_fibonacci(i: u32, n: u32) -> Vec3 {
     Vec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 
+/// SplitMix64's increment γ = 2⁶⁴/φ rounded to odd (Steele et al. 2014): [`hash_uniform`]
+/// adds it to its counter and [`ProbeUpdater::pilot_uniforms`] steps the pattern by it.
+pub const HASH_UNIFORM_GAMMA: u64 = 0x9e37_79b9_7f4a_7c15;
+
+/// The two multipliers of SplitMix64's finaliser (Steele et al. 2014), in the order
+/// [`hash_uniform`] applies them.
+pub const HASH_UNIFORM_MULTIPLIERS: [u64; 2] = [0xbf58_476d_1ce4_e5b9, 0x94d0_49bb_1331_11eb];
+
+/// What [`ProbeUpdater::pilot_uniforms`] xors into the pilot seed before counting from it.
+pub const PILOT_SEED_SALT: u64 = 0x5bd1_e995;
+
 /// A deterministic uniform in [0, 1) from a 64-bit counter (SplitMix64 finaliser; Steele et
 /// al. 2014), top 24 bits.
 #[inline]
 #[must_use]
 pub fn hash_uniform(counter: u64) -> f32 {
-    let mut z = counter.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    let [m0, m1] = HASH_UNIFORM_MULTIPLIERS;
+    let mut z = counter.wrapping_add(HASH_UNIFORM_GAMMA);
+    z = (z ^ (z >> 30)).wrapping_mul(m0);
+    z = (z ^ (z >> 27)).wrapping_mul(m1);
     z ^= z >> 31;
     (z >> 40) as f32 * (1.0 / 16_777_216.0)
 }

@@ -214,6 +214,22 @@ fn push_probe_cache_constants(out: &mut String) {
         "ADGI_WRAP_SHADING_OFFSET",
         mcg_probe_cache::WRAP_SHADING_OFFSET,
     );
+    out.push_str(
+        "\n// mcg-probe-cache: the pilot rays' SplitMix64 (`hash_uniform`), u64 as lo, hi.\n",
+    );
+    use mcg_probe_cache::probe_update::{
+        HASH_UNIFORM_GAMMA, HASH_UNIFORM_MULTIPLIERS, PILOT_SEED_SALT,
+    };
+    let [m0, m1] = HASH_UNIFORM_MULTIPLIERS;
+    for (name, v) in [
+        ("ADGI_HASH_GAMMA", HASH_UNIFORM_GAMMA),
+        ("ADGI_HASH_MUL_A", m0),
+        ("ADGI_HASH_MUL_B", m1),
+        ("ADGI_PILOT_SEED_SALT", PILOT_SEED_SALT),
+    ] {
+        push_u32(out, &format!("{name}_LO"), v as u32);
+        push_u32(out, &format!("{name}_HI"), (v >> 32) as u32);
+    }
 }
 
 /// The normal quantile of `mcg_markov_guide::standard_normal_from_uniform` (M. Giles' erf⁻¹

@@ -290,3 +290,13 @@ const ADGI_TEXEL_UNIFORM_PERIOD: u32 = 4096u;
 const ADGI_SHELL_COUNT: u32 = 16u;
 const ADGI_BLEND_WEIGHT_EPSILON: f32 = 1e-9;
 const ADGI_WRAP_SHADING_OFFSET: f32 = 0.2;
+
+// mcg-probe-cache: the pilot rays' SplitMix64 (`hash_uniform`), u64 as lo, hi.
+const ADGI_HASH_GAMMA_LO: u32 = 2135587861u;
+const ADGI_HASH_GAMMA_HI: u32 = 2654435769u;
+const ADGI_HASH_MUL_A_LO: u32 = 484763065u;
+const ADGI_HASH_MUL_A_HI: u32 = 3210233709u;
+const ADGI_HASH_MUL_B_LO: u32 = 321982955u;
+const ADGI_HASH_MUL_B_HI: u32 = 2496678331u;
+const ADGI_PILOT_SEED_SALT_LO: u32 = 1540483477u;
+const ADGI_PILOT_SEED_SALT_HI: u32 = 0u;

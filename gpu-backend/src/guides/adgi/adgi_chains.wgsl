@@ -7,6 +7,7 @@
 //   let h = adgi_guiding_value(f, g_hat, alpha, cap);               // eq. 2 (capped exponent)
 //   let x = adgi_locate(state, grid);                               // cell, octant, direction
 //   let y = adgi_propose(state, u, grid);                           // Alg. 5 line 2
+//   let u = adgi_pilot_uniforms(seed, pattern, probe, octant, 0u);  // sec. 4.4's pilot rays
 //
 // A chain's state is (p, cos θ, φ) (`AdgiChainState`); the tables of the guide are indexed
 // `cell · 8 + octant`, a cell being a probe (static chains, sec. 4.8) or a block of
@@ -22,7 +23,9 @@
     MARKOV_QUANTILE_TAIL_P2, MARKOV_QUANTILE_TAIL_P3, MARKOV_QUANTILE_TAIL_P4,
     MARKOV_QUANTILE_TAIL_P5, MARKOV_QUANTILE_TAIL_P6, MARKOV_QUANTILE_TAIL_P7,
     MARKOV_QUANTILE_TAIL_P8, MARKOV_QUANTILE_U_MIN, MCG_F32_MAX, MCG_ONE_MINUS_EPSILON,
-    MCG_SQRT_2, MCG_TAU
+    MCG_SQRT_2, MCG_TAU, ADGI_HASH_GAMMA_HI, ADGI_HASH_GAMMA_LO, ADGI_HASH_MUL_A_HI,
+    ADGI_HASH_MUL_A_LO, ADGI_HASH_MUL_B_HI, ADGI_HASH_MUL_B_LO, ADGI_PILOT_SEED_SALT_HI,
+    ADGI_PILOT_SEED_SALT_LO, MCG_UNIFORM_FLOAT_SCALE
 }
 #import mcg::math::{mcg_is_finite, mcg_is_nan, mcg_rounded, mcg_rounded3}
 #import mcg::sampling::{mcg_pcg_hash, mcg_rng_uniform}
@@ -267,4 +270,66 @@ fn adgi_chain_uniforms(seed: u32, chain: u32, draw: u32) -> AdgiStepUniforms {
     }
     u.accept = mcg_rng_uniform(&state);
     return u;
+}
+
+// ---------------------------------------------------------------------------------------------
+// ADGI's pilot rays (sec. 4.4: "a stratified-random ray-direction such that there is always one
+// ray per octant", the same rays on both frames of a pair): the twins of
+// `mcg_probe_cache::probe_update::{hash_uniform, ProbeUpdater::pilot_uniforms}` (the directions
+// from them: `adgi_pilot_direction` of `mcg::adgi`). WGSL has no 64-bit integers, so the u64
+// counters are vec2<u32>(low, high) words with wrapping arithmetic, and the uniforms equal the
+// CPU's bit for bit (integer hashing, then 24 bits times 2⁻²⁴, exact).
+
+// a + b mod 2⁶⁴.
+fn adgi_u64_add(a: vec2<u32>, b: vec2<u32>) -> vec2<u32> {
+    let lo = a.x + b.x;
+    return vec2<u32>(lo, a.y + b.y + select(0u, 1u, lo < a.x));
+}
+
+// The full 64-bit product of two u32 (16-bit limbs, no partial sum overflows).
+fn adgi_u32_mul_wide(a: u32, b: u32) -> vec2<u32> {
+    let a0 = a & 0xffffu;
+    let a1 = a >> 16u;
+    let b0 = b & 0xffffu;
+    let b1 = b >> 16u;
+    let p00 = a0 * b0;
+    let p01 = a0 * b1;
+    let p10 = a1 * b0;
+    let mid = (p00 >> 16u) + (p01 & 0xffffu) + (p10 & 0xffffu);
+    let lo = (p00 & 0xffffu) | (mid << 16u);
+    return vec2<u32>(lo, a1 * b1 + (p01 >> 16u) + (p10 >> 16u) + (mid >> 16u));
+}
+
+// a · b mod 2⁶⁴ (`u64::wrapping_mul`).
+fn adgi_u64_mul(a: vec2<u32>, b: vec2<u32>) -> vec2<u32> {
+    let p = adgi_u32_mul_wide(a.x, b.x);
+    return vec2<u32>(p.x, p.y + a.x * b.y + a.y * b.x);
+}
+
+// z ^ (z >> s) for 0 < s < 32.
+fn adgi_u64_xor_shift(z: vec2<u32>, s: u32) -> vec2<u32> {
+    return z ^ vec2<u32>((z.x >> s) | (z.y << (32u - s)), z.y >> s);
+}
+
+// `hash_uniform`: SplitMix64's finaliser (Steele et al. 2014) of counter + γ, its top 24 bits
+// times 2⁻²⁴ — a uniform in [0, 1), exactly the CPU's.
+fn adgi_hash_uniform(counter: vec2<u32>) -> f32 {
+    var z = adgi_u64_add(counter, vec2<u32>(ADGI_HASH_GAMMA_LO, ADGI_HASH_GAMMA_HI));
+    z = adgi_u64_mul(adgi_u64_xor_shift(z, 30u), vec2<u32>(ADGI_HASH_MUL_A_LO, ADGI_HASH_MUL_A_HI));
+    z = adgi_u64_mul(adgi_u64_xor_shift(z, 27u), vec2<u32>(ADGI_HASH_MUL_B_LO, ADGI_HASH_MUL_B_HI));
+    z = adgi_u64_xor_shift(z, 31u);
+    return f32(z.y >> 8u) * MCG_UNIFORM_FLOAT_SCALE;
+}
+
+// `ProbeUpdater::pilot_uniforms(seed, pattern, probe, octant, k)`: the two uniforms of the
+// counter (seed ^ salt) + pattern · γ + ((8 probe + octant) << 3) + k and of the counter after
+// it (k = 0 the direction, k = 2 the light sample at the hit); probe < 2²⁹.
+fn adgi_pilot_uniforms(seed: vec2<u32>, pattern: vec2<u32>, probe: u32, octant: u32, k: u32) -> vec2<f32> {
+    let salted = seed ^ vec2<u32>(ADGI_PILOT_SEED_SALT_LO, ADGI_PILOT_SEED_SALT_HI);
+    let step = adgi_u64_mul(pattern, vec2<u32>(ADGI_HASH_GAMMA_LO, ADGI_HASH_GAMMA_HI));
+    let slot = probe * 8u + octant;
+    var c = adgi_u64_add(salted, step);
+    c = adgi_u64_add(c, vec2<u32>(slot << 3u, slot >> 29u));
+    c = adgi_u64_add(c, vec2<u32>(k, 0u));
+    return vec2<f32>(adgi_hash_uniform(c), adgi_hash_uniform(adgi_u64_add(c, vec2<u32>(1u, 0u))));
 }
