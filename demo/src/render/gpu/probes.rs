@@ -12,9 +12,12 @@
 //!   instead stalled lavapipe for seconds on some frames.)
 //! - **`adgi`, the update on the GPU:** ADGI's frame (`UpdatePolicy::Adgi`, the twin of
 //!   `ProbeUpdater::frame`, same budget and order of steps) in one submission, no read-back
-//!   (`GpuTracer::adgi_frame`): the pilot rays (laid out by the host as DDGI's, with the CPU's
-//!   directions and light seeds) traced by `trace_probe_rays`, their hits into the texels on
-//!   the first frame of a pair and into the temporal trigger
+//!   (`GpuTracer::adgi_frame`): the pilot rays laid out on the GPU by the kernel
+//!   `lay_out_pilot_rays` (`GpuTracer::record_pilot_layout`: the CPU's pilot uniforms,
+//!   `mcg::adgi_chains::adgi_pilot_uniforms`, bit for bit, hence its light seeds, and its
+//!   directions within WGSL's `sqrt`/`sin`/`cos`; only the 16-byte seed and pattern are
+//!   uploaded), traced by `trace_probe_rays`, their hits into the texels on the first frame
+//!   of a pair (with rounding uniforms drawn on the host) and into the temporal trigger
 //!   ([`GpuProbeCache::record_pilot_hits`]); the triggers smoothed and the heuristics words
 //!   composed ([`GpuTriggerSmoothing`]); the dynamic chains on the proxies, each sample
 //!   expanded by the kernel `expand_dynamic_samples` into rays for every probe of its proxy
@@ -46,10 +49,8 @@ use mcg_gpu_backend::guides::adgi::{
 };
 use mcg_gpu_backend::sampling::next_uniform;
 use mcg_gpu_backend::{GpuBuffer, GpuContext, wgpu};
-use mcg_probe_cache::pilot_rays::pilot_rays;
 use mcg_probe_cache::{
-    AdgiParts, ClipVolume, ClipVolumes, Frustum, GuideParams, PilotPhase, ProbeUpdater,
-    UpdatePolicy,
+    AdgiParts, ClipVolume, ClipVolumes, Frustum, GuideParams, PilotPhase, UpdatePolicy,
 };
 use mcg_probe_cache::{ProbeGrid, ProbeRayRequest, RaySample};
 
@@ -150,6 +151,29 @@ pub struct GpuDynamicFrame {
     pub frame: u32,
 }
 
+/// The dispatch of `lay_out_pilot_rays` (WGSL `PilotLayout`, 16 bytes): two u64 as
+/// `[low, high]` words.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuPilotLayout {
+    /// `UpdateConfig::pilot_seed`.
+    pub seed: [u32; 2],
+    /// `PilotFrame::pattern` of the frame (ADGI sec. 4.4: both frames of a pair share it).
+    pub pattern: [u32; 2],
+}
+
+impl GpuPilotLayout {
+    /// The dispatch of pilot seed `seed` and pattern `pattern`.
+    #[must_use]
+    pub fn new(seed: u64, pattern: u64) -> Self {
+        let words = |v: u64| [v as u32, (v >> 32) as u32];
+        Self {
+            seed: words(seed),
+            pattern: words(pattern),
+        }
+    }
+}
+
 /// ADGI's frame on the GPU (`--method adgi`, `UpdatePolicy::Adgi`): the twin of
 /// `ProbeUpdater::frame`'s ADGI branch, every step recorded into one encoder, no read-back.
 struct GpuAdgi {
@@ -174,6 +198,8 @@ struct GpuAdgi {
     volumes: ClipVolumes,
     /// `expand_dynamic_samples` and its group 0 layout.
     expand: (wgpu::ComputePipeline, wgpu::BindGroupLayout),
+    /// `lay_out_pilot_rays` and its group 0 layout.
+    lay_out: (wgpu::ComputePipeline, wgpu::BindGroupLayout),
     /// The pilot rays of the last frame (for its ray count).
     pilots: u32,
 }
@@ -242,13 +268,25 @@ fn expand_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     })
 }
 
+/// The group 0 layout of `lay_out_pilot_rays`: the requests (18) and the dispatch (23).
+fn lay_out_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let entries = [
+        mcg_gpu_backend::storage_entry(18, false),
+        mcg_gpu_backend::buffer_entry(23, wgpu::BufferBindingType::Uniform),
+    ];
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("lay_out_pilot_rays"),
+        entries: &entries,
+    })
+}
+
 impl GpuAdgi {
     /// ADGI's frame for `probes` (an `adgi` updater) with ADGI's `parts`.
     fn new(
         ctx: &GpuContext,
         probes: &GpuProbes,
         parts: &AdgiParts<'_>,
-        expand: (wgpu::ComputePipeline, wgpu::BindGroupLayout),
+        [expand, lay_out]: [(wgpu::ComputePipeline, wgpu::BindGroupLayout); 2],
     ) -> Result<Self> {
         let updater = probes.gi.updater();
         let grid = updater.grid();
@@ -270,6 +308,7 @@ impl GpuAdgi {
             pilot_rounding: ctx.zeroed_buffer("mcg-demo adgi pilot rounding", n),
             volumes: all_probes(grid)?,
             expand,
+            lay_out,
             pilots: 0,
         })
     }
@@ -461,7 +500,14 @@ impl GpuTracer {
             "expand_dynamic_samples",
             &[&expand_layout, probes.cache.bind_group_layout()],
         )?;
-        let adgi = GpuAdgi::new(ctx, probes, &parts, (expand, expand_layout))?;
+        let lay_out_layout = lay_out_layout(ctx.device());
+        let lay_out = self.pipeline_with(
+            module,
+            "lay_out_pilot_rays",
+            &[&lay_out_layout, probes.cache.bind_group_layout()],
+        )?;
+        let kernels = [(expand, expand_layout), (lay_out, lay_out_layout)];
+        let adgi = GpuAdgi::new(ctx, probes, &parts, kernels)?;
         self.probes
             .as_mut()
             .ok_or("GpuTracer: no probes started")?
@@ -626,9 +672,10 @@ impl GpuTracer {
     ///
     /// 1. pilot rays (sec. 4.4): every probe's 8, along the CPU's directions with the CPU's
     ///    light seeds (keyed by pattern, probe and octant, so both frames of a pair trace the
-    ///    same rays; laid out on the host, as DDGI's), traced; on the first frame of a pair
-    ///    they also update the texels (N_max of the texels); their hits drive f_v, f_r, the
-    ///    temporal gradient and the trigger (eq. 11-17) on the second;
+    ///    same rays; laid out on the GPU, [`record_pilot_layout`](Self::record_pilot_layout)),
+    ///    traced; on the first frame of a pair they also update the texels (N_max of the
+    ///    texels); their hits drive f_v, f_r, the temporal gradient and the trigger
+    ///    (eq. 11-17) on the second;
     /// 2. the triggers smoothed (eq. 15, 18) and the heuristics words composed with f_c of the
     ///    camera (eq. 10, 19, 20);
     /// 3. dynamic chains (sec. 4.9) on f_d max-pooled into the proxies, each sample expanded
@@ -647,28 +694,7 @@ impl GpuTracer {
         let config = updater.config();
         let parts = updater.adgi_parts().ok_or("adgi: no ADGI state")?;
         let seed = p.gi.seed();
-        let grid = updater.grid();
         let pilot = config.pilot_schedule.frame(u64::from(frame));
-        let pilot_seed = config.pilot_seed;
-        let mut requests = Vec::with_capacity(8 * grid.probe_count());
-        pilot_rays(
-            grid,
-            pilot,
-            |_| true,
-            |pattern, probe, o| ProbeUpdater::pilot_uniforms(pilot_seed, pattern, probe, o, 0),
-            |ray| {
-                let (probe, o) = (ray.probe as usize, usize::from(ray.octant));
-                requests.push(GpuProbeRequest::from(&ProbeRayRequest {
-                    probe: ray.probe,
-                    origin: ray.origin,
-                    direction: ray.direction,
-                    u: ProbeUpdater::pilot_uniforms(pilot_seed, pilot.pattern, probe, o, 2),
-                }));
-            },
-        );
-        let pilots = requests.len() as u32;
-        ctx.queue()
-            .write_buffer(p.requests.raw(), 0, bytemuck::cast_slice(&requests));
         let tracer = ProbeTracer {
             ctx,
             params: self.params.raw(),
@@ -678,6 +704,7 @@ impl GpuTracer {
             .device()
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
         let e = &mut encoder;
+        let pilots = self.record_pilot_layout(e, frame)?;
         let pilot_parts = (&p.trace, &p.trace_layout, cache, &p.requests, &p.samples);
         let count = |n| GpuProbeFrame {
             count: n,
@@ -757,6 +784,51 @@ impl GpuTracer {
         cache.record_update_samples(ctx, e, rays, u, non_pilot, texel_average)?;
         ctx.queue().submit([encoder.finish()]);
         Ok(pilots)
+    }
+
+    /// Records `lay_out_pilot_rays` (one dispatch): ADGI's pilot requests of frame `frame`
+    /// (sec. 4.4; `ProbeUpdater`'s pilot phase: every probe's 8 rays, request `8 probe + o`
+    /// along `pilot_direction(o, pilot_uniforms(pilot_seed, pattern, probe, o, 0))` with the
+    /// light seed [`request_seed`] of the uniforms of k = 2) into the probe requests, on the GPU
+    /// from the updater's pilot seed and the frame's pattern; returns the requests written.
+    fn record_pilot_layout(&self, encoder: &mut wgpu::CommandEncoder, frame: u32) -> Result<u32> {
+        let p = &self.probes.as_ref().ok_or("GpuTracer: no probes")?.guide;
+        let a = p.adgi.as_ref().ok_or("GpuTracer: no adgi frame")?;
+        let config = p.gi.updater().config();
+        let pilot = config.pilot_schedule.frame(u64::from(frame));
+        let layout = GpuPilotLayout::new(config.pilot_seed, pilot.pattern);
+        let dispatch = self.ctx.uniform_buffer("lay_out_pilot_rays", &layout);
+        let pilots = u32::try_from(8 * p.gi.updater().grid().probe_count())?;
+        let groups = pilots.div_ceil(PROBE_GROUP);
+        let max = self
+            .ctx
+            .device()
+            .limits()
+            .max_compute_workgroups_per_dimension;
+        let kernel = ("lay_out_pilot_rays", &a.lay_out.0, &a.lay_out.1);
+        let buffers = [(18, p.requests.raw()), (23, dispatch.raw())];
+        let size = (groups.min(max), groups.div_ceil(max));
+        record_pass(&self.ctx, encoder, kernel, &buffers, &p.cache, size);
+        Ok(pilots)
+    }
+
+    /// ADGI's pilot requests of frame `frame` as the GPU frame lays them out (the kernel
+    /// `lay_out_pilot_rays`, submitted alone and read back): `8 · probes` requests,
+    /// probe-major, for comparison with `ProbeUpdater`'s.
+    ///
+    /// # Errors
+    /// Without `--method adgi` probes started, or when the read-back fails.
+    pub fn pilot_requests(&self, frame: u32) -> Result<Vec<GpuProbeRequest>> {
+        let p = &self.probes.as_ref().ok_or("GpuTracer: no probes")?.guide;
+        let mut encoder = self
+            .ctx
+            .device()
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        let pilots = self.record_pilot_layout(&mut encoder, frame)?;
+        self.ctx.queue().submit([encoder.finish()]);
+        let mut requests = self.ctx.read_back(&p.requests)?;
+        requests.truncate(pilots as usize);
+        Ok(requests)
     }
 
     /// The probe update of frame `frame` before the camera's tiles (the tracer's parameters
@@ -1028,8 +1100,8 @@ mod tests {
     /// scene's 7, requests, samples, words and table, `trace_chain_samples` the scene's 7, the
     /// traced samples, the chains' samples and counters, the rounding uniforms, the spent
     /// slots, words and table, `expand_dynamic_samples` the chains' samples and counters, the
-    /// rounding uniforms, the requests, the spent slots and its tables; the host structs have
-    /// the WGSL sizes.
+    /// rounding uniforms, the requests, the spent slots and its tables, `lay_out_pilot_rays`
+    /// the requests; the host structs have the WGSL sizes.
     #[test]
     fn probe_shader_validates_without_an_adapter() {
         let source = composed_probe_shader().unwrap();
@@ -1063,6 +1135,8 @@ mod tests {
         assert_eq!(storage("trace_chain_samples"), 14);
         assert_eq!(storage("expand_dynamic_samples"), 6);
         assert_eq!(size_of::<GpuDynamicFrame>(), 16);
+        assert_eq!(storage("lay_out_pilot_rays"), 1);
+        assert_eq!(size_of::<GpuPilotLayout>(), 16);
         assert_eq!(size_of::<GpuChainTrace>(), 16);
     }
 }

@@ -37,9 +37,10 @@
     mcpg_pdf_with, mcpg_sample_lobe
 }
 #import mcg::adgi::{
-    AdgiRaySample, adgi_irradiance_at, adgi_params, adgi_probe_position, adgi_sign_not_zero
+    AdgiRaySample, adgi_irradiance_at, adgi_params, adgi_pilot_direction, adgi_probe_position,
+    adgi_sign_not_zero
 }
-#import mcg::adgi_chains::AdgiProbeSample
+#import mcg::adgi_chains::{AdgiProbeSample, adgi_pilot_uniforms}
 #import mcg::sampling::{
     mcg_cosine_hemisphere_pdf, mcg_cosine_hemisphere_sample, mcg_frame_to_world, mcg_pcg_hash,
     mcg_rng_uniform, mcg_uniform_float
@@ -940,6 +941,36 @@ fn expand_dynamic_samples(@builtin(global_invocation_id) id: vec3<u32>) {
         written += cost;
     }
     atomicAdd(&dynamic_spent[1], written);
+}
+
+// `gpu::GpuPilotLayout`: the dispatch of `lay_out_pilot_rays`, two u64 as (low, high) words.
+struct PilotLayout {
+    // `UpdateConfig::pilot_seed`.
+    seed: vec2<u32>,
+    // `PilotFrame::pattern` of the frame (sec. 4.4's `AABBCC…`: both frames of a pair share it).
+    pattern: vec2<u32>,
+}
+
+@group(0) @binding(23) var<uniform> pilot_layout: PilotLayout;
+
+// ADGI sec. 4.4, the twin of `ProbeUpdater::pilot_phase`'s requests (`pilot_rays` over every
+// probe): invocation i = 8 probe + octant writes request i of `dynamic_requests` — from the
+// probe's position along `pilot_direction(octant, pilot_uniforms(seed, pattern, probe, octant,
+// 0))`, with the light-sample seed `probe_gi::request_seed` of the uniforms of k = 2:
+// pcg(bits(u.x) ^ pcg(bits(u.y))). The same rays on both frames of a pair, as on the CPU.
+@compute @workgroup_size(64)
+fn lay_out_pilot_rays(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = id.x + id.y * groups.x * 64u;
+    if i >= adgi_params.probe_count * 8u {
+        return;
+    }
+    let probe = i / 8u;
+    let octant = i % 8u;
+    let l = pilot_layout;
+    let direction = adgi_pilot_direction(octant, adgi_pilot_uniforms(l.seed, l.pattern, probe, octant, 0u));
+    let light = adgi_pilot_uniforms(l.seed, l.pattern, probe, octant, 2u);
+    let seed = mcg_pcg_hash(bitcast<u32>(light.x) ^ mcg_pcg_hash(bitcast<u32>(light.y)));
+    dynamic_requests[i] = ProbeRequest(adgi_probe_position(probe), seed, direction, probe);
 }
 #endif
 
