@@ -466,17 +466,25 @@ impl GpuTracer {
     /// ADGI's frame on the GPU for `--method adgi` (`UpdatePolicy::Adgi`; none for the other
     /// probe methods): its chains from the CPU updater's (the same initial states), the
     /// tables of the dynamic rays and the frame's buffers; an existing one is reused with the
-    /// new chain states and cleared words.
+    /// new chain states and cleared words. So `GpuProbes::adgi` is `Some` exactly when the
+    /// probes' policy is `UpdatePolicy::Adgi`.
     fn start_adgi(&mut self) -> Result<()> {
+        let probes = &mut self
+            .probes
+            .as_mut()
+            .ok_or("GpuTracer: no probes started")?
+            .guide;
+        if probes.gi.updater().policy() != UpdatePolicy::Adgi {
+            // A restart with another probe method drops the frame of an earlier `adgi`.
+            probes.adgi = None;
+            return Ok(());
+        }
         let probes = &self
             .probes
             .as_ref()
             .ok_or("GpuTracer: no probes started")?
             .guide;
         let updater = probes.gi.updater();
-        if updater.policy() != UpdatePolicy::Adgi {
-            return Ok(());
-        }
         let parts = updater.adgi_parts().ok_or("adgi: no ADGI state")?;
         let ctx = &self.ctx;
         if let Some(a) = &probes.adgi {
@@ -521,10 +529,8 @@ impl GpuTracer {
     pub fn probe_rays_last_frame(&self) -> Option<u64> {
         let p = &self.probes.as_ref()?.guide;
         match &p.adgi {
-            Some(a) if p.gi.updater().policy() == UpdatePolicy::Adgi => {
-                Some(self.adgi_rays(p, a).unwrap_or(p.rays_last_frame))
-            }
-            _ => Some(p.rays_last_frame),
+            Some(a) => Some(self.adgi_rays(p, a).unwrap_or(p.rays_last_frame)),
+            None => Some(p.rays_last_frame),
         }
     }
 
@@ -799,15 +805,9 @@ impl GpuTracer {
         let layout = GpuPilotLayout::new(config.pilot_seed, pilot.pattern);
         let dispatch = self.ctx.uniform_buffer("lay_out_pilot_rays", &layout);
         let pilots = u32::try_from(8 * p.gi.updater().grid().probe_count())?;
-        let groups = pilots.div_ceil(PROBE_GROUP);
-        let max = self
-            .ctx
-            .device()
-            .limits()
-            .max_compute_workgroups_per_dimension;
         let kernel = ("lay_out_pilot_rays", &a.lay_out.0, &a.lay_out.1);
         let buffers = [(18, p.requests.raw()), (23, dispatch.raw())];
-        let size = (groups.min(max), groups.div_ceil(max));
+        let size = workgroups_2d(&self.ctx, pilots);
         record_pass(&self.ctx, encoder, kernel, &buffers, &p.cache, size);
         Ok(pilots)
     }
@@ -849,7 +849,7 @@ impl GpuTracer {
         if probes.gi.updater().policy() == UpdatePolicy::Ddgi {
             return tracer.ddgi_frame(probes, frame);
         }
-        if probes.adgi.is_some() && probes.gi.updater().policy() == UpdatePolicy::Adgi {
+        if probes.adgi.is_some() {
             let pilots = self.adgi_frame(frame, camera)?;
             let probes = &mut self.probes.as_mut().ok_or("no probes")?.guide;
             probes.adgi.as_mut().ok_or("no adgi")?.pilots = pilots;
