@@ -23,6 +23,7 @@
 //! | [`RaySample`], [`BlendWeights`], [`ProbeTexels::update_sample`], [`ProbeTexels::update_sample_at`], [`ProbeTexels::blend_rays`] | ADGI's per-sample CAS update (at a probe or the nearest one); DDGI's cosine-weighted blend | ADGI Alg. 2-4; DDGI sec. 4 |
 //! | [`QueryConfig`], [`TexelContent`], [`ProbeTexels::irradiance_at`], [`ProbeTexels::convolved`] | irradiance from 8 probes: trilinear, wrap, Chebyshev, biases, bilinear; radiance texels → irradiance texels | DDGI sec. 4-5; RTXGI; ADGI sec. 4.8 |
 //! | [`ProbeUpdater`], [`UpdatePolicy`], [`UpdateConfig`], [`ProbeRayRequest`], [`FrameRays`] | the per-frame update a renderer calls: DDGI's uniform rays + blend, or ADGI's pilot rays → heuristics → dynamic → static chains in one ray budget, or mcg's extensions (refill; blend: staggered pilot pairs steering DDGI's blend); tracing through a batch callback | ADGI sec. 4, Fig. 4; DDGI sec. 4 |
+//! | [`uniform_rays`], [`UniformRays`], [`spherical_fibonacci`], [`sequence_direction`] | a probe's uniform rays: DDGI's rotated spherical Fibonacci set per frame, or mcg's per-probe R2 sequence continued over frames | DDGI sec. 4; Roberts 2018 (R2) |
 //! | [`clip_volume`], [`ClipVolumes`], [`Frustum`] | inner / outer clip volumes, shell count reset N ≤ 16 | ADGI Fig. 6b, sec. 4.4, 4.8 |
 //!
 //! ## Conventions
@@ -85,6 +86,7 @@ pub mod temporal_gradient;
 mod test_support;
 mod texel_map;
 mod texel_update;
+pub mod uniform_rays;
 
 pub use clip_volume::{ClipRegion, ClipVolume, ClipVolumes, Frustum};
 pub use equal_area::{equal_area_decode, equal_area_encode, equal_area_solid_angle};
@@ -105,7 +107,6 @@ pub use probe_texels::{
 };
 pub use probe_update::{
     AdgiParts, FrameRays, ProbeRayRequest, ProbeUpdater, UpdateConfig, UpdatePolicy, hash_uniform,
-    spherical_fibonacci,
 };
 pub use proxies::ProxyGrid;
 #[cfg(feature = "scene")]
@@ -115,6 +116,9 @@ pub use scene::{DynamicScene, ProbeRay, Scene, SceneEvent};
 pub use temporal_gradient::{ChangeDetector, SmoothingKernel, TemporalTrigger};
 pub use texel_map::{MAX_MAP_SIDE, MapKind, TexelMap};
 pub use texel_update::{BLEND_WEIGHT_EPSILON, BlendWeights, RaySample};
+pub use uniform_rays::{
+    SEQUENCE_SEED_SALT, SEQUENCE_STEPS, UniformRays, sequence_direction, spherical_fibonacci,
+};
 
 /// The README's example, compiled and run as a doctest.
 #[cfg(doctest)]

@@ -88,17 +88,19 @@
 //! 2. ignores gradients below [`UpdateConfig::blend_pulse_threshold`] (0.05; f_v, f_r ∈
 //!    [0, 1]): with it f_d > 0 on 4-5 probes before the event instead of 36-40, on 134 at
 //!    frame 32, and on none from frame 44;
-//! 3. traces per probe a spherical Fibonacci set under the frame's random rotation (DDGI's):
-//!    the rays left after the pilots shared equally, plus
-//!    [`UpdateConfig::blend_dynamic_rays`] · f_d for changed probes (within
-//!    [`UpdateConfig::dynamic_share`]), and blends them into all of the probe's texels with
-//!    DDGI's cosine weights (texels hold E/π, [`TexelContent::Irradiance`]);
+//! 3. traces per probe the rays left after the pilots, shared equally, plus
+//!    [`UpdateConfig::blend_dynamic_rays`] for each probe whose change signal is on (within
+//!    [`UpdateConfig::dynamic_share`]), along the probe's own low-discrepancy sequence
+//!    continued from frame to frame ([`UpdateConfig::blend_rays`],
+//!    [`crate::uniform_rays`]), and blends them into all of the probe's texels with DDGI's
+//!    cosine weights (texels hold E/π, [`TexelContent::Irradiance`]);
 //! 4. restarts the window of a probe whose change signal turns on (count 0: the next blend
 //!    replaces the texels), uses the dynamic N_max = 10 while it is on and
 //!    [`UpdateConfig::blend_max_count`] (24) otherwise.
 //!
-//! Renderer, `render` seeds 1-8, frames from the event until the event region's relMSE
-//! falls to 0.07: blend 1, 1, 1, 1, 1, 1, 0, 1 (median 1); DDGI 11, 9, 10, 11, 11, 9, 11, 9
+//! Renderer, with items 1, 2 and 4 and item 3's first form (DDGI's rotated Fibonacci sets,
+//! extra rays in proportion to f_d), `render` seeds 1-8, frames from the event until the
+//! event region's relMSE falls to 0.07: blend 1, 1, 1, 1, 1, 1, 0, 1 (median 1); DDGI 11, 9, 10, 11, 11, 9, 11, 9
 //! (median 10). Mean relMSE over the last 14 frames: event region 0.030-0.038 against
 //! 0.050-0.056, whole image 0.039-0.042 against 0.047-0.050. The restart does the work: the
 //! smoothed f_d stays small, so the extra rays are ≈ 60 of 6272 at the event. DDGI with a
@@ -108,9 +110,28 @@
 //! 0.019 — DDGI's error there is the lag of its hysteresis.
 //!
 //! On the `probe_cache_adgi` fixture of `mcg-tests` (door sliding open over frames 16-17,
-//! within a pair) the blend does *not* win: frames to 0.3 near the event 17, never, 13, 18,
-//! 19, 20, 15, 13 against DDGI's 11, 12, 12, 10, 14, 13, 12, 11, all-probe end error
-//! 0.092-0.115 against 0.086-0.099; refill stays the policy for that fixture.
+//! within a pair) that first form did *not* win: frames to 0.3 near the event 17, never, 13,
+//! 18, 19, 20, 15, 13 against DDGI's 11, 12, 12, 10, 14, 13, 12, 11, all-probe end error
+//! 0.092-0.115 against 0.086-0.099. Measured why (run seeds 1-4): its steady all-probe error
+//! before the event was already above DDGI's (0.093-0.105 against 0.087-0.096) — it blends
+//! 24 rays per probe and frame against DDGI's 32, and DDGI with 24 rays and the blend's window
+//! 24 matched it (0.098-0.103) — and the restart at the event put one frame of 24 rays into
+//! 60-66 probes' texels (near-event error 1.0 on the event's frame) whose smoothed f_d drew
+//! 12-28 extra rays in all. Blending the pilot rays in too made it worse (with the detector
+//! off, 0.102-0.110 against 0.096-0.110: 8 independent rays added to a stratified set of 24
+//! add more noise than they remove), which
+//! showed how much the stratification of the rays matters. Item 3 now (a) continues a
+//! per-probe R2 sequence over frames, so a texel's window holds a stratified set over its
+//! frames, not only within each, and (b) gives every changed probe the same extra rays. On the
+//! fixture, run seeds 1-8: frames to 0.3 near the event 4, 4, 2, 2, 3, 2, 2, 1 (median 2
+//! against 12, faster on every seed) and all-probe end error 0.069-0.078 against DDGI's
+//! 0.086-0.099 (lower on every seed); (a) alone gave 7-13 frames and 0.066-0.070. DDGI with
+//! the same sequence ([`UpdateConfig::ddgi_rays`], not the paper's baseline) ends lower, at
+//! 0.059-0.062 (the blend's 8 pilot rays per probe are what it pays for its change
+//! detection), and needs 8-11 frames to 0.3. In the renderer (the report's dynamic-GI section, its 8 seeds, CPU) the
+//! blend now needs 0-1 frames (DDGI 8-10) and ends at 0.041-0.047 whole-image relMSE against
+//! DDGI's 0.047-0.050 (it was 0.039-0.046 with the first form: the image's error there is
+//! the path tracer's noise, not the probes').
 //!
 //! # Budget
 //! A frame traces at most `rays_per_probe × probe count` probe rays under every policy
@@ -126,6 +147,7 @@ use mcg_color_codec::{HeuristicsWord, MovingAverage};
 use crate::guiding_function::{decode_field, octant_feedback};
 use crate::heuristics::{self, OCTANTS, octant};
 use crate::pilot_rays::{PilotHit, octant_heuristics, pilot_rays};
+use crate::uniform_rays::{UniformRays, sequence_direction, spherical_fibonacci};
 use crate::{
     BlendWeights, ChangeDetector, ControlError, GuideParams, GuidingFunction, HeuristicField,
     HeuristicParams, LayoutError, PilotFrame, PilotSchedule, ProbeChains, ProbeError, ProbeGrid,
@@ -246,7 +268,8 @@ pub struct UpdateConfig {
     pub camera_threshold: f32,
     /// The pilot directions' schedule (ADGI sec. 4.4: each set held for 2 frames).
     pub pilot_schedule: PilotSchedule,
-    /// Seed of the hashed pilot directions and their light-sample uniforms.
+    /// Seed of the hashed pilot directions and their light-sample uniforms, and of the probes'
+    /// shifts of [`UniformRays::Sequence`].
     pub pilot_seed: u64,
     /// κ of [`UpdatePolicy::AdgiRefill`] (mcg's extension; unused by the other policies): the
     /// static chains sample f' = f_s + (1 − f_s) · min(1, κ · d) instead of f_s (ADGI eq. 19),
@@ -259,21 +282,30 @@ pub struct UpdateConfig {
     /// 24 rays per probe left after the pilots, against DDGI's 32 with N_max = 17, and
     /// 24 × 24 ≈ 32 × 17 rays per window.
     pub blend_max_count: u32,
-    /// Extra rays per frame of an [`UpdatePolicy::AdgiBlend`] probe whose f_d is 1 (f_d · this
-    /// for smaller f_d), within [`UpdateConfig::dynamic_share`] of the rays after the pilots.
-    /// Our choice: 96.
+    /// Extra rays per frame of an [`UpdatePolicy::AdgiBlend`] probe whose change signal is on
+    /// (some octant's f_d above 0), within [`UpdateConfig::dynamic_share`] of the rays after
+    /// the pilots. Our choice: 96 (three times a probe's budget: a restarted probe's first
+    /// frames average 120 rays instead of 24).
     pub blend_dynamic_rays: u32,
     /// The gradient magnitude below which [`UpdatePolicy::AdgiBlend`]'s detector sees no
     /// change ([`ChangeDetector::with_pulse_threshold`]; f_v, f_r ∈ [0, 1]).
     pub blend_pulse_threshold: f32,
+    /// The ray layout of [`UpdatePolicy::Ddgi`]. Default: DDGI's own,
+    /// [`UniformRays::RotatedFibonacci`] (the baseline the ADGI paper compares with);
+    /// [`UniformRays::Sequence`] is mcg's (see [`crate::uniform_rays`]).
+    pub ddgi_rays: UniformRays,
+    /// The ray layout of [`UpdatePolicy::AdgiBlend`]'s uniform rays. Our choice:
+    /// [`UniformRays::Sequence`] (mcg's blend extension, module docs).
+    pub blend_rays: UniformRays,
 }
 
 impl UpdateConfig {
     /// The defaults (see each field): 32 rays per probe (ADGI sec. 5 gives Q-DDGI 32),
     /// ADGI's texels, Q-DDGI's N_max = 17, DDGI's blend, dynamic N_max = 10, share 0.75, 64
     /// rays per dynamic octant, 64 dynamic chains, trigger decay 0.5, 3 × 3 × 3 smoothing, no
-    /// camera falloff, pilot pairs, pilot seed 0, refill weight 2, blend window 24 and 96
-    /// blend dynamic rays.
+    /// camera falloff, pilot pairs, pilot seed 0, refill weight 2, blend window 24, 96 blend
+    /// dynamic rays, DDGI's rotated Fibonacci rays for DDGI and mcg's ray sequence for the
+    /// blend.
     pub const DEFAULT: Self = Self {
         rays_per_probe: 32,
         texels: TexelConfig::ADGI,
@@ -295,6 +327,8 @@ impl UpdateConfig {
         blend_max_count: 24,
         blend_dynamic_rays: 96,
         blend_pulse_threshold: 0.05,
+        ddgi_rays: UniformRays::RotatedFibonacci,
+        blend_rays: UniformRays::Sequence,
     };
 }
 
@@ -413,6 +447,8 @@ pub struct ProbeUpdater {
     samples: Vec<RaySample>,
     /// The texel-update uniform of each request (or of each probe, for DDGI's blend).
     rounding: Vec<f32>,
+    /// Per probe, the uniform rays traced so far (the index into its ray sequence).
+    ray_counter: Vec<u32>,
     adgi: Option<AdgiState>,
 }
 
@@ -554,6 +590,7 @@ impl ProbeUpdater {
             requests: Vec::new(),
             samples: Vec::new(),
             rounding: Vec::new(),
+            ray_counter: vec![0; grid.probe_count()],
             adgi,
         })
     }
@@ -667,7 +704,7 @@ impl ProbeUpdater {
         T: FnMut(&[ProbeRayRequest], &mut [RaySample]),
     {
         match self.adgi.take() {
-            None => self.ddgi_frame(&mut uniform, &mut trace),
+            None => self.ddgi_frame(frame, &mut uniform, &mut trace),
             Some(mut a) => {
                 let rays = self.adgi_frame(&mut a, frame, camera, &mut uniform, &mut trace);
                 self.adgi = Some(a);
@@ -709,10 +746,14 @@ impl ProbeUpdater {
 
     fn ddgi_frame(
         &mut self,
+        frame: u64,
         uniform: &mut impl FnMut() -> f32,
         trace: &mut impl FnMut(&[ProbeRayRequest], &mut [RaySample]),
     ) -> FrameRays {
         let r = self.config.rays_per_probe;
+        // The first index of this frame's rays in each probe's sequence (mcg's
+        // `UniformRays::Sequence`): every frame traces `r` of them.
+        let first = (frame as u32).wrapping_mul(r);
         // One random rotation per frame for all probes (DDGI sec. 4).
         let rotation = random_rotation(uniform);
         let dirs: Vec<Vec3> = (0..r)
@@ -722,7 +763,14 @@ impl ProbeUpdater {
         self.rounding.clear();
         for p in 0..self.grid.probe_count() {
             let origin = self.grid.probe_position(self.grid.probe_coords(p));
-            for &direction in &dirs {
+            for (i, &direction) in (0..).zip(&dirs) {
+                let direction = match self.config.ddgi_rays {
+                    UniformRays::RotatedFibonacci => direction,
+                    UniformRays::Sequence => {
+                        let index = first.wrapping_add(i);
+                        sequence_direction(self.config.pilot_seed, p as u32, index)
+                    }
+                };
                 self.push_request(p, origin, direction, uniform);
             }
             self.rounding.push(uniform());
@@ -983,8 +1031,8 @@ impl ProbeUpdater {
     }
 
     /// One frame of [`UpdatePolicy::AdgiBlend`] (module docs): staggered pilot rays and their
-    /// detection, the heuristics words, then per probe `n_p` rays along a rotated spherical
-    /// Fibonacci set, blended into all its texels.
+    /// detection, the heuristics words, then per probe `n_p` uniform rays
+    /// ([`UpdateConfig::blend_rays`]), blended into all its texels.
     fn blend_frame(
         &mut self,
         a: &mut AdgiState,
@@ -1004,9 +1052,16 @@ impl ProbeUpdater {
         for (p, &n) in counts.iter().enumerate() {
             let origin = self.grid.probe_position(self.grid.probe_coords(p));
             for i in 0..n {
-                let direction = rotation * spherical_fibonacci(i, n);
+                let direction = match self.config.blend_rays {
+                    UniformRays::RotatedFibonacci => rotation * spherical_fibonacci(i, n),
+                    UniformRays::Sequence => {
+                        let index = self.ray_counter[p].wrapping_add(i);
+                        sequence_direction(self.config.pilot_seed, p as u32, index)
+                    }
+                };
                 self.push_request(p, origin, direction, uniform);
             }
+            self.ray_counter[p] = self.ray_counter[p].wrapping_add(n);
             self.rounding.push(uniform());
         }
         self.trace_batch(trace);
@@ -1124,17 +1179,21 @@ impl ProbeUpdater {
     }
 
     /// Rays per probe of a blend frame, `non_pilot` in all: the same share for every probe,
-    /// plus [`UpdateConfig::blend_dynamic_rays`] · f_d for probes whose largest f_d is above
-    /// 0, their total scaled down to at most [`UpdateConfig::dynamic_share`] of `non_pilot`.
+    /// plus [`UpdateConfig::blend_dynamic_rays`] for each probe whose largest f_d is above 0,
+    /// their total scaled down to at most [`UpdateConfig::dynamic_share`] of `non_pilot`.
     /// Rounded by systematic sampling with the uniform `u`, so the counts add up to
     /// `non_pilot` exactly. Sets `a.dynamic_total`.
     fn blend_allocation(&self, a: &mut AdgiState, non_pilot: u64, u: f32) -> Vec<u32> {
         let probes = self.grid.probe_count();
-        let change: Vec<f64> = (0..probes)
-            .map(|p| f64::from(max_octant(&a.f_d[p * OCTANTS..][..OCTANTS])))
+        // Every probe whose change signal is on gets the same extra rays. The smoothed f_d of
+        // a real change is small, so rays in proportion to it (this rule's first form) were
+        // 12-28 of the fixture's 13 824 at its door's event and left the restarted probes
+        // with one frame of the base rays.
+        let changed: Vec<f64> = (0..probes)
+            .map(|p| f64::from(u8::from(max_octant(&a.f_d[p * OCTANTS..][..OCTANTS]) > 0.0)))
             .collect();
         let total = non_pilot as f64;
-        let wanted: f64 = change.iter().sum::<f64>() * f64::from(self.config.blend_dynamic_rays);
+        let wanted: f64 = changed.iter().sum::<f64>() * f64::from(self.config.blend_dynamic_rays);
         let dynamic = wanted.min(f64::from(self.config.dynamic_share) * total);
         a.dynamic_total = dynamic;
         let scale = if wanted > 0.0 { dynamic / wanted } else { 0.0 };
@@ -1143,7 +1202,7 @@ impl ProbeUpdater {
         let u = f64::from(u);
         let mut cumulative = 0.0;
         let mut before = u.floor();
-        change
+        changed
             .iter()
             .map(|&c| {
                 cumulative += base + extra * c;
@@ -1254,25 +1313,6 @@ fn max_octant(values: &[f32]) -> f32 {
     values.iter().fold(0.0_f32, |m, &v| m.max(v))
 }
 
-/// The i-th of n spherical Fibonacci directions (DDGI's ray set before its random rotation;
-/// DDGI sec. 4, after Keinert et al. 2015): z = 1 − (2i + 1)/n, φ = 2π·frac(i·(√5 − 1)/2).
-/// The directions [`ProbeUpdater`]'s uniform rays are rotated from, for a renderer that lays
-/// out the same rays itself (e.g. on a GPU).
-///
-/// ```
-/// use mcg_probe_cache::spherical_fibonacci;
-/// let d = spherical_fibonacci(0, 32);
-/// assert!((d.length() - 1.0).abs() < 1e-6 && d.z > 0.9);
-/// ```
-#[must_use]
-pub fn spherical_fibonacci(i: u32, n: u32) -> Vec3 {
-    const GOLDEN: f32 = 0.618_034;
-    let phi = core::f32::consts::TAU * ((i as f32 * GOLDEN).fract());
-    let z = 1.0 - (2.0 * i as f32 + 1.0) / n as f32;
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
-}
-
 /// SplitMix64's increment γ = 2⁶⁴/φ rounded to odd (Steele et al. 2014): [`hash_uniform`]
 /// adds it to its counter and [`ProbeUpdater::pilot_uniforms`] steps the pattern by it.
 pub const HASH_UNIFORM_GAMMA: u64 = 0x9e37_79b9_7f4a_7c15;
@@ -1289,12 +1329,17 @@ pub const PILOT_SEED_SALT: u64 = 0x5bd1_e995;
 #[inline]
 #[must_use]
 pub fn hash_uniform(counter: u64) -> f32 {
+    (split_mix64(counter) >> 40) as f32 * (1.0 / 16_777_216.0)
+}
+
+/// SplitMix64's output for `counter` (Steele et al. 2014): γ added, then the finaliser.
+#[inline]
+pub(crate) fn split_mix64(counter: u64) -> u64 {
     let [m0, m1] = HASH_UNIFORM_MULTIPLIERS;
     let mut z = counter.wrapping_add(HASH_UNIFORM_GAMMA);
     z = (z ^ (z >> 30)).wrapping_mul(m0);
     z = (z ^ (z >> 27)).wrapping_mul(m1);
-    z ^= z >> 31;
-    (z >> 40) as f32 * (1.0 / 16_777_216.0)
+    z ^ (z >> 31)
 }
 
 #[cfg(test)]
@@ -1333,6 +1378,51 @@ mod tests {
     fn updater(policy: UpdatePolicy, rng: &mut Pcg64Mcg) -> ProbeUpdater {
         ProbeUpdater::new(grid(), policy, UpdateConfig::DEFAULT, || rng.random())
             .expect("valid settings")
+    }
+
+    /// With [`UniformRays::Sequence`], DDGI's frame f traces indices f·r … f·r + r − 1 of
+    /// each probe's sequence, and the blend's probes continue theirs from frame to frame
+    /// (their ray counts vary); the rotated Fibonacci layout is DDGI's default.
+    #[test]
+    fn uniform_rays_continue_each_probes_sequence() {
+        let mut config = UpdateConfig::DEFAULT;
+        assert_eq!(config.ddgi_rays, UniformRays::RotatedFibonacci);
+        assert_eq!(config.blend_rays, UniformRays::Sequence);
+        config.ddgi_rays = UniformRays::Sequence;
+        config.pilot_seed = 0x1234;
+        let mut rng = Pcg64Mcg::seed_from_u64(3);
+        for policy in [UpdatePolicy::Ddgi, UpdatePolicy::AdgiBlend] {
+            let mut u =
+                ProbeUpdater::new(grid(), policy, config, || rng.random()).expect("valid settings");
+            let mut next = vec![0_u32; u.grid().probe_count()];
+            let mut uniform = Pcg64Mcg::seed_from_u64(5);
+            for frame in 0..6 {
+                let mut world = world(frame, 3);
+                u.frame(
+                    frame,
+                    Vec3::ZERO,
+                    || uniform.random(),
+                    |requests, samples| {
+                        // The blend's pilot batch (8 per probe) comes first; its uniform batch
+                        // is the one whose rays continue the sequences.
+                        let pilots =
+                            policy == UpdatePolicy::AdgiBlend && requests.len() == 8 * next.len();
+                        if !pilots {
+                            for r in requests {
+                                let p = r.probe as usize;
+                                let want = sequence_direction(0x1234, r.probe, next[p]);
+                                assert_eq!(r.direction, want, "{policy:?} frame {frame} probe {p}");
+                                next[p] += 1;
+                            }
+                        }
+                        world(requests, samples);
+                    },
+                );
+                if policy == UpdatePolicy::Ddgi {
+                    assert!(next.iter().all(|&n| n == 32 * (frame as u32 + 1)));
+                }
+            }
+        }
     }
 
     #[test]

@@ -119,6 +119,9 @@ pub struct Run {
     pub rays_near: Vec<u64>,
     /// Of them, the rays of ADGI's dynamic chains.
     pub rays_dynamic: Vec<u64>,
+    /// Probes whose change signal f_d (ADGI eq. 20) is above 0 in some octant, per frame
+    /// (0 for DDGI).
+    pub changed_probes: Vec<u32>,
     /// Irradiance estimates (indexed like the references) at the frames asked for.
     pub snapshots: Vec<(u32, Vec<Vec3>)>,
 }
@@ -188,12 +191,23 @@ impl Experiment {
     /// drawn from `seed` instead of the config's; the scene, reference and warm start stay.
     #[must_use]
     pub fn run_with_seed(&self, policy: UpdatePolicy, seed: u64, snapshot_frames: &[u32]) -> Run {
+        self.run_with_config(policy, seed, self.update_config(seed), snapshot_frames)
+    }
+
+    /// [`Self::run_with_seed`] with the updater's settings given instead of
+    /// [`Self::update_config`] (for ablations of one setting).
+    #[must_use]
+    pub fn run_with_config(
+        &self,
+        policy: UpdatePolicy,
+        seed: u64,
+        config: UpdateConfig,
+        snapshot_frames: &[u32],
+    ) -> Run {
         let mut rng = seeded_rng(seed ^ (policy_code(policy) * 0x9e37_79b9));
         let grid = self.scene.grid;
-        let mut updater = ProbeUpdater::new(grid, policy, self.update_config(seed), || {
-            rng.random::<f32>()
-        })
-        .expect("valid update settings");
+        let mut updater = ProbeUpdater::new(grid, policy, config, || rng.random::<f32>())
+            .expect("valid update settings");
         let values = match policy.content() {
             TexelContent::Irradiance => &self.warm_start.0,
             TexelContent::Radiance => &self.warm_start.1,
@@ -206,6 +220,7 @@ impl Experiment {
             rays: Vec::new(),
             rays_near: Vec::new(),
             rays_dynamic: Vec::new(),
+            changed_probes: Vec::new(),
             snapshots: Vec::new(),
         };
         let mut near_mask = vec![false; grid.probe_count()];
@@ -231,6 +246,10 @@ impl Experiment {
             run.rays.push(rays.rays);
             run.rays_near.push(rays_near);
             run.rays_dynamic.push(rays.rays_dynamic);
+            run.changed_probes
+                .push(updater.heuristics().map_or(0, |(_, f_d)| {
+                    f_d.chunks(8).filter(|o| o.iter().any(|&d| d > 0.0)).count() as u32
+                }));
             let estimate = self.estimate(updater.texels(), updater.content());
             let reference = self.reference(frame);
             run.error_near
