@@ -5,7 +5,9 @@
 //!
 //! `cargo run --release -p mcg-hashgrid --example instructions -- CASE BITS PASSES`, with
 //! `MCG_BENCH_HASH` picks the table's hash as in the benches. CASE one of `mcg_get`, `mcg_find_many`, `mcg_get_many`, `hashbrown_get`, `fx_get`, `std_get`,
-//! `mcg_insert`, `hashbrown_insert`, `fx_insert`; BITS the log₂ of the slot count. With a
+//! `mcg_insert`, `hashbrown_insert`, `fx_insert`, or the diagnostics `mcg_find` (`find` without
+//! the value read) and `interleaved36_get` / `interleaved64_get` (`benches/common/interleaved.rs`:
+//! a prototype with each checksum beside its value); BITS the log₂ of the slot count. With a
 //! fourth argument `time`, it also prints the fastest pass in ns per operation (a quick
 //! min-of-runs check; the criterion bench is the reference); with `cold` instead, every
 //! lookup pass starts with the structure flushed from the caches (`common/flush.rs`, untimed),
@@ -19,6 +21,8 @@ use rustc_hash::FxBuildHasher;
 
 #[path = "../benches/common/flush.rs"]
 mod flush;
+#[path = "../benches/common/interleaved.rs"]
+mod interleaved;
 #[path = "../benches/common/lookups.rs"]
 mod lookups;
 #[path = "../benches/common/stream.rs"]
@@ -45,9 +49,11 @@ fn main() {
         best = best.min(t0.elapsed().as_secs_f64() * 1e9 / ops as f64);
     };
     let sum = match case {
-        "mcg_get" | "mcg_find_many" | "mcg_get_many" | "mcg_insert" => {
+        "mcg_get" | "mcg_find" | "mcg_find_many" | "mcg_get_many" | "mcg_insert" => {
             mcg_case(case, &s, &mut table, passes, cold, &mut lap)
         }
+        "interleaved36_get" => interleaved_case::<9>(&s, bits, passes, cold, &mut lap),
+        "interleaved64_get" => interleaved_case::<16>(&s, bits, passes, cold, &mut lap),
         "hashbrown_get" | "fx_get" | "std_get" => {
             get_case(case, &packed, &fill, passes, cold, &mut lap)
         }
@@ -77,7 +83,7 @@ fn mcg_case(
 ) -> f32 {
     let mut sum = 0.0_f32;
     match case {
-        "mcg_get" | "mcg_find_many" | "mcg_get_many" => {
+        "mcg_get" | "mcg_find" | "mcg_find_many" | "mcg_get_many" => {
             let mut full = 0;
             for k in &s.fill {
                 match table.entry(k) {
@@ -94,6 +100,7 @@ fn mcg_case(
                 let t0 = Instant::now();
                 sum += match case {
                     "mcg_get" => get_pass(table, &s.queries),
+                    "mcg_find" => lookups::find_pass(table, &s.queries),
                     "mcg_get_many" => get_many_pass(table, &s.queries),
                     _ => find_many_pass(table, &s.queries, &mut slots),
                 };
@@ -112,6 +119,35 @@ fn mcg_case(
             sum += table.len() as f32;
         }
         _ => unreachable!("not a table case: {case}"),
+    }
+    sum
+}
+
+/// The prototype of the checksum beside the value with `STRIDE`-word slots
+/// (`interleaved36_get`: 9, packed; `interleaved64_get`: 16, aligned to the line), `passes`
+/// lookup passes.
+fn interleaved_case<const STRIDE: usize>(
+    s: &stream::Sized,
+    bits: u32,
+    passes: usize,
+    cold: bool,
+    lap: &mut impl FnMut(Instant, usize),
+) -> f32 {
+    let mut table = interleaved::Interleaved::<STRIDE>::new(1 << bits, 16);
+    let full = s
+        .fill
+        .iter()
+        .filter(|k| !table.insert(k, &[1.0; 8]))
+        .count();
+    eprintln!("{} keys, {full} did not fit", s.fill.len());
+    let mut sum = 0.0_f32;
+    for _ in 0..passes {
+        if cold {
+            flush::flush(bytemuck::cast_slice(table.words()));
+        }
+        let t0 = Instant::now();
+        sum += interleaved::interleaved_pass(&table, &s.queries);
+        lap(t0, s.queries.len());
     }
     sum
 }
