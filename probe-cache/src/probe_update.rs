@@ -110,29 +110,16 @@
 //! 0.019 — DDGI's error there is the lag of its hysteresis.
 //!
 //! On the `probe_cache_adgi` fixture of `mcg-tests` (door sliding open over frames 16-17,
-//! within a pair) that first form did *not* win: frames to 0.3 near the event 17, never, 13,
-//! 18, 19, 20, 15, 13 against DDGI's 11, 12, 12, 10, 14, 13, 12, 11, all-probe end error
-//! 0.092-0.115 against 0.086-0.099. Measured why (run seeds 1-4): its steady all-probe error
-//! before the event was already above DDGI's (0.093-0.105 against 0.087-0.096) — it blends
-//! 24 rays per probe and frame against DDGI's 32, and DDGI with 24 rays and the blend's window
-//! 24 matched it (0.098-0.103) — and the restart at the event put one frame of 24 rays into
-//! 60-66 probes' texels (near-event error 1.0 on the event's frame) whose smoothed f_d drew
-//! 12-28 extra rays in all. Blending the pilot rays in too made it worse (with the detector
-//! off, 0.102-0.110 against 0.096-0.110: 8 independent rays added to a stratified set of 24
-//! add more noise than they remove), which
-//! showed how much the stratification of the rays matters. Item 3 now (a) continues a
-//! per-probe R2 sequence over frames, so a texel's window holds a stratified set over its
-//! frames, not only within each, and (b) gives every changed probe the same extra rays. On the
-//! fixture, run seeds 1-8: frames to 0.3 near the event 4, 4, 2, 2, 3, 2, 2, 1 (median 2
-//! against 12, faster on every seed) and all-probe end error 0.069-0.078 against DDGI's
-//! 0.086-0.099 (lower on every seed); (a) alone gave 7-13 frames and 0.066-0.070. DDGI with
-//! the same sequence ([`UpdateConfig::ddgi_rays`], not the paper's baseline) ends lower, at
-//! 0.059-0.062 (the blend's 8 pilot rays per probe are what it pays for its change
-//! detection), and needs 8-11 frames to 0.3. In the renderer (the report's dynamic-GI section, its 8 seeds, CPU) the
-//! blend now needs 0-1 frames (DDGI 8-10) and ends at 0.041-0.047 whole-image relMSE against
-//! DDGI's 0.047-0.050 (it was 0.039-0.046 with the first form: the image's error there is
-//! the path tracer's noise, not the probes').
-//!
+//! within a pair; run seeds 1-8) that first form did *not* win (frames to 0.3 near the event
+//! 13 to never against DDGI's 10-14, all-probe end error 0.092-0.115 against 0.086-0.099);
+//! item 3 as it is now does: 4, 4, 2, 2, 3, 2, 2, 1 frames (median 2 against 12) and
+//! 0.069-0.078 all-probe end error, lower than DDGI on every seed. DDGI with the same ray
+//! sequence ([`UpdateConfig::ddgi_rays`], not the paper's baseline) ends lower still
+//! (0.059-0.062; the blend's 8 pilot rays per probe are what its change detection costs) and
+//! needs 8-11 frames. In the renderer (the report's dynamic-GI section, its 8 seeds, CPU) the
+//! blend needs 0-1 frames (DDGI 8-10) and ends at 0.041-0.047 whole-image relMSE against
+//! DDGI's 0.047-0.050. How this was found: `benches/README.md`.
+
 //! # Budget
 //! A frame traces at most `rays_per_probe × probe count` probe rays under every policy
 //! ([`FrameRays::rays`]); ADGI cuts its last sample list at the budget.

@@ -260,11 +260,13 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
          leave the radiance texels noisy. adgi-blend staggers the pairs over probes and \
          octants so every frame detects against the frame before, ignores gradients below \
          0.05 (the pilot hits read last frame's probes, which flicker), restarts the window of \
-         a probe whose change signal turns on, and blends uniform rays into all texels with \
-         DDGI's cosine weights (E/π texels, window 24 with the 24 rays left after the pilots, \
-         10 while the probe's change signal is on). adgi-refill (mcg's earlier extension, \
-         which wins on the probe-cache section's fixture) never reached the threshold here on \
-         7 of 8 seeds and is left out of this section. {} probes ({} m spacing), {}×{} pixels at {} spp, \
+         a probe whose change signal turns on and gives it 96 extra rays per frame while the \
+         signal is on, and blends uniform rays into all texels with DDGI's cosine weights \
+         (E/π texels, window 24 with the 24 rays left after the pilots, 10 while the probe's \
+         change signal is on); its rays continue a per-probe low-discrepancy (R2) sequence \
+         from frame to frame, so a texel's window holds rays stratified over its frames \
+         (mcg_probe_cache::uniform_rays). adgi-refill (mcg's earlier extension) never reached \
+         the threshold here on 7 of 8 seeds and is left out of this section. {} probes ({} m spacing), {}×{} pixels at {} spp, \
          {} seeds. Each frame is shown on its own and compared with the nee reference of its \
          state ({} spp, {} bounces) — so the camera's light-sample noise sets a floor under \
          both curves. The event region holds the pixels whose two references differ by more \

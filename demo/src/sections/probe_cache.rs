@@ -25,9 +25,10 @@ use crate::plot::{self, Axis, FONT_FAMILY, LineChart, PALETTE, Series, SeriesLab
 use crate::report::{Section, Table};
 
 /// The policies of the experiment, in chart order.
-const POLICIES: [UpdatePolicy; 4] = [
+const POLICIES: [UpdatePolicy; 5] = [
     UpdatePolicy::Adgi,
     UpdatePolicy::AdgiRefill,
+    UpdatePolicy::AdgiBlend,
     UpdatePolicy::AdgiUnguided,
     UpdatePolicy::Ddgi,
 ];
@@ -209,9 +210,17 @@ fn error_over_frames(ctx: &Context<'_>, section: &mut Section, study: &Study) ->
              of windows, refresh them at under one ray per texel and frame. ADGI + refill (mcg's \
              extension) restarts every texel of a probe whose change grows and steers the static \
              chains toward texels whose window is not full: it falls below the threshold sooner \
-             and stays lower. Over all probes DDGI still ends lower: ADGI's texels hold radiance \
-             per texel, and turning that into irradiance has a floor of its own (≈ 0.10 with the \
-             exact mean radiance in every texel) that DDGI's cosine-blended texels do not have. \
+             and stays lower. Over all probes DDGI still ends lower than both: their texels hold \
+             radiance per texel, and turning that into irradiance has a floor of its own (≈ 0.10 \
+             with the exact mean radiance in every texel) that DDGI's cosine-blended texels do \
+             not have. ADGI + blend (mcg's extension that the dynamic-GI section renders with) \
+             keeps ADGI's pilot rays and change detection but blends uniform rays into E/π \
+             texels as DDGI does; it restarts a probe whose change signal turns on and gives it \
+             96 extra rays per frame while the signal is on, and each probe's rays continue a \
+             low-discrepancy (R2) sequence from frame to frame, so a texel's window holds rays \
+             stratified over its frames: it falls below the threshold within a few frames and \
+             ends below DDGI over all probes (mcg-tests' probe_cache_adgi suite asserts both \
+             over 8 seeds). \
              The constant-guide run spends ADGI's rays through the same machinery but uniformly \
              over (p, ω): the gap between it and ADGI is what the guide buys.",
             cfg.rays_per_probe
