@@ -20,8 +20,7 @@ use glam::{UVec3, Vec3};
 use mcg_color_codec::Heuristics;
 use mcg_gpu_backend::GpuContext;
 use mcg_gpu_backend::guides::adgi::{
-    GpuChainState, GpuGuideQuery, GpuProbeCache, GpuProbeChains, GpuTriggerSmoothing,
-    ProbeCacheConfig, chain_step_uniforms,
+    GpuChainState, GpuGuideQuery, GpuProbeChains, GpuTriggerSmoothing, chain_step_uniforms,
 };
 use mcg_markov_guide::FrameSchedule;
 use mcg_probe_cache::guiding_function::decode_field;
@@ -33,10 +32,6 @@ use mcg_probe_cache::{
 };
 use rand::RngExt;
 use rand_pcg::Pcg64;
-
-fn cache(ctx: &GpuContext, grid: ProbeGrid) -> GpuProbeCache {
-    GpuProbeCache::new(ctx, &ProbeCacheConfig::adgi(grid, 1)).unwrap()
-}
 
 /// Heuristics words per probe and octant: `hot(coords, octant)` gives f_s and f_d's scale;
 /// f_v random; a tenth of the octants zero.
@@ -66,11 +61,6 @@ fn heuristic_words(w: &[u32]) -> Vec<mcg_color_codec::HeuristicsWord> {
         .collect()
 }
 
-/// Distance in units in the last place between two non-negative finite floats.
-fn ulps(a: f32, b: f32) -> u32 {
-    a.to_bits().abs_diff(b.to_bits())
-}
-
 /// The guiding function of both forms on a 7 × 5 × 4 grid (its proxies partly filled on the
 /// upper faces): the GPU's table (f_s per probe; f_d max-pooled into 3 × 2 × 2 proxies) equals
 /// the CPU's `decode_field` + `max_pool` bit for bit, and h(p, ω) at 2 000 points (a fifth
@@ -83,12 +73,7 @@ fn guiding_values_match_the_cpu() {
     let Some((ctx, mut rng)) = common::gpu_and_rng("guiding_values_match_the_cpu", 30) else {
         return;
     };
-    let grid = ProbeGrid::new(
-        Vec3::new(-1.0, 0.5, 0.0),
-        Vec3::new(0.5, 0.75, 1.0),
-        UVec3::new(7, 5, 4),
-    )
-    .unwrap();
+    let grid = common::adgi_grid();
     let w = words(&grid, &mut rng, |c, o| {
         if (c.x + o as u32).is_multiple_of(3) {
             0.3
@@ -154,7 +139,7 @@ fn guiding_values_match_the_cpu() {
         let mut positive = 0;
         for (&(p, d), &g) in queries.iter().zip(&got) {
             let c = h.guiding_value(p, d);
-            let e = ulps(g, c);
+            let e = common::ulps(g, c);
             worst = worst.max(e);
             positive += usize::from(c > 0.0);
             // WGSL's exp is within 3 + 2|x| ULP (x ≤ cap = 1), the CPU's within 1, and the
@@ -191,7 +176,7 @@ fn assert_state_close(g: &GpuChainState, c: &mcg_probe_cache::ProbeChainState, w
     let dphi = (g.phi - c.x[4]).abs();
     let dphi = dphi.min(core::f32::consts::TAU - dphi);
     assert!(
-        dp < 1e-4 && dz < 1e-4 && dphi < 1e-4 && ulps(g.target_value, c.target) <= 16,
+        dp < 1e-4 && dz < 1e-4 && dphi < 1e-4 && common::ulps(g.target_value, c.target) <= 16,
         "{what}: GPU {g:?} CPU {c:?}"
     );
 }
@@ -420,7 +405,7 @@ fn trigger_smoothing_matches_the_cpu() {
         return;
     };
     let grid = ProbeGrid::new(Vec3::ZERO, Vec3::ONE, UVec3::new(7, 5, 4)).unwrap();
-    let gpu_cache = cache(ctx, grid);
+    let gpu_cache = common::adgi_cache(ctx, grid);
     let n = grid.probe_count() * 8;
     let value = |rng: &mut Pcg64| match rng.random_range(0..60) {
         0 => f32::NAN,

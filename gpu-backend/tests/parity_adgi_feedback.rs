@@ -32,11 +32,6 @@ use mcg_probe_cache::{
 use rand::RngExt;
 use rand_pcg::Pcg64;
 
-/// Distance in units in the last place between two non-negative finite floats.
-fn ulps(a: f32, b: f32) -> u32 {
-    a.to_bits().abs_diff(b.to_bits())
-}
-
 /// Four chains of `kind` on `grid` (static: the probes, whose feedback table is one value per
 /// probe and octant; dynamic: ADGI's proxies).
 fn chains(ctx: &GpuContext, grid: ProbeGrid, kind: ChainKind) -> GpuProbeChains {
@@ -108,7 +103,7 @@ fn feedback_matches_the_cpu() {
         let want = cpu_feedback(map, &words, probes);
         assert_eq!(got.len(), want.len());
         for (i, (&g, &c)) in got.iter().zip(&want).enumerate() {
-            let e = ulps(g, c);
+            let e = common::ulps(g, c);
             worst = worst.max(e);
             assert!(
                 c.is_finite() && e <= 3,
@@ -130,7 +125,7 @@ fn feedback_matches_the_cpu() {
     println!("feedback: {compared} (probe, octant) values, worst {worst} ULP");
     // Dynamic chains' cells are proxies, not the cache's probes.
     let grid = ProbeGrid::new(Vec3::ZERO, Vec3::ONE, UVec3::new(6, 6, 6)).unwrap();
-    let cache = GpuProbeCache::new(ctx, &ProbeCacheConfig::adgi(grid, 1)).unwrap();
+    let cache = common::adgi_cache(ctx, grid);
     let dynamic = chains(ctx, grid, ChainKind::Dynamic);
     assert!(dynamic.feedback_from_cache(ctx, &cache).is_err());
 }
@@ -241,13 +236,8 @@ fn composed_words_match_the_cpu() {
     let Some((ctx, mut rng)) = common::gpu_and_rng("composed_words_match_the_cpu", 41) else {
         return;
     };
-    let grid = ProbeGrid::new(
-        Vec3::new(-1.0, 0.5, 0.0),
-        Vec3::new(0.5, 0.75, 1.0),
-        UVec3::new(7, 5, 4),
-    )
-    .unwrap();
-    let cache = GpuProbeCache::new(ctx, &ProbeCacheConfig::adgi(grid, 1)).unwrap();
+    let grid = common::adgi_grid();
+    let cache = common::adgi_cache(ctx, grid);
     let smoothing = GpuTriggerSmoothing::new(ctx, &cache);
     let n = grid.probe_count() * 8;
     let state: Vec<[f32; 4]> = (0..n)

@@ -1,11 +1,13 @@
-//! Shared by the GPU test files: the skip-or-context preamble, fixed-seed random inputs and
-//! the tolerances of the vMF comparisons.
+//! Shared by the GPU test files: the skip-or-context preamble, fixed-seed random inputs, the
+//! tolerances of the vMF comparisons and the ADGI parity tests' probe grid and cache.
 #![allow(dead_code)] // each test file uses a part
 
-use glam::{IVec3, Vec3};
+use glam::{IVec3, UVec3, Vec3};
 use mcg_gpu_backend::GpuContext;
+use mcg_gpu_backend::guides::adgi::{GpuProbeCache, ProbeCacheConfig};
 use mcg_gpu_backend::testing::gpu_or_skip;
 use mcg_hashgrid::CellKey;
+use mcg_probe_cache::ProbeGrid;
 use rand::{Rng, RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 
@@ -129,4 +131,25 @@ pub fn random_key(rng: &mut impl Rng) -> CellKey {
     } else {
         key
     }
+}
+
+/// Distance in units in the last place between two non-negative finite floats.
+pub fn ulps(a: f32, b: f32) -> u32 {
+    a.to_bits().abs_diff(b.to_bits())
+}
+
+/// The 7 × 5 × 4 probe grid of the ADGI parity tests (guiding values, composed heuristics
+/// words): origin, spacing and probe counts all differ per axis, so a mixed-up axis shows.
+pub fn adgi_grid() -> ProbeGrid {
+    ProbeGrid::new(
+        Vec3::new(-1.0, 0.5, 0.0),
+        Vec3::new(0.5, 0.75, 1.0),
+        UVec3::new(7, 5, 4),
+    )
+    .unwrap()
+}
+
+/// ADGI's probe cache on `grid` (`ProbeCacheConfig::adgi`, one blend ray per probe).
+pub fn adgi_cache(ctx: &GpuContext, grid: ProbeGrid) -> GpuProbeCache {
+    GpuProbeCache::new(ctx, &ProbeCacheConfig::adgi(grid, 1)).unwrap()
 }

@@ -739,26 +739,31 @@ impl<S: Scatter> GuidedVertex<'_, S> {
             _ => None,
         };
         let states = self.set.states();
+        // A young state lends the part y_k = `young_share` of its share to the scatter
+        // technique: computed once here for the lobes' weights and the scatter share.
+        let mut young = [0.0_f32; MAX_CANDIDATES];
+        for (y, s) in young.iter_mut().zip(states) {
+            *y = params.young_share(s.sample_count());
+        }
         let lane = |k: usize| match states.get(k) {
-            // `prepare_in_place` zeroed w̄ of every invalid state: w̄ > 0 is valid here. A young
-            // state lends the part `young_share` of its share to the scatter technique.
+            // `prepare_in_place` zeroed w̄ of every invalid state: w̄ > 0 is valid here.
             Some(s) if s.weight_sum > 0.0 => (
                 s.stats(),
                 distance_prior(s, x, params),
-                (s.weight_sum / total) * (1.0 - params.young_share(s.sample_count())),
+                (s.weight_sum / total) * (1.0 - young[k]),
             ),
             _ => (SufficientStats::EMPTY, MapPrior::NONE, 0.0),
         };
         // Every lobe at once (Alg. 2 lines 6-8; with the cosine product's lobe only,
         // μ' ∝ κμ + κ_c n, κ' = |κμ + κ_c n|), lane-wise, bit-identical to building each.
         self.lobes = VmfLanes::from_stats(x, cosine.as_ref(), lane);
-        for (k, s) in states.iter().enumerate() {
+        for ((k, s), y) in states.iter().enumerate().zip(young) {
             if !(s.weight_sum > 0.0) {
                 continue;
             }
             let share = s.weight_sum / total;
             if self.lobes.is_set(k) {
-                self.scatter_share += share * params.young_share(s.sample_count());
+                self.scatter_share += share * y;
             } else {
                 self.scatter_share += share;
             }

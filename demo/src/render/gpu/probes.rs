@@ -769,8 +769,9 @@ impl GpuTracer {
             (21, dispatch.raw()),
         ];
         let kernel = ("expand_dynamic_samples", &a.expand.0, &a.expand.1);
-        let groups = (chains.samples().len() as u32).div_ceil(PROBE_GROUP);
-        record_pass(ctx, e, kernel, &buffers, cache, (groups, 1));
+        // 2D, so that more samples than the per-dimension limit of workgroups covers stay valid.
+        let groups = workgroups_2d(ctx, u32::try_from(chains.samples().len())?);
+        record_pass(ctx, e, kernel, &buffers, cache, groups);
         let dynamic_parts = (&p.trace, &p.trace_layout, cache, &p.requests, &a.rays);
         let dynamic = GpuProbeFrame {
             limit: dynamic_budget,

@@ -566,7 +566,8 @@ fn adgi_pilot_direction(octant: u32, u: vec2<f32>) -> vec3<f32> {
     }
     let z = open.x;
     let phi = open.y * MCG_FRAC_PI_2;
-    let r = sqrt(max(1.0 - z * z, 0.0));
+    // `mcg_rounded` keeps z² from fusing into an FMA with the subtraction, as on the CPU.
+    let r = sqrt(max(1.0 - mcg_rounded(z * z), 0.0));
     let signs = select(vec3<f32>(1.0), vec3<f32>(-1.0), (vec3<u32>(octant) >> vec3<u32>(0u, 1u, 2u) & vec3<u32>(1u)) == vec3<u32>(1u));
     return vec3<f32>(r * cos(phi), r * sin(phi), z) * signs;
 }
