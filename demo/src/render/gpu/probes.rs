@@ -50,8 +50,7 @@ use mcg_gpu_backend::guides::adgi::{
 use mcg_gpu_backend::sampling::next_uniform;
 use mcg_gpu_backend::{GpuBuffer, GpuContext, wgpu};
 use mcg_probe_cache::{
-    AdgiParts, ClipVolume, ClipVolumes, Frustum, GuideParams, PilotPhase, UniformRays,
-    UpdatePolicy, sequence_direction,
+    AdgiParts, ClipVolume, ClipVolumes, Frustum, GuideParams, PilotPhase, UpdatePolicy,
 };
 use mcg_probe_cache::{ProbeGrid, ProbeRayRequest, RaySample};
 
@@ -1010,32 +1009,24 @@ impl ProbeTracer<'_> {
             .map(|_| next_uniform(&mut rng))
             .collect();
         self.ctx.write(&p.rounding, &rounding)?;
-        let config = *p.gi.updater().config();
-        let n = config.rays_per_probe;
+        let n = p.gi.updater().config().rays_per_probe;
         let directions: Vec<Vec3> = (0..n)
             .map(|i| rotation * mcg_probe_cache::spherical_fibonacci(i, n))
             .collect();
-        // The CPU updater's layout (`UpdateConfig::ddgi_rays`): frame f traces indices
-        // f·n … f·n + n − 1 of each probe's sequence.
-        let direction = |probe: u32, i: u32| match config.ddgi_rays {
-            UniformRays::RotatedFibonacci => directions[i as usize],
-            UniformRays::Sequence => {
-                let index = frame.wrapping_mul(n).wrapping_add(i);
-                sequence_direction(config.pilot_seed, probe, index)
-            }
-        };
         let grid = *p.gi.updater().grid();
-        let requests: Vec<GpuProbeRequest> = (0..grid.probe_count() as u32)
+        let requests: Vec<GpuProbeRequest> = (0..grid.probe_count())
             .flat_map(|probe| {
-                let origin = grid
-                    .probe_position(grid.probe_coords(probe as usize))
-                    .to_array();
-                (0..n).map(move |i| GpuProbeRequest {
-                    origin,
-                    seed: probe_ray_seed(seed, frame, probe, i),
-                    direction: direction(probe, i).to_array(),
-                    probe,
-                })
+                let origin = grid.probe_position(grid.probe_coords(probe)).to_array();
+                let probe = probe as u32;
+                directions
+                    .iter()
+                    .enumerate()
+                    .map(move |(i, d)| GpuProbeRequest {
+                        origin,
+                        seed: probe_ray_seed(seed, frame, probe, i as u32),
+                        direction: d.to_array(),
+                        probe,
+                    })
             })
             .collect();
         self.ctx
