@@ -27,23 +27,6 @@ impl Slots for AtomicSlots<'_> {
     }
 }
 
-/// A lookup of [`ConcurrentTable`] begun by [`ConcurrentTable::start_find`]: the key's
-/// home slot and checksum, for [`ConcurrentTable::find_started`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct PendingFind {
-    home: u32,
-    checksum: u32,
-}
-
-impl PendingFind {
-    /// The key's home slot, where its probe starts (its slot unless it was displaced).
-    #[inline]
-    #[must_use]
-    pub const fn home(self) -> u32 {
-        self.home
-    }
-}
-
 /// The slot index of a hash grid that many threads fill at once: checksums are
 /// [`AtomicU32`]s and a key is inserted by compare-and-swap on its checksum word, exactly as
 /// the GPU does with `atomicCompareExchangeWeak` (MCPG sec. 4; Bevy Solari).
@@ -154,54 +137,13 @@ impl ConcurrentTable {
     #[must_use]
     pub fn find(&self, key: &CellKey) -> Option<u32> {
         let (h, c) = self.hash.hash_and_checksum(key);
-        self.find_started(PendingFind {
-            home: self.indexer.index(h),
-            checksum: c,
-        })
-    }
-
-    /// The first half of [`find`](Self::find), for lookups spread over a wavefront of
-    /// vertices: hashes `key` and asks for the cache lines its lookup will read — the home
-    /// slot's checksum word, its age word, and the home slot's entry of `values` (the caller's
-    /// per-slot array, e.g. the states; `&[]` for none) — without waiting for them.
-    /// [`find_started`](Self::find_started) then decides the key, with the same result as
-    /// `find`. Starting the lookups of many keys (the candidates of several path vertices)
-    /// before finishing any lets their cache misses overlap, where one `find` after another
-    /// waits for each miss in turn.
-    ///
-    /// The request is `_mm_prefetch` on x86-64 (a hint, which never faults and changes no
-    /// result, as in [`HashTable::get_many`](crate::HashTable::get_many)) and nothing
-    /// elsewhere.
-    #[inline]
-    #[must_use]
-    pub fn start_find<T>(&self, key: &CellKey, values: &[T]) -> PendingFind {
-        let (h, c) = self.hash.hash_and_checksum(key);
-        let home = self.indexer.index(h) as usize;
-        probe::prefetch(self.checksums.as_ptr().wrapping_add(home));
-        if !self.ages.is_empty() {
-            probe::prefetch(self.ages.as_ptr().wrapping_add(home));
-        }
-        if !values.is_empty() {
-            probe::prefetch(values.as_ptr().wrapping_add(home));
-        }
-        PendingFind {
-            home: home as u32,
-            checksum: c,
-        }
-    }
-
-    /// The second half of [`find`](Self::find): the slot of the key `pending` was started
-    /// for (by [`start_find`](Self::start_find) on this table), if any; touches its age.
-    #[inline]
-    #[must_use]
-    pub fn find_started(&self, pending: PendingFind) -> Option<u32> {
         let slot = probe::find(
             &self.checksums,
             |w| w.load(Ordering::Acquire),
             &self.indexer,
             self.max_probes,
-            pending.home,
-            pending.checksum,
+            self.indexer.index(h),
+            c,
         )?;
         self.touch(slot);
         Some(slot)
@@ -261,24 +203,12 @@ impl ConcurrentTable {
     #[inline]
     pub fn insert_or_get(&self, key: &CellKey) -> Insert {
         let (h, c) = self.hash.hash_and_checksum(key);
-        self.insert_or_get_started(PendingFind {
-            home: self.indexer.index(h),
-            checksum: c,
-        })
-    }
-
-    /// [`insert_or_get`](Self::insert_or_get) of the key `pending` was begun for by
-    /// [`start_find`](Self::start_find) on this table: the same result as `insert_or_get` of
-    /// that key now (the probe runs here, on the table as it is), with the lines
-    /// `start_find` asked for already on their way.
-    #[inline]
-    pub fn insert_or_get_started(&self, pending: PendingFind) -> Insert {
         let r = probe::insert_or_get(
             &mut AtomicSlots(&self.checksums),
             &self.indexer,
             self.max_probes,
-            pending.home,
-            pending.checksum,
+            self.indexer.index(h),
+            c,
         );
         if let Some(slot) = r.slot() {
             self.touch(slot);
@@ -444,59 +374,6 @@ mod tests {
                 let mut got = alloc::vec![None; keys.len()];
                 t.find_many(&keys, &mut got);
                 assert_eq!(got, want, "{hash:?} capacity {capacity}");
-                let ages = t.ages();
-                for s in want.iter().flatten() {
-                    assert_eq!(ages[*s as usize], t.frame());
-                }
-            }
-        }
-    }
-
-    /// `start_find` then `find_started` gives `find`'s slot for every key (present, displaced
-    /// and missing keys of a full table, power-of-two and prime capacities, every hash, with
-    /// and without a values array), touches the ages like `find`, and its home slot is
-    /// `home_slot`'s.
-    #[test]
-    fn started_finds_equal_find() {
-        for capacity in [1024, 1009] {
-            for hash in BucketHash::ALL {
-                let mut t = ConcurrentTable::new(capacity, 8, hash)
-                    .unwrap()
-                    .with_age_tracking();
-                let values = alloc::vec![[0_u32; 16]; capacity as usize];
-                let keys: Vec<CellKey> = (0..3000)
-                    .map(|i| CellKey::new(IVec3::new(i % 13, -i / 13, i), (i % 5) as u8, 2))
-                    .collect();
-                for k in keys.iter().step_by(3) {
-                    t.insert_or_get(k);
-                }
-                let want: Vec<Option<u32>> = keys.iter().map(|k| t.find(k)).collect();
-                assert!(want.iter().any(Option::is_some) && want.iter().any(Option::is_none));
-                t.advance_frame();
-                let started: Vec<PendingFind> = keys
-                    .iter()
-                    .enumerate()
-                    .map(|(i, k)| {
-                        if i % 2 == 0 {
-                            t.start_find(k, &values)
-                        } else {
-                            t.start_find::<u32>(k, &[])
-                        }
-                    })
-                    .collect();
-                for (k, p) in keys.iter().zip(&started) {
-                    assert_eq!(p.home(), t.home_slot(k));
-                }
-                let got: Vec<Option<u32>> = started.iter().map(|&p| t.find_started(p)).collect();
-                assert_eq!(got, want, "{hash:?} capacity {capacity}");
-                // Inserting through started lookups ends where `insert_or_get` would: a
-                // twin table filled the plain way holds every key in the same slot.
-                let twin = ConcurrentTable::new(capacity, 8, hash).unwrap();
-                let fresh = ConcurrentTable::new(capacity, 8, hash).unwrap();
-                for k in &keys[..600] {
-                    let p = fresh.start_find::<u32>(k, &[]);
-                    assert_eq!(fresh.insert_or_get_started(p), twin.insert_or_get(k));
-                }
                 let ages = t.ages();
                 for s in want.iter().flatten() {
                     assert_eq!(ages[*s as usize], t.frame());

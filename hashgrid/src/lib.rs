@@ -44,7 +44,7 @@
 //! - [`ConcurrentTable`] claims slots by compare-and-swap on the checksum word; the caller owns
 //!   the values. The crate's three `unsafe` blocks: its `&[AtomicU32]` → `&[u32]` upload view,
 //!   three SSE2 compare intrinsics in the probe loop, and the prefetch (`_mm_prefetch`, a hint)
-//!   of [`HashTable::find_many`], [`HashTable::get_many`] and [`ConcurrentTable::start_find`].
+//!   of [`HashTable::find_many`] and [`HashTable::get_many`].
 //!
 //! The measurements behind these choices, the peer benchmarks (hashbrown, `FxHashMap`,
 //! `DashMap`, std's `HashMap`) and how to run them are in `benches/README.md`.
@@ -125,7 +125,7 @@ mod trilinear;
 
 pub use capacity::{SlotIndexer, next_prime};
 #[cfg(feature = "alloc")]
-pub use concurrent::{ConcurrentTable, PendingFind};
+pub use concurrent::ConcurrentTable;
 pub use error::{GridError, TableError};
 pub use hash::{
     BucketHash, checksum, fold_and_checksum, hash_fold, hash_mix, hash_mix_coherent,

@@ -1,6 +1,5 @@
 //! The CPU path tracer: unidirectional path tracing over a [`Scene`], one rayon task per image
-//! row, each tracing its row's paths [`WAVEFRONT`] at a time bounce by bounce ([`Wavefront`]),
-//! with every random decision drawn from the counter-based stream of
+//! row, with every random decision drawn from the counter-based stream of
 //! [`mcg_gpu_backend::sampling`] so that a GPU tracer seeded the same way draws the same
 //! numbers.
 //!
@@ -177,8 +176,7 @@ pub struct NextHit {
 
 /// The per-vertex direction sampler of the path loop: MCPG's seam (begin with the vertex,
 /// sample a direction, evaluate the density of another, and learn from the finished path).
-/// Implementations hold their own state; one is created per path of a row task's
-/// [`Wavefront`].
+/// Implementations hold their own state; one is created per rayon task.
 pub trait VertexSampler {
     /// Samples the next direction at `vertex` from three uniforms; `None` ends the path.
     fn sample(&mut self, vertex: &Vertex, u: Vec3) -> Option<BsdfSample>;
@@ -191,20 +189,6 @@ pub trait VertexSampler {
     /// default ignores it.
     fn begin_path(&mut self, seed: u32) {
         let _ = seed;
-    }
-    /// Called right before [`VertexSampler::sample`] at the same vertex, with the other paths
-    /// of the wavefront's prepared in between ([`Wavefront::trace`]): a sampler that reads large
-    /// tables starts its memory accesses here, so that the wavefront's cache misses overlap.
-    /// It must not change what `sample` returns. The default does nothing.
-    fn prepare(&mut self, vertex: &Vertex) {
-        let _ = vertex;
-    }
-    /// Called for each observation before [`VertexSampler::finish`] with it, in the same
-    /// order, with the other vertices of the path and of the wavefront prepared in between
-    /// ([`Wavefront::trace`]): a sampler starts the memory accesses of its update here. It
-    /// must not change what `finish` does. The default does nothing.
-    fn prepare_finish(&mut self, observation: &Observation) {
-        let _ = observation;
     }
 }
 
@@ -266,8 +250,7 @@ struct Recorded {
 /// the path's.
 const SAMPLER_SALT: u32 = 0x5bd1_e995;
 
-/// Traces one path from the camera ray `(origin, direction)` and returns its radiance:
-/// [`Wavefront::trace`] for a wavefront of one path.
+/// Traces one path from the camera ray `(origin, direction)` and returns its radiance.
 pub fn trace_path<S: VertexSampler>(
     scene: &Scene,
     sampler: &mut S,
@@ -277,273 +260,72 @@ pub fn trace_path<S: VertexSampler>(
     direction: Vec3,
     rng: &mut u32,
 ) -> Vec3 {
-    let mut path = Path::new();
-    path.start(sampler, origin, direction, *rng);
-    while let Some(vertex) = path.hit(scene, method, bounces) {
-        sampler.prepare(&vertex);
-        if !path.scatter(scene, sampler, method, &vertex) {
-            break;
-        }
-    }
-    *rng = path.rng;
-    path.prepare_finish(sampler);
-    path.finish(sampler)
-}
-
-/// Paths advanced together by [`render_frame`] (its wavefront): each row task traces this
-/// many paths bounce by bounce, so that a guide's table lookups at one bounce of all of them
-/// are begun before any is finished ([`VertexSampler::prepare`]).
-pub const WAVEFRONT: usize = 16;
-
-/// A wavefront of paths traced together, bounce by bounce ([`Wavefront::trace`]), each with
-/// its own sampler; its buffers are kept from one wavefront to the next.
-pub struct Wavefront<S> {
-    samplers: Vec<S>,
-    paths: Vec<Path>,
-    /// The vertex each path scatters at next.
-    vertices: Vec<Option<Vertex>>,
-}
-
-impl<S: VertexSampler> Wavefront<S> {
-    /// A wavefront of up to `len` paths, their samplers from `new_sampler`.
-    pub fn new(len: usize, new_sampler: impl Fn() -> S) -> Self {
-        Self {
-            samplers: (0..len).map(|_| new_sampler()).collect(),
-            paths: (0..len).map(|_| Path::new()).collect(),
-            vertices: vec![None; len],
-        }
-    }
-
-    /// Traces the paths of `rays` (camera ray origin, direction and random stream each; at
-    /// most the wavefront's length) bounce by bounce: all live paths' rays, then
-    /// [`VertexSampler::prepare`] at every new vertex, then each vertex's sample (and light
-    /// sample), until every path has ended; then each path's vertices are reported to its
-    /// sampler ([`VertexSampler::finish`]), path by path. Path `i` draws from sampler `i` and
-    /// from its own random stream exactly the uniforms [`trace_path`] draws, so a path whose
-    /// sampler does not learn (`bsdf`, `nee`) has `trace_path`'s radiance bit for bit; a
-    /// learning sampler sees the other paths' updates in another order. Writes the radiances
-    /// to `out`.
-    ///
-    /// # Panics
-    /// When `rays` is longer than the wavefront or `out`'s length differs from `rays`'.
-    pub fn trace(
-        &mut self,
-        scene: &Scene,
-        method: Method,
-        bounces: u32,
-        rays: &[(Vec3, Vec3, u32)],
-        out: &mut [Vec3],
-    ) {
-        assert!(rays.len() <= self.paths.len() && out.len() == rays.len());
-        let n = rays.len();
-        let (paths, samplers) = (&mut self.paths[..n], &mut self.samplers[..n]);
-        let vertices = &mut self.vertices[..n];
-        for ((path, sampler), &(o, d, rng)) in paths.iter_mut().zip(samplers.iter_mut()).zip(rays) {
-            path.start(sampler, o, d, rng);
-        }
-        loop {
-            let mut live = false;
-            let each = paths
-                .iter_mut()
-                .zip(samplers.iter_mut())
-                .zip(vertices.iter_mut());
-            for ((path, sampler), vertex) in each {
-                if path.ended {
-                    continue;
-                }
-                *vertex = path.hit(scene, method, bounces);
-                match vertex {
-                    Some(v) => {
-                        sampler.prepare(v);
-                        live = true;
-                    }
-                    None => path.ended = true,
-                }
-            }
-            if !live {
-                break;
-            }
-            let each = paths
-                .iter_mut()
-                .zip(samplers.iter_mut())
-                .zip(vertices.iter_mut());
-            for ((path, sampler), vertex) in each {
-                if let Some(v) = vertex.take()
-                    && !path.scatter(scene, sampler, method, &v)
-                {
-                    path.ended = true;
-                }
-            }
-        }
-        for (path, sampler) in paths.iter().zip(samplers.iter_mut()) {
-            path.prepare_finish(sampler);
-        }
-        for ((path, sampler), o) in paths.iter().zip(samplers.iter_mut()).zip(out) {
-            *o = path.finish(sampler);
-        }
-    }
-}
-
-/// One path in flight: its ray, radiance, throughput and the vertices it has recorded for
-/// [`VertexSampler::finish`].
-struct Path {
-    /// The path's random stream.
-    rng: u32,
-    radiance: Vec3,
-    throughput: Vec3,
-    /// The current ray.
-    o: Vec3,
-    d: Vec3,
-    /// The density of the direction that produced the current ray (0 for the camera ray,
-    /// whose emitter hits need no MIS weight).
-    last_pdf: f32,
-    recorded: [Option<Recorded>; MAX_RECORDED],
-    depth: u32,
-    /// No more rays to trace.
-    ended: bool,
-}
-
-impl Path {
-    /// An ended path, for [`Path::start`].
-    fn new() -> Self {
-        Self {
-            rng: 0,
-            radiance: Vec3::ZERO,
-            throughput: Vec3::ONE,
-            o: Vec3::ZERO,
-            d: Vec3::Z,
-            last_pdf: 0.0,
-            recorded: [None; MAX_RECORDED],
-            depth: 0,
-            ended: true,
-        }
-    }
-
-    /// Starts the path of the camera ray `(origin, direction)` with random stream `rng` in
-    /// place (the records cleared entry by entry, not copied) and tells `sampler` it begins.
-    fn start<S: VertexSampler>(
-        &mut self,
-        sampler: &mut S,
-        origin: Vec3,
-        direction: Vec3,
-        rng: u32,
-    ) {
-        sampler.begin_path(pcg_hash(rng ^ SAMPLER_SALT));
-        self.rng = rng;
-        self.radiance = Vec3::ZERO;
-        self.throughput = Vec3::ONE;
-        (self.o, self.d) = (origin, direction);
-        self.last_pdf = 0.0;
-        for r in &mut self.recorded {
-            *r = None;
-        }
-        self.depth = 0;
-        self.ended = false;
-    }
-
-    /// Traces the current ray and adds the emission it finds; returns the vertex to scatter
-    /// at, or `None` when the path ends there (it left the scene, or `bounces` were
-    /// scattered).
-    fn hit(&mut self, scene: &Scene, method: Method, bounces: u32) -> Option<Vertex> {
-        let (o, d, depth) = (self.o, self.d, self.depth);
-        let hit = scene.bvh.intersect(o, d, 0.0, f32::INFINITY)?;
+    sampler.begin_path(pcg_hash(*rng ^ SAMPLER_SALT));
+    let mut u = || next_uniform(rng);
+    let mut radiance = Vec3::ZERO;
+    let mut throughput = Vec3::ONE;
+    let (mut o, mut d) = (origin, direction);
+    // The density of the direction that produced the current ray (0 for the camera ray, whose
+    // emitter hits need no MIS weight).
+    let mut last_pdf = 0.0;
+    let mut recorded: [Option<Recorded>; MAX_RECORDED] = [None; MAX_RECORDED];
+    let mut depth = 0u32;
+    while let Some(hit) = scene.bvh.intersect(o, d, 0.0, f32::INFINITY) {
         let tri = scene.bvh.triangles[hit.triangle as usize];
         let material = scene.material_at(&hit);
         let (area, n_front, cos_front) = front_face(&tri, d);
         let position = o + hit.t * d;
-        if let Some(r) = previous_record(&mut self.recorded, depth) {
+        if let Some(r) = previous_record(&mut recorded, depth) {
             r.next = Some(next_hit(position, n_front, cos_front, &material));
         }
         if cos_front > 0.0 && material.is_emitter() {
-            let weight = emitter_weight(
-                method,
-                self.last_pdf,
-                tri.emitter_pmf,
-                area,
-                hit.t,
-                cos_front,
-            );
-            let emitted = self.throughput * material.emission();
-            self.radiance += emitted * weight;
+            let weight = emitter_weight(method, last_pdf, tri.emitter_pmf, area, hit.t, cos_front);
+            radiance += throughput * material.emission() * weight;
             // The vertex whose sample found this emitter observes all of its emission: the
             // MIS weight splits the estimate of *its* direct light with its light sample,
             // not the radiance arriving along the sampled direction.
-            if let Some(r) = previous_record(&mut self.recorded, depth) {
-                r.discarded += emitted * (1.0 - weight);
+            if let Some(r) = previous_record(&mut recorded, depth) {
+                r.discarded += throughput * material.emission() * (1.0 - weight);
             }
         }
         if depth == bounces {
-            return None;
+            break;
         }
         let normal = if cos_front > 0.0 { n_front } else { -n_front };
-        Some(Vertex {
+        let vertex = Vertex {
             position,
             normal,
             wo: -d,
             material,
             depth,
-        })
-    }
-
-    /// Samples the next direction at `vertex` (the one [`Path::hit`] returned) and, for
-    /// methods that sample lights, adds a light sample; records the vertex and moves the ray
-    /// on. Returns whether the path goes on.
-    fn scatter<S: VertexSampler>(
-        &mut self,
-        scene: &Scene,
-        sampler: &mut S,
-        method: Method,
-        vertex: &Vertex,
-    ) -> bool {
-        let rng = &mut self.rng;
-        let mut u = || next_uniform(rng);
-        let origin_next = offset(vertex.position, vertex.normal);
+        };
+        let origin_next = offset(position, normal);
         // Three uniforms for light sampling are drawn for every method, so that the stream
         // of the BSDF sample does not depend on the method.
         let (ul, u1, u2) = (u(), u(), u());
         // The direction is sampled before the light: a guide's density (for the light
         // sample's MIS weight) exists once its vertex has begun.
-        let sampled = sampler.sample(vertex, Vec3::new(u(), u(), u()));
+        let sampled = sampler.sample(&vertex, Vec3::new(u(), u(), u()));
         if method.samples_lights() {
-            self.radiance +=
-                self.throughput * light_sample(scene, sampler, vertex, origin_next, [ul, u1, u2]);
+            radiance +=
+                throughput * light_sample(scene, sampler, &vertex, origin_next, [ul, u1, u2]);
         }
         let Some(sample) = sampled else {
-            return false;
+            break;
         };
-        let before = self.radiance;
-        self.throughput *= sample.weight;
-        let depth = self.depth;
-        record_vertex(
-            &mut self.recorded,
-            depth,
-            *vertex,
-            sample,
-            before,
-            self.throughput,
-        );
-        self.last_pdf = sample.pdf;
-        self.o = origin_next;
-        self.d = sample.direction;
-        self.depth += 1;
-        self.throughput != Vec3::ZERO
-    }
-
-    /// Hands the recorded vertices' observations to [`VertexSampler::prepare_finish`].
-    fn prepare_finish<S: VertexSampler>(&self, sampler: &mut S) {
-        for o in observations(&self.recorded, self.radiance) {
-            sampler.prepare_finish(&o);
+        let before = radiance;
+        throughput *= sample.weight;
+        record_vertex(&mut recorded, depth, vertex, sample, before, throughput);
+        last_pdf = sample.pdf;
+        o = origin_next;
+        d = sample.direction;
+        depth += 1;
+        if throughput == Vec3::ZERO {
+            break;
         }
     }
-
-    /// Reports the recorded vertices' observations to [`VertexSampler::finish`], in path
-    /// order, and returns the path's radiance.
-    fn finish<S: VertexSampler>(&self, sampler: &mut S) -> Vec3 {
-        for o in observations(&self.recorded, self.radiance) {
-            sampler.finish(&o);
-        }
-        self.radiance
-    }
+    report_recorded(sampler, &recorded, radiance);
+    radiance
 }
 
 /// The record of the vertex whose sampled ray made the hit at `depth` (none for the camera
@@ -619,13 +401,14 @@ fn emitter_weight(
     }
 }
 
-/// The observation of every recorded vertex, in path order, with the radiance its sample
-/// gained once the path's total `radiance` is known.
-fn observations(
+/// Reports every recorded vertex to the sampler with the radiance its sample gained, in
+/// path order, once the path's total `radiance` is known.
+fn report_recorded<S: VertexSampler>(
+    sampler: &mut S,
     recorded: &[Option<Recorded>],
     radiance: Vec3,
-) -> impl Iterator<Item = Observation> + '_ {
-    recorded.iter().flatten().map(move |r| {
+) {
+    for r in recorded.iter().flatten() {
         let Recorded {
             vertex,
             sample,
@@ -640,13 +423,13 @@ fn observations(
             gained / *throughput,
             Vec3::ZERO,
         );
-        Observation {
+        sampler.finish(&Observation {
             vertex: *vertex,
             sample: *sample,
             radiance: incident,
             next: *next,
-        }
-    })
+        });
+    }
 }
 
 /// One light sample at `vertex` with MIS weight: `f·cos·L_e·w / p_light`, 0 when the point is
@@ -703,8 +486,7 @@ pub(crate) fn direct_light(
 }
 
 /// Renders one frame: `spp` paths per pixel, returns the per-pixel mean radiance, row-major
-/// from the top-left, `width × height` entries. `new_sampler` makes one sampler per path of
-/// a row task's wavefront ([`WAVEFRONT`] paths traced together by [`Wavefront::trace`]);
+/// from the top-left, `width × height` entries. `new_sampler` makes one sampler per row task;
 /// `row_done` is called after each row (for progress bars).
 pub fn render_frame<S: VertexSampler>(
     scene: &Scene,
@@ -714,13 +496,22 @@ pub fn render_frame<S: VertexSampler>(
     row_done: impl Fn() + Sync,
 ) -> Vec<Vec3> {
     let (method, bounces) = (settings.method, settings.bounces);
-    render_wavefronts(
+    render_pixels(
         scene,
         settings,
         frame,
-        WAVEFRONT,
-        || Wavefront::new(WAVEFRONT, &new_sampler),
-        |wavefront, rays, out| wavefront.trace(scene, method, bounces, rays, out),
+        new_sampler,
+        |sampler, d, rng| {
+            trace_path(
+                scene,
+                sampler,
+                method,
+                bounces,
+                scene.camera.position,
+                d,
+                rng,
+            )
+        },
         row_done,
     )
 }
@@ -738,36 +529,6 @@ pub fn render_pixels<S>(
     radiance: impl Fn(&mut S, Vec3, &mut u32) -> Vec3 + Sync,
     row_done: impl Fn() + Sync,
 ) -> Vec<Vec3> {
-    render_wavefronts(
-        scene,
-        settings,
-        frame,
-        1,
-        new_state,
-        |state, rays, out| {
-            for (&(_, d, mut rng), o) in rays.iter().zip(out) {
-                *o = radiance(state, d, &mut rng);
-            }
-        },
-        row_done,
-    )
-}
-
-/// [`render_pixels`] with the paths of a row handed out `wavefront` at a time: each row
-/// task takes its pixels' samples in order (pixel by pixel, each pixel's `spp` samples in
-/// turn), `wavefront` camera rays `(origin, direction, random stream)` at a time, to
-/// `radiance(state, rays, out)`, which writes their radiances to `out`. The per-pixel sums
-/// are added in sample order, so the image does not depend on `wavefront` when the paths do
-/// not.
-fn render_wavefronts<S>(
-    scene: &Scene,
-    settings: &RenderSettings,
-    frame: u32,
-    wavefront: usize,
-    new_state: impl Fn() -> S + Sync,
-    radiance: impl Fn(&mut S, &[(Vec3, Vec3, u32)], &mut [Vec3]) + Sync,
-    row_done: impl Fn() + Sync,
-) -> Vec<Vec3> {
     let RenderSettings {
         width,
         height,
@@ -776,37 +537,24 @@ fn render_wavefronts<S>(
         ..
     } = *settings;
     let mut image = vec![Vec3::ZERO; (width * height) as usize];
-    let samples = width * spp;
     image
         .par_chunks_mut(width as usize)
         .enumerate()
         .for_each(|(y, row)| {
             let mut state = new_state();
-            let mut rays = Vec::with_capacity(wavefront);
-            let mut out = vec![Vec3::ZERO; wavefront];
-            let mut first = 0;
-            while first < samples {
-                let last = (first + wavefront as u32).min(samples);
-                rays.clear();
-                rays.extend((first..last).map(|i| {
-                    let (x, s) = (i / spp, i % spp);
-                    let mut rng = path_seed(seed, frame, y as u32 * width + x, s);
+            for (x, pixel) in row.iter_mut().enumerate() {
+                let index = y as u32 * width + x as u32;
+                let mut sum = Vec3::ZERO;
+                for s in 0..spp {
+                    let mut rng = path_seed(seed, frame, index, s);
                     let jx = next_uniform(&mut rng);
                     let jy = next_uniform(&mut rng);
                     let d = scene
                         .camera
                         .direction(x as f32 + jx, y as f32 + jy, width, height);
-                    (scene.camera.position, d, rng)
-                }));
-                let out = &mut out[..rays.len()];
-                radiance(&mut state, &rays, out);
-                for (i, r) in (first..last).zip(out.iter()) {
-                    row[(i / spp) as usize] += *r;
+                    sum += radiance(&mut state, d, &mut rng);
                 }
-                first = last;
-            }
-            for pixel in row.iter_mut() {
-                *pixel /= spp as f32;
+                *pixel = sum / spp as f32;
             }
             row_done();
         });

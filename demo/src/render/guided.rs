@@ -20,7 +20,7 @@ use glam::{Vec2, Vec3};
 use mcg_gpu_backend::sampling::next_uniform;
 use mcg_markov_guide::mcpg::{
     BeginUniforms, FinishUniforms, Guide, GuideConfig, GuideError, GuidedSample, GuidedVertex,
-    PendingBegin, PendingFinish, SampleUniforms, Scatter, Vertex as GuideVertex, VertexObservation,
+    SampleUniforms, Scatter, Vertex as GuideVertex, VertexObservation,
 };
 
 use super::cpu::{MAX_RECORDED, Observation, Vertex, VertexSampler};
@@ -120,18 +120,10 @@ const NO_SAMPLE: GuidedSample = GuidedSample {
     lobe: None,
 };
 
-/// An open guided vertex: the guide's state between `sample` and `finish`, and the update's
-/// lookups once [`VertexSampler::prepare_finish`] has begun them.
-type Open<'g> = (
-    GuidedVertex<'g, MaterialScatter>,
-    GuidedSample,
-    Option<PendingFinish>,
-);
+/// An open guided vertex: the guide's state between `sample` and `finish`.
+type Open<'g> = (GuidedVertex<'g, MaterialScatter>, GuidedSample);
 
-/// MCPG as a [`VertexSampler`]: one per path of a row task's wavefront, all sharing one
-/// [`Guide`]. [`VertexSampler::prepare`] begins a vertex's candidate lookups
-/// ([`Guide::start_begin`]) and [`VertexSampler::sample`] finishes them
-/// ([`Guide::begin_started`]), so that the wavefront's cache misses overlap.
+/// MCPG as a [`VertexSampler`]: one per rayon task, all sharing one [`Guide`].
 ///
 /// Its own uniforms (the candidates' lookups, 4 per candidate, and the update's 5) come from a
 /// stream seeded by [`VertexSampler::begin_path`]; the direction's three are the tracer's.
@@ -141,9 +133,6 @@ pub struct McpgSampler<'g> {
     guide: &'g Guide,
     rng: u32,
     open: [Option<Open<'g>>; MAX_RECORDED],
-    /// The vertex [`VertexSampler::prepare`] began ([`Guide::start_begin`]), for the next
-    /// [`VertexSampler::sample`].
-    pending: Option<PendingBegin>,
 }
 
 impl<'g> McpgSampler<'g> {
@@ -154,21 +143,7 @@ impl<'g> McpgSampler<'g> {
             guide,
             rng: 0,
             open: [const { None }; MAX_RECORDED],
-            pending: None,
         }
-    }
-}
-
-impl McpgSampler<'_> {
-    /// Draws the lookup uniforms of vertex `v` from the sampler's stream (4 per candidate)
-    /// and begins its candidates' lookups ([`Guide::start_begin`]).
-    fn start(&mut self, v: &Vertex) -> PendingBegin {
-        let rng = &mut self.rng;
-        let begin = BeginUniforms::from_fn(self.guide.params().candidates as usize, || {
-            next_uniform(rng)
-        });
-        let vertex = GuideVertex::surface(v.position, v.normal);
-        self.guide.start_begin(vertex, &begin)
     }
 }
 
@@ -182,23 +157,17 @@ impl VertexSampler for McpgSampler<'_> {
         }
     }
 
-    /// Begins the vertex's candidate lookups ([`McpgSampler::start`]);
-    /// [`VertexSampler::sample`] at the same vertex finishes them.
-    fn prepare(&mut self, v: &Vertex) {
-        self.pending = Some(self.start(v));
-    }
-
     fn sample(&mut self, v: &Vertex, u: Vec3) -> Option<BsdfSample> {
         let scatter = MaterialScatter {
             material: v.material,
             normal: v.normal,
             wo: v.wo,
         };
-        // Begun by `prepare` (the tracer calls it before every `sample`), or here.
-        let pending = match self.pending.take() {
-            Some(p) => p,
-            None => self.start(v),
-        };
+        let rng = &mut self.rng;
+        let begin = BeginUniforms::from_fn(self.guide.params().candidates as usize, || {
+            next_uniform(rng)
+        });
+        let vertex = GuideVertex::surface(v.position, v.normal);
         let u = SampleUniforms {
             choice: u.x,
             direction: Vec2::new(u.y, u.z),
@@ -206,12 +175,12 @@ impl VertexSampler for McpgSampler<'_> {
         let s = match self.open.get_mut(v.depth as usize) {
             // Begun in its slot (a begun vertex moved into the slot cost two copies of it).
             Some(slot) => {
-                let (guided, s, _) =
-                    slot.insert((self.guide.begin_started(&pending, scatter), NO_SAMPLE, None));
+                let (guided, s) =
+                    slot.insert((self.guide.begin(vertex, scatter, &begin), NO_SAMPLE));
                 *s = guided.sample(&u);
                 *s
             }
-            None => self.guide.begin_started(&pending, scatter).sample(&u),
+            None => self.guide.begin(vertex, scatter, &begin).sample(&u),
         };
         if !(s.pdf > 0.0) {
             return None;
@@ -226,20 +195,9 @@ impl VertexSampler for McpgSampler<'_> {
 
     fn pdf(&self, v: &Vertex, wi: Vec3) -> f32 {
         match self.open.get(v.depth as usize) {
-            Some(Some((guided, _, _))) => guided.pdf(wi),
+            Some(Some((guided, _))) => guided.pdf(wi),
             _ => v.material.pdf(v.normal, v.wo, wi),
         }
-    }
-
-    /// Draws the update's uniforms and begins its lookups ([`GuidedVertex::start_finish`]);
-    /// [`VertexSampler::finish`] with the same observation finishes them.
-    fn prepare_finish(&mut self, o: &Observation) {
-        let Some(Some((guided, _, pending))) = self.open.get_mut(o.vertex.depth as usize) else {
-            return;
-        };
-        let rng = &mut self.rng;
-        let u = FinishUniforms::from_fn(|| next_uniform(rng));
-        *pending = Some(guided.start_finish(&observed(o), &u));
     }
 
     fn finish(&mut self, o: &Observation) {
@@ -247,28 +205,16 @@ impl VertexSampler for McpgSampler<'_> {
         let Some(open) = self.open.get_mut(o.vertex.depth as usize) else {
             return;
         };
-        let Some((guided, s, pending)) = open.as_ref() else {
+        let Some((guided, s)) = open.as_ref() else {
             return;
         };
-        let seen = observed(o);
-        match pending {
-            Some(p) => guided.finish_started(s, &seen, p),
-            None => {
-                let rng = &mut self.rng;
-                guided.finish(s, &seen, &FinishUniforms::from_fn(|| next_uniform(rng)))
-            }
+        let weight = o.sample.weight;
+        let seen = match o.next {
+            Some(hit) => VertexObservation::hit(hit.position, hit.normal, hit.emitted, weight),
+            None => VertexObservation::escaped(Vec3::ZERO, weight),
         };
+        let rng = &mut self.rng;
+        guided.finish(s, &seen, &FinishUniforms::from_fn(|| next_uniform(rng)));
         *open = None;
-    }
-}
-
-/// What the guide learns from an observation: the hit (position, normal, emission; the
-/// radiance reflected there comes from the guide's irradiance cache) or an escaped ray, and
-/// the sample's weight f·cos/p.
-fn observed(o: &Observation) -> VertexObservation {
-    let weight = o.sample.weight;
-    match o.next {
-        Some(hit) => VertexObservation::hit(hit.position, hit.normal, hit.emitted, weight),
-        None => VertexObservation::escaped(Vec3::ZERO, weight),
     }
 }

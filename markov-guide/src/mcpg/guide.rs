@@ -2,8 +2,8 @@
 //! `end_frame` per frame (MCPG Alg. 1-3, sec. 4-5).
 
 use mcg_hashgrid::{
-    AdaptiveGrid, CellKey, LevelParams, PendingFind, StaticGrid, cell_and_fraction,
-    geometric_jitter, normal_class, stochastic_corner, stochastic_trilinear,
+    AdaptiveGrid, CellKey, LevelParams, StaticGrid, cell_and_fraction, geometric_jitter,
+    normal_class, stochastic_corner, stochastic_trilinear,
 };
 use mcg_vmf::glam::{IVec3, Vec2, Vec3};
 use mcg_vmf::{MapPrior, SufficientStats, Vmf, VmfLanes};
@@ -652,71 +652,15 @@ impl Guide {
     /// candidate's lobe once (with the cosine product if configured). `scatter` is the
     /// fallback technique (Alg. 2 line 3). A non-finite position loads nothing (the vertex
     /// samples `scatter` only).
-    ///
-    /// The same as [`start_begin`](Self::start_begin) followed at once by
-    /// [`begin_started`](Self::begin_started); a renderer that has several vertices at hand
-    /// (a wavefront of paths) calls those two apart to overlap the vertices' cache misses.
-    #[inline]
     pub fn begin<S: Scatter>(
         &self,
         vertex: Vertex,
         scatter: S,
         u: &BeginUniforms,
     ) -> GuidedVertex<'_, S> {
-        self.begin_started(&self.start_begin(vertex, u), scatter)
-    }
-
-    /// The first half of [`begin`](Self::begin): the candidates' keys at `vertex` (Alg. 1
-    /// lines 3-4: grid, level jitter and stochastic trilinear corner from `u`), their lookups
-    /// begun ([`SharedGrid::start_find`]: the lines of each key's home checksum, age and state
-    /// asked for, nothing waited for). [`begin_started`](Self::begin_started) finishes the
-    /// vertex with exactly `begin`'s result, as long as no state was stored in between; a
-    /// store in between is read as `begin` would read it then (a candidate whose state moved
-    /// to another slot is looked up there).
-    ///
-    /// Why: in a renderer the guide's tables are far larger than the caches and each
-    /// candidate's lines miss; within one vertex the misses overlap, but a vertex is thousands
-    /// of instructions, so one vertex's misses cannot overlap the next one's. Starting the
-    /// vertices of a wavefront of paths first, then finishing them, overlaps them all.
-    #[must_use]
-    pub fn start_begin(&self, vertex: Vertex, u: &BeginUniforms) -> PendingBegin {
-        let count = (self.config.params.candidates as usize).min(MAX_CANDIDATES);
-        let x = vertex.position;
-        let mut p = PendingBegin {
-            vertex,
-            class: normal_class(vertex.key_direction),
-            target_level: self.adaptive.target_level(self.camera.distance(x)),
-            count: 0,
-            kinds: [GridKind::Static; MAX_CANDIDATES],
-            lookups: [PendingFind::default(); MAX_CANDIDATES],
-            reservoir: [0.0; MAX_CANDIDATES],
-        };
-        if !crate::math::all_finite(x) {
-            return p;
-        }
-        p.count = count;
-        let keys = self.candidate_keys(x, p.class, p.target_level, u, count);
-        for (k, (kind, key)) in keys.iter().enumerate().take(count) {
-            p.kinds[k] = *kind;
-            p.lookups[k] = self.grid(*kind).start_find(key);
-            p.reservoir[k] = u.candidates[k].reservoir;
-        }
-        p
-    }
-
-    /// The second half of [`begin`](Self::begin), for a vertex begun by
-    /// [`start_begin`](Self::start_begin) on this guide: the lookups finished, the states
-    /// loaded, predicted, rejected and offered, one chosen and the lobes built, as `begin`
-    /// describes. `scatter` is the fallback technique.
-    pub fn begin_started<S: Scatter>(
-        &self,
-        pending: &PendingBegin,
-        scatter: S,
-    ) -> GuidedVertex<'_, S> {
         let params = &self.config.params;
-        let vertex = pending.vertex;
         let x = vertex.position;
-        let count = pending.count;
+        let count = (params.candidates as usize).min(MAX_CANDIDATES);
         let mut v = GuidedVertex {
             guide: self,
             vertex,
@@ -725,17 +669,17 @@ impl Guide {
             slots: [None; MAX_CANDIDATES],
             lobes: VmfLanes::EMPTY,
             scatter_share: 0.0,
-            class: pending.class,
-            target_level: pending.target_level,
+            class: normal_class(vertex.key_direction),
+            target_level: self.adaptive.target_level(self.camera.distance(x)),
         };
-        if count == 0 {
+        if !crate::math::all_finite(x) {
             return v;
         }
+        let keys = self.candidate_keys(x, v.class, v.target_level, u, count);
         // One batch: every lookup, then every state, so that the lookups' memory accesses
         // overlap instead of waiting on each other.
-        let started = pending.kinds.iter().zip(&pending.lookups);
-        for (slot, (kind, lookup)) in v.slots.iter_mut().zip(started).take(count) {
-            *slot = self.grid(*kind).find_started(*lookup).map(|s| (*kind, s));
+        for (slot, (kind, key)) in v.slots.iter_mut().zip(&keys).take(count) {
+            *slot = self.grid(*kind).find(key).map(|s| (*kind, s));
         }
         // The states go straight into the candidate set's storage (all `EMPTY` so far, which
         // a slot without a state, a hash collision or a torn read leaves there), are
@@ -749,38 +693,15 @@ impl Guide {
             }
         }
         let now = self.frame as f32;
-        for (state, kind) in states.iter_mut().zip(&pending.kinds).take(count) {
+        for (state, (kind, _)) in states.iter_mut().zip(&keys).take(count) {
             // An `EMPTY` state is invalid: prepared to w̄ = 0 like a collision (Alg. 1 line 6).
             prepare_in_place(state, false, *kind, x, vertex.normal, now, params);
         }
-        for xi in pending.reservoir.iter().take(count) {
-            v.set.offer_stored(*xi);
+        for c in u.candidates.iter().take(count) {
+            v.set.offer_stored(c.reservoir);
         }
         v.build_lobes();
         v
-    }
-}
-
-/// A vertex whose candidate lookups [`Guide::start_begin`] has begun, for
-/// [`Guide::begin_started`]: the vertex, its key class and target level, and per candidate
-/// its grid, its started lookup and its reservoir ξ (Alg. 1 line 9).
-#[derive(Clone, Copy, Debug)]
-pub struct PendingBegin {
-    vertex: Vertex,
-    class: u8,
-    target_level: u32,
-    /// The candidates to load: N_mc, or 0 for a non-finite position.
-    count: usize,
-    kinds: [GridKind; MAX_CANDIDATES],
-    lookups: [PendingFind; MAX_CANDIDATES],
-    reservoir: [f32; MAX_CANDIDATES],
-}
-
-impl PendingBegin {
-    /// The vertex.
-    #[must_use]
-    pub const fn vertex(&self) -> &Vertex {
-        &self.vertex
     }
 }
 
@@ -941,69 +862,12 @@ impl<S: Scatter> GuidedVertex<'_, S> {
     /// 4. A rejected lobe sample may discard the state it came from (sec. 5).
     ///
     /// NaN, infinite or negative radiance or weights count as 0 and never reach a state.
-    ///
-    /// The same as [`start_finish`](Self::start_finish) followed at once by
-    /// [`finish_started`](Self::finish_started).
-    #[inline]
     pub fn finish(
         &self,
         sample: &GuidedSample,
         observation: &VertexObservation,
         u: &FinishUniforms,
     ) -> Transition {
-        self.finish_started(sample, observation, &self.start_finish(observation, u))
-    }
-
-    /// The first half of [`finish`](Self::finish), for a renderer that finishes several
-    /// vertices at once: the keys of the cells `finish` will read and write — the irradiance
-    /// cache's at hit_next (read) and at x (written), the grid vertex of the store (Alg. 3
-    /// line 12, from `u.store`) — hashed and their lines asked for, nothing waited for.
-    /// [`finish_started`](Self::finish_started) with the same `observation` then gives
-    /// `finish`'s result (the lookups run there, on the tables as they are then).
-    #[must_use]
-    pub fn start_finish(
-        &self,
-        observation: &VertexObservation,
-        u: &FinishUniforms,
-    ) -> PendingFinish {
-        let guide = self.guide;
-        let x = self.vertex.position;
-        let query = match (&guide.cache, observation.traced, observation.reflected) {
-            (
-                Some(cache),
-                Traced::Hit {
-                    position, normal, ..
-                },
-                None,
-            ) => {
-                let level = guide.adaptive.target_level(guide.camera.distance(position));
-                Some((level, cache.start_query(position, normal, level, u.cache)))
-            }
-            _ => None,
-        };
-        let add = match (&guide.cache, self.vertex.normal) {
-            (Some(cache), Some(n)) => Some(cache.start_add(x, n, self.target_level, u.cache)),
-            _ => None,
-        };
-        let (kind, key) = guide.key(x, self.class, self.target_level, &u.store);
-        PendingFinish {
-            u: *u,
-            query,
-            add,
-            store: (kind, guide.grid(kind).start_find(&key)),
-        }
-    }
-
-    /// The second half of [`finish`](Self::finish): MCPG Alg. 3 and the cache update for
-    /// `sample` and `observation`, through the lookups `pending` began
-    /// ([`start_finish`](Self::start_finish) on this vertex with the same `observation`).
-    pub fn finish_started(
-        &self,
-        sample: &GuidedSample,
-        observation: &VertexObservation,
-        pending: &PendingFinish,
-    ) -> Transition {
-        let u = &pending.u;
         let guide = self.guide;
         let params = &guide.config.params;
         let x = self.vertex.position;
@@ -1015,15 +879,15 @@ impl<S: Scatter> GuidedVertex<'_, S> {
                 emitted,
                 previous_position,
             } => {
-                let reflected =
-                    observation
-                        .reflected
-                        .unwrap_or_else(|| match (&guide.cache, pending.query) {
-                            (Some(cache), Some((level, first))) => {
-                                cache.query_started(Some(first), position, normal, level, u.cache)
-                            }
-                            _ => Vec3::ZERO,
-                        });
+                let reflected = observation.reflected.unwrap_or_else(|| match &guide.cache {
+                    Some(cache) => cache.query(
+                        position,
+                        normal,
+                        guide.adaptive.target_level(guide.camera.distance(position)),
+                        u.cache,
+                    ),
+                    None => Vec3::ZERO,
+                });
                 (
                     position,
                     previous_position.unwrap_or(position),
@@ -1042,7 +906,7 @@ impl<S: Scatter> GuidedVertex<'_, S> {
             Vec3::ZERO
         };
         if let (Some(cache), Some(n)) = (&guide.cache, self.vertex.normal) {
-            cache.add_started(pending.add, x, n, self.target_level, u.cache, carried);
+            cache.add(x, n, self.target_level, u.cache, carried);
         }
         let estimate = luminance(carried);
         let now = guide.frame as f32;
@@ -1060,8 +924,8 @@ impl<S: Scatter> GuidedVertex<'_, S> {
         };
         match update(&chosen, self.set.mean_weight(), &obs, u.accept, params) {
             Some(new) => {
-                let (kind, lookup) = pending.store;
-                if guide.grid(kind).store_started(lookup, &new) {
+                let (kind, key) = guide.key(x, self.class, self.target_level, &u.store);
+                if guide.grid(kind).store(&key, &new) {
                     Transition::Stored
                 } else {
                     Transition::Dropped
@@ -1081,166 +945,9 @@ impl<S: Scatter> GuidedVertex<'_, S> {
     }
 }
 
-/// The lookups of [`GuidedVertex::finish`] begun by [`GuidedVertex::start_finish`], for
-/// [`GuidedVertex::finish_started`]: the uniforms, the irradiance cache's first cells at
-/// hit_next (with its level) and at x, and the store's grid vertex.
-#[derive(Clone, Copy, Debug)]
-pub struct PendingFinish {
-    u: FinishUniforms,
-    query: Option<(u32, PendingFind)>,
-    add: Option<PendingFind>,
-    store: (GridKind, PendingFind),
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::vec::Vec;
-
-    /// Vertices begun all at once by `start_begin` and then finished one by one by
-    /// `begin_started` (a renderer's wavefront) must be `begin`'s vertices bit for bit
-    /// (slots, states, choice, lobes, scatter share) on a trained guide: 8 frames of 700
-    /// vertices on a floor below a light patch, then 203 vertices with a NaN position, a
-    /// point far outside the grid and a zero normal among them.
-    #[test]
-    fn started_begins_equal_begin() {
-        let mut config = GuideConfig::for_scene(Vec3::ZERO, Vec3::ONE);
-        config.adaptive_capacity = 1 << 14;
-        let mut guide = Guide::new(config).unwrap();
-        guide.set_camera(Vec3::new(0.5, 0.5, 1.5));
-        let mut state = 0x9e37_79b9_u32;
-        let mut next = move || {
-            state = state.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
-            (state >> 8) as f32 / (1u32 << 24) as f32
-        };
-        let floor = |a: f32, b: f32| Vertex::surface(Vec3::new(a, 0.0, b), Vec3::Y);
-        let scatter = Lambertian { normal: Vec3::Y };
-        for _ in 0..8 {
-            for _ in 0..700 {
-                let v = guide.begin(
-                    floor(next(), next()),
-                    scatter,
-                    &BeginUniforms::from_fn(5, &mut next),
-                );
-                let s = v.sample(&SampleUniforms::from_fn(&mut next));
-                let hit = Vec3::new(0.4 + 0.2 * next(), 1.0, 0.4 + 0.2 * next());
-                let obs = VertexObservation::hit(hit, -Vec3::Y, Vec3::splat(5.0), Vec3::ONE);
-                v.finish(&s, &obs, &FinishUniforms::from_fn(&mut next));
-            }
-            guide.end_frame();
-        }
-        let mut vertices: Vec<Vertex> = (0..203).map(|_| floor(next(), next())).collect();
-        vertices[5].position = Vec3::NAN;
-        vertices[70].position = Vec3::splat(1.0e30);
-        vertices[71] = Vertex::surface(Vec3::new(0.5, 0.0, 0.5), Vec3::ZERO);
-        let uniforms: Vec<BeginUniforms> = (0..203)
-            .map(|_| BeginUniforms::from_fn(5, &mut next))
-            .collect();
-        let pending: Vec<PendingBegin> = vertices
-            .iter()
-            .zip(&uniforms)
-            .map(|(x, u)| guide.start_begin(*x, u))
-            .collect();
-        let mut chosen = 0;
-        for (i, (p, (x, u))) in pending
-            .iter()
-            .zip(vertices.iter().zip(&uniforms))
-            .enumerate()
-        {
-            let bits = |v: &Vertex| v.position.to_array().map(f32::to_bits);
-            assert_eq!(bits(p.vertex()), bits(x), "vertex {i}");
-            let a = guide.begin(*x, scatter, u);
-            let b = guide.begin_started(p, scatter);
-            assert_eq!(a.slots, b.slots, "vertex {i}");
-            assert_eq!(a.set, b.set, "vertex {i}");
-            assert_eq!(a.lobes, b.lobes, "vertex {i}");
-            assert_eq!(
-                a.scatter_share.to_bits(),
-                b.scatter_share.to_bits(),
-                "vertex {i}"
-            );
-            assert_eq!((a.class, a.target_level), (b.class, b.target_level));
-            chosen += usize::from(a.selected().is_some());
-        }
-        // The comparison means something only if most vertices found states.
-        assert!(chosen > 150, "{chosen} of 203 vertices chose a state");
-    }
-
-    /// Vertices whose updates are all begun by `start_finish` and then finished one by one by
-    /// `finish_started` (a renderer's wavefront) must update the guide exactly as `finish`
-    /// one after another: two guides trained alike, 203 vertices (with a NaN position, a far
-    /// point, a zero normal, escaped rays and a NaN weight among them) finished each way in
-    /// the same order, then the same transitions, grid states and cache cells bit for bit.
-    #[test]
-    fn started_finishes_equal_finish() {
-        let mut config = GuideConfig::for_scene(Vec3::ZERO, Vec3::ONE);
-        config.adaptive_capacity = 1 << 14;
-        let mut guides = [Guide::new(config).unwrap(), Guide::new(config).unwrap()];
-        let floor = |a: f32, b: f32| Vertex::surface(Vec3::new(a, 0.0, b), Vec3::Y);
-        let scatter = Lambertian { normal: Vec3::Y };
-        let mut transitions: [Vec<Transition>; 2] = [Vec::new(), Vec::new()];
-        for (g, (guide, log)) in guides.iter_mut().zip(&mut transitions).enumerate() {
-            guide.set_camera(Vec3::new(0.5, 0.5, 1.5));
-            let mut state = 0x9e37_79b9_u32;
-            let mut next = move || {
-                state = state.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
-                (state >> 8) as f32 / (1u32 << 24) as f32
-            };
-            for frame in 0..9 {
-                let mut vertices: Vec<Vertex> = (0..203).map(|_| floor(next(), next())).collect();
-                vertices[5].position = Vec3::NAN;
-                vertices[70].position = Vec3::splat(1.0e30);
-                vertices[71] = Vertex::surface(Vec3::new(0.5, 0.0, 0.5), Vec3::ZERO);
-                let open: Vec<_> = vertices
-                    .iter()
-                    .map(|x| {
-                        let v = guide.begin(*x, scatter, &BeginUniforms::from_fn(5, &mut next));
-                        let s = v.sample(&SampleUniforms::from_fn(&mut next));
-                        let hit = Vec3::new(0.4 + 0.2 * next(), 1.0, 0.4 + 0.2 * next());
-                        let mut obs =
-                            VertexObservation::hit(hit, -Vec3::Y, Vec3::splat(5.0), Vec3::ONE);
-                        if next() < 0.1 {
-                            obs = VertexObservation::escaped(Vec3::ONE, Vec3::ONE);
-                        }
-                        (v, s, obs, FinishUniforms::from_fn(&mut next))
-                    })
-                    .collect();
-                if g == 0 || frame < 4 {
-                    for (v, s, obs, u) in &open {
-                        log.push(v.finish(s, obs, u));
-                    }
-                } else {
-                    let pending: Vec<PendingFinish> = open
-                        .iter()
-                        .map(|(v, _, obs, u)| v.start_finish(obs, u))
-                        .collect();
-                    for ((v, s, obs, _), p) in open.iter().zip(&pending) {
-                        log.push(v.finish_started(s, obs, p));
-                    }
-                }
-                drop(open);
-                guide.end_frame();
-            }
-        }
-        assert_eq!(transitions[0], transitions[1]);
-        assert!(transitions[0].contains(&Transition::Stored));
-        let [a, b] = &mut guides;
-        let bits = |g: &mut Guide| {
-            let cells: Vec<[u32; 4]> = g
-                .cache()
-                .unwrap()
-                .cells()
-                .iter()
-                .map(|c| bytemuck::cast(*c))
-                .collect();
-            let (adaptive, fixed) = g.grids_mut();
-            let states = |s: Vec<GridState>| -> Vec<[u32; 8]> {
-                s.into_iter().map(bytemuck::cast).collect()
-            };
-            (states(adaptive.snapshot()), states(fixed.snapshot()), cells)
-        };
-        assert!(bits(a) == bits(b));
-    }
 
     /// `candidate_keys` memoises cells per grid and level; it must give [`Guide::key`]'s
     /// keys bit for bit, for every grid choice, level jitter and corner (here a 4096-vertex

@@ -7,7 +7,7 @@ use std::vec::Vec;
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use bytemuck::{Pod, Zeroable};
-use mcg_hashgrid::{AdaptiveGrid, BucketHash, CellKey, ConcurrentTable, PendingFind, normal_class};
+use mcg_hashgrid::{AdaptiveGrid, BucketHash, CellKey, ConcurrentTable, normal_class};
 use mcg_vmf::glam::Vec3;
 
 use crate::error::ParamsError;
@@ -167,42 +167,14 @@ impl IrradianceCache {
         corner: f32,
         radiance: Vec3,
     ) -> bool {
-        self.add_started(None, position, normal, level, corner, radiance)
-    }
-
-    /// Begins [`add`](Self::add) at the same arguments: the first cell's key hashed and its
-    /// checksum, age and accumulator lines asked for ([`ConcurrentTable::start_find`]), for
-    /// [`add_started`](Self::add_started).
-    #[must_use]
-    pub fn start_add(&self, position: Vec3, normal: Vec3, level: u32, corner: f32) -> PendingFind {
-        let key = self.key(position, normal, self.cell_level(level, 0), corner);
-        self.table.start_find(&key, &self.accumulators)
-    }
-
-    /// [`add`](Self::add), the first cell through `first` when given (from
-    /// [`start_add`](Self::start_add) with the same position, normal, level and corner):
-    /// the same result as `add`.
-    pub fn add_started(
-        &self,
-        first: Option<PendingFind>,
-        position: Vec3,
-        normal: Vec3,
-        level: u32,
-        corner: f32,
-        radiance: Vec3,
-    ) -> bool {
         if !(radiance.is_finite() && radiance.min_element() >= 0.0 && position.is_finite()) {
             return false;
         }
+        let base = level;
         for extra in 0..=self.config.coarser_levels {
-            let inserted = match first {
-                Some(pending) if extra == 0 => self.table.insert_or_get_started(pending),
-                _ => {
-                    let key = self.key(position, normal, self.cell_level(level, extra), corner);
-                    self.table.insert_or_get(&key)
-                }
-            };
-            if let Some(slot) = inserted.slot() {
+            let level = self.cell_level(base, extra);
+            let key = self.key(position, normal, level, corner);
+            if let Some(slot) = self.table.insert_or_get(&key).slot() {
                 let acc = &self.accumulators[slot as usize];
                 for (word, value) in acc.iter().zip(radiance.to_array()) {
                     add_f32(word, value);
@@ -219,48 +191,14 @@ impl IrradianceCache {
     /// none holds one.
     #[must_use]
     pub fn query(&self, position: Vec3, normal: Vec3, level: u32, corner: f32) -> Vec3 {
-        self.query_started(None, position, normal, level, corner)
-    }
-
-    /// Begins [`query`](Self::query) at the same arguments: the first cell's key hashed and
-    /// its checksum, age and cell lines asked for ([`ConcurrentTable::start_find`]), for
-    /// [`query_started`](Self::query_started).
-    #[must_use]
-    pub fn start_query(
-        &self,
-        position: Vec3,
-        normal: Vec3,
-        level: u32,
-        corner: f32,
-    ) -> PendingFind {
-        let key = self.key(position, normal, self.cell_level(level, 0), corner);
-        self.table.start_find(&key, &self.cells)
-    }
-
-    /// [`query`](Self::query), the first cell through `first` when given (from
-    /// [`start_query`](Self::start_query) with the same position, normal, level and corner):
-    /// the same result as `query`.
-    #[must_use]
-    pub fn query_started(
-        &self,
-        first: Option<PendingFind>,
-        position: Vec3,
-        normal: Vec3,
-        level: u32,
-        corner: f32,
-    ) -> Vec3 {
         if !position.is_finite() {
             return Vec3::ZERO;
         }
+        let base = level;
         for extra in 0..=self.config.coarser_levels {
-            let found = match first {
-                Some(pending) if extra == 0 => self.table.find_started(pending),
-                _ => {
-                    let key = self.key(position, normal, self.cell_level(level, extra), corner);
-                    self.table.find(&key)
-                }
-            };
-            if let Some(slot) = found {
+            let level = self.cell_level(base, extra);
+            let key = self.key(position, normal, level, corner);
+            if let Some(slot) = self.table.find(&key) {
                 let cell = &self.cells[slot as usize];
                 if cell.weight > 0.0 {
                     return Vec3::from_array(cell.radiance);

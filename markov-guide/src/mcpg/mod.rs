@@ -89,8 +89,7 @@ pub use grid::{GridEnsemble, GridSlot, GridUniforms};
 pub use guide::{
     BeginUniforms, CandidateUniforms, FinishUniforms, Guide, GuideConfig, GuidedSample,
     GuidedVertex, Hemisphere, IsotropicPhase, Lambertian, MAX_CANDIDATES, PAPER_SCENE_EXTENT,
-    PendingBegin, PendingFinish, SampleUniforms, Scatter, Traced, Transition, Vertex,
-    VertexObservation, luminance,
+    SampleUniforms, Scatter, Traced, Transition, Vertex, VertexObservation, luminance,
 };
 #[cfg(feature = "std")]
 pub use irradiance_cache::{CacheCell, CacheConfig, IrradianceCache};

@@ -5,7 +5,7 @@ use std::vec::Vec;
 
 use core::sync::atomic::{AtomicU32, Ordering, fence};
 
-use mcg_hashgrid::{BucketHash, CellKey, ConcurrentTable, PendingFind, TableError};
+use mcg_hashgrid::{BucketHash, CellKey, ConcurrentTable, TableError};
 
 use super::GridState;
 
@@ -225,23 +225,6 @@ impl SharedGrid {
         self.table.find(key)
     }
 
-    /// [`find`](Self::find) begun: `key` hashed and the cache lines of its home slot's
-    /// checksum, age and state asked for ([`ConcurrentTable::start_find`]), so that the lookups
-    /// of many keys overlap their cache misses; [`find_started`](Self::find_started) ends it.
-    #[inline]
-    #[must_use]
-    pub fn start_find(&self, key: &CellKey) -> PendingFind {
-        self.table.start_find(key, &self.states.slots)
-    }
-
-    /// The slot of the key `pending` was begun for on this grid, if any: the same as
-    /// [`find`](Self::find) of that key.
-    #[inline]
-    #[must_use]
-    pub fn find_started(&self, pending: PendingFind) -> Option<u32> {
-        self.table.find_started(pending)
-    }
-
     /// The state at `slot`; `None` for a torn read (the second half of [`load`](Self::load)).
     #[inline]
     #[must_use]
@@ -260,16 +243,6 @@ impl SharedGrid {
     #[inline]
     pub fn store(&self, key: &CellKey, state: &GridState) -> bool {
         match self.table.insert_or_get(key).slot() {
-            Some(slot) => self.states.store(slot, state),
-            None => false,
-        }
-    }
-
-    /// [`store`](Self::store) at the key `pending` was begun for
-    /// ([`start_find`](Self::start_find)): the same result as `store` of that key now.
-    #[inline]
-    pub fn store_started(&self, pending: PendingFind, state: &GridState) -> bool {
-        match self.table.insert_or_get_started(pending).slot() {
             Some(slot) => self.states.store(slot, state),
             None => false,
         }
