@@ -142,6 +142,7 @@ impl<const N: usize> CandidateSet<N> {
     /// The storage of the states not yet offered (the first `len` entries are offered ones):
     /// load and prepare candidates there, then [`offer_stored`](Self::offer_stored) them in
     /// order.
+    #[cfg(feature = "std")]
     #[inline]
     pub(crate) fn storage_mut(&mut self) -> &mut [GridState; N] {
         &mut self.states
@@ -150,6 +151,7 @@ impl<const N: usize> CandidateSet<N> {
     /// Offers the state already in the storage at the next index (see
     /// [`storage_mut`](Self::storage_mut)), prepared by [`prepare_in_place`]: its w̄ is its
     /// resampling weight (preparation zeroed it for every invalid state).
+    #[cfg(feature = "std")]
     #[inline]
     pub(crate) fn offer_stored(&mut self, u: f32) -> bool {
         if self.len == N {
