@@ -100,14 +100,14 @@
 //!
 //! Renderer, with items 1, 2 and 4 and item 3's first form (DDGI's rotated Fibonacci sets,
 //! extra rays in proportion to f_d), `render` seeds 1-8, frames from the event until the
-//! event region's relMSE falls to 0.07: blend 1, 1, 1, 1, 1, 1, 0, 1 (median 1); DDGI 11, 9, 10, 11, 11, 9, 11, 9
-//! (median 10). Mean relMSE over the last 14 frames: event region 0.030-0.038 against
-//! 0.050-0.056, whole image 0.039-0.042 against 0.047-0.050. The restart does the work: the
-//! smoothed f_d stays small, so the extra rays are ≈ 60 of 6272 at the event. DDGI with a
-//! window of 10 instead of 17 reaches 0.07 after 5, 2, 4 frames (seeds 1-3; the blend: 1, 1,
-//! 1). Split of the event region's relMSE 8 frames after the event over seeds 1-3 (bias² of
-//! the seed-mean image + the rest): DDGI 0.058 + 0.016, ADGI 0.070 + 0.019, blend 0.018 +
-//! 0.019 — DDGI's error there is the lag of its hysteresis.
+//! event region's relMSE falls to 0.07: blend 1, 1, 1, 1, 1, 1, 0, 1 (median 1); DDGI 11, 9,
+//! 10, 11, 11, 9, 11, 9 (median 10). Mean relMSE over the last 14 frames: event region
+//! 0.030-0.038 against 0.050-0.056, whole image 0.039-0.042 against 0.047-0.050. The restart
+//! does the work: the smoothed f_d stays small, so the extra rays are ≈ 60 of 6272 at the
+//! event. DDGI with a window of 10 instead of 17 reaches 0.07 after 5, 2, 4 frames (seeds 1-3;
+//! the blend: 1, 1, 1). Split of the event region's relMSE 8 frames after the event over
+//! seeds 1-3 (bias² of the seed-mean image + the rest): DDGI 0.058 + 0.016, ADGI 0.070 +
+//! 0.019, blend 0.018 + 0.019 — DDGI's error there is the lag of its hysteresis.
 //!
 //! On the `probe_cache_adgi` fixture of `mcg-tests` (door sliding open over frames 16-17,
 //! within a pair; run seeds 1-8) that first form did *not* win (frames to 0.3 near the event
@@ -119,7 +119,7 @@
 //! needs 8-11 frames. In the renderer (the report's dynamic-GI section, its 8 seeds, CPU) the
 //! blend needs 0-1 frames (DDGI 8-10) and ends at 0.041-0.047 whole-image relMSE against
 //! DDGI's 0.047-0.050. How this was found: `benches/README.md`.
-
+//!
 //! # Budget
 //! A frame traces at most `rays_per_probe × probe count` probe rays under every policy
 //! ([`FrameRays::rays`]); ADGI cuts its last sample list at the budget.
@@ -271,8 +271,8 @@ pub struct UpdateConfig {
     pub blend_max_count: u32,
     /// Extra rays per frame of an [`UpdatePolicy::AdgiBlend`] probe whose change signal is on
     /// (some octant's f_d above 0), within [`UpdateConfig::dynamic_share`] of the rays after
-    /// the pilots. Our choice: 96 (three times a probe's budget: a restarted probe's first
-    /// frames average 120 rays instead of 24).
+    /// the pilots. Our choice: 96 (three times a probe's budget: while at most 108 probes are
+    /// changed, each traces 120 rays per frame instead of 24).
     pub blend_dynamic_rays: u32,
     /// The gradient magnitude below which [`UpdatePolicy::AdgiBlend`]'s detector sees no
     /// change ([`ChangeDetector::with_pulse_threshold`]; f_v, f_r ∈ [0, 1]).

@@ -57,7 +57,8 @@ pub const SEQUENCE_STEPS: [u32; 2] = [3_242_174_889, 2_447_445_414];
 /// for i in 100..164 {
 ///     let d = sequence_direction(7, 3, i);
 ///     assert!((d.length() - 1.0).abs() < 1e-6);
-///     octants[usize::from(d.x < 0.0) | usize::from(d.y < 0.0) << 1 | usize::from(d.z < 0.0) << 2] += 1;
+///     let o = usize::from(d.x < 0.0) | usize::from(d.y < 0.0) << 1 | usize::from(d.z < 0.0) << 2;
+///     octants[o] += 1;
 /// }
 /// assert!(octants.iter().all(|&n| (5..=11).contains(&n)), "{octants:?}");
 /// ```

@@ -43,9 +43,9 @@
 //! - H4: refill ends with a lower near-event error than the paper's ADGI (mean over the seeds
 //!   of the last 10 frames). Measured: 0.171-0.269 against 0.254-0.394.
 //! - H5 (why the radiance texels of the paper's ADGI and of refill cannot end below DDGI over
-//!   all probes): the discretisation floor of radiance texels — the all-probe error of texels that hold the
-//!   exact mean radiance of their texel (256 jittered rays each), after the event — is above
-//!   DDGI's worst all-probe error over the last 10 frames. Measured: floor 0.102 (1024 rays per
+//!   all probes): the discretisation floor of radiance texels — the all-probe error of texels
+//!   that hold the exact mean radiance of their texel (256 jittered rays each), after the
+//!   event — is above DDGI's worst all-probe error over the last 10 frames. Measured: floor 0.102 (1024 rays per
 //!   texel give 0.102 too; exact clipped-cosine texel weights instead of centre cosines 0.111),
 //!   DDGI 0.086-0.099; ADGI ends at 0.129-0.139, refill at 0.124-0.131.
 //!
