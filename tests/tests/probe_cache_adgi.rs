@@ -57,9 +57,11 @@
 //!   it: its uniform rays continue a per-probe R2 sequence from frame to frame
 //!   (`UniformRays::Sequence`; with DDGI's rotated Fibonacci sets it ended at 0.092-0.115),
 //!   and every probe whose change signal is on gets 96 extra rays (in proportion to the
-//!   smoothed f_d it got 12-28 rays in all at the event and needed 7-13 frames). DDGI with the
-//!   same sequence (not the paper's baseline) ends lower (H7: the blend spends 8 of its 32
-//!   rays per probe on pilots): see `mcg_probe_cache::uniform_rays`.
+//!   smoothed f_d it got 12-28 rays in all at the event and needed 7-13 frames; with the
+//!   extra rays but DDGI's Fibonacci sets it needs 0-2 frames and ends at 0.102-0.127: each
+//!   part alone fails H6). DDGI with the same sequence (not the paper's baseline) ends lower
+//!   (H7: the blend spends 8 of its 32 rays per probe on pilots): see
+//!   `mcg_probe_cache::uniform_rays`.
 //! - H7 (the honest other side of H6): DDGI with the blend's ray sequence (not the paper's
 //!   baseline) ends with a lower all-probe error than the blend, on average over the seeds.
 //!   Measured: DDGI + sequence 0.059-0.062 against the blend's 0.069-0.078; it needs 9, 9,
