@@ -44,3 +44,45 @@ pub(crate) fn lazy<'a>(
     let kernel = ctx.compute_kernel(&src::plain(source), entry)?;
     Ok(cell.get_or_init(|| kernel))
 }
+
+/// The pipelines of `entries` in one kernel file, composed with `defs`, with the bind group
+/// `layouts` (group i at i): one shader module and one pipeline layout, both labelled `label`,
+/// and a pipeline per entry point labelled with its name. Composition and validation errors
+/// come back as [`GpuError::Shader`] with `label` as the entry point.
+pub(crate) fn build_pipelines<const N: usize>(
+    ctx: &GpuContext,
+    layouts: &[&wgpu::BindGroupLayout],
+    (label, source, defs): (&str, &str, &[(&str, u32)]),
+    entries: [&str; N],
+) -> Result<[wgpu::ComputePipeline; N], GpuError> {
+    let shader_error = |message: String| GpuError::Shader {
+        entry_point: label.to_owned(),
+        message,
+    };
+    let device = ctx.device();
+    let source = crate::shaders::compose(source, defs).map_err(|e| shader_error(e.to_string()))?;
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &layouts.iter().map(|l| Some(*l)).collect::<Vec<_>>(),
+        immediate_size: 0,
+    });
+    let pipelines = entries.map(|entry| {
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: wgpu::PipelineCompilationOptions::default(),
+            cache: None,
+        })
+    });
+    if let Some(error) = pollster::block_on(scope.pop()) {
+        return Err(shader_error(error.to_string()));
+    }
+    Ok(pipelines)
+}

@@ -13,48 +13,9 @@ use super::{
     AdgiConfigError, GpuChainParams, GpuChainState, GpuComposeParams, GpuGuideQuery, GpuProbeCache,
     GpuProbeSample, GpuSmoothingPass,
 };
-use crate::shaders::{self, kernels};
+use crate::runtime::build_pipelines;
+use crate::shaders::kernels;
 use crate::{GpuBuffer, GpuContext, GpuError, WORKGROUP_SIZE, storage_entry};
-
-/// The pipelines of `entries` in one kernel file, composed with `defs`, with the bind group
-/// `layouts` (group i at i).
-fn build_pipelines<const N: usize>(
-    ctx: &GpuContext,
-    layouts: &[&wgpu::BindGroupLayout],
-    (label, source, defs): (&str, &str, &[(&str, u32)]),
-    entries: [&str; N],
-) -> Result<[wgpu::ComputePipeline; N], GpuError> {
-    let shader_error = |message: String| GpuError::Shader {
-        entry_point: label.to_owned(),
-        message,
-    };
-    let device = ctx.device();
-    let source = shaders::compose(source, defs).map_err(|e| shader_error(e.to_string()))?;
-    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(label),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(label),
-        bind_group_layouts: &layouts.iter().map(|l| Some(*l)).collect::<Vec<_>>(),
-        immediate_size: 0,
-    });
-    let pipelines = entries.map(|entry| {
-        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(entry),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some(entry),
-            compilation_options: wgpu::PipelineCompilationOptions::default(),
-            cache: None,
-        })
-    });
-    if let Some(error) = pollster::block_on(scope.pop()) {
-        return Err(shader_error(error.to_string()));
-    }
-    Ok(pipelines)
-}
 
 /// The pipeline in `cell`, built on first use from entry point `entry` of a kernel that reads
 /// `cache`'s group (`mcg::adgi`) at group 0 and `layout` at group 1.

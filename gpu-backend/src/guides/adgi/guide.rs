@@ -11,7 +11,8 @@ use super::{
     AdgiConfigError, AdgiGpuParams, GpuClipVolumes, GpuIrradianceQuery, GpuPilotStep, GpuRaySample,
     GpuStepParams, ProbeCacheConfig,
 };
-use crate::shaders::{self, defs, kernels};
+use crate::runtime::build_pipelines;
+use crate::shaders::{defs, kernels};
 use crate::{GpuBuffer, GpuContext, GpuError, WORKGROUP_SIZE};
 
 /// The steps' pipelines.
@@ -291,47 +292,27 @@ impl GpuProbeCache {
         if let Some(s) = self.steps.get() {
             return Ok(s);
         }
-        let device = ctx.device();
-        let source = shaders::compose(kernels::ADGI_STEPS, &Self::shader_defs(0)).map_err(|e| {
-            GpuError::Shader {
-                entry_point: "adgi steps".to_owned(),
-                message: e.to_string(),
-            }
-        })?;
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("adgi steps"),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("adgi steps"),
-            bind_group_layouts: &[Some(&self.layout), Some(&self.step_layout)],
-            immediate_size: 0,
-        });
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: wgpu::PipelineCompilationOptions::default(),
-                cache: None,
-            })
-        };
+        let [update, blend, query, clip_reset, pilot_rays, pilot_hits] = build_pipelines(
+            ctx,
+            &[&self.layout, &self.step_layout],
+            ("adgi steps", kernels::ADGI_STEPS, &Self::shader_defs(0)),
+            [
+                "adgi_update_samples",
+                "adgi_blend",
+                "adgi_query",
+                "adgi_clip_reset",
+                "adgi_pilot_rays",
+                "adgi_pilot_hits",
+            ],
+        )?;
         let s = Steps {
-            update: pipeline("adgi_update_samples"),
-            blend: pipeline("adgi_blend"),
-            query: pipeline("adgi_query"),
-            clip_reset: pipeline("adgi_clip_reset"),
-            pilot_rays: pipeline("adgi_pilot_rays"),
-            pilot_hits: pipeline("adgi_pilot_hits"),
+            update,
+            blend,
+            query,
+            clip_reset,
+            pilot_rays,
+            pilot_hits,
         };
-        if let Some(error) = pollster::block_on(scope.pop()) {
-            return Err(GpuError::Shader {
-                entry_point: "adgi steps".to_owned(),
-                message: error.to_string(),
-            });
-        }
         Ok(self.steps.get_or_init(|| s))
     }
 
