@@ -86,3 +86,57 @@ pub(crate) fn build_pipelines<const N: usize>(
     }
     Ok(pipelines)
 }
+
+/// The workgroup grid `(x, y)` of a dispatch of `invocations` (at least one workgroup) with
+/// [`WORKGROUP_SIZE`](crate::WORKGROUP_SIZE) invocations each: `x` up to the device's
+/// per-dimension limit, `y` the rows of `x` workgroups needed for the rest.
+pub(crate) fn workgroup_grid(ctx: &GpuContext, invocations: u32) -> (u32, u32) {
+    let max = ctx.device().limits().max_compute_workgroups_per_dimension;
+    let groups = invocations.div_ceil(crate::WORKGROUP_SIZE).max(1);
+    let x = groups.min(max);
+    (x, groups.div_ceil(x))
+}
+
+/// Records one compute pass named `label` into `encoder`: `pipeline` with `groups[i]` at
+/// group i, dispatched over [`workgroup_grid`]`(invocations)`.
+pub(crate) fn record_dispatch(
+    ctx: &GpuContext,
+    encoder: &mut wgpu::CommandEncoder,
+    label: &str,
+    pipeline: &wgpu::ComputePipeline,
+    groups: &[&wgpu::BindGroup],
+    invocations: u32,
+) {
+    let (x, y) = workgroup_grid(ctx, invocations);
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(label),
+        timestamp_writes: None,
+    });
+    pass.set_pipeline(pipeline);
+    for (i, g) in (0..).zip(groups) {
+        pass.set_bind_group(i, *g, &[]);
+    }
+    pass.dispatch_workgroups(x, y, 1);
+}
+
+/// A bind group named `label` of `layout` with `buffers[i]`, whole, at binding `i`.
+pub(crate) fn bind_group(
+    ctx: &GpuContext,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
+        .iter()
+        .zip(0..)
+        .map(|(b, binding)| wgpu::BindGroupEntry {
+            binding,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
+}

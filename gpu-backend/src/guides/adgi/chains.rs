@@ -13,9 +13,12 @@ use super::{
     AdgiConfigError, GpuChainParams, GpuChainState, GpuComposeParams, GpuGuideQuery, GpuProbeCache,
     GpuProbeSample, GpuSmoothingPass,
 };
-use crate::runtime::build_pipelines;
+use crate::runtime::{bind_group, build_pipelines, record_dispatch};
 use crate::shaders::kernels;
-use crate::{GpuBuffer, GpuContext, GpuError, WORKGROUP_SIZE, storage_entry};
+use crate::{GpuBuffer, GpuContext, GpuError, storage_entry};
+
+/// The label of this file's passes and bind groups in wgpu's messages.
+const LABEL: &str = "adgi chains";
 
 /// The pipeline in `cell`, built on first use from entry point `entry` of a kernel that reads
 /// `cache`'s group (`mcg::adgi`) at group 0 and `layout` at group 1.
@@ -38,49 +41,6 @@ fn cache_pipeline<'a>(
         [entry],
     )?;
     Ok(cell.get_or_init(|| p))
-}
-
-/// Records one dispatch of `pipeline` over `invocations` with `groups[i]` at group i.
-fn record_dispatch(
-    ctx: &GpuContext,
-    encoder: &mut wgpu::CommandEncoder,
-    pipeline: &wgpu::ComputePipeline,
-    groups: &[&wgpu::BindGroup],
-    invocations: u32,
-) {
-    let max = ctx.device().limits().max_compute_workgroups_per_dimension;
-    let workgroups = invocations.div_ceil(WORKGROUP_SIZE).max(1);
-    let x = workgroups.min(max);
-    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-        label: Some("adgi chains"),
-        timestamp_writes: None,
-    });
-    pass.set_pipeline(pipeline);
-    for (i, g) in (0..).zip(groups) {
-        pass.set_bind_group(i, *g, &[]);
-    }
-    pass.dispatch_workgroups(x, workgroups.div_ceil(x), 1);
-}
-
-/// A bind group of `layout` with `buffers[i]`, whole, at binding `i`.
-fn bind_group(
-    ctx: &GpuContext,
-    layout: &wgpu::BindGroupLayout,
-    buffers: &[&wgpu::Buffer],
-) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
-        .iter()
-        .zip(0..)
-        .map(|(b, binding)| wgpu::BindGroupEntry {
-            binding,
-            resource: b.as_entire_binding(),
-        })
-        .collect();
-    ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("adgi chains"),
-        layout,
-        entries: &entries,
-    })
 }
 
 fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
@@ -261,6 +221,7 @@ impl GpuProbeChains {
         let uniform = ctx.uniform_buffer("adgi chain params", params);
         let group = bind_group(
             ctx,
+            LABEL,
             &self.layout,
             &[
                 uniform.raw(),
@@ -274,7 +235,7 @@ impl GpuProbeChains {
                 inputs.values.unwrap_or(self.unused_values.raw()),
             ],
         );
-        record_dispatch(ctx, encoder, pipeline, &[&group], invocations);
+        record_dispatch(ctx, encoder, LABEL, pipeline, &[&group], invocations);
     }
 
     /// Records the guide's table from the heuristics words `words` (one `HeuristicsWord` per
@@ -423,8 +384,15 @@ impl GpuProbeChains {
             ("adgi feedback", kernels::ADGI_FEEDBACK),
             "adgi_octant_feedback",
         )?;
-        let group = bind_group(ctx, &self.feedback_layout, &[self.feedback.raw()]);
-        record_dispatch(ctx, encoder, pipeline, &[cache.bind_group(), &group], n);
+        let group = bind_group(ctx, LABEL, &self.feedback_layout, &[self.feedback.raw()]);
+        record_dispatch(
+            ctx,
+            encoder,
+            LABEL,
+            pipeline,
+            &[cache.bind_group(), &group],
+            n,
+        );
         Ok(())
     }
 
@@ -645,12 +613,14 @@ impl GpuTriggerSmoothing {
             let uniform = ctx.uniform_buffer("adgi smoothing pass", pass);
             let group = bind_group(
                 ctx,
+                LABEL,
                 &self.layout,
                 &[uniform.raw(), src, dst, self.reciprocals.raw()],
             );
             record_dispatch(
                 ctx,
                 encoder,
+                LABEL,
                 pipeline,
                 &[cache.bind_group(), &group],
                 invocations,
@@ -708,11 +678,19 @@ impl GpuTriggerSmoothing {
         let uniform = ctx.uniform_buffer("adgi compose params", &params);
         let group = bind_group(
             ctx,
+            LABEL,
             &self.compose_layout,
             &[uniform.raw(), self.delta.raw(), words],
         );
         let n = self.delta.len() as u32;
-        record_dispatch(ctx, encoder, pipeline, &[cache.bind_group(), &group], n);
+        record_dispatch(
+            ctx,
+            encoder,
+            LABEL,
+            pipeline,
+            &[cache.bind_group(), &group],
+            n,
+        );
         Ok(())
     }
 

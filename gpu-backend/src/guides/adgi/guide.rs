@@ -11,9 +11,9 @@ use super::{
     AdgiConfigError, AdgiGpuParams, GpuClipVolumes, GpuIrradianceQuery, GpuPilotStep, GpuRaySample,
     GpuStepParams, ProbeCacheConfig,
 };
-use crate::runtime::build_pipelines;
+use crate::runtime::{bind_group, build_pipelines, record_dispatch};
 use crate::shaders::{defs, kernels};
-use crate::{GpuBuffer, GpuContext, GpuError, WORKGROUP_SIZE};
+use crate::{GpuBuffer, GpuContext, GpuError};
 
 /// The steps' pipelines.
 #[derive(Debug)]
@@ -325,7 +325,6 @@ impl GpuProbeCache {
         inputs: &StepInputs<'_>,
         invocations: u32,
     ) {
-        let device = ctx.device();
         let step = ctx.uniform_buffer("adgi step", &inputs.step);
         let clip = inputs
             .clip
@@ -334,10 +333,11 @@ impl GpuProbeCache {
             .pilot
             .map(|p| ctx.uniform_buffer("adgi pilot step", &p));
         let u = &self.unused;
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("adgi step"),
-            layout: &self.step_layout,
-            entries: &[
+        let group = bind_group(
+            ctx,
+            "adgi step",
+            &self.step_layout,
+            &[
                 inputs.samples.unwrap_or(u.samples.raw()),
                 inputs.uniforms.unwrap_or(u.uniforms.raw()),
                 step.raw(),
@@ -345,26 +345,16 @@ impl GpuProbeCache {
                 inputs.results.unwrap_or(u.results.raw()),
                 clip.as_ref().map_or(u.clip.raw(), GpuBuffer::raw),
                 pilot.as_ref().map_or(u.pilot.raw(), GpuBuffer::raw),
-            ]
-            .into_iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: b.as_entire_binding(),
-            })
-            .collect::<Vec<_>>(),
-        });
-        let max = device.limits().max_compute_workgroups_per_dimension;
-        let groups = invocations.div_ceil(WORKGROUP_SIZE).max(1);
-        let x = groups.min(max);
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("adgi step"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, &self.bind_group, &[]);
-        pass.set_bind_group(1, &group, &[]);
-        pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
+            ],
+        );
+        record_dispatch(
+            ctx,
+            encoder,
+            "adgi step",
+            pipeline,
+            &[&self.bind_group, &group],
+            invocations,
+        );
     }
 
     /// Records ADGI's per-sample update (Alg. 2-4) of the first `count` samples of `samples`

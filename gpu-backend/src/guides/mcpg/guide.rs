@@ -7,11 +7,9 @@ use glam::Vec3;
 use mcg_markov_guide::mcpg::{CacheCell, GridState, GuideConfig};
 
 use super::{McpgBufferWords, McpgGpuParams};
-use crate::runtime::build_pipelines;
+use crate::runtime::{build_pipelines, workgroup_grid};
 use crate::shaders::{defs, kernels};
-use crate::{
-    GpuBuffer, GpuContext, GpuError, WORKGROUP_SIZE, codes, sized_buffer_entry, storage_entry,
-};
+use crate::{GpuBuffer, GpuContext, GpuError, codes, sized_buffer_entry, storage_entry};
 
 /// The per-frame pass's pipelines, in the order they run.
 #[derive(Debug)]
@@ -252,12 +250,7 @@ impl GpuMcpgGuide {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
         let m = self.maintenance(ctx)?;
-        let max = ctx.device().limits().max_compute_workgroups_per_dimension;
-        let grid = |invocations: u32| {
-            let groups = invocations.div_ceil(WORKGROUP_SIZE).max(1);
-            let x = groups.min(max);
-            (x, groups.div_ceil(x))
-        };
+        let grid = |invocations: u32| workgroup_grid(ctx, invocations);
         let p = &self.params;
         let slots = p.adaptive_table.capacity
             + p.static_table.capacity
