@@ -119,10 +119,11 @@ pub(crate) fn record_dispatch(
     pass.dispatch_workgroups(x, y, 1);
 }
 
-/// A bind group named `label` of `layout` with `buffers[i]`, whole, at binding `i`.
+/// A bind group of `layout` with `buffers[i]`, whole, at binding `i`, named `label` in wgpu's
+/// messages.
 pub(crate) fn bind_group(
     ctx: &GpuContext,
-    label: &str,
+    label: Option<&str>,
     layout: &wgpu::BindGroupLayout,
     buffers: &[&wgpu::Buffer],
 ) -> wgpu::BindGroup {
@@ -135,7 +136,7 @@ pub(crate) fn bind_group(
         })
         .collect();
     ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some(label),
+        label,
         layout,
         entries: &entries,
     })

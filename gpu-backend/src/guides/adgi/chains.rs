@@ -43,6 +43,22 @@ fn cache_pipeline<'a>(
     Ok(cell.get_or_init(|| p))
 }
 
+/// Records one dispatch of a [`cache_pipeline`] over `invocations`: `cache`'s group at group 0
+/// and a group of `layout` with `buffers[i]` at binding i at group 1.
+fn record_cache_dispatch(
+    ctx: &GpuContext,
+    encoder: &mut wgpu::CommandEncoder,
+    pipeline: &wgpu::ComputePipeline,
+    cache: &GpuProbeCache,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+    invocations: u32,
+) {
+    let group = bind_group(ctx, Some(LABEL), layout, buffers);
+    let groups = [cache.bind_group(), &group];
+    record_dispatch(ctx, encoder, LABEL, pipeline, &groups, invocations);
+}
+
 fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     crate::buffer_entry(binding, wgpu::BufferBindingType::Uniform)
 }
@@ -221,7 +237,7 @@ impl GpuProbeChains {
         let uniform = ctx.uniform_buffer("adgi chain params", params);
         let group = bind_group(
             ctx,
-            LABEL,
+            Some(LABEL),
             &self.layout,
             &[
                 uniform.raw(),
@@ -384,13 +400,14 @@ impl GpuProbeChains {
             ("adgi feedback", kernels::ADGI_FEEDBACK),
             "adgi_octant_feedback",
         )?;
-        let group = bind_group(ctx, LABEL, &self.feedback_layout, &[self.feedback.raw()]);
-        record_dispatch(
+        let buffers = [self.feedback.raw()];
+        record_cache_dispatch(
             ctx,
             encoder,
-            LABEL,
             pipeline,
-            &[cache.bind_group(), &group],
+            cache,
+            &self.feedback_layout,
+            &buffers,
             n,
         );
         Ok(())
@@ -611,18 +628,14 @@ impl GpuTriggerSmoothing {
         let invocations = self.delta.len() as u32;
         for (pass, (src, dst)) in GpuSmoothingPass::passes(kernel).iter().zip(routes) {
             let uniform = ctx.uniform_buffer("adgi smoothing pass", pass);
-            let group = bind_group(
-                ctx,
-                LABEL,
-                &self.layout,
-                &[uniform.raw(), src, dst, self.reciprocals.raw()],
-            );
-            record_dispatch(
+            let buffers = [uniform.raw(), src, dst, self.reciprocals.raw()];
+            record_cache_dispatch(
                 ctx,
                 encoder,
-                LABEL,
                 pipeline,
-                &[cache.bind_group(), &group],
+                cache,
+                &self.layout,
+                &buffers,
                 invocations,
             );
         }
@@ -676,19 +689,15 @@ impl GpuTriggerSmoothing {
         )?;
         let params = GpuComposeParams::new(heuristics, camera);
         let uniform = ctx.uniform_buffer("adgi compose params", &params);
-        let group = bind_group(
-            ctx,
-            LABEL,
-            &self.compose_layout,
-            &[uniform.raw(), self.delta.raw(), words],
-        );
+        let buffers = [uniform.raw(), self.delta.raw(), words];
         let n = self.delta.len() as u32;
-        record_dispatch(
+        record_cache_dispatch(
             ctx,
             encoder,
-            LABEL,
             pipeline,
-            &[cache.bind_group(), &group],
+            cache,
+            &self.compose_layout,
+            &buffers,
             n,
         );
         Ok(())

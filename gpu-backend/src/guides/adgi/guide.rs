@@ -335,7 +335,7 @@ impl GpuProbeCache {
         let u = &self.unused;
         let group = bind_group(
             ctx,
-            "adgi step",
+            Some("adgi step"),
             &self.step_layout,
             &[
                 inputs.samples.unwrap_or(u.samples.raw()),
