@@ -3,7 +3,7 @@
 
 use crate::SmisError;
 use crate::technique::select_uniform;
-use crate::tsmis::MAX_TILE_SIZE;
+use crate::tsmis::{assert_tile_len, validate_tile};
 
 /// Lane that lane `lane` takes its state from under the xor permutation with `mask`:
 /// `lane ^ mask`. An involution, so it is also the lane that receives `lane`'s state.
@@ -49,22 +49,10 @@ impl XorPermutation {
     /// [`SmisError::TileSizeNotPowerOfTwo`], [`SmisError::OffsetOutOfRange`] (`mask ≥ size`).
     #[inline]
     pub const fn new(size: u32, mask: u32) -> Result<Self, SmisError> {
-        if size == 0 {
-            return Err(SmisError::TileSizeZero);
+        match validate_tile(size, mask, true) {
+            Ok(()) => Ok(Self { size, mask }),
+            Err(e) => Err(e),
         }
-        if size > MAX_TILE_SIZE {
-            return Err(SmisError::TileSizeTooLarge {
-                size,
-                maximum: MAX_TILE_SIZE,
-            });
-        }
-        if !size.is_power_of_two() {
-            return Err(SmisError::TileSizeNotPowerOfTwo { size });
-        }
-        if mask >= size {
-            return Err(SmisError::OffsetOutOfRange { offset: mask, size });
-        }
-        Ok(Self { size, mask })
     }
 
     /// The permutation with mask ⌊u·size⌋ (clamped to size − 1): uniform over all masks for a
@@ -108,11 +96,7 @@ impl XorPermutation {
     /// If `tile.len()` is not the tile size.
     #[inline]
     pub fn apply<X>(&self, tile: &mut [X]) {
-        assert_eq!(
-            tile.len(),
-            self.size as usize,
-            "tile length is the tile size"
-        );
+        assert_tile_len(tile.len(), self.size);
         for lane in 0..self.size {
             let other = lane ^ self.mask;
             if other > lane {
@@ -125,6 +109,7 @@ impl XorPermutation {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::tsmis::MAX_TILE_SIZE;
 
     #[test]
     fn exhaustively_a_permutation() {

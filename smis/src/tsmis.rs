@@ -7,6 +7,47 @@ use crate::SmisError;
 /// ("We choose tile sizes below or equal to 32 pixels", MCMM sec. 4.2).
 pub const MAX_TILE_SIZE: u32 = 32;
 
+/// The checks shared by the tile permutations' constructors ([`CyclicShift::new`],
+/// [`XorPermutation::new`](crate::XorPermutation::new)), in this order: `size` is not zero
+/// ([`SmisError::TileSizeZero`]) and at most [`MAX_TILE_SIZE`]
+/// ([`SmisError::TileSizeTooLarge`]); with `power_of_two`, `size` is a power of two
+/// ([`SmisError::TileSizeNotPowerOfTwo`]); `offset` (the shift or mask) is below `size`
+/// ([`SmisError::OffsetOutOfRange`]).
+#[inline]
+pub(crate) const fn validate_tile(
+    size: u32,
+    offset: u32,
+    power_of_two: bool,
+) -> Result<(), SmisError> {
+    if size == 0 {
+        return Err(SmisError::TileSizeZero);
+    }
+    if size > MAX_TILE_SIZE {
+        return Err(SmisError::TileSizeTooLarge {
+            size,
+            maximum: MAX_TILE_SIZE,
+        });
+    }
+    if power_of_two && !size.is_power_of_two() {
+        return Err(SmisError::TileSizeNotPowerOfTwo { size });
+    }
+    if offset >= size {
+        return Err(SmisError::OffsetOutOfRange { offset, size });
+    }
+    Ok(())
+}
+
+/// The length check of the tile permutations' `apply`: panics unless a tile of `len` states
+/// has the permutation's `size`.
+///
+/// # Panics
+/// If `len` is not `size`.
+#[inline]
+#[track_caller]
+pub(crate) fn assert_tile_len(len: usize, size: u32) {
+    assert_eq!(len, size as usize, "tile length is the tile size");
+}
+
 /// Lane that lane `lane` receives its state from under a cyclic shift by `shift` in a tile of
 /// `size` lanes: `(lane + size − shift mod size) mod size`. The state of lane l moves to lane
 /// (l + shift) mod size (MCMM's "shuffle up": shift 1 sends lane l's state to lane l + 1 and
@@ -59,22 +100,10 @@ impl CyclicShift {
     /// [`SmisError::OffsetOutOfRange`] (`shift ≥ size`).
     #[inline]
     pub const fn new(size: u32, shift: u32) -> Result<Self, SmisError> {
-        if size == 0 {
-            return Err(SmisError::TileSizeZero);
+        match validate_tile(size, shift, false) {
+            Ok(()) => Ok(Self { size, shift }),
+            Err(e) => Err(e),
         }
-        if size > MAX_TILE_SIZE {
-            return Err(SmisError::TileSizeTooLarge {
-                size,
-                maximum: MAX_TILE_SIZE,
-            });
-        }
-        if shift >= size {
-            return Err(SmisError::OffsetOutOfRange {
-                offset: shift,
-                size,
-            });
-        }
-        Ok(Self { size, shift })
     }
 
     /// The tile size.
@@ -113,11 +142,7 @@ impl CyclicShift {
     /// If `tile.len()` is not the tile size.
     #[inline]
     pub fn apply<X>(&self, tile: &mut [X]) {
-        assert_eq!(
-            tile.len(),
-            self.size as usize,
-            "tile length is the tile size"
-        );
+        assert_tile_len(tile.len(), self.size);
         tile.rotate_right(self.shift as usize);
     }
 }

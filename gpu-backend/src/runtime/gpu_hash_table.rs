@@ -80,6 +80,21 @@ impl<T: Pod> GpuHashTable<T> {
         &self.values
     }
 
+    /// Dispatches `kernel`, one of the `hashgrid_table` or `hashgrid_ages` kernels, with the
+    /// bindings they all start with (0: the table's params, 1: its words buffer), then `rest`
+    /// from binding 2 on.
+    fn dispatch(
+        &self,
+        ctx: &GpuContext,
+        kernel: &ComputeKernel,
+        rest: &[&wgpu::Buffer],
+        invocations: u32,
+    ) -> Result<(), GpuError> {
+        let mut buffers = vec![self.params_buffer.raw(), self.words.raw()];
+        buffers.extend_from_slice(rest);
+        ctx.dispatch(kernel, &buffers, invocations)
+    }
+
     fn run(
         &self,
         ctx: &GpuContext,
@@ -94,14 +109,10 @@ impl<T: Pod> GpuHashTable<T> {
         let kernel = lazy(kernel.0, ctx, src::HASHGRID_TABLE, kernel.1)?;
         let keys_buffer = ctx.storage_buffer("keys", keys);
         let results: GpuBuffer<[u32; 2]> = ctx.zeroed_buffer("results", keys.len());
-        ctx.dispatch(
+        self.dispatch(
+            ctx,
             kernel,
-            &[
-                self.params_buffer.raw(),
-                self.words.raw(),
-                keys_buffer.raw(),
-                results.raw(),
-            ],
+            &[keys_buffer.raw(), results.raw()],
             invocations,
         )?;
         ctx.read_back(&results)
@@ -174,21 +185,8 @@ impl<T: Pod> GpuHashTable<T> {
         let capacity = self.params.capacity;
         let evict = lazy(&self.evict, ctx, src::HASHGRID_AGES, "hashgrid_evict")?;
         let trim = lazy(&self.trim, ctx, src::HASHGRID_AGES, "hashgrid_trim")?;
-        ctx.dispatch(
-            evict,
-            &[
-                self.params_buffer.raw(),
-                self.words.raw(),
-                params.raw(),
-                evicted.raw(),
-            ],
-            capacity,
-        )?;
-        ctx.dispatch(
-            trim,
-            &[self.params_buffer.raw(), self.words.raw()],
-            capacity,
-        )?;
+        self.dispatch(ctx, evict, &[params.raw(), evicted.raw()], capacity)?;
+        self.dispatch(ctx, trim, &[], capacity)?;
         Ok(ctx.read_back(&evicted)?[0])
     }
 
@@ -236,15 +234,10 @@ impl<T: Pod> GpuHashTable<T> {
         let params = ctx.uniform_buffer("age params", &HashgridAgeParams::new(frame, 0));
         let inserted: GpuBuffer<u32> = ctx.zeroed_buffer("inserted", 1);
         let keys = ctx.storage_buffer("keys", keys);
-        ctx.dispatch(
+        self.dispatch(
+            ctx,
             kernel,
-            &[
-                self.params_buffer.raw(),
-                self.words.raw(),
-                params.raw(),
-                inserted.raw(),
-                keys.raw(),
-            ],
+            &[params.raw(), inserted.raw(), keys.raw()],
             invocations,
         )?;
         Ok(ctx.read_back(&inserted)?[0])

@@ -116,19 +116,7 @@ impl GuidedKernel {
     /// The group-0 bind group: `buffers[i]`, whole, at binding `i`.
     #[must_use]
     pub fn io_bind_group(&self, ctx: &GpuContext, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
-        let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
-            .iter()
-            .zip(0..)
-            .map(|(buffer, binding)| wgpu::BindGroupEntry {
-                binding,
-                resource: buffer.as_entire_binding(),
-            })
-            .collect();
-        ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
-            label: None,
-            layout: &self.io_layout,
-            entries: &entries,
-        })
+        super::bind_group(ctx, None, &self.io_layout, buffers)
     }
 
     /// The group-0 layout.

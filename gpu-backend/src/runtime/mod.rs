@@ -44,3 +44,100 @@ pub(crate) fn lazy<'a>(
     let kernel = ctx.compute_kernel(&src::plain(source), entry)?;
     Ok(cell.get_or_init(|| kernel))
 }
+
+/// The pipelines of `entries` in one kernel file, composed with `defs`, with the bind group
+/// `layouts` (group i at i): one shader module and one pipeline layout, both labelled `label`,
+/// and a pipeline per entry point labelled with its name. Composition and validation errors
+/// come back as [`GpuError::Shader`] with `label` as the entry point.
+pub(crate) fn build_pipelines<const N: usize>(
+    ctx: &GpuContext,
+    layouts: &[&wgpu::BindGroupLayout],
+    (label, source, defs): (&str, &str, &[(&str, u32)]),
+    entries: [&str; N],
+) -> Result<[wgpu::ComputePipeline; N], GpuError> {
+    let shader_error = |message: String| GpuError::Shader {
+        entry_point: label.to_owned(),
+        message,
+    };
+    let device = ctx.device();
+    let source = crate::shaders::compose(source, defs).map_err(|e| shader_error(e.to_string()))?;
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &layouts.iter().map(|l| Some(*l)).collect::<Vec<_>>(),
+        immediate_size: 0,
+    });
+    let pipelines = entries.map(|entry| {
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: wgpu::PipelineCompilationOptions::default(),
+            cache: None,
+        })
+    });
+    if let Some(error) = pollster::block_on(scope.pop()) {
+        return Err(shader_error(error.to_string()));
+    }
+    Ok(pipelines)
+}
+
+/// The workgroup grid `(x, y)` of a dispatch of `invocations` (at least one workgroup) with
+/// [`WORKGROUP_SIZE`](crate::WORKGROUP_SIZE) invocations each: `x` up to the device's
+/// per-dimension limit, `y` the rows of `x` workgroups needed for the rest.
+pub(crate) fn workgroup_grid(ctx: &GpuContext, invocations: u32) -> (u32, u32) {
+    let max = ctx.device().limits().max_compute_workgroups_per_dimension;
+    let groups = invocations.div_ceil(crate::WORKGROUP_SIZE).max(1);
+    let x = groups.min(max);
+    (x, groups.div_ceil(x))
+}
+
+/// Records one compute pass named `label` into `encoder`: `pipeline` with `groups[i]` at
+/// group i, dispatched over [`workgroup_grid`]`(invocations)`.
+pub(crate) fn record_dispatch(
+    ctx: &GpuContext,
+    encoder: &mut wgpu::CommandEncoder,
+    label: &str,
+    pipeline: &wgpu::ComputePipeline,
+    groups: &[&wgpu::BindGroup],
+    invocations: u32,
+) {
+    let (x, y) = workgroup_grid(ctx, invocations);
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(label),
+        timestamp_writes: None,
+    });
+    pass.set_pipeline(pipeline);
+    for (i, g) in (0..).zip(groups) {
+        pass.set_bind_group(i, *g, &[]);
+    }
+    pass.dispatch_workgroups(x, y, 1);
+}
+
+/// A bind group of `layout` with `buffers[i]`, whole, at binding `i`, named `label` in wgpu's
+/// messages.
+pub(crate) fn bind_group(
+    ctx: &GpuContext,
+    label: Option<&str>,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
+        .iter()
+        .zip(0..)
+        .map(|(b, binding)| wgpu::BindGroupEntry {
+            binding,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
+        label,
+        layout,
+        entries: &entries,
+    })
+}

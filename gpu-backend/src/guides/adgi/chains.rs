@@ -13,48 +13,12 @@ use super::{
     AdgiConfigError, GpuChainParams, GpuChainState, GpuComposeParams, GpuGuideQuery, GpuProbeCache,
     GpuProbeSample, GpuSmoothingPass,
 };
-use crate::shaders::{self, kernels};
-use crate::{GpuBuffer, GpuContext, GpuError, WORKGROUP_SIZE, storage_entry};
+use crate::runtime::{bind_group, build_pipelines, record_dispatch};
+use crate::shaders::kernels;
+use crate::{GpuBuffer, GpuContext, GpuError, storage_entry};
 
-/// The pipelines of `entries` in one kernel file, composed with `defs`, with the bind group
-/// `layouts` (group i at i).
-fn build_pipelines<const N: usize>(
-    ctx: &GpuContext,
-    layouts: &[&wgpu::BindGroupLayout],
-    (label, source, defs): (&str, &str, &[(&str, u32)]),
-    entries: [&str; N],
-) -> Result<[wgpu::ComputePipeline; N], GpuError> {
-    let shader_error = |message: String| GpuError::Shader {
-        entry_point: label.to_owned(),
-        message,
-    };
-    let device = ctx.device();
-    let source = shaders::compose(source, defs).map_err(|e| shader_error(e.to_string()))?;
-    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(label),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(label),
-        bind_group_layouts: &layouts.iter().map(|l| Some(*l)).collect::<Vec<_>>(),
-        immediate_size: 0,
-    });
-    let pipelines = entries.map(|entry| {
-        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(entry),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some(entry),
-            compilation_options: wgpu::PipelineCompilationOptions::default(),
-            cache: None,
-        })
-    });
-    if let Some(error) = pollster::block_on(scope.pop()) {
-        return Err(shader_error(error.to_string()));
-    }
-    Ok(pipelines)
-}
+/// The label of this file's passes and bind groups in wgpu's messages.
+const LABEL: &str = "adgi chains";
 
 /// The pipeline in `cell`, built on first use from entry point `entry` of a kernel that reads
 /// `cache`'s group (`mcg::adgi`) at group 0 and `layout` at group 1.
@@ -79,47 +43,20 @@ fn cache_pipeline<'a>(
     Ok(cell.get_or_init(|| p))
 }
 
-/// Records one dispatch of `pipeline` over `invocations` with `groups[i]` at group i.
-fn record_dispatch(
+/// Records one dispatch of a [`cache_pipeline`] over `invocations`: `cache`'s group at group 0
+/// and a group of `layout` with `buffers[i]` at binding i at group 1.
+fn record_cache_dispatch(
     ctx: &GpuContext,
     encoder: &mut wgpu::CommandEncoder,
     pipeline: &wgpu::ComputePipeline,
-    groups: &[&wgpu::BindGroup],
-    invocations: u32,
-) {
-    let max = ctx.device().limits().max_compute_workgroups_per_dimension;
-    let workgroups = invocations.div_ceil(WORKGROUP_SIZE).max(1);
-    let x = workgroups.min(max);
-    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-        label: Some("adgi chains"),
-        timestamp_writes: None,
-    });
-    pass.set_pipeline(pipeline);
-    for (i, g) in (0..).zip(groups) {
-        pass.set_bind_group(i, *g, &[]);
-    }
-    pass.dispatch_workgroups(x, workgroups.div_ceil(x), 1);
-}
-
-/// A bind group of `layout` with `buffers[i]`, whole, at binding `i`.
-fn bind_group(
-    ctx: &GpuContext,
+    cache: &GpuProbeCache,
     layout: &wgpu::BindGroupLayout,
     buffers: &[&wgpu::Buffer],
-) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
-        .iter()
-        .zip(0..)
-        .map(|(b, binding)| wgpu::BindGroupEntry {
-            binding,
-            resource: b.as_entire_binding(),
-        })
-        .collect();
-    ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("adgi chains"),
-        layout,
-        entries: &entries,
-    })
+    invocations: u32,
+) {
+    let group = bind_group(ctx, Some(LABEL), layout, buffers);
+    let groups = [cache.bind_group(), &group];
+    record_dispatch(ctx, encoder, LABEL, pipeline, &groups, invocations);
 }
 
 fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
@@ -300,6 +237,7 @@ impl GpuProbeChains {
         let uniform = ctx.uniform_buffer("adgi chain params", params);
         let group = bind_group(
             ctx,
+            Some(LABEL),
             &self.layout,
             &[
                 uniform.raw(),
@@ -313,7 +251,7 @@ impl GpuProbeChains {
                 inputs.values.unwrap_or(self.unused_values.raw()),
             ],
         );
-        record_dispatch(ctx, encoder, pipeline, &[&group], invocations);
+        record_dispatch(ctx, encoder, LABEL, pipeline, &[&group], invocations);
     }
 
     /// Records the guide's table from the heuristics words `words` (one `HeuristicsWord` per
@@ -462,8 +400,16 @@ impl GpuProbeChains {
             ("adgi feedback", kernels::ADGI_FEEDBACK),
             "adgi_octant_feedback",
         )?;
-        let group = bind_group(ctx, &self.feedback_layout, &[self.feedback.raw()]);
-        record_dispatch(ctx, encoder, pipeline, &[cache.bind_group(), &group], n);
+        let buffers = [self.feedback.raw()];
+        record_cache_dispatch(
+            ctx,
+            encoder,
+            pipeline,
+            cache,
+            &self.feedback_layout,
+            &buffers,
+            n,
+        );
         Ok(())
     }
 
@@ -682,16 +628,14 @@ impl GpuTriggerSmoothing {
         let invocations = self.delta.len() as u32;
         for (pass, (src, dst)) in GpuSmoothingPass::passes(kernel).iter().zip(routes) {
             let uniform = ctx.uniform_buffer("adgi smoothing pass", pass);
-            let group = bind_group(
-                ctx,
-                &self.layout,
-                &[uniform.raw(), src, dst, self.reciprocals.raw()],
-            );
-            record_dispatch(
+            let buffers = [uniform.raw(), src, dst, self.reciprocals.raw()];
+            record_cache_dispatch(
                 ctx,
                 encoder,
                 pipeline,
-                &[cache.bind_group(), &group],
+                cache,
+                &self.layout,
+                &buffers,
                 invocations,
             );
         }
@@ -745,13 +689,17 @@ impl GpuTriggerSmoothing {
         )?;
         let params = GpuComposeParams::new(heuristics, camera);
         let uniform = ctx.uniform_buffer("adgi compose params", &params);
-        let group = bind_group(
-            ctx,
-            &self.compose_layout,
-            &[uniform.raw(), self.delta.raw(), words],
-        );
+        let buffers = [uniform.raw(), self.delta.raw(), words];
         let n = self.delta.len() as u32;
-        record_dispatch(ctx, encoder, pipeline, &[cache.bind_group(), &group], n);
+        record_cache_dispatch(
+            ctx,
+            encoder,
+            pipeline,
+            cache,
+            &self.compose_layout,
+            &buffers,
+            n,
+        );
         Ok(())
     }
 

@@ -11,8 +11,9 @@ use super::{
     AdgiConfigError, AdgiGpuParams, GpuClipVolumes, GpuIrradianceQuery, GpuPilotStep, GpuRaySample,
     GpuStepParams, ProbeCacheConfig,
 };
-use crate::shaders::{self, defs, kernels};
-use crate::{GpuBuffer, GpuContext, GpuError, WORKGROUP_SIZE};
+use crate::runtime::{bind_group, build_pipelines, record_dispatch};
+use crate::shaders::{defs, kernels};
+use crate::{GpuBuffer, GpuContext, GpuError};
 
 /// The steps' pipelines.
 #[derive(Debug)]
@@ -291,47 +292,27 @@ impl GpuProbeCache {
         if let Some(s) = self.steps.get() {
             return Ok(s);
         }
-        let device = ctx.device();
-        let source = shaders::compose(kernels::ADGI_STEPS, &Self::shader_defs(0)).map_err(|e| {
-            GpuError::Shader {
-                entry_point: "adgi steps".to_owned(),
-                message: e.to_string(),
-            }
-        })?;
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("adgi steps"),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("adgi steps"),
-            bind_group_layouts: &[Some(&self.layout), Some(&self.step_layout)],
-            immediate_size: 0,
-        });
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: wgpu::PipelineCompilationOptions::default(),
-                cache: None,
-            })
-        };
+        let [update, blend, query, clip_reset, pilot_rays, pilot_hits] = build_pipelines(
+            ctx,
+            &[&self.layout, &self.step_layout],
+            ("adgi steps", kernels::ADGI_STEPS, &Self::shader_defs(0)),
+            [
+                "adgi_update_samples",
+                "adgi_blend",
+                "adgi_query",
+                "adgi_clip_reset",
+                "adgi_pilot_rays",
+                "adgi_pilot_hits",
+            ],
+        )?;
         let s = Steps {
-            update: pipeline("adgi_update_samples"),
-            blend: pipeline("adgi_blend"),
-            query: pipeline("adgi_query"),
-            clip_reset: pipeline("adgi_clip_reset"),
-            pilot_rays: pipeline("adgi_pilot_rays"),
-            pilot_hits: pipeline("adgi_pilot_hits"),
+            update,
+            blend,
+            query,
+            clip_reset,
+            pilot_rays,
+            pilot_hits,
         };
-        if let Some(error) = pollster::block_on(scope.pop()) {
-            return Err(GpuError::Shader {
-                entry_point: "adgi steps".to_owned(),
-                message: error.to_string(),
-            });
-        }
         Ok(self.steps.get_or_init(|| s))
     }
 
@@ -344,7 +325,6 @@ impl GpuProbeCache {
         inputs: &StepInputs<'_>,
         invocations: u32,
     ) {
-        let device = ctx.device();
         let step = ctx.uniform_buffer("adgi step", &inputs.step);
         let clip = inputs
             .clip
@@ -353,10 +333,11 @@ impl GpuProbeCache {
             .pilot
             .map(|p| ctx.uniform_buffer("adgi pilot step", &p));
         let u = &self.unused;
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("adgi step"),
-            layout: &self.step_layout,
-            entries: &[
+        let group = bind_group(
+            ctx,
+            Some("adgi step"),
+            &self.step_layout,
+            &[
                 inputs.samples.unwrap_or(u.samples.raw()),
                 inputs.uniforms.unwrap_or(u.uniforms.raw()),
                 step.raw(),
@@ -364,26 +345,16 @@ impl GpuProbeCache {
                 inputs.results.unwrap_or(u.results.raw()),
                 clip.as_ref().map_or(u.clip.raw(), GpuBuffer::raw),
                 pilot.as_ref().map_or(u.pilot.raw(), GpuBuffer::raw),
-            ]
-            .into_iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: b.as_entire_binding(),
-            })
-            .collect::<Vec<_>>(),
-        });
-        let max = device.limits().max_compute_workgroups_per_dimension;
-        let groups = invocations.div_ceil(WORKGROUP_SIZE).max(1);
-        let x = groups.min(max);
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("adgi step"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, &self.bind_group, &[]);
-        pass.set_bind_group(1, &group, &[]);
-        pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
+            ],
+        );
+        record_dispatch(
+            ctx,
+            encoder,
+            "adgi step",
+            pipeline,
+            &[&self.bind_group, &group],
+            invocations,
+        );
     }
 
     /// Records ADGI's per-sample update (Alg. 2-4) of the first `count` samples of `samples`

@@ -7,10 +7,9 @@ use glam::Vec3;
 use mcg_markov_guide::mcpg::{CacheCell, GridState, GuideConfig};
 
 use super::{McpgBufferWords, McpgGpuParams};
+use crate::runtime::{build_pipelines, workgroup_grid};
 use crate::shaders::{defs, kernels};
-use crate::{
-    GpuBuffer, GpuContext, GpuError, WORKGROUP_SIZE, codes, sized_buffer_entry, storage_entry,
-};
+use crate::{GpuBuffer, GpuContext, GpuError, codes, sized_buffer_entry, storage_entry};
 
 /// The per-frame pass's pipelines, in the order they run.
 #[derive(Debug)]
@@ -214,39 +213,27 @@ impl GpuMcpgGuide {
         if let Some(m) = self.maintenance.get() {
             return Ok(m);
         }
-        let device = ctx.device();
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("mcpg maintenance"),
-            source: wgpu::ShaderSource::Wgsl(kernels::plain(kernels::MCPG_MAINTENANCE).into()),
-        });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("mcpg maintenance"),
-            bind_group_layouts: &[Some(&self.layout)],
-            immediate_size: 0,
-        });
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: wgpu::PipelineCompilationOptions::default(),
-                cache: None,
-            })
-        };
+        let [fold, evict, trim, next_frame] = build_pipelines(
+            ctx,
+            &[&self.layout],
+            (
+                "mcpg maintenance",
+                kernels::MCPG_MAINTENANCE,
+                kernels::KERNEL_DEFS,
+            ),
+            [
+                "mcpg_fold_cache",
+                "mcpg_evict",
+                "mcpg_trim",
+                "mcpg_next_frame",
+            ],
+        )?;
         let m = Maintenance {
-            fold: pipeline("mcpg_fold_cache"),
-            evict: pipeline("mcpg_evict"),
-            trim: pipeline("mcpg_trim"),
-            next_frame: pipeline("mcpg_next_frame"),
+            fold,
+            evict,
+            trim,
+            next_frame,
         };
-        if let Some(error) = pollster::block_on(scope.pop()) {
-            return Err(GpuError::Shader {
-                entry_point: "mcpg maintenance".to_owned(),
-                message: error.to_string(),
-            });
-        }
         Ok(self.maintenance.get_or_init(|| m))
     }
 
@@ -263,12 +250,7 @@ impl GpuMcpgGuide {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
         let m = self.maintenance(ctx)?;
-        let max = ctx.device().limits().max_compute_workgroups_per_dimension;
-        let grid = |invocations: u32| {
-            let groups = invocations.div_ceil(WORKGROUP_SIZE).max(1);
-            let x = groups.min(max);
-            (x, groups.div_ceil(x))
-        };
+        let grid = |invocations: u32| workgroup_grid(ctx, invocations);
         let p = &self.params;
         let slots = p.adaptive_table.capacity
             + p.static_table.capacity
