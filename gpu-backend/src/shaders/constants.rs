@@ -38,7 +38,7 @@ fn logluv_le(y: f32) -> u32 {
     LogLuv32::pack_xyz(Vec3::new(0.0, y, 0.0)) >> 16
 }
 
-/// `T[k]` (see [`logluv_tables`]): Le = 256 (e + 64) + #{k ≥ 1 : m ≥ T[k]} for Y = 2ᵉ m.
+/// `T[k]` (see [`logluv_tables`]): Le = 256 (e + 64) + #{k ≥ 1 : m ≥ `T[k]`} for Y = 2ᵉ m.
 fn logluv_log2_steps() -> [f32; 256] {
     let base = logluv_le(1.0);
     let mut steps = [1.0_f32; 256];
