@@ -21,7 +21,8 @@
 //! 0.059-0.062 with the sequence. For the blend extension (24 uniform rays per probe after its
 //! 8 pilots, its change detection off, seeds 1-4): 0.096-0.110 and 0.065-0.068.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
+use mcg_markov_guide::mcg_vmf::uniform_sphere;
 
 use crate::probe_update::split_mix64;
 
@@ -68,12 +69,9 @@ pub fn sequence_direction(seed: u64, probe: u32, index: u32) -> Vec3 {
     let [a, b] = SEQUENCE_STEPS;
     let x = ((shift >> 32) as u32).wrapping_add(index.wrapping_mul(a));
     let y = (shift as u32).wrapping_add(index.wrapping_mul(b));
-    // Top 24 bits, so both lie in [0, 1) exactly.
+    // Top 24 bits, so both lie in [0, 1) exactly; x sets the height, y the azimuth.
     let unit = |v: u32| (v >> 8) as f32 * (1.0 / 16_777_216.0);
-    let z = 1.0 - 2.0 * unit(x);
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let (s, c) = (core::f32::consts::TAU * unit(y)).sin_cos();
-    Vec3::new(r * c, r * s, z)
+    uniform_sphere(Vec2::new(unit(y), unit(x)))
 }
 
 /// The i-th of n spherical Fibonacci directions (DDGI's ray set before its random rotation;

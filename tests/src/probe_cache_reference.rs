@@ -36,6 +36,7 @@
 //! their texels.
 
 use glam::{UVec2, Vec2, Vec3};
+use mcg_probe_cache::heuristics::OCTANTS;
 use mcg_probe_cache::{
     DynamicScene, ProbeTexels, ProbeUpdater, TexelConfig, TexelContent, UpdateConfig, UpdatePolicy,
     reference_irradiance,
@@ -248,7 +249,9 @@ impl Experiment {
             run.rays_dynamic.push(rays.rays_dynamic);
             run.changed_probes
                 .push(updater.heuristics().map_or(0, |(_, f_d)| {
-                    f_d.chunks(8).filter(|o| o.iter().any(|&d| d > 0.0)).count() as u32
+                    f_d.chunks(OCTANTS)
+                        .filter(|o| o.iter().any(|&d| d > 0.0))
+                        .count() as u32
                 }));
             let estimate = self.estimate(updater.texels(), updater.content());
             let reference = self.reference(frame);
