@@ -253,7 +253,7 @@ fn furnace_matches_the_truncated_neumann_series() {
         };
         let image = if method.is_guided() {
             // Three frames of learning first, so that the tested frame samples the lobes.
-            let mut guide = new_guide(&scene, 16).unwrap();
+            let mut guide = new_guide(&scene, 16, 16).unwrap();
             for frame in 0..3 {
                 render_frame(&scene, &settings, frame, || McpgSampler::new(&guide), || ());
                 guide.end_frame();
@@ -344,7 +344,7 @@ fn guided_methods_agree_with_nee_per_tile() {
         });
         let guided = common::tile_stats((w, h, 16, 32), |run| {
             let s = settings(method, 100 + run);
-            let mut guide = new_guide(&scene, h).unwrap();
+            let mut guide = new_guide(&scene, w, h).unwrap();
             let mut sum = vec![Vec3::ZERO; (w * h) as usize];
             for f in 0..frames {
                 let image = render_frame(&scene, &s, f, || McpgSampler::new(&guide), || ());

@@ -30,12 +30,12 @@ fn tracer(test: &str, scene: &Scene) -> Option<GpuTracer> {
 
 /// A tracer on a device of its own with the adapter's limits (`mcpg` binds 10 storage buffers,
 /// more than the shared test device's WebGPU defaults), `scene` uploaded and an empty guide
-/// started for an image `height` pixels high, or `None` (skip).
-fn mcpg_tracer(test: &str, scene: &Scene, height: u32) -> Option<GpuTracer> {
+/// started for an image of `width` × `height` pixels, or `None` (skip).
+fn mcpg_tracer(test: &str, scene: &Scene, width: u32, height: u32) -> Option<GpuTracer> {
     gpu_or_skip(test)?;
     let mut tracer = GpuTracer::new().unwrap();
     tracer.upload(scene).unwrap();
-    tracer.start_mcpg(&guide_config(scene, height)).unwrap();
+    tracer.start_mcpg(&guide_config(scene, width, height)).unwrap();
     Some(tracer)
 }
 
@@ -195,7 +195,7 @@ fn gpu_furnace_matches_the_truncated_neumann_series() {
 fn gpu_mcpg_furnace_matches_the_truncated_neumann_series() {
     let (rho, le) = (Vec3::new(0.5, 0.3, 0.8), Vec3::new(1.0, 2.0, 0.5));
     let scene = furnace(rho, le);
-    let Some(mut gpu) = mcpg_tracer("gpu_mcpg_furnace", &scene, 16) else {
+    let Some(mut gpu) = mcpg_tracer("gpu_mcpg_furnace", &scene, 16, 16) else {
         return;
     };
     let bounces = 3;
@@ -209,7 +209,7 @@ fn gpu_mcpg_furnace_matches_the_truncated_neumann_series() {
             seed: 7,
             method,
         };
-        gpu.start_mcpg(&guide_config(&scene, size)).unwrap();
+        gpu.start_mcpg(&guide_config(&scene, size, size)).unwrap();
         for frame in 0..3 {
             gpu.render_frame(&settings, frame).unwrap();
         }
@@ -236,7 +236,7 @@ fn gpu_mcpg_furnace_matches_the_truncated_neumann_series() {
 fn gpu_mcpg_agrees_with_gpu_nee_per_tile() {
     let scene = built_in("hidden_light_room.gltf");
     let (w, h) = (32u32, 32u32);
-    let Some(mut gpu) = mcpg_tracer("gpu_mcpg_agrees_with_gpu_nee_per_tile", &scene, h) else {
+    let Some(mut gpu) = mcpg_tracer("gpu_mcpg_agrees_with_gpu_nee_per_tile", &scene, w, h) else {
         return;
     };
     let settings = |method, seed| RenderSettings {
@@ -249,7 +249,7 @@ fn gpu_mcpg_agrees_with_gpu_nee_per_tile() {
     };
     let nee = settings(Method::Nee, 12);
     let reference = tile_stats((w, h, 16, 128), |f| gpu.render_frame(&nee, f).unwrap().0);
-    let config = guide_config(&scene, h);
+    let config = guide_config(&scene, w, h);
     let guided = tile_stats((w, h, 16, 32), |run| {
         let s = settings(Method::Mcpg, 100 + run);
         gpu.start_mcpg(&config).unwrap();

@@ -88,27 +88,28 @@ pub const CONFIDENCE_SAMPLES: f32 = 16.0;
 /// 0.52/0.63 → 0.55/0.74, seeds 1-2), which is why the crate keeps the engine's value.
 pub const ALPHA_MIN: f32 = 0.1;
 
-/// The guide's configuration for `scene` rendered `height` pixels high (both devices):
-/// [`GuideConfig::for_scene`] over the scene's bounds, [`GuideConfig::for_camera`] for its
-/// field of view, young chains' confidence [`CONFIDENCE_SAMPLES`] and the update's
-/// [`ALPHA_MIN`].
+/// The guide's configuration for `scene` rendered at `width` × `height` pixels (both
+/// devices): [`GuideConfig::for_scene`] over the scene's bounds, [`GuideConfig::for_camera`]
+/// for its field of view, [`GuideConfig::for_pixels`] for the adaptive table's size, young
+/// chains' confidence [`CONFIDENCE_SAMPLES`] and the update's [`ALPHA_MIN`].
 #[must_use]
-pub fn guide_config(scene: &Scene, height: u32) -> GuideConfig {
+pub fn guide_config(scene: &Scene, width: u32, height: u32) -> GuideConfig {
     let root = scene.bvh.nodes[0];
     let mut config = GuideConfig::for_scene(Vec3::from(root.min), Vec3::from(root.max))
-        .for_camera(scene.camera.yfov, height);
+        .for_camera(scene.camera.yfov, height)
+        .for_pixels(u64::from(width) * u64::from(height));
     config.params.confidence_samples = CONFIDENCE_SAMPLES;
     config.params.fit.alpha_min = ALPHA_MIN;
     config
 }
 
-/// The guide for `scene` rendered `height` pixels high: [`GuideConfig::for_scene`] over the
-/// scene's bounds and [`GuideConfig::for_camera`] for its field of view, the camera set.
+/// The guide for `scene` rendered at `width` × `height` pixels ([`guide_config`]), the camera
+/// set.
 ///
 /// # Errors
 /// [`GuideError`] when the configuration is invalid (it is not for a finite scene).
-pub fn new_guide(scene: &Scene, height: u32) -> Result<Guide, GuideError> {
-    let mut guide = Guide::new(guide_config(scene, height))?;
+pub fn new_guide(scene: &Scene, width: u32, height: u32) -> Result<Guide, GuideError> {
+    let mut guide = Guide::new(guide_config(scene, width, height))?;
     guide.set_camera(scene.camera.position);
     Ok(guide)
 }

@@ -547,7 +547,7 @@ impl CpuGuide {
 /// `--mcpg-alpha-min`.
 #[must_use]
 pub fn mcpg_config(scene: &Scene, args: &RenderArgs) -> GuideConfig {
-    let mut config = guide_config(scene, args.height);
+    let mut config = guide_config(scene, args.width, args.height);
     config.params.confidence_samples = args.mcpg_confidence;
     config.params.fit.alpha_min = args.mcpg_alpha_min;
     if args.no_irradiance_cache {

@@ -193,6 +193,37 @@ impl GuideConfig {
     }
 }
 
+impl GuideConfig {
+    /// The adaptive table's slots for an image of `pixels`: [`SLOTS_PER_PIXEL`] per pixel,
+    /// rounded up to a power of two, at least 2¹² and at most [`PAPER`](Self::PAPER)'s 2²⁰.
+    #[must_use]
+    pub fn adaptive_capacity_for(pixels: u64) -> u32 {
+        let slots = pixels.saturating_mul(u64::from(SLOTS_PER_PIXEL));
+        let max = u64::from(Self::PAPER.adaptive_capacity);
+        slots.clamp(1 << 12, max).next_power_of_two() as u32
+    }
+
+    /// The same configuration with the adaptive table sized for an image of `pixels`
+    /// ([`adaptive_capacity_for`](Self::adaptive_capacity_for)).
+    ///
+    /// With [`for_camera`](Self::for_camera)'s cells the adaptive grid holds about 1.5-1.7
+    /// states per pixel (3 bounces in a closed room, `mcg-demo`'s hidden-light room at 128²
+    /// and 256²), so 8 slots per pixel keep the table at load ≈ 0.2, where linear probing
+    /// seldom leaves the home slot. A table much larger than that costs time, not only
+    /// memory: its few occupied slots spread over many more pages and cache lines, and a
+    /// guided vertex waits on its candidates' loads. At 128 × 128 pixels 2¹⁷ slots instead of
+    /// 2²⁰ made a guided CPU frame of that room about 10 % cheaper with the same error
+    /// (`benches/README.md`); 2¹⁶ (load ≈ 0.4) was slower again.
+    #[must_use]
+    pub fn for_pixels(mut self, pixels: u64) -> Self {
+        self.adaptive_capacity = Self::adaptive_capacity_for(pixels);
+        self
+    }
+}
+
+/// Adaptive-table slots per pixel of [`GuideConfig::for_pixels`].
+pub const SLOTS_PER_PIXEL: u32 = 8;
+
 impl Default for GuideConfig {
     /// [`GuideConfig::PAPER`].
     fn default() -> Self {
@@ -957,6 +988,20 @@ mod tests {
     /// `candidate_keys` memoises cells per grid and level; it must give [`Guide::key`]'s
     /// keys bit for bit, for every grid choice, level jitter and corner (here a 4096-vertex
     /// sweep over points, camera distances and uniforms, uniforms at 0, near 1 and beyond).
+    #[test]
+    fn adaptive_capacity_follows_the_pixels_within_bounds() {
+        assert_eq!(GuideConfig::adaptive_capacity_for(0), 1 << 12);
+        assert_eq!(GuideConfig::adaptive_capacity_for(16 * 16), 1 << 12);
+        assert_eq!(GuideConfig::adaptive_capacity_for(128 * 128), 1 << 17);
+        assert_eq!(GuideConfig::adaptive_capacity_for(100 * 100), 1 << 17);
+        assert_eq!(GuideConfig::adaptive_capacity_for(1920 * 1080), 1 << 20);
+        assert_eq!(GuideConfig::adaptive_capacity_for(u64::MAX), 1 << 20);
+        let c = GuideConfig::PAPER.for_pixels(64 * 64);
+        assert_eq!(c.adaptive_capacity, 1 << 15);
+        assert_eq!(c.static_capacity, GuideConfig::PAPER.static_capacity);
+        assert!(Guide::new(c).is_ok());
+    }
+
     #[test]
     fn candidate_keys_equal_the_single_keys() {
         let mut config = GuideConfig::for_scene(Vec3::ZERO, Vec3::splat(10.0));
