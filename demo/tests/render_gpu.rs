@@ -35,7 +35,9 @@ fn mcpg_tracer(test: &str, scene: &Scene, width: u32, height: u32) -> Option<Gpu
     gpu_or_skip(test)?;
     let mut tracer = GpuTracer::new().unwrap();
     tracer.upload(scene).unwrap();
-    tracer.start_mcpg(&guide_config(scene, width, height)).unwrap();
+    tracer
+        .start_mcpg(&guide_config(scene, width, height))
+        .unwrap();
     Some(tracer)
 }
 

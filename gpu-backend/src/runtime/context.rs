@@ -272,6 +272,22 @@ impl GpuContext {
         GpuBuffer::new(buffer, 1)
     }
 
+    /// The workgroup grid `(x, y)` of a 2D dispatch of `invocations` (at least one workgroup)
+    /// in workgroups of `group_size` invocations: `x` up to the device's
+    /// `max_compute_workgroups_per_dimension`, `y` the rows of `x` workgroups needed for the
+    /// rest. A kernel dispatched over it recovers its flat index as
+    /// `id.x + id.y · x · group_size` (`mcg_invocation_index` of the prelude for
+    /// [`WORKGROUP_SIZE`]) and skips indices ≥ its element count. `y` can exceed the limit
+    /// only beyond `max² · group_size` invocations ([`dispatch`](Self::dispatch) reports that
+    /// as [`GpuError::TooManyInvocations`]).
+    #[must_use]
+    pub fn workgroup_grid(&self, invocations: u32, group_size: u32) -> (u32, u32) {
+        let max = self.device.limits().max_compute_workgroups_per_dimension;
+        let groups = invocations.div_ceil(group_size.max(1)).max(1);
+        let x = groups.min(max);
+        (x, groups.div_ceil(x))
+    }
+
     /// Runs `kernel` for `invocations` invocations with `buffers[i]` bound at
     /// `@group(0) @binding(i)`, and waits for it to finish.
     ///
@@ -284,10 +300,8 @@ impl GpuContext {
         buffers: &[&wgpu::Buffer],
         invocations: u32,
     ) -> Result<(), GpuError> {
-        let groups = invocations.div_ceil(WORKGROUP_SIZE);
         let max = self.device.limits().max_compute_workgroups_per_dimension;
-        let x = groups.clamp(1, max);
-        let y = groups.div_ceil(x).max(1);
+        let (x, y) = self.workgroup_grid(invocations, WORKGROUP_SIZE);
         if y > max {
             return Err(GpuError::TooManyInvocations {
                 requested: u64::from(invocations),

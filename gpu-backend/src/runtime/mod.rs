@@ -87,18 +87,8 @@ pub(crate) fn build_pipelines<const N: usize>(
     Ok(pipelines)
 }
 
-/// The workgroup grid `(x, y)` of a dispatch of `invocations` (at least one workgroup) with
-/// [`WORKGROUP_SIZE`](crate::WORKGROUP_SIZE) invocations each: `x` up to the device's
-/// per-dimension limit, `y` the rows of `x` workgroups needed for the rest.
-pub(crate) fn workgroup_grid(ctx: &GpuContext, invocations: u32) -> (u32, u32) {
-    let max = ctx.device().limits().max_compute_workgroups_per_dimension;
-    let groups = invocations.div_ceil(crate::WORKGROUP_SIZE).max(1);
-    let x = groups.min(max);
-    (x, groups.div_ceil(x))
-}
-
 /// Records one compute pass named `label` into `encoder`: `pipeline` with `groups[i]` at
-/// group i, dispatched over [`workgroup_grid`]`(invocations)`.
+/// group i, dispatched over [`GpuContext::workgroup_grid`]`(invocations, WORKGROUP_SIZE)`.
 pub(crate) fn record_dispatch(
     ctx: &GpuContext,
     encoder: &mut wgpu::CommandEncoder,
@@ -107,7 +97,7 @@ pub(crate) fn record_dispatch(
     groups: &[&wgpu::BindGroup],
     invocations: u32,
 ) {
-    let (x, y) = workgroup_grid(ctx, invocations);
+    let (x, y) = ctx.workgroup_grid(invocations, crate::WORKGROUP_SIZE);
     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
         label: Some(label),
         timestamp_writes: None,

@@ -595,7 +595,7 @@ impl GpuTracer {
             .into());
         }
         let (pipeline, layout) = self.chain_trace_pipeline(probes)?;
-        let (x, y) = workgroups_2d(&self.ctx, limit);
+        let (x, y) = self.ctx.workgroup_grid(limit, PROBE_GROUP);
         let dispatch = GpuChainTrace {
             limit,
             row: x * PROBE_GROUP,
@@ -769,7 +769,7 @@ impl GpuTracer {
         ];
         let kernel = ("expand_dynamic_samples", &a.expand.0, &a.expand.1);
         // 2D, so that more samples than the per-dimension limit of workgroups covers stay valid.
-        let groups = workgroups_2d(ctx, u32::try_from(chains.samples().len())?);
+        let groups = ctx.workgroup_grid(u32::try_from(chains.samples().len())?, PROBE_GROUP);
         record_pass(ctx, e, kernel, &buffers, cache, groups);
         let dynamic_parts = (&p.trace, &p.trace_layout, cache, &p.requests, &a.rays);
         let dynamic = GpuProbeFrame {
@@ -808,7 +808,7 @@ impl GpuTracer {
         let pilots = u32::try_from(8 * p.gi.updater().grid().probe_count())?;
         let kernel = ("lay_out_pilot_rays", &a.lay_out.0, &a.lay_out.1);
         let buffers = [(18, p.requests.raw()), (23, dispatch.raw())];
-        let size = workgroups_2d(&self.ctx, pilots);
+        let size = self.ctx.workgroup_grid(pilots, PROBE_GROUP);
         record_pass(&self.ctx, encoder, kernel, &buffers, &p.cache, size);
         Ok(pilots)
     }
@@ -904,14 +904,6 @@ fn scene_bindings<'a>(
     ]
 }
 
-/// Workgroups of [`PROBE_GROUP`] for `invocations` as a 2D dispatch `(x, y)` within the
-/// device's per-dimension limit (at least one).
-fn workgroups_2d(ctx: &GpuContext, invocations: u32) -> (u32, u32) {
-    let groups = invocations.div_ceil(PROBE_GROUP).max(1);
-    let x = groups.min(ctx.device().limits().max_compute_workgroups_per_dimension);
-    (x, groups.div_ceil(x))
-}
-
 /// Records one compute pass of `kernel` (label, pipeline, group 0 layout) over `groups`, with
 /// `buffers` at group 0 and `cache`'s group at [`GUIDE_GROUP`].
 fn record_pass(
@@ -983,7 +975,7 @@ impl ProbeTracer<'_> {
     ) {
         let (pipeline, layout, cache, requests, samples) = parts;
         dispatch.limit = dispatch.limit.max(dispatch.count);
-        let (x, y) = workgroups_2d(self.ctx, dispatch.limit);
+        let (x, y) = self.ctx.workgroup_grid(dispatch.limit, PROBE_GROUP);
         dispatch.row = x * PROBE_GROUP;
         let frame = self.ctx.uniform_buffer("trace_probe_rays", &dispatch);
         if let Some((source, offset)) = count_from {

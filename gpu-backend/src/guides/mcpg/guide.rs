@@ -7,7 +7,7 @@ use glam::Vec3;
 use mcg_markov_guide::mcpg::{CacheCell, GridState, GuideConfig};
 
 use super::{McpgBufferWords, McpgGpuParams};
-use crate::runtime::{build_pipelines, workgroup_grid};
+use crate::runtime::build_pipelines;
 use crate::shaders::{defs, kernels};
 use crate::{GpuBuffer, GpuContext, GpuError, codes, sized_buffer_entry, storage_entry};
 
@@ -250,7 +250,7 @@ impl GpuMcpgGuide {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
         let m = self.maintenance(ctx)?;
-        let grid = |invocations: u32| workgroup_grid(ctx, invocations);
+        let grid = |invocations: u32| ctx.workgroup_grid(invocations, crate::WORKGROUP_SIZE);
         let p = &self.params;
         let slots = p.adaptive_table.capacity
             + p.static_table.capacity
