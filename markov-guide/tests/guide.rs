@@ -676,3 +676,64 @@ fn young_chains_lend_their_share_and_continue() {
         assert_eq!(after, want, "N_c {confidence}");
     }
 }
+
+/// `Guide::begin_in` over a vertex begun elsewhere (another point, a non-finite one, another
+/// normal) answers as `begin`'s vertex bit for bit: the candidates, the choice, 16 samples
+/// (direction, pdf, lobe) and the density at 16 directions, for 512 vertices of a trained
+/// guide (both hemisphere options, young chains lending N_c = 16), the points around the
+/// trained ones and a few non-finite.
+#[test]
+fn begin_in_equals_begin() {
+    let scene = medium_light();
+    for hemisphere in [Hemisphere::Sphere, Hemisphere::CosineProduct] {
+        let mut config = *toy_guide(hemisphere).config();
+        config.params.confidence_samples = 16.0;
+        let mut guide = Guide::new(config).unwrap();
+        guide.set_camera(Vec3::new(0.0, -2.5, 3.0));
+        let mut rng = Pcg64Mcg::seed_from_u64(11);
+        run(&mut guide, &scene, 6, 6, 32, &mut rng);
+        let n = guide.params().candidates as usize;
+        let scatter = |normal: Vec3| Lambertian { normal };
+        let tilted = Vec3::new(0.3, 0.1, 1.0).normalize();
+        let mut kept = guide.begin(
+            Vertex::surface(Vec3::new(0.1, 0.0, 0.0), tilted),
+            scatter(tilted),
+            &BeginUniforms::from_fn(n, || rng.random()),
+        );
+        let mut lobes = 0;
+        for i in 0..512 {
+            let x = if i % 97 == 5 {
+                Vec3::new(f32::NAN, 0.0, 0.0)
+            } else {
+                shading_point(i % 8) + Vec3::new(rng.random(), rng.random(), 0.0) * 0.05
+            };
+            let normal = if i % 5 == 0 { tilted } else { TOY_NORMAL };
+            let u = BeginUniforms::from_fn(n, || rng.random());
+            let fresh = guide.begin(Vertex::surface(x, normal), scatter(normal), &u);
+            guide.begin_in(&mut kept, Vertex::surface(x, normal), scatter(normal), &u);
+            assert_eq!(
+                format!("{:?}", fresh.candidates()),
+                format!("{:?}", kept.candidates()),
+                "vertex {i}"
+            );
+            assert_eq!(fresh.selected(), kept.selected(), "vertex {i}");
+            for _ in 0..16 {
+                let su = SampleUniforms::from_fn(|| rng.random());
+                let (a, b) = (fresh.sample(&su), kept.sample(&su));
+                assert_eq!(a.lobe, b.lobe, "vertex {i}");
+                assert_eq!(
+                    a.direction.to_array().map(f32::to_bits),
+                    b.direction.to_array().map(f32::to_bits)
+                );
+                assert_eq!(a.pdf.to_bits(), b.pdf.to_bits(), "vertex {i}");
+                lobes += u32::from(a.lobe.is_some());
+                let w = mcg_markov_guide::mcg_vmf::uniform_sphere(Vec2::new(
+                    rng.random(),
+                    rng.random(),
+                ));
+                assert_eq!(fresh.pdf(w).to_bits(), kept.pdf(w).to_bits(), "vertex {i}");
+            }
+        }
+        assert!(lobes > 1000, "{lobes}");
+    }
+}

@@ -77,6 +77,18 @@ impl<const N: usize> VmfLanes<N> {
         scale: [0.0; N],
     };
 
+    /// Empties every lane: `self` becomes [`EMPTY`](Self::EMPTY), written array by array
+    /// (assigning the constant copies it from memory, a `memcpy` call for eight lanes).
+    #[inline]
+    pub fn clear(&mut self) {
+        self.mu_x = [0.0; N];
+        self.mu_y = [0.0; N];
+        self.mu_z = [1.0; N];
+        self.kappa = [0.0; N];
+        self.weight = [0.0; N];
+        self.scale = [0.0; N];
+    }
+
     /// Puts `lobe` with mixture weight `weight` into lane `i`. A weight that is not finite and
     /// positive (0, negative, NaN, ∞) empties the lane.
     ///
@@ -114,6 +126,22 @@ impl<const N: usize> VmfLanes<N> {
         product: Option<&Vmf>,
         lane: impl Fn(usize) -> (SufficientStats, MapPrior, f32),
     ) -> Self {
+        let mut out = Self::EMPTY;
+        out.set_from_stats(x, product, lane);
+        out
+    }
+
+    /// [`from_stats`](Self::from_stats) written over `self`: every lane is overwritten (the
+    /// previous contents do not matter), with the same lanes bit for bit. For a caller that
+    /// keeps its lanes in a larger value, so that the lanes are built where they live instead
+    /// of being returned and copied.
+    #[inline]
+    pub fn set_from_stats(
+        &mut self,
+        x: Vec3,
+        product: Option<&Vmf>,
+        lane: impl Fn(usize) -> (SufficientStats, MapPrior, f32),
+    ) {
         // Gather the lanes' inputs (the fields of the statistics, the posterior's parts and
         // the weights) into arrays, then do the arithmetic over whole lanes.
         let mut lanes = [[0.0_f32; N]; LANE_INPUTS];
@@ -137,33 +165,33 @@ impl<const N: usize> VmfLanes<N> {
                 values[i] = v;
             }
         }
-        let mut out = match product {
-            Some(p) => Self::lobes_from_inputs::<true>(&lanes, p),
-            None => Self::lobes_from_inputs::<false>(&lanes, &Vmf::uniform()),
-        };
+        match product {
+            Some(p) => self.lobes_from_inputs::<true>(&lanes, p),
+            None => self.lobes_from_inputs::<false>(&lanes, &Vmf::uniform()),
+        }
         // A lane marked by a negative weight has |ȳ − x|² outside the normal range.
         for i in 0..N {
-            if out.weight[i] < 0.0 {
-                out.set(i, &Vmf::uniform(), 0.0);
+            if self.weight[i] < 0.0 {
+                self.set(i, &Vmf::uniform(), 0.0);
                 let (s, prior, weight) = lane(i);
                 if let Some(lobe) = s.to_vmf(x, prior) {
                     let lobe = product.map_or(lobe, |p| lobe.product_lobe(p));
-                    out.set(i, &lobe, weight);
+                    self.set(i, &lobe, weight);
                 }
             }
         }
-        out
     }
 
     /// The lanes from [`from_stats`](Self::from_stats)' gathered inputs: μ from the offsets
     /// ȳ − x, κ from the posterior's parts (N_eff, N_p, 1 − r_p, 1 − r̄), times `product` when
     /// `PRODUCT`, and the scales. A lane whose |ȳ − x|² leaves the normal range gets the
-    /// negated weight (the caller redoes it by the scalar path).
+    /// negated weight (the caller redoes it by the scalar path). Writes every lane of `self`.
     #[inline(always)]
     fn lobes_from_inputs<const PRODUCT: bool>(
+        &mut self,
         lanes: &[[f32; N]; LANE_INPUTS],
         product: &Vmf,
-    ) -> Self {
+    ) {
         let [
             dx,
             dy,
@@ -174,7 +202,6 @@ impl<const N: usize> VmfLanes<N> {
             sample,
             weight,
         ] = lanes;
-        let mut out = Self::EMPTY;
         for i in 0..N {
             let d = Vec3::new(dx[i], dy[i], dz[i]);
             let l2 = d.length_squared();
@@ -195,14 +222,13 @@ impl<const N: usize> VmfLanes<N> {
                 0.0
             };
             let w = if fast { w } else { -w };
-            out.mu_x[i] = mu.x;
-            out.mu_y[i] = mu.y;
-            out.mu_z[i] = mu.z;
-            out.kappa[i] = k;
-            out.weight[i] = w;
-            out.scale[i] = w * normalization_lane(k);
+            self.mu_x[i] = mu.x;
+            self.mu_y[i] = mu.y;
+            self.mu_z[i] = mu.z;
+            self.kappa[i] = k;
+            self.weight[i] = w;
+            self.scale[i] = w * normalization_lane(k);
         }
-        out
     }
 
     /// The lobe in lane `i` (the uniform lobe for a lane never set).
@@ -358,7 +384,8 @@ mod tests {
     /// `from_stats` gives the scalar path's lobes bit for bit (μ, κ) and its normalisation to
     /// 4·10⁻⁷: 4096 random statistics seen from random points, with and without the product,
     /// plus the edge cases (N = 0, w̄ = 0, ȳ at x, ȳ far enough that |ȳ − x|² overflows or
-    /// near enough that it underflows, an infinite prior, weights 0 and NaN).
+    /// near enough that it underflows, an infinite prior, weights 0 and NaN). `set_from_stats`
+    /// over earlier lanes gives `from_stats`' bits.
     #[test]
     fn from_stats_equals_the_scalar_lobes() {
         let mut state = 0x9e37_79b9_u32;
@@ -367,6 +394,11 @@ mod tests {
             (state >> 8) as f32 / (1u32 << 24) as f32
         };
         let cosine = Vmf::clamped_cosine(Vec3::new(0.1, 1.0, -0.2)).unwrap();
+        let bits = |l: &VmfLanes<8>| {
+            [l.mu_x, l.mu_y, l.mu_z, l.kappa, l.weight, l.scale].map(|a| a.map(f32::to_bits))
+        };
+        let mut reused = VmfLanes::<8>::EMPTY;
+        reused.set(3, &cosine, 0.5);
         let mut cases = 0;
         for round in 0..512 {
             let x = Vec3::new(next(), next(), next()) * 4.0 - 2.0;
@@ -405,6 +437,9 @@ mod tests {
             for product in [None, Some(&cosine)] {
                 let lanes =
                     VmfLanes::<8>::from_stats(x, product, |i| (stats[i], priors[i], weights[i]));
+                // Written over the previous round's lanes: the same bits.
+                reused.set_from_stats(x, product, |i| (stats[i], priors[i], weights[i]));
+                assert_eq!(bits(&reused), bits(&lanes), "round {round}");
                 for i in 0..8 {
                     let want = stats[i]
                         .to_vmf(x, priors[i])

@@ -121,8 +121,15 @@ const NO_SAMPLE: GuidedSample = GuidedSample {
     lobe: None,
 };
 
-/// An open guided vertex: the guide's state between `sample` and `finish`.
-type Open<'g> = (GuidedVertex<'g, MaterialScatter>, GuidedSample);
+/// The guided vertex at one depth: the guide's state between `sample` and `finish` and the
+/// sample drawn, kept after `finish` (closed) so that the next vertex at that depth is begun
+/// in its place ([`Guide::begin_in`]) instead of being built elsewhere and moved in.
+struct Kept<'g> {
+    vertex: GuidedVertex<'g, MaterialScatter>,
+    sample: GuidedSample,
+    /// Sampled and not yet finished in the current path.
+    open: bool,
+}
 
 /// MCPG as a [`VertexSampler`]: one per rayon task, all sharing one [`Guide`].
 ///
@@ -133,7 +140,8 @@ type Open<'g> = (GuidedVertex<'g, MaterialScatter>, GuidedSample);
 pub struct McpgSampler<'g> {
     guide: &'g Guide,
     rng: u32,
-    open: [Option<Open<'g>>; MAX_RECORDED],
+    /// Per depth, the vertex begun there last; `None` until the first.
+    kept: [Option<Kept<'g>>; MAX_RECORDED],
 }
 
 impl<'g> McpgSampler<'g> {
@@ -143,7 +151,7 @@ impl<'g> McpgSampler<'g> {
         Self {
             guide,
             rng: 0,
-            open: [const { None }; MAX_RECORDED],
+            kept: [const { None }; MAX_RECORDED],
         }
     }
 }
@@ -151,10 +159,10 @@ impl<'g> McpgSampler<'g> {
 impl VertexSampler for McpgSampler<'_> {
     fn begin_path(&mut self, seed: u32) {
         self.rng = seed;
-        // Entry by entry: assigning a fresh array copied all 16 open vertices (about 12 KB)
-        // per path, 7 % of a guided frame.
-        for open in &mut self.open {
-            *open = None;
+        // Closed, not dropped: the vertices stay for `begin_in` (assigning a fresh array
+        // copied all 16 open vertices, about 12 KB, per path, 7 % of a guided frame).
+        for kept in self.kept.iter_mut().flatten() {
+            kept.open = false;
         }
     }
 
@@ -173,13 +181,23 @@ impl VertexSampler for McpgSampler<'_> {
             choice: u.x,
             direction: Vec2::new(u.y, u.z),
         };
-        let s = match self.open.get_mut(v.depth as usize) {
-            // Begun in its slot (a begun vertex moved into the slot cost two copies of it).
+        let s = match self.kept.get_mut(v.depth as usize) {
+            // Begun in place (a begun vertex moved into the slot cost a copy of it).
+            Some(Some(kept)) => {
+                self.guide
+                    .begin_in(&mut kept.vertex, vertex, scatter, &begin);
+                kept.sample = kept.vertex.sample(&u);
+                kept.open = true;
+                kept.sample
+            }
             Some(slot) => {
-                let (guided, s) =
-                    slot.insert((self.guide.begin(vertex, scatter, &begin), NO_SAMPLE));
-                *s = guided.sample(&u);
-                *s
+                let kept = slot.insert(Kept {
+                    vertex: self.guide.begin(vertex, scatter, &begin),
+                    sample: NO_SAMPLE,
+                    open: true,
+                });
+                kept.sample = kept.vertex.sample(&u);
+                kept.sample
             }
             None => self.guide.begin(vertex, scatter, &begin).sample(&u),
         };
@@ -195,27 +213,31 @@ impl VertexSampler for McpgSampler<'_> {
     }
 
     fn pdf(&self, v: &Vertex, wi: Vec3) -> f32 {
-        match self.open.get(v.depth as usize) {
-            Some(Some((guided, _))) => guided.pdf(wi),
+        match self.kept.get(v.depth as usize) {
+            Some(Some(kept)) if kept.open => kept.vertex.pdf(wi),
             _ => v.material.pdf(v.normal, v.wo, wi),
         }
     }
 
     fn finish(&mut self, o: &Observation) {
-        // Finished in place, then closed (taking it out would copy the open vertex).
-        let Some(open) = self.open.get_mut(o.vertex.depth as usize) else {
+        // Finished in place, then closed.
+        let Some(Some(kept)) = self.kept.get_mut(o.vertex.depth as usize) else {
             return;
         };
-        let Some((guided, s)) = open.as_ref() else {
+        if !kept.open {
             return;
-        };
+        }
         let weight = o.sample.weight;
         let seen = match o.next {
             Some(hit) => VertexObservation::hit(hit.position, hit.normal, hit.emitted, weight),
             None => VertexObservation::escaped(Vec3::ZERO, weight),
         };
         let rng = &mut self.rng;
-        guided.finish(s, &seen, &FinishUniforms::from_fn(|| next_uniform(rng)));
-        *open = None;
+        kept.vertex.finish(
+            &kept.sample,
+            &seen,
+            &FinishUniforms::from_fn(|| next_uniform(rng)),
+        );
+        kept.open = false;
     }
 }

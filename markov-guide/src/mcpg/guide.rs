@@ -618,6 +618,7 @@ impl Guide {
     /// grid and level instead of once per candidate (most candidates share the static grid's
     /// cell or the target level's). The same keys as [`key`](Self::key) bit for bit:
     /// [`stochastic_trilinear`] is the lower corner plus the [`stochastic_corner`] offset.
+    /// Writes the first `count` entries of `keys` (in place: a returned array was copied).
     #[inline(always)]
     fn candidate_keys(
         &self,
@@ -626,10 +627,10 @@ impl Guide {
         target_level: u32,
         u: &BeginUniforms,
         count: usize,
-    ) -> [(GridKind, CellKey); MAX_CANDIDATES] {
+        keys: &mut [(GridKind, CellKey); MAX_CANDIDATES],
+    ) {
         let params = &self.config.params;
         let max_level = self.adaptive.params().max_level;
-        let mut keys = [(GridKind::Static, CellKey::unclassed(IVec3::ZERO)); MAX_CANDIDATES];
         // The cells met so far, direct-mapped: entry 0 the static grid's, entry 1 + j the
         // adaptive level target_level + j (j < 7; the geometric jitter rarely goes further),
         // `filled` their bits.
@@ -666,7 +667,6 @@ impl Guide {
                 GridKind::Static => (kind, CellKey::unclassed(vertex)),
             };
         }
-        keys
     }
 
     #[inline]
@@ -682,16 +682,14 @@ impl Guide {
     /// lobes below the surface; chooses one by reservoir sampling on w̄; builds every
     /// candidate's lobe once (with the cosine product if configured). `scatter` is the
     /// fallback technique (Alg. 2 line 3). A non-finite position loads nothing (the vertex
-    /// samples `scatter` only).
+    /// samples `scatter` only). [`begin_in`](Self::begin_in) does the same in a vertex the
+    /// caller keeps.
     pub fn begin<S: Scatter>(
         &self,
         vertex: Vertex,
         scatter: S,
         u: &BeginUniforms,
     ) -> GuidedVertex<'_, S> {
-        let params = &self.config.params;
-        let x = vertex.position;
-        let count = (params.candidates as usize).min(MAX_CANDIDATES);
         let mut v = GuidedVertex {
             guide: self,
             vertex,
@@ -700,27 +698,68 @@ impl Guide {
             slots: [None; MAX_CANDIDATES],
             lobes: VmfLanes::EMPTY,
             scatter_share: 0.0,
-            class: normal_class(vertex.key_direction),
-            target_level: self.adaptive.target_level(self.camera.distance(x)),
+            class: 0,
+            target_level: 0,
         };
+        self.load_candidates(&mut v, u);
+        v
+    }
+
+    /// [`begin`](Self::begin) written over `v`, a vertex begun earlier (by this guide or
+    /// another): every part of it is replaced, and it then answers exactly as the vertex
+    /// `begin(vertex, scatter, u)` returns would (the same candidates, choice, lobes, samples
+    /// and densities, bit for bit). For a renderer that keeps its open vertices in place: the
+    /// vertex (some 600 bytes with eight candidates) is built where it lives instead of being
+    /// returned and moved there.
+    pub fn begin_in<'g, S: Scatter>(
+        &'g self,
+        v: &mut GuidedVertex<'g, S>,
+        vertex: Vertex,
+        scatter: S,
+        u: &BeginUniforms,
+    ) {
+        v.guide = self;
+        v.vertex = vertex;
+        v.scatter = scatter;
+        self.load_candidates(v, u);
+    }
+
+    /// Alg. 1 into `v`, whose guide (`self`), vertex and scatter are set: writes every other
+    /// field, whatever it held.
+    #[inline(always)]
+    fn load_candidates<S: Scatter>(&self, v: &mut GuidedVertex<'_, S>, u: &BeginUniforms) {
+        let params = &self.config.params;
+        let vertex = v.vertex;
+        let x = vertex.position;
+        let count = (params.candidates as usize).min(MAX_CANDIDATES);
+        v.class = normal_class(vertex.key_direction);
+        v.target_level = self.adaptive.target_level(self.camera.distance(x));
+        v.slots = [None; MAX_CANDIDATES];
+        v.scatter_share = 0.0;
         if !crate::math::all_finite(x) {
-            return v;
+            *v.set.restart() = [GridState::EMPTY; MAX_CANDIDATES];
+            v.lobes.clear();
+            return;
         }
-        let keys = self.candidate_keys(x, v.class, v.target_level, u, count);
+        let mut keys = [(GridKind::Static, CellKey::unclassed(IVec3::ZERO)); MAX_CANDIDATES];
+        self.candidate_keys(x, v.class, v.target_level, u, count, &mut keys);
         // One batch: every lookup, then every state, so that the lookups' memory accesses
         // overlap instead of waiting on each other.
         for (slot, (kind, key)) in v.slots.iter_mut().zip(&keys).take(count) {
             *slot = self.grid(*kind).find(key).map(|s| (*kind, s));
         }
-        // The states go straight into the candidate set's storage (all `EMPTY` so far, which
-        // a slot without a state, a hash collision or a torn read leaves there), are
-        // prepared there, then offered in load order.
-        let states = v.set.storage_mut();
-        for (state, slot) in states.iter_mut().zip(&mut v.slots).take(count) {
-            if let Some((kind, s)) = *slot
-                && !self.grid(kind).load_into(s, state)
-            {
-                *slot = None;
+        // The states go straight into the candidate set's storage: the loaded state, or
+        // `EMPTY` for a slot without a state, a hash collision, a torn read (which leaves its
+        // entry as it was) and the entries past N_mc. Then they are prepared there and
+        // offered in load order.
+        let states = v.set.restart();
+        for (state, slot) in states.iter_mut().zip(&mut v.slots) {
+            match *slot {
+                Some((kind, s)) if self.grid(kind).load_into(s, state) => {}
+                _ => {
+                    *slot = None;
+                    *state = GridState::EMPTY;
+                }
             }
         }
         let now = self.frame as f32;
@@ -732,7 +771,6 @@ impl Guide {
             v.set.offer_stored(c.reservoir);
         }
         v.build_lobes();
-        v
     }
 }
 
@@ -758,9 +796,12 @@ pub struct GuidedVertex<'g, S> {
 }
 
 impl<S: Scatter> GuidedVertex<'_, S> {
+    /// Writes `lobes` and `scatter_share` (0 before) from the offered candidates.
+    #[inline(always)]
     fn build_lobes(&mut self) {
         let total = self.set.weight_sum();
         if !(total > 0.0) {
+            self.lobes.clear();
             return;
         }
         let params = &self.guide.config.params;
@@ -787,7 +828,7 @@ impl<S: Scatter> GuidedVertex<'_, S> {
         };
         // Every lobe at once (Alg. 2 lines 6-8; with the cosine product's lobe only,
         // μ' ∝ κμ + κ_c n, κ' = |κμ + κ_c n|), lane-wise, bit-identical to building each.
-        self.lobes = VmfLanes::from_stats(x, cosine.as_ref(), lane);
+        self.lobes.set_from_stats(x, cosine.as_ref(), lane);
         for ((k, s), y) in states.iter().enumerate().zip(young) {
             if !(s.weight_sum > 0.0) {
                 continue;
@@ -1033,7 +1074,8 @@ mod tests {
             };
             let class = normal_class(Vec3::Y);
             let target = guide.adaptive.target_level(guide.camera.distance(x));
-            let keys = guide.candidate_keys(x, class, target, &u, MAX_CANDIDATES);
+            let mut keys = [(GridKind::Adaptive, CellKey::unclassed(IVec3::ONE)); MAX_CANDIDATES];
+            guide.candidate_keys(x, class, target, &u, MAX_CANDIDATES, &mut keys);
             for (k, c) in u.candidates.iter().enumerate() {
                 let g = GridUniforms {
                     grid: c.grid,

@@ -139,17 +139,20 @@ impl<const N: usize> CandidateSet<N> {
         true
     }
 
-    /// The storage of the states not yet offered (the first `len` entries are offered ones):
-    /// load and prepare candidates there, then [`offer_stored`](Self::offer_stored) them in
-    /// order.
+    /// Empties the set (nothing offered, the reservoir reset) and returns the storage of its
+    /// states, left as they were: the caller writes every entry (a loaded state or
+    /// [`GridState::EMPTY`], so that they are not zeroed first), prepares the candidates there,
+    /// then [`offer_stored`](Self::offer_stored)s them in order.
     #[cfg(feature = "std")]
     #[inline]
-    pub(crate) fn storage_mut(&mut self) -> &mut [GridState; N] {
+    pub(crate) fn restart(&mut self) -> &mut [GridState; N] {
+        self.len = 0;
+        self.reservoir = Reservoir::new();
         &mut self.states
     }
 
     /// Offers the state already in the storage at the next index (see
-    /// [`storage_mut`](Self::storage_mut)), prepared by [`prepare_in_place`]: its w̄ is its
+    /// [`restart`](Self::restart)), prepared by [`prepare_in_place`]: its w̄ is its
     /// resampling weight (preparation zeroed it for every invalid state).
     #[cfg(feature = "std")]
     #[inline]
