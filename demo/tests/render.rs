@@ -585,6 +585,8 @@ fn render_command_writes_exr_png_and_json() {
         reference: None,
         no_progress: true,
         no_irradiance_cache: false,
+        mcpg_reflected: mcg_demo::render::guided::Reflected::Path,
+        mcpg_cache_add: mcg_demo::render::guided::CACHE_ADD_PROBABILITY,
         mcpg_confidence: mcg_demo::render::guided::CONFIDENCE_SAMPLES,
         mcpg_alpha_min: mcg_demo::render::guided::ALPHA_MIN,
         mcmm_score: McmmScore::TileMixture,

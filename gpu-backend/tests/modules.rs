@@ -437,7 +437,7 @@ fn wgsl_structs_match_the_rust_pod_types() {
                 camera, max_state_age, levels, adaptive_table, static_table, cache_table,
                 cache_enabled, cache_accumulation, cache_coarser_levels, cache_level_bias,
                 cache_max_age, cache_max_weight, adaptive_states, static_states, adaptive_guards,
-                static_guards, cache_cells, cache_sums, confidence_inverse, widths),
+                static_guards, cache_cells, cache_sums, confidence_inverse, cache_add_scale, widths),
         );
     }
     // ADGI's probe cache: the parameters (a uniform) and the structs its steps exchange.

@@ -407,6 +407,7 @@ fn irradiance_cache_accumulates_and_evicts() {
         coarser_levels: 2,
         max_age: 2,
         level_bias: 0,
+        add_probability: 1.0,
     };
     let mut cache = IrradianceCache::new(grid, config).unwrap();
     let (x, n, cam) = (
@@ -457,6 +458,7 @@ fn cache_goes_coarser_on_collision() {
         coarser_levels: 6,
         max_age: 100,
         level_bias: 0,
+        add_probability: 1.0,
     };
     let mut cache = IrradianceCache::new(grid, config).unwrap();
     let cam = Vec3::ZERO;

@@ -161,6 +161,11 @@ pub struct Observation {
     pub radiance: Vec3,
     /// What the sampled ray hit; `None` when it left the scene.
     pub next: Option<NextHit>,
+    /// The part of `radiance` reflected at the next hit, `radiance` − its emission: the path's
+    /// own estimate of L_r(hit_next, −ω), present when the path scattered at the next hit
+    /// (so that `radiance` carries what it gathered from there on); `None` when the path
+    /// ended there (the next hit's depth was the last) or the ray left the scene.
+    pub reflected: Option<Vec3>,
 }
 
 /// The surface a sampled ray hit, as [`Observation::next`] reports it.
@@ -324,7 +329,7 @@ pub fn trace_path<S: VertexSampler>(
             break;
         }
     }
-    report_recorded(sampler, &recorded, radiance);
+    report_recorded(sampler, &recorded, radiance, bounces);
     radiance
 }
 
@@ -402,11 +407,13 @@ fn emitter_weight(
 }
 
 /// Reports every recorded vertex to the sampler with the radiance its sample gained, in
-/// path order, once the path's total `radiance` is known.
+/// path order, once the path's total `radiance` of a path of at most `bounces` scattering
+/// events is known.
 fn report_recorded<S: VertexSampler>(
     sampler: &mut S,
     recorded: &[Option<Recorded>],
     radiance: Vec3,
+    bounces: u32,
 ) {
     for r in recorded.iter().flatten() {
         let Recorded {
@@ -423,11 +430,16 @@ fn report_recorded<S: VertexSampler>(
             gained / *throughput,
             Vec3::ZERO,
         );
+        // The loop scattered at the next hit unless its depth was the last.
+        let reflected = next
+            .filter(|_| vertex.depth + 1 < bounces)
+            .map(|hit| (incident - hit.emitted).max(Vec3::ZERO));
         sampler.finish(&Observation {
             vertex: *vertex,
             sample: *sample,
             radiance: incident,
             next: *next,
+            reflected,
         });
     }
 }

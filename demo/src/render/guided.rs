@@ -88,10 +88,19 @@ pub const CONFIDENCE_SAMPLES: f32 = 16.0;
 /// 0.52/0.63 → 0.55/0.74, seeds 1-2), which is why the crate keeps the engine's value.
 pub const ALPHA_MIN: f32 = 0.1;
 
+/// The share of guided vertices whose sample goes into `mcpg`'s irradiance cache
+/// ([`mcg_markov_guide::mcpg::CacheConfig::add_probability`], mcg's extension; the paper adds
+/// every one). Scene (a) at 128², 8 spp, 3 bounces has ~60 samples per cache cell and frame;
+/// one in four or one in sixteen rendered it with the same error after 64 frames (seeds 7-9,
+/// CPU) for 4 % fewer instructions per frame at one in sixteen, most of them the adds'
+/// compare-and-swap loops (`markov-guide/benches/README.md`).
+pub const CACHE_ADD_PROBABILITY: f32 = 0.125;
+
 /// The guide's configuration for `scene` rendered at `width` × `height` pixels (both
 /// devices): [`GuideConfig::for_scene`] over the scene's bounds, [`GuideConfig::for_camera`]
 /// for its field of view, [`GuideConfig::for_pixels`] for the adaptive table's size, young
-/// chains' confidence [`CONFIDENCE_SAMPLES`] and the update's [`ALPHA_MIN`].
+/// chains' confidence [`CONFIDENCE_SAMPLES`], the update's [`ALPHA_MIN`] and the cache's
+/// [`CACHE_ADD_PROBABILITY`].
 #[must_use]
 pub fn guide_config(scene: &Scene, width: u32, height: u32) -> GuideConfig {
     let root = scene.bvh.nodes[0];
@@ -100,6 +109,9 @@ pub fn guide_config(scene: &Scene, width: u32, height: u32) -> GuideConfig {
         .for_pixels(u64::from(width) * u64::from(height));
     config.params.confidence_samples = CONFIDENCE_SAMPLES;
     config.params.fit.alpha_min = ALPHA_MIN;
+    if let Some(cache) = &mut config.cache {
+        cache.add_probability = CACHE_ADD_PROBABILITY;
+    }
     config
 }
 
@@ -142,18 +154,49 @@ pub struct McpgSampler<'g> {
     rng: u32,
     /// Per depth, the vertex begun there last; `None` until the first.
     kept: [Option<Kept<'g>>; MAX_RECORDED],
+    reflected: Reflected,
 }
 
 impl<'g> McpgSampler<'g> {
-    /// A sampler drawing from `guide`.
+    /// A sampler drawing from `guide`, training on [`Reflected::Path`].
     #[must_use]
     pub fn new(guide: &'g Guide) -> Self {
         Self {
             guide,
             rng: 0,
             kept: [const { None }; MAX_RECORDED],
+            reflected: Reflected::Path,
         }
     }
+
+    /// The same sampler training on `reflected`.
+    #[must_use]
+    pub fn with_reflected(mut self, reflected: Reflected) -> Self {
+        self.reflected = reflected;
+        self
+    }
+}
+
+/// Where `mcpg` takes L_r(hit_next, −ω), the radiance reflected at the next hit that its
+/// training signal f_mc = lum(weight·(L_e + L_r)) needs (MCPG Alg. 3 line 1).
+///
+/// The paper reads it from the irradiance cache at every vertex (sec. 4, "Irradiance
+/// Caching"): a real-time tracer finishes a vertex as soon as its ray is traced, before the
+/// path knows more, and so does this renderer's GPU tracer. The CPU tracer finishes its
+/// vertices when the path is complete, so it also has the path's own estimate of L_r: what
+/// the path gathered from the next hit on. Scene (a), 128², 8 spp, 64 frames, seeds 7-12: the
+/// path's estimate gave a lower relMSE than the cache on all six seeds (0.0239-0.0262 against
+/// 0.0255-0.0284) and a 3-12 % cheaper guided frame, as two of three cache queries are gone
+/// (`markov-guide/benches/README.md`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Reflected {
+    /// The path's estimate ([`Observation::reflected`]) where the path scattered at the next
+    /// hit, the cache where it ended there — mcg's extension.
+    #[default]
+    Path,
+    /// The irradiance cache at every vertex (MCPG sec. 4).
+    Cache,
 }
 
 impl VertexSampler for McpgSampler<'_> {
@@ -228,10 +271,13 @@ impl VertexSampler for McpgSampler<'_> {
             return;
         }
         let weight = o.sample.weight;
-        let seen = match o.next {
+        let mut seen = match o.next {
             Some(hit) => VertexObservation::hit(hit.position, hit.normal, hit.emitted, weight),
             None => VertexObservation::escaped(Vec3::ZERO, weight),
         };
+        if self.reflected == Reflected::Path {
+            seen.reflected = o.reflected;
+        }
         let rng = &mut self.rng;
         kept.vertex.finish(
             &kept.sample,

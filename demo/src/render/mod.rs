@@ -115,6 +115,16 @@ pub struct RenderArgs {
     /// only (as MCPG Fig. 8 compares on direct light).
     #[arg(long)]
     pub no_irradiance_cache: bool,
+    /// Where `mcpg`'s training takes the radiance reflected at the next hit on the CPU: the
+    /// path's own estimate where the path went on (mcg's extension), or the irradiance cache
+    /// at every vertex (the paper's rule, and the GPU tracer's) ([`guided::Reflected`]);
+    /// with `--no-irradiance-cache`, neither.
+    #[arg(long, value_enum, default_value_t = guided::Reflected::Path)]
+    pub mcpg_reflected: guided::Reflected,
+    /// The share of `mcpg`'s vertices whose sample goes into its irradiance cache, in (0, 1]
+    /// ([`guided::CACHE_ADD_PROBABILITY`]; 1 is the paper's rule).
+    #[arg(long, default_value_t = guided::CACHE_ADD_PROBABILITY)]
+    pub mcpg_cache_add: f32,
     /// `mcpg`'s young-chain confidence N_c (mcg's extension of MCPG Alg. 2: a chain of fewer
     /// samples lends part of its share to the material and continues after the material's
     /// samples); 0 is the paper's rule.
@@ -378,7 +388,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         image,
         report,
         guide: match guide {
-            CpuGuide::Mcpg(g) => Some(Arc::new(*g)),
+            CpuGuide::Mcpg(g, _) => Some(Arc::new(*g)),
             CpuGuide::None | CpuGuide::Mcmm(_) | CpuGuide::Probes(_) => None,
         },
         frames: kept,
@@ -527,7 +537,7 @@ struct FrameTimes {
 /// runs on the GPU).
 enum CpuGuide {
     None,
-    Mcpg(Box<Guide>),
+    Mcpg(Box<Guide>, guided::Reflected),
     Mcmm(McmmRenderer),
     Probes(Box<ProbeGi>),
 }
@@ -537,14 +547,14 @@ impl CpuGuide {
     fn probe_count(&self) -> Option<usize> {
         match self {
             Self::Probes(p) => Some(p.shading().texels.grid().probe_count()),
-            Self::None | Self::Mcpg(_) | Self::Mcmm(_) => None,
+            Self::None | Self::Mcpg(..) | Self::Mcmm(_) => None,
         }
     }
 }
 
 /// MCPG's configuration for `args` on `scene`: [`guide_config`], without the irradiance
 /// cache under `--no-irradiance-cache`, N_c from `--mcpg-confidence`, α_min from
-/// `--mcpg-alpha-min`.
+/// `--mcpg-alpha-min`, the cache's add probability from `--mcpg-cache-add`.
 #[must_use]
 pub fn mcpg_config(scene: &Scene, args: &RenderArgs) -> GuideConfig {
     let mut config = guide_config(scene, args.width, args.height);
@@ -552,6 +562,9 @@ pub fn mcpg_config(scene: &Scene, args: &RenderArgs) -> GuideConfig {
     config.params.fit.alpha_min = args.mcpg_alpha_min;
     if args.no_irradiance_cache {
         config.cache = None;
+    }
+    if let Some(cache) = &mut config.cache {
+        cache.add_probability = args.mcpg_cache_add;
     }
     config
 }
@@ -592,7 +605,14 @@ fn start_guide(
             let mut guide = Guide::new(mcpg_config(scene, args))
                 .map_err(|e| format!("the MCPG guide: {e:?}"))?;
             guide.set_camera(scene.camera.position);
-            CpuGuide::Mcpg(Box::new(guide))
+            // `--no-irradiance-cache` keeps its meaning (the guide learns from the emission
+            // its rays hit only): no reflected radiance from the path either.
+            let reflected = if args.no_irradiance_cache {
+                guided::Reflected::Cache
+            } else {
+                args.mcpg_reflected
+            };
+            CpuGuide::Mcpg(Box::new(guide), reflected)
         }
         Method::Mcmm => CpuGuide::Mcmm(McmmRenderer::new(args.width, args.height, mcmm())?),
         Method::Bsdf | Method::Nee => CpuGuide::None,
@@ -627,9 +647,11 @@ fn cpu_frame(
     let started = Instant::now();
     let cpu_started = process_cpu_seconds();
     let image = match guide {
-        CpuGuide::Mcpg(g) => {
+        CpuGuide::Mcpg(g, reflected) => {
             g.set_camera(scene.camera.position);
-            let image = render_frame(scene, settings, frame, || McpgSampler::new(g), || ());
+            let reflected = *reflected;
+            let sampler = || McpgSampler::new(g).with_reflected(reflected);
+            let image = render_frame(scene, settings, frame, sampler, || ());
             let ending = Instant::now();
             g.end_frame();
             times.end_frame.push(ending.elapsed().as_secs_f64());

@@ -184,6 +184,8 @@ fn args(
         reference: reference.map(Path::to_path_buf),
         no_progress: true,
         no_irradiance_cache: !study.mcpg_cache,
+        mcpg_reflected: crate::render::guided::Reflected::Path,
+        mcpg_cache_add: crate::render::guided::CACHE_ADD_PROBABILITY,
         mcpg_confidence: crate::render::guided::CONFIDENCE_SAMPLES,
         mcpg_alpha_min: crate::render::guided::ALPHA_MIN,
         mcmm_score: McmmScore::TileMixture,

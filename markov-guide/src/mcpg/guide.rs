@@ -982,8 +982,10 @@ impl<S: Scatter> GuidedVertex<'_, S> {
         } else {
             Vec3::ZERO
         };
-        if let (Some(cache), Some(n)) = (&guide.cache, self.vertex.normal) {
-            cache.add(x, n, self.target_level, u.cache, carried);
+        if let (Some(cache), Some(n)) = (&guide.cache, self.vertex.normal)
+            && let Some(corner) = cache.config().add_uniform(u.cache)
+        {
+            cache.add(x, n, self.target_level, corner, carried);
         }
         let estimate = luminance(carried);
         let now = guide.frame as f32;

@@ -49,28 +49,64 @@ pub struct CacheConfig {
     /// was 0.135 with bias 0, 0.174 with 1, 0.152-0.158 with 2, 0.233 with 4 and 0.242 with 6;
     /// 2 costs 15 % less time than 0 (fewer cells).
     pub level_bias: u32,
+    /// The probability with which [`GuidedVertex::finish`](super::GuidedVertex::finish) adds
+    /// its vertex's sample to the cache (mcg's extension; 1, the paper, adds every sample).
+    /// The decision and the add's corner come from the same uniform ([`add_uniform`](
+    /// Self::add_uniform)), so a cell's frame mean stays unbiased and only gets fewer samples.
+    /// With 2-3 scattering vertices per path at 128² and 8 spp, the cells of `mcg-demo`'s
+    /// hidden-light room receive ~60 samples per frame at 1 and blend frames with α_min =
+    /// 0.05; 1/4 and 1/16 rendered that room with the same error after 64 frames (within the
+    /// seeds' spread) and cost 4 % fewer instructions per frame at 1/16
+    /// (`benches/README.md`). Must lie in (0, 1].
+    pub add_probability: f32,
 }
 
 impl CacheConfig {
     /// 2¹⁶ slots, α_min = 0.05, 1 coarser level on collision (each level tried costs a
     /// lookup on every miss), eviction after 64 idle frames, cells 2 levels coarser than the
-    /// guiding states'.
+    /// guiding states', every sample added.
     pub const DEFAULT: Self = Self {
         capacity: 1 << 16,
         accumulation: 0.05,
         coarser_levels: 1,
         max_age: 64,
         level_bias: 2,
+        add_probability: 1.0,
     };
 
-    fn validate(&self) -> Result<(), ParamsError> {
-        if !(self.accumulation > 0.0 && self.accumulation <= 1.0) {
-            return Err(ParamsError::ProbabilityOutOfRange {
-                parameter: "cache.accumulation",
-                value: self.accumulation,
-            });
+    /// Checks the probabilities: `accumulation` and `add_probability` in (0, 1].
+    ///
+    /// # Errors
+    /// [`ParamsError::ProbabilityOutOfRange`] naming the first one outside (NaN included).
+    pub fn validate(&self) -> Result<(), ParamsError> {
+        for (parameter, value) in [
+            ("cache.accumulation", self.accumulation),
+            ("cache.add_probability", self.add_probability),
+        ] {
+            if !(value > 0.0 && value <= 1.0) {
+                return Err(ParamsError::ProbabilityOutOfRange { parameter, value });
+            }
         }
         Ok(())
+    }
+
+    /// 1 / `add_probability`, the factor [`add_uniform`](Self::add_uniform) scales its
+    /// uniform by (the GPU guide receives this f32 and multiplies the same way).
+    #[must_use]
+    pub fn add_scale(&self) -> f32 {
+        1.0 / self.add_probability
+    }
+
+    /// The corner uniform of the cache add of a vertex finished with the cache uniform `u`:
+    /// `u·s`, s = [`add_scale`](Self::add_scale), when that is below 1 (probability
+    /// `add_probability` for a uniform `u`; then uniform in [0, 1) itself), `None` when this
+    /// vertex adds nothing. With s = 1 every vertex adds, with its `u` unchanged.
+    #[inline]
+    #[must_use]
+    pub fn add_uniform(&self, u: f32) -> Option<f32> {
+        let s = self.add_scale();
+        let v = u * s;
+        (s <= 1.0 || v < 1.0).then_some(v)
     }
 }
 
@@ -264,5 +300,50 @@ fn add_f32(word: &AtomicU32, value: f32) {
             Ok(_) => return,
             Err(seen) => current = seen,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// With `add_probability` p the decision and the corner come from one uniform: over a
+    /// stratified grid of N uniforms exactly p·N add (p a power of two), their corners are
+    /// the same grid stretched over [0, 1) (so uniform), and p = 1 adds every uniform at its
+    /// own value.
+    #[test]
+    fn add_uniform_adds_the_share_p_with_uniform_corners() {
+        const N: u32 = 4096;
+        let grid = (0..N).map(|i| (i as f32 + 0.5) / N as f32);
+        let all = CacheConfig::DEFAULT;
+        assert!(grid.clone().all(|u| all.add_uniform(u) == Some(u)));
+        let quarter = CacheConfig {
+            add_probability: 0.25,
+            ..CacheConfig::DEFAULT
+        };
+        let corners: Vec<f32> = grid.filter_map(|u| quarter.add_uniform(u)).collect();
+        assert_eq!(corners.len() as u32, N / 4);
+        for (i, c) in corners.iter().enumerate() {
+            assert_eq!(*c, (i as f32 + 0.5) / (N / 4) as f32);
+        }
+    }
+
+    #[test]
+    fn probabilities_outside_the_unit_interval_are_rejected() {
+        for p in [0.0, -0.5, 1.5, f32::NAN] {
+            let c = CacheConfig {
+                add_probability: p,
+                ..CacheConfig::DEFAULT
+            };
+            assert!(matches!(
+                c.validate(),
+                Err(ParamsError::ProbabilityOutOfRange {
+                    parameter: "cache.add_probability",
+                    ..
+                })
+            ));
+            assert!(IrradianceCache::new(AdaptiveGrid::default(), c).is_err());
+        }
+        assert!(CacheConfig::DEFAULT.validate().is_ok());
     }
 }

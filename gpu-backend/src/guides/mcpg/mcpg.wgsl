@@ -90,6 +90,7 @@ struct McpgParams {
     cache_cells: u32,
     cache_sums: u32,
     confidence_inverse: f32,
+    cache_add_scale: f32,
     widths: array<vec4<f32>, 64>,
 }
 
@@ -747,8 +748,13 @@ fn mcpg_finish(v: ptr<function, McpgGuidedVertex>, sample: McpgSample, obs: Mcpg
     } else {
         carried = vec3<f32>(0.0);
     }
-    if mcpg_params.cache_enabled != 0u && (*v).vertex.has_normal != 0u {
-        mcpg_cache_add_at(x, (*v).vertex.normal, (*v).target_level, u.cache, carried, frame);
+    // `CacheConfig::add_uniform`: the add's corner u·s, s = 1/add_probability; no add when
+    // it reaches 1 (with s = 1, always an add at u).
+    let scale = mcpg_params.cache_add_scale;
+    let add_corner = u.cache * scale;
+    if mcpg_params.cache_enabled != 0u && (*v).vertex.has_normal != 0u
+        && (scale <= 1.0 || add_corner < 1.0) {
+        mcpg_cache_add_at(x, (*v).vertex.normal, (*v).target_level, add_corner, carried, frame);
     }
     let estimate = mcpg_luminance(carried);
     let now = f32(frame);

@@ -86,8 +86,10 @@ pub struct McpgGpuParams {
     /// 1/N_c of `McpgParams::confidence_samples` (the f32 reciprocal the CPU's
     /// `McpgParams::young_share` multiplies by), 0 for the paper's Alg. 2.
     pub confidence_inverse: f32,
+    /// `CacheConfig::add_scale` (1/`add_probability`; 1 without a cache).
+    pub cache_add_scale: f32,
     /// Padding to the 16-byte row of `widths`.
-    pub _padding: [u32; 3],
+    pub _padding: [u32; 2],
     /// `AdaptiveGrid::width(level)` for levels 0..256, four per row.
     pub widths: [[f32; 4]; 64],
 }
@@ -194,7 +196,8 @@ impl McpgGpuParams {
             } else {
                 0.0
             },
-            _padding: [0; 3],
+            cache_add_scale: cache_config.map_or(1.0, |c| c.add_scale()),
+            _padding: [0; 2],
             widths,
         };
         Ok((
@@ -247,14 +250,7 @@ impl McpgGpuParams {
         let static_table = table(config.static_capacity)?;
         let cache = match config.cache {
             Some(c) => {
-                if !(c.accumulation > 0.0 && c.accumulation <= 1.0) {
-                    return Err(GuideError::Params(
-                        mcg_markov_guide::ParamsError::ProbabilityOutOfRange {
-                            parameter: "cache.accumulation",
-                            value: c.accumulation,
-                        },
-                    ));
-                }
+                c.validate().map_err(GuideError::Params)?;
                 Some((c, table(c.capacity)?))
             }
             None => None,
