@@ -7,7 +7,7 @@
 //! 1. [`collaborative_discovery`]: resample S from neighbour states of the previous frame.
 //! 2. [`choose_technique`]: hemisphere (cosine or BSDF) or the lobe of S; the renderer samples
 //!    ω, traces to x₂ and computes f = lum(L_e f_r)/p(ω) (p per [`ScoreDensity`]).
-//! 3. [`update`]: acceptance min(1, f/S_c.f), reset after a hemisphere sample, MLE update.
+//! 3. [`update()`]: acceptance min(1, f/S_c.f), reset after a hemisphere sample, MLE update.
 //!
 //! The SMIS estimator over a tile of chains (eq. 8, 9) takes its pdfs from [`technique_pdf`].
 

@@ -67,7 +67,7 @@ pub fn technique_pdf(
 ///
 /// Its density is [`technique_pdf`] with p_hemi(ω) = max(0, n·ω)/π; its uniform is
 /// `(u_select, u)`, `u_select` choosing the branch as [`choose_technique`] does. Build it from
-/// the state the sample is drawn from, before [`update`](super::update) changes that state.
+/// the state the sample is drawn from, before [`update`](super::update()) changes that state.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CosineChainTechnique {
     lobe: Option<Vmf>,

@@ -62,7 +62,7 @@
 //! 2. [`choose_technique`]: BSDF or the chosen state's lobe; sample ω; trace to hit_next.
 //! 3. Divide f·cos by [`CandidateSet::pdf`] (eq. 6-7, per vertex); f_mc = lum of that
 //!    estimate for the transition.
-//! 4. [`update`] or [`update_from`] (eq. 8, Alg. 3) and store the returned state at a freshly
+//! 4. [`update()`] or [`update_from`] (eq. 8, Alg. 3) and store the returned state at a freshly
 //!    chosen level and corner; or, for a rejected lobe sample, [`should_discard`] and zero the
 //!    slot it came from.
 
