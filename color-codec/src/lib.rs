@@ -9,7 +9,7 @@
 //! | item | what it is | paper |
 //! |---|---|---|
 //! | [`LogCodec`], [`LogField`] | `u = min(ln(γv + 1), β)/β`, quantised to k bits; (5, 15) and (8, 20) | ADGI eq. 21, sec. 4.5-4.6, App. B |
-//! | [`Rounding`], [`quantize`] | round down (ADGI), nearest, stochastic (caller's uniform) | ADGI App. B |
+//! | [`Rounding`], [`quantize()`] | round down (ADGI), nearest, stochastic (caller's uniform) | ADGI App. B |
 //! | [`IrradianceLayout`], [`IrradianceWord`] | R9 G9 B8 + 6-bit count (widths configurable) | ADGI sec. 4.5, Table 3 |
 //! | [`VisibilityLayout`], [`VisibilityWord`] | 13-bit d̄ + 13-bit d̄² + 6-bit count | ADGI sec. 4.6, Table 3 |
 //! | [`HeuristicsLayout`], [`HeuristicsWord`], [`Heuristics`] | f_v, f_s, f_d as 6-10-10 bits + 6 flags | ADGI sec. 4.3, eq. 11, 19, 20 |

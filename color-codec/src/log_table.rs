@@ -12,10 +12,10 @@
 //!   in the increasing `decode` table. An index over the bits of y = γv + 1 (its exponent and
 //!   top `k` mantissa bits: a piecewise-linear log₂) gives a code `lo ≤ q*`, and q* is `lo`
 //!   plus 1 if `decode[lo + 1]` ≤ v. Why `lo ≤ q*`: `index[b]`
-//!   is the largest code q whose y(decode[q]) falls in a bucket below b; y(·) is monotone
-//!   (a rounded product by γ > 0 and a rounded sum), so a v in bucket b has y(v) > y(decode[q])
-//!   and hence v > decode[q]. Why one step suffices: every code q* can reach has its
-//!   y(decode[q]) in bucket b or below, and `k = bits − 2` makes a bucket ≈ 0.8 codes wide, so
+//!   is the largest code q whose y(`decode[q]`) falls in a bucket below b; y(·) is monotone
+//!   (a rounded product by γ > 0 and a rounded sum), so a v in bucket b has y(v) > y(`decode[q]`)
+//!   and hence v > `decode[q]`. Why one step suffices: every code q* can reach has its
+//!   y(`decode[q]`) in bucket b or below, and `k = bits − 2` makes a bucket ≈ 0.8 codes wide, so
 //!   at most one code falls past `lo` (checked for every bucket by a test).
 //!
 //! Tables exist for (β, γ) = (5, 15) at 8, 9 and 10 bits: ADGI's irradiance and distance

@@ -135,7 +135,7 @@ pub(crate) const fn fast_exp2(x: f32) -> f32 {
     p * f32::from_bits((shifted.to_bits() << 23).wrapping_add(POW2_OFFSET))
 }
 
-/// [`fast_ln_parts`] on four lanes: the same operations in the same order, so each lane is
+/// `fast_ln_parts` on four lanes: the same operations in the same order, so each lane is
 /// bit-identical to the scalar function.
 #[inline(always)]
 pub(crate) fn fast_ln_parts_x4(x: F4) -> (F4, F4) {

@@ -27,7 +27,7 @@ pub enum BucketHash {
     /// (MCPG sec. 4, "Hash Grid"; Müller et al. 2022, eq. 4). Three multiplies, but poor low
     /// bits on structured keys: [`hash_xor_primes`].
     XorPrimes,
-    /// Word [`MIX_WORD`](crate::constants::MIX_WORD) of [`pcg4d`] of the four words
+    /// Word [`MIX_WORD`] of [`pcg4d`] of the four words
     /// ([`hash_mix`]): every output bit depends on every input bit; uniform bucket occupancy
     /// on structured keys. 12 multiplies in two dependent rounds, plus the [`checksum`]'s
     /// fold: a lookup hashes in ≈ 3× the instructions of [`BucketHash::Fold`].
@@ -194,7 +194,7 @@ const fn finish(t: u32) -> u32 {
 /// ```
 ///
 /// Each fold is injective on every box of keys of sides below ≈ 44 000 cells (see
-/// [`FOLD_X`](crate::constants::FOLD_X) and [`FOLD_Z`](crate::constants::FOLD_Z); the meta
+/// [`FOLD_X`] and [`FOLD_Z`]; the meta
 /// word, whose level and class are small, is rotated into the high half instead of
 /// multiplied); xor'ing two folds is not linear mod 2³², and the multiply–xorshift finisher
 /// (Wellons' `lowbias32`, first round) carries every bit into the low bits that a power-of-two

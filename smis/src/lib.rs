@@ -14,7 +14,7 @@
 //! | [`Technique`] | conditional density p(x \| t) and sampling from explicit uniforms; classical techniques fit too | MMIS eq. 2 |
 //! | [`pdf_sum`], [`mixture_pdf`], [`select_uniform`], [`sample_uniform_mixture`] | Σⱼ p(x \| tⱼ), its mean, uniform technique choice | MCMM eq. 8, 9 |
 //! | [`mis_balance`], [`balance_denominator`] | multi-sample MIS with the balance heuristic (the reference) | MMIS eq. 1, 3, 4 |
-//! | [`smis`] | n-sample SMIS Σᵢ f(xᵢ) / Σⱼ p(xᵢ \| tⱼ) | MCMM eq. 8, MCPG eq. 7 |
+//! | [`smis()`] | n-sample SMIS Σᵢ f(xᵢ) / Σⱼ p(xᵢ \| tⱼ) | MCMM eq. 8, MCPG eq. 7 |
 //! | [`smis_one_sample`] | one-sample SMIS f(x) / ((1/n) Σⱼ p(x \| tⱼ)) with uniform (stratified) selection | MCMM eq. 9 |
 //! | [`Mmis`] | MMIS over T technique spaces with nᵢ pairs each, classical techniques mixed in | MMIS eq. 6, sec. 3.1 |
 //! | [`Defensive`] | classical technique with probability p plus a stochastic set: p·p_c + (1 − p)(1/n)Σⱼ p(x \| tⱼ) | MCMM Alg. 2, App. A; MCPG Alg. 2 |

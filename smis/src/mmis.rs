@@ -17,7 +17,7 @@ use crate::technique::{Technique, finite_or_zero, pdf_sum, ratio, saturate};
 /// density nᵢ pᵢ(x) estimated by its own pairs, eq. 5); the first is the split of the balance
 /// heuristic into classical and marginal parts that sec. 3.1 describes (equivalently, extruding
 /// a classical technique over a technique space of identical conditionals). With one space and
-/// no classical technique this is n-sample SMIS ([`smis`](crate::smis)); with classical
+/// no classical technique this is n-sample SMIS ([`smis`](crate::smis())); with classical
 /// techniques only it is [`mis_balance`](crate::mis_balance).
 ///
 /// Borrowing slices (`spaces: &[&[T]]`) keeps it allocation-free. Spaces of different

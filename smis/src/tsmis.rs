@@ -75,7 +75,7 @@ pub const fn cyclic_source_lane(lane: u32, size: u32, shift: u32) -> u32 {
 /// biased (MCMM sec. 4.2, Fig. 16). Shifting the states by one lane after every step makes a
 /// lane's history over n ≤ `size` steps consist of n different chains — each (tᵢ, xᵢ) pair from
 /// a chain whose other samples are not in this estimator — so the n-sample
-/// [`smis`](crate::smis) over the history is unbiased (MCMM appendix A).
+/// [`smis`](crate::smis()) over the history is unbiased (MCMM appendix A).
 ///
 /// # Example
 /// ```

@@ -9,7 +9,7 @@
 //! | [`ks_test`], [`assert_ks`], [`KsResult`] | one-sample Kolmogorov-Smirnov against an analytic CDF | 1-D marginals of samplers (cos θ, φ) |
 //! | [`chi_square_test`], [`assert_chi_square`], [`ChiSquareResult`] | chi-square goodness of fit over bins, small bins merged | samplers against their pdf on a binned sphere |
 //! | [`SphereBins`] | equal-area bins on S², bin probabilities of a pdf by quadrature | the bins of the chi-square test |
-//! | [`RunningStats`], [`z_test`], [`assert_z_test`] | z-test of a sample mean (Welford mean and variance) | estimators against analytic integrals |
+//! | [`RunningStats`], [`z_test()`], [`assert_z_test`] | z-test of a sample mean (Welford mean and variance) | estimators against analytic integrals |
 //! | [`GaussLegendre`], [`integrate_sphere`], [`graded_theta_breaks`] | f64 reference quadrature on an interval and on S² | normalisation and product integrals |
 //! | [`vmf_pdf`], [`vmf_one_minus_cos_cdf`], [`one_minus_cos`], [`vmf_mean_cosine`], … | f64 reference formulas of the vMF lobe | every suite that tests vMF code |
 //! | [`LineTechnique`], [`SphereTechnique`], [`line_integrands`], [`sphere_integrands`], [`AdaptiveTile`], [`convergence_run`], [`fig1_estimate`], [`variance_with_error`], … | techniques, integrands with closed-form integrals, MCMM Fig. 16 and MMIS Fig. 1 in miniature | the `smis_*` suites and the demo's smis section |

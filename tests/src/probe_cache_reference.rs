@@ -23,8 +23,8 @@
 //! # Equal budget
 //! A frame of every policy traces at most `rays_per_probe × probe count` probe rays (each
 //! also traces one shadow ray at its hit, for all policies alike). ADGI spends 8 per probe on
-//! pilots, up to [`DYNAMIC_SHARE`] of the rest on dynamic samples, and the remainder on static
-//! samples, cutting the last sample list at the budget.
+//! pilots, up to [`UpdateConfig::dynamic_share`] of the rest on dynamic samples, and the
+//! remainder on static samples, cutting the last sample list at the budget.
 //!
 //! # Error
 //! Each probe's irradiance E(p, n) is read back at the centre direction n of each interior
