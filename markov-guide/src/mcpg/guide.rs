@@ -191,9 +191,7 @@ impl GuideConfig {
         }
         self
     }
-}
 
-impl GuideConfig {
     /// The adaptive table's slots for an image of `pixels`: [`SLOTS_PER_PIXEL`] per pixel,
     /// rounded up to a power of two, at least 2¹² and at most [`PAPER`](Self::PAPER)'s 2²⁰.
     #[must_use]

@@ -904,7 +904,8 @@ fn probe_octahedral_decode(p_in: vec2<f32>) -> vec3<f32> {
 // sample order; here in the order the slots are claimed).
 @compute @workgroup_size(64)
 fn expand_dynamic_samples(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    // A 2D dispatch (`GpuContext::workgroup_grid` with `gpu::probes`' PROBE_GROUP): rows of groups.x workgroups of 64.
+    // A 2D dispatch (`GpuContext::workgroup_grid` with `gpu::probes`' PROBE_GROUP): rows of
+    // groups.x workgroups of 64.
     let i = id.x + id.y * groups.x * 64u;
     if i >= min(chain_counters[0], arrayLength(&chain_samples)) {
         return;
