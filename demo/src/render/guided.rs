@@ -17,10 +17,9 @@
 //! covers every direction the material scatters into.
 
 use glam::{Vec2, Vec3};
-use mcg_gpu_backend::sampling::next_uniform;
 use mcg_markov_guide::mcpg::{
-    BeginUniforms, FinishUniforms, Guide, GuideConfig, GuideError, GuidedSample, GuidedVertex,
-    SampleUniforms, Scatter, Vertex as GuideVertex, VertexObservation,
+    BeginUniforms, CandidateUniforms, FinishUniforms, GridUniforms, Guide, GuideConfig, GuideError,
+    GuidedSample, GuidedVertex, SampleUniforms, Scatter, Vertex as GuideVertex, VertexObservation,
 };
 
 use super::cpu::{MAX_RECORDED, Observation, Vertex, VertexSampler};
@@ -146,12 +145,13 @@ struct Kept<'g> {
 /// MCPG as a [`VertexSampler`]: one per rayon task, all sharing one [`Guide`].
 ///
 /// Its own uniforms (the candidates' lookups, 4 per candidate, and the update's 5) come from a
-/// stream seeded by [`VertexSampler::begin_path`]; the direction's three are the tracer's.
+/// [`GuideUniforms`] stream seeded by [`VertexSampler::begin_path`]; the direction's three are
+/// the tracer's.
 /// [`VertexSampler::pdf`] answers the guided density of the vertex sampled last at that depth
 /// (the material's before): `mcpg` does no light sampling, so the tracer never asks before.
 pub struct McpgSampler<'g> {
     guide: &'g Guide,
-    rng: u32,
+    rng: GuideUniforms,
     /// Per depth, the vertex begun there last; `None` until the first.
     kept: [Option<Kept<'g>>; MAX_RECORDED],
     reflected: Reflected,
@@ -163,7 +163,7 @@ impl<'g> McpgSampler<'g> {
     pub fn new(guide: &'g Guide) -> Self {
         Self {
             guide,
-            rng: 0,
+            rng: GuideUniforms::new(0),
             kept: [const { None }; MAX_RECORDED],
             reflected: Reflected::Path,
         }
@@ -174,6 +174,74 @@ impl<'g> McpgSampler<'g> {
     pub fn with_reflected(mut self, reflected: Reflected) -> Self {
         self.reflected = reflected;
         self
+    }
+}
+
+/// The guide's own uniforms in the CPU tracer: two 24-bit uniforms from each 64-bit output of
+/// WyRand (Wang Yi's wyhash generator, through `fastrand`), seeded per path.
+///
+/// A vertex takes 25 (Alg. 1's four per candidate, Alg. 3's five); drawn one per 32-bit
+/// `pcg_hash` step, as the tracer's own stream is, they were ~5 % of a guided frame's
+/// instructions (callgrind). Each uniform keeps the 24-bit resolution of
+/// [`uniform_float`](mcg_gpu_backend::sampling::uniform_float), the largest an f32 in [0, 1)
+/// holds evenly spaced.
+#[derive(Clone, Debug)]
+pub struct GuideUniforms {
+    rng: fastrand::Rng,
+}
+
+impl GuideUniforms {
+    /// The stream of path `seed`.
+    #[must_use]
+    pub fn new(seed: u32) -> Self {
+        Self {
+            rng: fastrand::Rng::with_seed(u64::from(seed)),
+        }
+    }
+
+    /// The next two uniforms in [0, 1): the output's top and next 24 bits.
+    #[inline]
+    pub fn pair(&mut self) -> [f32; 2] {
+        const SCALE: f32 = 1.0 / (1u32 << 24) as f32;
+        let bits = self.rng.u64(..);
+        let hi = (bits >> 40) as u32;
+        let lo = (bits >> 16) as u32 & 0x00ff_ffff;
+        [hi as f32 * SCALE, lo as f32 * SCALE]
+    }
+
+    /// [`Guide::begin`]'s uniforms for `count` candidates (grid, level, corner, reservoir).
+    #[inline]
+    pub fn begin(&mut self, count: usize) -> BeginUniforms {
+        let mut u = BeginUniforms::default();
+        for c in u.candidates.iter_mut().take(count) {
+            let [grid, level] = self.pair();
+            let [corner, reservoir] = self.pair();
+            *c = CandidateUniforms {
+                grid,
+                level,
+                corner,
+                reservoir,
+            };
+        }
+        u
+    }
+
+    /// [`GuidedVertex::finish`]'s uniforms (accept, the store's grid, level and corner, the
+    /// cache's corner).
+    #[inline]
+    pub fn finish(&mut self) -> FinishUniforms {
+        let [accept, grid] = self.pair();
+        let [level, corner] = self.pair();
+        let [cache, _] = self.pair();
+        FinishUniforms {
+            accept,
+            store: GridUniforms {
+                grid,
+                level,
+                corner,
+            },
+            cache,
+        }
     }
 }
 
@@ -201,7 +269,7 @@ pub enum Reflected {
 
 impl VertexSampler for McpgSampler<'_> {
     fn begin_path(&mut self, seed: u32) {
-        self.rng = seed;
+        self.rng = GuideUniforms::new(seed);
         // Closed, not dropped: the vertices stay for `begin_in` (assigning a fresh array
         // copied all 16 open vertices, about 12 KB, per path, 7 % of a guided frame).
         for kept in self.kept.iter_mut().flatten() {
@@ -215,10 +283,7 @@ impl VertexSampler for McpgSampler<'_> {
             normal: v.normal,
             wo: v.wo,
         };
-        let rng = &mut self.rng;
-        let begin = BeginUniforms::from_fn(self.guide.params().candidates as usize, || {
-            next_uniform(rng)
-        });
+        let begin = self.rng.begin(self.guide.params().candidates as usize);
         let vertex = GuideVertex::surface(v.position, v.normal);
         let u = SampleUniforms {
             choice: u.x,
@@ -278,12 +343,7 @@ impl VertexSampler for McpgSampler<'_> {
         if self.reflected == Reflected::Path {
             seen.reflected = o.reflected;
         }
-        let rng = &mut self.rng;
-        kept.vertex.finish(
-            &kept.sample,
-            &seen,
-            &FinishUniforms::from_fn(|| next_uniform(rng)),
-        );
+        kept.vertex.finish(&kept.sample, &seen, &self.rng.finish());
         kept.open = false;
     }
 }
