@@ -616,7 +616,8 @@ impl Guide {
     /// grid and level instead of once per candidate (most candidates share the static grid's
     /// cell or the target level's). The same keys as [`key`](Self::key) bit for bit:
     /// [`stochastic_trilinear`] is the lower corner plus the [`stochastic_corner`] offset.
-    /// Writes the first `count` entries of `keys` (in place: a returned array was copied).
+    /// Hands the first `count` candidates' grids and keys to `emit`, in order (`begin` looks
+    /// each up as it comes: an array of keys in between cost its initialisation and copies).
     #[inline(always)]
     fn candidate_keys(
         &self,
@@ -625,7 +626,7 @@ impl Guide {
         target_level: u32,
         u: &BeginUniforms,
         count: usize,
-        keys: &mut [(GridKind, CellKey); MAX_CANDIDATES],
+        mut emit: impl FnMut(usize, GridKind, &CellKey),
     ) {
         let params = &self.config.params;
         let max_level = self.adaptive.params().max_level;
@@ -634,7 +635,7 @@ impl Guide {
         // `filled` their bits.
         let mut memo = [(IVec3::ZERO, Vec3::ZERO); MAX_CANDIDATES];
         let mut filled = 0_u32;
-        for (key, c) in keys.iter_mut().zip(&u.candidates).take(count) {
+        for (k, c) in u.candidates.iter().enumerate().take(count) {
             let (kind, level, width, entry) = if c.grid < params.adaptive_probability {
                 let level = (target_level + geometric_jitter(c.level)).min(max_level);
                 let j = level.wrapping_sub(target_level) as usize;
@@ -660,10 +661,11 @@ impl Guide {
             };
             let corner = stochastic_corner(f, c.corner) as i32;
             let vertex = base + IVec3::new(corner & 1, (corner >> 1) & 1, corner >> 2);
-            *key = match kind {
-                GridKind::Adaptive => (kind, CellKey::new(vertex, level as u8, class)),
-                GridKind::Static => (kind, CellKey::unclassed(vertex)),
+            let key = match kind {
+                GridKind::Adaptive => CellKey::new(vertex, level as u8, class),
+                GridKind::Static => CellKey::unclassed(vertex),
             };
+            emit(k, kind, &key);
         }
     }
 
@@ -739,13 +741,14 @@ impl Guide {
             v.lobes.clear();
             return;
         }
-        let mut keys = [(GridKind::Static, CellKey::unclassed(IVec3::ZERO)); MAX_CANDIDATES];
-        self.candidate_keys(x, v.class, v.target_level, u, count, &mut keys);
         // One batch: every lookup, then every state, so that the lookups' memory accesses
         // overlap instead of waiting on each other.
-        for (slot, (kind, key)) in v.slots.iter_mut().zip(&keys).take(count) {
-            *slot = self.grid(*kind).find(key).map(|s| (*kind, s));
-        }
+        let mut kinds = [GridKind::Static; MAX_CANDIDATES];
+        let slots = &mut v.slots;
+        self.candidate_keys(x, v.class, v.target_level, u, count, |k, kind, key| {
+            kinds[k] = kind;
+            slots[k] = self.grid(kind).find(key).map(|s| (kind, s));
+        });
         // The states go straight into the candidate set's storage: the loaded state, or
         // `EMPTY` for a slot without a state, a hash collision, a torn read (which leaves its
         // entry as it was) and the entries past N_mc. Then they are prepared there and
@@ -761,7 +764,7 @@ impl Guide {
             }
         }
         let now = self.frame as f32;
-        for (state, (kind, _)) in states.iter_mut().zip(&keys).take(count) {
+        for (state, kind) in states.iter_mut().zip(&kinds).take(count) {
             // An `EMPTY` state is invalid: prepared to w̄ = 0 like a collision (Alg. 1 line 6).
             prepare_in_place(state, false, *kind, x, vertex.normal, now, params);
         }
@@ -1075,7 +1078,9 @@ mod tests {
             let class = normal_class(Vec3::Y);
             let target = guide.adaptive.target_level(guide.camera.distance(x));
             let mut keys = [(GridKind::Adaptive, CellKey::unclassed(IVec3::ONE)); MAX_CANDIDATES];
-            guide.candidate_keys(x, class, target, &u, MAX_CANDIDATES, &mut keys);
+            guide.candidate_keys(x, class, target, &u, MAX_CANDIDATES, |k, kind, key| {
+                keys[k] = (kind, *key);
+            });
             for (k, c) in u.candidates.iter().enumerate() {
                 let g = GridUniforms {
                     grid: c.grid,
