@@ -188,6 +188,7 @@ fn args(
         mcpg_cache_add: crate::render::guided::CACHE_ADD_PROBABILITY,
         mcpg_confidence: crate::render::guided::CONFIDENCE_SAMPLES,
         mcpg_alpha_min: crate::render::guided::ALPHA_MIN,
+        ramp_frames: None,
         mcmm_score: McmmScore::TileMixture,
         probes: ProbeOptions::default(),
     }
@@ -982,13 +983,14 @@ fn mcpg_targets(section: &mut Section, runs: &[Runs]) -> serde_json::Value {
          end_frame). Once learned, one late mcpg frame has {:.3}× the relMSE of a bsdf frame \
          and {:.3}× that of a nee frame. The late-frame ratios against the accumulated ones \
          separate the learned guide from its warm-up (the first frames, sampled while the \
-         guide is still empty or thin, weigh on the mean); the cost ratio is what equal time \
-         charges for the guide.",
+         guide is still empty or thin, weigh on the mean, although mcpg's mean weighs frame i \
+         by min(1, (i + 1)/{})); the cost ratio is what equal time charges for the guide.",
         time_of(Method::Mcpg) / time_of(Method::Bsdf),
         time_of(Method::Mcpg) / time_of(Method::Nee),
         1e3 * end_frame_seconds(&find(runs, Method::Mcpg).equal_samples),
         late_of(Method::Mcpg) / late_of(Method::Bsdf),
         late_of(Method::Mcpg) / late_of(Method::Nee),
+        crate::render::guided::RAMP_FRAMES,
     ));
     serde_json::json!({
         "mcpg_over_bsdf_equal_samples": ratio_samples,
