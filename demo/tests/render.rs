@@ -589,7 +589,7 @@ fn render_command_writes_exr_png_and_json() {
         mcpg_cache_add: mcg_demo::render::guided::CACHE_ADD_PROBABILITY,
         mcpg_confidence: mcg_demo::render::guided::CONFIDENCE_SAMPLES,
         mcpg_alpha_min: mcg_demo::render::guided::ALPHA_MIN,
-        ramp_frames: None,
+        ramp_frames: 1,
         mcmm_score: McmmScore::TileMixture,
         probes: ProbeOptions::default(),
     };

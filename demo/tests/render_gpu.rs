@@ -455,7 +455,7 @@ fn render_on_the_gpu(method: Method) {
         mcpg_cache_add: mcg_demo::render::guided::CACHE_ADD_PROBABILITY,
         mcpg_confidence: mcg_demo::render::guided::CONFIDENCE_SAMPLES,
         mcpg_alpha_min: mcg_demo::render::guided::ALPHA_MIN,
-        ramp_frames: None,
+        ramp_frames: 1,
         mcmm_score: McmmScore::TileMixture,
         probes: ProbeOptions::default(),
     };

@@ -95,8 +95,10 @@ pub const ALPHA_MIN: f32 = 0.1;
 /// compare-and-swap loops (`markov-guide/benches/README.md`).
 pub const CACHE_ADD_PROBABILITY: f32 = 0.125;
 
-/// The warm-up ramp R of `mcpg`'s accumulated mean (`--ramp-frames`,
-/// [`frame_weight`](super::frame_weight)): frame i counts min(1, (i + 1)/R), so the first
+/// The warm-up ramp R that suits `mcpg`'s accumulated mean on scene (a), for `--ramp-frames R`
+/// (off by default: the output and the report's targets are the plain mean over all frames,
+/// as issue 18 defines it). With [`frame_weight`](super::frame_weight) frame i counts
+/// min(1, (i + 1)/R), so the first
 /// frames, drawn while the guide is still learning, weigh less. The mean stays unbiased for
 /// any fixed weights (each frame is unbiased given the guide of the frames before it); with
 /// uncorrelated frame errors of variance v_i its variance Σ w_i² v_i / (Σ w_i)² is smallest
@@ -107,7 +109,7 @@ pub const CACHE_ADD_PROBABILITY: f32 = 0.125;
 /// --spp 8 --frames 64 --bounces 3 --seed S --reference REF --ramp-frames R` (one thread, so
 /// the frames are the same for every R; relMSE after 64 frames): R = 6 is 4.9-7.3 % below
 /// the plain mean (R = 1) on seeds 7-12 (seed 7: 0.0250 → 0.0235), R = 8 the same on
-/// average, R = 2 2.5-3.8 %, R = 16 1.3-7.0 %; `--ramp-frames 1` gives the plain mean. The price where a guide does not warm up: for
+/// average, R = 2 2.5-3.8 %, R = 16 1.3-7.0 %. The price where a guide does not warm up: for
 /// frames of equal variance the ramp's mean has 1.024× the plain mean's variance over 64
 /// frames and 1.10× over 16 (`many_lights_room`, 64², 4 spp, 1 bounce, no cache, seeds 1-2:
 /// +2.0 % and +2.8 %); `mcpg-nee` on `hidden_light_room`: −1.7 % and −1.2 %

@@ -144,7 +144,7 @@ fn args(
         mcpg_cache_add: crate::render::guided::CACHE_ADD_PROBABILITY,
         mcpg_confidence: crate::render::guided::CONFIDENCE_SAMPLES,
         mcpg_alpha_min: crate::render::guided::ALPHA_MIN,
-        ramp_frames: None,
+        ramp_frames: 1,
         mcmm_score: McmmScore::TileMixture,
         probes: ProbeOptions {
             probe_spacing: s.probe_spacing,

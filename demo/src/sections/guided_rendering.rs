@@ -104,15 +104,20 @@ pub struct Settings {
 }
 
 impl Settings {
-    /// The full report: 128 × 128, 8 spp × 64 frames, 3 bounces; the reference 64 spp × 64
-    /// frames (4 096 spp, 8× the samples of a measured render).
+    /// The full report: 128 × 128, 8 spp × 64 frames, 3 bounces; the reference 64 spp × 256
+    /// frames (16 384 spp, 32× the samples of a measured render).
+    ///
+    /// A reference's own error adds to every method's relMSE against it (for independent
+    /// renders, E[(X − R)²] = E[(X − I)²] + E[(R − I)²]): at 4 096 spp of `nee` it was ≈ 0.003,
+    /// a ninth of `mcpg`'s relMSE after 64 frames and a quarter of `nee`'s at equal time, so it
+    /// skewed the ratios between methods. At 16 384 spp it is ≈ 0.0008.
     pub const FULL: Self = Self {
         size: 128,
         spp: 8,
         frames: 64,
         bounces: 3,
         reference_spp: 64,
-        reference_frames: 64,
+        reference_frames: 256,
     };
     /// `--quick`: 64 × 64, 16 frames.
     pub const QUICK: Self = Self {
@@ -188,7 +193,7 @@ fn args(
         mcpg_cache_add: crate::render::guided::CACHE_ADD_PROBABILITY,
         mcpg_confidence: crate::render::guided::CONFIDENCE_SAMPLES,
         mcpg_alpha_min: crate::render::guided::ALPHA_MIN,
-        ramp_frames: None,
+        ramp_frames: 1,
         mcmm_score: McmmScore::TileMixture,
         probes: ProbeOptions::default(),
     }
@@ -983,14 +988,13 @@ fn mcpg_targets(section: &mut Section, runs: &[Runs]) -> serde_json::Value {
          end_frame). Once learned, one late mcpg frame has {:.3}× the relMSE of a bsdf frame \
          and {:.3}× that of a nee frame. The late-frame ratios against the accumulated ones \
          separate the learned guide from its warm-up (the first frames, sampled while the \
-         guide is still empty or thin, weigh on the mean, although mcpg's mean weighs frame i \
-         by min(1, (i + 1)/{})); the cost ratio is what equal time charges for the guide.",
+         guide is still empty or thin, weigh on the mean); the cost ratio is what equal time \
+         charges for the guide.",
         time_of(Method::Mcpg) / time_of(Method::Bsdf),
         time_of(Method::Mcpg) / time_of(Method::Nee),
         1e3 * end_frame_seconds(&find(runs, Method::Mcpg).equal_samples),
         late_of(Method::Mcpg) / late_of(Method::Bsdf),
         late_of(Method::Mcpg) / late_of(Method::Nee),
-        crate::render::guided::RAMP_FRAMES,
     ));
     serde_json::json!({
         "mcpg_over_bsdf_equal_samples": ratio_samples,

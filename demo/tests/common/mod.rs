@@ -234,7 +234,7 @@ pub fn door_args(method: Method, out: PathBuf, frames: u32) -> RenderArgs {
         mcpg_cache_add: mcg_demo::render::guided::CACHE_ADD_PROBABILITY,
         mcpg_confidence: mcg_demo::render::guided::CONFIDENCE_SAMPLES,
         mcpg_alpha_min: mcg_demo::render::guided::ALPHA_MIN,
-        ramp_frames: None,
+        ramp_frames: 1,
         mcmm_score: McmmScore::TileMixture,
         probes: ProbeOptions {
             probe_spacing: 1.0,
