@@ -202,8 +202,8 @@ impl<'g> McpgSampler<'g> {
 /// WyRand (Wang Yi's wyhash generator, through `fastrand`), seeded per path.
 ///
 /// A vertex takes 25 (Alg. 1's four per candidate, Alg. 3's five); drawn one per 32-bit
-/// `pcg_hash` step, as the tracer's own stream is, they were ~5 % of a guided frame's
-/// instructions (callgrind). Each uniform keeps the 24-bit resolution of
+/// `pcg_hash` step, as the tracer's own stream is, they were ~4 % of a guided frame's
+/// instructions (callgrind), half of that now. Each uniform keeps the 24-bit resolution of
 /// [`uniform_float`](mcg_gpu_backend::sampling::uniform_float), the largest an f32 in [0, 1)
 /// holds evenly spaced.
 #[derive(Clone, Debug)]

@@ -42,16 +42,16 @@
 //!
 //! # Performance
 //! One full guided vertex without tracing (`begin` with N_mc = 5, `sample`, one more `pdf`,
-//! `finish`) executes about 4,700 instructions, 53 times a cosine-hemisphere sample (89); with
-//! the irradiance cache about 5,750 (65 times); on an idle 2-core machine that was about
-//! 0.86 µs (1.1 µs with the cache) against 9.7 ns. No single step dominates: the five keys,
+//! `finish`) executes about 4,540 instructions, 51 times a cosine-hemisphere sample (89); with
+//! the irradiance cache about 5,570 (63 times); on an idle 2-core machine that was about
+//! 0.49 µs (0.65 µs with the cache) against 7.0 ns. No single step dominates: the five keys,
 //! lookups and seqlocked loads, the five lobes (μ, posterior κ, cosine product, C(κ)), the
 //! densities and the transition with its store each take 10-25 %. Two threads sharing one
-//! `&Guide` ran 2.13 times as fast as one. In mcg-demo's 3-bounce CPU path tracer of a small
-//! room lit from behind a panel (128 × 128, 8 samples per pixel × 64 frames, no light
-//! sampling, [`McpgParams::confidence_samples`] 16) a guided frame costs about 3.3 times a
-//! BSDF-sampled one and reaches 0.18-0.19 of its relative MSE: 0.61-0.65 at equal CPU time
-//! (`benches/README.md` has the commands).
+//! `&Guide` ran 1.8-2.1 times as fast as one. In mcg-demo's 3-bounce CPU path tracer of a
+//! small room lit from behind a panel (128 × 128, 8 samples per pixel × 64 frames, no light
+//! sampling, [`McpgParams::confidence_samples`] 16) a guided frame costs about 2.8-3.0 times
+//! a BSDF-sampled one and reaches 0.15-0.17 of its relative MSE: 0.43-0.53 at equal CPU
+//! time (`benches/README.md` has the commands).
 //!
 //! # The parts
 //! Per path vertex x with normal n at time T:
