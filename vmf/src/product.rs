@@ -106,7 +106,7 @@ impl Vmf {
         // False for NaN and ∞: those go to `new`, which names the error.
         if length_squared > 0.5 && length_squared < 2.0 {
             return Ok(Vmf::from_unit_mean(
-                normal * length_squared.sqrt().recip(),
+                normal * math::sqrt(length_squared).recip(),
                 CLAMPED_COSINE_KAPPA,
             ));
         }
