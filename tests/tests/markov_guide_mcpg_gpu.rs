@@ -331,7 +331,11 @@ fn plain_mean_of_the_candidate_pdfs_is_detected_as_biased() {
 
 /// Velocity prediction (MCPG eq. 9-10) pays on the moving light: without the light's previous
 /// position the chains lag behind and the mean squared relative error is at least 4× larger
-/// (issue table: 0.018 vs 0.67 relative to cosine).
+/// (issue table: 0.018 vs 0.67 relative to cosine). Over 24 seeds each: the per-seed MSE is
+/// heavy-tailed (a rare path that finds the light through an untrained direction), and the
+/// GPU's racing stores make every launch differ, so with 8 seeds one run in CI measured
+/// 5.92 with velocity against 15.1 without (2.6×), where repeated runs give 2.3-3.0 against
+/// 16-43.
 #[test]
 fn gpu_mcpg_tracks_a_moving_light_with_velocity_prediction() {
     let Some(ctx) = gpu_or_skip("gpu_mcpg_tracks_a_moving_light_with_velocity_prediction") else {
@@ -339,8 +343,8 @@ fn gpu_mcpg_tracks_a_moving_light_with_velocity_prediction() {
     };
     let mut bench = Bench::new(ctx);
     let scene = ToyScene::moving_light(0.03);
-    let (_, with) = measure(ctx, &mut bench, &scene, MODE_GUIDED, 30);
-    let (_, without) = measure(ctx, &mut bench, &scene, MODE_NO_VELOCITY, 31);
+    let (_, with) = measure_seeds(ctx, &mut bench, &scene, MODE_GUIDED, 30, 3 * SEEDS);
+    let (_, without) = measure_seeds(ctx, &mut bench, &scene, MODE_NO_VELOCITY, 31, 3 * SEEDS);
     println!("moving light: MSE with velocity {with:.4}, without {without:.4}");
     assert!(without >= 4.0 * with, "{without:.4} < 4 × {with:.4}");
 }
