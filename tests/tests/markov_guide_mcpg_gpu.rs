@@ -176,18 +176,7 @@ fn relative_errors(samples: &[(f64, f64, f64)]) -> (f64, f64) {
     (sum / n, sum_sq / n)
 }
 
-/// Bias (per-seed means) and mean squared relative error over `SEEDS` seeds.
-fn measure(
-    ctx: &GpuContext,
-    bench: &mut Bench,
-    scene: &ToyScene,
-    mode: u32,
-    salt: u32,
-) -> (RunningStats, f64) {
-    measure_seeds(ctx, bench, scene, mode, salt, SEEDS)
-}
-
-/// [`measure`] over `seeds` seeds (at most 64).
+/// Bias (per-seed means) and mean squared relative error over `seeds` seeds (at most 64).
 fn measure_seeds(
     ctx: &GpuContext,
     bench: &mut Bench,
