@@ -1,8 +1,8 @@
 //! The renderer: glTF 2.0 scenes path traced with and without mcg's guides.
 //!
 //! `mcg-demo render --scene FILE --method bsdf|nee|mcpg|mcmm|adgi|adgi-refill|ddgi …` renders a scene and
-//! writes `<out>/<method>.exr` (the mean over all frames, linear RGB; the guided methods'
-//! first frames weigh less, [`frame_weight`]), `<out>/<method>.png`
+//! writes `<out>/<method>.exr` (the mean over all frames, linear RGB; `--ramp-frames` weighs
+//! the first frames less, [`frame_weight`]), `<out>/<method>.png`
 //! (sRGB-encoded, clipped) and `<out>/<method>.json` (settings, device, per-frame times and,
 //! with `--reference`, per-frame errors of the running mean; with `--reference-spp`, each
 //! frame's errors against the reference of its scene state, [`states`]). `mcg-demo scenes` rewrites the
