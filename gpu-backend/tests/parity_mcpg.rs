@@ -109,8 +109,29 @@ fn random_step(rng: &mut impl Rng) -> Step {
     } else {
         (Vec3::new(0.4 + 0.2 * u(), 0.4 + 0.2 * u(), 1.8), -Vec3::Z)
     };
+    // A renderer's MIS weight of the emission: MCPG's 1, a weight, or the edge values
+    // (clamped; NaN counts as 1). Drawn from a hash of the step's other values rather than from
+    // `rng`, so that the steps (and the coverage the tests below count) stay those of the
+    // stream without it.
+    let bits = |v: f32| u64::from(v.to_bits());
+    let h = (bits(weight.x) ^ bits(light.x) << 32 ^ bits(light.y) << 11)
+        .wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    let (pick, value) = (
+        (h >> 40) as f32 / 16_777_216.0,
+        (h >> 8 & 0xff_ffff) as f32 / 16_777_216.0,
+    );
+    let emission_weight = match pick {
+        p if p < 0.75 => 1.0,
+        p if p < 0.9 => value,
+        p if p < 0.94 => 0.0,
+        p if p < 0.97 => f32::NAN,
+        _ => 3.0,
+    };
     let observation = if kind < 0.15 {
-        VertexObservation::escaped(Vec3::splat(u()), weight)
+        VertexObservation {
+            emission_weight,
+            ..VertexObservation::escaped(Vec3::splat(u()), weight)
+        }
     } else {
         let emitted = if u() < 0.3 {
             Vec3::ZERO
@@ -128,6 +149,7 @@ fn random_step(rng: &mut impl Rng) -> Step {
             },
             weight,
             reflected,
+            emission_weight,
         }
     };
     Step {

@@ -50,3 +50,14 @@ pub(crate) use mcg_smis::finite_non_negative_or_zero;
 pub(crate) fn all_finite(v: mcg_vmf::glam::Vec3) -> bool {
     (v.x - v.x) + (v.y - v.y) + (v.z - v.z) == 0.0
 }
+
+/// Radiance that may reach a chain's estimate or the irradiance cache: 0 when any component
+/// is NaN or infinite, else `v` with negative components made 0 (one rule for both).
+#[inline(always)]
+pub(crate) fn finite_radiance(v: mcg_vmf::glam::Vec3) -> mcg_vmf::glam::Vec3 {
+    if all_finite(v) {
+        v.max(mcg_vmf::glam::Vec3::ZERO)
+    } else {
+        mcg_vmf::glam::Vec3::ZERO
+    }
+}

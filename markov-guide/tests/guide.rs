@@ -516,6 +516,80 @@ fn finish_reports_transitions() {
     );
 }
 
+/// `VertexObservation::emission_weight` w_e (a renderer's MIS weight of emission it also
+/// samples as a light): the chain learns from weight·(w_e·L_e + L_r), the irradiance cache
+/// from weight·(L_e + L_r). An emitter hit that the light sample carries entirely (w_e = 0)
+/// and that reflects nothing trains no chain (rejected: its estimate is 0) but reaches the
+/// cache; w_e = 1, NaN (counts as 1) and 3 (clamped to 1) store, and so does w_e = 0 with a
+/// reflected part. (With the weight ignored, the first case stores; with it applied to the
+/// cache as well, the cache stays empty.)
+#[test]
+fn emission_weight_splits_the_chain_from_the_cache() {
+    let camera = Vec3::new(0.5, 0.5, 0.9);
+    let fresh_guide = || {
+        let mut config = GuideConfig::for_scene(Vec3::ZERO, Vec3::ONE).for_camera(1.0, 32);
+        config.adaptive_capacity = 1 << 12;
+        config.static_capacity = 1 << 10;
+        config.cache = Some(CacheConfig {
+            capacity: 1 << 10,
+            add_probability: 1.0,
+            ..CacheConfig::DEFAULT
+        });
+        let mut guide = Guide::new(config).unwrap();
+        guide.set_camera(camera);
+        guide
+    };
+    let (x, n) = (Vec3::new(0.5, 0.5, 0.0), Vec3::Z);
+    let light = VertexObservation::hit(
+        Vec3::new(0.5, 0.5, 1.0),
+        -Vec3::Z,
+        Vec3::splat(4.0),
+        Vec3::splat(0.5),
+    );
+    let observed = |w_e: f32, reflected: Option<Vec3>| VertexObservation {
+        emission_weight: w_e,
+        reflected,
+        ..light
+    };
+    let finish = |guide: &Guide, observation: &VertexObservation| {
+        let v = guide.begin(
+            Vertex::surface(x, n),
+            Lambertian { normal: n },
+            &BeginUniforms::from_fn(5, || 0.5),
+        );
+        let s = v.sample(&SampleUniforms::from_fn(|| 0.5));
+        assert_eq!(s.lobe, None, "an empty guide samples the material");
+        v.finish(&s, observation, &FinishUniforms::from_fn(|| 0.5))
+    };
+    let mut guide = fresh_guide();
+    assert_eq!(
+        finish(&guide, &observed(0.0, Some(Vec3::ZERO))),
+        Transition::Rejected
+    );
+    let level = guide.cache().unwrap().level(x, camera);
+    guide.end_frame();
+    // The cache received weight·L_e = 2 although the chain learnt nothing.
+    assert_eq!(
+        guide.cache().unwrap().query(x, n, level, 0.5),
+        Vec3::splat(2.0)
+    );
+    for (w_e, reflected, expected) in [
+        (1.0, Some(Vec3::ZERO), Transition::Stored),
+        (f32::NAN, Some(Vec3::ZERO), Transition::Stored),
+        (3.0, Some(Vec3::ZERO), Transition::Stored),
+        (0.0, Some(Vec3::splat(0.1)), Transition::Stored),
+        (-1.0, Some(Vec3::ZERO), Transition::Rejected),
+        // L_r from the cache at the light's position, where nothing was added.
+        (0.0, None, Transition::Rejected),
+    ] {
+        assert_eq!(
+            finish(&fresh_guide(), &observed(w_e, reflected)),
+            expected,
+            "w_e {w_e}, L_r {reflected:?}"
+        );
+    }
+}
+
 /// Where a ray from inside the unit cube leaves it: the point and the inward normal there.
 fn cube_exit(o: Vec3, d: Vec3) -> (Vec3, Vec3) {
     let mut best = (f32::INFINITY, 0);

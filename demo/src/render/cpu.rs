@@ -42,8 +42,10 @@ pub enum Method {
     Mcpg,
     /// MCPG's guide for the scattered direction plus one light sample per vertex, the two
     /// combined by MIS with the guide's exact mixture density — mcg's extension of MCPG (the
-    /// paper uses no light sampling) for renderers that already sample their lights: the guide
-    /// then learns the indirect light that light sampling cannot reach.
+    /// paper uses no light sampling) for renderers that already sample their lights: the
+    /// chains learn only the MIS-weighted share of the emission their directions hit
+    /// ([`NextHit::emission_weight`]), so the guide learns the light that light sampling cannot
+    /// reach.
     McpgNee,
     /// MCMM's screen-space chains (Dittebrandt et al. 2023) at the first hit, for direct light
     /// only (`--bounces 1`), no light sampling: rendered by [`super::mcmm::McmmRenderer`] on
@@ -177,6 +179,11 @@ pub struct NextHit {
     pub normal: Vec3,
     /// The radiance the hit surface emits back along the ray (0 from a back face).
     pub emitted: Vec3,
+    /// The MIS weight the path gave `emitted` (the power heuristic against a light sample of
+    /// the same point, [`Method::samples_lights`]); 1 without light sampling. A guide learns
+    /// from `emission_weight · emitted` the part its direction carries
+    /// ([`mcg_markov_guide::mcpg::VertexObservation::emission_weight`]).
+    pub emission_weight: f32,
 }
 
 /// The per-vertex direction sampler of the path loop: MCPG's seam (begin with the vertex,
@@ -291,6 +298,9 @@ pub fn trace_path<S: VertexSampler>(
             // not the radiance arriving along the sampled direction.
             if let Some(r) = previous_record(&mut recorded, depth) {
                 r.discarded += throughput * material.emission() * (1.0 - weight);
+                if let Some(next) = r.next.as_mut() {
+                    next.emission_weight = weight;
+                }
             }
         }
         if depth == bounces {
@@ -385,6 +395,7 @@ fn next_hit(position: Vec3, n_front: Vec3, cos_front: f32, material: &Material) 
         } else {
             Vec3::ZERO
         },
+        emission_weight: 1.0,
     }
 }
 

@@ -364,6 +364,9 @@ impl VertexSampler for McpgSampler<'_> {
         if self.reflected == Reflected::Path {
             seen.reflected = o.reflected;
         }
+        if let Some(hit) = o.next {
+            seen.emission_weight = hit.emission_weight;
+        }
         kept.vertex.finish(&kept.sample, &seen, &self.rng.finish());
         kept.open = false;
     }

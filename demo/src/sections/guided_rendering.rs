@@ -1009,7 +1009,8 @@ fn mcpg_targets(section: &mut Section, runs: &[Runs]) -> serde_json::Value {
         section.paragraph(&format!(
             "With the light sampling a renderer already has (mcpg-nee, mcg's extension: the \
              guide samples the scattered direction, one light sample per vertex as in nee, the \
-             two combined by MIS with the guide's exact mixture density): mcpg-nee ÷ nee = \
+             two combined by MIS with the guide's exact mixture density, and the chains learn \
+             only the MIS-weighted share of the emission their directions hit): mcpg-nee ÷ nee = \
              {samples:.3} at equal samples and {time:.3} at equal time; its frame costs {:.1}× a \
              nee frame, and one late frame has {:.3}× the relMSE of a nee frame. Why mcpg alone \
              does not beat nee here: nee gathers a light sample at every vertex besides the \

@@ -36,7 +36,7 @@ pub struct ObservationGpu {
     pub traced: u32,
     pub has_previous: u32,
     pub has_reflected: u32,
-    pub pad: u32,
+    pub emission_weight: f32,
     pub position: Vec3,
     pub pad_a: f32,
     pub normal: Vec3,
@@ -116,6 +116,7 @@ impl Step {
             weight: o.weight,
             has_reflected: u32::from(o.reflected.is_some()),
             reflected: o.reflected.unwrap_or(Vec3::ZERO),
+            emission_weight: o.emission_weight,
             ..Default::default()
         };
         match o.traced {

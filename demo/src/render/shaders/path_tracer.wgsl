@@ -448,7 +448,7 @@ fn guided_sample(g: ptr<function, McpgGuidedVertex>, v: Vertex, u: vec3<f32>) ->
 // Alg. 3 for the vertex `g` once its ray is traced, with five uniforms from `grng` (accept,
 // store grid, level, corner, cache corner).
 fn guided_finish(g: ptr<function, McpgGuidedVertex>, s: McpgSample, hit: bool, position: vec3<f32>,
-                 normal: vec3<f32>, emitted: vec3<f32>, weight: vec3<f32>,
+                 normal: vec3<f32>, emitted: vec3<f32>, emission_weight: f32, weight: vec3<f32>,
                  grng: ptr<function, u32>) {
     let accept = mcg_rng_uniform(grng);
     let grid = mcg_rng_uniform(grng);
@@ -457,7 +457,9 @@ fn guided_finish(g: ptr<function, McpgGuidedVertex>, s: McpgSample, hit: bool, p
     let cache = mcg_rng_uniform(grng);
     let u = McpgFinishUniforms(accept, grid, level, corner, cache);
     if hit {
-        mcpg_finish(g, s, mcpg_observation_hit(position, normal, emitted, weight), u);
+        var obs = mcpg_observation_hit(position, normal, emitted, weight);
+        obs.emission_weight = emission_weight;
+        mcpg_finish(g, s, obs, u);
     } else {
         mcpg_finish(g, s, mcpg_observation_escaped(vec3<f32>(0.0), weight), u);
     }
@@ -583,22 +585,24 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
         let n_front = c / (2.0 * area);
         let cos_front = -dot(n_front, d);
         let position = o + hit.t * d;
+        // The emission's MIS weight against a light sample of the same point (1 without).
+        var emission_weight = 1.0;
+        if cos_front > 0.0 && any(material.emission > vec3<f32>(0.0)) {
+            if samples_lights() && last_pdf > 0.0 {
+                let light_pdf = tri.emitter_pmf / area * hit.t * hit.t / cos_front;
+                emission_weight = power_heuristic(last_pdf, light_pdf);
+            }
+            radiance += throughput * material.emission * emission_weight;
+        }
 #ifdef MCG_DEMO_MCPG
         if is_open {
             let emitted = select(vec3<f32>(0.0), material.emission, cos_front > 0.0);
             let n_hit = select(-n_front, n_front, cos_front > 0.0);
-            guided_finish(&open, open_sample, true, position, n_hit, emitted, open_weight, &grng);
+            guided_finish(&open, open_sample, true, position, n_hit, emitted, emission_weight,
+                          open_weight, &grng);
             is_open = false;
         }
 #endif
-        if cos_front > 0.0 && any(material.emission > vec3<f32>(0.0)) {
-            var weight = 1.0;
-            if samples_lights() && last_pdf > 0.0 {
-                let light_pdf = tri.emitter_pmf / area * hit.t * hit.t / cos_front;
-                weight = power_heuristic(last_pdf, light_pdf);
-            }
-            radiance += throughput * material.emission * weight;
-        }
         if depth == params.bounces {
             break;
         }
@@ -658,7 +662,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
     // escaped, seeing nothing).
     if is_open {
         let zero = vec3<f32>(0.0);
-        guided_finish(&open, open_sample, false, zero, zero, zero, open_weight, &grng);
+        guided_finish(&open, open_sample, false, zero, zero, zero, 1.0, open_weight, &grng);
     }
 #endif
     return radiance;

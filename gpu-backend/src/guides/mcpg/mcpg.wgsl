@@ -33,7 +33,7 @@
     MCPG_TRANSITION_DROPPED, MCPG_TRANSITION_REJECTED, MCPG_TRANSITION_STORED,
     VMF_CLAMPED_COSINE_KAPPA, VMF_KAPPA_MAX, VMF_PRIOR_DECAY_SQUARED_COUNT, VMF_UNIFORM_SPHERE_PDF
 }
-#import mcg::math::{mcg_is_finite, mcg_is_finite3, mcg_rounded}
+#import mcg::math::{mcg_is_finite, mcg_is_finite3, mcg_is_nan, mcg_rounded}
 #import mcg::sampling::{mcg_cosine_hemisphere_pdf, mcg_cosine_hemisphere_sample, mcg_pcg_hash}
 #import mcg::vmf::{
     Vmf, VmfFitParams, VmfMapPrior, vmf_normalization, vmf_posterior_one_minus_mean_cosine,
@@ -153,10 +153,14 @@ struct McpgSample {
 // `position`, `normal`, `emitted` and, when `has_previous` is 1, `previous_position` of moving
 // geometry) or MCPG_TRACED_ESCAPED (`emitted` is the environment's radiance). `weight` is f·cos/p;
 // `reflected` (when `has_reflected` is 1) is L_r at the hit, otherwise the cache is read.
+// `emission_weight` is the MIS weight the renderer gave `emitted` (1 without light sampling):
+// the chain learns from weight·(emission_weight·emitted + L_r), the cache gets the whole
+// weight·(emitted + L_r) (`VertexObservation::emission_weight`).
 struct McpgObservation {
     traced: u32,
     has_previous: u32,
     has_reflected: u32,
+    emission_weight: f32,
     position: vec3<f32>,
     normal: vec3<f32>,
     emitted: vec3<f32>,
@@ -168,13 +172,13 @@ struct McpgObservation {
 // `VertexObservation::hit`: a hit of static geometry, L_r from the cache.
 fn mcpg_observation_hit(position: vec3<f32>, normal: vec3<f32>, emitted: vec3<f32>, weight: vec3<f32>) -> McpgObservation {
     let zero = vec3<f32>(0.0);
-    return McpgObservation(MCPG_TRACED_HIT, 0u, 0u, position, normal, emitted, position, weight, zero);
+    return McpgObservation(MCPG_TRACED_HIT, 0u, 0u, 1.0, position, normal, emitted, position, weight, zero);
 }
 
 // `VertexObservation::escaped`: a ray that left the scene, seeing `radiance`.
 fn mcpg_observation_escaped(radiance: vec3<f32>, weight: vec3<f32>) -> McpgObservation {
     let zero = vec3<f32>(0.0);
-    return McpgObservation(MCPG_TRACED_ESCAPED, 0u, 0u, zero, zero, radiance, zero, weight, zero);
+    return McpgObservation(MCPG_TRACED_ESCAPED, 0u, 0u, 1.0, zero, zero, radiance, zero, weight, zero);
 }
 
 // One vertex between `mcpg_begin` and `mcpg_finish` (`GuidedVertex`): the candidates' lobes
@@ -712,8 +716,15 @@ fn mcpg_should_discard(s: MarkovGridState, x: vec3<f32>, w: vec3<f32>, estimate:
     return dot(mu, w) >= threshold;
 }
 
+// Radiance that may reach a chain's estimate or the cache: 0 when any component is NaN or
+// infinite, else negative components made 0 (`math::finite_radiance`).
+fn mcpg_finite_radiance(v: vec3<f32>) -> vec3<f32> {
+    return select(vec3<f32>(0.0), max(v, vec3<f32>(0.0)), mcg_is_finite3(v));
+}
+
 // MCPG Alg. 3 and the cache update after the renderer traced `sample` (`GuidedVertex::finish`):
-// L = L_e + L_r (L_r observed or from the cache), f_mc = lum(weight·L); weight·L into the cache at
+// L = L_e + L_r (L_r observed or from the cache), f_mc = lum(weight·(w_e·L_e + L_r)) with w_e the
+// observation's emission_weight (1 in MCPG); weight·L into the cache at
 // a surface x; acceptance against the mean candidate score (eq. 8); the MLE update of the chosen
 // state (or the empty one after a scatter sample), T ← now, v from the hit's previous position
 // (eq. 9), stored at a fresh vertex (line 12); a rejected lobe sample may discard its state.
@@ -725,6 +736,9 @@ fn mcpg_finish(v: ptr<function, McpgGuidedVertex>, sample: McpgSample, obs: Mcpg
     var next: vec3<f32>;
     var next_previous: vec3<f32>;
     var incident: vec3<f32>;
+    var learned: vec3<f32>;
+    // Clamped to [0, 1]; NaN counts as 1.
+    let w_e = select(clamp(obs.emission_weight, 0.0, 1.0), 1.0, mcg_is_nan(obs.emission_weight));
     if obs.traced == MCPG_TRACED_HIT {
         var reflected = obs.reflected;
         if obs.has_reflected == 0u {
@@ -737,17 +751,14 @@ fn mcpg_finish(v: ptr<function, McpgGuidedVertex>, sample: McpgSample, obs: Mcpg
         next = obs.position;
         next_previous = select(obs.position, obs.previous_position, obs.has_previous != 0u);
         incident = obs.emitted + reflected;
+        learned = obs.emitted * w_e + reflected;
     } else {
         next = x + w * mcpg_params.environment_distance;
         next_previous = next;
         incident = obs.emitted;
+        learned = obs.emitted * w_e;
     }
-    var carried = obs.weight * incident;
-    if mcg_is_finite3(carried) {
-        carried = max(carried, vec3<f32>(0.0));
-    } else {
-        carried = vec3<f32>(0.0);
-    }
+    let carried = mcpg_finite_radiance(obs.weight * incident);
     // `CacheConfig::add_uniform`: the add's corner u·s, s = 1/add_probability; no add when
     // it reaches 1 (with s = 1, always an add at u).
     let scale = mcpg_params.cache_add_scale;
@@ -756,7 +767,7 @@ fn mcpg_finish(v: ptr<function, McpgGuidedVertex>, sample: McpgSample, obs: Mcpg
         && (scale <= 1.0 || add_corner < 1.0) {
         mcpg_cache_add_at(x, (*v).vertex.normal, (*v).target_level, add_corner, carried, frame);
     }
-    let estimate = mcpg_luminance(carried);
+    let estimate = mcpg_luminance(mcpg_finite_radiance(obs.weight * learned));
     let now = f32(frame);
     // The chain the transition continues: the sampled lobe's, a young chosen state's after a
     // scatter sample, else the empty state (Alg. 2 line 4).
