@@ -53,9 +53,10 @@
 //! a BSDF-sampled one and reaches 0.15-0.17 of its relative MSE: 0.43-0.53 at equal CPU
 //! time. Against light sampling (next-event estimation with MIS) the guide alone only ties
 //! at equal samples there, but beside it — the guide sampling the scattered direction, one
-//! light sample per vertex, MIS with [`GuidedVertex::pdf`] — it reaches 0.29-0.31 of light
-//! sampling's relative MSE, 0.76-0.84 at equal CPU time (`benches/README.md` has the
-//! commands).
+//! light sample per vertex, MIS with [`GuidedVertex::pdf`], the chains learning only the
+//! MIS-weighted share of the emission ([`VertexObservation::emission_weight`]) — it reaches
+//! 0.28 of light sampling's relative MSE, 0.71-0.74 at equal CPU time (`benches/README.md` has
+//! the commands).
 //!
 //! # The parts
 //! Per path vertex x with normal n at time T:
