@@ -12,7 +12,11 @@
 //! mcpg_finish(&v, s, mcpg_observation_hit(y, n_y, emitted, weight), finish_uniforms); // Alg. 3
 //! ```
 //!
-//! composed with [`GpuMcpgGuide::shader_defs`]`(group)`, its pipeline layout holding
+//! A tracer that also samples its lights and weights the emission `s.direction` hit by MIS
+//! sets `obs.emission_weight` on the observation to that weight before `mcpg_finish` (the
+//! chain then learns only the share its direction carries; `VertexObservation::emission_weight`).
+//!
+//! The module is composed with [`GpuMcpgGuide::shader_defs`]`(group)`, its pipeline layout holding
 //! [`GpuMcpgGuide::bind_group_layout`] at `group`, and [`GpuMcpgGuide::bind_group`] set there.
 //! After the frame's dispatches, [`GpuMcpgGuide::record_end_frame`] records the cache's fold,
 //! the eviction of idle states and cells, and the frame advance into the same encoder.
