@@ -179,8 +179,10 @@ pub struct NextHit {
     pub normal: Vec3,
     /// The radiance the hit surface emits back along the ray (0 from a back face).
     pub emitted: Vec3,
-    /// The MIS weight the path gave `emitted` (the power heuristic against a light sample of
-    /// the same point, [`Method::samples_lights`]); 1 without light sampling. A guide learns
+    /// The MIS weight the path gave `emitted` against a light sample of the same point (the
+    /// power heuristic, [`Method::samples_lights`]); 1 without light sampling, also where a
+    /// guide's emission-only direction shares the emission
+    /// ([`VertexSampler::sample_emission`]: both directions are the guide's). A guide learns
     /// from `emission_weight · emitted` the part its direction carries
     /// ([`mcg_markov_guide::mcpg::VertexObservation::emission_weight`]).
     pub emission_weight: f32,
@@ -201,6 +203,19 @@ pub trait VertexSampler {
     /// default ignores it.
     fn begin_path(&mut self, seed: u32) {
         let _ = seed;
+    }
+    /// Whether the tracer asks [`VertexSampler::sample_emission`] at every vertex of a method
+    /// without light sampling; then the emission found along either direction counts ½. The
+    /// default: no.
+    fn gathers_emission(&self) -> bool {
+        false
+    }
+    /// A second direction at `vertex`, right after [`VertexSampler::sample`] there, whose ray
+    /// only gathers the emission it hits (`None` gathers nothing). Any density keeps the
+    /// estimate unbiased (the weights are a constant ½); the default samples nothing.
+    fn sample_emission(&mut self, vertex: &Vertex, u: Vec3) -> Option<BsdfSample> {
+        let _ = (vertex, u);
+        None
     }
 }
 
@@ -282,6 +297,8 @@ pub fn trace_path<S: VertexSampler>(
     let mut last_pdf = 0.0;
     let mut recorded: [Option<Recorded>; MAX_RECORDED] = [None; MAX_RECORDED];
     let mut depth = 0u32;
+    // A second direction per vertex for emission only (a guide's, without light sampling).
+    let gathers = !method.samples_lights() && sampler.gathers_emission();
     while let Some(hit) = scene.bvh.intersect(o, d, 0.0, f32::INFINITY) {
         let tri = scene.bvh.triangles[hit.triangle as usize];
         let material = scene.material_at(&hit);
@@ -291,14 +308,20 @@ pub fn trace_path<S: VertexSampler>(
             r.next = Some(next_hit(position, n_front, cos_front, &material));
         }
         if cos_front > 0.0 && material.is_emitter() {
-            let weight = emitter_weight(method, last_pdf, tri.emitter_pmf, area, hit.t, cos_front);
+            let weight = if gathers && last_pdf > 0.0 {
+                0.5
+            } else {
+                emitter_weight(method, last_pdf, tri.emitter_pmf, area, hit.t, cos_front)
+            };
             radiance += throughput * material.emission() * weight;
             // The vertex whose sample found this emitter observes all of its emission: the
             // MIS weight splits the estimate of *its* direct light with its light sample,
             // not the radiance arriving along the sampled direction.
             if let Some(r) = previous_record(&mut recorded, depth) {
                 r.discarded += throughput * material.emission() * (1.0 - weight);
-                if let Some(next) = r.next.as_mut() {
+                // Against a light sample; a guide's own second direction shares the
+                // emission with this one, and the guide learns all of it.
+                if let Some(next) = r.next.as_mut().filter(|_| method.samples_lights()) {
                     next.emission_weight = weight;
                 }
             }
@@ -324,6 +347,9 @@ pub fn trace_path<S: VertexSampler>(
         if method.samples_lights() {
             radiance +=
                 throughput * light_sample(scene, sampler, &vertex, origin_next, [ul, u1, u2]);
+        } else if gathers && let Some(s) = sampler.sample_emission(&vertex, Vec3::new(ul, u1, u2)) {
+            radiance +=
+                throughput * s.weight * 0.5 * emission_along(scene, origin_next, s.direction);
         }
         let Some(sample) = sampled else {
             break;
@@ -341,6 +367,21 @@ pub fn trace_path<S: VertexSampler>(
     }
     report_recorded(sampler, &recorded, radiance, bounces);
     radiance
+}
+
+/// The emission a ray from `origin` along `d` finds first (0 from a back face or a surface
+/// that emits nothing, and when it leaves the scene).
+fn emission_along(scene: &Scene, origin: Vec3, d: Vec3) -> Vec3 {
+    let Some(hit) = scene.bvh.intersect(origin, d, 0.0, f32::INFINITY) else {
+        return Vec3::ZERO;
+    };
+    let material = scene.material_at(&hit);
+    let (_, _, cos_front) = front_face(&scene.bvh.triangles[hit.triangle as usize], d);
+    if cos_front > 0.0 && material.is_emitter() {
+        material.emission()
+    } else {
+        Vec3::ZERO
+    }
 }
 
 /// The record of the vertex whose sampled ray made the hit at `depth` (none for the camera

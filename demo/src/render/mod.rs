@@ -123,6 +123,12 @@ pub struct RenderArgs {
     /// with `--no-irradiance-cache`, neither.
     #[arg(long, value_enum, default_value_t = guided::Reflected::Path)]
     pub mcpg_reflected: guided::Reflected,
+    /// Whether `mcpg` on the CPU draws a second direction per vertex from the guide's mixture
+    /// for the emission it hits, each direction's emission counting ½ (mcg's extension), or
+    /// only the path's direction (`none`, the paper's rule, and the GPU tracer's)
+    /// ([`guided::EmissionSample`]). `mcpg-nee` samples its lights instead.
+    #[arg(long, value_enum, default_value_t = guided::EmissionSample::Guided)]
+    pub mcpg_emission_sample: guided::EmissionSample,
     /// The share of `mcpg`'s vertices whose sample goes into its irradiance cache, in (0, 1]
     /// ([`guided::CACHE_ADD_PROBABILITY`]; 1 is the paper's rule).
     #[arg(long, default_value_t = guided::CACHE_ADD_PROBABILITY)]
@@ -422,7 +428,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         image,
         report,
         guide: match guide {
-            CpuGuide::Mcpg(g, _) => Some(Arc::new(*g)),
+            CpuGuide::Mcpg(g, ..) => Some(Arc::new(*g)),
             CpuGuide::None | CpuGuide::Mcmm(_) | CpuGuide::Probes(_) => None,
         },
         frames: kept,
@@ -607,7 +613,7 @@ struct FrameTimes {
 /// runs on the GPU).
 enum CpuGuide {
     None,
-    Mcpg(Box<Guide>, guided::Reflected),
+    Mcpg(Box<Guide>, guided::Reflected, guided::EmissionSample),
     Mcmm(McmmRenderer),
     Probes(Box<ProbeGi>),
 }
@@ -682,7 +688,7 @@ fn start_guide(
             } else {
                 args.mcpg_reflected
             };
-            CpuGuide::Mcpg(Box::new(guide), reflected)
+            CpuGuide::Mcpg(Box::new(guide), reflected, args.mcpg_emission_sample)
         }
         Method::Mcmm => CpuGuide::Mcmm(McmmRenderer::new(args.width, args.height, mcmm())?),
         Method::Bsdf | Method::Nee => CpuGuide::None,
@@ -717,10 +723,14 @@ fn cpu_frame(
     let started = Instant::now();
     let cpu_started = process_cpu_seconds();
     let image = match guide {
-        CpuGuide::Mcpg(g, reflected) => {
+        CpuGuide::Mcpg(g, reflected, emission) => {
             g.set_camera(scene.camera.position);
-            let reflected = *reflected;
-            let sampler = || McpgSampler::new(g).with_reflected(reflected);
+            let (reflected, emission) = (*reflected, *emission);
+            let sampler = || {
+                McpgSampler::new(g)
+                    .with_reflected(reflected)
+                    .with_emission_sample(emission)
+            };
             let image = render_frame(scene, settings, frame, sampler, || ());
             let ending = Instant::now();
             g.end_frame();

@@ -40,7 +40,7 @@ use super::Context;
 use crate::Result;
 use crate::plot::{self, Axis, LineChart, PALETTE, Series, SeriesLabelPosition};
 use crate::render::cpu::Method;
-use crate::render::guided::MaterialScatter;
+use crate::render::guided::{EmissionSample, MaterialScatter};
 use crate::render::mcmm::McmmScore;
 use crate::render::output::{Errors, RgbImage, srgb_encode};
 use crate::render::scene::{SceneFile, frame_time};
@@ -192,6 +192,7 @@ fn args(
         no_progress: true,
         no_irradiance_cache: !study.mcpg_cache,
         mcpg_reflected: crate::render::guided::Reflected::Path,
+        mcpg_emission_sample: study.mcpg_emission,
         mcpg_cache_add: crate::render::guided::CACHE_ADD_PROBABILITY,
         mcpg_confidence: crate::render::guided::CONFIDENCE_SAMPLES,
         mcpg_alpha_min: crate::render::guided::ALPHA_MIN,
@@ -455,6 +456,8 @@ pub struct Study {
     pub settings: Settings,
     /// Whether `mcpg` uses its irradiance cache.
     pub mcpg_cache: bool,
+    /// `mcpg`'s emission sample on the CPU.
+    pub mcpg_emission: EmissionSample,
 }
 
 impl Study {
@@ -468,6 +471,7 @@ impl Study {
             methods: &METHODS,
             settings: Settings::for_samples(samples),
             mcpg_cache: true,
+            mcpg_emission: EmissionSample::Guided,
         }
     }
 
@@ -501,6 +505,7 @@ impl Study {
             methods: &MANY_LIGHTS_METHODS,
             settings,
             mcpg_cache: false,
+            mcpg_emission: EmissionSample::None,
         }
     }
 }
@@ -535,7 +540,12 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
          a path's last vertex (mcg's extension; `render --mcpg-reflected cache` is the paper's \
          rule, which the GPU tracer keeps: it finishes a vertex as soon as its ray is traced), \
          and one vertex in {} adds its sample to the cache (`--mcpg-cache-add 1` adds all): \
-         together a guided frame about 15 % cheaper at the same error. \
+         together a guided frame about 15 % cheaper at the same error. On the CPU, mcpg also \
+         draws a second direction per vertex from the guide's mixture that only gathers the \
+         emission it hits, the emission along either direction counting ½ (mcg's extension, \
+         still without light information; `render --mcpg-emission-sample none` gives the \
+         paper's one direction, which the GPU tracer keeps): two chances at the light per \
+         vertex, as nee has, for a ray more. \
          FLIP is NVIDIA's LDR-FLIP of the sRGB images (the PNGs) at 67 pixels per degree. \
          The reference is cached in {}.",
         hidden.settings.bounces,
@@ -1014,12 +1024,14 @@ fn mcpg_targets(section: &mut Section, runs: &[Runs]) -> serde_json::Value {
              {samples:.3} at equal samples and {time:.3} at equal time; its frame costs {:.1}× a \
              nee frame, and one late frame has {:.3}× the relMSE of a nee frame. Why mcpg alone \
              does not beat nee here: nee gathers a light sample at every vertex besides the \
-             direction it continues in, where the guide alone must spend its one direction on \
+             direction it continues in, where the paper's guide must spend its one direction on \
              either; the light, 1.2 m wide and 0.4 m under the ceiling it lights, is near and \
              wide from there, where a light sample is hard to beat. Guiding only the last vertex \
-             of mcpg's paths lowers a late frame's relMSE 1.4× against bsdf, nee's light samples \
-             6.7× (markov-guide/benches/README.md). The guide's gain is in the directions light \
-             sampling cannot find: the slit, the lit ceiling, the walls it lights.",
+             of mcpg's paths (with one direction per vertex) lowers a late frame's relMSE 1.4× \
+             against bsdf, nee's light samples 6.7× (markov-guide/benches/README.md); mcpg's \
+             second, emission-only direction takes back part of that, and its frame costs a ray \
+             per vertex more. The guide's gain is in the directions light sampling cannot find: \
+             the slit, the lit ceiling, the walls it lights.",
             time_of(Method::McpgNee) / time_of(Method::Nee),
             late_of(Method::McpgNee) / late_of(Method::Nee),
         ));
