@@ -13,7 +13,7 @@ use common::{
 use glam::Vec3;
 use mcg_demo::render::cpu::{BsdfSampler, Method, RenderSettings, render_frame};
 use mcg_demo::render::gpu::{GpuHit, GpuRay, GpuTiming, GpuTracer};
-use mcg_demo::render::guided::guide_config;
+use mcg_demo::render::guided::{EmissionSample, guide_config};
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
 use mcg_demo::render::scene::{Scene, SceneFile, TextureInfo, TriangleUv};
 use mcg_demo::render::{Device, ProbeOptions, RenderArgs, render};
@@ -186,8 +186,9 @@ fn gpu_furnace_matches_the_truncated_neumann_series() {
 /// events is Σ_{k=0}^{B} ρ^k L_e per channel, whatever the guide has learnt. Sample: B = 3,
 /// seed 7, ρ = (0.5, 0.3, 0.8), L_e = (1, 2, 0.5), the fourth frame after three frames of
 /// learning of a fresh guide (the pixel values are independent given the guide); `mcpg` 16×16
-/// pixels × 16 spp, `mcpg-nee` 32×32 × 32 spp. Threshold: |z| < 5 on the pixel mean per channel
-/// (6 tests, α ≈ 3.4·10⁻⁶); the frame must show spread (BSDF sampling alone is exact here, so
+/// pixels × 16 spp, with and without its second, emission-only direction, `mcpg-nee` 32×32 ×
+/// 32 spp. Threshold: |z| < 5 on the pixel mean per channel (9 tests, α ≈ 5·10⁻⁶); the frame
+/// must show spread (BSDF sampling alone is exact here, so
 /// spread means guided lobes were sampled). Today |z| ≤ 2. Dividing the WGSL guided samples by
 /// the material's density instead of the guided mixture's fails `mcpg` at z = −8.2, skipping
 /// the finish at the next hit (the guide never learns) fails the spread check, and weighting
@@ -202,7 +203,11 @@ fn gpu_mcpg_furnace_matches_the_truncated_neumann_series() {
     };
     let bounces = 3;
     let expected: Vec3 = (0..=bounces).map(|k| rho.powf(k as f32) * le).sum();
-    for (method, size, spp) in [(Method::Mcpg, 16, 16), (Method::McpgNee, 32, 32)] {
+    for (method, size, spp, emission) in [
+        (Method::Mcpg, 16, 16, EmissionSample::None),
+        (Method::Mcpg, 16, 16, EmissionSample::Guided),
+        (Method::McpgNee, 32, 32, EmissionSample::None),
+    ] {
         let settings = RenderSettings {
             width: size,
             height: size,
@@ -211,14 +216,16 @@ fn gpu_mcpg_furnace_matches_the_truncated_neumann_series() {
             seed: 7,
             method,
         };
+        gpu.set_mcpg_emission_sample(emission);
         gpu.start_mcpg(&guide_config(&scene, size, size)).unwrap();
         for frame in 0..3 {
             gpu.render_frame(&settings, frame).unwrap();
         }
         let (image, seconds) = gpu.render_frame(&settings, 3).unwrap();
         assert!(seconds > 0.0);
-        assert_spread(&image, expected, &format!("{method:?}"));
-        assert_pixel_mean(&image, expected, 0.0, &format!("GPU {method:?} furnace"));
+        let label = format!("GPU {method:?} furnace, emission sample {emission:?}");
+        assert_spread(&image, expected, &label);
+        assert_pixel_mean(&image, expected, 0.0, &label);
     }
 }
 

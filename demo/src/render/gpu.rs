@@ -110,7 +110,7 @@ pub fn method_code(method: Method) -> Option<u32> {
 }
 
 /// The uniform block of the `render` kernel (`Params` in WGSL): the camera, the frame's
-/// settings and the tile of one dispatch. 112 bytes.
+/// settings and the tile of one dispatch. 128 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuParams {
@@ -154,6 +154,11 @@ pub struct GpuParams {
     pub uv_count: u32,
     /// Number of textures.
     pub texture_count: u32,
+    /// 1: `mcpg` draws a second, emission-only direction per vertex
+    /// ([`super::guided::EmissionSample::Guided`]); 0: one direction.
+    pub emission_sample: u32,
+    /// Padding to the uniform block's 16-byte multiple.
+    pub pad: [u32; 3],
 }
 
 /// One entry of the emitter table as the shader reads it: [`Scene::emitters`] and
@@ -253,6 +258,8 @@ pub struct GpuTracer {
     image: Option<GpuBuffer<[f32; 4]>>,
     timer: Option<Timer>,
     guided: Option<Guided<GpuMcpgGuide>>,
+    /// `mcpg`'s emission sample ([`GpuTracer::set_mcpg_emission_sample`]).
+    mcpg_emission: super::guided::EmissionSample,
     /// The compiled `mcpg` shader, kept for rebuilding its pipeline with a new guide.
     guided_module: Option<wgpu::ShaderModule>,
     mcmm: Option<Guided<GpuMcmmGuide>>,
@@ -380,6 +387,7 @@ impl GpuTracer {
             image: None,
             timer,
             guided: None,
+            mcpg_emission: super::guided::EmissionSample::None,
             guided_module: None,
             mcmm: None,
             mcmm_module: None,
@@ -424,6 +432,13 @@ impl GpuTracer {
             layout,
         });
         Ok(())
+    }
+
+    /// Whether `mcpg` draws a second, emission-only direction per vertex, as the CPU tracer's
+    /// [`super::guided::McpgSampler::with_emission_sample`] (the default: one direction, the
+    /// paper's).
+    pub fn set_mcpg_emission_sample(&mut self, emission: super::guided::EmissionSample) {
+        self.mcpg_emission = emission;
     }
 
     /// Starts `mcmm` with empty chains for a `width × height` image and `params` (the CPU's
@@ -780,6 +795,10 @@ impl GpuTracer {
             emitter_count: scene.emitters.len() as u32,
             uv_count: scene.uvs.len() as u32,
             texture_count: scene.textures.len() as u32,
+            emission_sample: u32::from(
+                settings.method == Method::Mcpg
+                    && self.mcpg_emission == super::guided::EmissionSample::Guided,
+            ),
             ..GpuParams::default()
         })
     }
@@ -1133,6 +1152,6 @@ mod tests {
         let (_, tracer, guide) = validate(&composed_mcpg_shader().unwrap());
         assert_eq!(tracer + guide, MCPG_STORAGE_BUFFERS as usize);
         assert_eq!(guide, 2, "the mcpg render binds the guide");
-        assert_eq!(size_of::<GpuParams>(), 112);
+        assert_eq!(size_of::<GpuParams>(), 128);
     }
 }

@@ -218,8 +218,8 @@ impl<'g> McpgSampler<'g> {
 /// 1, so the estimate stays unbiased). It costs a ray per vertex and one more sample of a
 /// vertex already begun. On scene (a) (128², 8 spp, 64 frames, seeds 7-8) it lowered `mcpg`'s
 /// relMSE from 0.0223 / 0.0237 to 0.0138 / 0.0129 for 29 % more CPU time per frame
-/// (`markov-guide/benches/README.md`). mcg's extension; the GPU tracer keeps the paper's one
-/// direction.
+/// (`markov-guide/benches/README.md`). mcg's extension, on both devices (the WGSL tracer's
+/// `gathers_emission`, set by [`super::gpu::GpuTracer::set_mcpg_emission_sample`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum EmissionSample {

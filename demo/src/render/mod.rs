@@ -123,9 +123,9 @@ pub struct RenderArgs {
     /// with `--no-irradiance-cache`, neither.
     #[arg(long, value_enum, default_value_t = guided::Reflected::Path)]
     pub mcpg_reflected: guided::Reflected,
-    /// Whether `mcpg` on the CPU draws a second direction per vertex from the guide's mixture
-    /// for the emission it hits, each direction's emission counting ½ (mcg's extension), or
-    /// only the path's direction (`none`, the paper's rule, and the GPU tracer's)
+    /// Whether `mcpg` draws a second direction per vertex from the guide's mixture for the
+    /// emission it hits, each direction's emission counting ½ (mcg's extension), or only the
+    /// path's direction (`none`, the paper's rule), on either device
     /// ([`guided::EmissionSample`]). `mcpg-nee` samples its lights instead.
     #[arg(long, value_enum, default_value_t = guided::EmissionSample::Guided)]
     pub mcpg_emission_sample: guided::EmissionSample,
@@ -275,6 +275,9 @@ pub struct RenderReport {
     /// The warm-up ramp of the mean (`--ramp-frames`, [`frame_weight`]); 1 is the
     /// plain mean.
     pub ramp_frames: u32,
+    /// `mcpg`'s emission sample (`--mcpg-emission-sample`); absent for other methods.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mcpg_emission_sample: Option<guided::EmissionSample>,
     /// Scattering events per path.
     pub bounces: u32,
     /// The seed as given.
@@ -407,6 +410,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         spp: args.spp,
         frames: args.frames,
         ramp_frames: args.ramp_frames,
+        mcpg_emission_sample: (args.method == Method::Mcpg).then_some(args.mcpg_emission_sample),
         bounces: args.bounces,
         seed: args.seed,
         frame_cpu_times_s: if times.cpu.len() == times.frame.len() {
@@ -655,7 +659,10 @@ fn start_guide(
     let mcmm = || mcmm_params(args.mcmm_score, args.height);
     if let Some(g) = gpu.as_deref_mut() {
         let started = match args.method {
-            Method::Mcpg | Method::McpgNee => g.start_mcpg(&mcpg_config(scene, args)),
+            Method::Mcpg | Method::McpgNee => {
+                g.set_mcpg_emission_sample(args.mcpg_emission_sample);
+                g.start_mcpg(&mcpg_config(scene, args))
+            }
             Method::Mcmm => g.start_mcmm(&mcmm(), args.width, args.height),
             Method::Bsdf | Method::Nee => Ok(()),
             Method::Adgi | Method::AdgiRefill | Method::AdgiBlend | Method::Ddgi => {

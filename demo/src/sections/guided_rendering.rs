@@ -540,12 +540,12 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
          a path's last vertex (mcg's extension; `render --mcpg-reflected cache` is the paper's \
          rule, which the GPU tracer keeps: it finishes a vertex as soon as its ray is traced), \
          and one vertex in {} adds its sample to the cache (`--mcpg-cache-add 1` adds all): \
-         together a guided frame about 15 % cheaper at the same error. On the CPU, mcpg also \
-         draws a second direction per vertex from the guide's mixture that only gathers the \
-         emission it hits, the emission along either direction counting ½ (mcg's extension, \
-         still without light information; `render --mcpg-emission-sample none` gives the \
-         paper's one direction, which the GPU tracer keeps): two chances at the light per \
-         vertex, as nee has, for a ray more. \
+         together a guided frame about 15 % cheaper at the same error. On both devices, mcpg \
+         also draws a second direction per vertex from the guide's mixture that only gathers \
+         the emission it hits, the emission along either direction counting ½ (mcg's \
+         extension, still without light information; `render --mcpg-emission-sample none` \
+         gives the paper's one direction): two chances at the light per vertex, as nee has, \
+         for a ray more. \
          FLIP is NVIDIA's LDR-FLIP of the sRGB images (the PNGs) at 67 pixels per degree. \
          The reference is cached in {}.",
         hidden.settings.bounces,

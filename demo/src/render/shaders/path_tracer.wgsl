@@ -122,6 +122,8 @@ struct Params {
     tile_height: u32,
     uv_count: u32,
     texture_count: u32,
+    // 1: `mcpg` draws a second, emission-only direction per vertex (`guided::EmissionSample`).
+    emission_sample: u32,
 }
 
 // `gpu::GpuRay`: a query of the `trace_rays` kernel (closest hit, or any hit when `any_hit`).
@@ -153,6 +155,7 @@ struct RayHit {
 @group(0) @binding(10) var<storage, read_write> ray_hits: array<RayHit>;
 
 const METHOD_NEE: u32 = 1u;
+const METHOD_MCPG: u32 = 2u;
 const METHOD_MCPG_NEE: u32 = 4u;
 // `cpu::MAX_RECORDED`: the deepest vertex a guide learns from.
 const MAX_RECORDED: u32 = 16u;
@@ -527,6 +530,23 @@ fn samples_lights() -> bool {
     return params.method == METHOD_NEE || params.method == METHOD_MCPG_NEE;
 }
 
+// Whether `mcpg` draws a second direction per vertex for the emission it hits
+// (`VertexSampler::gathers_emission`); the emission along either direction then counts ½.
+fn gathers_emission() -> bool {
+    return params.method == METHOD_MCPG && params.emission_sample != 0u;
+}
+
+// `cpu::emission_along`: the emission a ray from `origin` along `d` finds first.
+fn emission_along(origin: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
+    let hit = bvh_walk(origin, d, 0.0, FAR, false);
+    if hit.triangle == NO_HIT {
+        return vec3<f32>(0.0);
+    }
+    let tri = triangles[hit.triangle];
+    let facing = dot(cross(tri.e1, tri.e2), d) < 0.0;
+    return select(vec3<f32>(0.0), material_at(hit).emission, facing);
+}
+
 // `cpu::light_sample` before its MIS weight, which the caller applies against the density of
 // its own direction sampler (the material's, or the guide's mixture for `mcpg-nee`).
 fn light_sample(v: Vertex, origin: vec3<f32>, u: vec3<f32>) -> LightSample {
@@ -585,14 +605,20 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
         let n_front = c / (2.0 * area);
         let cos_front = -dot(n_front, d);
         let position = o + hit.t * d;
-        // The emission's MIS weight against a light sample of the same point (1 without).
+        // The emission's MIS weight against a light sample of the same point (1 without; the
+        // guide learns with it), and its weight in the estimate (½ beside `mcpg`'s second
+        // direction).
         var emission_weight = 1.0;
+        var share = 1.0;
         if cos_front > 0.0 && any(material.emission > vec3<f32>(0.0)) {
             if samples_lights() && last_pdf > 0.0 {
                 let light_pdf = tri.emitter_pmf / area * hit.t * hit.t / cos_front;
                 emission_weight = power_heuristic(last_pdf, light_pdf);
+                share = emission_weight;
+            } else if gathers_emission() && last_pdf > 0.0 {
+                share = 0.5;
             }
-            radiance += throughput * material.emission * emission_weight;
+            radiance += throughput * material.emission * share;
         }
 #ifdef MCG_DEMO_MCPG
         if is_open {
@@ -626,6 +652,14 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
                 let p = mcpg_pdf_with(&open, l.direction,
                                       material_pdf(material, normal, -d, l.direction));
                 radiance += throughput * l.value * power_heuristic(l.pdf, p);
+            }
+        } else if gathers_emission() {
+            // `McpgSampler::sample_emission`: a second direction from the begun vertex, from
+            // the light-sampling uniforms `mcpg` does not use.
+            let e = guided_sample(&open, vertex, vec3<f32>(ul, u1, u2));
+            if e.pdf > 0.0 {
+                let f = material_eval(material, normal, -d, e.direction) / e.pdf;
+                radiance += throughput * f * 0.5 * emission_along(origin_next, e.direction);
             }
         }
         if !(open_sample.pdf > 0.0) {
