@@ -308,11 +308,15 @@ pub fn trace_path<S: VertexSampler>(
             r.next = Some(next_hit(position, n_front, cos_front, &material));
         }
         if cos_front > 0.0 && material.is_emitter() {
-            let weight = if gathers && last_pdf > 0.0 {
-                0.5
-            } else {
-                emitter_weight(method, last_pdf, tri.emitter_pmf, area, hit.t, cos_front)
-            };
+            let weight = emitter_weight(
+                method,
+                gathers,
+                last_pdf,
+                tri.emitter_pmf,
+                area,
+                hit.t,
+                cos_front,
+            );
             radiance += throughput * material.emission() * weight;
             // The vertex whose sample found this emitter observes all of its emission: the
             // MIS weight splits the estimate of *its* direct light with its light sample,
@@ -375,9 +379,14 @@ fn emission_along(scene: &Scene, origin: Vec3, d: Vec3) -> Vec3 {
     let Some(hit) = scene.bvh.intersect(origin, d, 0.0, f32::INFINITY) else {
         return Vec3::ZERO;
     };
-    let material = scene.material_at(&hit);
     let (_, _, cos_front) = front_face(&scene.bvh.triangles[hit.triangle as usize], d);
-    if cos_front > 0.0 && material.is_emitter() {
+    front_emission(&scene.material_at(&hit), cos_front)
+}
+
+/// What a surface of `material` hit at cosine `cos_front` with its front normal emits back
+/// along the ray: its emission from the front face, 0 from the back.
+fn front_emission(material: &Material, cos_front: f32) -> Vec3 {
+    if cos_front > 0.0 {
         material.emission()
     } else {
         Vec3::ZERO
@@ -431,28 +440,31 @@ fn next_hit(position: Vec3, n_front: Vec3, cos_front: f32, material: &Material) 
     NextHit {
         position,
         normal: if cos_front > 0.0 { n_front } else { -n_front },
-        emitted: if cos_front > 0.0 {
-            material.emission()
-        } else {
-            Vec3::ZERO
-        },
+        emitted: front_emission(material, cos_front),
         emission_weight: 1.0,
     }
 }
 
-/// The MIS weight of an emitter hit at distance `t` by a sampled direction of density
-/// `last_pdf`; `emitter_pmf`, `area` and `cos_front` give the light sample's density of it.
+/// The weight of an emitter hit at distance `t` by a sampled direction of density `last_pdf`
+/// in the estimate: the MIS weight against a light sample (`emitter_pmf`, `area` and
+/// `cos_front` give its density of the hit), ½ when the vertex also `gathers` emission along a
+/// second direction ([`VertexSampler::sample_emission`]), else 1 (and 1 for the camera ray).
 fn emitter_weight(
     method: Method,
+    gathers: bool,
     last_pdf: f32,
     emitter_pmf: f32,
     area: f32,
     t: f32,
     cos_front: f32,
 ) -> f32 {
-    if method.samples_lights() && last_pdf > 0.0 {
+    if !(last_pdf > 0.0) {
+        1.0
+    } else if method.samples_lights() {
         let light_pdf = emitter_pmf / area * t * t / cos_front;
         power_heuristic(last_pdf, light_pdf)
+    } else if gathers {
+        0.5
     } else {
         1.0
     }
