@@ -60,9 +60,11 @@ fn built_in(name: &str) -> Scene {
         .unwrap()
 }
 
-/// Hypothesis: the WGSL `bvh_walk` over the uploaded buffers answers every query as the CPU's
-/// [`Bvh::intersect`](mcg_demo::render::bvh::Bvh::intersect) and
-/// [`Bvh::occluded`](mcg_demo::render::bvh::Bvh::occluded). Sample: 4096 rays of fixed seed
+/// Hypothesis: the WGSL `bvh_walk_tree` over the uploaded buffers answers every query as the
+/// CPU's [`Bvh::intersect`](mcg_demo::render::bvh::Bvh::intersect) and
+/// [`Bvh::occluded`](mcg_demo::render::bvh::Bvh::occluded) over the scene, and as
+/// [`Bvh::intersect_front`](mcg_demo::render::bvh::Bvh::intersect_front) over the emitters'
+/// tree (`Scene::emitter_bvh`, joined after the scene's: the same emitter and distance). Sample: 4096 rays of fixed seed
 /// with origins uniform in the box of the many-lights room (inside and outside its walls) and
 /// uniform directions, each asked for the closest hit and for any hit before a random
 /// fraction (0 to 1.5) of the CPU's hit distance. Threshold: the same hit or miss for every
@@ -78,6 +80,7 @@ fn gpu_bvh_walk_matches_cpu() {
     };
     let root = scene.bvh.nodes[0];
     let (lo, hi) = (Vec3::from(root.min), Vec3::from(root.max));
+    let emitter_root = gpu.emitter_root().unwrap();
     let mut state = 2024u32;
     let mut u = || next_uniform(&mut state);
     let mut rays = Vec::new();
@@ -91,24 +94,62 @@ fn gpu_bvh_walk_matches_cpu() {
         let closest = scene.bvh.intersect(o, d, 0.0, f32::INFINITY);
         let t_max = closest.map_or(10.0, |h| h.t) * 1.5 * u();
         let occluded = scene.bvh.occluded(o, d, 0.0, t_max);
-        rays.push(GpuRay {
+        let ray = GpuRay {
             origin: o.to_array(),
             t_max: f32::MAX,
             direction: d.to_array(),
-            any_hit: 0,
-        });
+            ..GpuRay::default()
+        };
+        rays.push(ray);
         rays.push(GpuRay {
-            origin: o.to_array(),
             t_max,
-            direction: d.to_array(),
             any_hit: 1,
+            ..ray
         });
-        cpu.push((closest, occluded));
+        // The emitters' tree is asked along a ray aimed at a point of a random emitter (at
+        // times past its edges), which meets the emitters far more often than `d`.
+        let k = ((u() * scene.emitters.len() as f32) as usize).min(scene.emitters.len() - 1);
+        let tri = scene.bvh.triangles[scene.emitters[k] as usize];
+        let (b1, b2) = (1.2 * u() - 0.1, 1.2 * u() - 0.1);
+        let (b1, b2) = if b1 + b2 > 1.0 {
+            (1.0 - b1, 1.0 - b2)
+        } else {
+            (b1, b2)
+        };
+        let aim = (tri.point(b1, b2) - o).normalize();
+        rays.push(GpuRay {
+            direction: aim.to_array(),
+            root: emitter_root,
+            front_only: 1,
+            ..ray
+        });
+        let emitter = scene
+            .emitter_bvh
+            .intersect_front(o, aim, 0.0, f32::INFINITY);
+        cpu.push((closest, occluded, emitter));
     }
     let hits = gpu.trace_rays(&rays).unwrap();
-    let mut found = 0;
-    for (i, ((closest, occluded), pair)) in cpu.iter().zip(hits.chunks_exact(2)).enumerate() {
-        let (g, any) = (pair[0], pair[1]);
+    let (mut found, mut emitters_found) = (0, 0);
+    let first_emitter = scene.bvh.triangles.len() as u32;
+    for (i, ((closest, occluded, emitter), triple)) in
+        cpu.iter().zip(hits.chunks_exact(3)).enumerate()
+    {
+        let (g, any, e) = (triple[0], triple[1], triple[2]);
+        match emitter {
+            None => assert_eq!(e.triangle, GpuHit::MISS, "ray {i}: GPU met an emitter"),
+            Some(h) => {
+                emitters_found += 1;
+                assert_eq!(
+                    e.triangle,
+                    first_emitter + h.triangle,
+                    "ray {i}: the emitters' tree disagrees"
+                );
+                assert!(
+                    (e.t - h.t).abs() <= 1e-5 * h.t.max(1.0),
+                    "ray {i}: {e:?} vs {h:?}"
+                );
+            }
+        }
         assert_eq!(
             any.triangle != GpuHit::MISS,
             *occluded,
@@ -145,7 +186,10 @@ fn gpu_bvh_walk_matches_cpu() {
             }
         }
     }
-    assert!(found > 2000, "most rays must hit to decide: {found}");
+    assert!(
+        found > 2000 && emitters_found > 1000,
+        "enough rays must hit to decide: {found} hits, {emitters_found} emitters met"
+    );
 }
 
 /// Furnace test on the GPU (the CPU's `furnace_matches_the_truncated_neumann_series`).

@@ -157,8 +157,46 @@ pub struct GpuParams {
     /// 1: `mcpg` draws a second, emission-only direction per vertex
     /// ([`super::guided::EmissionSample::Guided`]); 0: one direction.
     pub emission_sample: u32,
+    /// The root of the emitters' tree ([`Scene::emitter_bvh`]) in the node buffer, which
+    /// holds it after the scene's ([`joined_trees`]).
+    pub emitter_root: u32,
     /// Padding to the uniform block's 16-byte multiple.
-    pub pad: [u32; 3],
+    pub pad: [u32; 2],
+}
+
+/// The scene's BVH and the emitters' ([`Scene::emitter_bvh`]) in one node array and one
+/// triangle array, as the shader binds them: the emitters' nodes follow the scene's (from
+/// index `scene.bvh.nodes.len()`, the emitters' root), their child indices shifted past the
+/// scene's nodes and their leaves' first triangles past the scene's triangles. The scene's
+/// own entries are unchanged, so every index into them stays valid.
+#[must_use]
+pub fn joined_trees(scene: &Scene) -> (Vec<BvhNode>, Vec<Triangle>) {
+    let node_offset = scene.bvh.nodes.len() as u32;
+    let triangle_offset = scene.bvh.triangles.len() as u32;
+    let emitter_nodes = scene.emitter_bvh.nodes.iter().map(|n| BvhNode {
+        index: n.index
+            + if n.count > 0 {
+                triangle_offset
+            } else {
+                node_offset
+            },
+        ..*n
+    });
+    let nodes = scene
+        .bvh
+        .nodes
+        .iter()
+        .copied()
+        .chain(emitter_nodes)
+        .collect();
+    let triangles = scene
+        .bvh
+        .triangles
+        .iter()
+        .chain(&scene.emitter_bvh.triangles)
+        .copied()
+        .collect();
+    (nodes, triangles)
 }
 
 /// One entry of the emitter table as the shader reads it: [`Scene::emitters`] and
@@ -185,6 +223,13 @@ pub struct GpuRay {
     /// 1: any hit (a shadow ray, [`super::bvh::Bvh::occluded`]); 0: the closest hit
     /// ([`super::bvh::Bvh::intersect`]).
     pub any_hit: u32,
+    /// The root of the tree to walk in the node buffer: 0 for the scene's, or
+    /// [`GpuTracer::emitter_root`] for the emitters' ([`joined_trees`]).
+    pub root: u32,
+    /// 1: front faces only ([`super::bvh::Bvh::intersect_front`]); 0: both faces.
+    pub front_only: u32,
+    /// Padding to 16 bytes; always 0.
+    pub pad: [u32; 2],
 }
 
 /// The answer to a [`GpuRay`].
@@ -209,6 +254,8 @@ impl GpuHit {
 /// The scene's buffers on the device.
 struct SceneBuffers {
     camera: Camera,
+    /// [`GpuParams::emitter_root`].
+    emitter_root: u32,
     nodes: GpuBuffer<BvhNode>,
     triangles: GpuBuffer<Triangle>,
     materials: GpuBuffer<Material>,
@@ -646,10 +693,11 @@ impl GpuTracer {
             .zip(&scene.emitter_cdf)
             .map(|(&triangle, &cdf)| GpuEmitter { triangle, cdf })
             .collect();
+        let (nodes, triangles) = joined_trees(scene);
         let max = self.ctx.device().limits().max_storage_buffer_binding_size;
         let largest = [
-            size_of_val(scene.bvh.nodes.as_slice()),
-            size_of_val(scene.bvh.triangles.as_slice()),
+            size_of_val(nodes.as_slice()),
+            size_of_val(triangles.as_slice()),
             size_of_val(scene.texels.as_slice()),
         ]
         .into_iter()
@@ -664,8 +712,9 @@ impl GpuTracer {
         let ctx = &self.ctx;
         self.scene = Some(SceneBuffers {
             camera: scene.camera,
-            nodes: ctx.storage_buffer("mcg-demo nodes", &scene.bvh.nodes),
-            triangles: ctx.storage_buffer("mcg-demo triangles", &scene.bvh.triangles),
+            emitter_root: scene.bvh.nodes.len() as u32,
+            nodes: ctx.storage_buffer("mcg-demo nodes", &nodes),
+            triangles: ctx.storage_buffer("mcg-demo triangles", &triangles),
             materials: ctx.storage_buffer("mcg-demo materials", &scene.materials),
             emitters: ctx.storage_buffer("mcg-demo emitters", &emitters),
             uvs: ctx.storage_buffer("mcg-demo uvs", &scene.uvs),
@@ -795,6 +844,7 @@ impl GpuTracer {
             emitter_count: scene.emitters.len() as u32,
             uv_count: scene.uvs.len() as u32,
             texture_count: scene.textures.len() as u32,
+            emitter_root: scene.emitter_root,
             emission_sample: u32::from(
                 settings.method == Method::Mcpg
                     && self.mcpg_emission == super::guided::EmissionSample::Guided,
@@ -957,8 +1007,18 @@ impl GpuTracer {
         }
     }
 
-    /// Walks the uploaded scene's BVH for each ray on the GPU (the WGSL `bvh_walk` that the
-    /// tracer uses), for comparing with [`super::bvh::Bvh::intersect`] and
+    /// The root of the uploaded emitters' tree in the node buffer ([`joined_trees`]): the
+    /// [`GpuRay::root`] that walks it.
+    ///
+    /// # Errors
+    /// No scene uploaded.
+    pub fn emitter_root(&self) -> Result<u32> {
+        Ok(self.scene()?.emitter_root)
+    }
+
+    /// Walks the uploaded scene's BVH (or the emitters', [`GpuRay::root`]) for each ray on the
+    /// GPU (the WGSL `bvh_walk_tree` that the tracer uses), for comparing with
+    /// [`super::bvh::Bvh::intersect`], [`super::bvh::Bvh::intersect_front`] and
     /// [`super::bvh::Bvh::occluded`].
     ///
     /// # Errors

@@ -215,10 +215,13 @@ impl<'g> McpgSampler<'g> {
 /// either on the light or on the surfaces that lead on to it. The second direction gives the
 /// guide the same two chances at the light without telling it where the lights are: the
 /// emission found along either direction counts with weight ½ (constant weights summing to
-/// 1, so the estimate stays unbiased). It costs a ray per vertex and one more sample of a
-/// vertex already begun. On scene (a) (128², 8 spp, 64 frames, seeds 7-8) it lowered `mcpg`'s
-/// relMSE from 0.0223 / 0.0237 to 0.0138 / 0.0129 for 29 % more CPU time per frame
-/// (`markov-guide/benches/README.md`). mcg's extension, on both devices (the WGSL tracer's
+/// 1, so the estimate stays unbiased). It costs one more sample of a vertex already begun and
+/// a query that needs no first hit (`cpu::emission_along`): a walk of the emitters' own tree
+/// ([`Scene::emitter_bvh`](super::scene::Scene::emitter_bvh)), and a shadow ray only when the
+/// direction meets an emitter's front face. On scene (a) (128², 8 spp, 64 frames, seeds 7-8)
+/// it lowered `mcpg`'s relMSE from 0.0223 / 0.0237 to 0.0138 / 0.0129, for 14 % more
+/// instructions per frame (34 % when it traced a closest-hit ray through the scene;
+/// `markov-guide/benches/README.md`). mcg's extension, on both devices (the WGSL tracer's
 /// `gathers_emission`, set by [`super::gpu::GpuTracer::set_mcpg_emission_sample`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]

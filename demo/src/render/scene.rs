@@ -283,6 +283,11 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Indices (into `bvh.triangles`) of the front-emitting triangles.
     pub emitters: Vec<u32>,
+    /// The front-emitting triangles alone, in a BVH of their own (their [`Triangle::material`]
+    /// indexes [`Scene::materials`]): a ray that only gathers emission (`mcpg`'s second
+    /// direction) finds the nearest emitter facing it here and then tests whether anything
+    /// blocks the way, instead of walking the whole scene for its first hit.
+    pub emitter_bvh: Bvh,
     /// Inclusive cumulative distribution over `emitters`, proportional to each triangle's
     /// emitted power `area × luminance(L_e)`; the last entry is 1.
     pub emitter_cdf: Vec<f32>,
@@ -775,8 +780,13 @@ impl Scene {
             bvh.triangles[i as usize].emitter_pmf = (p / total) as f32;
         }
         *emitter_cdf.last_mut().expect("non-empty") = 1.0;
+        let emitter_triangles: Vec<Triangle> = emitters
+            .iter()
+            .map(|&i| bvh.triangles[i as usize])
+            .collect();
         Some(Self {
             camera,
+            emitter_bvh: Bvh::build(&emitter_triangles),
             bvh,
             materials,
             emitters,

@@ -124,6 +124,8 @@ struct Params {
     texture_count: u32,
     // 1: `mcpg` draws a second, emission-only direction per vertex (`guided::EmissionSample`).
     emission_sample: u32,
+    // The root of the emitters' tree in `nodes` (`gpu::joined_trees`).
+    emitter_root: u32,
 }
 
 // `gpu::GpuRay`: a query of the `trace_rays` kernel (closest hit, or any hit when `any_hit`).
@@ -132,6 +134,9 @@ struct Ray {
     t_max: f32,
     direction: vec3<f32>,
     any_hit: u32,
+    root: u32,
+    front_only: u32,
+    pad: vec2<u32>,
 }
 
 // `gpu::GpuHit`: the answer to a `Ray`; `triangle` is 0xffffffff for a miss.
@@ -178,10 +183,11 @@ const FAR: f32 = MCG_F32_MAX;
 
 // `Triangle::intersect`: Möller and Trumbore 1997; (t, b1, b2) in .xyz, .w = 1 on a hit.
 fn triangle_intersect(tri: Triangle, origin: vec3<f32>, direction: vec3<f32>, t_min: f32,
-                      t_max: f32) -> vec4<f32> {
+                      t_max: f32, front_only: bool) -> vec4<f32> {
     let p = cross(direction, tri.e2);
     let det = dot(tri.e1, p);
-    if abs(det) < 1e-12 {
+    // `Triangle::intersect_front`: det = −d·(e1 × e2) > 0 exactly on the front face.
+    if select(abs(det), det, front_only) < 1e-12 {
         return vec4<f32>(0.0);
     }
     let inv = 1.0 / det;
@@ -217,6 +223,13 @@ fn box_entry(node: BvhNode, origin: vec3<f32>, inv: vec3<f32>, t_min: f32, t_max
 // `triangle` is NO_HIT on a miss.
 fn bvh_walk(origin: vec3<f32>, direction: vec3<f32>, t_min: f32, t_max: f32,
             any_hit: bool) -> RayHit {
+    return bvh_walk_tree(0u, false, origin, direction, t_min, t_max, any_hit);
+}
+
+// `bvh_walk` in the tree whose root is `nodes[root]` (0: the scene's; `params.emitter_root`:
+// the emitters', `gpu::joined_trees`), with `front_only` hitting front faces only.
+fn bvh_walk_tree(root: u32, front_only: bool, origin: vec3<f32>, direction: vec3<f32>,
+                 t_min: f32, t_max: f32, any_hit: bool) -> RayHit {
     var best = RayHit(t_max, NO_HIT, 0.0, 0.0);
     // 1/d with zero components replaced by a tiny signed value: the CPU's ±∞ times a zero
     // slab distance is NaN, which GPUs compare inconsistently.
@@ -225,14 +238,15 @@ fn bvh_walk(origin: vec3<f32>, direction: vec3<f32>, t_min: f32, t_max: f32,
                       abs(direction) < tiny);
     let inv = 1.0 / safe;
     var stack: array<u32, STACK_SIZE>;
-    stack[0] = 0u;
+    stack[0] = root;
     var top = 1u;
     while top > 0u {
         top -= 1u;
         let node = nodes[stack[top]];
         if node.count > 0u {
             for (var i = node.index; i < node.index + node.count; i++) {
-                let h = triangle_intersect(triangles[i], origin, direction, t_min, best.t);
+                let h = triangle_intersect(triangles[i], origin, direction, t_min, best.t,
+                                           front_only);
                 if h.w > 0.0 {
                     best = RayHit(h.x, i, h.y, h.z);
                     if any_hit {
@@ -536,15 +550,14 @@ fn gathers_emission() -> bool {
     return params.method == METHOD_MCPG && params.emission_sample != 0u;
 }
 
-// `cpu::emission_along`: the emission a ray from `origin` along `d` finds first.
+// `cpu::emission_along`: the emission a ray from `origin` along `d` finds first, as the
+// nearest emitter facing the ray (the emitters' tree) that nothing blocks.
 fn emission_along(origin: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
-    let hit = bvh_walk(origin, d, 0.0, FAR, false);
-    if hit.triangle == NO_HIT {
+    let e = bvh_walk_tree(params.emitter_root, true, origin, d, 0.0, FAR, false);
+    if e.triangle == NO_HIT || bvh_walk(origin, d, 0.0, e.t, true).triangle != NO_HIT {
         return vec3<f32>(0.0);
     }
-    let tri = triangles[hit.triangle];
-    let facing = dot(cross(tri.e1, tri.e2), d) < 0.0;
-    return select(vec3<f32>(0.0), material_at(hit).emission, facing);
+    return materials[triangles[e.triangle].material].emission;
 }
 
 // `cpu::light_sample` before its MIS weight, which the caller applies against the density of
@@ -736,14 +749,16 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     image[index] = vec4<f32>(sum / f32(params.spp), 1.0);
 }
 
-// One invocation per ray of `rays`: the BVH query of `bvh_walk`, for the CPU/GPU agreement test.
+// One invocation per ray of `rays`: the BVH query of `bvh_walk_tree`, for the CPU/GPU agreement
+// test.
 @compute @workgroup_size(64)
 fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= arrayLength(&rays) {
         return;
     }
     let r = rays[id.x];
-    ray_hits[id.x] = bvh_walk(r.origin, r.direction, 0.0, r.t_max, r.any_hit != 0u);
+    ray_hits[id.x] = bvh_walk_tree(r.root, r.front_only != 0u, r.origin, r.direction, 0.0,
+                                   r.t_max, r.any_hit != 0u);
 }
 
 #ifdef MCG_DEMO_PROBE_GI
