@@ -15,7 +15,7 @@ use mcg_demo::render::cpu::{
     BsdfSampler, Method, Observation, RenderSettings, Vertex, VertexSampler, path_seed,
     render_frame, trace_path,
 };
-use mcg_demo::render::guided::{EmissionSample, McpgSampler, new_guide};
+use mcg_demo::render::guided::{McpgSampler, new_guide};
 use mcg_demo::render::material::BsdfSample;
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
 use mcg_demo::render::scene::{Scene, SceneError, SceneFile, frame_time};
@@ -235,9 +235,9 @@ fn gltf_errors_are_typed_and_name_the_file() {
 /// of standard errors. `mcpg` and `mcpg-nee` are tested on their fourth frame, after three
 /// frames of learning
 /// (it must show spread, i.e. have sampled lobes); dividing its samples by the material's
-/// density instead of the guided mixture's fails it (checked once). `mcpg` runs with and
-/// without its emission sample (every face emits, so each of its rays finds emission; counting
-/// it in full instead of ½ fails the test).
+/// density instead of the guided mixture's fails it (checked once). `mcpg` runs without and
+/// with three emission-only directions (every face emits, so each of its rays finds emission;
+/// counting it with ½ instead of ¼ fails the test).
 #[test]
 fn furnace_matches_the_truncated_neumann_series() {
     let (rho, le) = (Vec3::new(0.5, 0.3, 0.8), Vec3::new(1.0, 2.0, 0.5));
@@ -245,11 +245,11 @@ fn furnace_matches_the_truncated_neumann_series() {
     let bounces = 3;
     let expected: Vec3 = (0..=bounces).map(|k| rho.powf(k as f32) * le).sum();
     for (method, emission) in [
-        (Method::Bsdf, EmissionSample::None),
-        (Method::Nee, EmissionSample::None),
-        (Method::Mcpg, EmissionSample::None),
-        (Method::Mcpg, EmissionSample::Guided),
-        (Method::McpgNee, EmissionSample::None),
+        (Method::Bsdf, 0),
+        (Method::Nee, 0),
+        (Method::Mcpg, 0),
+        (Method::Mcpg, 3),
+        (Method::McpgNee, 0),
     ] {
         let settings = RenderSettings {
             width: 16,
@@ -259,16 +259,16 @@ fn furnace_matches_the_truncated_neumann_series() {
             seed: 7,
             method,
         };
-        let label = format!("{method:?}, emission sample {emission:?}");
+        let label = format!("{method:?}, {emission} emission samples");
         let image = if method.is_guided() {
             // Three frames of learning first, so that the tested frame samples the lobes.
             let mut guide = new_guide(&scene, 16, 16).unwrap();
             for frame in 0..3 {
-                let sampler = || McpgSampler::new(&guide).with_emission_sample(emission);
+                let sampler = || McpgSampler::new(&guide).with_emission_samples(emission);
                 render_frame(&scene, &settings, frame, sampler, || ());
                 guide.end_frame();
             }
-            let sampler = || McpgSampler::new(&guide).with_emission_sample(emission);
+            let sampler = || McpgSampler::new(&guide).with_emission_samples(emission);
             let image = render_frame(&scene, &settings, 3, sampler, || ());
             // BSDF sampling is exact here (each bounce multiplies by ρ): spread in the
             // pixels shows that guided lobes were sampled.
@@ -597,7 +597,7 @@ fn render_command_writes_exr_png_and_json() {
         no_progress: true,
         no_irradiance_cache: false,
         mcpg_reflected: mcg_demo::render::guided::Reflected::Path,
-        mcpg_emission_sample: mcg_demo::render::guided::EmissionSample::Guided,
+        mcpg_emission_samples: mcg_demo::render::guided::EMISSION_SAMPLES,
         mcpg_cache_add: mcg_demo::render::guided::CACHE_ADD_PROBABILITY,
         mcpg_confidence: mcg_demo::render::guided::CONFIDENCE_SAMPLES,
         mcpg_alpha_min: mcg_demo::render::guided::ALPHA_MIN,

@@ -194,6 +194,15 @@ fn compare_step(
         cpu.sample.direction,
         gpu.direction
     );
+    // `mcpg_choose_mixture` with the same uniforms: the same lobe (or the scatter technique),
+    // so the same direction.
+    assert!(
+        (cpu.mixture - gpu.mixture).length() <= 1e-3,
+        "{label}: mixture direction {} vs {} (GPU lobe {})",
+        cpu.mixture,
+        gpu.mixture,
+        gpu.mixture_lobe
+    );
     assert!(
         close(pdf_at_gpu, gpu.pdf, 1e-4),
         "{label}: pdf {pdf_at_gpu} vs {}",
@@ -298,8 +307,9 @@ fn compare_tables(label: &str, cpu: &mut Guide, gpu: &GpuMcpgGuide, ctx: &GpuCon
 
 /// Hypothesis: for the same steps the GPU guide makes the CPU guide's choices and leaves the
 /// same tables. 3 configurations × 6 frames × 48 vertices run serially (one invocation) on the
-/// GPU, as the CPU runs them, through begin, sample, pdf and finish, with the per-frame pass
-/// between frames; every decision and integer must be equal, floats within the tolerances of
+/// GPU, as the CPU runs them, through begin, sample (and `mcpg_choose_mixture`'s sample of the
+/// whole mixture from the same uniforms, `GuidedVertex::sample_mixture`), pdf and finish, with
+/// the per-frame pass between frames; every decision and integer must be equal, floats within the tolerances of
 /// the file's header. Also checks that the run exercised every transition that a serial run
 /// can take (stored, rejected, discarded) and cache reads and writes.
 #[test]
@@ -360,7 +370,9 @@ fn serial_frames_match_the_cpu_guide() {
 /// Hypothesis: begin, sample and pdf run by many invocations at once (as a renderer runs them,
 /// composed through naga_oil this time) read the same states as the CPU. After 4 serial
 /// frames, 512 vertices run in parallel (no finish: the grids do not change) and each is
-/// compared with the CPU guide's answer.
+/// compared with the CPU guide's answer; more than 20 of their mixture samples must take
+/// another lobe than Alg. 1's choice (rescaling the choice uniform wrongly in
+/// `mcpg_choose_mixture` fails both tests, checked once).
 #[test]
 fn parallel_vertices_match_the_cpu_guide() {
     let Some((ctx, mut rng)) =
@@ -390,12 +402,18 @@ fn parallel_vertices_match_the_cpu_guide() {
     let batch: Vec<Step> = (0..512).map(|_| random_step(&mut rng)).collect();
     let inputs: Vec<StepInput> = batch.iter().map(Step::gpu_input).collect();
     let outputs = steps.run(ctx, &gpu, "mcpg_sample_only", &inputs, inputs.len(), 8);
-    let mut guided = 0;
+    let (mut guided, mut other_lobes) = (0, 0);
     for (i, (step, out)) in batch.iter().zip(&outputs).enumerate() {
         compare_step(&format!("parallel {i}"), out, &cpu, step, false);
         guided += u32::from(out.lobe != codes::MCPG_NO_LOBE);
+        other_lobes +=
+            u32::from(out.mixture_lobe != codes::MCPG_NO_LOBE && out.mixture_lobe != out.selected);
     }
     assert!(guided > 100, "only {guided} of 512 vertices sampled a lobe");
+    assert!(
+        other_lobes > 20,
+        "only {other_lobes} of 512 mixture samples took another lobe than Alg. 1's"
+    );
 }
 
 /// Hypothesis: racing stores never let a reader see a mixture of two states. 4 096 invocations

@@ -162,21 +162,21 @@ fn guiding_beats_cosine_sampling_on_a_small_light() {
     );
 }
 
+/// `n` points of a Fibonacci sphere, each standing for 4π/n steradians.
+fn fibonacci_sphere(n: usize) -> impl Iterator<Item = Vec3> {
+    let golden = (1.0 + 5f64.sqrt()) / 2.0;
+    (0..n).map(move |i| {
+        let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
+        let r = (1.0 - z * z).sqrt();
+        let phi = std::f64::consts::TAU * (i as f64 / golden).fract();
+        Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32)
+    })
+}
+
 /// Σ over a Fibonacci sphere of `pdf(ω)·4π/N`: the integral of the density.
 fn integral(v: &GuidedVertex<'_, impl mcg_markov_guide::mcpg::Scatter>) -> f64 {
     let n = 200_000;
-    let golden = (1.0 + 5f64.sqrt()) / 2.0;
-    (0..n)
-        .map(|i| {
-            let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
-            let r = (1.0 - z * z).sqrt();
-            let phi = std::f64::consts::TAU * (i as f64 / golden).fract();
-            let w = Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
-            v.pdf(w) as f64
-        })
-        .sum::<f64>()
-        * 4.0
-        * std::f64::consts::PI
+    fibonacci_sphere(n).map(|w| v.pdf(w) as f64).sum::<f64>() * 4.0 * std::f64::consts::PI
         / n as f64
 }
 
@@ -755,7 +755,8 @@ fn young_chains_lend_their_share_and_continue() {
 
 /// `Guide::begin_in` over a vertex begun elsewhere (another point, a non-finite one, another
 /// normal) answers as `begin`'s vertex bit for bit: the candidates, the choice, 16 samples
-/// (direction, pdf, lobe) and the density at 16 directions, for 512 vertices of a trained
+/// (direction, pdf, lobe; `sample_direction` the same direction) and the density at 16
+/// directions, for 512 vertices of a trained
 /// guide (both hemisphere options, young chains lending N_c = 16), the points around the
 /// trained ones and a few non-finite.
 #[test]
@@ -801,6 +802,11 @@ fn begin_in_equals_begin() {
                     a.direction.to_array().map(f32::to_bits),
                     b.direction.to_array().map(f32::to_bits)
                 );
+                assert_eq!(
+                    a.direction.to_array().map(f32::to_bits),
+                    kept.sample_direction(&su).to_array().map(f32::to_bits),
+                    "vertex {i}: sample_direction is sample's direction"
+                );
                 assert_eq!(a.pdf.to_bits(), b.pdf.to_bits(), "vertex {i}");
                 lobes += u32::from(a.lobe.is_some());
                 let w = mcg_markov_guide::mcg_vmf::uniform_sphere(Vec2::new(
@@ -812,4 +818,69 @@ fn begin_in_equals_begin() {
         }
         assert!(lobes > 1000, "{lobes}");
     }
+}
+
+/// The bin of `w` among 16: 4 bands of z (the toy scene's normal) × 4 sectors of φ.
+fn sphere_bin(w: Vec3) -> usize {
+    let band = (((w.z + 1.0) * 2.0) as usize).min(3);
+    let sector = (((w.y.atan2(w.x) / std::f32::consts::TAU) + 0.5) * 4.0) as usize;
+    band * 4 + sector.min(3)
+}
+
+/// Pearson's X² of `counts` against the mass of the vertex's `pdf` in each [`sphere_bin`]
+/// (quadrature over 400 000 Fibonacci points).
+fn chi_square_against_pdf(
+    v: &GuidedVertex<'_, impl mcg_markov_guide::mcpg::Scatter>,
+    counts: &[u64; 16],
+) -> f64 {
+    let n = 400_000;
+    let mut mass = [0.0f64; 16];
+    for w in fibonacci_sphere(n) {
+        mass[sphere_bin(w)] += f64::from(v.pdf(w)) * 4.0 * std::f64::consts::PI / n as f64;
+    }
+    let total: u64 = counts.iter().sum();
+    let norm: f64 = mass.iter().sum();
+    counts
+        .iter()
+        .zip(mass)
+        .map(|(&o, m)| {
+            let e = total as f64 * m / norm;
+            (o as f64 - e).powi(2) / e.max(1e-9)
+        })
+        .sum()
+}
+
+/// `sample_mixture` draws from exactly the density `pdf` describes at the vertex (given the
+/// vertex, not only on average over Alg. 1's choice). Hypothesis: 200 000 directions at one
+/// trained surface vertex (cosine product, at least three candidates with lobes) fall into 16
+/// bins (4 bands of z × 4 sectors of φ) with the frequencies of the pdf's mass per bin.
+/// Threshold: X² < 44.6 (15 degrees of freedom, α ≈ 10⁻⁴). Negative control at the same
+/// vertex: the directions of `sample_direction` (the lobe of the state Alg. 1 chose, whose
+/// density given the vertex is that lobe's) must be rejected, X² > 1000.
+#[test]
+fn sample_mixture_draws_from_the_vertex_density() {
+    let scene = medium_light();
+    let mut guide = toy_guide(Hemisphere::CosineProduct);
+    let mut rng = Pcg64Mcg::seed_from_u64(23);
+    run(&mut guide, &scene, 6, 6, 64, &mut rng);
+    let v = (0..400)
+        .map(|i| {
+            guide.begin(
+                Vertex::surface(shading_point(i % 8), TOY_NORMAL),
+                Lambertian { normal: TOY_NORMAL },
+                &BeginUniforms::from_fn(5, || rng.random()),
+            )
+        })
+        .find(|v| v.candidates().iter().filter(|s| s.is_valid()).count() >= 3)
+        .expect("a trained vertex");
+    let (mut mixture, mut chosen) = ([0u64; 16], [0u64; 16]);
+    for _ in 0..200_000 {
+        let u = SampleUniforms::from_fn(|| rng.random());
+        mixture[sphere_bin(v.sample_mixture(&u))] += 1;
+        chosen[sphere_bin(v.sample_direction(&u))] += 1;
+    }
+    let x2 = chi_square_against_pdf(&v, &mixture);
+    assert!(x2 < 44.6, "sample_mixture: X² = {x2} ({mixture:?})");
+    let control = chi_square_against_pdf(&v, &chosen);
+    assert!(control > 1000.0, "sample_direction: X² = {control}");
 }

@@ -244,6 +244,16 @@ impl<const N: usize> VmfLanes<N> {
         )
     }
 
+    /// Lane `i`'s mixture weight wᵢ (0 for an empty lane).
+    ///
+    /// # Panics
+    /// If `i ≥ N`.
+    #[inline]
+    #[must_use]
+    pub fn weight(&self, i: usize) -> f32 {
+        self.weight[i]
+    }
+
     /// `true` when lane `i` carries weight.
     ///
     /// # Panics

@@ -308,6 +308,11 @@ impl Bvh {
             return;
         }
         let inv = direction.recip();
+        // Front-face queries gather emission from a small tree of emitters that most of
+        // their rays miss: the root's box turns those away before the walk starts.
+        if FRONT && box_entry(&self.nodes[0], origin, inv, t_min, *t_far) == f32::INFINITY {
+            return;
+        }
         let mut stack = [0u32; STACK_SIZE];
         let mut top = 1usize;
         while top > 0 {

@@ -204,16 +204,17 @@ pub trait VertexSampler {
     fn begin_path(&mut self, seed: u32) {
         let _ = seed;
     }
-    /// Whether the tracer asks [`VertexSampler::sample_emission`] at every vertex of a method
-    /// without light sampling; then the emission found along either direction counts ½. The
-    /// default: no.
-    fn gathers_emission(&self) -> bool {
-        false
+    /// How many times the tracer asks [`VertexSampler::sample_emission`] at every vertex of a
+    /// method without light sampling, K; the emission found along each of the K + 1
+    /// directions then counts 1/(K + 1). The default: 0.
+    fn emission_samples(&self) -> u32 {
+        0
     }
-    /// A second direction at `vertex`, right after [`VertexSampler::sample`] there, whose ray
-    /// only gathers the emission it hits (`None` gathers nothing). Any density keeps the
-    /// estimate unbiased (the weights are a constant ½); the default samples nothing.
-    fn sample_emission(&mut self, vertex: &Vertex, u: Vec3) -> Option<BsdfSample> {
+    /// A direction at `vertex`, after [`VertexSampler::sample`] there, whose ray only gathers
+    /// the emission it meets (`None` gathers nothing); the tracer divides by
+    /// [`VertexSampler::pdf`] of it, asked only when it met emission. Any density keeps the
+    /// estimate unbiased (the weights are constant); the default samples nothing.
+    fn sample_emission(&mut self, vertex: &Vertex, u: Vec3) -> Option<Vec3> {
         let _ = (vertex, u);
         None
     }
@@ -297,8 +298,13 @@ pub fn trace_path<S: VertexSampler>(
     let mut last_pdf = 0.0;
     let mut recorded: [Option<Recorded>; MAX_RECORDED] = [None; MAX_RECORDED];
     let mut depth = 0u32;
-    // A second direction per vertex for emission only (a guide's, without light sampling).
-    let gathers = !method.samples_lights() && sampler.gathers_emission();
+    // Directions per vertex for emission only (a guide's, without light sampling).
+    let gathers = if method.samples_lights() {
+        0
+    } else {
+        sampler.emission_samples()
+    };
+    let share = 1.0 / (1 + gathers) as f32;
     while let Some(hit) = scene.bvh.intersect(o, d, 0.0, f32::INFINITY) {
         let tri = scene.bvh.triangles[hit.triangle as usize];
         let material = scene.material_at(&hit);
@@ -310,7 +316,7 @@ pub fn trace_path<S: VertexSampler>(
         if cos_front > 0.0 && material.is_emitter() {
             let weight = emitter_weight(
                 method,
-                gathers,
+                share,
                 last_pdf,
                 tri.emitter_pmf,
                 area,
@@ -323,7 +329,7 @@ pub fn trace_path<S: VertexSampler>(
             // not the radiance arriving along the sampled direction.
             if let Some(r) = previous_record(&mut recorded, depth) {
                 r.discarded += throughput * material.emission() * (1.0 - weight);
-                // Against a light sample; a guide's own second direction shares the
+                // Against a light sample; a guide's own emission-only directions share the
                 // emission with this one, and the guide learns all of it.
                 if let Some(next) = r.next.as_mut().filter(|_| method.samples_lights()) {
                     next.emission_weight = weight;
@@ -351,9 +357,21 @@ pub fn trace_path<S: VertexSampler>(
         if method.samples_lights() {
             radiance +=
                 throughput * light_sample(scene, sampler, &vertex, origin_next, [ul, u1, u2]);
-        } else if gathers && let Some(s) = sampler.sample_emission(&vertex, Vec3::new(ul, u1, u2)) {
-            radiance +=
-                throughput * s.weight * 0.5 * emission_along(scene, origin_next, s.direction);
+        } else {
+            // The first takes the light sample's uniforms, which `mcpg` does not use; the
+            // others draw theirs after the direction's.
+            for i in 0..gathers {
+                let ue = if i == 0 {
+                    Vec3::new(ul, u1, u2)
+                } else {
+                    Vec3::new(u(), u(), u())
+                };
+                if let Some(wi) = sampler.sample_emission(&vertex, ue) {
+                    radiance += throughput
+                        * share
+                        * emission_weighted(scene, sampler, &vertex, origin_next, wi);
+                }
+            }
         }
         let Some(sample) = sampled else {
             break;
@@ -371,6 +389,27 @@ pub fn trace_path<S: VertexSampler>(
     }
     report_recorded(sampler, &recorded, radiance, bounces);
     radiance
+}
+
+/// f·cos/p times the emission that the direction `wi` sampled at `vertex` meets from `origin`,
+/// p the sampler's density of `wi`; 0 without emission, before any density or material is
+/// evaluated (most such directions meet none).
+fn emission_weighted<S: VertexSampler>(
+    scene: &Scene,
+    sampler: &S,
+    vertex: &Vertex,
+    origin: Vec3,
+    wi: Vec3,
+) -> Vec3 {
+    let emitted = emission_along(scene, origin, wi);
+    if emitted == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let pdf = sampler.pdf(vertex, wi);
+    if !(pdf > 0.0) {
+        return Vec3::ZERO;
+    }
+    vertex.material.eval(vertex.normal, vertex.wo, wi) / pdf * emitted
 }
 
 /// The emission a ray from `origin` along `d` finds first (0 from a back face or a surface
@@ -458,11 +497,12 @@ fn next_hit(position: Vec3, n_front: Vec3, cos_front: f32, material: &Material) 
 
 /// The weight of an emitter hit at distance `t` by a sampled direction of density `last_pdf`
 /// in the estimate: the MIS weight against a light sample (`emitter_pmf`, `area` and
-/// `cos_front` give its density of the hit), ½ when the vertex also `gathers` emission along a
-/// second direction ([`VertexSampler::sample_emission`]), else 1 (and 1 for the camera ray).
+/// `cos_front` give its density of the hit), else `share`, 1/(K + 1) when the vertex also
+/// gathers emission along K more directions ([`VertexSampler::sample_emission`]) (and 1 for
+/// the camera ray).
 fn emitter_weight(
     method: Method,
-    gathers: bool,
+    share: f32,
     last_pdf: f32,
     emitter_pmf: f32,
     area: f32,
@@ -474,10 +514,8 @@ fn emitter_weight(
     } else if method.samples_lights() {
         let light_pdf = emitter_pmf / area * t * t / cos_front;
         power_heuristic(last_pdf, light_pdf)
-    } else if gathers {
-        0.5
     } else {
-        1.0
+        share
     }
 }
 

@@ -154,9 +154,9 @@ pub struct GpuParams {
     pub uv_count: u32,
     /// Number of textures.
     pub texture_count: u32,
-    /// 1: `mcpg` draws a second, emission-only direction per vertex
-    /// ([`super::guided::EmissionSample::Guided`]); 0: one direction.
-    pub emission_sample: u32,
+    /// `mcpg`'s emission-only directions per vertex ([`super::guided::EMISSION_SAMPLES`]);
+    /// 0: the path's direction only.
+    pub emission_samples: u32,
     /// The root of the emitters' tree ([`Scene::emitter_bvh`]) in the node buffer, which
     /// holds it after the scene's ([`joined_trees`]).
     pub emitter_root: u32,
@@ -305,8 +305,8 @@ pub struct GpuTracer {
     image: Option<GpuBuffer<[f32; 4]>>,
     timer: Option<Timer>,
     guided: Option<Guided<GpuMcpgGuide>>,
-    /// `mcpg`'s emission sample ([`GpuTracer::set_mcpg_emission_sample`]).
-    mcpg_emission: super::guided::EmissionSample,
+    /// `mcpg`'s emission-only directions per vertex ([`GpuTracer::set_mcpg_emission_samples`]).
+    mcpg_emission: u32,
     /// The compiled `mcpg` shader, kept for rebuilding its pipeline with a new guide.
     guided_module: Option<wgpu::ShaderModule>,
     mcmm: Option<Guided<GpuMcmmGuide>>,
@@ -434,7 +434,7 @@ impl GpuTracer {
             image: None,
             timer,
             guided: None,
-            mcpg_emission: super::guided::EmissionSample::None,
+            mcpg_emission: 0,
             guided_module: None,
             mcmm: None,
             mcmm_module: None,
@@ -481,11 +481,11 @@ impl GpuTracer {
         Ok(())
     }
 
-    /// Whether `mcpg` draws a second, emission-only direction per vertex, as the CPU tracer's
-    /// [`super::guided::McpgSampler::with_emission_sample`] (the default: one direction, the
-    /// paper's).
-    pub fn set_mcpg_emission_sample(&mut self, emission: super::guided::EmissionSample) {
-        self.mcpg_emission = emission;
+    /// How many emission-only directions `mcpg` draws per vertex, as the CPU tracer's
+    /// [`super::guided::McpgSampler::with_emission_samples`] (the default: 0, the paper's one
+    /// direction).
+    pub fn set_mcpg_emission_samples(&mut self, count: u32) {
+        self.mcpg_emission = count;
     }
 
     /// Starts `mcmm` with empty chains for a `width × height` image and `params` (the CPU's
@@ -845,10 +845,11 @@ impl GpuTracer {
             uv_count: scene.uvs.len() as u32,
             texture_count: scene.textures.len() as u32,
             emitter_root: scene.emitter_root,
-            emission_sample: u32::from(
-                settings.method == Method::Mcpg
-                    && self.mcpg_emission == super::guided::EmissionSample::Guided,
-            ),
+            emission_samples: if settings.method == Method::Mcpg {
+                self.mcpg_emission
+            } else {
+                0
+            },
             ..GpuParams::default()
         })
     }

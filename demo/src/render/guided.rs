@@ -176,7 +176,7 @@ pub struct McpgSampler<'g> {
     /// Per depth, the vertex begun there last; `None` until the first.
     kept: [Option<Kept<'g>>; MAX_RECORDED],
     reflected: Reflected,
-    emission: EmissionSample,
+    emission_samples: u32,
 }
 
 impl<'g> McpgSampler<'g> {
@@ -188,7 +188,7 @@ impl<'g> McpgSampler<'g> {
             rng: GuideUniforms::new(0),
             kept: [const { None }; MAX_RECORDED],
             reflected: Reflected::Path,
-            emission: EmissionSample::None,
+            emission_samples: 0,
         }
     }
 
@@ -199,39 +199,36 @@ impl<'g> McpgSampler<'g> {
         self
     }
 
-    /// The same sampler with the emission sample `emission` at every vertex.
+    /// The same sampler with `count` emission-only directions at every vertex
+    /// ([`EMISSION_SAMPLES`]; 0: none, the paper's rule).
     #[must_use]
-    pub fn with_emission_sample(mut self, emission: EmissionSample) -> Self {
-        self.emission = emission;
+    pub fn with_emission_samples(mut self, count: u32) -> Self {
+        self.emission_samples = count;
         self
     }
 }
 
-/// Whether the CPU tracer's `mcpg` draws, at every vertex, a second direction from the begun
-/// vertex's mixture that only gathers the emission it hits ([`VertexSampler::sample_emission`]).
+/// How many directions `mcpg` draws at every vertex, besides the path's own, from the begun
+/// vertex's mixture for the emission they meet ([`VertexSampler::sample_emission`]) — mcg's
+/// extension, on both devices (the WGSL tracer's `emission_samples`, set by
+/// [`super::gpu::GpuTracer::set_mcpg_emission_samples`]); 0 is the paper's one direction.
 ///
 /// A light sample (`nee`) adds direct light at every vertex besides the direction the path
 /// continues in; MCPG, knowing no lights, has only that one direction, and must spend it
-/// either on the light or on the surfaces that lead on to it. The second direction gives the
-/// guide the same two chances at the light without telling it where the lights are: the
-/// emission found along either direction counts with weight ½ (constant weights summing to
-/// 1, so the estimate stays unbiased). It costs one more sample of a vertex already begun and
-/// a query that needs no first hit (`cpu::emission_along`): a walk of the emitters' own tree
-/// ([`Scene::emitter_bvh`](super::scene::Scene::emitter_bvh)), and a shadow ray only when the
-/// direction meets an emitter's front face. On scene (a) (128², 8 spp, 64 frames, seeds 7-8)
-/// it lowered `mcpg`'s relMSE from 0.0223 / 0.0237 to 0.0138 / 0.0129, for 14 % more
-/// instructions per frame (34 % when it traced a closest-hit ray through the scene;
-/// `markov-guide/benches/README.md`). mcg's extension, on both devices (the WGSL tracer's
-/// `gathers_emission`, set by [`super::gpu::GpuTracer::set_mcpg_emission_sample`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum EmissionSample {
-    /// One direction per vertex (MCPG).
-    None,
-    /// A second direction from the guide's mixture, for emission only — mcg's extension.
-    #[default]
-    Guided,
-}
+/// either on the light or on the surfaces that lead on to it. The extra directions give the
+/// guide more chances at the light without telling it where the lights are: with K of them,
+/// the emission found along each of the K + 1 directions counts 1/(K + 1) (constant weights
+/// summing to 1, so the estimate stays unbiased). Each costs a sample of the vertex already
+/// begun and a query that needs no first hit (`cpu::emission_along`: a walk of the emitters'
+/// own tree, [`Scene::emitter_bvh`](super::scene::Scene::emitter_bvh), then a shadow ray
+/// only when the direction meets an emitter facing it); the density and the material are
+/// evaluated only for a direction that found emission.
+///
+/// Scene (a), 128², 8 spp, 64 frames, 2 threads, seeds 7-8 (`markov-guide/benches/README.md`):
+/// relMSE 0.0247 with K = 0, 0.0135 (K = 1), 0.0104 (2), 0.0088 (3), 0.0080 (4), 0.0070 (6),
+/// 0.0066 (8), each direction adding about 8 % of a K = 0 frame's instructions; error × cost
+/// is lowest and flat from K = 4 to 6, so 4 is the default.
+pub const EMISSION_SAMPLES: u32 = 4;
 
 /// The guide's own uniforms in the CPU tracer: two 24-bit uniforms from each 64-bit output of
 /// WyRand (Wang Yi's wyhash generator, through `fastrand`), seeded per path.
@@ -387,18 +384,16 @@ impl VertexSampler for McpgSampler<'_> {
         material_weighted(v, &s)
     }
 
-    fn gathers_emission(&self) -> bool {
-        self.emission == EmissionSample::Guided
+    fn emission_samples(&self) -> u32 {
+        self.emission_samples
     }
 
-    fn sample_emission(&mut self, v: &Vertex, u: Vec3) -> Option<BsdfSample> {
-        let s = match self.kept.get(v.depth as usize) {
-            Some(Some(kept)) if kept.open => kept.vertex.sample(&sample_uniforms(u)),
-            // Past the kept depths: the material's sample (the ½ weights are constant, so
-            // any density keeps the estimate unbiased).
-            _ => return v.material.sample(v.normal, v.wo, u),
-        };
-        material_weighted(v, &s)
+    fn sample_emission(&mut self, v: &Vertex, u: Vec3) -> Option<Vec3> {
+        match self.kept.get(v.depth as usize) {
+            Some(Some(kept)) if kept.open => Some(kept.vertex.sample_mixture(&sample_uniforms(u))),
+            // Past the kept depths: the material's sample, whose density `pdf` answers there.
+            _ => v.material.sample(v.normal, v.wo, u).map(|s| s.direction),
+        }
     }
 
     fn pdf(&self, v: &Vertex, wi: Vec3) -> f32 {

@@ -123,12 +123,12 @@ pub struct RenderArgs {
     /// with `--no-irradiance-cache`, neither.
     #[arg(long, value_enum, default_value_t = guided::Reflected::Path)]
     pub mcpg_reflected: guided::Reflected,
-    /// Whether `mcpg` draws a second direction per vertex from the guide's mixture for the
-    /// emission it hits, each direction's emission counting ½ (mcg's extension), or only the
-    /// path's direction (`none`, the paper's rule), on either device
-    /// ([`guided::EmissionSample`]). `mcpg-nee` samples its lights instead.
-    #[arg(long, value_enum, default_value_t = guided::EmissionSample::Guided)]
-    pub mcpg_emission_sample: guided::EmissionSample,
+    /// How many directions `mcpg` draws per vertex, besides the path's, from the guide's
+    /// mixture for the emission they meet, the emission along each of the K + 1 directions
+    /// counting 1/(K + 1) (mcg's extension), on either device ([`guided::EMISSION_SAMPLES`]);
+    /// 0 is the paper's one direction. `mcpg-nee` samples its lights instead.
+    #[arg(long, default_value_t = guided::EMISSION_SAMPLES)]
+    pub mcpg_emission_samples: u32,
     /// The share of `mcpg`'s vertices whose sample goes into its irradiance cache, in (0, 1]
     /// ([`guided::CACHE_ADD_PROBABILITY`]; 1 is the paper's rule).
     #[arg(long, default_value_t = guided::CACHE_ADD_PROBABILITY)]
@@ -275,9 +275,10 @@ pub struct RenderReport {
     /// The warm-up ramp of the mean (`--ramp-frames`, [`frame_weight`]); 1 is the
     /// plain mean.
     pub ramp_frames: u32,
-    /// `mcpg`'s emission sample (`--mcpg-emission-sample`); absent for other methods.
+    /// `mcpg`'s emission-only directions per vertex (`--mcpg-emission-samples`); absent for
+    /// other methods.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub mcpg_emission_sample: Option<guided::EmissionSample>,
+    pub mcpg_emission_samples: Option<u32>,
     /// Scattering events per path.
     pub bounces: u32,
     /// The seed as given.
@@ -410,7 +411,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         spp: args.spp,
         frames: args.frames,
         ramp_frames: args.ramp_frames,
-        mcpg_emission_sample: (args.method == Method::Mcpg).then_some(args.mcpg_emission_sample),
+        mcpg_emission_samples: (args.method == Method::Mcpg).then_some(args.mcpg_emission_samples),
         bounces: args.bounces,
         seed: args.seed,
         frame_cpu_times_s: if times.cpu.len() == times.frame.len() {
@@ -617,7 +618,7 @@ struct FrameTimes {
 /// runs on the GPU).
 enum CpuGuide {
     None,
-    Mcpg(Box<Guide>, guided::Reflected, guided::EmissionSample),
+    Mcpg(Box<Guide>, guided::Reflected, u32),
     Mcmm(McmmRenderer),
     Probes(Box<ProbeGi>),
 }
@@ -660,7 +661,7 @@ fn start_guide(
     if let Some(g) = gpu.as_deref_mut() {
         let started = match args.method {
             Method::Mcpg | Method::McpgNee => {
-                g.set_mcpg_emission_sample(args.mcpg_emission_sample);
+                g.set_mcpg_emission_samples(args.mcpg_emission_samples);
                 g.start_mcpg(&mcpg_config(scene, args))
             }
             Method::Mcmm => g.start_mcmm(&mcmm(), args.width, args.height),
@@ -695,7 +696,7 @@ fn start_guide(
             } else {
                 args.mcpg_reflected
             };
-            CpuGuide::Mcpg(Box::new(guide), reflected, args.mcpg_emission_sample)
+            CpuGuide::Mcpg(Box::new(guide), reflected, args.mcpg_emission_samples)
         }
         Method::Mcmm => CpuGuide::Mcmm(McmmRenderer::new(args.width, args.height, mcmm())?),
         Method::Bsdf | Method::Nee => CpuGuide::None,
@@ -736,7 +737,7 @@ fn cpu_frame(
             let sampler = || {
                 McpgSampler::new(g)
                     .with_reflected(reflected)
-                    .with_emission_sample(emission)
+                    .with_emission_samples(emission)
             };
             let image = render_frame(scene, settings, frame, sampler, || ());
             let ending = Instant::now();

@@ -40,7 +40,7 @@ use super::Context;
 use crate::Result;
 use crate::plot::{self, Axis, LineChart, PALETTE, Series, SeriesLabelPosition};
 use crate::render::cpu::Method;
-use crate::render::guided::{EmissionSample, MaterialScatter};
+use crate::render::guided::{EMISSION_SAMPLES, MaterialScatter};
 use crate::render::mcmm::McmmScore;
 use crate::render::output::{Errors, RgbImage, srgb_encode};
 use crate::render::scene::{SceneFile, frame_time};
@@ -192,7 +192,7 @@ fn args(
         no_progress: true,
         no_irradiance_cache: !study.mcpg_cache,
         mcpg_reflected: crate::render::guided::Reflected::Path,
-        mcpg_emission_sample: study.mcpg_emission,
+        mcpg_emission_samples: study.mcpg_emission,
         mcpg_cache_add: crate::render::guided::CACHE_ADD_PROBABILITY,
         mcpg_confidence: crate::render::guided::CONFIDENCE_SAMPLES,
         mcpg_alpha_min: crate::render::guided::ALPHA_MIN,
@@ -456,8 +456,8 @@ pub struct Study {
     pub settings: Settings,
     /// Whether `mcpg` uses its irradiance cache.
     pub mcpg_cache: bool,
-    /// `mcpg`'s emission sample on the CPU.
-    pub mcpg_emission: EmissionSample,
+    /// `mcpg`'s emission-only directions per vertex.
+    pub mcpg_emission: u32,
 }
 
 impl Study {
@@ -471,7 +471,7 @@ impl Study {
             methods: &METHODS,
             settings: Settings::for_samples(samples),
             mcpg_cache: true,
-            mcpg_emission: EmissionSample::Guided,
+            mcpg_emission: EMISSION_SAMPLES,
         }
     }
 
@@ -505,7 +505,7 @@ impl Study {
             methods: &MANY_LIGHTS_METHODS,
             settings,
             mcpg_cache: false,
-            mcpg_emission: EmissionSample::None,
+            mcpg_emission: 0,
         }
     }
 }
@@ -541,11 +541,13 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
          rule, which the GPU tracer keeps: it finishes a vertex as soon as its ray is traced), \
          and one vertex in {} adds its sample to the cache (`--mcpg-cache-add 1` adds all): \
          together a guided frame about 15 % cheaper at the same error. On both devices, mcpg \
-         also draws a second direction per vertex from the guide's mixture that only gathers \
-         the emission it hits, the emission along either direction counting ½ (mcg's \
-         extension, still without light information; `render --mcpg-emission-sample none` \
-         gives the paper's one direction): two chances at the light per vertex, as nee has, \
-         for a ray more. \
+         also draws {} more directions per vertex from the guide's mixture that only gather \
+         the emission they meet, the emission along each of the directions counting 1/{} \
+         (mcg's extension, still without light information; `render \
+         --mcpg-emission-samples 0` gives the paper's one direction): more chances at the \
+         light per vertex than nee's one light sample, each costing a sample of the vertex \
+         already begun and a walk of the emitters' own small tree, with a shadow ray only \
+         where it meets an emitter. \
          FLIP is NVIDIA's LDR-FLIP of the sRGB images (the PNGs) at 67 pixels per degree. \
          The reference is cached in {}.",
         hidden.settings.bounces,
@@ -553,6 +555,8 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
         1.0 / crate::render::guided::ALPHA_MIN,
         crate::render::guided::ALPHA_MIN,
         (1.0 / crate::render::guided::CACHE_ADD_PROBABILITY).round(),
+        EMISSION_SAMPLES,
+        EMISSION_SAMPLES + 1,
         reference_path
             .strip_prefix(ctx.out_dir())
             .unwrap_or(&reference_path)
@@ -1022,16 +1026,16 @@ fn mcpg_targets(section: &mut Section, runs: &[Runs]) -> serde_json::Value {
              two combined by MIS with the guide's exact mixture density, and the chains learn \
              only the MIS-weighted share of the emission their directions hit): mcpg-nee ÷ nee = \
              {samples:.3} at equal samples and {time:.3} at equal time; its frame costs {:.1}× a \
-             nee frame, and one late frame has {:.3}× the relMSE of a nee frame. Why mcpg alone \
-             does not beat nee here: nee gathers a light sample at every vertex besides the \
-             direction it continues in, where the paper's guide must spend its one direction on \
-             either; the light, 1.2 m wide and 0.4 m under the ceiling it lights, is near and \
-             wide from there, where a light sample is hard to beat. Guiding only the last vertex \
-             of mcpg's paths (with one direction per vertex) lowers a late frame's relMSE 1.4× \
-             against bsdf, nee's light samples 6.7× (markov-guide/benches/README.md); mcpg's \
-             second, emission-only direction takes back part of that, and its frame costs a ray \
-             per vertex more. The guide's gain is in the directions light sampling cannot find: \
-             the slit, the lit ceiling, the walls it lights.",
+             nee frame, and one late frame has {:.3}× the relMSE of a nee frame. Why the \
+             paper's mcpg (one direction per vertex) does not beat nee here: nee gathers a \
+             light sample at every vertex besides the direction it continues in, where the \
+             paper's guide must spend its one direction on either; the light, 1.2 m wide and \
+             0.4 m under the ceiling it lights, is near and wide from there, where a light \
+             sample is hard to beat. Guiding only the last vertex of mcpg's paths (with one \
+             direction per vertex) lowers a late frame's relMSE 1.4× against bsdf, nee's light \
+             samples 6.7× (markov-guide/benches/README.md); mcpg's emission-only directions \
+             give the guide those chances back. The guide's gain is in the directions light \
+             sampling cannot find: the slit, the lit ceiling, the walls it lights.",
             time_of(Method::McpgNee) / time_of(Method::Nee),
             late_of(Method::McpgNee) / late_of(Method::Nee),
         ));

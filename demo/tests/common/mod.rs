@@ -231,7 +231,7 @@ pub fn door_args(method: Method, out: PathBuf, frames: u32) -> RenderArgs {
         no_progress: true,
         no_irradiance_cache: false,
         mcpg_reflected: mcg_demo::render::guided::Reflected::Path,
-        mcpg_emission_sample: mcg_demo::render::guided::EmissionSample::Guided,
+        mcpg_emission_samples: mcg_demo::render::guided::EMISSION_SAMPLES,
         mcpg_cache_add: mcg_demo::render::guided::CACHE_ADD_PROBABILITY,
         mcpg_confidence: mcg_demo::render::guided::CONFIDENCE_SAMPLES,
         mcpg_alpha_min: mcg_demo::render::guided::ALPHA_MIN,

@@ -64,7 +64,7 @@ pub struct StepInput {
 }
 const _: () = assert!(size_of::<StepInput>() == 336);
 
-/// WGSL `StepOutput` (48 bytes).
+/// WGSL `StepOutput` (64 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct StepOutput {
@@ -78,6 +78,8 @@ pub struct StepOutput {
     pub count: u32,
     pub target_level: u32,
     pub normal_class: u32,
+    pub mixture: Vec3,
+    pub mixture_lobe: u32,
 }
 
 /// A vertex with the CPU's types: where, what the ray found, and every uniform.
@@ -159,6 +161,9 @@ impl Step {
 #[derive(Clone, Copy, Debug)]
 pub struct CpuStep {
     pub sample: GuidedSample,
+    /// [`GuidedVertex::sample_mixture`](mcg_markov_guide::mcpg::GuidedVertex::sample_mixture)
+    /// of the same uniforms.
+    pub mixture: Vec3,
     pub probe_pdf: f32,
     pub selected: Option<usize>,
     pub weight_sum: f32,
@@ -175,6 +180,7 @@ fn cpu_step_with<S: Scatter>(guide: &Guide, step: &Step, scatter: S, finish: boo
         .sum::<f32>();
     CpuStep {
         sample,
+        mixture: v.sample_mixture(&step.sample),
         probe_pdf: v.pdf(step.probe),
         selected: v.selected(),
         weight_sum,

@@ -2,13 +2,13 @@
 // (composed with `GpuMcpgGuide::shader_defs(1)`). One guided vertex per input: begin, sample,
 // the pdf at a probe direction, and (except in `mcpg_sample_only`) finish.
 
-#import mcg::constants::MCG_WORKGROUP_SIZE
+#import mcg::constants::{MCG_WORKGROUP_SIZE, MCPG_NO_LOBE}
 #import mcg::dispatch::mcg_invocation_index
 #import mcg::markov::MarkovGridState
 #import mcg::mcpg::{
     McpgBeginUniforms, McpgFinishUniforms, McpgGuidedVertex, McpgObservation, McpgSampleUniforms,
-    McpgVertex, mcpg_begin, mcpg_finish, mcpg_load_state, mcpg_pdf, mcpg_sample,
-    mcpg_store_state, mcpg_volume_vertex
+    McpgVertex, mcpg_begin, mcpg_choose_mixture, mcpg_finish, mcpg_load_state, mcpg_pdf,
+    mcpg_sample, mcpg_sample_lobe, mcpg_scatter_sample, mcpg_store_state, mcpg_volume_vertex
 }
 
 struct StepInput {
@@ -34,6 +34,9 @@ struct StepOutput {
     count: u32,
     target_level: u32,
     normal_class: u32,
+    // `GuidedVertex::sample_mixture` of the same uniforms, and its lobe.
+    mixture: vec3<f32>,
+    mixture_lobe: u32,
 }
 
 @group(0) @binding(0) var<storage, read> inputs: array<StepInput>;
@@ -44,7 +47,12 @@ fn step(i: u32, finish: bool) {
     var v = mcpg_begin(input.vertex, input.begin);
     let s = mcpg_sample(&v, McpgSampleUniforms(input.sample.x, input.sample.yz));
     let probe = input.cache_and_probe.yzw;
-    var out = StepOutput(s.direction, s.pdf, mcpg_pdf(&v, probe), s.lobe, v.selected, 0xffffffffu, v.weight_sum, v.count, v.target_level, v.normal_class);
+    let k = mcpg_choose_mixture(&v, input.sample.x);
+    var mixture = mcpg_scatter_sample(&v, input.sample.yz);
+    if k != MCPG_NO_LOBE {
+        mixture = mcpg_sample_lobe(&v, k, input.sample.yz);
+    }
+    var out = StepOutput(s.direction, s.pdf, mcpg_pdf(&v, probe), s.lobe, v.selected, 0xffffffffu, v.weight_sum, v.count, v.target_level, v.normal_class, mixture, k);
     if finish {
         let f = input.finish;
         out.transition = mcpg_finish(&v, s, input.observation, McpgFinishUniforms(f.x, f.y, f.z, f.w, input.cache_and_probe.x));

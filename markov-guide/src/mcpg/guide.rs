@@ -889,14 +889,58 @@ impl<S: Scatter> GuidedVertex<'_, S> {
     #[must_use]
     pub fn sample(&self, u: &SampleUniforms) -> GuidedSample {
         let lobe = self.lobe_choice(u.choice);
-        let direction = match lobe {
-            Some(k) => self.lobes.lobe(k).sample(u.direction),
-            None => self.scatter.sample(u.direction),
-        };
+        let direction = self.direction_of(lobe, u);
         GuidedSample {
             direction,
             pdf: self.pdf(direction),
             lobe: lobe.map(|k| k as u8),
+        }
+    }
+
+    /// The direction [`sample`](Self::sample) draws from `u`, without its density: for a
+    /// renderer that needs the density only when the direction contributes, e.g. a direction
+    /// that only gathers the emission it meets and mostly meets none. Its density is
+    /// [`pdf`](Self::pdf) of it; it trains nothing ([`finish`](Self::finish) takes the
+    /// vertex's own [`sample`](Self::sample)).
+    #[inline]
+    #[must_use]
+    pub fn sample_direction(&self, u: &SampleUniforms) -> Vec3 {
+        self.direction_of(self.lobe_choice(u.choice), u)
+    }
+
+    /// A direction from the whole mixture that [`pdf`](Self::pdf) describes, chosen afresh by
+    /// `u.choice` — the scatter technique with probability p_bsdf, else lobe k with its share
+    /// (w̄_k/Σw̄)·(1 − y_k), else the scatter technique — rather than from the state Alg. 1
+    /// chose for the vertex. Its density, given the vertex, is exactly [`pdf`](Self::pdf), as
+    /// [`sample`](Self::sample)'s is only on average over Alg. 1's choice: several such
+    /// directions at one vertex spread over every candidate's lobe where
+    /// [`sample_direction`](Self::sample_direction) keeps to one. It trains nothing: for
+    /// directions that only gather what they meet (mcg's extension; mcg-demo's emission-only
+    /// directions).
+    #[inline]
+    #[must_use]
+    pub fn sample_mixture(&self, u: &SampleUniforms) -> Vec3 {
+        let p = self.guide.config.params.bsdf_probability;
+        if !(self.set.weight_sum() > 0.0) || u.choice < p {
+            return self.scatter.sample(u.direction);
+        }
+        let mut rest = (u.choice - p) / (1.0 - p);
+        for k in 0..MAX_CANDIDATES {
+            let share = self.lobes.weight(k);
+            if rest < share {
+                return self.lobes.lobe(k).sample(u.direction);
+            }
+            rest -= share;
+        }
+        self.scatter.sample(u.direction)
+    }
+
+    /// The chosen lobe's sample, or the scatter technique's without one.
+    #[inline(always)]
+    fn direction_of(&self, lobe: Option<usize>, u: &SampleUniforms) -> Vec3 {
+        match lobe {
+            Some(k) => self.lobes.lobe(k).sample(u.direction),
+            None => self.scatter.sample(u.direction),
         }
     }
 

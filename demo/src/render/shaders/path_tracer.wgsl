@@ -122,8 +122,8 @@ struct Params {
     tile_height: u32,
     uv_count: u32,
     texture_count: u32,
-    // 1: `mcpg` draws a second, emission-only direction per vertex (`guided::EmissionSample`).
-    emission_sample: u32,
+    // `mcpg`'s emission-only directions per vertex (`guided::EMISSION_SAMPLES`).
+    emission_samples: u32,
     // The root of the emitters' tree in `nodes` (`gpu::joined_trees`).
     emitter_root: u32,
 }
@@ -237,6 +237,11 @@ fn bvh_walk_tree(root: u32, front_only: bool, origin: vec3<f32>, direction: vec3
     let safe = select(direction, select(tiny, -tiny, direction < vec3<f32>(0.0)),
                       abs(direction) < tiny);
     let inv = 1.0 / safe;
+    // `Bvh::walk`: front-face queries (emission from the emitters' small tree, which most of
+    // their rays miss) test the root's box first.
+    if front_only && box_entry(nodes[root], origin, inv, t_min, best.t) >= FAR {
+        return best;
+    }
     var stack: array<u32, STACK_SIZE>;
     stack[0] = root;
     var top = 1u;
@@ -452,14 +457,25 @@ fn guided_begin(v: Vertex, grng: ptr<function, u32>) -> McpgGuidedVertex {
 // direction's two): the direction, its exact mixture density and the lobe (`McpgSample`).
 fn guided_sample(g: ptr<function, McpgGuidedVertex>, v: Vertex, u: vec3<f32>) -> McpgSample {
     let k = mcpg_choose(g, u.x);
-    var w: vec3<f32>;
-    if k == MCPG_NO_LOBE {
-        w = material_scatter_sample(v.material, v.normal, v.wo, u.yz);
-    } else {
-        w = mcpg_sample_lobe(g, k, u.yz);
-    }
+    let w = guided_lobe_direction(g, v, k, u.yz);
     let pdf = mcpg_pdf_with(g, w, material_pdf(v.material, v.normal, v.wo, w));
     return McpgSample(w, pdf, k);
+}
+
+// `GuidedVertex::sample_mixture`: a direction from the whole mixture of `mcpg_pdf_with`, its
+// lobe chosen afresh (not the state Alg. 1 chose), without its density.
+fn guided_mixture_direction(g: ptr<function, McpgGuidedVertex>, v: Vertex,
+                            u: vec3<f32>) -> vec3<f32> {
+    return guided_lobe_direction(g, v, mcpg_choose_mixture(g, u.x), u.yz);
+}
+
+// Lobe `k`'s sample, or the material's for MCPG_NO_LOBE.
+fn guided_lobe_direction(g: ptr<function, McpgGuidedVertex>, v: Vertex, k: u32,
+                         u: vec2<f32>) -> vec3<f32> {
+    if k == MCPG_NO_LOBE {
+        return material_scatter_sample(v.material, v.normal, v.wo, u);
+    }
+    return mcpg_sample_lobe(g, k, u);
 }
 
 // Alg. 3 for the vertex `g` once its ray is traced, with five uniforms from `grng` (accept,
@@ -544,10 +560,10 @@ fn samples_lights() -> bool {
     return params.method == METHOD_NEE || params.method == METHOD_MCPG_NEE;
 }
 
-// Whether `mcpg` draws a second direction per vertex for the emission it hits
-// (`VertexSampler::gathers_emission`); the emission along either direction then counts ½.
-fn gathers_emission() -> bool {
-    return params.method == METHOD_MCPG && params.emission_sample != 0u;
+// How many directions `mcpg` draws per vertex, besides the path's, for the emission they meet
+// (`VertexSampler::emission_samples`, K); the emission along each then counts 1/(K + 1).
+fn emission_samples() -> u32 {
+    return select(0u, params.emission_samples, params.method == METHOD_MCPG);
 }
 
 // `cpu::emission_along`: the emission a ray from `origin` along `d` finds first, as the
@@ -628,8 +644,8 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
                 let light_pdf = tri.emitter_pmf / area * hit.t * hit.t / cos_front;
                 emission_weight = power_heuristic(last_pdf, light_pdf);
                 share = emission_weight;
-            } else if gathers_emission() && last_pdf > 0.0 {
-                share = 0.5;
+            } else if last_pdf > 0.0 {
+                share = 1.0 / f32(1u + emission_samples());
             }
             radiance += throughput * material.emission * share;
         }
@@ -666,13 +682,29 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
                                       material_pdf(material, normal, -d, l.direction));
                 radiance += throughput * l.value * power_heuristic(l.pdf, p);
             }
-        } else if gathers_emission() {
-            // `McpgSampler::sample_emission`: a second direction from the begun vertex, from
-            // the light-sampling uniforms `mcpg` does not use.
-            let e = guided_sample(&open, vertex, vec3<f32>(ul, u1, u2));
-            if e.pdf > 0.0 {
-                let f = material_eval(material, normal, -d, e.direction) / e.pdf;
-                radiance += throughput * f * 0.5 * emission_along(origin_next, e.direction);
+        } else {
+            // `McpgSampler::sample_emission`: directions from the begun vertex, the first from
+            // the light-sampling uniforms `mcpg` does not use, the others from the path's
+            // stream after the direction's; density and material only where emission is met
+            // (`cpu::emission_weighted`).
+            let count = emission_samples();
+            let each = 1.0 / f32(1u + count);
+            for (var i = 0u; i < count; i++) {
+                var ue = vec3<f32>(ul, u1, u2);
+                if i > 0u {
+                    ue.x = mcg_rng_uniform(rng);
+                    ue.y = mcg_rng_uniform(rng);
+                    ue.z = mcg_rng_uniform(rng);
+                }
+                let wi = guided_mixture_direction(&open, vertex, ue);
+                let emitted = emission_along(origin_next, wi);
+                if any(emitted > vec3<f32>(0.0)) {
+                    let p = mcpg_pdf_with(&open, wi, material_pdf(material, normal, -d, wi));
+                    if p > 0.0 {
+                        let f = material_eval(material, normal, -d, wi) / p;
+                        radiance += throughput * f * each * emitted;
+                    }
+                }
             }
         }
         if !(open_sample.pdf > 0.0) {

@@ -551,6 +551,25 @@ fn mcpg_choose(v: ptr<function, McpgGuidedVertex>, choice: f32) -> u32 {
     return k;
 }
 
+// `GuidedVertex::sample_mixture`'s choice: the lobe a direction from the whole mixture of
+// `mcpg_pdf_with` takes — MCPG_NO_LOBE (the scatter technique) with probability p_bsdf, else
+// candidate k with its share, else MCPG_NO_LOBE — chosen afresh, not the state Alg. 1 chose.
+fn mcpg_choose_mixture(v: ptr<function, McpgGuidedVertex>, choice: f32) -> u32 {
+    let p = mcpg_params.bsdf_probability;
+    if !((*v).weight_sum > 0.0) || choice < p {
+        return MCPG_NO_LOBE;
+    }
+    var rest = (choice - p) / (1.0 - p);
+    for (var k = 0u; k < MCPG_MAX_CANDIDATES; k += 1u) {
+        let share = (*v).shares[k];
+        if rest < share {
+            return k;
+        }
+        rest -= share;
+    }
+    return MCPG_NO_LOBE;
+}
+
 // A direction from candidate `k`'s lobe.
 fn mcpg_sample_lobe(v: ptr<function, McpgGuidedVertex>, k: u32, u: vec2<f32>) -> vec3<f32> {
     return vmf_sample((*v).lobes[k], u);
