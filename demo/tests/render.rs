@@ -15,6 +15,7 @@ use mcg_demo::render::cpu::{
     BsdfSampler, Method, Observation, RenderSettings, Vertex, VertexSampler, path_seed,
     render_frame, trace_path,
 };
+use mcg_demo::render::emission_allocation::{Allocation, EmissionAllocation};
 use mcg_demo::render::guided::{McpgSampler, new_guide};
 use mcg_demo::render::material::BsdfSample;
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
@@ -236,20 +237,22 @@ fn gltf_errors_are_typed_and_name_the_file() {
 /// frames of learning
 /// (it must show spread, i.e. have sampled lobes); dividing its samples by the material's
 /// density instead of the guided mixture's fails it (checked once). `mcpg` runs without and
-/// with three emission-only directions (every face emits, so each of its rays finds emission;
-/// counting it with ½ instead of ¼ fails the test).
+/// with three emission-only directions per vertex, at every vertex and spread over the depths
+/// by their variances (a random ⌊K(d)⌋ or ⌈K(d)⌉ per vertex; every face emits, so each of its
+/// rays finds emission; counting it with ½ instead of ¼ fails the test).
 #[test]
 fn furnace_matches_the_truncated_neumann_series() {
     let (rho, le) = (Vec3::new(0.5, 0.3, 0.8), Vec3::new(1.0, 2.0, 0.5));
     let scene = furnace(rho, le);
     let bounces = 3;
     let expected: Vec3 = (0..=bounces).map(|k| rho.powf(k as f32) * le).sum();
-    for (method, emission) in [
-        (Method::Bsdf, 0),
-        (Method::Nee, 0),
-        (Method::Mcpg, 0),
-        (Method::Mcpg, 3),
-        (Method::McpgNee, 0),
+    for (method, emission, allocation) in [
+        (Method::Bsdf, 0, Allocation::Uniform),
+        (Method::Nee, 0, Allocation::Uniform),
+        (Method::Mcpg, 0, Allocation::Uniform),
+        (Method::Mcpg, 3, Allocation::Uniform),
+        (Method::Mcpg, 3, Allocation::Adaptive),
+        (Method::McpgNee, 0, Allocation::Uniform),
     ] {
         let settings = RenderSettings {
             width: 16,
@@ -259,16 +262,26 @@ fn furnace_matches_the_truncated_neumann_series() {
             seed: 7,
             method,
         };
-        let label = format!("{method:?}, {emission} emission samples");
+        let label = format!("{method:?}, {emission} emission samples, {allocation:?}");
         let image = if method.is_guided() {
-            // Three frames of learning first, so that the tested frame samples the lobes.
+            // Three frames of learning first, so that the tested frame samples the lobes (and
+            // spreads its emission-only directions by the depths' measured variances).
             let mut guide = new_guide(&scene, 16, 16).unwrap();
+            let mut spread = EmissionAllocation::new(emission, allocation);
             for frame in 0..3 {
-                let sampler = || McpgSampler::new(&guide).with_emission_samples(emission);
+                let sampler = || McpgSampler::new(&guide).with_emission_allocation(&spread);
                 render_frame(&scene, &settings, frame, sampler, || ());
                 guide.end_frame();
+                spread.end_frame();
             }
-            let sampler = || McpgSampler::new(&guide).with_emission_samples(emission);
+            if allocation == Allocation::Adaptive {
+                let k = spread.per_depth();
+                assert!(
+                    k[0] != k[1] && k[..3].iter().any(|k| k.fract() != 0.0),
+                    "{label}: the allocation must vary by depth and round: {k:?}"
+                );
+            }
+            let sampler = || McpgSampler::new(&guide).with_emission_allocation(&spread);
             let image = render_frame(&scene, &settings, 3, sampler, || ());
             // BSDF sampling is exact here (each bounce multiplies by ρ): spread in the
             // pixels shows that guided lobes were sampled.
@@ -598,6 +611,7 @@ fn render_command_writes_exr_png_and_json() {
         no_irradiance_cache: false,
         mcpg_reflected: mcg_demo::render::guided::Reflected::Path,
         mcpg_emission_samples: mcg_demo::render::guided::EMISSION_SAMPLES,
+        mcpg_emission_allocation: mcg_demo::render::emission_allocation::Allocation::Adaptive,
         mcpg_cache_add: mcg_demo::render::guided::CACHE_ADD_PROBABILITY,
         mcpg_confidence: mcg_demo::render::guided::CONFIDENCE_SAMPLES,
         mcpg_alpha_min: mcg_demo::render::guided::ALPHA_MIN,

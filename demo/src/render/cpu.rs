@@ -204,11 +204,19 @@ pub trait VertexSampler {
     fn begin_path(&mut self, seed: u32) {
         let _ = seed;
     }
-    /// How many times the tracer asks [`VertexSampler::sample_emission`] at every vertex of a
-    /// method without light sampling, K; the emission found along each of the K + 1
-    /// directions then counts 1/(K + 1). The default: 0.
-    fn emission_samples(&self) -> u32 {
+    /// How many times the tracer asks [`VertexSampler::sample_emission`] at this vertex of
+    /// depth `depth` (asked once per vertex of a method without light sampling, before the
+    /// directions), K; the emission found along each of the vertex's K + 1 directions then
+    /// counts 1/(K + 1). The default: 0.
+    fn emission_samples(&mut self, depth: u32) -> u32 {
+        let _ = depth;
         0
+    }
+    /// What one of the directions of [`VertexSampler::sample_emission`] at depth `depth`
+    /// added to the pixel before its weight 1/(K + 1) (0 when it met no emission), for
+    /// samplers that measure them. The default ignores it.
+    fn emission_gathered(&mut self, depth: u32, value: Vec3) {
+        let _ = (depth, value);
     }
     /// A direction at `vertex`, after [`VertexSampler::sample`] there, whose ray only gathers
     /// the emission it meets (`None` gathers nothing); the tracer divides by
@@ -298,13 +306,9 @@ pub fn trace_path<S: VertexSampler>(
     let mut last_pdf = 0.0;
     let mut recorded: [Option<Recorded>; MAX_RECORDED] = [None; MAX_RECORDED];
     let mut depth = 0u32;
-    // Directions per vertex for emission only (a guide's, without light sampling).
-    let gathers = if method.samples_lights() {
-        0
-    } else {
-        sampler.emission_samples()
-    };
-    let share = 1.0 / (1 + gathers) as f32;
+    // The weight of the emission the last sampled direction meets: 1/(K + 1) beside the K
+    // emission-only directions of its vertex (a guide's, without light sampling).
+    let mut share = 1.0;
     while let Some(hit) = scene.bvh.intersect(o, d, 0.0, f32::INFINITY) {
         let tri = scene.bvh.triangles[hit.triangle as usize];
         let material = scene.material_at(&hit);
@@ -360,17 +364,21 @@ pub fn trace_path<S: VertexSampler>(
         } else {
             // The first takes the light sample's uniforms, which `mcpg` does not use; the
             // others draw theirs after the direction's.
+            let gathers = sampler.emission_samples(depth);
+            share = 1.0 / (1 + gathers) as f32;
             for i in 0..gathers {
                 let ue = if i == 0 {
                     Vec3::new(ul, u1, u2)
                 } else {
                     Vec3::new(u(), u(), u())
                 };
-                if let Some(wi) = sampler.sample_emission(&vertex, ue) {
-                    radiance += throughput
-                        * share
-                        * emission_weighted(scene, sampler, &vertex, origin_next, wi);
-                }
+                let value = sampler
+                    .sample_emission(&vertex, ue)
+                    .map_or(Vec3::ZERO, |wi| {
+                        throughput * emission_weighted(scene, sampler, &vertex, origin_next, wi)
+                    });
+                sampler.emission_gathered(depth, value);
+                radiance += share * value;
             }
         }
         let Some(sample) = sampled else {

@@ -23,6 +23,7 @@ use mcg_markov_guide::mcpg::{
 };
 
 use super::cpu::{MAX_RECORDED, Observation, Vertex, VertexSampler};
+use super::emission_allocation::{EmissionAllocation, EmissionMoments};
 use super::material::{BsdfSample, Material};
 use super::scene::Scene;
 
@@ -177,6 +178,9 @@ pub struct McpgSampler<'g> {
     kept: [Option<Kept<'g>>; MAX_RECORDED],
     reflected: Reflected,
     emission_samples: u32,
+    /// Directions per vertex by depth, shared by the frame's samplers, and this sampler's
+    /// statistics for it (merged when the sampler is dropped).
+    allocation: Option<(&'g EmissionAllocation, EmissionMoments)>,
 }
 
 impl<'g> McpgSampler<'g> {
@@ -189,6 +193,7 @@ impl<'g> McpgSampler<'g> {
             kept: [const { None }; MAX_RECORDED],
             reflected: Reflected::Path,
             emission_samples: 0,
+            allocation: None,
         }
     }
 
@@ -205,6 +210,23 @@ impl<'g> McpgSampler<'g> {
     pub fn with_emission_samples(mut self, count: u32) -> Self {
         self.emission_samples = count;
         self
+    }
+
+    /// The same sampler drawing its number of emission-only directions per vertex from
+    /// `allocation` (replacing [`with_emission_samples`](Self::with_emission_samples)'s) and
+    /// adding what they gather to its statistics.
+    #[must_use]
+    pub fn with_emission_allocation(mut self, allocation: &'g EmissionAllocation) -> Self {
+        self.allocation = Some((allocation, EmissionMoments::default()));
+        self
+    }
+}
+
+impl Drop for McpgSampler<'_> {
+    fn drop(&mut self) {
+        if let Some((allocation, moments)) = &self.allocation {
+            allocation.merge(moments);
+        }
     }
 }
 
@@ -227,7 +249,10 @@ impl<'g> McpgSampler<'g> {
 /// Scene (a), 128², 8 spp, 64 frames, 2 threads, seeds 7-8 (`markov-guide/benches/README.md`):
 /// relMSE 0.0247 with K = 0, 0.0135 (K = 1), 0.0104 (2), 0.0088 (3), 0.0080 (4), 0.0070 (6),
 /// 0.0066 (8), each direction adding about 8 % of a K = 0 frame's instructions; error × cost
-/// is lowest and flat from K = 4 to 6, so 4 is the default.
+/// is lowest and flat from K = 4 to 6, so 4 is the default. The directions come from the
+/// whole mixture ([`GuidedVertex::sample_mixture`]), not only from the state Alg. 1 chose
+/// (4-6 % less error than [`GuidedVertex::sample_direction`]'s), and on the CPU K is the
+/// mean of a per-depth allocation ([`super::emission_allocation`]).
 pub const EMISSION_SAMPLES: u32 = 4;
 
 /// The guide's own uniforms in the CPU tracer: two 24-bit uniforms from each 64-bit output of
@@ -384,8 +409,20 @@ impl VertexSampler for McpgSampler<'_> {
         material_weighted(v, &s)
     }
 
-    fn emission_samples(&self) -> u32 {
-        self.emission_samples
+    fn emission_samples(&mut self, depth: u32) -> u32 {
+        match &mut self.allocation {
+            Some((allocation, moments)) => {
+                moments.add_vertex(depth);
+                allocation.samples_at(depth, self.rng.pair()[0])
+            }
+            None => self.emission_samples,
+        }
+    }
+
+    fn emission_gathered(&mut self, depth: u32, value: Vec3) {
+        if let Some((_, moments)) = &mut self.allocation {
+            moments.add_direction(depth, value);
+        }
     }
 
     fn sample_emission(&mut self, v: &Vertex, u: Vec3) -> Option<Vec3> {

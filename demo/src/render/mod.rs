@@ -27,6 +27,7 @@
 
 pub mod bvh;
 pub mod cpu;
+pub mod emission_allocation;
 pub mod gpu;
 pub mod guided;
 pub mod material;
@@ -48,6 +49,7 @@ use mcg_probe_cache::ProbeGrid;
 
 use crate::Result;
 use cpu::{BsdfSampler, Method, RenderSettings, render_frame};
+use emission_allocation::EmissionAllocation;
 use gpu::{GpuTiming, GpuTracer};
 use guided::{McpgSampler, guide_config};
 use mcmm::{McmmRenderer, McmmScore, mcmm_params};
@@ -129,6 +131,12 @@ pub struct RenderArgs {
     /// 0 is the paper's one direction. `mcpg-nee` samples its lights instead.
     #[arg(long, default_value_t = guided::EMISSION_SAMPLES)]
     pub mcpg_emission_samples: u32,
+    /// How `mcpg` spreads its emission-only directions over the depths of a path on the CPU:
+    /// as many at every vertex, or, with the same mean, by each depth's measured variance
+    /// ([`emission_allocation::Allocation`], mcg's extension; the GPU tracer spends the same
+    /// number at every vertex).
+    #[arg(long, value_enum, default_value_t = emission_allocation::Allocation::Adaptive)]
+    pub mcpg_emission_allocation: emission_allocation::Allocation,
     /// The share of `mcpg`'s vertices whose sample goes into its irradiance cache, in (0, 1]
     /// ([`guided::CACHE_ADD_PROBABILITY`]; 1 is the paper's rule).
     #[arg(long, default_value_t = guided::CACHE_ADD_PROBABILITY)]
@@ -279,6 +287,10 @@ pub struct RenderReport {
     /// other methods.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mcpg_emission_samples: Option<u32>,
+    /// How `mcpg` spread them over the depths on the CPU (`--mcpg-emission-allocation`);
+    /// absent for other methods and on the GPU.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mcpg_emission_allocation: Option<emission_allocation::Allocation>,
     /// Scattering events per path.
     pub bounces: u32,
     /// The seed as given.
@@ -412,6 +424,8 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         frames: args.frames,
         ramp_frames: args.ramp_frames,
         mcpg_emission_samples: (args.method == Method::Mcpg).then_some(args.mcpg_emission_samples),
+        mcpg_emission_allocation: (args.method == Method::Mcpg && gpu.is_none())
+            .then_some(args.mcpg_emission_allocation),
         bounces: args.bounces,
         seed: args.seed,
         frame_cpu_times_s: if times.cpu.len() == times.frame.len() {
@@ -618,7 +632,7 @@ struct FrameTimes {
 /// runs on the GPU).
 enum CpuGuide {
     None,
-    Mcpg(Box<Guide>, guided::Reflected, u32),
+    Mcpg(Box<Guide>, guided::Reflected, Box<EmissionAllocation>),
     Mcmm(McmmRenderer),
     Probes(Box<ProbeGi>),
 }
@@ -696,7 +710,14 @@ fn start_guide(
             } else {
                 args.mcpg_reflected
             };
-            CpuGuide::Mcpg(Box::new(guide), reflected, args.mcpg_emission_samples)
+            CpuGuide::Mcpg(
+                Box::new(guide),
+                reflected,
+                Box::new(EmissionAllocation::new(
+                    args.mcpg_emission_samples,
+                    args.mcpg_emission_allocation,
+                )),
+            )
         }
         Method::Mcmm => CpuGuide::Mcmm(McmmRenderer::new(args.width, args.height, mcmm())?),
         Method::Bsdf | Method::Nee => CpuGuide::None,
@@ -733,13 +754,15 @@ fn cpu_frame(
     let image = match guide {
         CpuGuide::Mcpg(g, reflected, emission) => {
             g.set_camera(scene.camera.position);
-            let (reflected, emission) = (*reflected, *emission);
+            let reflected = *reflected;
+            let allocation = &**emission;
             let sampler = || {
                 McpgSampler::new(g)
                     .with_reflected(reflected)
-                    .with_emission_samples(emission)
+                    .with_emission_allocation(allocation)
             };
             let image = render_frame(scene, settings, frame, sampler, || ());
+            emission.end_frame();
             let ending = Instant::now();
             g.end_frame();
             times.end_frame.push(ending.elapsed().as_secs_f64());

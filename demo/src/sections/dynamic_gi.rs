@@ -142,6 +142,7 @@ fn args(
         no_irradiance_cache: false,
         mcpg_reflected: crate::render::guided::Reflected::Path,
         mcpg_emission_samples: crate::render::guided::EMISSION_SAMPLES,
+        mcpg_emission_allocation: crate::render::emission_allocation::Allocation::Adaptive,
         mcpg_cache_add: crate::render::guided::CACHE_ADD_PROBABILITY,
         mcpg_confidence: crate::render::guided::CONFIDENCE_SAMPLES,
         mcpg_alpha_min: crate::render::guided::ALPHA_MIN,

@@ -232,6 +232,7 @@ pub fn door_args(method: Method, out: PathBuf, frames: u32) -> RenderArgs {
         no_irradiance_cache: false,
         mcpg_reflected: mcg_demo::render::guided::Reflected::Path,
         mcpg_emission_samples: mcg_demo::render::guided::EMISSION_SAMPLES,
+        mcpg_emission_allocation: mcg_demo::render::emission_allocation::Allocation::Adaptive,
         mcpg_cache_add: mcg_demo::render::guided::CACHE_ADD_PROBABILITY,
         mcpg_confidence: mcg_demo::render::guided::CONFIDENCE_SAMPLES,
         mcpg_alpha_min: mcg_demo::render::guided::ALPHA_MIN,
