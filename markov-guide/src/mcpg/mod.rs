@@ -51,10 +51,12 @@
 //! small room lit from behind a panel (128 × 128, 8 samples per pixel × 64 frames, no light
 //! sampling, [`McpgParams::confidence_samples`] 16) a guided frame costs about 2.8-3.0 times
 //! a BSDF-sampled one and reaches 0.15-0.17 of its relative MSE: 0.43-0.53 at equal CPU
-//! time; with a second direction per vertex drawn from the begun vertex for the emission it
-//! hits (mcg-demo's `--mcpg-emission-sample`, each direction's emission weighted ½) 0.09 of it
-//! and 0.35-0.37 at equal CPU time. Against light sampling (next-event estimation with MIS) the guide alone only ties
-//! at equal samples there, but beside it — the guide sampling the scattered direction, one
+//! time; with four more directions per vertex drawn from the begun vertex's whole mixture
+//! ([`GuidedVertex::sample_mixture`]) for the emission they meet (mcg-demo's
+//! `--mcpg-emission-samples`, each direction's emission weighted 1/5) its relative MSE falls to
+//! a third of the one-direction guide's, and its error × time comes within 5-15 % of light
+//! sampling's (next-event estimation with MIS), which the one-direction guide only ties at
+//! equal samples. Beside light sampling — the guide sampling the scattered direction, one
 //! light sample per vertex, MIS with [`GuidedVertex::pdf`], the chains learning only the
 //! MIS-weighted share of the emission ([`VertexObservation::emission_weight`]) — it reaches
 //! 0.28 of light sampling's relative MSE, 0.71-0.74 at equal CPU time (`benches/README.md` has
