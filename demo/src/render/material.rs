@@ -146,6 +146,18 @@ impl Material {
     /// contribution (below the surface, or zero density).
     #[must_use]
     pub fn sample(&self, n: Vec3, wo: Vec3, u: Vec3) -> Option<BsdfSample> {
+        let (wi, pdf) = self.sample_direction(n, wo, u)?;
+        Some(BsdfSample {
+            direction: wi,
+            pdf,
+            weight: self.eval(n, wo, wi) / pdf,
+        })
+    }
+
+    /// The direction and density of [`sample`](Self::sample), without the material's value
+    /// (for a sampler that needs only where to go).
+    #[must_use]
+    pub fn sample_direction(&self, n: Vec3, wo: Vec3, u: Vec3) -> Option<(Vec3, f32)> {
         let wi = if u.x < self.metallic {
             let a2 = self.alpha() * self.alpha();
             let cos2 = (1.0 - u.y) / (1.0 + u.y * (a2 - 1.0));
@@ -158,14 +170,7 @@ impl Material {
             cosine_hemisphere(n, Vec2::new(u.y, u.z)).0
         };
         let pdf = self.pdf(n, wo, wi);
-        if !(pdf > 0.0) {
-            return None;
-        }
-        Some(BsdfSample {
-            direction: wi,
-            pdf,
-            weight: self.eval(n, wo, wi) / pdf,
-        })
+        (pdf > 0.0).then_some((wi, pdf))
     }
 }
 
