@@ -429,7 +429,10 @@ impl VertexSampler for McpgSampler<'_> {
         match self.kept.get(v.depth as usize) {
             Some(Some(kept)) if kept.open => Some(kept.vertex.sample_mixture(&sample_uniforms(u))),
             // Past the kept depths: the material's sample, whose density `pdf` answers there.
-            _ => v.material.sample_direction(v.normal, v.wo, u).map(|(w, _)| w),
+            _ => v
+                .material
+                .sample_direction(v.normal, v.wo, u)
+                .map(|(w, _)| w),
         }
     }
 

@@ -542,13 +542,17 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
          rule, which the GPU tracer keeps: it finishes a vertex as soon as its ray is traced), \
          and one vertex in {} adds its sample to the cache (`--mcpg-cache-add 1` adds all): \
          together a guided frame about 15 % cheaper at the same error. On both devices, mcpg \
-         also draws {} more directions per vertex from the guide's mixture that only gather \
-         the emission they meet, the emission along each of the directions counting 1/{} \
+         also draws {} more directions per vertex on average from the guide's mixture that \
+         only gather the emission they meet, the emission along each of a vertex's K + 1 \
+         directions counting 1/(K + 1) \
          (mcg's extension, still without light information; `render \
          --mcpg-emission-samples 0` gives the paper's one direction): more chances at the \
          light per vertex than nee's one light sample, each costing a sample of the vertex \
          already begun and a walk of the emitters' own small tree, with a shadow ray only \
-         where it meets an emitter. \
+         where it meets an emitter; drawn from the whole mixture (not only the lobe of the \
+         state Alg. 1 chose), and on the CPU spread over the path's depths by each depth's \
+         measured variance at the same mean (`--mcpg-emission-allocation uniform` spends as \
+         many at every vertex, as the GPU tracer does). \
          FLIP is NVIDIA's LDR-FLIP of the sRGB images (the PNGs) at 67 pixels per degree. \
          The reference is cached in {}.",
         hidden.settings.bounces,
@@ -557,7 +561,6 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
         crate::render::guided::ALPHA_MIN,
         (1.0 / crate::render::guided::CACHE_ADD_PROBABILITY).round(),
         EMISSION_SAMPLES,
-        EMISSION_SAMPLES + 1,
         reference_path
             .strip_prefix(ctx.out_dir())
             .unwrap_or(&reference_path)
