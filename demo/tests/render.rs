@@ -230,7 +230,7 @@ fn gltf_errors_are_typed_and_name_the_file() {
 /// inner face, every pixel's radiance with B scattering events is Σ_{k=0}^{B} ρ^k L_e
 /// (per channel). Sample: 16×16 pixels × 16 spp, B = 3, seed 7, ρ = (0.5, 0.3, 0.8),
 /// L_e = (1, 2, 0.5); the 256 pixel values are independent. Threshold: |z| < 5 on the pixel
-/// mean per channel and method (12 tests, α ≈ 7·10⁻⁶), with an absolute floor of 10⁻⁵·L for
+/// mean per channel and method (18 tests, α ≈ 10⁻⁵), with an absolute floor of 10⁻⁵·L for
 /// `bsdf`, whose estimate here has no variance (each bounce multiplies by exactly ρ). A
 /// missing MIS weight, a wrong light pdf or an extra bounce moves the mean by ≥ 5 %, hundreds
 /// of standard errors. `mcpg` and `mcpg-nee` are tested on their fourth frame, after three

@@ -635,8 +635,8 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
         let cos_front = -dot(n_front, d);
         let position = o + hit.t * d;
         // The emission's MIS weight against a light sample of the same point (1 without; the
-        // guide learns with it), and its weight in the estimate (½ beside `mcpg`'s second
-        // direction).
+        // guide learns with it), and its weight in the estimate (1/(K + 1) beside `mcpg`'s K
+        // emission-only directions).
         var emission_weight = 1.0;
         var share = 1.0;
         if cos_front > 0.0 && any(material.emission > vec3<f32>(0.0)) {
