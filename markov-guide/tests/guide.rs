@@ -755,8 +755,7 @@ fn young_chains_lend_their_share_and_continue() {
 
 /// `Guide::begin_in` over a vertex begun elsewhere (another point, a non-finite one, another
 /// normal) answers as `begin`'s vertex bit for bit: the candidates, the choice, 16 samples
-/// (direction, pdf, lobe; `sample_direction` the same direction) and the density at 16
-/// directions, for 512 vertices of a trained
+/// (direction, pdf, lobe) and the density at 16 directions, for 512 vertices of a trained
 /// guide (both hemisphere options, young chains lending N_c = 16), the points around the
 /// trained ones and a few non-finite.
 #[test]
@@ -801,11 +800,6 @@ fn begin_in_equals_begin() {
                 assert_eq!(
                     a.direction.to_array().map(f32::to_bits),
                     b.direction.to_array().map(f32::to_bits)
-                );
-                assert_eq!(
-                    a.direction.to_array().map(f32::to_bits),
-                    kept.sample_direction(&su).to_array().map(f32::to_bits),
-                    "vertex {i}: sample_direction is sample's direction"
                 );
                 assert_eq!(a.pdf.to_bits(), b.pdf.to_bits(), "vertex {i}");
                 lobes += u32::from(a.lobe.is_some());
@@ -855,7 +849,7 @@ fn chi_square_against_pdf(
 /// trained surface vertex (cosine product, at least three candidates with lobes) fall into 16
 /// bins (4 bands of z × 4 sectors of φ) with the frequencies of the pdf's mass per bin.
 /// Threshold: X² < 44.6 (15 degrees of freedom, α ≈ 10⁻⁴). Negative control at the same
-/// vertex: the directions of `sample_direction` (the lobe of the state Alg. 1 chose, whose
+/// vertex: the directions of `sample` (the lobe of the state Alg. 1 chose, whose
 /// density given the vertex is that lobe's) must be rejected, X² > 1000.
 #[test]
 fn sample_mixture_draws_from_the_vertex_density() {
@@ -877,10 +871,10 @@ fn sample_mixture_draws_from_the_vertex_density() {
     for _ in 0..200_000 {
         let u = SampleUniforms::from_fn(|| rng.random());
         mixture[sphere_bin(v.sample_mixture(&u))] += 1;
-        chosen[sphere_bin(v.sample_direction(&u))] += 1;
+        chosen[sphere_bin(v.sample(&u).direction)] += 1;
     }
     let x2 = chi_square_against_pdf(&v, &mixture);
     assert!(x2 < 44.6, "sample_mixture: X² = {x2} ({mixture:?})");
     let control = chi_square_against_pdf(&v, &chosen);
-    assert!(control > 1000.0, "sample_direction: X² = {control}");
+    assert!(control > 1000.0, "sample: X² = {control}");
 }

@@ -759,7 +759,6 @@ mod tests {
                 lit += usize::from(expected != Vec3::ZERO);
                 hidden += usize::from(facing.is_some() && expected == Vec3::ZERO);
             }
-            println!("{name}: {lit} lit, {hidden} hidden rays so far");
         }
         assert!(lit > 200 && hidden > 100, "{lit} lit, {hidden} hidden rays");
     }

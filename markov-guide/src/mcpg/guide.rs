@@ -897,42 +897,38 @@ impl<S: Scatter> GuidedVertex<'_, S> {
         }
     }
 
-    /// The direction [`sample`](Self::sample) draws from `u`, without its density: for a
-    /// renderer that needs the density only when the direction contributes, e.g. a direction
-    /// that only gathers the emission it meets and mostly meets none. Its density is
-    /// [`pdf`](Self::pdf) of it; it trains nothing ([`finish`](Self::finish) takes the
-    /// vertex's own [`sample`](Self::sample)).
-    #[inline]
-    #[must_use]
-    pub fn sample_direction(&self, u: &SampleUniforms) -> Vec3 {
-        self.direction_of(self.lobe_choice(u.choice), u)
-    }
-
     /// A direction from the whole mixture that [`pdf`](Self::pdf) describes, chosen afresh by
     /// `u.choice` — the scatter technique with probability p_bsdf, else lobe k with its share
     /// (w̄_k/Σw̄)·(1 − y_k), else the scatter technique — rather than from the state Alg. 1
     /// chose for the vertex. Its density, given the vertex, is exactly [`pdf`](Self::pdf), as
     /// [`sample`](Self::sample)'s is only on average over Alg. 1's choice: several such
-    /// directions at one vertex spread over every candidate's lobe where
-    /// [`sample_direction`](Self::sample_direction) keeps to one. It trains nothing: for
-    /// directions that only gather what they meet (mcg's extension; mcg-demo's emission-only
-    /// directions).
+    /// directions at one vertex spread over every candidate's lobe where `sample`'s keep to
+    /// one. Only the direction is returned, as its density is needed only where it
+    /// contributes ([`pdf`](Self::pdf) of it), and it trains nothing: for directions that only
+    /// gather what they meet (mcg's extension; mcg-demo's emission-only directions).
     #[inline]
     #[must_use]
     pub fn sample_mixture(&self, u: &SampleUniforms) -> Vec3 {
+        self.direction_of(self.mixture_choice(u.choice), u)
+    }
+
+    /// [`sample_mixture`](Self::sample_mixture)'s lobe (`None`: the scatter technique), the
+    /// twin of the WGSL `mcpg_choose_mixture`.
+    #[inline]
+    fn mixture_choice(&self, choice: f32) -> Option<usize> {
         let p = self.guide.config.params.bsdf_probability;
-        if !(self.set.weight_sum() > 0.0) || u.choice < p {
-            return self.scatter.sample(u.direction);
+        if !(self.set.weight_sum() > 0.0) || choice < p {
+            return None;
         }
-        let mut rest = (u.choice - p) / (1.0 - p);
+        let mut rest = (choice - p) / (1.0 - p);
         for k in 0..MAX_CANDIDATES {
             let share = self.lobes.weight(k);
             if rest < share {
-                return self.lobes.lobe(k).sample(u.direction);
+                return Some(k);
             }
             rest -= share;
         }
-        self.scatter.sample(u.direction)
+        None
     }
 
     /// The chosen lobe's sample, or the scatter technique's without one.

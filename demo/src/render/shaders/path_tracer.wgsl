@@ -566,6 +566,11 @@ fn emission_samples() -> u32 {
     return select(0u, params.emission_samples, params.method == METHOD_MCPG);
 }
 
+// The weight 1/(K + 1) of the emission any one of a vertex's K + 1 directions meets.
+fn emission_share() -> f32 {
+    return 1.0 / f32(1u + emission_samples());
+}
+
 // `cpu::emission_along`: the emission a ray from `origin` along `d` finds first, as the
 // nearest emitter facing the ray (the emitters' tree) that nothing blocks.
 fn emission_along(origin: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
@@ -645,7 +650,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
                 emission_weight = power_heuristic(last_pdf, light_pdf);
                 share = emission_weight;
             } else if last_pdf > 0.0 {
-                share = 1.0 / f32(1u + emission_samples());
+                share = emission_share();
             }
             radiance += throughput * material.emission * share;
         }
@@ -688,7 +693,6 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
             // stream after the direction's; density and material only where emission is met
             // (`cpu::emission_weighted`).
             let count = emission_samples();
-            let each = 1.0 / f32(1u + count);
             for (var i = 0u; i < count; i++) {
                 var ue = vec3<f32>(ul, u1, u2);
                 if i > 0u {
@@ -702,7 +706,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
                     let p = mcpg_pdf_with(&open, wi, material_pdf(material, normal, -d, wi));
                     if p > 0.0 {
                         let f = material_eval(material, normal, -d, wi) / p;
-                        radiance += throughput * f * each * emitted;
+                        radiance += throughput * f * emission_share() * emitted;
                     }
                 }
             }
