@@ -158,7 +158,30 @@ impl Material {
     /// (for a sampler that needs only where to go).
     #[must_use]
     pub fn sample_direction(&self, n: Vec3, wo: Vec3, u: Vec3) -> Option<(Vec3, f32)> {
-        let wi = if u.x < self.metallic {
+        let wi = self.sampled(n, wo, u);
+        let pdf = self.pdf(n, wo, wi);
+        (pdf > 0.0).then_some((wi, pdf))
+    }
+
+    /// The direction of [`sample`](Self::sample) alone, `None` where it has no density: for a
+    /// sampler whose own density replaces the material's (a guide's scatter technique, whose
+    /// mixture density the guide evaluates). Below a material with a diffuse part the density
+    /// is positive exactly where `ωi` and `ωo` are above the surface, so only a pure GGX
+    /// material evaluates it.
+    #[must_use]
+    pub fn sample_direction_only(&self, n: Vec3, wo: Vec3, u: Vec3) -> Option<Vec3> {
+        let wi = self.sampled(n, wo, u);
+        let has_density = if self.metallic < 1.0 {
+            n.dot(wi) > 0.0 && n.dot(wo) > 0.0
+        } else {
+            self.pdf(n, wo, wi) > 0.0
+        };
+        has_density.then_some(wi)
+    }
+
+    /// The direction [`sample`](Self::sample) draws, before its density is checked.
+    fn sampled(&self, n: Vec3, wo: Vec3, u: Vec3) -> Vec3 {
+        if u.x < self.metallic {
             let a2 = self.alpha() * self.alpha();
             let cos2 = (1.0 - u.y) / (1.0 + u.y * (a2 - 1.0));
             let cos_h = cos2.max(0.0).sqrt();
@@ -168,9 +191,7 @@ impl Material {
             2.0 * wo.dot(h) * h - wo
         } else {
             cosine_hemisphere(n, Vec2::new(u.y, u.z)).0
-        };
-        let pdf = self.pdf(n, wo, wi);
-        (pdf > 0.0).then_some((wi, pdf))
+        }
     }
 }
 
