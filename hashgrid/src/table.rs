@@ -232,19 +232,20 @@ impl<T: Pod> HashTable<T> {
 
     /// [`find`](Self::find) for a batch of keys: `out[i] = find(&keys[i])`.
     ///
-    /// The same slots as `find`, faster on large tables: software-pipelined. While it decides
-    /// key `i` it has already hashed key `i +` [`BATCH`](Self::BATCH) and prefetched the cache
-    /// line of that key's home checksum word, so every decision reads the L1 cache and
-    /// [`BATCH`](Self::BATCH) keys' misses are in flight at once, whatever the branches do. A
-    /// per-key `find` instead mispredicts on the ≈ α/2 of keys (at load α) not in their home
-    /// slot, and each misprediction that waits on a missed checksum line stalls the loads of
-    /// the following keys. Keys not in their home slot are decided from one compare of 4
-    /// slots at once. The loop is compiled once per hash and kind of capacity (no per-key
-    /// branch on either), and keeps 16 `(home, checksum)` pairs on the stack. Measured
-    /// (`benches/README.md`, 2¹⁹ slots, load 1/4, fastest passes, then the value reads):
-    /// 4.9–5.2 ns per key with warm caches, 14.2–14.4 ns with the table flushed from the
-    /// caches, where `get` takes 5.3–6.7 and 22–23 ns (hashbrown's `get`: 3.6–4.4 and 16–19).
-    /// To read the values right away, [`get_many`](Self::get_many) is faster from memory.
+    /// The same slots as `find`, faster on large tables: software-pipelined by chunks of
+    /// [`BATCH`](Self::BATCH) keys. Before it decides a chunk it has already hashed the next
+    /// one and prefetched the cache lines of those keys' home checksum words, so every
+    /// decision reads the L1 cache and up to 2 × [`BATCH`](Self::BATCH) keys' misses are in
+    /// flight at once, whatever the branches do. A per-key `find` instead mispredicts on the
+    /// ≈ α/2 of keys (at load α) not in their home slot, and each misprediction that waits on a
+    /// missed checksum line stalls the loads of the following keys. A chunk is hashed lane by
+    /// lane (with the default [`BucketHash::Fold`] the compiler hashes four keys at once with
+    /// baseline x86-64's SSE2); keys not in their home slot are decided out of line, from one
+    /// compare of 4 slots at once. The loop is compiled once per hash and kind of capacity
+    /// (no per-key branch on either). Measured (`benches/README.md`, 2¹⁶ / 2¹⁹ slots, load
+    /// 1/4, fastest passes, then the value reads): 3.3 / 4.2–4.9 ns per key with warm caches,
+    /// where `get` takes 3.5 / 5.8–6.5 ns and hashbrown's `get` 2.6 / 3.5–4.3 ns. To read the
+    /// values right away, [`get_many`](Self::get_many) is faster from memory.
     ///
     /// # Panics
     /// When `keys` and `out` differ in length.
@@ -254,7 +255,18 @@ impl<T: Pod> HashTable<T> {
             out.len(),
             "find_many: keys and out differ in length"
         );
-        self.ahead(keys, |_| {}, |i, slot| out[i] = slot);
+        let mut sink = OutSink {
+            out: out.chunks_mut(probe::CHUNK),
+        };
+        probe::find_chunked(
+            &self.checksums,
+            self.hash,
+            &self.indexer,
+            self.max_probes,
+            keys,
+            |_| {},
+            &mut sink,
+        );
     }
 
     /// The values of a batch of keys: `f(i, self.get(&keys[i]))` for every `i`, in order.
@@ -307,8 +319,9 @@ impl<T: Pod> HashTable<T> {
     }
 
     /// Keys in flight in [`find_many`](Self::find_many) and [`get_many`](Self::get_many):
-    /// each hashes (and prefetches the lines of) the key this many places ahead of the one it
-    /// decides. (Before they were pipelined, the batch of keys hashed per step: 256.)
+    /// `get_many` hashes (and prefetches the lines of) the key this many places ahead of the
+    /// one it decides, `find_many` hashes chunks of this many keys one chunk ahead. (Before
+    /// they were pipelined, the batch of keys hashed per step: 256.)
     pub const BATCH: usize = probe::AHEAD;
 
     /// The value of `key`, if the table holds it.
@@ -497,6 +510,28 @@ impl<T: Pod> HashTable<T> {
     }
 }
 
+/// [`HashTable::find_many`]'s output, a chunk of `out` per chunk of keys.
+struct OutSink<'a> {
+    out: core::slice::ChunksMut<'a, Option<u32>>,
+}
+
+impl probe::ChunkSink for OutSink<'_> {
+    #[inline(always)]
+    fn chunk(
+        &mut self,
+        _first: usize,
+        homes: &[u32],
+        checks: &[u32],
+        decide: &impl Fn(u32, u32) -> Option<u32>,
+    ) {
+        if let Some(out) = self.out.next() {
+            for ((o, &home), &c) in out.iter_mut().zip(homes).zip(checks) {
+                *o = decide(home, c);
+            }
+        }
+    }
+}
+
 /// Plain slots that remember whether the claimed slot was a tombstone.
 struct TrackingSlots<'a> {
     words: &'a mut [u32],
@@ -671,6 +706,69 @@ mod tests {
         t.find_many(&keys, &mut out);
         assert_eq!(out, [Some(15), Some(0)]);
         t.find_many(&[], &mut []);
+    }
+
+    #[test]
+    fn find_many_equals_find_on_a_long_stream() {
+        // The chunked loop hashes a full chunk of keys lane by lane (vectorised for `Fold`) and
+        // a partial one key by key: a long stream of random keys (negative coordinates, every
+        // meta field set), half of them in the table, at load 1/4 and 3/4, with a mask and a
+        // modulo capacity, must give `find`'s slots, and `get_many` `get`'s values.
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(21);
+        let mut random_key = || {
+            CellKey::new(
+                IVec3::new(
+                    rng.random_range(-3000..3000),
+                    rng.random_range(-40..40),
+                    rng.random_range(-3000..3000),
+                ),
+                rng.random_range(0..20),
+                rng.random_range(0..7),
+            )
+            .with_extra(rng.random())
+        };
+        for hash in BucketHash::ALL {
+            for (cap, stored) in [(4096_u32, 1024), (4096, 3072), (4093, 1023)] {
+                let mut t = HashTable::<[u32; 8]>::new(cap, 16, hash).unwrap();
+                let inserted: Vec<CellKey> = (0..stored).map(|_| random_key()).collect();
+                for (i, k) in inserted.iter().enumerate() {
+                    if let Some((v, _)) = t.entry(k) {
+                        v[5] = i as u32;
+                    }
+                }
+                // Hits and misses interleaved, 5 003 keys (not a multiple of the chunk).
+                let keys: Vec<CellKey> = (0..5003)
+                    .map(|i| {
+                        if i % 2 == 0 {
+                            inserted[(i * 7) % inserted.len()]
+                        } else {
+                            random_key()
+                        }
+                    })
+                    .collect();
+                for k in &keys {
+                    assert_eq!(
+                        fold_and_checksum(k),
+                        crate::hash::fold_and_checksum_words(k.load_words())
+                    );
+                }
+                let mut out = vec![Some(u32::MAX); keys.len()];
+                t.find_many(&keys, &mut out);
+                let want: Vec<Option<u32>> = keys.iter().map(|k| t.find(k)).collect();
+                assert_eq!(out, want, "{hash:?} {cap} {stored}");
+                let hits = want.iter().filter(|s| s.is_some()).count();
+                assert!(hits > keys.len() / 3 && hits < keys.len() * 2 / 3, "{hits}");
+                let mut got = Vec::new();
+                t.get_many(&keys, |i, v| got.push((i, v.copied())));
+                let want: Vec<(usize, Option<[u32; 8]>)> = keys
+                    .iter()
+                    .enumerate()
+                    .map(|(i, k)| (i, t.get(k).copied()))
+                    .collect();
+                assert_eq!(got, want, "{hash:?} {cap} {stored}");
+            }
+        }
     }
 
     #[test]
