@@ -169,8 +169,8 @@ pub const fn mix_and_checksum(key: &CellKey) -> (u32, u32) {
 
 /// The two folds of [`hash_fold`]: `(x·FOLD_X + y·FOLD_Y, z·FOLD_Z + rotl(meta, 16))`.
 #[inline(always)]
-const fn folds(words: [u32; 4]) -> (u32, u32) {
-    let [x, y, z, meta] = words;
+const fn folds(key: &CellKey) -> (u32, u32) {
+    let [x, y, z, meta] = key.words();
     (
         x.wrapping_mul(FOLD_X).wrapping_add(y.wrapping_mul(FOLD_Y)),
         z.wrapping_mul(FOLD_Z)
@@ -206,7 +206,7 @@ const fn finish(t: u32) -> u32 {
 #[inline]
 #[must_use]
 pub const fn hash_fold(key: &CellKey) -> u32 {
-    let (a, b) = folds(key.words());
+    let (a, b) = folds(key);
     finish(a ^ b)
 }
 
@@ -220,14 +220,7 @@ pub const fn hash_fold(key: &CellKey) -> u32 {
 #[inline]
 #[must_use]
 pub const fn fold_and_checksum(key: &CellKey) -> (u32, u32) {
-    fold_and_checksum_words(key.words())
-}
-
-/// [`fold_and_checksum`] of the key with these [`words`](CellKey::words): the batched lookups
-/// read a chunk of keys as words, which the compiler vectorises.
-#[inline(always)]
-pub(crate) const fn fold_and_checksum_words(words: [u32; 4]) -> (u32, u32) {
-    let (a, b) = folds(words);
+    let (a, b) = folds(key);
     let h = finish(a ^ b);
     (h, reserve(b.wrapping_add(h)))
 }

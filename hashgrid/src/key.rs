@@ -90,22 +90,6 @@ impl CellKey {
         ]
     }
 
-    /// [`words`](Self::words), read as one 16-byte copy where that is the layout
-    /// (little-endian targets; `words_round_trip_and_match_memory` checks it), so that a loop
-    /// over many keys loads whole words (the vectorised hash of the batched lookups) rather
-    /// than the meta word's three fields.
-    #[inline(always)]
-    pub(crate) fn load_words(&self) -> [u32; 4] {
-        #[cfg(target_endian = "little")]
-        {
-            bytemuck::cast(*self)
-        }
-        #[cfg(not(target_endian = "little"))]
-        {
-            self.words()
-        }
-    }
-
     /// The key whose [`words`](Self::words) are `words` (the inverse of `words`).
     #[inline]
     #[must_use]
@@ -171,7 +155,6 @@ mod tests {
         if cfg!(target_endian = "little") {
             assert_eq!(bytes, words);
         }
-        assert_eq!(key.load_words(), words);
         assert_eq!(CellKey::unclassed(IVec3::ONE).class, CLASS_NONE);
     }
 

@@ -42,9 +42,10 @@
 //! - Probing is linear and bounded by `max_probes` ([`Insert::Full`] beyond): size tables for
 //!   a load ≲ 0.25 or raise the limit.
 //! - [`ConcurrentTable`] claims slots by compare-and-swap on the checksum word; the caller owns
-//!   the values. The crate's three `unsafe` blocks: its `&[AtomicU32]` → `&[u32]` upload view,
-//!   three SSE2 compare intrinsics in the probe loop, and the prefetch (`_mm_prefetch`, a hint)
-//!   of [`HashTable::find_many`] and [`HashTable::get_many`].
+//!   the values. The crate's four `unsafe` blocks: its `&[AtomicU32]` → `&[u32]` upload view,
+//!   three SSE2 compare intrinsics in the probe loop, the prefetch (`_mm_prefetch`, a hint)
+//!   of [`HashTable::find_many`] and [`HashTable::get_many`], and their SSE2 hash of four keys
+//!   at once (register arithmetic, no pointers).
 //!
 //! The measurements behind these choices, the peer benchmarks (hashbrown, `FxHashMap`,
 //! `DashMap`, std's `HashMap`) and how to run them are in `benches/README.md`.
@@ -95,10 +96,12 @@
 //! # Ok::<(), mcg_hashgrid::TableError>(())
 //! ```
 #![no_std]
-// Three `unsafe` blocks: `ConcurrentTable::checksums` views `&[AtomicU32]` as `&[u32]` for upload
-// (documented there), `probe::group_masks` calls SSE2 compare intrinsics (no pointers), and
-// `probe::prefetch` calls `_mm_prefetch` (a hint that never faults, whatever the address);
-// everything else is safe code. Hence `unsafe_code = "deny"` (not "forbid") in Cargo.toml.
+// Four `unsafe` blocks: `ConcurrentTable::checksums` views `&[AtomicU32]` as `&[u32]` for upload
+// (documented there), `probe::group_masks` calls SSE2 compare intrinsics (no pointers),
+// `probe::prefetch` calls `_mm_prefetch` (a hint that never faults, whatever the address), and
+// `probe::fold4_sse2` calls SSE2 arithmetic and shuffle intrinsics (the `Fold` hash of four keys
+// in the lanes of registers; no pointers, the keys come in and the results go out by
+// `bytemuck::cast`); everything else is safe code. Hence `unsafe_code = "deny"` (not "forbid") in Cargo.toml.
 #![cfg_attr(docsrs, feature(doc_cfg))]
 
 #[cfg(feature = "alloc")]

@@ -291,38 +291,22 @@ impl<T: Pod> HashTable<T> {
         // Cut to the capacity like the checksums, so that a home slot (`h & mask` on the
         // default path) indexes the values without a bounds check.
         let values = &self.values[..self.checksums.len()];
-        self.ahead(
-            keys,
-            |home| probe::prefetch(values.as_ptr().wrapping_add(home as usize)),
-            |i, slot| f(i, slot.and_then(|s| values.get(s as usize))),
-        );
-    }
-
-    /// The pipelined lookup behind [`find_many`](Self::find_many) and
-    /// [`get_many`](Self::get_many) (see `probe::find_ahead`).
-    #[inline(always)]
-    fn ahead(
-        &self,
-        keys: &[CellKey],
-        prefetch: impl Fn(u32),
-        emit: impl FnMut(usize, Option<u32>),
-    ) {
-        probe::find_ahead(
+        probe::find_chunked(
             &self.checksums,
             self.hash,
             &self.indexer,
             self.max_probes,
             keys,
-            prefetch,
-            emit,
+            |home| probe::prefetch(values.as_ptr().wrapping_add(home as usize)),
+            &mut ValueSink { values, f: &mut f },
         );
     }
 
-    /// Keys in flight in [`find_many`](Self::find_many) and [`get_many`](Self::get_many):
-    /// `get_many` hashes (and prefetches the lines of) the key this many places ahead of the
-    /// one it decides, `find_many` hashes chunks of this many keys one chunk ahead. (Before
-    /// they were pipelined, the batch of keys hashed per step: 256.)
-    pub const BATCH: usize = probe::AHEAD;
+    /// Keys per step of [`find_many`](Self::find_many) and [`get_many`](Self::get_many):
+    /// each hashes (and prefetches the lines of) a chunk of this many keys one chunk ahead of
+    /// the chunk it decides. (Before they were pipelined, the batch of keys hashed per step:
+    /// 256; from the fifth session to the seventh, the distance of a ring of 16 keys.)
+    pub const BATCH: usize = probe::CHUNK;
 
     /// The value of `key`, if the table holds it.
     #[inline]
@@ -528,6 +512,27 @@ impl probe::ChunkSink for OutSink<'_> {
             for ((o, &home), &c) in out.iter_mut().zip(homes).zip(checks) {
                 *o = decide(home, c);
             }
+        }
+    }
+}
+
+/// [`HashTable::get_many`]'s output: `f(i, value)` for every key `i`, in order.
+struct ValueSink<'a, 'f, T, F> {
+    values: &'a [T],
+    f: &'f mut F,
+}
+
+impl<'a, T, F: FnMut(usize, Option<&'a T>)> probe::ChunkSink for ValueSink<'a, '_, T, F> {
+    #[inline(always)]
+    fn chunk(
+        &mut self,
+        first: usize,
+        homes: &[u32],
+        checks: &[u32],
+        decide: &impl Fn(u32, u32) -> Option<u32>,
+    ) {
+        for (i, (&home, &c)) in (first..).zip(homes.iter().zip(checks)) {
+            (self.f)(i, decide(home, c).and_then(|s| self.values.get(s as usize)));
         }
     }
 }
@@ -747,12 +752,6 @@ mod tests {
                         }
                     })
                     .collect();
-                for k in &keys {
-                    assert_eq!(
-                        fold_and_checksum(k),
-                        crate::hash::fold_and_checksum_words(k.load_words())
-                    );
-                }
                 let mut out = vec![Some(u32::MAX); keys.len()];
                 t.find_many(&keys, &mut out);
                 let want: Vec<Option<u32>> = keys.iter().map(|k| t.find(k)).collect();
