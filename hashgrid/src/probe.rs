@@ -296,8 +296,15 @@ fn find_chunked_with(
         // A no-op on a home slot (an `& mask` again, or nothing), which shows the compiler
         // that the home slot from the stack is in bounds of the words cut to the capacity.
         let home = in_bounds(home);
+        // The next slot: `(home + 1) & mask`, or `home + 1` (past the last slot with a modulo
+        // capacity, where `words.get` answers `None` and `past_home` wraps).
+        let next = in_bounds(home + 1);
         match words.get(home as usize) {
             Some(&w) if w == c => Some(home),
+            // Most keys not in their home slot are in the next one.
+            Some(&w) if w != EMPTY && max_probes > 1 && words.get(next as usize) == Some(&c) => {
+                Some(next)
+            }
             _ => past_home(words, indexer, max_probes, home, c),
         }
     };

@@ -198,10 +198,19 @@ impl<T: Pod> HashTable<T> {
     fn lookup<R>(&self, mask: u32, key: &CellKey, hit: impl FnOnce(u32) -> Option<R>) -> Option<R> {
         let (h, c) = fold_and_checksum(key);
         let home = h & mask;
-        match self.checksums.get(..=mask as usize)?.get(home as usize) {
+        let words = self.checksums.get(..=mask as usize)?;
+        match words.get(home as usize) {
             Some(&w) if w == c => hit(home),
             Some(&EMPTY) => None,
-            _ => hit(self.walk(home, c)?),
+            _ => {
+                // Most keys not in their home slot are in the next one (wrapping): one compare
+                // there before the general walk, which starts over from the home slot.
+                let next = (home + 1) & mask;
+                match words.get(next as usize) {
+                    Some(&w) if w == c && self.max_probes > 1 => hit(next),
+                    _ => hit(self.walk(home, c)?),
+                }
+            }
         }
     }
 
