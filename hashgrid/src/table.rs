@@ -831,6 +831,32 @@ mod tests {
     }
 
     #[test]
+    fn next_slot_behind_a_tombstone() {
+        // Two keys with home slot 63 (the last): the first there, the second wrapped to slot 0.
+        // With the first removed (a tombstone at home), `get`, `find_many` and `get_many` still
+        // find the second through the next-slot compare, and the first is gone.
+        let mut t = HashTable::<u32>::new(64, 8, BucketHash::Fold).unwrap();
+        let keys: Vec<CellKey> = (0..3).map(|s| key_at_home(&t, 63, s)).collect();
+        for (i, k) in keys[..2].iter().enumerate() {
+            *t.entry(k).unwrap().0 = i as u32 + 10;
+        }
+        assert_eq!(t.find(&keys[1]), Some(0));
+        assert!(t.remove(&keys[0]));
+        assert_eq!(t.get(&keys[1]), Some(&11));
+        assert_eq!(t.get(&keys[0]), None);
+        assert_eq!(t.get(&keys[2]), None);
+        let stream: Vec<CellKey> = keys.iter().copied().cycle().take(40).collect();
+        let mut out = vec![None; stream.len()];
+        t.find_many(&stream, &mut out);
+        let want: Vec<Option<u32>> = stream.iter().map(|k| t.find(k)).collect();
+        assert_eq!(out, want);
+        assert_eq!(&out[..3], [None, Some(0), None]);
+        let mut got = Vec::new();
+        t.get_many(&stream, |_, v| got.push(v.copied()));
+        assert_eq!(&got[..3], [None, Some(11), None]);
+    }
+
+    #[test]
     #[should_panic(expected = "differ in length")]
     fn find_many_checks_lengths() {
         let t = HashTable::<u32>::new(16, 4, BucketHash::Mix).unwrap();
