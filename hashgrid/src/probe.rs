@@ -670,6 +670,39 @@ mod tests {
         CellKey::new(IVec3::new(x as i32, 0, z), level, 3)
     }
 
+    #[cfg(feature = "alloc")]
+    #[test]
+    fn keys_whose_raw_checksum_is_empty_or_tombstone() {
+        // `get` compares the raw checksum first: a key whose raw checksum is 0 must not match
+        // an empty home slot, one whose raw checksum is 1 not a tombstone there.
+        use crate::{BucketHash, HashTable};
+        let mut t = HashTable::<u32>::new(64, 8, BucketHash::Fold).unwrap();
+        let k0 = key_with_raw_checksum(0, 5, 1);
+        let k1 = key_with_raw_checksum(1, -9, 2);
+        assert_eq!(t.get(&k0), None);
+        assert_eq!(t.get(&k1), None);
+        // A tombstone in k1's home slot, k1 in the next one.
+        let home = t.home_slot(&k1);
+        let other = (0..)
+            .map(|i| CellKey::new(IVec3::new(i, 3, 4), 0, 0))
+            .find(|k| t.home_slot(k) == home)
+            .unwrap();
+        *t.entry(&other).unwrap().0 = 7;
+        *t.entry(&k1).unwrap().0 = 11;
+        assert!(t.remove(&other));
+        assert_eq!(t.checksums()[home as usize], crate::constants::TOMBSTONE);
+        assert_eq!(t.find(&k1), Some((home + 1) % 64));
+        assert_eq!(t.get(&k1), Some(&11));
+        assert_eq!(t.get(&k0), None);
+        *t.entry(&k0).unwrap().0 = 10;
+        assert_eq!(t.get(&k0), Some(&10));
+        assert_eq!(t.get(&other), None);
+        let keys = [k0, k1, other, k0, k1];
+        let mut out = [None; 5];
+        t.find_many(&keys, &mut out);
+        assert_eq!(out, keys.map(|k| t.find(&k)));
+    }
+
     #[test]
     fn four_keys_at_once_equal_one_at_a_time() {
         // Keys whose raw checksum is 0 or 1 (remapped to 2 and 3) in every lane, among others
