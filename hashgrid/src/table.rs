@@ -255,10 +255,11 @@ impl<T: Pod> HashTable<T> {
     /// lane (with the default [`BucketHash::Fold`] the compiler hashes four keys at once with
     /// baseline x86-64's SSE2); keys not in their home slot are decided out of line, from one
     /// compare of 4 slots at once. The loop is compiled once per hash and kind of capacity
-    /// (no per-key branch on either). Measured (`benches/README.md`, 2¹⁶ / 2¹⁹ slots, load
-    /// 1/4, fastest passes, then the value reads): 3.3 / 4.2–4.9 ns per key with warm caches,
-    /// where `get` takes 3.5 / 5.8–6.5 ns and hashbrown's `get` 2.6 / 3.5–4.3 ns. To read the
-    /// values right away, [`get_many`](Self::get_many) is faster from memory.
+    /// (no per-key branch on either). Measured (`benches/README.md`, seventh session, 2¹⁶ /
+    /// 2¹⁹ slots, load 1/4, fastest passes, then the value reads): 2.9 / 4.6 ns per key with
+    /// warm caches (0.87–0.88 / 0.88–0.94 of hashbrown's `get` speed), 5.6 / 13.2–13.7 ns with
+    /// the table flushed from the caches (1.15–1.16 / 1.25–1.29). To read the values right
+    /// away, [`get_many`](Self::get_many) is faster from memory.
     ///
     /// # Panics
     /// When `keys` and `out` differ in length.
@@ -285,17 +286,17 @@ impl<T: Pod> HashTable<T> {
     /// The values of a batch of keys: `f(i, self.get(&keys[i]))` for every `i`, in order.
     ///
     /// [`find_many`](Self::find_many) with the value reads inside: with the home checksum
-    /// word's line it also prefetches the home slot's value line, and it calls `f` for key
-    /// `i` right after deciding it, [`BATCH`](Self::BATCH) keys after both lines were asked
-    /// for; a `find_many` over a long stream followed by a pass over the values fetches every
+    /// word's line it also prefetches the home slot's value line, and it calls `f` for each
+    /// key right after deciding it, a chunk of [`BATCH`](Self::BATCH) keys after both lines
+    /// were asked for; a `find_many` over a long stream followed by a pass over the values fetches every
     /// value line a second time, after the stream has evicted it. Use it for a wavefront of
     /// hit points whose states are read (or accumulated) right away, `find_many` where the
     /// slots themselves are wanted. Measured against hashbrown's `get` per key
-    /// (`benches/README.md`, 2¹⁶ / 2¹⁹ slots at load 1/4, fastest passes): 0.74–0.82 /
-    /// 0.64–0.80 of its speed with warm caches, 0.99–1.05 / 1.24–1.40 with the structures
-    /// flushed from the caches (`get`: 0.69–0.70 / 0.78–0.83). With warm caches on a table
-    /// well above the L2 cache, `find_many` followed by a value pass measured faster (0.81–0.84
-    /// at 2¹⁹): two prefetched lines per key in flight, where `find_many` has one.
+    /// (`benches/README.md`, seventh session, 2¹⁶ / 2¹⁹ slots at load 1/4, fastest passes):
+    /// 0.84–0.85 / 0.68–0.72 of its speed with warm caches, 1.09–1.11 / 1.34–1.35 with the
+    /// structures flushed from the caches (`get`: 0.75–0.77 / 0.79–0.83). With warm caches on
+    /// a table well above the L2 cache, `find_many` followed by a value pass measured faster
+    /// (0.88–0.94 at 2¹⁹): two prefetched lines per key in flight, where `find_many` has one.
     ///
     /// The prefetch is `_mm_prefetch` on x86-64 (a hint, which never faults and changes no
     /// result) and nothing elsewhere.
