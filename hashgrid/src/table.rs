@@ -649,8 +649,8 @@ mod tests {
                 t.insert_or_get(&key(i));
             }
             // 0..40 are (mostly) in, the rest not. Streams shorter than, as long as and longer
-            // than the keys in flight, up to several rounds of the ring plus a partial one
-            // (whose ring entries still hold earlier keys' homes); a small capacity puts some
+            // than a chunk, up to several chunks plus a partial one (whose stack arrays still
+            // hold an earlier chunk's homes past its length); a small capacity puts some
             // windows across the wrap-around.
             let b = HashTable::<u32>::BATCH;
             for n in [0, 1, b - 1, b, b + 1, 2 * b + 75] {
