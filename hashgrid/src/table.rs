@@ -251,9 +251,9 @@ impl<T: Pod> HashTable<T> {
     /// decision reads the L1 cache and up to 2 × [`BATCH`](Self::BATCH) keys' misses are in
     /// flight at once, whatever the branches do. A per-key `find` instead mispredicts on the
     /// ≈ α/2 of keys (at load α) not in their home slot, and each misprediction that waits on a
-    /// missed checksum line stalls the loads of the following keys. A chunk is hashed lane by
-    /// lane (with the default [`BucketHash::Fold`] the compiler hashes four keys at once with
-    /// baseline x86-64's SSE2); keys not in their home slot are decided out of line, from one
+    /// missed checksum line stalls the loads of the following keys. With the default
+    /// [`BucketHash::Fold`] a chunk is hashed four keys at a time (SSE2 on x86-64); a key not
+    /// in its home slot is looked for in the next slot, then decided out of line from one
     /// compare of 4 slots at once. The loop is compiled once per hash and kind of capacity
     /// (no per-key branch on either). Measured (`benches/README.md`, seventh session, 2¹⁶ /
     /// 2¹⁹ slots, load 1/4, fastest passes, then the value reads): 2.9 / 4.6 ns per key with
@@ -288,8 +288,8 @@ impl<T: Pod> HashTable<T> {
     /// [`find_many`](Self::find_many) with the value reads inside: with the home checksum
     /// word's line it also prefetches the home slot's value line, and it calls `f` for each
     /// key right after deciding it, a chunk of [`BATCH`](Self::BATCH) keys after both lines
-    /// were asked for; a `find_many` over a long stream followed by a pass over the values fetches every
-    /// value line a second time, after the stream has evicted it. Use it for a wavefront of
+    /// were asked for; a `find_many` over a long stream followed by a pass over the values
+    /// fetches every value line a second time, after the stream has evicted it. Use it for a wavefront of
     /// hit points whose states are read (or accumulated) right away, `find_many` where the
     /// slots themselves are wanted. Measured against hashbrown's `get` per key
     /// (`benches/README.md`, seventh session, 2¹⁶ / 2¹⁹ slots at load 1/4, fastest passes):
