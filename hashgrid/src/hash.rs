@@ -220,9 +220,18 @@ pub const fn hash_fold(key: &CellKey) -> u32 {
 #[inline]
 #[must_use]
 pub const fn fold_and_checksum(key: &CellKey) -> (u32, u32) {
+    let (h, raw) = fold_and_raw_checksum(key);
+    (h, reserve(raw))
+}
+
+/// [`fold_and_checksum`] with the checksum before [`reserve`] (`b + hash`, possibly 0 or 1):
+/// [`HashTable::get`](crate::HashTable::get) compares it with the home slot's word first and
+/// remaps it only off its fast path.
+#[inline(always)]
+pub(crate) const fn fold_and_raw_checksum(key: &CellKey) -> (u32, u32) {
     let (a, b) = folds(key);
     let h = finish(a ^ b);
-    (h, reserve(b.wrapping_add(h)))
+    (h, b.wrapping_add(h))
 }
 
 /// The coherent mixing bucket hash: [`hash_mix`] of `[x >> 2, y, z, meta]`, xor'ed with
@@ -257,7 +266,7 @@ pub const fn checksum(key: &CellKey) -> u32 {
 
 /// Moves raw values 0 and 1 (the reserved words) to 2 and 3.
 #[inline]
-const fn reserve(h: u32) -> u32 {
+pub(crate) const fn reserve(h: u32) -> u32 {
     if h < FIRST_CHECKSUM {
         h | FIRST_CHECKSUM
     } else {

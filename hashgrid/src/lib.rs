@@ -42,27 +42,29 @@
 //! - Probing is linear and bounded by `max_probes` ([`Insert::Full`] beyond): size tables for
 //!   a load ≲ 0.25 or raise the limit.
 //! - [`ConcurrentTable`] claims slots by compare-and-swap on the checksum word; the caller owns
-//!   the values. The crate's three `unsafe` blocks: its `&[AtomicU32]` → `&[u32]` upload view,
-//!   three SSE2 compare intrinsics in the probe loop, and the prefetch (`_mm_prefetch`, a hint)
-//!   of [`HashTable::find_many`] and [`HashTable::get_many`].
+//!   the values. The crate's four `unsafe` blocks: its `&[AtomicU32]` → `&[u32]` upload view,
+//!   three SSE2 compare intrinsics in the probe loop, the prefetch (`_mm_prefetch`, a hint)
+//!   of [`HashTable::find_many`] and [`HashTable::get_many`], and their SSE2 hash of four keys
+//!   at once (register arithmetic, no pointers).
 //!
 //! The measurements behind these choices, the peer benchmarks (hashbrown, `FxHashMap`,
 //! `DashMap`, std's `HashMap`) and how to run them are in `benches/README.md`.
 //!
 //! ## Performance
-//! Against hashbrown (foldhash) holding the same keys (fastest of repeated passes on shared
-//! 2-vCPU VMs, Intel and AMD, baseline x86-64, 2¹⁶ / 2¹⁹ slots at load 1/4; peer ÷ mcg, > 1:
-//! mcg faster): with warm caches [`HashTable::get`] 0.73–0.75 / 0.62–0.74 (34 instructions
-//! against 33), [`HashTable::find_many`] plus the value reads 0.73–0.74 / 0.81–0.85,
-//! [`HashTable::get_many`] 0.76–0.82 / 0.64–0.80; with the structures flushed from the caches
-//! `get` 0.69–0.72 / 0.76–0.83, `get_many` 0.99–1.05 / 1.28–1.40 and `find_many` 1.02–1.06 /
-//! 1.15–1.32 (both prefetch the lines of the key 16 places ahead); an insert 0.87–1.06 /
-//! 0.71–0.75; [`ConcurrentTable`] inserted from two threads 5.7× faster than `DashMap` at 2¹⁹
-//! in a criterion run at moderate load (1.45–2.84× on two cores shared with four builds). The
-//! rest of the gap is instructions per lookup: the 4-word key's hash is 20 of `get`'s 34
-//! (foldhash hashes a packed `u64` in ≈ 5) and no cheaper finisher passes the occupancy suite,
-//! while a prototype with the checksum beside the value (one line per lookup) gained at most
-//! 8 %. Run
+//! Against hashbrown (foldhash) holding the same keys (fastest of repeated passes on a shared
+//! 2-vCPU AMD EPYC VM, baseline x86-64, 2¹⁶ / 2¹⁹ slots at load 1/4; peer ÷ mcg, > 1: mcg
+//! faster; seventh session of issue 21): with warm caches [`HashTable::get`] 0.80–0.81 /
+//! 0.66–0.70 (33 instructions against 33), [`HashTable::find_many`] plus the value reads
+//! 0.87–0.88 / 0.88–0.94 (50 instructions), [`HashTable::get_many`] 0.84–0.85 / 0.68–0.72;
+//! with the structures flushed from the caches `get` 0.75–0.77 / 0.79–0.83, `get_many`
+//! 1.09–1.11 / 1.34–1.35 and `find_many` 1.15–1.16 / 1.25–1.29 (both hash a chunk of 16 keys,
+//! four at a time with SSE2, and prefetch its lines before deciding the chunk before it); an
+//! insert 0.87–1.06 / 0.71–0.75 (fourth session); [`ConcurrentTable`] inserted from two
+//! threads 5.7× faster than `DashMap` at 2¹⁹ in a criterion run at moderate load (1.45–2.84×
+//! on two cores shared with four builds). The rest of the gap is instructions per lookup:
+//! the 4-word key's hash is 20 of `get`'s 33 (foldhash hashes a packed `u64` in ≈ 5) and no
+//! cheaper finisher passes the occupancy suite, while a prototype with the checksum beside the
+//! value (one line per lookup) gained at most 8 %. Run
 //! `cargo run --release -p mcg-hashgrid --example instructions -- CASE BITS PASSES time`
 //! (`cold` instead of `time` flushes the caches first),
 //! `cargo bench -p mcg-hashgrid --bench peers` and `scripts/hashgrid-instructions`; numbers
@@ -95,10 +97,12 @@
 //! # Ok::<(), mcg_hashgrid::TableError>(())
 //! ```
 #![no_std]
-// Three `unsafe` blocks: `ConcurrentTable::checksums` views `&[AtomicU32]` as `&[u32]` for upload
-// (documented there), `probe::group_masks` calls SSE2 compare intrinsics (no pointers), and
-// `probe::prefetch` calls `_mm_prefetch` (a hint that never faults, whatever the address);
-// everything else is safe code. Hence `unsafe_code = "deny"` (not "forbid") in Cargo.toml.
+// Four `unsafe` blocks: `ConcurrentTable::checksums` views `&[AtomicU32]` as `&[u32]` for upload
+// (documented there), `probe::group_masks` calls SSE2 compare intrinsics (no pointers),
+// `probe::prefetch` calls `_mm_prefetch` (a hint that never faults, whatever the address), and
+// `probe::fold4_sse2` calls SSE2 arithmetic and shuffle intrinsics (the `Fold` hash of four keys
+// in the lanes of registers; no pointers, the keys come in and the results go out by
+// `bytemuck::cast`); everything else is safe code. Hence `unsafe_code = "deny"` (not "forbid") in Cargo.toml.
 #![cfg_attr(docsrs, feature(doc_cfg))]
 
 #[cfg(feature = "alloc")]

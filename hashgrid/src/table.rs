@@ -6,9 +6,9 @@ use alloc::vec::Vec;
 use bytemuck::Pod;
 
 use crate::capacity::SlotIndexer;
-use crate::constants::{EMPTY, TOMBSTONE};
+use crate::constants::{EMPTY, FIRST_CHECKSUM, TOMBSTONE};
 use crate::error::TableError;
-use crate::hash::{BucketHash, fold_and_checksum};
+use crate::hash::{BucketHash, fold_and_checksum, fold_and_raw_checksum, reserve};
 use crate::key::CellKey;
 use crate::probe::{self, Insert, Slots};
 
@@ -196,12 +196,25 @@ impl<T: Pod> HashTable<T> {
     /// checks and the register they held).
     #[inline(always)]
     fn lookup<R>(&self, mask: u32, key: &CellKey, hit: impl FnOnce(u32) -> Option<R>) -> Option<R> {
-        let (h, c) = fold_and_checksum(key);
+        let (h, raw) = fold_and_raw_checksum(key);
         let home = h & mask;
-        match self.checksums.get(..=mask as usize)?.get(home as usize) {
-            Some(&w) if w == c => hit(home),
+        let words = self.checksums.get(..=mask as usize)?;
+        match words.get(home as usize) {
+            // The raw checksum equals the stored one unless it is 0 or 1 (EMPTY, TOMBSTONE),
+            // which `reserve` remaps: one compare on the fast path instead of the remap.
+            Some(&w) if w == raw && raw >= FIRST_CHECKSUM => hit(home),
             Some(&EMPTY) => None,
-            _ => hit(self.walk(home, c)?),
+            Some(&w) if w == reserve(raw) => hit(home),
+            _ => {
+                let c = reserve(raw);
+                // Most keys not in their home slot are in the next one (wrapping): one compare
+                // there before the general walk, which starts over from the home slot.
+                let next = (home + 1) & mask;
+                match words.get(next as usize) {
+                    Some(&w) if w == c && self.max_probes > 1 => hit(next),
+                    _ => hit(self.walk(home, c)?),
+                }
+            }
         }
     }
 
@@ -232,19 +245,21 @@ impl<T: Pod> HashTable<T> {
 
     /// [`find`](Self::find) for a batch of keys: `out[i] = find(&keys[i])`.
     ///
-    /// The same slots as `find`, faster on large tables: software-pipelined. While it decides
-    /// key `i` it has already hashed key `i +` [`BATCH`](Self::BATCH) and prefetched the cache
-    /// line of that key's home checksum word, so every decision reads the L1 cache and
-    /// [`BATCH`](Self::BATCH) keys' misses are in flight at once, whatever the branches do. A
-    /// per-key `find` instead mispredicts on the ≈ α/2 of keys (at load α) not in their home
-    /// slot, and each misprediction that waits on a missed checksum line stalls the loads of
-    /// the following keys. Keys not in their home slot are decided from one compare of 4
-    /// slots at once. The loop is compiled once per hash and kind of capacity (no per-key
-    /// branch on either), and keeps 16 `(home, checksum)` pairs on the stack. Measured
-    /// (`benches/README.md`, 2¹⁹ slots, load 1/4, fastest passes, then the value reads):
-    /// 4.9–5.2 ns per key with warm caches, 14.2–14.4 ns with the table flushed from the
-    /// caches, where `get` takes 5.3–6.7 and 22–23 ns (hashbrown's `get`: 3.6–4.4 and 16–19).
-    /// To read the values right away, [`get_many`](Self::get_many) is faster from memory.
+    /// The same slots as `find`, faster on large tables: software-pipelined by chunks of
+    /// [`BATCH`](Self::BATCH) keys. Before it decides a chunk it has already hashed the next
+    /// one and prefetched the cache lines of those keys' home checksum words, so every
+    /// decision reads the L1 cache and up to 2 × [`BATCH`](Self::BATCH) keys' misses are in
+    /// flight at once, whatever the branches do. A per-key `find` instead mispredicts on the
+    /// ≈ α/2 of keys (at load α) not in their home slot, and each misprediction that waits on a
+    /// missed checksum line stalls the loads of the following keys. With the default
+    /// [`BucketHash::Fold`] a chunk is hashed four keys at a time (SSE2 on x86-64); a key not
+    /// in its home slot is looked for in the next slot, then decided out of line from one
+    /// compare of 4 slots at once. The loop is compiled once per hash and kind of capacity
+    /// (no per-key branch on either). Measured (`benches/README.md`, seventh session, 2¹⁶ /
+    /// 2¹⁹ slots, load 1/4, fastest passes, then the value reads): 2.9 / 4.6 ns per key with
+    /// warm caches (0.87–0.88 / 0.88–0.94 of hashbrown's `get` speed), 5.6 / 13.2–13.7 ns with
+    /// the table flushed from the caches (1.15–1.16 / 1.25–1.29). To read the values right
+    /// away, [`get_many`](Self::get_many) is faster from memory.
     ///
     /// # Panics
     /// When `keys` and `out` differ in length.
@@ -254,23 +269,34 @@ impl<T: Pod> HashTable<T> {
             out.len(),
             "find_many: keys and out differ in length"
         );
-        self.ahead(keys, |_| {}, |i, slot| out[i] = slot);
+        let mut sink = OutSink {
+            out: out.chunks_mut(probe::CHUNK),
+        };
+        probe::find_chunked(
+            &self.checksums,
+            self.hash,
+            &self.indexer,
+            self.max_probes,
+            keys,
+            |_| {},
+            &mut sink,
+        );
     }
 
     /// The values of a batch of keys: `f(i, self.get(&keys[i]))` for every `i`, in order.
     ///
     /// [`find_many`](Self::find_many) with the value reads inside: with the home checksum
-    /// word's line it also prefetches the home slot's value line, and it calls `f` for key
-    /// `i` right after deciding it, [`BATCH`](Self::BATCH) keys after both lines were asked
-    /// for; a `find_many` over a long stream followed by a pass over the values fetches every
-    /// value line a second time, after the stream has evicted it. Use it for a wavefront of
+    /// word's line it also prefetches the home slot's value line, and it calls `f` for each
+    /// key right after deciding it, a chunk of [`BATCH`](Self::BATCH) keys after both lines
+    /// were asked for; a `find_many` over a long stream followed by a pass over the values
+    /// fetches every value line a second time, after the stream has evicted it. Use it for a wavefront of
     /// hit points whose states are read (or accumulated) right away, `find_many` where the
     /// slots themselves are wanted. Measured against hashbrown's `get` per key
-    /// (`benches/README.md`, 2¹⁶ / 2¹⁹ slots at load 1/4, fastest passes): 0.74–0.82 /
-    /// 0.64–0.80 of its speed with warm caches, 0.99–1.05 / 1.24–1.40 with the structures
-    /// flushed from the caches (`get`: 0.69–0.70 / 0.78–0.83). With warm caches on a table
-    /// well above the L2 cache, `find_many` followed by a value pass measured faster (0.81–0.84
-    /// at 2¹⁹): two prefetched lines per key in flight, where `find_many` has one.
+    /// (`benches/README.md`, seventh session, 2¹⁶ / 2¹⁹ slots at load 1/4, fastest passes):
+    /// 0.84–0.85 / 0.68–0.72 of its speed with warm caches, 1.09–1.11 / 1.34–1.35 with the
+    /// structures flushed from the caches (`get`: 0.75–0.77 / 0.79–0.83). With warm caches on
+    /// a table well above the L2 cache, `find_many` followed by a value pass measured faster
+    /// (0.88–0.94 at 2¹⁹): two prefetched lines per key in flight, where `find_many` has one.
     ///
     /// The prefetch is `_mm_prefetch` on x86-64 (a hint, which never faults and changes no
     /// result) and nothing elsewhere.
@@ -279,37 +305,22 @@ impl<T: Pod> HashTable<T> {
         // Cut to the capacity like the checksums, so that a home slot (`h & mask` on the
         // default path) indexes the values without a bounds check.
         let values = &self.values[..self.checksums.len()];
-        self.ahead(
-            keys,
-            |home| probe::prefetch(values.as_ptr().wrapping_add(home as usize)),
-            |i, slot| f(i, slot.and_then(|s| values.get(s as usize))),
-        );
-    }
-
-    /// The pipelined lookup behind [`find_many`](Self::find_many) and
-    /// [`get_many`](Self::get_many) (see `probe::find_ahead`).
-    #[inline(always)]
-    fn ahead(
-        &self,
-        keys: &[CellKey],
-        prefetch: impl Fn(u32),
-        emit: impl FnMut(usize, Option<u32>),
-    ) {
-        probe::find_ahead(
+        probe::find_chunked(
             &self.checksums,
             self.hash,
             &self.indexer,
             self.max_probes,
             keys,
-            prefetch,
-            emit,
+            |home| probe::prefetch(values.as_ptr().wrapping_add(home as usize)),
+            &mut ValueSink { values, f: &mut f },
         );
     }
 
-    /// Keys in flight in [`find_many`](Self::find_many) and [`get_many`](Self::get_many):
-    /// each hashes (and prefetches the lines of) the key this many places ahead of the one it
-    /// decides. (Before they were pipelined, the batch of keys hashed per step: 256.)
-    pub const BATCH: usize = probe::AHEAD;
+    /// Keys per step of [`find_many`](Self::find_many) and [`get_many`](Self::get_many):
+    /// each hashes (and prefetches the lines of) a chunk of this many keys one chunk ahead of
+    /// the chunk it decides. (Before they were pipelined, the batch of keys hashed per step:
+    /// 256; from the fifth session to the seventh, the distance of a ring of 16 keys.)
+    pub const BATCH: usize = probe::CHUNK;
 
     /// The value of `key`, if the table holds it.
     #[inline]
@@ -497,6 +508,49 @@ impl<T: Pod> HashTable<T> {
     }
 }
 
+/// [`HashTable::find_many`]'s output, a chunk of `out` per chunk of keys.
+struct OutSink<'a> {
+    out: core::slice::ChunksMut<'a, Option<u32>>,
+}
+
+impl probe::ChunkSink for OutSink<'_> {
+    #[inline(always)]
+    fn chunk(
+        &mut self,
+        _first: usize,
+        homes: &[u32],
+        checks: &[u32],
+        decide: &impl Fn(u32, u32) -> Option<u32>,
+    ) {
+        if let Some(out) = self.out.next() {
+            for ((o, &home), &c) in out.iter_mut().zip(homes).zip(checks) {
+                *o = decide(home, c);
+            }
+        }
+    }
+}
+
+/// [`HashTable::get_many`]'s output: `f(i, value)` for every key `i`, in order.
+struct ValueSink<'a, 'f, T, F> {
+    values: &'a [T],
+    f: &'f mut F,
+}
+
+impl<'a, T, F: FnMut(usize, Option<&'a T>)> probe::ChunkSink for ValueSink<'a, '_, T, F> {
+    #[inline(always)]
+    fn chunk(
+        &mut self,
+        first: usize,
+        homes: &[u32],
+        checks: &[u32],
+        decide: &impl Fn(u32, u32) -> Option<u32>,
+    ) {
+        for (i, (&home, &c)) in (first..).zip(homes.iter().zip(checks)) {
+            (self.f)(i, decide(home, c).and_then(|s| self.values.get(s as usize)));
+        }
+    }
+}
+
 /// Plain slots that remember whether the claimed slot was a tombstone.
 struct TrackingSlots<'a> {
     words: &'a mut [u32],
@@ -595,8 +649,8 @@ mod tests {
                 t.insert_or_get(&key(i));
             }
             // 0..40 are (mostly) in, the rest not. Streams shorter than, as long as and longer
-            // than the keys in flight, up to several rounds of the ring plus a partial one
-            // (whose ring entries still hold earlier keys' homes); a small capacity puts some
+            // than a chunk, up to several chunks plus a partial one (whose stack arrays still
+            // hold an earlier chunk's homes past its length); a small capacity puts some
             // windows across the wrap-around.
             let b = HashTable::<u32>::BATCH;
             for n in [0, 1, b - 1, b, b + 1, 2 * b + 75] {
@@ -674,6 +728,82 @@ mod tests {
     }
 
     #[test]
+    fn find_many_equals_find_on_a_long_stream() {
+        // The chunked loop hashes a full chunk of keys lane by lane (vectorised for `Fold`) and
+        // a partial one key by key: a long stream of random keys (negative coordinates, every
+        // meta field set), half of them in the table, at load 1/4 and 3/4, with a mask and a
+        // modulo capacity, must give `find`'s slots, and `get_many` `get`'s values.
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(21);
+        let mut random_key = || {
+            CellKey::new(
+                IVec3::new(
+                    rng.random_range(-3000..3000),
+                    rng.random_range(-40..40),
+                    rng.random_range(-3000..3000),
+                ),
+                rng.random_range(0..20),
+                rng.random_range(0..7),
+            )
+            .with_extra(rng.random())
+        };
+        for hash in BucketHash::ALL {
+            for (cap, stored) in [(4096_u32, 1024), (4096, 3072), (4093, 1023)] {
+                let mut t = HashTable::<[u32; 8]>::new(cap, 16, hash).unwrap();
+                let inserted: Vec<CellKey> = (0..stored).map(|_| random_key()).collect();
+                for (i, k) in inserted.iter().enumerate() {
+                    if let Some((v, _)) = t.entry(k) {
+                        v[5] = i as u32;
+                    }
+                }
+                // Tombstones: every fifth key removed again.
+                for k in inserted.iter().step_by(5) {
+                    t.remove(k);
+                }
+                assert!(t.tombstones() > 0);
+                // Hits and misses interleaved, 5 003 keys (not a multiple of the chunk).
+                let keys: Vec<CellKey> = (0..5003)
+                    .map(|i| {
+                        if i % 2 == 0 {
+                            inserted[(i * 7) % inserted.len()]
+                        } else {
+                            random_key()
+                        }
+                    })
+                    .collect();
+                let mut out = vec![Some(u32::MAX); keys.len()];
+                t.find_many(&keys, &mut out);
+                let want: Vec<Option<u32>> = keys.iter().map(|k| t.find(k)).collect();
+                assert_eq!(out, want, "{hash:?} {cap} {stored}");
+                // `find` (inline fast paths for `Fold` with a mask) against the plain walk from
+                // the home slot.
+                for (k, &slot) in keys.iter().zip(&want) {
+                    let (h, c) = hash.hash_and_checksum(k);
+                    let walk = probe::find(
+                        t.checksums(),
+                        |&w| w,
+                        &t.indexer,
+                        t.max_probes(),
+                        t.indexer.index(h),
+                        c,
+                    );
+                    assert_eq!(slot, walk, "{hash:?} {cap} {stored} {k:?}");
+                }
+                let hits = want.iter().filter(|s| s.is_some()).count();
+                assert!(hits > keys.len() / 4 && hits < keys.len() * 2 / 3, "{hits}");
+                let mut got = Vec::new();
+                t.get_many(&keys, |i, v| got.push((i, v.copied())));
+                let want: Vec<(usize, Option<[u32; 8]>)> = keys
+                    .iter()
+                    .enumerate()
+                    .map(|(i, k)| (i, t.get(k).copied()))
+                    .collect();
+                assert_eq!(got, want, "{hash:?} {cap} {stored}");
+            }
+        }
+    }
+
+    #[test]
     fn find_many_with_fewer_probes_than_a_group() {
         // max_probes 1..=3, below the 4-slot group: `find_many` must not look past the
         // probe limit. Tables nearly full, so keys sit past their home slots and windows wrap.
@@ -722,6 +852,32 @@ mod tests {
         for k in (1000..1100).map(key).chain(wrapped) {
             assert_eq!(t.get(&k), t.find(&k).map(|s| &t.values()[s as usize]));
         }
+    }
+
+    #[test]
+    fn next_slot_behind_a_tombstone() {
+        // Two keys with home slot 63 (the last): the first there, the second wrapped to slot 0.
+        // With the first removed (a tombstone at home), `get`, `find_many` and `get_many` still
+        // find the second through the next-slot compare, and the first is gone.
+        let mut t = HashTable::<u32>::new(64, 8, BucketHash::Fold).unwrap();
+        let keys: Vec<CellKey> = (0..3).map(|s| key_at_home(&t, 63, s)).collect();
+        for (i, k) in keys[..2].iter().enumerate() {
+            *t.entry(k).unwrap().0 = i as u32 + 10;
+        }
+        assert_eq!(t.find(&keys[1]), Some(0));
+        assert!(t.remove(&keys[0]));
+        assert_eq!(t.get(&keys[1]), Some(&11));
+        assert_eq!(t.get(&keys[0]), None);
+        assert_eq!(t.get(&keys[2]), None);
+        let stream: Vec<CellKey> = keys.iter().copied().cycle().take(40).collect();
+        let mut out = vec![None; stream.len()];
+        t.find_many(&stream, &mut out);
+        let want: Vec<Option<u32>> = stream.iter().map(|k| t.find(k)).collect();
+        assert_eq!(out, want);
+        assert_eq!(&out[..3], [None, Some(0), None]);
+        let mut got = Vec::new();
+        t.get_many(&stream, |_, v| got.push(v.copied()));
+        assert_eq!(&got[..3], [None, Some(11), None]);
     }
 
     #[test]
