@@ -20,6 +20,12 @@
 //! ⌊K(d)⌋ or ⌈K(d)⌉ directions with the probabilities that make their mean K(d). The number is
 //! decided before any of them is traced, and the emission along each of the K + 1 directions
 //! of the vertex counts 1/(K + 1), so the estimate stays unbiased whatever the allocation.
+//!
+//! The CPU tracer's samplers gather [`EmissionMoments`] from every vertex. The WGSL tracer
+//! gathers the same sums in about [`gpu::MOMENT_PIXELS`](super::gpu::MOMENT_PIXELS) evenly
+//! spaced pixels, written after the pixels in its image buffer
+//! ([`gpu::moment_entries`](super::gpu::moment_entries)), and the host turns them into the next
+//! frame's K(d) with the same [`allocate`].
 
 use std::sync::Mutex;
 
@@ -138,7 +144,8 @@ pub fn allocate(mean: f32, moments: &EmissionMoments) -> [f32; MAX_RECORDED] {
 }
 
 /// The directions per vertex of one render: the mean K̄, the policy, this frame's K(d) and the
-/// statistics being gathered for the next (from every rayon task's sampler at once).
+/// statistics being gathered for the next (from every rayon task's sampler at once, or from
+/// the GPU tracer's recording pixels).
 #[derive(Debug)]
 pub struct EmissionAllocation {
     mean: f32,
@@ -158,6 +165,18 @@ impl EmissionAllocation {
             per_depth: [mean as f32; MAX_RECORDED],
             gathered: Mutex::new(EmissionMoments::default()),
         }
+    }
+
+    /// K̄, the mean number of directions per vertex.
+    #[must_use]
+    pub fn mean(&self) -> u32 {
+        self.mean as u32
+    }
+
+    /// How the directions are spread over the depths.
+    #[must_use]
+    pub fn policy(&self) -> Allocation {
+        self.policy
     }
 
     /// K(d) of this frame, per depth.

@@ -51,7 +51,8 @@ pub use probes::{
 };
 
 use super::bvh::{BvhNode, Triangle};
-use super::cpu::{Method, RenderSettings};
+use super::cpu::{MAX_RECORDED, Method, RenderSettings};
+use super::emission_allocation::{Allocation, EmissionAllocation, EmissionMoments};
 use super::material::Material;
 use super::scene::{Camera, Scene, TextureInfo, TriangleUv};
 use crate::Result;
@@ -110,7 +111,7 @@ pub fn method_code(method: Method) -> Option<u32> {
 }
 
 /// The uniform block of the `render` kernel (`Params` in WGSL): the camera, the frame's
-/// settings and the tile of one dispatch. 128 bytes.
+/// settings and the tile of one dispatch. 192 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuParams {
@@ -154,14 +155,53 @@ pub struct GpuParams {
     pub uv_count: u32,
     /// Number of textures.
     pub texture_count: u32,
-    /// `mcpg`'s emission-only directions per vertex ([`super::guided::EMISSION_SAMPLES`]);
-    /// 0: the path's direction only.
-    pub emission_samples: u32,
+    /// Every how many pixels one records the statistics of `mcpg`'s emission-only directions
+    /// ([`EmissionMoments`], after the pixels in the image buffer: [`moment_entries`]); 0
+    /// records none (a uniform allocation needs none).
+    pub moment_stride: u32,
     /// The root of the emitters' tree ([`Scene::emitter_bvh`]) in the node buffer, which
     /// holds it after the scene's ([`joined_trees`]).
     pub emitter_root: u32,
-    /// Padding to the uniform block's 16-byte multiple.
+    /// Padding to the array's 16-byte alignment.
     pub pad: [u32; 2],
+    /// `mcpg`'s mean number K(d) of emission-only directions per vertex of depth d
+    /// ([`EmissionAllocation::per_depth`]: depth `4i + j` in `[i][j]`); 0 everywhere for the
+    /// other methods.
+    pub emission_per_depth: [[f32; 4]; 4],
+}
+
+/// Pixels that record emission statistics (see [`GpuParams::moment_stride`]) in a frame of
+/// `pixels`: about this many, one in every ⌈pixels / this⌉.
+pub const MOMENT_PIXELS: u32 = 4096;
+
+/// The image buffer's entries after the `pixels` pixels that hold the statistics of
+/// `mcpg`'s emission-only directions, with `stride` [`GpuParams::moment_stride`]: for the
+/// pixel `i·stride`, one `(vertices, directions, Σ luminance, Σ luminance²)` entry per depth
+/// d < 16 (the depths a guide learns at) at `pixels + 16i + d` (the twin of
+/// [`EmissionMoments`]; the recording invocation zeroes its entries first).
+#[must_use]
+pub fn moment_entries(pixels: u32, stride: u32) -> usize {
+    if stride == 0 {
+        0
+    } else {
+        pixels.div_ceil(stride) as usize * MAX_RECORDED
+    }
+}
+
+/// Adds the statistics that a frame's recording pixels left in `entries` ([`moment_entries`])
+/// to `moments`.
+pub fn gather_moments(entries: &[[f32; 4]], moments: &mut EmissionMoments) {
+    for pixel in entries.chunks_exact(MAX_RECORDED) {
+        for (d, e) in pixel.iter().enumerate() {
+            // Counts below 2²⁴ per pixel are exact in f32.
+            moments.vertices[d] += e[0] as u64;
+            moments.directions[d] += e[1] as u64;
+            if e[2].is_finite() && e[3].is_finite() {
+                moments.first[d] += f64::from(e[2]);
+                moments.second[d] += f64::from(e[3]);
+            }
+        }
+    }
 }
 
 /// The scene's BVH and the emitters' ([`Scene::emitter_bvh`]) in one node array and one
@@ -305,8 +345,11 @@ pub struct GpuTracer {
     image: Option<GpuBuffer<[f32; 4]>>,
     timer: Option<Timer>,
     guided: Option<Guided<GpuMcpgGuide>>,
-    /// `mcpg`'s emission-only directions per vertex ([`GpuTracer::set_mcpg_emission_samples`]).
-    mcpg_emission: u32,
+    /// `mcpg`'s emission-only directions per vertex ([`GpuTracer::set_mcpg_emission_samples`],
+    /// [`GpuTracer::set_mcpg_emission_allocation`]).
+    mcpg_emission: EmissionAllocation,
+    /// What the last `mcpg` frame's recording pixels gathered (adaptive allocation only).
+    mcpg_moments: Option<EmissionMoments>,
     /// The compiled `mcpg` shader, kept for rebuilding its pipeline with a new guide.
     guided_module: Option<wgpu::ShaderModule>,
     mcmm: Option<Guided<GpuMcmmGuide>>,
@@ -434,7 +477,8 @@ impl GpuTracer {
             image: None,
             timer,
             guided: None,
-            mcpg_emission: 0,
+            mcpg_emission: EmissionAllocation::new(0, Allocation::Uniform),
+            mcpg_moments: None,
             guided_module: None,
             mcmm: None,
             mcmm_module: None,
@@ -481,11 +525,34 @@ impl GpuTracer {
         Ok(())
     }
 
-    /// How many emission-only directions `mcpg` draws per vertex, as the CPU tracer's
-    /// [`super::guided::McpgSampler::with_emission_samples`] (the default: 0, the paper's one
-    /// direction).
+    /// How many emission-only directions `mcpg` draws per vertex on average, as the CPU
+    /// tracer's [`super::guided::McpgSampler::with_emission_samples`] (the default: 0, the
+    /// paper's one direction), spread over the depths as before
+    /// ([`GpuTracer::set_mcpg_emission_allocation`]); the next frame starts a new measurement.
     pub fn set_mcpg_emission_samples(&mut self, count: u32) {
-        self.mcpg_emission = count;
+        self.mcpg_emission = EmissionAllocation::new(count, self.mcpg_emission.policy());
+    }
+
+    /// How `mcpg` spreads its emission-only directions over the depths, as the CPU tracer does
+    /// ([`EmissionAllocation`]; the default: [`Allocation::Uniform`]): with
+    /// [`Allocation::Adaptive`] a frame records the directions' statistics (in pixels
+    /// [`GpuParams::moment_stride`] apart) and the next spends K(d) by them.
+    pub fn set_mcpg_emission_allocation(&mut self, policy: Allocation) {
+        self.mcpg_emission = EmissionAllocation::new(self.mcpg_emission.mean(), policy);
+    }
+
+    /// K(d) of `mcpg`'s next frame, per depth.
+    #[must_use]
+    pub fn mcpg_emission_per_depth(&self) -> &[f32; MAX_RECORDED] {
+        self.mcpg_emission.per_depth()
+    }
+
+    /// The statistics of the emission-only directions that the last `mcpg` frame recorded,
+    /// summed over its recording pixels (`None` before one, and under
+    /// [`Allocation::Uniform`]).
+    #[must_use]
+    pub fn mcpg_emission_moments(&self) -> Option<&EmissionMoments> {
+        self.mcpg_moments.as_ref()
     }
 
     /// Starts `mcmm` with empty chains for a `width × height` image and `params` (the CPU's
@@ -778,8 +845,17 @@ impl GpuTracer {
         };
         let image = self.image.as_ref().expect("allocated in frame_params");
         let texels = self.ctx.read_back(image)?;
+        let (pixels, moments) = texels.split_at((base.width * base.height) as usize);
+        self.mcpg_moments = None;
+        if base.moment_stride > 0 {
+            let mut gathered = EmissionMoments::default();
+            gather_moments(moments, &mut gathered);
+            self.mcpg_emission.merge(&gathered);
+            self.mcpg_emission.end_frame();
+            self.mcpg_moments = Some(gathered);
+        }
         Ok((
-            texels.iter().map(|t| Vec3::new(t[0], t[1], t[2])).collect(),
+            pixels.iter().map(|t| Vec3::new(t[0], t[1], t[2])).collect(),
             seconds,
         ))
     }
@@ -794,8 +870,15 @@ impl GpuTracer {
             )
         })?;
         let (width, height) = (settings.width, settings.height);
+        let mcpg = settings.method == Method::Mcpg;
+        let moment_stride = if mcpg && self.mcpg_emission.policy() == Allocation::Adaptive {
+            (width * height).div_ceil(MOMENT_PIXELS).max(1)
+        } else {
+            0
+        };
         let pixels = width as usize * height as usize;
-        let bytes = (pixels * size_of::<[f32; 4]>()) as u64;
+        let entries = pixels + moment_entries(width * height, moment_stride);
+        let bytes = (entries * size_of::<[f32; 4]>()) as u64;
         let max = self.ctx.device().limits().max_storage_buffer_binding_size;
         if bytes > max {
             return Err(format!(
@@ -803,8 +886,8 @@ impl GpuTracer {
             )
             .into());
         }
-        if self.image.as_ref().is_none_or(|b| b.len() != pixels) {
-            self.image = Some(self.ctx.zeroed_buffer("mcg-demo image", pixels));
+        if self.image.as_ref().is_none_or(|b| b.len() != entries) {
+            self.image = Some(self.ctx.zeroed_buffer("mcg-demo image", entries));
         }
         match settings.method {
             Method::Mcpg | Method::McpgNee if self.guided.is_none() => {
@@ -845,10 +928,11 @@ impl GpuTracer {
             uv_count: scene.uvs.len() as u32,
             texture_count: scene.textures.len() as u32,
             emitter_root: scene.emitter_root,
-            emission_samples: if settings.method == Method::Mcpg {
-                self.mcpg_emission
+            moment_stride,
+            emission_per_depth: if mcpg {
+                bytemuck::cast(*self.mcpg_emission.per_depth())
             } else {
-                0
+                [[0.0; 4]; 4]
             },
             ..GpuParams::default()
         })
@@ -1213,6 +1297,16 @@ mod tests {
         let (_, tracer, guide) = validate(&composed_mcpg_shader().unwrap());
         assert_eq!(tracer + guide, MCPG_STORAGE_BUFFERS as usize);
         assert_eq!(guide, 2, "the mcpg render binds the guide");
-        assert_eq!(size_of::<GpuParams>(), 128);
+        // `GpuParams` is `Params` in WGSL, byte for byte.
+        let mut layouter = naga::proc::Layouter::default();
+        layouter.update(module.to_ctx()).unwrap();
+        let params = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some("Params"))
+            .map(|(h, _)| h)
+            .unwrap();
+        assert_eq!(layouter[params].size as usize, size_of::<GpuParams>());
+        assert_eq!(size_of::<GpuParams>(), 192);
     }
 }

@@ -251,8 +251,8 @@ impl Drop for McpgSampler<'_> {
 /// 0.0066 (8), each direction adding about 8 % of a K = 0 frame's instructions; error × cost
 /// is lowest and flat from K = 4 to 6, so 4 is the default. The directions come from the
 /// whole mixture ([`GuidedVertex::sample_mixture`]), not only from the state Alg. 1 chose
-/// (4-6 % less error than from that state's lobe), and on the CPU K is the
-/// mean of a per-depth allocation ([`super::emission_allocation`]).
+/// (4-6 % less error than from that state's lobe), and K is the mean of a per-depth
+/// allocation ([`super::emission_allocation`]) on either device.
 pub const EMISSION_SAMPLES: u32 = 4;
 
 /// The guide's own uniforms in the CPU tracer: two 24-bit uniforms from each 64-bit output of

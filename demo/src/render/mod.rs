@@ -131,10 +131,10 @@ pub struct RenderArgs {
     /// 0 is the paper's one direction. `mcpg-nee` samples its lights instead.
     #[arg(long, default_value_t = guided::EMISSION_SAMPLES)]
     pub mcpg_emission_samples: u32,
-    /// How `mcpg` spreads its emission-only directions over the depths of a path on the CPU:
-    /// as many at every vertex, or, with the same mean, by each depth's measured variance
-    /// ([`emission_allocation::Allocation`], mcg's extension; the GPU tracer spends the same
-    /// number at every vertex).
+    /// How `mcpg` spreads its emission-only directions over the depths of a path, on either
+    /// device: as many at every vertex, or, with the same mean, by each depth's variance
+    /// measured in the frame before ([`emission_allocation::Allocation`], mcg's extension; the
+    /// GPU tracer measures it in about [`gpu::MOMENT_PIXELS`] evenly spaced pixels).
     #[arg(long, value_enum, default_value_t = emission_allocation::Allocation::Adaptive)]
     pub mcpg_emission_allocation: emission_allocation::Allocation,
     /// The share of `mcpg`'s vertices whose sample goes into its irradiance cache, in (0, 1]
@@ -287,10 +287,14 @@ pub struct RenderReport {
     /// other methods.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mcpg_emission_samples: Option<u32>,
-    /// How `mcpg` spread them over the depths on the CPU (`--mcpg-emission-allocation`);
-    /// absent for other methods and on the GPU.
+    /// How `mcpg` spread them over the depths (`--mcpg-emission-allocation`); absent for
+    /// other methods.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mcpg_emission_allocation: Option<emission_allocation::Allocation>,
+    /// `mcpg`'s K(d) after the last frame, per depth of a scattering vertex (the next frame's
+    /// allocation); absent for other methods.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mcpg_emission_per_depth: Option<Vec<f32>>,
     /// Scattering events per path.
     pub bounces: u32,
     /// The seed as given.
@@ -424,8 +428,15 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         frames: args.frames,
         ramp_frames: args.ramp_frames,
         mcpg_emission_samples: (args.method == Method::Mcpg).then_some(args.mcpg_emission_samples),
-        mcpg_emission_allocation: (args.method == Method::Mcpg && gpu.is_none())
+        mcpg_emission_allocation: (args.method == Method::Mcpg)
             .then_some(args.mcpg_emission_allocation),
+        mcpg_emission_per_depth: match (&guide, gpu.as_deref()) {
+            _ if args.method != Method::Mcpg => None,
+            (CpuGuide::Mcpg(_, _, e), _) => Some(e.per_depth()),
+            (_, Some(g)) => Some(g.mcpg_emission_per_depth()),
+            _ => None,
+        }
+        .map(|k| k[..(args.bounces as usize).min(k.len())].to_vec()),
         bounces: args.bounces,
         seed: args.seed,
         frame_cpu_times_s: if times.cpu.len() == times.frame.len() {
@@ -676,6 +687,7 @@ fn start_guide(
         let started = match args.method {
             Method::Mcpg | Method::McpgNee => {
                 g.set_mcpg_emission_samples(args.mcpg_emission_samples);
+                g.set_mcpg_emission_allocation(args.mcpg_emission_allocation);
                 g.start_mcpg(&mcpg_config(scene, args))
             }
             Method::Mcmm => g.start_mcmm(&mcmm(), args.width, args.height),

@@ -122,10 +122,14 @@ struct Params {
     tile_height: u32,
     uv_count: u32,
     texture_count: u32,
-    // `mcpg`'s emission-only directions per vertex (`guided::EMISSION_SAMPLES`).
-    emission_samples: u32,
+    // Every how many pixels one records the statistics of `mcpg`'s emission-only directions
+    // after the pixels in `image` (`gpu::moment_entries`); 0: none.
+    moment_stride: u32,
     // The root of the emitters' tree in `nodes` (`gpu::joined_trees`).
     emitter_root: u32,
+    // `mcpg`'s mean number K(d) of emission-only directions per vertex of depth d = 4i + j in
+    // [i][j] (`EmissionAllocation::per_depth`).
+    emission_per_depth: array<vec4<f32>, 4>,
 }
 
 // `gpu::GpuRay`: a query of the `trace_rays` kernel (closest hit, or any hit when `any_hit`).
@@ -555,21 +559,38 @@ struct LightSample {
     pdf: f32,
 }
 
+// `scene::luminance`: Rec. 709 luminance of linear RGB.
+fn luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
+}
+
 // Whether the method takes a light sample per vertex (`Method::samples_lights`).
 fn samples_lights() -> bool {
     return params.method == METHOD_NEE || params.method == METHOD_MCPG_NEE;
 }
 
-// How many directions `mcpg` draws per vertex, besides the path's, for the emission they meet
-// (`VertexSampler::emission_samples`, K); the emission along each then counts 1/(K + 1).
-fn emission_samples() -> u32 {
-    return select(0u, params.emission_samples, params.method == METHOD_MCPG);
+// How many directions `mcpg` draws at a vertex of `depth`, besides the path's, for the emission
+// they meet (`VertexSampler::emission_samples`, K): ⌊K(d)⌋, plus one with probability
+// K(d) − ⌊K(d)⌋ (`EmissionAllocation::samples_at`; the uniform is drawn only then); the
+// emission along each of the K + 1 directions then counts 1/(K + 1).
+fn emission_samples(depth: u32, rng: ptr<function, u32>) -> u32 {
+    if params.method != METHOD_MCPG {
+        return 0u;
+    }
+    let d = min(depth, MAX_RECORDED - 1u);
+    let k = params.emission_per_depth[d / 4u][d % 4u];
+    let whole = floor(k);
+    var extra = 0u;
+    if k > whole && mcg_rng_uniform(rng) < k - whole {
+        extra = 1u;
+    }
+    return u32(whole) + extra;
 }
 
-// The weight 1/(K + 1) of the emission any one of a vertex's K + 1 directions meets.
-fn emission_share() -> f32 {
-    return 1.0 / f32(1u + emission_samples());
-}
+// The pixel's first entry of emission statistics after the pixels of `image`
+// (`gpu::moment_entries`), NO_MOMENTS for a pixel that records none.
+var<private> moment_base: u32;
+const NO_MOMENTS: u32 = 0xffffffffu;
 
 // `cpu::emission_along`: the emission a ray from `origin` along `d` finds first, as the
 // nearest emitter facing the ray (the emitters' tree) that nothing blocks.
@@ -618,6 +639,8 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
     var d = direction;
     // Density of the direction that produced the ray (0 for the camera ray: no MIS weight).
     var last_pdf = 0.0;
+    // 1/(K + 1) of the vertex that sampled the ray, K its emission-only directions.
+    var last_share = 1.0;
     var depth = 0u;
 #ifdef MCG_DEMO_MCPG
     var grng = mcg_pcg_hash(*rng ^ SAMPLER_SALT);
@@ -640,8 +663,8 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
         let cos_front = -dot(n_front, d);
         let position = o + hit.t * d;
         // The emission's MIS weight against a light sample of the same point (1 without; the
-        // guide learns with it), and its weight in the estimate (1/(K + 1) beside `mcpg`'s K
-        // emission-only directions).
+        // guide learns with it), and its weight in the estimate (1/(K + 1) beside the K
+        // emission-only directions of `mcpg`'s vertex that sampled the ray).
         var emission_weight = 1.0;
         var share = 1.0;
         if cos_front > 0.0 && any(material.emission > vec3<f32>(0.0)) {
@@ -650,7 +673,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
                 emission_weight = power_heuristic(last_pdf, light_pdf);
                 share = emission_weight;
             } else if last_pdf > 0.0 {
-                share = emission_share();
+                share = last_share;
             }
             radiance += throughput * material.emission * share;
         }
@@ -692,7 +715,12 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
             // the light-sampling uniforms `mcpg` does not use, the others from the path's
             // stream after the direction's; density and material only where emission is met
             // (`cpu::emission_weighted`).
-            let count = emission_samples();
+            let count = emission_samples(depth, &grng);
+            let share = 1.0 / f32(1u + count);
+            last_share = share;
+            // `EmissionMoments::add_direction`'s sums of the directions' luminance.
+            var first = 0.0;
+            var second = 0.0;
             for (var i = 0u; i < count; i++) {
                 var ue = vec3<f32>(ul, u1, u2);
                 if i > 0u {
@@ -705,10 +733,20 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
                 if any(emitted > vec3<f32>(0.0)) {
                     let p = mcpg_pdf_with(&open, wi, material_pdf(material, normal, -d, wi));
                     if p > 0.0 {
-                        let f = material_eval(material, normal, -d, wi) / p;
-                        radiance += throughput * f * emission_share() * emitted;
+                        let value = throughput * material_eval(material, normal, -d, wi) / p
+                            * emitted;
+                        radiance += share * value;
+                        let l = luminance(value);
+                        if l == l && abs(l) <= 3.4e38 {
+                            first += l;
+                            second += l * l;
+                        }
                     }
                 }
+            }
+            if moment_base != NO_MOMENTS {
+                let m = moment_base + min(depth, MAX_RECORDED - 1u);
+                image[m] += vec4<f32>(1.0, f32(count), first, second);
             }
         }
         if !(open_sample.pdf > 0.0) {
@@ -770,6 +808,13 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let index = y * params.width + x;
+    moment_base = NO_MOMENTS;
+    if params.moment_stride > 0u && index % params.moment_stride == 0u {
+        moment_base = params.width * params.height + (index / params.moment_stride) * MAX_RECORDED;
+        for (var m = 0u; m <= min(params.bounces, MAX_RECORDED - 1u); m++) {
+            image[moment_base + m] = vec4<f32>(0.0);
+        }
+    }
     var sum = vec3<f32>(0.0);
     for (var s = 0u; s < params.spp; s++) {
         var rng = path_seed(params.seed, params.frame, index, s);
@@ -1078,11 +1123,6 @@ const MCMM_TILE_HEIGHT: u32 = 8u;
 const MCMM_LANES: u32 = 64u;
 // `mcmm::TILE_SALT`: the per-tile stream of the xor masks.
 const MCMM_TILE_SALT: u32 = 0x7f4a7c15u;
-
-// `scene::luminance`: Rec. 709 luminance of linear RGB.
-fn luminance(c: vec3<f32>) -> f32 {
-    return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
-}
 
 // `mcmm::ratio`: value/density, zero where the density is not positive or the quotient not
 // finite.
