@@ -492,13 +492,17 @@ impl GpuTracer {
     /// [`super::guided::guide_config`] for the same scene and image): a guide equal in
     /// configuration to the current one is emptied ([`GpuMcpgGuide::reset`]), otherwise a new
     /// one is made (its per-frame pass's pipelines built) and the `mcpg` pipeline (compiled
-    /// on the first call) is rebuilt around it.
+    /// on the first call) is rebuilt around it. The emission-only directions' allocation
+    /// starts again at K̄ at every depth.
     /// [`GpuTracer::render_frame`] with [`Method::Mcpg`] then learns from frame to frame.
     ///
     /// # Errors
     /// When the device binds fewer than [`MCPG_STORAGE_BUFFERS`] storage buffers per stage,
     /// the configuration is invalid or too large for the device, or the shader fails.
     pub fn start_mcpg(&mut self, config: &GuideConfig) -> Result<()> {
+        // A fresh render's first frame spends K̄ at every depth, as on the CPU.
+        self.set_mcpg_emission_allocation(self.mcpg_emission.policy());
+        self.mcpg_moments = None;
         if let Some(g) = &mut self.guided
             && g.guide.config() == config
         {
