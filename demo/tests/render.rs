@@ -644,6 +644,13 @@ fn render_command_writes_exr_png_and_json() {
         ),
         (Some("nee"), Some("cpu"), Some(2))
     );
+    assert!(v.get("mcpg_emission_per_depth").is_none());
+    // `mcpg` reports the allocation of its emission-only directions, K(d) per scattering depth.
+    args.method = Method::Mcpg;
+    let guided = render(&args).unwrap();
+    let k = guided.report.mcpg_emission_per_depth.as_deref().unwrap();
+    assert_eq!(k.len(), args.bounces as usize);
+    assert!(k.iter().all(|&k| k.is_finite() && k >= 0.0), "{k:?}");
     args.width = 8;
     assert!(render(&args).unwrap_err().to_string().contains("nee.exr"));
     std::fs::remove_dir_all(&dir).unwrap();
