@@ -42,10 +42,11 @@
 //! - Probing is linear and bounded by `max_probes` ([`Insert::Full`] beyond): size tables for
 //!   a load ≲ 0.25 or raise the limit.
 //! - [`ConcurrentTable`] claims slots by compare-and-swap on the checksum word; the caller owns
-//!   the values. The crate's four `unsafe` blocks: its `&[AtomicU32]` → `&[u32]` upload view,
+//!   the values. The crate's five `unsafe` blocks: its `&[AtomicU32]` → `&[u32]` upload view,
 //!   three SSE2 compare intrinsics in the probe loop, the prefetch (`_mm_prefetch`, a hint)
-//!   of [`HashTable::find_many`] and [`HashTable::get_many`], and their SSE2 hash of four keys
-//!   at once (register arithmetic, no pointers).
+//!   of [`HashTable::find_many`] and [`HashTable::get_many`], their SSE2 hash of four keys
+//!   at once (register arithmetic, no pointers), and the call of their AVX2 hash of eight
+//!   keys at once, only after `is_x86_feature_detected!("avx2")` (with the `std` feature).
 //!
 //! The measurements behind these choices, the peer benchmarks (hashbrown, `FxHashMap`,
 //! `DashMap`, std's `HashMap`) and how to run them are in `benches/README.md`.
@@ -97,12 +98,15 @@
 //! # Ok::<(), mcg_hashgrid::TableError>(())
 //! ```
 #![no_std]
-// Four `unsafe` blocks: `ConcurrentTable::checksums` views `&[AtomicU32]` as `&[u32]` for upload
+// Five `unsafe` blocks: `ConcurrentTable::checksums` views `&[AtomicU32]` as `&[u32]` for upload
 // (documented there), `probe::group_masks` calls SSE2 compare intrinsics (no pointers),
-// `probe::prefetch` calls `_mm_prefetch` (a hint that never faults, whatever the address), and
+// `probe::prefetch` calls `_mm_prefetch` (a hint that never faults, whatever the address),
 // `probe::fold4_sse2` calls SSE2 arithmetic and shuffle intrinsics (the `Fold` hash of four keys
 // in the lanes of registers; no pointers, the keys come in and the results go out by
-// `bytemuck::cast`); everything else is safe code. Hence `unsafe_code = "deny"` (not "forbid") in Cargo.toml.
+// `bytemuck::cast`), and `<probe::Fold as LaneHash>::chunk` calls the safe
+// `#[target_feature(enable = "avx2")]` function `probe::fold16_avx2` (the same hash of eight
+// keys at once) only after `std::is_x86_feature_detected!("avx2")` said the CPU has AVX2 (with
+// the `std` feature; without it the SSE2 path); everything else is safe code. Hence `unsafe_code = "deny"` (not "forbid") in Cargo.toml.
 #![cfg_attr(docsrs, feature(doc_cfg))]
 
 #[cfg(feature = "alloc")]
