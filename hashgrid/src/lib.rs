@@ -56,10 +56,12 @@
 //! 2-vCPU AMD EPYC VM, baseline x86-64, 2¹⁶ / 2¹⁹ slots at load 1/4; peer ÷ mcg, > 1: mcg
 //! faster; seventh session of issue 21): with warm caches [`HashTable::get`] 0.80–0.81 /
 //! 0.66–0.70 (33 instructions against 33), [`HashTable::find_many`] plus the value reads
-//! 0.87–0.88 / 0.88–0.94 (50 instructions), [`HashTable::get_many`] 0.84–0.85 / 0.68–0.72;
+//! 1.08–1.10 / 1.02–1.07 (39 instructions), [`HashTable::get_many`] 1.01–1.03 / 0.73–0.78;
 //! with the structures flushed from the caches `get` 0.75–0.77 / 0.79–0.83, `get_many`
-//! 1.09–1.11 / 1.34–1.35 and `find_many` 1.15–1.16 / 1.25–1.29 (both hash a chunk of 16 keys,
-//! four at a time with SSE2, and prefetch its lines before deciding the chunk before it); an
+//! 1.25–1.26 / 1.51–1.56 and `find_many` 1.31–1.32 / 1.39–1.41 (both hash a chunk of 16 keys,
+//! eight at a time with AVX2 where `std` detects it at run time, and prefetch its lines before
+//! deciding the chunk before it; with SSE2 instead, four at a time, `find_many` warm
+//! 0.87–0.89 / 0.88–0.96 at 50 instructions, `get_many` 0.84–0.86 / 0.68–0.72); an
 //! insert 0.87–1.06 / 0.71–0.75 (fourth session); [`ConcurrentTable`] inserted from two
 //! threads 5.7× faster than `DashMap` at 2¹⁹ in a criterion run at moderate load (1.45–2.84×
 //! on two cores shared with four builds). The rest of the gap is instructions per lookup:
@@ -72,7 +74,9 @@
 //! and diary: `benches/README.md`.
 //!
 //! ## Features
-//! - `std` (default): float functions from the standard library; implies `alloc`.
+//! - `std` (default): float functions from the standard library; implies `alloc`. On x86-64
+//!   it also lets [`HashTable::find_many`] and [`HashTable::get_many`] hash eight keys at
+//!   once with AVX2 where the CPU has it (detected at run time; same results).
 //! - `alloc`: the tables ([`HashTable`], [`ConcurrentTable`]). Without it the crate is keys,
 //!   hashes, levels and vertex choice only.
 //! - `libm`: float functions from `libm` for `#![no_std]` builds
