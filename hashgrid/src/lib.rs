@@ -42,10 +42,11 @@
 //! - Probing is linear and bounded by `max_probes` ([`Insert::Full`] beyond): size tables for
 //!   a load ≲ 0.25 or raise the limit.
 //! - [`ConcurrentTable`] claims slots by compare-and-swap on the checksum word; the caller owns
-//!   the values. The crate's four `unsafe` blocks: its `&[AtomicU32]` → `&[u32]` upload view,
+//!   the values. The crate's five `unsafe` blocks: its `&[AtomicU32]` → `&[u32]` upload view,
 //!   three SSE2 compare intrinsics in the probe loop, the prefetch (`_mm_prefetch`, a hint)
-//!   of [`HashTable::find_many`] and [`HashTable::get_many`], and their SSE2 hash of four keys
-//!   at once (register arithmetic, no pointers).
+//!   of [`HashTable::find_many`] and [`HashTable::get_many`], their SSE2 hash of four keys
+//!   at once (register arithmetic, no pointers), and the call of their AVX2 hash of eight
+//!   keys at once, only after `is_x86_feature_detected!("avx2")` (with the `std` feature).
 //!
 //! The measurements behind these choices, the peer benchmarks (hashbrown, `FxHashMap`,
 //! `DashMap`, std's `HashMap`) and how to run them are in `benches/README.md`.
@@ -55,10 +56,12 @@
 //! 2-vCPU AMD EPYC VM, baseline x86-64, 2¹⁶ / 2¹⁹ slots at load 1/4; peer ÷ mcg, > 1: mcg
 //! faster; seventh session of issue 21): with warm caches [`HashTable::get`] 0.80–0.81 /
 //! 0.66–0.70 (33 instructions against 33), [`HashTable::find_many`] plus the value reads
-//! 0.87–0.88 / 0.88–0.94 (50 instructions), [`HashTable::get_many`] 0.84–0.85 / 0.68–0.72;
+//! 1.08–1.10 / 1.02–1.07 (39 instructions), [`HashTable::get_many`] 1.01–1.03 / 0.73–0.78;
 //! with the structures flushed from the caches `get` 0.75–0.77 / 0.79–0.83, `get_many`
-//! 1.09–1.11 / 1.34–1.35 and `find_many` 1.15–1.16 / 1.25–1.29 (both hash a chunk of 16 keys,
-//! four at a time with SSE2, and prefetch its lines before deciding the chunk before it); an
+//! 1.25–1.26 / 1.51–1.56 and `find_many` 1.31–1.32 / 1.39–1.41 (both hash a chunk of 16 keys,
+//! eight at a time with AVX2 where `std` detects it at run time, and prefetch its lines before
+//! deciding the chunk before it; with SSE2 instead, four at a time, `find_many` warm
+//! 0.87–0.89 / 0.88–0.96 at 50 instructions, `get_many` 0.84–0.86 / 0.68–0.72); an
 //! insert 0.87–1.06 / 0.71–0.75 (fourth session); [`ConcurrentTable`] inserted from two
 //! threads 5.7× faster than `DashMap` at 2¹⁹ in a criterion run at moderate load (1.45–2.84×
 //! on two cores shared with four builds). The rest of the gap is instructions per lookup:
@@ -71,7 +74,9 @@
 //! and diary: `benches/README.md`.
 //!
 //! ## Features
-//! - `std` (default): float functions from the standard library; implies `alloc`.
+//! - `std` (default): float functions from the standard library; implies `alloc`. On x86-64
+//!   it also lets [`HashTable::find_many`] and [`HashTable::get_many`] hash eight keys at
+//!   once with AVX2 where the CPU has it (detected at run time; same results).
 //! - `alloc`: the tables ([`HashTable`], [`ConcurrentTable`]). Without it the crate is keys,
 //!   hashes, levels and vertex choice only.
 //! - `libm`: float functions from `libm` for `#![no_std]` builds
@@ -97,12 +102,15 @@
 //! # Ok::<(), mcg_hashgrid::TableError>(())
 //! ```
 #![no_std]
-// Four `unsafe` blocks: `ConcurrentTable::checksums` views `&[AtomicU32]` as `&[u32]` for upload
+// Five `unsafe` blocks: `ConcurrentTable::checksums` views `&[AtomicU32]` as `&[u32]` for upload
 // (documented there), `probe::group_masks` calls SSE2 compare intrinsics (no pointers),
-// `probe::prefetch` calls `_mm_prefetch` (a hint that never faults, whatever the address), and
+// `probe::prefetch` calls `_mm_prefetch` (a hint that never faults, whatever the address),
 // `probe::fold4_sse2` calls SSE2 arithmetic and shuffle intrinsics (the `Fold` hash of four keys
 // in the lanes of registers; no pointers, the keys come in and the results go out by
-// `bytemuck::cast`); everything else is safe code. Hence `unsafe_code = "deny"` (not "forbid") in Cargo.toml.
+// `bytemuck::cast`), and `<probe::Fold as LaneHash>::chunk` calls the safe
+// `#[target_feature(enable = "avx2")]` function `probe::fold16_avx2` (the same hash of eight
+// keys at once) only after `std::is_x86_feature_detected!("avx2")` said the CPU has AVX2 (with
+// the `std` feature; without it the SSE2 path); everything else is safe code. Hence `unsafe_code = "deny"` (not "forbid") in Cargo.toml.
 #![cfg_attr(docsrs, feature(doc_cfg))]
 
 #[cfg(feature = "alloc")]

@@ -358,6 +358,29 @@ pub(crate) trait LaneHash {
         }
         out
     }
+    /// The home slots (`index` of the bucket hashes) and checksums of a full chunk: four keys
+    /// at a time.
+    #[inline(always)]
+    fn chunk(&self, keys: &[CellKey; CHUNK], index: &impl Fn(u32) -> u32, hashed: &mut Hashed) {
+        by_fours(self, keys, index, hashed);
+    }
+}
+
+/// [`LaneHash::chunk`] four keys at a time ([`LaneHash::four`]).
+#[inline(always)]
+fn by_fours(
+    hash: &(impl LaneHash + ?Sized),
+    keys: &[CellKey; CHUNK],
+    index: &impl Fn(u32) -> u32,
+    (homes, checks): &mut Hashed,
+) {
+    let groups = keys.as_chunks::<4>().0;
+    let (hs, cs) = (homes.as_chunks_mut::<4>().0, checks.as_chunks_mut::<4>().0);
+    for ((h, c), group) in hs.iter_mut().zip(cs.iter_mut()).zip(groups) {
+        let (h4, c4) = hash.four(group);
+        *h = h4.map(index);
+        *c = c4;
+    }
 }
 
 /// Any `(bucket hash, checksum)` function, four keys as four single ones.
@@ -371,7 +394,8 @@ impl<F: Fn(&CellKey) -> (u32, u32)> LaneHash for PerKey<F> {
 }
 
 /// [`fold_and_checksum`], four keys at once with SSE2 where the target has it (baseline
-/// x86-64: [`fold4_sse2`]).
+/// x86-64: [`fold4_sse2`]); a full chunk eight keys at once where the CPU has AVX2 (detected
+/// at run time, with the `std` feature: [`fold16_avx2`]).
 pub(crate) struct Fold;
 
 impl LaneHash for Fold {
@@ -383,6 +407,66 @@ impl LaneHash for Fold {
     #[inline(always)]
     fn four(&self, keys: &[CellKey; 4]) -> ([u32; 4], [u32; 4]) {
         fold4_sse2(keys)
+    }
+    /// Eight keys at a time with AVX2 where the CPU has it (detected at run time, with `std`),
+    /// otherwise four at a time.
+    #[inline(always)]
+    #[allow(unsafe_code)]
+    fn chunk(&self, keys: &[CellKey; CHUNK], index: &impl Fn(u32) -> u32, hashed: &mut Hashed) {
+        #[cfg(all(target_arch = "x86_64", feature = "std"))]
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: `fold16_avx2` is safe code that needs AVX2, which the CPU running this
+            // has (detected just above); it takes no pointers.
+            unsafe { fold16_avx2(keys, index, hashed) };
+            return;
+        }
+        by_fours(self, keys, index, hashed);
+    }
+}
+
+/// [`fold_and_checksum`] of a chunk, eight keys at once in the lanes of AVX2 registers: as
+/// [`fold4_sse2`] with each 32-bit multiply one `vpmulld`. Keys `i` and `i + 4` of a group of
+/// eight share a register (one per 128-bit half), so that the in-half transposition leaves the
+/// lanes in key order.
+#[cfg(all(target_arch = "x86_64", feature = "std"))]
+#[target_feature(enable = "avx2")]
+fn fold16_avx2(keys: &[CellKey; CHUNK], index: &impl Fn(u32) -> u32, (homes, checks): &mut Hashed) {
+    use crate::constants::{FIRST_CHECKSUM, FOLD_FINISH, FOLD_X, FOLD_Y, FOLD_Z};
+    use core::arch::x86_64::{
+        __m128i, __m256i, _mm256_add_epi32, _mm256_and_si256, _mm256_cmpeq_epi32,
+        _mm256_mullo_epi32, _mm256_or_si256, _mm256_set_m128i, _mm256_set1_epi32,
+        _mm256_setzero_si256, _mm256_slli_epi32, _mm256_srli_epi32, _mm256_unpackhi_epi32,
+        _mm256_unpackhi_epi64, _mm256_unpacklo_epi32, _mm256_unpacklo_epi64, _mm256_xor_si256,
+    };
+    const _: () = assert!(crate::constants::FOLD_META_ROTATE == 16 && FIRST_CHECKSUM == 2);
+    let k: [__m128i; CHUNK] = bytemuck::cast(*keys);
+    let mul = |v: __m256i, c: u32| _mm256_mullo_epi32(v, _mm256_set1_epi32(c as i32));
+    let groups = k.as_chunks::<8>().0;
+    let (hs, cs) = (homes.as_chunks_mut::<8>().0, checks.as_chunks_mut::<8>().0);
+    for ((hs, cs), g) in hs.iter_mut().zip(cs.iter_mut()).zip(groups) {
+        let r = |i: usize| _mm256_set_m128i(g[i + 4], g[i]);
+        let (k0, k1, k2, k3) = (r(0), r(1), r(2), r(3));
+        let t0 = _mm256_unpacklo_epi32(k0, k1); // x0 x1 y0 y1 | x4 x5 y4 y5
+        let t1 = _mm256_unpacklo_epi32(k2, k3); // x2 x3 y2 y3 | x6 x7 y6 y7
+        let t2 = _mm256_unpackhi_epi32(k0, k1); // z0 z1 m0 m1 | z4 z5 m4 m5
+        let t3 = _mm256_unpackhi_epi32(k2, k3); // z2 z3 m2 m3 | z6 z7 m6 m7
+        let (x, y) = (_mm256_unpacklo_epi64(t0, t1), _mm256_unpackhi_epi64(t0, t1));
+        let (z, m) = (_mm256_unpacklo_epi64(t2, t3), _mm256_unpackhi_epi64(t2, t3));
+        let rot = _mm256_or_si256(_mm256_slli_epi32::<16>(m), _mm256_srli_epi32::<16>(m));
+        let a = _mm256_add_epi32(mul(x, FOLD_X), mul(y, FOLD_Y));
+        let b = _mm256_add_epi32(mul(z, FOLD_Z), rot);
+        let t = _mm256_xor_si256(a, b);
+        let t = mul(_mm256_xor_si256(t, _mm256_srli_epi32::<16>(t)), FOLD_FINISH);
+        let h = _mm256_xor_si256(t, _mm256_srli_epi32::<15>(t));
+        let c = _mm256_add_epi32(b, h);
+        let low = _mm256_cmpeq_epi32(_mm256_srli_epi32::<1>(c), _mm256_setzero_si256());
+        let c = _mm256_or_si256(
+            c,
+            _mm256_and_si256(low, _mm256_set1_epi32(FIRST_CHECKSUM as i32)),
+        );
+        let h: [u32; 8] = bytemuck::cast(h);
+        *hs = h.map(index);
+        *cs = bytemuck::cast(c);
     }
 }
 
@@ -445,20 +529,15 @@ fn fold4_sse2(keys: &[CellKey; 4]) -> ([u32; 4], [u32; 4]) {
 /// at a time ([`LaneHash::four`]), a partial one key by key.
 #[inline(always)]
 fn hash_chunk(
-    (homes, checks): &mut Hashed,
+    hashed: &mut Hashed,
     keys: &[CellKey],
     hash: &impl LaneHash,
     index: &impl Fn(u32) -> u32,
 ) {
     if let Ok(full) = <&[CellKey; CHUNK]>::try_from(keys) {
-        let groups = full.as_chunks::<4>().0;
-        let (hs, cs) = (homes.as_chunks_mut::<4>().0, checks.as_chunks_mut::<4>().0);
-        for ((h, c), group) in hs.iter_mut().zip(cs.iter_mut()).zip(groups) {
-            let (h4, c4) = hash.four(group);
-            *h = h4.map(index);
-            *c = c4;
-        }
+        hash.chunk(full, index, hashed);
     } else {
+        let (homes, checks) = hashed;
         for ((h, c), key) in homes.iter_mut().zip(checks.iter_mut()).zip(keys) {
             let (hash, checksum) = hash.one(key);
             (*h, *c) = (index(hash), checksum);
@@ -730,6 +809,41 @@ mod tests {
                 for (i, key) in group.iter().enumerate() {
                     assert_eq!((h[i], c[i]), fold_and_checksum(key), "{key:?}");
                     assert_eq!((h[i], c[i]), Fold.one(key));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_chunk_at_once_equals_one_key_at_a_time() {
+        // `Fold::chunk` as dispatched on this CPU (eight keys at once with AVX2 where it has
+        // it, four with SSE2 otherwise) against the scalar hash, at every offset, with a mask
+        // and a modulo for the slot index; the keys with raw checksums 0 and 1 in every lane.
+        let reserved = (0..32).map(|i| key_with_raw_checksum(i % 2, 13 * i as i32 - 200, i as u8));
+        let others = (0..2000).map(|i: i32| {
+            CellKey::new(
+                IVec3::new(i * 104_729 - 7_000_000, 3 - i * 31, i * i - 5000),
+                (i % 17) as u8,
+                (i % 7) as u8,
+            )
+            .with_extra((i * 977) as u16)
+        });
+        let keys: Vec<CellKey> = reserved.chain(others).collect();
+        let indices: [&dyn Fn(u32) -> u32; 3] = [&|h| h, &|h| h & 1023, &|h| h % 1_000_003];
+        #[cfg(all(target_arch = "x86_64", feature = "std"))]
+        std::println!("avx2: {}", std::is_x86_feature_detected!("avx2"));
+        for index in indices {
+            for start in 0..CHUNK {
+                for chunk in keys[start..].as_chunks::<CHUNK>().0 {
+                    let mut hashed: Hashed = Default::default();
+                    Fold.chunk(chunk, &index, &mut hashed);
+                    let mut by_fours_out: Hashed = Default::default();
+                    by_fours(&Fold, chunk, &index, &mut by_fours_out);
+                    assert_eq!(hashed, by_fours_out);
+                    for (i, key) in chunk.iter().enumerate() {
+                        let (h, c) = fold_and_checksum(key);
+                        assert_eq!((hashed.0[i], hashed.1[i]), (index(h), c), "{key:?}");
+                    }
                 }
             }
         }
