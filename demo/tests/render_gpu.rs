@@ -13,7 +13,7 @@ use common::{
 use glam::Vec3;
 use mcg_demo::render::cpu::{BsdfSampler, Method, RenderSettings, render_frame};
 use mcg_demo::render::emission_allocation::Allocation;
-use mcg_demo::render::gpu::{GpuHit, GpuRay, GpuTiming, GpuTracer};
+use mcg_demo::render::gpu::{GpuHit, GpuRay, GpuTiming, GpuTracer, frame_counts};
 use mcg_demo::render::guided::guide_config;
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
 use mcg_demo::render::scene::{Scene, SceneFile, TextureInfo, TriangleUv};
@@ -232,15 +232,15 @@ fn gpu_furnace_matches_the_truncated_neumann_series() {
 /// seed 7, ρ = (0.5, 0.3, 0.8), L_e = (1, 2, 0.5), the fourth frame after three frames of
 /// learning of a fresh guide (the pixel values are independent given the guide); `mcpg` 16×16
 /// pixels × 16 spp, without and with three emission-only directions per vertex (as many at
-/// every vertex, and spread over the depths by the adaptive allocation, whose vertices draw
-/// ⌊K(d)⌋ or ⌈K(d)⌉), `mcpg-nee` 32×32 × 32 spp. Threshold: |z| < 5 on the pixel mean per channel (9 tests, α ≈ 5·10⁻⁶); the frame
+/// every vertex, and spread over the depths by the adaptive allocation, a frame's vertices of
+/// depth d drawing ⌊K(d)⌋ or ⌈K(d)⌉), `mcpg-nee` 32×32 × 32 spp. Threshold: |z| < 5 on the pixel mean per channel (9 tests, α ≈ 5·10⁻⁶); the frame
 /// must show spread (BSDF sampling alone is exact here, so
 /// spread means guided lobes were sampled). Today |z| ≤ 2. Dividing the WGSL guided samples by
 /// the material's density instead of the guided mixture's fails `mcpg` at z = −8.2, skipping
 /// the finish at the next hit (the guide never learns) fails the spread check, and weighting
 /// `mcpg-nee`'s light samples with the material's density instead of the guide's fails it at
-/// z = −8.3, and weighting a vertex's directions by 1/(⌊K(d)⌋ + 1) instead of 1/(K + 1) with
-/// the K it drew fails the adaptive case at z = 45 (checked once each).
+/// z = −8.3, and weighting a vertex's directions by 1/(K + 1) with the next depth's count
+/// instead of its own fails the adaptive case at z = 178 (checked once each).
 #[test]
 fn gpu_mcpg_furnace_matches_the_truncated_neumann_series() {
     let (rho, le) = (Vec3::new(0.5, 0.3, 0.8), Vec3::new(1.0, 2.0, 0.5));
@@ -283,16 +283,15 @@ fn gpu_mcpg_furnace_matches_the_truncated_neumann_series() {
 }
 
 /// The GPU tracer's adaptive allocation of `mcpg`'s emission-only directions: its recording
-/// pixels count every vertex and direction, and its vertices draw K(d) on average. Scene: the
-/// built-in hidden-light room, 32×32 (every pixel records: fewer than
+/// pixels count every vertex and direction, and every vertex of a depth draws the frame's
+/// count. Scene: the built-in hidden-light room, 32×32 (every pixel records: fewer than
 /// [`mcg_demo::render::gpu::MOMENT_PIXELS`]), 4 spp, B = 3, K̄ = 4, seed 3. Frame 0 spends
 /// K̄ = 4 at every vertex, so its direction counts must be exactly 4 × its vertex counts and
 /// its vertex counts 4 096 at depth 0 (every camera ray hits the closed room). Frame 1
-/// spends the K(d) that frame 0's statistics gave, whose mean per vertex must be within 5
-/// binomial standard deviations of K(d) (the vertex draws ⌈K(d)⌉ with probability
-/// K(d) − ⌊K(d)⌋). And, as on the CPU, the camera's hits, which see little of the hidden
-/// light, get fewer directions than the next vertices. Recording every direction at depth 0
-/// fails the first check, and drawing ⌊K(d)⌋ always the second (checked once each).
+/// spends [`frame_counts`] of the K(d) that frame 0's statistics gave, exactly. And, as on the
+/// CPU, the camera's hits, which see little of the hidden light, get fewer directions than
+/// the next vertices. Recording every direction at depth 0 fails the first check (checked
+/// once).
 #[test]
 fn gpu_emission_allocation_counts_and_draws_k_per_depth() {
     let scene = built_in("hidden_light_room.gltf");
@@ -326,15 +325,14 @@ fn gpu_emission_allocation_counts_and_draws_k_per_depth() {
     );
     gpu.render_frame(&settings, 1).unwrap();
     let second = *gpu.mcpg_emission_moments().unwrap();
-    for (d, &kd) in k.iter().enumerate().take(3) {
-        let n = second.vertices[d] as f64;
-        let mean = second.directions[d] as f64 / n;
-        let f = f64::from(kd - kd.floor());
-        let sigma = (f * (1.0 - f) / n).sqrt().max(1e-9);
-        let z = (mean - f64::from(kd)) / sigma;
-        assert!(
-            z.abs() < 5.0,
-            "depth {d}: {mean:.4} directions per vertex against K(d) = {kd} (z = {z:.1})"
+    let counts = frame_counts(&k, settings.seed, 1);
+    for d in 0..3 {
+        assert!(second.vertices[d] > 0, "depth {d}: {second:?}");
+        assert_eq!(
+            second.directions[d],
+            u64::from(counts[d]) * second.vertices[d],
+            "depth {d}: K(d) = {}",
+            k[d]
         );
     }
 }

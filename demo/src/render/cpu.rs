@@ -362,16 +362,12 @@ pub fn trace_path<S: VertexSampler>(
             radiance +=
                 throughput * light_sample(scene, sampler, &vertex, origin_next, [ul, u1, u2]);
         } else {
-            // The first takes the light sample's uniforms, which `mcpg` does not use; the
-            // others draw theirs after the direction's.
+            // The directions' uniforms: the light sample's, which `mcpg` does not use, moved
+            // along a lattice ([`emission_uniforms`]).
             let gathers = sampler.emission_samples(depth);
             share = 1.0 / (1 + gathers) as f32;
             for i in 0..gathers {
-                let ue = if i == 0 {
-                    Vec3::new(ul, u1, u2)
-                } else {
-                    Vec3::new(u(), u(), u())
-                };
+                let ue = emission_uniforms(Vec3::new(ul, u1, u2), i);
                 let value = sampler
                     .sample_emission(&vertex, ue)
                     .map_or(Vec3::ZERO, |wi| {
@@ -397,6 +393,25 @@ pub fn trace_path<S: VertexSampler>(
     }
     report_recorded(sampler, &recorded, radiance, bounces);
     radiance
+}
+
+/// The generator of the R₃ lattice (Roberts 2018, "The unreasonable effectiveness of
+/// quasirandom sequences"): 1/φ₃, 1/φ₃², 1/φ₃³ with φ₃ ≈ 1.2207440846, the real root of
+/// x⁴ = x + 1. Its points i·α mod 1 fill the unit cube more evenly than independent ones.
+pub const EMISSION_LATTICE: Vec3 = Vec3::new(0.819_172_5, 0.671_043_6, 0.549_700_5);
+
+/// The three uniforms of a vertex's `i`-th emission-only direction
+/// ([`VertexSampler::sample_emission`]): `first` + i·[`EMISSION_LATTICE`] mod 1, a
+/// Cranley–Patterson rotation of the R₃ lattice by the vertex's own uniforms `first`. Each
+/// direction's uniforms alone are uniform in [0, 1)³ (so each direction is drawn from the
+/// sampler's density and the estimate stays unbiased); together a vertex's K directions cover
+/// the mixture's choice and the lobes' angles more evenly than K independent draws (mcg's
+/// extension: 3 % less error after 64 frames on scene (a), lower on each of six seeds,
+/// `markov-guide/benches/README.md`). The WGSL tracer's `emission_uniforms` is the twin.
+#[must_use]
+pub fn emission_uniforms(first: Vec3, i: u32) -> Vec3 {
+    let v = first + i as f32 * EMISSION_LATTICE;
+    (v - v.floor()).min(Vec3::splat(1.0 - f32::EPSILON / 2.0))
 }
 
 /// f·cos/p times the emission that the direction `wi` sampled at `vertex` meets from `origin`,
@@ -697,6 +712,39 @@ pub fn render_pixels<S>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `emission_uniforms`: each direction's uniforms are uniform, and a vertex's directions
+    /// spread more evenly than independent ones. Sample: 4,096 random rotations (seed 11) of
+    /// K = 8 points. Hypotheses and thresholds: every coordinate lies in [0, 1) and i = 0 gives
+    /// the rotation itself; the points in the octant [0, ½)³ average 1 per rotation (|z| < 5
+    /// with the measured variance); their variance over rotations is below 0.7, where
+    /// independent points give the binomial 8·⅛·⅞ = 0.875 (R₃ gives about 0.55), and the
+    /// generator (½, ½, ½) fails it at 3.1 (checked once).
+    #[test]
+    fn emission_uniforms_spread_a_vertexs_directions() {
+        let mut state = 11_u32;
+        let n = 4096;
+        let counts: Vec<f64> = (0..n)
+            .map(|_| {
+                let first = Vec3::new(
+                    next_uniform(&mut state),
+                    next_uniform(&mut state),
+                    next_uniform(&mut state),
+                );
+                assert_eq!(emission_uniforms(first, 0), first);
+                (0..8)
+                    .map(|i| emission_uniforms(first, i))
+                    .inspect(|u| assert!(u.cmpge(Vec3::ZERO).all() && u.cmplt(Vec3::ONE).all()))
+                    .filter(|u| u.cmplt(Vec3::splat(0.5)).all())
+                    .count() as f64
+            })
+            .collect();
+        let mean = counts.iter().sum::<f64>() / f64::from(n);
+        let var = counts.iter().map(|c| (c - mean).powi(2)).sum::<f64>() / f64::from(n - 1);
+        let z = (mean - 1.0) / (var / f64::from(n)).sqrt();
+        assert!(z.abs() < 5.0, "mean {mean} (z = {z})");
+        assert!(var < 0.7, "variance {var}");
+    }
     use crate::render::scene::SceneFile;
 
     /// The first hit's emission as the tracer's main loop finds it: the scene's closest hit,

@@ -127,9 +127,9 @@ struct Params {
     moment_stride: u32,
     // The root of the emitters' tree in `nodes` (`gpu::joined_trees`).
     emitter_root: u32,
-    // `mcpg`'s mean number K(d) of emission-only directions per vertex of depth d = 4i + j in
-    // [i][j] (`EmissionAllocation::per_depth`).
-    emission_per_depth: array<vec4<f32>, 4>,
+    // `mcpg`'s emission-only directions per vertex of depth d = 4i + j in [i][j] this frame
+    // (`gpu::frame_counts`).
+    emission_counts: array<vec4<u32>, 4>,
 }
 
 // `gpu::GpuRay`: a query of the `trace_rays` kernel (closest hit, or any hit when `any_hit`).
@@ -570,21 +570,25 @@ fn samples_lights() -> bool {
 }
 
 // How many directions `mcpg` draws at a vertex of `depth`, besides the path's, for the emission
-// they meet (`VertexSampler::emission_samples`, K): ⌊K(d)⌋, plus one with probability
-// K(d) − ⌊K(d)⌋ (`EmissionAllocation::samples_at`; the uniform is drawn only then); the
-// emission along each of the K + 1 directions then counts 1/(K + 1).
-fn emission_samples(depth: u32, rng: ptr<function, u32>) -> u32 {
+// they meet (`VertexSampler::emission_samples`, K; the same at every vertex of a depth in a
+// frame, `gpu::frame_counts`); the emission along each of the K + 1 directions then counts
+// 1/(K + 1).
+fn emission_samples(depth: u32) -> u32 {
     if params.method != METHOD_MCPG {
         return 0u;
     }
     let d = min(depth, MAX_RECORDED - 1u);
-    let k = params.emission_per_depth[d / 4u][d % 4u];
-    let whole = floor(k);
-    var extra = 0u;
-    if k > whole && mcg_rng_uniform(rng) < k - whole {
-        extra = 1u;
-    }
-    return u32(whole) + extra;
+    return params.emission_counts[d / 4u][d % 4u];
+}
+
+// `cpu::EMISSION_LATTICE`: the generator of the R3 lattice (1/φ₃, 1/φ₃², 1/φ₃³).
+const EMISSION_LATTICE: vec3<f32> = vec3<f32>(0.8191725, 0.6710436, 0.5497005);
+
+// `cpu::emission_uniforms`: the uniforms of a vertex's `i`-th emission-only direction, `first`
+// + i·EMISSION_LATTICE mod 1 (a Cranley–Patterson rotation of the R3 lattice).
+fn emission_uniforms(first: vec3<f32>, i: u32) -> vec3<f32> {
+    let v = first + f32(i) * EMISSION_LATTICE;
+    return min(v - floor(v), vec3<f32>(0.99999994));
 }
 
 // The pixel's first entry of emission statistics after the pixels of `image`
@@ -711,23 +715,18 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
                 radiance += throughput * l.value * power_heuristic(l.pdf, p);
             }
         } else {
-            // `McpgSampler::sample_emission`: directions from the begun vertex, the first from
-            // the light-sampling uniforms `mcpg` does not use, the others from the path's
-            // stream after the direction's; density and material only where emission is met
+            // `McpgSampler::sample_emission`: directions from the begun vertex, their uniforms
+            // the light-sampling ones `mcpg` does not use moved along a lattice
+            // (`emission_uniforms`); density and material only where emission is met
             // (`cpu::emission_weighted`).
-            let count = emission_samples(depth, &grng);
+            let count = emission_samples(depth);
             let share = 1.0 / f32(1u + count);
             last_share = share;
             // `EmissionMoments::add_direction`'s sums of the directions' luminance.
             var first = 0.0;
             var second = 0.0;
             for (var i = 0u; i < count; i++) {
-                var ue = vec3<f32>(ul, u1, u2);
-                if i > 0u {
-                    ue.x = mcg_rng_uniform(rng);
-                    ue.y = mcg_rng_uniform(rng);
-                    ue.z = mcg_rng_uniform(rng);
-                }
+                let ue = emission_uniforms(vec3<f32>(ul, u1, u2), i);
                 let wi = guided_mixture_direction(&open, vertex, ue);
                 let emitted = emission_along(origin_next, wi);
                 if any(emitted > vec3<f32>(0.0)) {
