@@ -25,7 +25,9 @@
 //! gathers the same sums in about [`gpu::MOMENT_PIXELS`](super::gpu::MOMENT_PIXELS) evenly
 //! spaced pixels, written after the pixels in its image buffer
 //! ([`gpu::moment_entries`](super::gpu::moment_entries)), and the host turns them into the next
-//! frame's K(d) with the same [`allocate`].
+//! frame's K(d) with the same [`allocate`]; there the count is drawn once per depth and frame
+//! ([`gpu::frame_counts`](super::gpu::frame_counts)) rather than per vertex, so that a SIMD group
+//! runs one loop length.
 
 use std::sync::Mutex;
 

@@ -179,15 +179,19 @@ const COUNT_SALT: u32 = 0x2545_f491;
 /// vertex ([`EmissionAllocation::samples_at`]); on the GPU every vertex of a depth draws the
 /// same number, so that the invocations of a SIMD group or warp run one loop length instead
 /// of the longest of theirs (drawn per vertex, lavapipe's frames took 10-15 % longer for the
-/// same mean). The number is fixed before the frame's samples, so the estimate stays
-/// unbiased.
+/// same mean). A depth with K(d) > 0 gets at least one direction, so that every frame measures
+/// it: a depth left without directions for a frame gets the largest σ of the others in the
+/// next allocation ([`super::emission_allocation::allocate`]), and K(0) ≈ 0.5 then swung to
+/// about 4.4 for a frame. The number is fixed before the frame's samples, so the estimate
+/// stays unbiased.
 #[must_use]
 pub fn frame_counts(per_depth: &[f32; MAX_RECORDED], seed: u32, frame: u32) -> [u32; MAX_RECORDED] {
     core::array::from_fn(|d| {
         let k = per_depth[d].max(0.0);
         let whole = k.floor();
         let bits = pcg_hash(seed ^ pcg_hash(frame ^ pcg_hash(d as u32 ^ COUNT_SALT)));
-        whole as u32 + u32::from(uniform_float(bits) < k - whole)
+        let count = whole as u32 + u32::from(uniform_float(bits) < k - whole);
+        if k > 0.0 { count.max(1) } else { count }
     })
 }
 
@@ -1309,18 +1313,21 @@ mod tests {
         (module, tracer, guide)
     }
 
-    /// `frame_counts` draws ⌊K(d)⌋ or ⌈K(d)⌉ with mean K(d). Sample: 20,000 frames (seed 9)
-    /// of K = (0, 1.25, 6.5, 4.9, 16) at depths 0-4. Threshold: every count is ⌊K⌋ or ⌈K⌉,
-    /// and the mean over frames is within 5 binomial standard deviations of K. Never rounding
-    /// up fails it (z = −82 at depth 1; checked once).
+    /// `frame_counts` draws ⌊K(d)⌋ or ⌈K(d)⌉ with mean K(d), and at least one direction where
+    /// K(d) > 0. Sample: 20,000 frames (seed 9) of K = (0, 1.25, 6.5, 4.9, 16) at depths 0-4
+    /// and 0.4 at depth 5. Threshold: every count is ⌊K⌋ or ⌈K⌉, and the mean over frames is
+    /// within 5 binomial standard deviations of K; depth 5 always draws 1. Never rounding up
+    /// fails it (z = −82 at depth 1; checked once).
     #[test]
     fn frame_counts_draw_k_on_average() {
         let mut k = [0.0_f32; MAX_RECORDED];
-        k[..5].copy_from_slice(&[0.0, 1.25, 6.5, 4.9, 16.0]);
+        k[..6].copy_from_slice(&[0.0, 1.25, 6.5, 4.9, 16.0, 0.4]);
         let n = 20_000_u32;
         let mut sums = [0_u64; MAX_RECORDED];
         for frame in 0..n {
-            for (d, c) in frame_counts(&k, 9, frame).into_iter().enumerate() {
+            let counts = frame_counts(&k, 9, frame);
+            assert_eq!(counts[5], 1);
+            for (d, c) in counts.into_iter().enumerate().take(5) {
                 assert!(
                     c == k[d].floor() as u32 || c == k[d].ceil() as u32,
                     "{d}: {c}"

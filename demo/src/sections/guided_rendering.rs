@@ -550,7 +550,7 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
          light per vertex than nee's one light sample, each costing a sample of the vertex \
          already begun and a walk of the emitters' own small tree, with a shadow ray only \
          where it meets an emitter; drawn from the whole mixture (not only the lobe of the \
-         state Alg. 1 chose), and spread over the path's depths by each depth's variance \
+         state Alg. 1 chose) with uniforms from a randomly shifted R3 lattice, and spread over the path's depths by each depth's variance \
          measured in the frame before, at the same mean (`--mcpg-emission-allocation uniform` \
          spends as many at every vertex). \
          FLIP is NVIDIA's LDR-FLIP of the sRGB images (the PNGs) at 67 pixels per degree. \
