@@ -301,7 +301,6 @@ fn gpu_emission_allocation_counts_and_draws_k_per_depth() {
     };
     gpu.set_mcpg_emission_samples(4);
     gpu.set_mcpg_emission_allocation(Allocation::Adaptive);
-    gpu.start_mcpg(&guide_config(&scene, w, h)).unwrap();
     let settings = RenderSettings {
         width: w,
         height: h,

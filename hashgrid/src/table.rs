@@ -581,6 +581,21 @@ mod tests {
     }
 
     /// A key whose home slot in `table` is `home` (searched).
+    /// Each key's index and value, if any.
+    type Values = Vec<(usize, Option<[u32; 8]>)>;
+
+    /// `keys`' values as `get_many` hands them on, and as `get` finds them one by one.
+    fn get_many_and_get(t: &HashTable<[u32; 8]>, keys: &[CellKey]) -> (Values, Values) {
+        let mut got = Vec::new();
+        t.get_many(keys, |i, v| got.push((i, v.copied())));
+        let want = keys
+            .iter()
+            .enumerate()
+            .map(|(i, k)| (i, t.get(k).copied()))
+            .collect();
+        (got, want)
+    }
+
     fn key_at_home<T: Pod>(table: &HashTable<T>, home: u32, skip: usize) -> CellKey {
         (0..)
             .map(key)
@@ -683,13 +698,7 @@ mod tests {
             let b = HashTable::<u32>::BATCH;
             for n in [0, 1, b - 1, b, b + 1, 3 * b + 75] {
                 let keys: Vec<CellKey> = (0..n as i32).map(key).collect();
-                let mut got = Vec::new();
-                t.get_many(&keys, |i, v| got.push((i, v.copied())));
-                let want: Vec<(usize, Option<[u32; 8]>)> = keys
-                    .iter()
-                    .enumerate()
-                    .map(|(i, k)| (i, t.get(k).copied()))
-                    .collect();
+                let (got, want) = get_many_and_get(&t, &keys);
                 assert_eq!(got, want, "{hash:?} {cap} {n} keys");
                 if n > 60 {
                     assert!(want[..60].iter().filter(|(_, v)| v.is_some()).count() > 45);
@@ -791,13 +800,7 @@ mod tests {
                 }
                 let hits = want.iter().filter(|s| s.is_some()).count();
                 assert!(hits > keys.len() / 4 && hits < keys.len() * 2 / 3, "{hits}");
-                let mut got = Vec::new();
-                t.get_many(&keys, |i, v| got.push((i, v.copied())));
-                let want: Vec<(usize, Option<[u32; 8]>)> = keys
-                    .iter()
-                    .enumerate()
-                    .map(|(i, k)| (i, t.get(k).copied()))
-                    .collect();
+                let (got, want) = get_many_and_get(&t, &keys);
                 assert_eq!(got, want, "{hash:?} {cap} {stored}");
             }
         }

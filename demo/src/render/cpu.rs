@@ -712,6 +712,7 @@ pub fn render_pixels<S>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::scene::SceneFile;
 
     /// `emission_uniforms`: each direction's uniforms are uniform, and a vertex's directions
     /// spread more evenly than independent ones. Sample: 4,096 random rotations (seed 11) of
@@ -745,7 +746,6 @@ mod tests {
         assert!(z.abs() < 5.0, "mean {mean} (z = {z})");
         assert!(var < 0.7, "variance {var}");
     }
-    use crate::render::scene::SceneFile;
 
     /// The first hit's emission as the tracer's main loop finds it: the scene's closest hit,
     /// then its front-face emission.

@@ -145,6 +145,13 @@ pub fn allocate(mean: f32, moments: &EmissionMoments) -> [f32; MAX_RECORDED] {
     out
 }
 
+/// ⌊k⌋, plus one when `u < k − ⌊k⌋` (`u` uniform in [0, 1)), so that the mean is `k` (≥ 0).
+#[must_use]
+pub fn round_stochastically(k: f32, u: f32) -> u32 {
+    let whole = k.floor();
+    whole as u32 + u32::from(u < k - whole)
+}
+
 /// The directions per vertex of one render: the mean K̄, the policy, this frame's K(d) and the
 /// statistics being gathered for the next (from every rayon task's sampler at once, or from
 /// the GPU tracer's recording pixels).
@@ -187,13 +194,10 @@ impl EmissionAllocation {
         &self.per_depth
     }
 
-    /// The number of directions for a vertex at `depth`: ⌊K(d)⌋, plus one when `u < K(d) −
-    /// ⌊K(d)⌋` (`u` uniform in [0, 1)), so that its mean is K(d).
+    /// The number of directions for a vertex at `depth`: [`round_stochastically`] of K(d).
     #[must_use]
     pub fn samples_at(&self, depth: u32, u: f32) -> u32 {
-        let k = self.per_depth[EmissionMoments::slot(depth)];
-        let whole = k.floor();
-        whole as u32 + u32::from(u < k - whole)
+        round_stochastically(self.per_depth[EmissionMoments::slot(depth)], u)
     }
 
     /// Adds one sampler's statistics of this frame.

@@ -53,7 +53,9 @@ pub use probes::{
 
 use super::bvh::{BvhNode, Triangle};
 use super::cpu::{MAX_RECORDED, Method, RenderSettings};
-use super::emission_allocation::{Allocation, EmissionAllocation, EmissionMoments};
+use super::emission_allocation::{
+    Allocation, EmissionAllocation, EmissionMoments, round_stochastically,
+};
 use super::material::Material;
 use super::scene::{Camera, Scene, TextureInfo, TriangleUv};
 use crate::Result;
@@ -174,8 +176,8 @@ pub struct GpuParams {
 const COUNT_SALT: u32 = 0x2545_f491;
 
 /// The number of `mcpg`'s emission-only directions at every vertex of depth d in one frame of
-/// the GPU tracer: ⌊K(d)⌋, plus one with probability K(d) − ⌊K(d)⌋, drawn once per depth and
-/// frame from `seed` and `frame` (so its mean over frames is K(d)). The CPU tracer draws per
+/// the GPU tracer: [`round_stochastically`] of K(d), drawn once per depth and frame from
+/// `seed` and `frame` (so its mean over frames is K(d)). The CPU tracer draws per
 /// vertex ([`EmissionAllocation::samples_at`]); on the GPU every vertex of a depth draws the
 /// same number, so that the invocations of a SIMD group or warp run one loop length instead
 /// of the longest of theirs (drawn per vertex, lavapipe's frames took 10-15 % longer for the
@@ -188,9 +190,8 @@ const COUNT_SALT: u32 = 0x2545_f491;
 pub fn frame_counts(per_depth: &[f32; MAX_RECORDED], seed: u32, frame: u32) -> [u32; MAX_RECORDED] {
     core::array::from_fn(|d| {
         let k = per_depth[d].max(0.0);
-        let whole = k.floor();
         let bits = pcg_hash(seed ^ pcg_hash(frame ^ pcg_hash(d as u32 ^ COUNT_SALT)));
-        let count = whole as u32 + u32::from(uniform_float(bits) < k - whole);
+        let count = round_stochastically(k, uniform_float(bits));
         if k > 0.0 { count.max(1) } else { count }
     })
 }

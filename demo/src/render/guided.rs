@@ -50,7 +50,7 @@ impl Scatter for MaterialScatter {
         };
         let x = x.clamp(0.0, 1.0 - f32::EPSILON);
         self.material
-            .sample_direction_only(self.normal, self.wo, Vec3::new(lobe, x, u.y))
+            .sample_direction(self.normal, self.wo, Vec3::new(lobe, x, u.y))
             // A direction the material cannot scatter into: its weight is 0 and ends the path.
             .unwrap_or(-self.normal)
     }
@@ -429,7 +429,7 @@ impl VertexSampler for McpgSampler<'_> {
         match self.kept.get(v.depth as usize) {
             Some(Some(kept)) if kept.open => Some(kept.vertex.sample_mixture(&sample_uniforms(u))),
             // Past the kept depths: the material's sample, whose density `pdf` answers there.
-            _ => v.material.sample_direction_only(v.normal, v.wo, u),
+            _ => v.material.sample_direction(v.normal, v.wo, u),
         }
     }
 

@@ -146,21 +146,13 @@ impl Material {
     /// contribution (below the surface, or zero density).
     #[must_use]
     pub fn sample(&self, n: Vec3, wo: Vec3, u: Vec3) -> Option<BsdfSample> {
-        let (wi, pdf) = self.sample_direction(n, wo, u)?;
-        Some(BsdfSample {
+        let wi = self.sampled(n, wo, u);
+        let pdf = self.pdf(n, wo, wi);
+        (pdf > 0.0).then(|| BsdfSample {
             direction: wi,
             pdf,
             weight: self.eval(n, wo, wi) / pdf,
         })
-    }
-
-    /// The direction and density of [`sample`](Self::sample), without the material's value
-    /// (for a sampler that needs only where to go).
-    #[must_use]
-    pub fn sample_direction(&self, n: Vec3, wo: Vec3, u: Vec3) -> Option<(Vec3, f32)> {
-        let wi = self.sampled(n, wo, u);
-        let pdf = self.pdf(n, wo, wi);
-        (pdf > 0.0).then_some((wi, pdf))
     }
 
     /// The direction of [`sample`](Self::sample) alone, `None` where it has no density: for a
@@ -169,7 +161,7 @@ impl Material {
     /// is positive exactly where `ωi` and `ωo` are above the surface, so only a pure GGX
     /// material evaluates it.
     #[must_use]
-    pub fn sample_direction_only(&self, n: Vec3, wo: Vec3, u: Vec3) -> Option<Vec3> {
+    pub fn sample_direction(&self, n: Vec3, wo: Vec3, u: Vec3) -> Option<Vec3> {
         let wi = self.sampled(n, wo, u);
         let has_density = if self.metallic < 1.0 {
             n.dot(wi) > 0.0 && n.dot(wo) > 0.0
