@@ -36,7 +36,8 @@ pub trait ColorCodec {
     ///
     /// The default is that loop, one colour at a time (for R11G11B10 and the other integer
     /// codecs the compiler vectorises it across colours); [`LogRgb`] overrides it with a batch
-    /// form that runs four colours per vector (see [`IrradianceLayout::encode_slice`]).
+    /// form that runs four colours per vector, or for ADGI's round-down a table loop with its
+    /// constants folded (see [`IrradianceLayout::encode_slice`]).
     ///
     /// # Panics
     /// If `colours` and `words` differ in length.
@@ -117,14 +118,16 @@ impl ColorCodec for LogRgb {
     fn name(&self) -> &'static str {
         self.name
     }
-    /// Batch form, four colours per vector: bit for bit `encode` per colour, with
+    /// Batch form (four colours per vector, or the table loop for round-down with tables): bit
+    /// for bit `encode` per colour, with
     /// [`LogRgb::rounding`] (the same stochastic uniform) for every colour.
     #[inline]
     fn encode_slice(&self, colours: &[Vec3], words: &mut [u32]) {
         self.layout
             .encode_slice(colours, 0, self.rounding, bytemuck::cast_slice_mut(words));
     }
-    /// Batch form, four colours per vector: bit for bit `decode` per word.
+    /// Batch form (four words per vector, or the table loop with tables): bit for bit `decode`
+    /// per word.
     #[inline]
     fn decode_slice(&self, words: &[u32], colours: &mut [Vec3]) {
         self.layout

@@ -7,7 +7,7 @@ use glam::Vec3;
 use crate::bits::BitField;
 use crate::error::CodecError;
 use crate::log_codec::{LogCodec, LogField, LogLanes, MAX_FIELD_BITS};
-use crate::log_table::LogTable;
+use crate::log_table::{FieldTable, LogTable};
 use crate::quantize::Rounding;
 
 /// Bit layout of an irradiance word: R, G, B fields of the log codec (eq. 21) and a count field.
@@ -46,7 +46,46 @@ pub struct IrradianceLayout {
     count: BitField,
     /// The three channels' tables when every channel has them (ADGI's codec at 8-10 bits):
     /// decode by three loads, round down by three table searches, the same bits as `lanes`.
-    tables: Option<[&'static LogTable; 3]>,
+    /// Held by value, not as `&'static LogTable`, so that where the layout is a constant (e.g.
+    /// [`LogRgb::ADGI`](crate::LogRgb::ADGI) inlined into a loop) its γ, clamp, shift and mask
+    /// fold into the code: the statics' contents are opaque to a caller in another crate.
+    tables: Option<[LogTable; 3]>,
+}
+
+/// [`IrradianceLayout::encode_slice`]'s table loop for a layout of ADGI's codec with widths
+/// R, G, B (R at bit 0, G at R, B at R + G), rounding down: the tables and shifts are
+/// constants, whoever calls. `count_bits` is the count field, already in place.
+#[inline(never)]
+fn encode_down_fixed<const R: u32, const G: u32, const B: u32>(
+    count_bits: u32,
+    colours: &[Vec3],
+    words: &mut [IrradianceWord],
+) {
+    let (r, g, b) = (
+        FieldTable::<R>::TABLE,
+        FieldTable::<G>::TABLE,
+        FieldTable::<B>::TABLE,
+    );
+    for (w, &c) in words.iter_mut().zip(colours) {
+        let rgb = r.encode_down(c.x) | g.encode_down(c.y) << R | b.encode_down(c.z) << (R + G);
+        *w = IrradianceWord(count_bits | rgb);
+    }
+}
+
+/// [`IrradianceLayout::decode_slice`]'s table loop for widths R, G, B, as [`encode_down_fixed`].
+#[inline(never)]
+fn decode_fixed<const R: u32, const G: u32, const B: u32>(
+    words: &[IrradianceWord],
+    colours: &mut [Vec3],
+) {
+    let (r, g, b) = (
+        FieldTable::<R>::TABLE,
+        FieldTable::<G>::TABLE,
+        FieldTable::<B>::TABLE,
+    );
+    for (c, &w) in colours.iter_mut().zip(words) {
+        *c = Vec3::new(r.decode(w.0), g.decode(w.0 >> R), b.decode(w.0 >> (R + G)));
+    }
 }
 
 /// A packed irradiance texel (see [`IrradianceLayout`] for its bit map); plain `u32` on the GPU.
@@ -120,7 +159,7 @@ impl IrradianceLayout {
             ],
             count: BitField::new(32 - count_bits, count_bits),
             tables: match (fields[0].table(), fields[1].table(), fields[2].table()) {
-                (Some(r), Some(g), Some(b)) => Some([r, g, b]),
+                (Some(r), Some(g), Some(b)) => Some([*r, *g, *b]),
                 _ => None,
             },
         })
@@ -209,7 +248,7 @@ impl IrradianceLayout {
 
     /// The colour fields of a word rounded down by the tables.
     #[inline(always)]
-    fn pack(&self, [r, g, b]: [&'static LogTable; 3], rgb: Vec3) -> u32 {
+    fn pack(&self, [r, g, b]: [LogTable; 3], rgb: Vec3) -> u32 {
         let s = self.shifts();
         r.encode_down(rgb.x) << s[0] | g.encode_down(rgb.y) << s[1] | b.encode_down(rgb.z) << s[2]
     }
@@ -232,6 +271,12 @@ impl IrradianceLayout {
     /// [`encode`](Self::encode). Round-down's exact check falls back per vector as in `encode`
     /// (any lane near a code boundary); lane by lane the operations are those of `encode`, hence
     /// the same codes (tested for every rounding mode, bad input and code boundaries).
+    ///
+    /// Layouts whose three fields have tables (ADGI's codec at 8-10 bits) round down colour by
+    /// colour through the table search instead, as `encode` does (fewer instructions than the
+    /// 4-lane polynomial); for ADGI's R9G9B8 and the 10/10/10 layout that loop is compiled with
+    /// the tables and shifts as constants, whatever the caller (tested against the polynomial
+    /// path at every code).
     ///
     /// # Panics
     /// If `colours` and `words` differ in length.
@@ -261,11 +306,32 @@ impl IrradianceLayout {
         );
         if let (Some(t), Rounding::Down) = (self.tables, rounding) {
             let count_bits = self.count.put(count.min(self.max_count()));
-            for (w, &c) in words.iter_mut().zip(colours) {
-                *w = IrradianceWord(count_bits | self.pack(t, c));
+            // The tables are fixed by the widths (they exist only for ADGI's codec), and so
+            // are the shifts: ADGI's and the 10/10/10 layout run loops with both as constants.
+            match self.widths() {
+                [9, 9, 8, _] => encode_down_fixed::<9, 9, 8>(count_bits, colours, words),
+                [10, 10, 10, _] => encode_down_fixed::<10, 10, 10>(count_bits, colours, words),
+                _ => {
+                    for (w, &c) in words.iter_mut().zip(colours) {
+                        *w = IrradianceWord(count_bits | self.pack(t, c));
+                    }
+                }
             }
             return;
         }
+        self.encode_slice_lanes(colours, count, rounding, words);
+    }
+
+    /// The batch form of [`encode_slice`](Self::encode_slice) (every path but the tables'
+    /// round-down), out of line: `encode_slice` itself is then only the dispatch.
+    #[inline(never)]
+    fn encode_slice_lanes(
+        &self,
+        colours: &[Vec3],
+        count: u32,
+        rounding: Rounding,
+        words: &mut [IrradianceWord],
+    ) {
         // Spelled out, not `[0, 1, 2].map(..)`: LLVM left such closures un-inlined here.
         let lanes = [
             self.channel_lanes(0),
@@ -297,7 +363,8 @@ impl IrradianceLayout {
     ///
     /// Batch form: four words at a time, one 4-lane vector per channel (lane = word), so the
     /// `exp2` polynomial runs on four colours per evaluation; a tail of fewer than four words
-    /// goes through [`decode`](Self::decode).
+    /// goes through [`decode`](Self::decode). Layouts with tables decode by three loads per
+    /// word, as `decode` does (constant tables and shifts for ADGI's and the 10/10/10 layout).
     ///
     /// # Panics
     /// If `words` and `colours` differ in length.
@@ -308,11 +375,24 @@ impl IrradianceLayout {
             "decode_slice: words and colours differ in length"
         );
         if self.tables.is_some() {
-            for (c, &w) in colours.iter_mut().zip(words) {
-                *c = self.decode(w);
+            match self.widths() {
+                [9, 9, 8, _] => decode_fixed::<9, 9, 8>(words, colours),
+                [10, 10, 10, _] => decode_fixed::<10, 10, 10>(words, colours),
+                _ => {
+                    for (c, &w) in colours.iter_mut().zip(words) {
+                        *c = self.decode(w);
+                    }
+                }
             }
             return;
         }
+        self.decode_slice_lanes(words, colours);
+    }
+
+    /// The batch form of [`decode_slice`](Self::decode_slice) for layouts without tables, out
+    /// of line like [`encode_slice_lanes`](Self::encode_slice_lanes).
+    #[inline(never)]
+    fn decode_slice_lanes(&self, words: &[IrradianceWord], colours: &mut [Vec3]) {
         let lanes = [
             self.channel_lanes(0),
             self.channel_lanes(1),
@@ -649,6 +729,80 @@ mod tests {
                 assert_eq!(
                     d.to_array().map(f32::to_bits),
                     want.to_array().map(f32::to_bits)
+                );
+            }
+        }
+    }
+
+    /// The table loops of `encode_slice` / `decode_slice` (constant tables and shifts for
+    /// ADGI's and the 10/10/10 layout, the runtime tables for other widths) give the words and
+    /// values of the polynomial path, which the GPU twin runs: for every code of every channel
+    /// (its value and 3 f32 neighbours either side, in every channel), a dense log sweep and bad
+    /// input; and `decode_slice` of every field value.
+    #[test]
+    fn table_slices_match_the_polynomial_path() {
+        let layouts = [
+            IrradianceLayout::ADGI,
+            IrradianceLayout::EQUAL_10,
+            IrradianceLayout::new(8, 9, 9, 6, LogCodec::IRRADIANCE).unwrap(),
+            IrradianceLayout::new(10, 9, 8, 5, LogCodec::IRRADIANCE).unwrap(),
+        ];
+        for l in layouts {
+            assert!(l.tables.is_some());
+            let mut values = std::vec![
+                f32::NAN,
+                -1.0,
+                -0.0,
+                0.0,
+                1e-40,
+                f32::INFINITY,
+                1e30,
+                l.codec().max_value(),
+            ];
+            for i in 0..3 {
+                let f = l.channel(i);
+                for q in 0..=f.max_code() {
+                    let d = l.lanes.decode_word(q << l.shifts()[i])[i];
+                    for k in -3..=3_i32 {
+                        values.push(f32::from_bits(d.to_bits().wrapping_add_signed(k)));
+                    }
+                }
+            }
+            let mut v = 1e-6_f32;
+            while v < 20.0 {
+                values.push(v);
+                v *= 1.000_37;
+            }
+            let n = values.len();
+            let colours: Vec<Vec3> = (0..n)
+                .flat_map(|j| {
+                    [
+                        Vec3::splat(values[j]),
+                        Vec3::new(values[j], values[(j * 7 + 3) % n], values[(j * 13 + 5) % n]),
+                    ]
+                })
+                .collect();
+            let mut words = std::vec![IrradianceWord(0); colours.len()];
+            l.encode_slice(&colours, 5, Rounding::Down, &mut words);
+            let count = l.count.put(5.min(l.max_count()));
+            for (&c, &w) in colours.iter().zip(&words) {
+                let want = count | l.lanes.encode_word3([c.x, c.y, c.z, c.z], Rounding::Down);
+                assert_eq!(w.0, want, "{:?} {c}", l.widths());
+            }
+            // Every field value, with the other fields and the count bits varying.
+            words = (0..1 << 16)
+                .map(|q: u32| IrradianceWord(q.wrapping_mul(0x9e37_79b9) ^ q))
+                .chain((0..1 << 10).flat_map(|q: u32| l.shifts().map(|s| IrradianceWord(q << s))))
+                .collect();
+            let mut dec = std::vec![Vec3::NAN; words.len()];
+            l.decode_slice(&words, &mut dec);
+            for (&w, d) in words.iter().zip(&dec) {
+                let [r, g, b, _] = l.lanes.decode_word(w.0);
+                assert_eq!(
+                    d.to_array().map(f32::to_bits),
+                    [r, g, b].map(f32::to_bits),
+                    "{:?} {w:x?}",
+                    l.widths()
                 );
             }
         }

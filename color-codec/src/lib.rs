@@ -36,13 +36,13 @@
 //!
 //! ## Performance
 //! ADGI's log codec (R9G9B8, round down) decodes from a table and rounds down by a table
-//! search (the polynomials' exact results): a round trip takes 0.79× R11G11B10's time per colour
-//! and 0.92–0.95× through the slice API (fastest of repeated runs on a shared 2-vCPU VM,
-//! baseline x86-64: `cargo run --release -p mcg-color-codec --example codec_min_timing`); 94 and 101
-//! instructions per colour against R11G11B10's 70 and 77 (`scripts/codec-instructions`). The
-//! criterion groups (`cargo bench -p mcg-color-codec --bench color_codec -- round_trip`) gave
-//! 1.02× and 0.97× in one run and 1.58× and 1.24× in another under heavier load; numbers and
-//! diary: `benches/README.md`.
+//! search (the polynomials' exact results; the slice API runs it with the tables and shifts as
+//! constants): a round trip takes 0.79–0.81× R11G11B10's time per colour and 0.87× through the
+//! slice API (fastest of repeated runs on a shared 2-vCPU AMD EPYC VM, baseline x86-64:
+//! `cargo run --release -p mcg-color-codec --example codec_min_timing`); 85 and 67 instructions
+//! per colour against R11G11B10's 70 and 77 (`scripts/codec-instructions`). The criterion groups
+//! (`cargo bench -p mcg-color-codec --bench color_codec -- round_trip`, load 2–3.5) gave
+//! 1.48–1.55× per colour and 0.84–0.91× for the slices; numbers and diary: `benches/README.md`.
 //!
 //! ## Features
 //! - `std` (default): float functions from the standard library.

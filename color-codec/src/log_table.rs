@@ -35,6 +35,9 @@ pub(crate) struct LogTable {
     /// `index[b]`: the largest code whose y = γ·decode + 1 lies in a bucket below b (0 if
     /// none); buckets past the top code's hold M.
     index: &'static [u16; INDEX_LEN],
+    /// `next[b] = decode[index[b] + 1]`: the value the round-down step compares with, read by
+    /// the same index as `index[b]` (two independent loads instead of two dependent ones).
+    next: &'static [f32; INDEX_LEN],
     gamma: f32,
     /// `decode[M]`: inputs are clamped to it.
     top: f32,
@@ -109,25 +112,44 @@ const fn index_table(decode: &[f32; DECODE_LEN], bits: u32) -> [u16; INDEX_LEN] 
     t
 }
 
+/// `next[b] = decode[index[b] + 1]` for every bucket b.
+const fn next_table(decode: &[f32; DECODE_LEN], index: &[u16; INDEX_LEN]) -> [f32; INDEX_LEN] {
+    let mut t = [0.0; INDEX_LEN];
+    let mut b = 0;
+    while b < INDEX_LEN {
+        t[b] = decode[index[b] as usize + 1];
+        b += 1;
+    }
+    t
+}
+
 const DECODE_8: [f32; DECODE_LEN] = decode_table(8);
 const DECODE_9: [f32; DECODE_LEN] = decode_table(9);
 const DECODE_10: [f32; DECODE_LEN] = decode_table(10);
 static DECODE_8_S: [f32; DECODE_LEN] = DECODE_8;
 static DECODE_9_S: [f32; DECODE_LEN] = DECODE_9;
 static DECODE_10_S: [f32; DECODE_LEN] = DECODE_10;
-static INDEX_8: [u16; INDEX_LEN] = index_table(&DECODE_8, 8);
-static INDEX_9: [u16; INDEX_LEN] = index_table(&DECODE_9, 9);
-static INDEX_10: [u16; INDEX_LEN] = index_table(&DECODE_10, 10);
+const INDEX_8: [u16; INDEX_LEN] = index_table(&DECODE_8, 8);
+const INDEX_9: [u16; INDEX_LEN] = index_table(&DECODE_9, 9);
+const INDEX_10: [u16; INDEX_LEN] = index_table(&DECODE_10, 10);
+static INDEX_8_S: [u16; INDEX_LEN] = INDEX_8;
+static INDEX_9_S: [u16; INDEX_LEN] = INDEX_9;
+static INDEX_10_S: [u16; INDEX_LEN] = INDEX_10;
+static NEXT_8: [f32; INDEX_LEN] = next_table(&DECODE_8, &INDEX_8);
+static NEXT_9: [f32; INDEX_LEN] = next_table(&DECODE_9, &INDEX_9);
+static NEXT_10: [f32; INDEX_LEN] = next_table(&DECODE_10, &INDEX_10);
 
 const fn table(
     decode: &'static [f32; DECODE_LEN],
     index: &'static [u16; INDEX_LEN],
+    next: &'static [f32; INDEX_LEN],
     bits: u32,
 ) -> LogTable {
     let max_code = (1_u32 << bits) - 1;
     LogTable {
         decode,
         index,
+        next,
         gamma: LogCodec::IRRADIANCE.gamma(),
         top: decode[max_code as usize],
         shift: 23 - (bits - 2),
@@ -135,9 +157,23 @@ const fn table(
     }
 }
 
-static TABLE_8: LogTable = table(&DECODE_8_S, &INDEX_8, 8);
-static TABLE_9: LogTable = table(&DECODE_9_S, &INDEX_9, 9);
-static TABLE_10: LogTable = table(&DECODE_10_S, &INDEX_10, 10);
+static TABLE_8: LogTable = table(&DECODE_8_S, &INDEX_8_S, &NEXT_8, 8);
+static TABLE_9: LogTable = table(&DECODE_9_S, &INDEX_9_S, &NEXT_9, 9);
+static TABLE_10: LogTable = table(&DECODE_10_S, &INDEX_10_S, &NEXT_10, 10);
+
+/// The table of ADGI's codec at `BITS` bits (8, 9 or 10) as a constant, for loops whose
+/// layout is fixed at compile time: its γ, clamp, shift and mask become immediates.
+pub(crate) struct FieldTable<const BITS: u32>;
+
+impl<const BITS: u32> FieldTable<BITS> {
+    /// [`LogTable::find`]`(LogCodec::IRRADIANCE, BITS)`, by value.
+    pub(crate) const TABLE: LogTable = match BITS {
+        8 => table(&DECODE_8_S, &INDEX_8_S, &NEXT_8, 8),
+        9 => table(&DECODE_9_S, &INDEX_9_S, &NEXT_9, 9),
+        10 => table(&DECODE_10_S, &INDEX_10_S, &NEXT_10, 10),
+        _ => panic!("no table at this width"),
+    };
+}
 
 impl LogTable {
     /// The tables of `codec` quantised to `bits`, if there are any: (β, γ) = (5, 15) at 8, 9
@@ -166,9 +202,10 @@ impl LogTable {
     pub(crate) fn encode_down(&self, v: f32) -> u32 {
         let v = if v > 0.0 { v } else { 0.0 };
         let v = if v < self.top { v } else { self.top };
-        let b = bucket(self.gamma, v, self.shift);
-        let lo = self.index[b.min(INDEX_LEN - 1)] as usize;
-        lo as u32 + u32::from(self.decode[(lo + 1) % DECODE_LEN] <= v)
+        // b < the field's bucket count ≤ INDEX_LEN (v ≤ top, asserted when the index is
+        // built), so the mask only spares the bounds check.
+        let b = bucket(self.gamma, v, self.shift) % INDEX_LEN;
+        u32::from(self.index[b]) + u32::from(self.next[b] <= v)
     }
 }
 
@@ -193,6 +230,31 @@ mod tests {
         assert!(LogTable::find(LogCodec::IRRADIANCE, 11).is_none());
         assert!(LogTable::find(LogCodec::SQUARED_DISTANCE, 9).is_none());
         assert!(LogTable::find(LogCodec::new(5.0, 14.0).unwrap(), 9).is_none());
+    }
+
+    #[test]
+    fn field_tables_are_the_found_tables() {
+        let fixed = [
+            FieldTable::<8>::TABLE,
+            FieldTable::<9>::TABLE,
+            FieldTable::<10>::TABLE,
+        ];
+        for ((bits, t), f) in tables().into_iter().zip(fixed) {
+            assert_eq!(f, *t, "{bits} bits");
+        }
+    }
+
+    #[test]
+    fn next_is_the_value_after_index() {
+        for (bits, t) in tables() {
+            for (b, (&lo, &next)) in t.index.iter().zip(t.next).enumerate() {
+                assert_eq!(
+                    next.to_bits(),
+                    t.decode[lo as usize + 1].to_bits(),
+                    "{bits} {b}"
+                );
+            }
+        }
     }
 
     #[test]
