@@ -21,7 +21,7 @@ use mcg_demo::render::material::BsdfSample;
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
 use mcg_demo::render::scene::{Scene, SceneError, SceneFile, frame_time};
 use mcg_demo::render::scene_generator::{DOOR_OPENS_AT_FRAME, SCENE_NAMES, built_in_scenes};
-use mcg_demo::render::{Device, ProbeOptions, RenderArgs, render, write_outputs};
+use mcg_demo::render::{Device, ProbeOptions, RenderArgs, output, render, write_outputs};
 use mcg_tests::RunningStats;
 
 fn temp_dir(name: &str) -> PathBuf {
@@ -622,9 +622,14 @@ fn render_command_writes_exr_png_and_json() {
     let first = render(&args).unwrap();
     let paths = write_outputs(&dir, &first).unwrap();
     assert!(paths.iter().all(|p| p.exists()));
+    // The variance of the mean goes beside it, and makes it a reference whose own error the
+    // next render reports.
+    assert_eq!(paths[3], dir.join("nee.variance.exr"));
     args.reference = Some(dir.join("nee.exr"));
     args.method = Method::Bsdf;
     let second = render(&args).unwrap();
+    let own = second.report.reference_own_error.unwrap();
+    assert!(own.rmse > 0.0 && own.rel_mse > 0.0, "{own:?}");
     assert_eq!(second.report.errors.len(), 2);
     assert_eq!(second.report.frame_times_s.len(), 2);
     assert!(
@@ -654,6 +659,46 @@ fn render_command_writes_exr_png_and_json() {
     args.width = 8;
     assert!(render(&args).unwrap_err().to_string().contains("nee.exr"));
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Hypothesis: a reference's own error ([`output::own_error`]) is what it adds to an error
+/// measured against it — for independent unbiased renders A and B of one scene,
+/// E[(A − B)²] = Var A + Var B per pixel and channel, with Var estimated from each render's
+/// frames (`Rendered::variance`, s²/n). Two `nee` renders of scene (a), 32 × 32, 8 spp × 32
+/// frames, 3 bounces, seeds 1 and 2: the 3 072 differences (A − B)² − (V_A + V_B), independent
+/// across pixels (`nee` shares nothing between pixels), have mean 0 within |z| < 5. The
+/// threshold leaves room for the squared differences' heavy tail, which makes the standard
+/// error noisy: over ten pairs of seeds z spread from −1.2 to 2.3 (SD ≈ 1.3). The variance of
+/// one frame (s² without the division by n) fails it at z = −19.
+#[test]
+fn reference_variance_is_what_it_adds_to_the_error() {
+    let run = |seed: u64| {
+        let args = RenderArgs {
+            scene: scenes_dir().join("hidden_light_room.gltf"),
+            width: 32,
+            height: 32,
+            spp: 8,
+            frames: 32,
+            seed,
+            probes: ProbeOptions::default(),
+            ..common::door_args(Method::Nee, PathBuf::new(), 16)
+        };
+        let r = render(&args).unwrap();
+        (r.image.pixels, r.variance.unwrap().pixels)
+    };
+    let ((a, va), (b, vb)) = (run(1), run(2));
+    let mut stats = RunningStats::default();
+    for i in 0..a.len() {
+        for c in 0..3 {
+            let d = f64::from(a[i][c] - b[i][c]);
+            stats.push(d * d - f64::from(va[i][c] + vb[i][c]));
+        }
+    }
+    let z = stats.mean() / stats.standard_error();
+    assert!(z.abs() < 5.0, "z = {z}, mean {}", stats.mean());
+    // Both renders' own errors are positive and of the size the differences show.
+    let own = output::own_error(&b, &vb).unwrap();
+    assert!(own.rmse > 0.0, "{own:?}");
 }
 
 /// A sampler that samples the BSDF and records what `finish` reports, per depth.

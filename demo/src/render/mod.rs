@@ -53,7 +53,7 @@ use emission_allocation::EmissionAllocation;
 use gpu::{GpuTiming, GpuTracer};
 use guided::{McpgSampler, guide_config};
 use mcmm::{McmmRenderer, McmmScore, mcmm_params};
-use output::{Errors, RgbImage, errors};
+use output::{Errors, FrameVariance, RgbImage, errors};
 use probe_gi::{DEFAULT_PROBE_RAYS, DEFAULT_PROBE_SPACING, ProbeGi, fit_grid};
 use scene::{Scene, SceneFile, frame_time};
 use states::{DynamicErrors, ReferenceSettings, SceneStates};
@@ -109,7 +109,9 @@ pub struct RenderArgs {
     /// Output folder (created if missing).
     #[arg(long, default_value = "out/render")]
     pub out: PathBuf,
-    /// A reference EXR of the same size: per-frame errors go into the JSON.
+    /// A reference EXR of the same size: per-frame errors go into the JSON, and the
+    /// reference's own error too when its variance file (`REF.variance.exr`, which `render`
+    /// writes beside every plain mean of a still scene) lies beside it.
     #[arg(long)]
     pub reference: Option<PathBuf>,
     /// No progress bar.
@@ -320,6 +322,11 @@ pub struct RenderReport {
     pub end_frame_times_s: Vec<f64>,
     /// The reference, if any.
     pub reference: Option<PathBuf>,
+    /// The error the reference carries itself ([`output::own_error`]), when its variance
+    /// file ([`output::variance_path`]) lies beside it: subtract its `rel_mse` from a relMSE
+    /// in `errors` for an unbiased estimate of the error against the true image.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reference_own_error: Option<Errors>,
     /// Errors of the running mean after each frame against the reference.
     pub errors: Vec<Errors>,
     /// Errors of each frame's own image against the reference (what a real-time renderer
@@ -345,6 +352,10 @@ pub struct RenderReport {
 pub struct Rendered {
     /// The mean over all frames ([`Accumulation`]).
     pub image: RgbImage,
+    /// The variance of `image` per pixel and channel, estimated from the frames
+    /// ([`FrameVariance`]); `None` for a weighted mean (`--ramp-frames` above 1), an animated
+    /// scene or a single frame.
+    pub variance: Option<RgbImage>,
     /// Settings and measurements.
     pub report: RenderReport,
     /// The CPU guide as the last frame left it (`mcpg` on the CPU only).
@@ -360,6 +371,7 @@ pub struct Rendered {
 pub fn render(args: &RenderArgs) -> Result<Rendered> {
     let file = SceneFile::open(&args.scene)?;
     let reference = read_reference(args)?;
+    let reference_own_error = read_reference_own_error(args, reference.as_ref())?;
     let settings = render_settings(args)?;
     let mut states = scene_states(&file, args)?;
     let mut scene = file.build(frame_time(0))?;
@@ -371,7 +383,11 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     }
     let mut guide = start_guide(args, &scene, &mut gpu)?;
     let progress = progress_bar(args)?;
-    let mut sum = Accumulation::new((args.width * args.height) as usize, args.ramp_frames);
+    let pixels = (args.width * args.height) as usize;
+    let mut sum = Accumulation::new(pixels, args.ramp_frames);
+    // The variance of the plain mean of a still scene's frames.
+    let mut spread =
+        (args.ramp_frames == 1 && !file.is_animated()).then(|| FrameVariance::new(pixels));
     let mut times = FrameTimes::default();
     let probe_count = guide.probe_count().or_else(|| {
         let g = gpu.as_deref()?;
@@ -399,6 +415,9 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         progress.inc(1);
         let checks = (reference.as_ref(), states.as_mut());
         accumulate(&mut sum, &image, frame, checks, &mut collected);
+        if let Some(spread) = &mut spread {
+            spread.add(&image);
+        }
         if args.probes.keep_frames.contains(&frame) {
             collected.keep(frame, args, image);
         }
@@ -447,6 +466,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         frame_times_s: times.frame,
         end_frame_times_s: times.end_frame,
         reference: args.reference.clone(),
+        reference_own_error,
         errors: errs,
         frame_errors: frame_errs,
         probe_rays_per_frame: times.probe_rays,
@@ -454,8 +474,16 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         dynamic: states.map(SceneStates::finish),
         warnings,
     };
+    let variance = spread
+        .and_then(|s| s.variance_of_mean())
+        .map(|pixels| RgbImage {
+            width: args.width,
+            height: args.height,
+            pixels,
+        });
     Ok(Rendered {
         image,
+        variance,
         report,
         guide: match guide {
             CpuGuide::Mcpg(g, ..) => Some(Arc::new(*g)),
@@ -614,6 +642,27 @@ fn read_reference(args: &RenderArgs) -> Result<Option<RgbImage>> {
         .into());
     }
     Ok(Some(r))
+}
+
+/// The reference's own error ([`output::own_error`]) from the variance file beside it
+/// ([`output::variance_path`]), `None` without a reference or without that file.
+fn read_reference_own_error(
+    args: &RenderArgs,
+    reference: Option<&RgbImage>,
+) -> Result<Option<Errors>> {
+    let (Some(path), Some(reference)) = (&args.reference, reference) else {
+        return Ok(None);
+    };
+    let path = output::variance_path(path);
+    if !path.exists() {
+        return Ok(None);
+    }
+    let variance = RgbImage::read_exr(&path)?;
+    let own = output::own_error(&reference.pixels, &variance.pixels);
+    if own.is_none() {
+        return Err(format!("{}: not the size of the reference", path.display()).into());
+    }
+    Ok(own)
 }
 
 /// The progress bar of a render (hidden with `--no-progress`).
@@ -873,7 +922,9 @@ pub fn run_render(args: &RenderArgs) -> Result<Vec<PathBuf>> {
     write_outputs(&args.out, &rendered)
 }
 
-/// Writes `<dir>/<method>.{exr,png,json}` and the kept frames'
+/// Writes `<dir>/<method>.{exr,png,json}`, the variance of the mean where it was estimated
+/// (`<dir>/<method>.variance.exr`, [`Rendered::variance`]: a `nee` render written so serves as
+/// a `--reference` whose own error the errors can be corrected for) and the kept frames'
 /// `<dir>/<method>_frame<N>.{exr,png}`; returns the paths (the three first).
 ///
 /// # Errors
@@ -890,6 +941,11 @@ pub fn write_outputs(dir: &Path, rendered: &Rendered) -> Result<Vec<PathBuf>> {
     std::fs::write(&json, text + "\n")
         .map_err(|e| format!("cannot write {}: {e}", json.display()))?;
     let mut paths = vec![exr, png, json];
+    if let Some(variance) = &rendered.variance {
+        let path = output::variance_path(&paths[0]);
+        variance.write_exr(&path)?;
+        paths.push(path);
+    }
     for (frame, image) in &rendered.frames {
         let stem = dir.join(format!("{name}_frame{frame}"));
         let (exr, png) = (stem.with_extension("exr"), stem.with_extension("png"));

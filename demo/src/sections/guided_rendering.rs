@@ -42,7 +42,7 @@ use crate::plot::{self, Axis, LineChart, PALETTE, Series, SeriesLabelPosition};
 use crate::render::cpu::Method;
 use crate::render::guided::{EMISSION_SAMPLES, MaterialScatter};
 use crate::render::mcmm::McmmScore;
-use crate::render::output::{Errors, RgbImage, srgb_encode};
+use crate::render::output::{self, Errors, RgbImage, srgb_encode};
 use crate::render::scene::{SceneFile, frame_time};
 use crate::render::{Device, ProbeOptions, RenderArgs, Rendered, render};
 use crate::report::{Section, Table};
@@ -219,7 +219,8 @@ fn reference(ctx: &Context<'_>, study: &Study, seed: u64) -> Result<PathBuf> {
         seed,
         stem
     ));
-    if path.exists() {
+    let variance_path = output::variance_path(&path);
+    if path.exists() && variance_path.exists() {
         return Ok(path);
     }
     std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
@@ -228,6 +229,9 @@ fn reference(ctx: &Context<'_>, study: &Study, seed: u64) -> Result<PathBuf> {
     a.spp = s.reference_spp;
     let r = render_on(Device::Cpu, &a)?;
     r.image.write_exr(&path)?;
+    r.variance
+        .ok_or("the reference has no variance (fewer than two frames)")?
+        .write_exr(&variance_path)?;
     bar.finish_and_clear();
     Ok(path)
 }
@@ -893,7 +897,8 @@ fn results_table(
         last_error(&g.equal_samples).rel_mse,
         late_frame_error(&g.equal_samples),
     );
-    let mut table = results_header(study, device_name, guide, budget, slowest, clock);
+    let own = reference_own_rel_mse(runs);
+    let mut table = results_header(study, device_name, guide, (budget, slowest, clock), own);
     let mut summary = serde_json::Map::new();
     for r in runs {
         let es = last_error(&r.equal_samples).rel_mse;
@@ -942,23 +947,23 @@ fn results_header(
     study: &Study,
     device_name: &str,
     guide: Method,
-    budget: f64,
-    slowest: Method,
-    clock: &str,
+    (budget, slowest, clock): (f64, Method, &str),
+    own: f64,
 ) -> Table {
     let s = &study.settings;
     let per = format!("÷ {}", guide.name());
     Table::new(
         &format!(
             "{device_name}, {0}×{0}, {1} bounces, {2} spp per frame; relMSE of the mean \
-             against the reference; cost = {6}; equal time = the {3:.1} s that {4} took for {5} frames",
+             against the reference (which carries the reference's own, {7:.5}); cost = {6}; equal time = the {3:.1} s that {4} took for {5} frames",
             s.size,
             s.bounces,
             s.spp,
             budget,
             slowest.name(),
             s.frames,
-            clock
+            clock,
+            own
         ),
         [
             "method",
@@ -990,6 +995,16 @@ fn error_of(runs: &[Runs], m: Method, equal_time: bool) -> f64 {
     .rel_mse
 }
 
+/// The reference's own relMSE ([`output::own_error`]) that every error
+/// measured against it carries, 0 where its variance file is missing.
+fn reference_own_rel_mse(runs: &[Runs]) -> f64 {
+    runs[0]
+        .equal_samples
+        .report
+        .reference_own_error
+        .map_or(0.0, |e| e.rel_mse)
+}
+
 /// The paragraph of MCPG's targets (scene (a)); their numbers.
 fn mcpg_targets(section: &mut Section, runs: &[Runs]) -> serde_json::Value {
     let ratio_samples = error_of(runs, Method::Mcpg, false) / error_of(runs, Method::Bsdf, false);
@@ -1000,6 +1015,14 @@ fn mcpg_targets(section: &mut Section, runs: &[Runs]) -> serde_json::Value {
     );
     let time_of = |m: Method| seconds_per_frame(&find(runs, m).equal_samples);
     let late_of = |m: Method| late_frame_error(&find(runs, m).equal_samples);
+    // The same ratios with the reference's own error taken out of every relMSE.
+    let own = reference_own_rel_mse(runs);
+    let net = |m: Method, equal_time: bool| error_of(runs, m, equal_time) - own;
+    let net_samples = net(Method::Mcpg, false) / net(Method::Bsdf, false);
+    let (net_bsdf, net_nee) = (
+        net(Method::Mcpg, true) / net(Method::Bsdf, true),
+        net(Method::Mcpg, true) / net(Method::Nee, true),
+    );
     section.paragraph(&format!(
         "Targets (issue: mcpg relMSE ≤ ¼ of bsdf at equal samples, below both at equal \
          time): mcpg ÷ bsdf at equal samples = {ratio_samples:.3}; at equal time mcpg ÷ \
@@ -1016,10 +1039,19 @@ fn mcpg_targets(section: &mut Section, runs: &[Runs]) -> serde_json::Value {
         late_of(Method::Mcpg) / late_of(Method::Bsdf),
         late_of(Method::Mcpg) / late_of(Method::Nee),
     ));
+    section.paragraph(&format!(
+        "Every relMSE above is measured against a reference that has its own noise, and          carries it: for independent renders E[(X − R)²] = E[(X − I)²] + Var R, so each          method's relMSE against the reference exceeds its relMSE against the true image I by          the reference's own, {own:.5} here (estimated from the reference's frames,          Σ Var Rₚ/(Rₚ² + ε) over pixels and channels). The same for every method, it weighs          most on the lowest errors. Net of it: mcpg ÷ bsdf = {net_samples:.3} at equal samples          and {net_bsdf:.3} at equal time, mcpg ÷ nee = {net_nee:.3} at equal time."
+    ));
     let mut targets = serde_json::json!({
         "mcpg_over_bsdf_equal_samples": ratio_samples,
         "mcpg_over_bsdf_equal_time": vs_bsdf,
         "mcpg_over_nee_equal_time": vs_nee,
+        "reference_own_rel_mse": own,
+        "net_of_reference": {
+            "mcpg_over_bsdf_equal_samples": net_samples,
+            "mcpg_over_bsdf_equal_time": net_bsdf,
+            "mcpg_over_nee_equal_time": net_nee,
+        },
     });
     if runs.iter().any(|r| r.method == Method::McpgNee) {
         let samples = error_of(runs, Method::McpgNee, false) / error_of(runs, Method::Nee, false);
@@ -1045,6 +1077,10 @@ fn mcpg_targets(section: &mut Section, runs: &[Runs]) -> serde_json::Value {
         ));
         targets["mcpg_nee_over_nee_equal_samples"] = samples.into();
         targets["mcpg_nee_over_nee_equal_time"] = time.into();
+        targets["net_of_reference"]["mcpg_nee_over_nee_equal_samples"] =
+            (net(Method::McpgNee, false) / net(Method::Nee, false)).into();
+        targets["net_of_reference"]["mcpg_nee_over_nee_equal_time"] =
+            (net(Method::McpgNee, true) / net(Method::Nee, true)).into();
     }
     targets
 }
