@@ -50,6 +50,47 @@ pub struct IrradianceLayout {
     /// [`LogRgb::ADGI`](crate::LogRgb::ADGI) inlined into a loop) its γ, clamp, shift and mask
     /// fold into the code: the statics' contents are opaque to a caller in another crate.
     tables: Option<[LogTable; 3]>,
+    /// Whether the tables' code for this layout is compiled with its widths as constants
+    /// (ADGI's R9G9B8 and the 10/10/10 layout): then `encode` (round-down), `decode` and the
+    /// slice loops run it whoever calls, even where the layout is a run-time value (a codec in
+    /// a struct, behind a reference, captured by a closure): one predictable branch on this
+    /// tag instead of loading the tables' pointers, γ, clamps and shifts for every colour.
+    fixed: FixedWidths,
+}
+
+/// The widths whose table code is compiled with the tables and shifts as constants (see
+/// [`IrradianceLayout`]'s `fixed`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum FixedWidths {
+    /// No tables, or other widths: the layout's run-time tables or the polynomial path.
+    None,
+    /// ADGI's R9 G9 B8 with tables.
+    R9G9B8,
+    /// Equal 10/10/10 with tables.
+    R10G10B10,
+}
+
+/// Round-down of one colour by the tables of widths R, G, B (R at bit 0, G at R, B at R + G),
+/// the tables and shifts constants: the colour bits of [`IrradianceLayout::encode`].
+#[inline(always)]
+fn pack_down_fixed<const R: u32, const G: u32, const B: u32>(c: Vec3) -> u32 {
+    let (r, g, b) = (
+        FieldTable::<R>::TABLE,
+        FieldTable::<G>::TABLE,
+        FieldTable::<B>::TABLE,
+    );
+    r.encode_down(c.x) | g.encode_down(c.y) << R | b.encode_down(c.z) << (R + G)
+}
+
+/// [`IrradianceLayout::decode`] by the tables of widths R, G, B, as [`pack_down_fixed`].
+#[inline(always)]
+fn unpack_fixed<const R: u32, const G: u32, const B: u32>(w: u32) -> Vec3 {
+    let (r, g, b) = (
+        FieldTable::<R>::TABLE,
+        FieldTable::<G>::TABLE,
+        FieldTable::<B>::TABLE,
+    );
+    Vec3::new(r.decode(w), g.decode(w >> R), b.decode(w >> (R + G)))
 }
 
 /// [`IrradianceLayout::encode_slice`]'s table loop for a layout of ADGI's codec with widths
@@ -61,14 +102,8 @@ fn encode_down_fixed<const R: u32, const G: u32, const B: u32>(
     colours: &[Vec3],
     words: &mut [IrradianceWord],
 ) {
-    let (r, g, b) = (
-        FieldTable::<R>::TABLE,
-        FieldTable::<G>::TABLE,
-        FieldTable::<B>::TABLE,
-    );
     for (w, &c) in words.iter_mut().zip(colours) {
-        let rgb = r.encode_down(c.x) | g.encode_down(c.y) << R | b.encode_down(c.z) << (R + G);
-        *w = IrradianceWord(count_bits | rgb);
+        *w = IrradianceWord(count_bits | pack_down_fixed::<R, G, B>(c));
     }
 }
 
@@ -78,13 +113,8 @@ fn decode_fixed<const R: u32, const G: u32, const B: u32>(
     words: &[IrradianceWord],
     colours: &mut [Vec3],
 ) {
-    let (r, g, b) = (
-        FieldTable::<R>::TABLE,
-        FieldTable::<G>::TABLE,
-        FieldTable::<B>::TABLE,
-    );
     for (c, &w) in colours.iter_mut().zip(words) {
-        *c = Vec3::new(r.decode(w.0), g.decode(w.0 >> R), b.decode(w.0 >> (R + G)));
+        *c = unpack_fixed::<R, G, B>(w.0);
     }
 }
 
@@ -144,6 +174,15 @@ impl IrradianceLayout {
             codec.field(g_bits),
             codec.field(b_bits),
         ];
+        let tables = match (fields[0].table(), fields[1].table(), fields[2].table()) {
+            (Some(r), Some(g), Some(b)) => Some([*r, *g, *b]),
+            _ => None,
+        };
+        let fixed = match (tables.is_some(), r_bits, g_bits, b_bits) {
+            (true, 9, 9, 8) => FixedWidths::R9G9B8,
+            (true, 10, 10, 10) => FixedWidths::R10G10B10,
+            _ => FixedWidths::None,
+        };
         Ok(Self {
             fields,
             lanes: LogLanes::new(
@@ -158,10 +197,8 @@ impl IrradianceLayout {
                 BitField::new(r_bits + g_bits, b_bits),
             ],
             count: BitField::new(32 - count_bits, count_bits),
-            tables: match (fields[0].table(), fields[1].table(), fields[2].table()) {
-                (Some(r), Some(g), Some(b)) => Some([*r, *g, *b]),
-                _ => None,
-            },
+            tables,
+            fixed,
         })
     }
 
@@ -214,11 +251,26 @@ impl IrradianceLayout {
     /// Bad input: negative and NaN channels encode to 0, channels above (e⁵ − 1)/15 (and +∞)
     /// saturate. With [`Rounding::Stochastic`] each channel uses the caller's uniform rotated by
     /// a golden-ratio step, so one uniform serves the word.
+    ///
+    /// Round-down with tables (ADGI's codec at 8-10 bits) searches the tables; for ADGI's
+    /// R9G9B8 and the 10/10/10 layout that code is compiled with the tables and shifts as
+    /// constants, chosen by one branch on the layout, so it is as fast where the layout is a
+    /// run-time value (a codec in a struct, behind a reference) as where it is a constant.
+    /// Same codes as the polynomial path (tested at every code).
     #[inline(always)]
     #[must_use]
     pub fn encode(&self, rgb: Vec3, count: u32, rounding: Rounding) -> IrradianceWord {
-        if let (Some(t), Rounding::Down) = (self.tables, rounding) {
-            return IrradianceWord(self.count.put(count.min(self.max_count())) | self.pack(t, rgb));
+        if let Rounding::Down = rounding {
+            let count_bits = self.count.put(count.min(self.max_count()));
+            let colour_bits = match (self.fixed, self.tables) {
+                (FixedWidths::R9G9B8, _) => Some(pack_down_fixed::<9, 9, 8>(rgb)),
+                (FixedWidths::R10G10B10, _) => Some(pack_down_fixed::<10, 10, 10>(rgb)),
+                (FixedWidths::None, Some(_)) => Some(self.pack_out_of_line(rgb.x, rgb.y, rgb.z)),
+                (FixedWidths::None, None) => None,
+            };
+            if let Some(bits) = colour_bits {
+                return IrradianceWord(count_bits | bits);
+            }
         }
         // Lane 3 repeats B (it has no field and is left out of the word): a constant there
         // would sit on a code boundary and send every word down round-down's slow path.
@@ -231,19 +283,60 @@ impl IrradianceLayout {
     }
 
     /// Unpacks the colour; every word decodes to finite, non-negative channels.
+    ///
+    /// Layouts with tables decode by three loads (constant tables and shifts for ADGI's and
+    /// the 10/10/10 layout, as in [`encode`](Self::encode)), the polynomial path's values.
     #[inline(always)]
     #[must_use]
     pub fn decode(&self, word: IrradianceWord) -> Vec3 {
-        if let Some([r, g, b]) = self.tables {
-            let s = self.shifts();
-            return Vec3::new(
-                r.decode(word.0 >> s[0]),
-                g.decode(word.0 >> s[1]),
-                b.decode(word.0 >> s[2]),
-            );
+        match self.fixed {
+            FixedWidths::R9G9B8 => return unpack_fixed::<9, 9, 8>(word.0),
+            FixedWidths::R10G10B10 => return unpack_fixed::<10, 10, 10>(word.0),
+            FixedWidths::None => {}
+        }
+        if self.tables.is_some() {
+            let [r, g, b] = self.unpack_out_of_line(word.0);
+            return Vec3::new(r, g, b);
         }
         let [r, g, b, _] = self.lanes.decode_word(word.0);
         Vec3::new(r, g, b)
+    }
+
+    /// The colour fields of a word rounded down by the run-time tables (widths other than
+    /// the constant ones), out of line: inlined into a caller's loop, the tables' pointers,
+    /// clamps and shifts would hold registers there that the constant-width code needs.
+    /// The channels come and go as scalars, not as a `Vec3` in memory, so that the caller's
+    /// colour stays in registers. `#[cold]` only for the caller's block layout (the
+    /// constant-width path falls through); the call itself costs a few instructions.
+    #[cold]
+    #[inline(never)]
+    fn pack_out_of_line(&self, r: f32, g: f32, b: f32) -> u32 {
+        match self.tables {
+            Some(t) => self.pack(t, Vec3::new(r, g, b)),
+            None => 0,
+        }
+    }
+
+    /// [`decode`](Self::decode) by the run-time tables, out of line as
+    /// [`pack_out_of_line`](Self::pack_out_of_line).
+    #[cold]
+    #[inline(never)]
+    fn unpack_out_of_line(&self, word: u32) -> [f32; 3] {
+        match self.tables {
+            Some(t) => self.unpack(t, word).to_array(),
+            None => [0.0; 3],
+        }
+    }
+
+    /// A word's colour decoded by the tables.
+    #[inline(always)]
+    fn unpack(&self, [r, g, b]: [LogTable; 3], word: u32) -> Vec3 {
+        let s = self.shifts();
+        Vec3::new(
+            r.decode(word >> s[0]),
+            g.decode(word >> s[1]),
+            b.decode(word >> s[2]),
+        )
     }
 
     /// The colour fields of a word rounded down by the tables.
@@ -308,10 +401,12 @@ impl IrradianceLayout {
             let count_bits = self.count.put(count.min(self.max_count()));
             // The tables are fixed by the widths (they exist only for ADGI's codec), and so
             // are the shifts: ADGI's and the 10/10/10 layout run loops with both as constants.
-            match self.widths() {
-                [9, 9, 8, _] => encode_down_fixed::<9, 9, 8>(count_bits, colours, words),
-                [10, 10, 10, _] => encode_down_fixed::<10, 10, 10>(count_bits, colours, words),
-                _ => {
+            match self.fixed {
+                FixedWidths::R9G9B8 => encode_down_fixed::<9, 9, 8>(count_bits, colours, words),
+                FixedWidths::R10G10B10 => {
+                    encode_down_fixed::<10, 10, 10>(count_bits, colours, words)
+                }
+                FixedWidths::None => {
                     for (w, &c) in words.iter_mut().zip(colours) {
                         *w = IrradianceWord(count_bits | self.pack(t, c));
                     }
@@ -374,13 +469,13 @@ impl IrradianceLayout {
             colours.len(),
             "decode_slice: words and colours differ in length"
         );
-        if self.tables.is_some() {
-            match self.widths() {
-                [9, 9, 8, _] => decode_fixed::<9, 9, 8>(words, colours),
-                [10, 10, 10, _] => decode_fixed::<10, 10, 10>(words, colours),
-                _ => {
+        if let Some(t) = self.tables {
+            match self.fixed {
+                FixedWidths::R9G9B8 => decode_fixed::<9, 9, 8>(words, colours),
+                FixedWidths::R10G10B10 => decode_fixed::<10, 10, 10>(words, colours),
+                FixedWidths::None => {
                     for (c, &w) in colours.iter_mut().zip(words) {
-                        *c = self.decode(w);
+                        *c = self.unpack(t, w.0);
                     }
                 }
             }
@@ -734,6 +829,65 @@ mod tests {
         }
     }
 
+    /// Layouts with tables: the constant-width ones (ADGI's, 10/10/10) and two with run-time
+    /// tables.
+    fn table_layouts() -> [IrradianceLayout; 4] {
+        [
+            IrradianceLayout::ADGI,
+            IrradianceLayout::EQUAL_10,
+            IrradianceLayout::new(8, 9, 9, 6, LogCodec::IRRADIANCE).unwrap(),
+            IrradianceLayout::new(10, 9, 8, 5, LogCodec::IRRADIANCE).unwrap(),
+        ]
+    }
+
+    /// Colours for checking a table path against the polynomial path: for every code of every
+    /// channel its value and 3 f32 neighbours either side (in every channel, and mixed across
+    /// channels), a dense log sweep and bad input.
+    fn table_check_colours(l: &IrradianceLayout) -> Vec<Vec3> {
+        let mut values = std::vec![
+            f32::NAN,
+            -1.0,
+            -0.0,
+            0.0,
+            1e-40,
+            f32::INFINITY,
+            1e30,
+            l.codec().max_value(),
+        ];
+        for i in 0..3 {
+            let f = l.channel(i);
+            for q in 0..=f.max_code() {
+                let d = l.lanes.decode_word(q << l.shifts()[i])[i];
+                for k in -3..=3_i32 {
+                    values.push(f32::from_bits(d.to_bits().wrapping_add_signed(k)));
+                }
+            }
+        }
+        let mut v = 1e-6_f32;
+        while v < 20.0 {
+            values.push(v);
+            v *= 1.000_37;
+        }
+        let n = values.len();
+        (0..n)
+            .flat_map(|j| {
+                [
+                    Vec3::splat(values[j]),
+                    Vec3::new(values[j], values[(j * 7 + 3) % n], values[(j * 13 + 5) % n]),
+                ]
+            })
+            .collect()
+    }
+
+    /// Words for checking a table decoder: every field value, with the other fields and the
+    /// count bits varying.
+    fn table_check_words(l: &IrradianceLayout) -> Vec<IrradianceWord> {
+        (0..1 << 16)
+            .map(|q: u32| IrradianceWord(q.wrapping_mul(0x9e37_79b9) ^ q))
+            .chain((0..1 << 10).flat_map(|q: u32| l.shifts().map(|s| IrradianceWord(q << s))))
+            .collect()
+    }
+
     /// The table loops of `encode_slice` / `decode_slice` (constant tables and shifts for
     /// ADGI's and the 10/10/10 layout, the runtime tables for other widths) give the words and
     /// values of the polynomial path, which the GPU twin runs: for every code of every channel
@@ -741,47 +895,9 @@ mod tests {
     /// input; and `decode_slice` of every field value.
     #[test]
     fn table_slices_match_the_polynomial_path() {
-        let layouts = [
-            IrradianceLayout::ADGI,
-            IrradianceLayout::EQUAL_10,
-            IrradianceLayout::new(8, 9, 9, 6, LogCodec::IRRADIANCE).unwrap(),
-            IrradianceLayout::new(10, 9, 8, 5, LogCodec::IRRADIANCE).unwrap(),
-        ];
-        for l in layouts {
+        for l in table_layouts() {
             assert!(l.tables.is_some());
-            let mut values = std::vec![
-                f32::NAN,
-                -1.0,
-                -0.0,
-                0.0,
-                1e-40,
-                f32::INFINITY,
-                1e30,
-                l.codec().max_value(),
-            ];
-            for i in 0..3 {
-                let f = l.channel(i);
-                for q in 0..=f.max_code() {
-                    let d = l.lanes.decode_word(q << l.shifts()[i])[i];
-                    for k in -3..=3_i32 {
-                        values.push(f32::from_bits(d.to_bits().wrapping_add_signed(k)));
-                    }
-                }
-            }
-            let mut v = 1e-6_f32;
-            while v < 20.0 {
-                values.push(v);
-                v *= 1.000_37;
-            }
-            let n = values.len();
-            let colours: Vec<Vec3> = (0..n)
-                .flat_map(|j| {
-                    [
-                        Vec3::splat(values[j]),
-                        Vec3::new(values[j], values[(j * 7 + 3) % n], values[(j * 13 + 5) % n]),
-                    ]
-                })
-                .collect();
+            let colours = table_check_colours(&l);
             let mut words = std::vec![IrradianceWord(0); colours.len()];
             l.encode_slice(&colours, 5, Rounding::Down, &mut words);
             let count = l.count.put(5.min(l.max_count()));
@@ -789,11 +905,7 @@ mod tests {
                 let want = count | l.lanes.encode_word3([c.x, c.y, c.z, c.z], Rounding::Down);
                 assert_eq!(w.0, want, "{:?} {c}", l.widths());
             }
-            // Every field value, with the other fields and the count bits varying.
-            words = (0..1 << 16)
-                .map(|q: u32| IrradianceWord(q.wrapping_mul(0x9e37_79b9) ^ q))
-                .chain((0..1 << 10).flat_map(|q: u32| l.shifts().map(|s| IrradianceWord(q << s))))
-                .collect();
+            words = table_check_words(&l);
             let mut dec = std::vec![Vec3::NAN; words.len()];
             l.decode_slice(&words, &mut dec);
             for (&w, d) in words.iter().zip(&dec) {
@@ -804,6 +916,49 @@ mod tests {
                     "{:?} {w:x?}",
                     l.widths()
                 );
+            }
+        }
+    }
+
+    /// The per-colour `encode` (round down) and `decode` of layouts with tables (the
+    /// constant-width code for ADGI's and the 10/10/10 layout, the out-of-line run-time tables
+    /// for other widths), with the layout a constant and a run-time value, give the words and
+    /// values of the polynomial path (the GPU twin's) on the colours and words of
+    /// `table_slices_match_the_polynomial_path`; other rounding modes keep the polynomial path.
+    #[test]
+    fn per_colour_tables_match_the_polynomial_path() {
+        for layout in table_layouts() {
+            let fixed = match layout.widths() {
+                [9, 9, 8, _] => FixedWidths::R9G9B8,
+                [10, 10, 10, _] => FixedWidths::R10G10B10,
+                _ => FixedWidths::None,
+            };
+            assert_eq!(layout.fixed, fixed, "{:?}", layout.widths());
+            for l in [layout, core::hint::black_box(layout)] {
+                let count = l.count.put(7.min(l.max_count()));
+                for c in table_check_colours(&l) {
+                    let want = count | l.lanes.encode_word3([c.x, c.y, c.z, c.z], Rounding::Down);
+                    assert_eq!(
+                        l.encode(c, 7, Rounding::Down).0,
+                        want,
+                        "{:?} {c}",
+                        l.widths()
+                    );
+                    let rgb = [c.x, c.y, c.z, c.z];
+                    for rounding in [Rounding::Nearest, Rounding::Stochastic(0.3)] {
+                        let want = count | l.lanes.encode_word3(rgb, rounding);
+                        assert_eq!(l.encode(c, 7, rounding).0, want, "{c} {rounding:?}");
+                    }
+                }
+                for w in table_check_words(&l) {
+                    let [r, g, b, _] = l.lanes.decode_word(w.0);
+                    assert_eq!(
+                        l.decode(w).to_array().map(f32::to_bits),
+                        [r, g, b].map(f32::to_bits),
+                        "{:?} {w:x?}",
+                        l.widths()
+                    );
+                }
             }
         }
     }

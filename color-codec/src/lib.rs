@@ -36,13 +36,16 @@
 //!
 //! ## Performance
 //! ADGI's log codec (R9G9B8, round down) decodes from a table and rounds down by a table
-//! search (the polynomials' exact results; the slice API runs it with the tables and shifts as
-//! constants): a round trip takes 0.79–0.81× R11G11B10's time per colour and 0.87× through the
-//! slice API (fastest of repeated runs on a shared 2-vCPU AMD EPYC VM, baseline x86-64:
-//! `cargo run --release -p mcg-color-codec --example codec_min_timing`); 85 and 67 instructions
-//! per colour against R11G11B10's 70 and 77 (`scripts/codec-instructions`). The criterion groups
-//! (`cargo bench -p mcg-color-codec --bench color_codec -- round_trip`, load 2–3.5) gave
-//! 1.48–1.55× per colour and 0.84–0.91× for the slices; numbers and diary: `benches/README.md`.
+//! search (the polynomials' exact results, run with the tables and shifts as constants per
+//! colour and in the slice API, whether or not the caller's layout is a constant): a round trip
+//! takes 0.91–0.94× R11G11B10's time per colour with the codec a run-time value as in the
+//! criterion bench (0.77–0.81× where the caller's loop keeps it in registers) and 0.87–0.88×
+//! through the slice API (fastest of repeated runs on a shared 2-vCPU AMD EPYC VM, baseline
+//! x86-64: `cargo run --release -p mcg-color-codec --example codec_min_timing`); 81 (75) and 67
+//! instructions per colour against R11G11B10's 70 and 77 (`scripts/codec-instructions`). The
+//! criterion groups (`cargo bench -p mcg-color-codec --bench color_codec -- round_trip`, load
+//! 0.7–3.2) gave 1.05–1.14× per colour and 0.71–0.95× for the slices; numbers and diary:
+//! `benches/README.md`.
 //!
 //! ## Features
 //! - `std` (default): float functions from the standard library.
