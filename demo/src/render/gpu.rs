@@ -83,9 +83,10 @@ pub const UNUSED_GROUP: u32 = 2;
 /// (no pipeline of theirs binds it).
 pub const PROBE_UNUSED_GROUP: u32 = 3;
 
-/// Storage buffers the `mcpg` pipeline binds: the tracer's 8 and the guide's 2 (more than
+/// Storage buffers the `mcpg` pipeline binds: the tracer's 8 and the guide's 3 (its hash
+/// words, its words and their vec4 view; more than
 /// WebGPU's default of 8; [`GpuTracer::new`] asks the adapter for its own maximum).
-pub const MCPG_STORAGE_BUFFERS: u32 = 10;
+pub const MCPG_STORAGE_BUFFERS: u32 = 11;
 
 /// Invocations per workgroup side of the `render` kernel (`@workgroup_size(8, 8)`).
 const GROUP: u32 = 8;

@@ -93,6 +93,13 @@ impl GpuMcpgGuide {
     pub const TABLE_WORDS_BINDING: u32 = 1;
     /// The binding of the guide's words (`mcpg_words`) in the guide's group.
     pub const GUIDE_WORDS_BINDING: u32 = 2;
+    /// The binding of the same words viewed as `vec4<u32>` (`mcpg_words4`) in the guide's
+    /// group: a candidate's state is read as two 16-byte loads instead of eight atomic word
+    /// loads (WGSL has no plain load from an atomic array). The view aliases
+    /// [`GUIDE_WORDS_BINDING`](Self::GUIDE_WORDS_BINDING)'s buffer; a read racing a writer
+    /// may come back torn, which the state's guard stamp (a hash of its eight words) detects,
+    /// and the candidate is dropped, as a torn atomic read was.
+    pub const GUIDE_WORDS_VEC4_BINDING: u32 = 3;
 
     /// An empty guide on `ctx`'s device.
     ///
@@ -123,6 +130,7 @@ impl GpuMcpgGuide {
                     ),
                     storage_entry(Self::TABLE_WORDS_BINDING, false),
                     storage_entry(Self::GUIDE_WORDS_BINDING, false),
+                    storage_entry(Self::GUIDE_WORDS_VEC4_BINDING, false),
                 ],
             });
         let bind_group = ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
@@ -139,6 +147,10 @@ impl GpuMcpgGuide {
                 },
                 wgpu::BindGroupEntry {
                     binding: Self::GUIDE_WORDS_BINDING,
+                    resource: guide_words.raw().as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: Self::GUIDE_WORDS_VEC4_BINDING,
                     resource: guide_words.raw().as_entire_binding(),
                 },
             ],

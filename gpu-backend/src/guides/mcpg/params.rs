@@ -141,7 +141,8 @@ impl McpgGpuParams {
             Some((_, t)) => t.at_offsets(words(2 * (ca64 + cs64)), words(2 * (ca64 + cs64) + cc64)),
             None => HashgridTableParams::default(),
         };
-        // Guide words: header, states, guards, cache cells and sums.
+        // Guide words: header, states, guards, cache cells and sums. The states start at a
+        // multiple of 4 words (header 4, 8 per state), as the shader's vec4 view of them needs.
         let header = u64::from(codes::MCPG_HEADER_WORDS);
         let adaptive_states = header;
         let static_states = adaptive_states + 8 * ca64;
@@ -265,6 +266,20 @@ mod tests {
 
     /// The README's memory figure: `GuideConfig::PAPER` (2²⁰ + 2¹⁶ grid slots at 44 bytes,
     /// 2¹⁶ cache slots at 40, a 16-byte header) takes 51 642 384 bytes.
+    /// Every state starts on a 16-byte boundary, where `mcpg_read_words` reads it as two
+    /// `vec4<u32>`, whatever the capacities (odd ones included).
+    #[test]
+    fn states_start_on_vec4_boundaries() {
+        for (adaptive, fixed) in [(1 << 20, 1 << 16), (4097, 1023), (12_345, 777)] {
+            let mut c = GuideConfig::PAPER;
+            c.adaptive_capacity = adaptive;
+            c.static_capacity = fixed;
+            let (p, _) = McpgGpuParams::new(&c).unwrap();
+            assert_eq!(p.adaptive_states % 4, 0);
+            assert_eq!(p.static_states % 4, 0);
+        }
+    }
+
     #[test]
     fn paper_configuration_takes_the_documented_memory() {
         let (_, sizes) = McpgGpuParams::new(&GuideConfig::PAPER).unwrap();
