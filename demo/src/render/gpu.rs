@@ -1353,7 +1353,7 @@ mod tests {
     /// The composed tracer parses and validates with naga under WebGPU's capabilities alone
     /// (no adapter needed, so CI without a GPU still checks the shader), both entry points
     /// exist, and the `render` kernel of `bsdf`/`nee` binds the 8 storage buffers WebGPU
-    /// guarantees and nothing of the guide's group; `mcpg`'s adds the guide's 2.
+    /// guarantees and nothing of the guide's group; `mcpg`'s adds the guide's 3.
     #[test]
     fn shader_validates_without_an_adapter() {
         let (module, tracer, guide) = validate(&composed_shader().unwrap());
@@ -1366,7 +1366,7 @@ mod tests {
         assert_eq!((tracer, guide), (8, 0), "render binds 1–8 as storage");
         let (_, tracer, guide) = validate(&composed_mcpg_shader().unwrap());
         assert_eq!(tracer + guide, MCPG_STORAGE_BUFFERS as usize);
-        assert_eq!(guide, 2, "the mcpg render binds the guide");
+        assert_eq!(guide, 3, "the mcpg render binds the guide");
         // `GpuParams` is `Params` in WGSL, byte for byte.
         let mut layouter = naga::proc::Layouter::default();
         layouter.update(module.to_ctx()).unwrap();
