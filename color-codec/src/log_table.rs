@@ -157,9 +157,9 @@ const fn table(
     }
 }
 
-static TABLE_8: LogTable = table(&DECODE_8_S, &INDEX_8_S, &NEXT_8, 8);
-static TABLE_9: LogTable = table(&DECODE_9_S, &INDEX_9_S, &NEXT_9, 9);
-static TABLE_10: LogTable = table(&DECODE_10_S, &INDEX_10_S, &NEXT_10, 10);
+static TABLE_8: LogTable = FieldTable::<8>::TABLE;
+static TABLE_9: LogTable = FieldTable::<9>::TABLE;
+static TABLE_10: LogTable = FieldTable::<10>::TABLE;
 
 /// The table of ADGI's codec at `BITS` bits (8, 9 or 10) as a constant, for loops whose
 /// layout is fixed at compile time: its γ, clamp, shift and mask become immediates.

@@ -233,8 +233,8 @@ fn gpu_furnace_matches_the_truncated_neumann_series() {
 /// learning of a fresh guide (the pixel values are independent given the guide); `mcpg` 16×16
 /// pixels × 16 spp, without and with three emission-only directions per vertex (as many at
 /// every vertex, and spread over the depths by the adaptive allocation, a frame's vertices of
-/// depth d drawing ⌊K(d)⌋ or ⌈K(d)⌉), `mcpg-nee` 32×32 × 32 spp. Threshold: |z| < 5 on the pixel mean per channel (9 tests, α ≈ 5·10⁻⁶); the frame
-/// must show spread (BSDF sampling alone is exact here, so
+/// depth d drawing ⌊K(d)⌋ or ⌈K(d)⌉), `mcpg-nee` 32×32 × 32 spp. Threshold: |z| < 5 on the
+/// pixel mean per channel (12 tests, α ≈ 7·10⁻⁶); the frame must show spread (BSDF sampling alone is exact here, so
 /// spread means guided lobes were sampled). Today |z| ≤ 2. Dividing the WGSL guided samples by
 /// the material's density instead of the guided mixture's fails `mcpg` at z = −8.2, skipping
 /// the finish at the next hit (the guide never learns) fails the spread check, and weighting

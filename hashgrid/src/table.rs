@@ -580,7 +580,6 @@ mod tests {
         CellKey::new(IVec3::new(i, 2 * i, -i), 3, 1)
     }
 
-    /// A key whose home slot in `table` is `home` (searched).
     /// Each key's index and value, if any.
     type Values = Vec<(usize, Option<[u32; 8]>)>;
 
@@ -596,6 +595,7 @@ mod tests {
         (got, want)
     }
 
+    /// A key whose home slot in `table` is `home` (searched).
     fn key_at_home<T: Pod>(table: &HashTable<T>, home: u32, skip: usize) -> CellKey {
         (0..)
             .map(key)

@@ -554,9 +554,9 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
          light per vertex than nee's one light sample, each costing a sample of the vertex \
          already begun and a walk of the emitters' own small tree, with a shadow ray only \
          where it meets an emitter; drawn from the whole mixture (not only the lobe of the \
-         state Alg. 1 chose) with uniforms from a randomly shifted R3 lattice, and spread over the path's depths by each depth's variance \
-         measured in the frame before, at the same mean (`--mcpg-emission-allocation uniform` \
-         spends as many at every vertex). \
+         state Alg. 1 chose) with uniforms from a randomly shifted R3 lattice, and spread over \
+         the path's depths by each depth's variance measured in the frame before, at the same \
+         mean (`--mcpg-emission-allocation uniform` spends as many at every vertex). \
          FLIP is NVIDIA's LDR-FLIP of the sRGB images (the PNGs) at 67 pixels per degree. \
          The reference is cached in {}.",
         hidden.settings.bounces,
@@ -955,7 +955,8 @@ fn results_header(
     Table::new(
         &format!(
             "{device_name}, {0}×{0}, {1} bounces, {2} spp per frame; relMSE of the mean \
-             against the reference (which carries the reference's own, {7:.5}); cost = {6}; equal time = the {3:.1} s that {4} took for {5} frames",
+             against the reference (which carries the reference's own, {7:.5}); cost = {6}; \
+             equal time = the {3:.1} s that {4} took for {5} frames",
             s.size,
             s.bounces,
             s.spp,
@@ -995,8 +996,8 @@ fn error_of(runs: &[Runs], m: Method, equal_time: bool) -> f64 {
     .rel_mse
 }
 
-/// The reference's own relMSE ([`output::own_error`]) that every error
-/// measured against it carries, 0 where its variance file is missing.
+/// The reference's own relMSE ([`output::own_error`]) that every error measured against it
+/// carries, 0 where its variance file is missing.
 fn reference_own_rel_mse(runs: &[Runs]) -> f64 {
     runs[0]
         .equal_samples
@@ -1040,7 +1041,13 @@ fn mcpg_targets(section: &mut Section, runs: &[Runs]) -> serde_json::Value {
         late_of(Method::Mcpg) / late_of(Method::Nee),
     ));
     section.paragraph(&format!(
-        "Every relMSE above is measured against a reference that has its own noise, and          carries it: for independent renders E[(X − R)²] = E[(X − I)²] + Var R, so each          method's relMSE against the reference exceeds its relMSE against the true image I by          the reference's own, {own:.5} here (estimated from the reference's frames,          Σ Var Rₚ/(Rₚ² + ε) over pixels and channels). The same for every method, it weighs          most on the lowest errors. Net of it: mcpg ÷ bsdf = {net_samples:.3} at equal samples          and {net_bsdf:.3} at equal time, mcpg ÷ nee = {net_nee:.3} at equal time."
+        "Every relMSE above is measured against a reference that has its own noise, and \
+         carries it: for independent renders E[(X − R)²] = E[(X − I)²] + Var R, so each \
+         method's relMSE against the reference exceeds its relMSE against the true image I by \
+         the reference's own, {own:.5} here (estimated from the reference's frames, \
+         Σ Var Rₚ/(Rₚ² + ε) over pixels and channels). The same for every method, it weighs \
+         most on the lowest errors. Net of it: mcpg ÷ bsdf = {net_samples:.3} at equal samples \
+         and {net_bsdf:.3} at equal time, mcpg ÷ nee = {net_nee:.3} at equal time."
     ));
     let mut targets = serde_json::json!({
         "mcpg_over_bsdf_equal_samples": ratio_samples,

@@ -736,7 +736,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
                             * emitted;
                         radiance += share * value;
                         let l = luminance(value);
-                        if l == l && abs(l) <= 3.4e38 {
+                        if mcg_is_finite(l) {
                             first += l;
                             second += l * l;
                         }
