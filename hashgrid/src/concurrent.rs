@@ -27,6 +27,24 @@ impl Slots for AtomicSlots<'_> {
     }
 }
 
+/// A key's probe start in a [`ConcurrentTable`]: its home slot and checksum
+/// ([`ConcurrentTable::locate`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Located {
+    home: u32,
+    checksum: u32,
+}
+
+impl Located {
+    /// The home slot, where probing starts (also the slot a value array is best prefetched
+    /// at: at a low load most keys sit there).
+    #[inline]
+    #[must_use]
+    pub const fn home(self) -> u32 {
+        self.home
+    }
+}
+
 /// The slot index of a hash grid that many threads fill at once: checksums are
 /// [`AtomicU32`]s and a key is inserted by compare-and-swap on its checksum word, exactly as
 /// the GPU does with `atomicCompareExchangeWeak` (MCPG sec. 4; Bevy Solari).
@@ -144,6 +162,40 @@ impl ConcurrentTable {
             self.max_probes,
             self.indexer.index(h),
             c,
+        )?;
+        self.touch(slot);
+        Some(slot)
+    }
+
+    /// Where the probe for `key` starts (its home slot and checksum, hashed once), with the
+    /// cache line of its home checksum word asked for: a prefetch hint, which changes
+    /// nothing. [`find_located`](Self::find_located) then decides the key:
+    /// `find_located(locate(key)) == find(key)`.
+    ///
+    /// For a few keys wanted at once that are not a stream for
+    /// [`find_many`](Self::find_many) — a guide's candidates at one vertex: locate them all,
+    /// then find them, and their cache misses overlap instead of waiting on each other.
+    #[inline]
+    #[must_use]
+    pub fn locate(&self, key: &CellKey) -> Located {
+        let (h, checksum) = self.hash.hash_and_checksum(key);
+        let home = self.indexer.index(h);
+        probe::prefetch(self.checksums.as_ptr().wrapping_add(home as usize));
+        Located { home, checksum }
+    }
+
+    /// The slot holding the key `at` was [`locate`](Self::locate)d for, if any; touches its
+    /// age. The same slot as [`find`](Self::find) of that key.
+    #[inline]
+    #[must_use]
+    pub fn find_located(&self, at: Located) -> Option<u32> {
+        let slot = probe::find(
+            &self.checksums,
+            |w| w.load(Ordering::Acquire),
+            &self.indexer,
+            self.max_probes,
+            at.home,
+            at.checksum,
         )?;
         self.touch(slot);
         Some(slot)

@@ -138,7 +138,7 @@ mod trilinear;
 
 pub use capacity::{SlotIndexer, next_prime};
 #[cfg(feature = "alloc")]
-pub use concurrent::ConcurrentTable;
+pub use concurrent::{ConcurrentTable, Located};
 pub use error::{GridError, TableError};
 pub use hash::{
     BucketHash, checksum, fold_and_checksum, hash_fold, hash_mix, hash_mix_coherent,
@@ -148,7 +148,7 @@ pub use key::{CellKey, normal_class};
 pub use level::{
     AdaptiveGrid, LevelParams, StaticGrid, geometric_jitter, geometric_jitter_probability,
 };
-pub use probe::Insert;
+pub use probe::{Insert, prefetch_line};
 #[cfg(feature = "alloc")]
 pub use table::HashTable;
 pub use trilinear::{

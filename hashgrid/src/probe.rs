@@ -567,6 +567,16 @@ pub(crate) fn prefetch<T>(address: *const T) {
     let _ = address;
 }
 
+/// Asks the CPU to start loading the cache line that holds `value`, so that a later read of
+/// it waits less: `_mm_prefetch` on x86-64 (a hint that reads nothing architecturally and
+/// changes no result), nothing on other targets. For values a caller indexes by the slots of
+/// a table ([`ConcurrentTable::locate`](crate::ConcurrentTable::locate) does the same for the
+/// table's own words).
+#[inline(always)]
+pub fn prefetch_line<T>(value: &T) {
+    prefetch(core::ptr::from_ref(value));
+}
+
 /// Slots compared at once by [`group`].
 pub(crate) const GROUP: u32 = 4;
 

@@ -209,3 +209,36 @@ fn wrap_around_at_the_last_slot() {
         assert_eq!(concurrent.find(k), Some(want));
     }
 }
+
+/// `find_located(locate(key))` is `find(key)` for every hash, for keys held (in their home
+/// slot, walked past it, wrapped from the last slot) and keys absent, and it touches the age
+/// of the slot it finds as `find` does: locating only prefetches.
+#[test]
+fn located_lookups_are_finds() {
+    for hash in BucketHash::ALL {
+        let cap = 61;
+        let mut table = ConcurrentTable::new(cap, 8, hash)
+            .unwrap()
+            .with_age_tracking();
+        let keys: Vec<CellKey> = (0..40)
+            .map(|i| CellKey::new(IVec3::new(i % 7, i / 7, -i), (i % 3) as u8, (i % 6) as u8))
+            .collect();
+        for k in &keys[..30] {
+            assert!(table.insert_or_get(k).slot().is_some());
+        }
+        table.advance_frame();
+        let mut walked = 0;
+        for k in &keys {
+            let at = table.locate(k);
+            assert_eq!(at.home(), table.home_slot(k), "{hash:?}");
+            let slot = table.find_located(at);
+            if let Some(s) = slot {
+                walked += u32::from(s != at.home());
+                assert_eq!(table.ages()[s as usize], table.frame(), "{hash:?}");
+            }
+            assert_eq!(slot, table.find(k), "{hash:?}");
+        }
+        assert!(walked > 0, "{hash:?}: no key was walked past its home slot");
+        assert_eq!(keys[30..].iter().filter(|k| table.find(k).is_some()).count(), 0);
+    }
+}

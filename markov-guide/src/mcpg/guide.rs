@@ -2,7 +2,7 @@
 //! `end_frame` per frame (MCPG Alg. 1-3, sec. 4-5).
 
 use mcg_hashgrid::{
-    AdaptiveGrid, CellKey, LevelParams, StaticGrid, cell_and_fraction, geometric_jitter,
+    AdaptiveGrid, CellKey, Located, LevelParams, StaticGrid, cell_and_fraction, geometric_jitter,
     normal_class, stochastic_corner, stochastic_trilinear,
 };
 use mcg_vmf::glam::{IVec3, Vec2, Vec3};
@@ -759,14 +759,18 @@ impl Guide {
             v.lobes.clear();
             return;
         }
-        // One batch: every lookup, then every state, so that the lookups' memory accesses
-        // overlap instead of waiting on each other.
+        // One batch: every key located (hashed, its lines asked for), then every lookup, then
+        // every state, so that the candidates' cache misses overlap instead of waiting on
+        // each other.
         let mut kinds = [GridKind::Static; MAX_CANDIDATES];
-        let slots = &mut v.slots;
+        let mut located = [Located::default(); MAX_CANDIDATES];
         self.candidate_keys(x, v.class, v.target_level, u, count, |k, kind, key| {
             kinds[k] = kind;
-            slots[k] = self.grid(kind).find(key).map(|s| (kind, s));
+            located[k] = self.grid(kind).locate(key);
         });
+        for ((slot, kind), at) in v.slots.iter_mut().zip(kinds).zip(located).take(count) {
+            *slot = self.grid(kind).find_located(at).map(|s| (kind, s));
+        }
         // The states go straight into the candidate set's storage: the loaded state, or
         // `EMPTY` for a slot without a state, a hash collision, a torn read (which leaves its
         // entry as it was) and the entries past N_mc. Then they are prepared there and

@@ -5,7 +5,7 @@ use std::vec::Vec;
 
 use core::sync::atomic::{AtomicU32, Ordering, fence};
 
-use mcg_hashgrid::{BucketHash, CellKey, ConcurrentTable, TableError};
+use mcg_hashgrid::{BucketHash, CellKey, ConcurrentTable, Located, TableError};
 
 use super::GridState;
 
@@ -102,6 +102,15 @@ impl SharedStates {
                 true
             }
             None => false,
+        }
+    }
+
+    /// Asks for the cache line of the state at `slot` (a prefetch hint; nothing for a slot
+    /// out of range).
+    #[inline]
+    pub fn prefetch(&self, slot: u32) {
+        if let Some(s) = self.slots.get(slot as usize) {
+            mcg_hashgrid::prefetch_line(s);
         }
     }
 
@@ -223,6 +232,26 @@ impl SharedGrid {
     #[must_use]
     pub fn find(&self, key: &CellKey) -> Option<u32> {
         self.table.find(key)
+    }
+
+    /// Where the lookup of `key` starts ([`ConcurrentTable::locate`]), with the cache lines it
+    /// will read asked for: the home slot's checksum word and its state (at a low load most
+    /// keys sit in their home slot). Locate a vertex's candidates first, then
+    /// [`find_located`](Self::find_located) them: their cache misses overlap.
+    #[inline]
+    #[must_use]
+    pub fn locate(&self, key: &CellKey) -> Located {
+        let at = self.table.locate(key);
+        self.states.prefetch(at.home());
+        at
+    }
+
+    /// The slot of the key `at` was [`locate`](Self::locate)d for, if any: the same as
+    /// [`find`](Self::find) of that key.
+    #[inline]
+    #[must_use]
+    pub fn find_located(&self, at: Located) -> Option<u32> {
+        self.table.find_located(at)
     }
 
     /// The state at `slot`; `None` for a torn read (the second half of [`load`](Self::load)).
