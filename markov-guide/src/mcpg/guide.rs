@@ -2,7 +2,7 @@
 //! `end_frame` per frame (MCPG Alg. 1-3, sec. 4-5).
 
 use mcg_hashgrid::{
-    AdaptiveGrid, CellKey, Located, LevelParams, StaticGrid, cell_and_fraction, geometric_jitter,
+    AdaptiveGrid, CellKey, LevelParams, Located, StaticGrid, cell_and_fraction, geometric_jitter,
     normal_class, stochastic_corner, stochastic_trilinear,
 };
 use mcg_vmf::glam::{IVec3, Vec2, Vec3};
