@@ -57,7 +57,8 @@
 //! faster; seventh session of issue 21): with warm caches [`HashTable::get`] 0.80–0.81 /
 //! 0.66–0.70 (33 instructions against 33), [`HashTable::find_many`] plus the value reads
 //! 1.08–1.10 / 1.02–1.07 (39 instructions), [`HashTable::get_many`] 1.01–1.03 / 0.73–0.78;
-//! with the structures flushed from the caches `get` 0.75–0.77 / 0.79–0.83, `get_many`
+//! with the structures flushed from the caches `get` 0.75–0.77 / 0.79–0.83 (and 1.08–1.39 from
+//! 2²⁰ to 2²² slots, where hashbrown's control bytes leave the L2 cache), `get_many`
 //! 1.25–1.26 / 1.51–1.56 and `find_many` 1.31–1.32 / 1.39–1.41 (both hash a chunk of 16 keys,
 //! eight at a time with AVX2 where `std` detects it at run time, and prefetch its lines before
 //! deciding the chunk before it; with SSE2 instead, four at a time, `find_many` warm
