@@ -42,9 +42,12 @@
 //!
 //! # Performance
 //! One full guided vertex without tracing (`begin` with N_mc = 5, `sample`, one more `pdf`,
-//! `finish`) executes about 4,540 instructions, 51 times a cosine-hemisphere sample (89); with
-//! the irradiance cache about 5,570 (63 times); on an idle 2-core machine that was about
-//! 0.49 µs (0.65 µs with the cache) against 7.0 ns. No single step dominates: the five keys,
+//! `finish`) executes about 4,750 instructions, 53 times a cosine-hemisphere sample (89); with
+//! the irradiance cache about 5,820 (65 times); on an idle 2-core machine that is about
+//! 0.53-0.56 µs (0.64-0.70 µs with the cache) against 6.9 ns. `begin` hashes (and prefetches)
+//! all its candidates before it probes any: 160 instructions more than probing each in turn,
+//! which renderers, whose states do not stay in the caches, get back as a 4-5 % cheaper guided
+//! frame. No single step dominates: the five keys,
 //! lookups and seqlocked loads, the five lobes (μ, posterior κ, cosine product, C(κ)), the
 //! densities and the transition with its store each take 10-25 %. Two threads sharing one
 //! `&Guide` ran 1.8-2.1 times as fast as one. In mcg-demo's 3-bounce CPU path tracer of a
@@ -54,9 +57,9 @@
 //! time; with four more directions per vertex drawn from the begun vertex's whole mixture
 //! ([`GuidedVertex::sample_mixture`]) for the emission they meet (mcg-demo's
 //! `--mcpg-emission-samples`, each direction's emission weighted 1/5) its relative MSE falls to
-//! a third of the one-direction guide's, and its error × time comes within 5-15 % of light
-//! sampling's (next-event estimation with MIS), which the one-direction guide only ties at
-//! equal samples. Beside light sampling — the guide sampling the scattered direction, one
+//! a third of the one-direction guide's, and its error × time ties light sampling's
+//! (next-event estimation with MIS; 0.95-1.00 of it over three seeds), which the
+//! one-direction guide only ties at equal samples. Beside light sampling — the guide sampling the scattered direction, one
 //! light sample per vertex, MIS with [`GuidedVertex::pdf`], the chains learning only the
 //! MIS-weighted share of the emission ([`VertexObservation::emission_weight`]) — it reaches
 //! 0.28 of light sampling's relative MSE, 0.71-0.74 at equal CPU time (`benches/README.md` has
