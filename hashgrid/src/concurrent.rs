@@ -28,7 +28,8 @@ impl Slots for AtomicSlots<'_> {
 }
 
 /// A key's probe start in a [`ConcurrentTable`]: its home slot and checksum
-/// ([`ConcurrentTable::locate`]).
+/// ([`ConcurrentTable::locate`]). The default locates no key: [`ConcurrentTable::find_located`]
+/// of it is `None` (a placeholder for arrays of them).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Located {
     home: u32,
@@ -189,6 +190,11 @@ impl ConcurrentTable {
     #[inline]
     #[must_use]
     pub fn find_located(&self, at: Located) -> Option<u32> {
+        // A real key's checksum is never EMPTY or TOMBSTONE; the default `Located` has EMPTY,
+        // which the probe would otherwise "find" in an empty slot.
+        if at.checksum <= TOMBSTONE {
+            return None;
+        }
         let slot = probe::find(
             &self.checksums,
             |w| w.load(Ordering::Acquire),

@@ -7,7 +7,7 @@ use std::sync::Barrier;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::IVec3;
-use mcg_hashgrid::{BucketHash, CellKey, ConcurrentTable, HashTable, Insert, checksum};
+use mcg_hashgrid::{BucketHash, CellKey, ConcurrentTable, HashTable, Insert, Located, checksum};
 
 const THREADS: usize = 4;
 
@@ -239,6 +239,10 @@ fn located_lookups_are_finds() {
             assert_eq!(slot, table.find(k), "{hash:?}");
         }
         assert!(walked > 0, "{hash:?}: no key was walked past its home slot");
+        // The placeholder locates nothing, not even an empty slot 0.
+        assert_eq!(table.find_located(Located::default()), None, "{hash:?}");
+        let empty = ConcurrentTable::new(16, 4, hash).unwrap();
+        assert_eq!(empty.find_located(Located::default()), None, "{hash:?}");
         assert!(
             keys[30..]
                 .iter()
