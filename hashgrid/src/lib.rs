@@ -44,7 +44,8 @@
 //! - [`ConcurrentTable`] claims slots by compare-and-swap on the checksum word; the caller owns
 //!   the values. The crate's five `unsafe` blocks: its `&[AtomicU32]` → `&[u32]` upload view,
 //!   three SSE2 compare intrinsics in the probe loop, the prefetch (`_mm_prefetch`, a hint)
-//!   of [`HashTable::find_many`] and [`HashTable::get_many`], their SSE2 hash of four keys
+//!   of [`HashTable::find_many`], [`HashTable::get_many`], [`ConcurrentTable::locate`] and
+//!   [`prefetch_line`], the batched lookups' SSE2 hash of four keys
 //!   at once (register arithmetic, no pointers), and the call of their AVX2 hash of eight
 //!   keys at once, only after `is_x86_feature_detected!("avx2")` (with the `std` feature).
 //!
@@ -105,7 +106,8 @@
 #![no_std]
 // Five `unsafe` blocks: `ConcurrentTable::checksums` views `&[AtomicU32]` as `&[u32]` for upload
 // (documented there), `probe::group_masks` calls SSE2 compare intrinsics (no pointers),
-// `probe::prefetch` calls `_mm_prefetch` (a hint that never faults, whatever the address),
+// `probe::prefetch` calls `_mm_prefetch` (a hint that never faults, whatever the address; the
+// public `prefetch_line` passes it a reference's address),
 // `probe::fold4_sse2` calls SSE2 arithmetic and shuffle intrinsics (the `Fold` hash of four keys
 // in the lanes of registers; no pointers, the keys come in and the results go out by
 // `bytemuck::cast`), and `<probe::Fold as LaneHash>::chunk` calls the safe
