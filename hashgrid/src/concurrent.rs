@@ -155,17 +155,17 @@ impl ConcurrentTable {
     #[inline]
     #[must_use]
     pub fn find(&self, key: &CellKey) -> Option<u32> {
-        let (h, c) = self.hash.hash_and_checksum(key);
-        let slot = probe::find(
-            &self.checksums,
-            |w| w.load(Ordering::Acquire),
-            &self.indexer,
-            self.max_probes,
-            self.indexer.index(h),
-            c,
-        )?;
-        self.touch(slot);
-        Some(slot)
+        self.find_located(self.located(key))
+    }
+
+    /// `key`'s home slot and checksum (the hash, once), nothing asked for.
+    #[inline]
+    fn located(&self, key: &CellKey) -> Located {
+        let (h, checksum) = self.hash.hash_and_checksum(key);
+        Located {
+            home: self.indexer.index(h),
+            checksum,
+        }
     }
 
     /// Where the probe for `key` starts (its home slot and checksum, hashed once), with the
@@ -179,10 +179,9 @@ impl ConcurrentTable {
     #[inline]
     #[must_use]
     pub fn locate(&self, key: &CellKey) -> Located {
-        let (h, checksum) = self.hash.hash_and_checksum(key);
-        let home = self.indexer.index(h);
-        probe::prefetch(self.checksums.as_ptr().wrapping_add(home as usize));
-        Located { home, checksum }
+        let at = self.located(key);
+        probe::prefetch(self.checksums.as_ptr().wrapping_add(at.home as usize));
+        at
     }
 
     /// The slot holding the key `at` was [`locate`](Self::locate)d for, if any; touches its
@@ -260,13 +259,13 @@ impl ConcurrentTable {
     /// from many threads at once. [`Insert::Full`] when the probe limit is reached.
     #[inline]
     pub fn insert_or_get(&self, key: &CellKey) -> Insert {
-        let (h, c) = self.hash.hash_and_checksum(key);
+        let at = self.located(key);
         let r = probe::insert_or_get(
             &mut AtomicSlots(&self.checksums),
             &self.indexer,
             self.max_probes,
-            self.indexer.index(h),
-            c,
+            at.home,
+            at.checksum,
         );
         if let Some(slot) = r.slot() {
             self.touch(slot);

@@ -139,17 +139,23 @@ pub fn errors(image: &[Vec3], reference: &[Vec3]) -> Option<Errors> {
     if image.len() != reference.len() || image.is_empty() {
         return None;
     }
+    let terms = channel_pairs(image, reference).map(|(x, y)| ((x - y) * (x - y), y));
+    Some(mean_errors(image.len(), terms))
+}
+
+/// [`Errors`] from the squared error `e` and the reference value `r` of each of the 3 · `pixels`
+/// channels: rmse = √(mean e), relMSE = mean e / (r² + ε).
+fn mean_errors(pixels: usize, terms: impl Iterator<Item = (f64, f64)>) -> Errors {
     let (mut se, mut rel) = (0.0f64, 0.0f64);
-    for (x, y) in channel_pairs(image, reference) {
-        let d2 = (x - y) * (x - y);
-        se += d2;
-        rel += d2 / (y * y + REL_MSE_EPSILON);
+    for (e, r) in terms {
+        se += e;
+        rel += e / (r * r + REL_MSE_EPSILON);
     }
-    let n = (3 * image.len()) as f64;
-    Some(Errors {
+    let n = (3 * pixels) as f64;
+    Errors {
         rmse: (se / n).sqrt(),
         rel_mse: rel / n,
-    })
+    }
 }
 
 /// The values of `a` and `b` at every pixel and channel, in order, as f64.
@@ -184,16 +190,8 @@ pub fn own_error(reference: &[Vec3], variance: &[Vec3]) -> Option<Errors> {
     if reference.len() != variance.len() || reference.is_empty() {
         return None;
     }
-    let (mut v, mut rel) = (0.0f64, 0.0f64);
-    for (y, var) in channel_pairs(reference, variance) {
-        v += var;
-        rel += var / (y * y + REL_MSE_EPSILON);
-    }
-    let n = (3 * reference.len()) as f64;
-    Some(Errors {
-        rmse: (v / n).sqrt(),
-        rel_mse: rel / n,
-    })
+    let terms = channel_pairs(reference, variance).map(|(y, var)| (var, y));
+    Some(mean_errors(reference.len(), terms))
 }
 
 /// The variance of the plain mean of a render's frames, per pixel and channel, estimated from
