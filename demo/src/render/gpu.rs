@@ -56,6 +56,7 @@ use super::cpu::{MAX_RECORDED, Method, RenderSettings};
 use super::emission_allocation::{
     Allocation, EmissionAllocation, EmissionMoments, round_stochastically,
 };
+use super::guided::Reflected;
 use super::material::Material;
 use super::scene::{Camera, Scene, TextureInfo, TriangleUv};
 use crate::Result;
@@ -166,8 +167,12 @@ pub struct GpuParams {
     /// The root of the emitters' tree ([`Scene::emitter_bvh`]) in the node buffer, which
     /// holds it after the scene's ([`joined_trees`]).
     pub emitter_root: u32,
+    /// 1 when `mcpg`'s chains learn the radiance reflected at the next hit from the path
+    /// ([`Reflected::Path`]: the GPU tracer then finishes the first two vertices of a path at
+    /// its end), 0 from the irradiance cache at every vertex ([`Reflected::Cache`]).
+    pub mcpg_reflected: u32,
     /// Padding to the array's 16-byte alignment.
-    pub pad: [u32; 2],
+    pub pad: u32,
     /// `mcpg`'s emission-only directions per vertex of depth d in this frame (depth `4i + j`
     /// in `[i][j]`): [`frame_counts`] of the allocation's K(d); 0 for the other methods.
     pub emission_counts: [[u32; 4]; 4],
@@ -375,6 +380,8 @@ pub struct GpuTracer {
     /// `mcpg`'s emission-only directions per vertex ([`GpuTracer::set_mcpg_emission_samples`],
     /// [`GpuTracer::set_mcpg_emission_allocation`]).
     mcpg_emission: EmissionAllocation,
+    /// Where `mcpg`'s chains take L_r at the next hit ([`GpuTracer::set_mcpg_reflected`]).
+    mcpg_reflected: Reflected,
     /// What the last `mcpg` frame's recording pixels gathered (adaptive allocation only).
     mcpg_moments: Option<EmissionMoments>,
     /// The compiled `mcpg` shader, kept for rebuilding its pipeline with a new guide.
@@ -505,6 +512,7 @@ impl GpuTracer {
             timer,
             guided: None,
             mcpg_emission: EmissionAllocation::new(0, Allocation::Uniform),
+            mcpg_reflected: Reflected::Cache,
             mcpg_moments: None,
             guided_module: None,
             mcmm: None,
@@ -554,6 +562,17 @@ impl GpuTracer {
             layout,
         });
         Ok(())
+    }
+
+    /// Where `mcpg`'s chains take the radiance reflected at the next hit, as the CPU tracer's
+    /// [`super::guided::McpgSampler::with_reflected`] (the default: [`Reflected::Cache`], the
+    /// paper's rule, each vertex finished as soon as its ray is traced). With
+    /// [`Reflected::Path`] the tracer holds the first two vertices of a path whose next hit
+    /// scatters again (`HeldVertex`, 240 bytes each) and finishes them at the end of
+    /// the path with what it gathered from that hit on: every vertex but the last at 3
+    /// bounces, as on the CPU; the next frame uses it.
+    pub fn set_mcpg_reflected(&mut self, reflected: Reflected) {
+        self.mcpg_reflected = reflected;
     }
 
     /// How many emission-only directions `mcpg` draws per vertex on average, as the CPU
@@ -959,6 +978,10 @@ impl GpuTracer {
             uv_count: scene.uvs.len() as u32,
             texture_count: scene.textures.len() as u32,
             emitter_root: scene.emitter_root,
+            mcpg_reflected: u32::from(
+                matches!(settings.method, Method::Mcpg | Method::McpgNee)
+                    && self.mcpg_reflected == Reflected::Path,
+            ),
             moment_stride,
             emission_counts: if mcpg {
                 bytemuck::cast(frame_counts(

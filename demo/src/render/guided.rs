@@ -19,7 +19,8 @@
 use glam::{Vec2, Vec3};
 use mcg_markov_guide::mcpg::{
     BeginUniforms, CandidateUniforms, FinishUniforms, GridUniforms, Guide, GuideConfig, GuideError,
-    GuidedSample, GuidedVertex, SampleUniforms, Scatter, Vertex as GuideVertex, VertexObservation,
+    GuidedSample, GuidedVertex, PendingFinish, SampleUniforms, Scatter, Vertex as GuideVertex,
+    VertexObservation,
 };
 
 use super::cpu::{MAX_RECORDED, Observation, Vertex, VertexSampler};
@@ -147,20 +148,14 @@ pub fn new_guide(scene: &Scene, width: u32, height: u32) -> Result<Guide, GuideE
     Ok(guide)
 }
 
-/// The sample of an open vertex before [`GuidedVertex::sample`] has run.
-const NO_SAMPLE: GuidedSample = GuidedSample {
-    direction: Vec3::ZERO,
-    pdf: 0.0,
-    lobe: None,
-};
-
-/// The guided vertex at one depth: the guide's state between `sample` and `finish` and the
-/// sample drawn, kept after `finish` (closed) so that the next vertex at that depth is begun
-/// in its place ([`Guide::begin_in`]) instead of being built elsewhere and moved in.
-struct Kept<'g> {
+/// The vertex begun last: the guide's state between `sample` and the vertex's emission-only
+/// directions and light sample, kept after the tracer moves on so that the next vertex is
+/// begun in its place ([`Guide::begin_in`]) instead of being built elsewhere and moved in.
+struct Current<'g> {
     vertex: GuidedVertex<'g, MaterialScatter>,
-    sample: GuidedSample,
-    /// Sampled and not yet finished in the current path.
+    /// The path depth it was begun at.
+    depth: u32,
+    /// Begun in the current path (the tracer may still ask its density).
     open: bool,
 }
 
@@ -174,8 +169,12 @@ struct Kept<'g> {
 pub struct McpgSampler<'g> {
     guide: &'g Guide,
     rng: GuideUniforms,
-    /// Per depth, the vertex begun there last; `None` until the first.
-    kept: [Option<Kept<'g>>; MAX_RECORDED],
+    /// The vertex begun last; `None` until the first.
+    current: Option<Current<'g>>,
+    /// Per depth, the sampled vertex waiting for the path's end ([`PendingFinish`]), valid
+    /// where bit `depth` of `pending_mask` is set (cleared per path, not the array).
+    pending: [Option<PendingFinish<'g>>; MAX_RECORDED],
+    pending_mask: u32,
     reflected: Reflected,
     emission_samples: u32,
     /// Directions per vertex by depth, shared by the frame's samplers, and this sampler's
@@ -190,7 +189,9 @@ impl<'g> McpgSampler<'g> {
         Self {
             guide,
             rng: GuideUniforms::new(0),
-            kept: [const { None }; MAX_RECORDED],
+            current: None,
+            pending: [None; MAX_RECORDED],
+            pending_mask: 0,
             reflected: Reflected::Path,
             emission_samples: 0,
             allocation: None,
@@ -328,12 +329,15 @@ impl GuideUniforms {
 ///
 /// The paper reads it from the irradiance cache at every vertex (sec. 4, "Irradiance
 /// Caching"): a real-time tracer finishes a vertex as soon as its ray is traced, before the
-/// path knows more, and so does this renderer's GPU tracer. The CPU tracer finishes its
-/// vertices when the path is complete, so it also has the path's own estimate of L_r: what
-/// the path gathered from the next hit on. Scene (a), 128², 8 spp, 64 frames, seeds 7-12: the
-/// path's estimate gave a lower relMSE than the cache on all six seeds (0.0239-0.0262 against
-/// 0.0255-0.0284) and a 3-12 % cheaper guided frame, as two of three cache queries are gone
-/// (`markov-guide/benches/README.md`).
+/// path knows more. A tracer that finishes its vertices when the path is complete also has
+/// the path's own estimate of L_r: what the path gathered from the next hit on. The CPU tracer
+/// keeps every vertex of a path for it; the GPU tracer holds the first two
+/// ([`super::gpu::GpuTracer::set_mcpg_reflected`], `mcg_markov_guide::mcpg::PendingFinish`'s
+/// WGSL twin), every vertex but the last at 3 bounces. Scene (a), 128², 8 spp, 64 frames,
+/// seeds 7-12: on the CPU the path's estimate gave a lower relMSE than the cache on all six
+/// seeds (0.0239-0.0262 against 0.0255-0.0284) and a 3-12 % cheaper guided frame, as two of
+/// three cache queries are gone; on lavapipe the frame costs the same and the relMSE after 16
+/// frames is 9 % lower (`markov-guide/benches/README.md`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Reflected {
@@ -370,11 +374,10 @@ fn material_weighted(v: &Vertex, s: &GuidedSample) -> Option<BsdfSample> {
 impl VertexSampler for McpgSampler<'_> {
     fn begin_path(&mut self, seed: u32) {
         self.rng = GuideUniforms::new(seed);
-        // Closed, not dropped: the vertices stay for `begin_in` (assigning a fresh array
-        // copied all 16 open vertices, about 12 KB, per path, 7 % of a guided frame).
-        for kept in self.kept.iter_mut().flatten() {
-            kept.open = false;
+        if let Some(current) = &mut self.current {
+            current.open = false;
         }
+        self.pending_mask = 0;
     }
 
     fn sample(&mut self, v: &Vertex, u: Vec3) -> Option<BsdfSample> {
@@ -385,27 +388,26 @@ impl VertexSampler for McpgSampler<'_> {
         };
         let begin = self.rng.begin(self.guide.params().candidates as usize);
         let vertex = GuideVertex::surface(v.position, v.normal);
-        let u = sample_uniforms(u);
-        let s = match self.kept.get_mut(v.depth as usize) {
+        let current = match &mut self.current {
             // Begun in place (a begun vertex moved into the slot cost a copy of it).
-            Some(Some(kept)) => {
+            Some(current) => {
                 self.guide
-                    .begin_in(&mut kept.vertex, vertex, scatter, &begin);
-                kept.sample = kept.vertex.sample(&u);
-                kept.open = true;
-                kept.sample
+                    .begin_in(&mut current.vertex, vertex, scatter, &begin);
+                current
             }
-            Some(slot) => {
-                let kept = slot.insert(Kept {
-                    vertex: self.guide.begin(vertex, scatter, &begin),
-                    sample: NO_SAMPLE,
-                    open: true,
-                });
-                kept.sample = kept.vertex.sample(&u);
-                kept.sample
-            }
-            None => self.guide.begin(vertex, scatter, &begin).sample(&u),
+            slot @ None => slot.insert(Current {
+                vertex: self.guide.begin(vertex, scatter, &begin),
+                depth: 0,
+                open: false,
+            }),
         };
+        current.depth = v.depth;
+        current.open = true;
+        let s = current.vertex.sample(&sample_uniforms(u));
+        if let Some(p) = self.pending.get_mut(v.depth as usize) {
+            *p = Some(current.vertex.pending(&s));
+            self.pending_mask |= 1 << v.depth;
+        }
         material_weighted(v, &s)
     }
 
@@ -426,28 +428,31 @@ impl VertexSampler for McpgSampler<'_> {
     }
 
     fn sample_emission(&mut self, v: &Vertex, u: Vec3) -> Option<Vec3> {
-        match self.kept.get(v.depth as usize) {
-            Some(Some(kept)) if kept.open => Some(kept.vertex.sample_mixture(&sample_uniforms(u))),
-            // Past the kept depths: the material's sample, whose density `pdf` answers there.
-            _ => v.material.sample_direction(v.normal, v.wo, u),
+        match self.open_at(v.depth) {
+            Some(vertex) => Some(vertex.sample_mixture(&sample_uniforms(u))),
+            None => v.material.sample_direction(v.normal, v.wo, u),
         }
     }
 
     fn pdf(&self, v: &Vertex, wi: Vec3) -> f32 {
-        match self.kept.get(v.depth as usize) {
-            Some(Some(kept)) if kept.open => kept.vertex.pdf(wi),
-            _ => v.material.pdf(v.normal, v.wo, wi),
+        match self.open_at(v.depth) {
+            Some(vertex) => vertex.pdf(wi),
+            None => v.material.pdf(v.normal, v.wo, wi),
         }
     }
 
     fn finish(&mut self, o: &Observation) {
-        // Finished in place, then closed.
-        let Some(Some(kept)) = self.kept.get_mut(o.vertex.depth as usize) else {
+        let depth = o.vertex.depth;
+        let bit = 1u32.checked_shl(depth).unwrap_or(0);
+        let Some(Some(pending)) = self
+            .pending
+            .get(depth as usize)
+            .filter(|_| self.pending_mask & bit != 0)
+            .copied()
+        else {
             return;
         };
-        if !kept.open {
-            return;
-        }
+        self.pending_mask &= !bit;
         let weight = o.sample.weight;
         let mut seen = match o.next {
             Some(hit) => VertexObservation::hit(hit.position, hit.normal, hit.emitted, weight),
@@ -459,7 +464,17 @@ impl VertexSampler for McpgSampler<'_> {
         if let Some(hit) = o.next {
             seen.emission_weight = hit.emission_weight;
         }
-        kept.vertex.finish(&kept.sample, &seen, &self.rng.finish());
-        kept.open = false;
+        pending.finish(&seen, &self.rng.finish());
+    }
+}
+
+impl<'g> McpgSampler<'g> {
+    /// The vertex begun at `depth` in the current path, if it is the last one begun (the
+    /// tracer asks only about the vertex it is at).
+    fn open_at(&self, depth: u32) -> Option<&GuidedVertex<'g, MaterialScatter>> {
+        self.current
+            .as_ref()
+            .filter(|c| c.open && c.depth == depth)
+            .map(|c| &c.vertex)
     }
 }

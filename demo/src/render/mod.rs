@@ -121,10 +121,10 @@ pub struct RenderArgs {
     /// only (as MCPG Fig. 8 compares on direct light).
     #[arg(long)]
     pub no_irradiance_cache: bool,
-    /// Where `mcpg`'s training takes the radiance reflected at the next hit on the CPU: the
-    /// path's own estimate where the path went on (mcg's extension), or the irradiance cache
-    /// at every vertex (the paper's rule, and the GPU tracer's) ([`guided::Reflected`]);
-    /// with `--no-irradiance-cache`, neither.
+    /// Where `mcpg`'s training takes the radiance reflected at the next hit, on either device:
+    /// the path's own estimate where the path went on (mcg's extension; the GPU tracer holds
+    /// the first two vertices of a path for it), or the irradiance cache at every vertex (the
+    /// paper's rule) ([`guided::Reflected`]); with `--no-irradiance-cache`, neither.
     #[arg(long, value_enum, default_value_t = guided::Reflected::Path)]
     pub mcpg_reflected: guided::Reflected,
     /// How many directions `mcpg` draws per vertex, besides the path's, from the guide's
@@ -732,9 +732,17 @@ fn start_guide(
     gpu: &mut Option<std::sync::MutexGuard<'_, GpuTracer>>,
 ) -> Result<CpuGuide> {
     let mcmm = || mcmm_params(args.mcmm_score, args.height);
+    // `--no-irradiance-cache` keeps its meaning (the guide learns from the emission its rays
+    // hit only): no reflected radiance from the path either.
+    let reflected = if args.no_irradiance_cache {
+        guided::Reflected::Cache
+    } else {
+        args.mcpg_reflected
+    };
     if let Some(g) = gpu.as_deref_mut() {
         let started = match args.method {
             Method::Mcpg | Method::McpgNee => {
+                g.set_mcpg_reflected(reflected);
                 g.set_mcpg_emission_samples(args.mcpg_emission_samples);
                 g.set_mcpg_emission_allocation(args.mcpg_emission_allocation);
                 g.start_mcpg(&mcpg_config(scene, args))
@@ -764,13 +772,6 @@ fn start_guide(
             let mut guide = Guide::new(mcpg_config(scene, args))
                 .map_err(|e| format!("the MCPG guide: {e:?}"))?;
             guide.set_camera(scene.camera.position);
-            // `--no-irradiance-cache` keeps its meaning (the guide learns from the emission
-            // its rays hit only): no reflected radiance from the path either.
-            let reflected = if args.no_irradiance_cache {
-                guided::Reflected::Cache
-            } else {
-                args.mcpg_reflected
-            };
             CpuGuide::Mcpg(
                 Box::new(guide),
                 reflected,

@@ -818,7 +818,7 @@ pub struct GuidedVertex<'g, S> {
     target_level: u32,
 }
 
-impl<S: Scatter> GuidedVertex<'_, S> {
+impl<'g, S: Scatter> GuidedVertex<'g, S> {
     /// Writes `lobes` and `scatter_share` (0 before) from the offered candidates.
     #[inline(always)]
     fn build_lobes(&mut self) {
@@ -1002,16 +1002,111 @@ impl<S: Scatter> GuidedVertex<'_, S> {
     /// 4. A rejected lobe sample may discard the state it came from (sec. 5).
     ///
     /// NaN, infinite or negative radiance or weights count as 0 and never reach a state.
+    #[inline]
     pub fn finish(
         &self,
         sample: &GuidedSample,
         observation: &VertexObservation,
         u: &FinishUniforms,
     ) -> Transition {
+        self.pending(sample).finish(observation, u)
+    }
+
+    /// What [`finish`](Self::finish) needs of this vertex once `sample` is drawn, apart from
+    /// the lobes: a renderer that finishes its vertices only when the whole path is known
+    /// (to train on the path's own estimate of L_r, [`VertexObservation::reflected`]) keeps
+    /// one [`PendingFinish`] per vertex, about a sixth of a `GuidedVertex`, and may begin the
+    /// next vertex over this one. `self.finish(s, o, u)` is `self.pending(s).finish(o, u)`.
+    #[inline]
+    #[must_use]
+    pub fn pending(&self, sample: &GuidedSample) -> PendingFinish<'g> {
+        let chosen = match sample.lobe {
+            Some(k) => self.set.states()[k as usize],
+            None => self.young_chain().copied().unwrap_or(GridState::EMPTY),
+        };
+        PendingFinish {
+            guide: self.guide,
+            position: self.vertex.position,
+            normal: self.vertex.normal,
+            direction: sample.direction,
+            chosen,
+            mean_weight: self.set.mean_weight(),
+            lobe_slot: sample.lobe.and_then(|k| self.slots[k as usize]),
+            class: self.class,
+            target_level: self.target_level,
+        }
+    }
+}
+
+/// A guided vertex whose sample is drawn and whose finish (MCPG Alg. 3) waits for the
+/// observation: [`GuidedVertex::pending`]. Holds the continued chain's state, the candidates'
+/// mean score, the slot of the sampled lobe's state (for the discard), and where the vertex
+/// is; the WGSL twin is `McpgPending` of `mcg::mcpg`.
+///
+/// A path tracer that trains every vertex but the last on the path's own L_r (what the path
+/// gathered from the next hit on) keeps these until the path ends:
+///
+/// ```
+/// use mcg_markov_guide::glam::Vec3;
+/// use mcg_markov_guide::mcpg::{
+///     BeginUniforms, FinishUniforms, Guide, GuideConfig, Lambertian, SampleUniforms, Vertex,
+///     VertexObservation,
+/// };
+///
+/// let guide = Guide::new(GuideConfig::for_scene(Vec3::ZERO, Vec3::ONE)).unwrap();
+/// let mut u = 0.0_f32;
+/// let mut next = move || {
+///     u = (u + 0.618_034) % 1.0;
+///     u
+/// };
+/// // A path from the floor of a unit room to its glowing ceiling and back down.
+/// let (floor, ceiling) = (Vec3::new(0.5, 0.5, 0.0), Vec3::new(0.5, 0.5, 1.0));
+/// let mut pending = Vec::new();
+/// for (x, n) in [(floor, Vec3::Z), (ceiling, -Vec3::Z)] {
+///     let u = BeginUniforms::from_fn(5, &mut next);
+///     let v = guide.begin(Vertex::surface(x, n), Lambertian { normal: n }, &u);
+///     let s = v.sample(&SampleUniforms::from_fn(&mut next));
+///     let cos = n.dot(s.direction).max(0.0);
+///     let weight = Vec3::splat(0.5 * cos / (core::f32::consts::PI * s.pdf)); // albedo 0.5
+///     pending.push((v.pending(&s), weight)); // `v` may go now
+/// }
+/// // The path is done: the floor's vertex learns the ceiling's emission plus what the path
+/// // gathered after it; the last vertex, whose hit did not scatter, reads the cache.
+/// let hits = [(ceiling, -Vec3::Z, Vec3::splat(4.0)), (floor, Vec3::Z, Vec3::ZERO)];
+/// let reflected = [Some(Vec3::splat(1.5)), None];
+/// for (((p, weight), (y, n_y, emitted)), r) in pending.iter().zip(hits).zip(reflected) {
+///     let mut seen = VertexObservation::hit(y, n_y, emitted, *weight);
+///     seen.reflected = r;
+///     p.finish(&seen, &FinishUniforms::from_fn(&mut next));
+/// }
+/// ```
+#[derive(Clone, Copy, Debug)]
+pub struct PendingFinish<'g> {
+    guide: &'g Guide,
+    position: Vec3,
+    normal: Option<Vec3>,
+    direction: Vec3,
+    /// The chain the transition continues: the sampled lobe's state, a young chosen state's
+    /// after a scatter sample, else the empty state (Alg. 2 line 4).
+    chosen: GridState,
+    /// Σw̄ / N over the accessed states (eq. 8's denominator).
+    mean_weight: f32,
+    /// The grid and slot the sampled lobe's state was read from; `None` after a scatter
+    /// sample or for a state that was not found.
+    lobe_slot: Option<(GridKind, u32)>,
+    class: u8,
+    target_level: u32,
+}
+
+impl PendingFinish<'_> {
+    /// [`GuidedVertex::finish`] of the vertex this was taken from, with the same result and
+    /// effects on the guide.
+    #[inline]
+    pub fn finish(&self, observation: &VertexObservation, u: &FinishUniforms) -> Transition {
         let guide = self.guide;
         let params = &guide.config.params;
-        let x = self.vertex.position;
-        let w = sample.direction;
+        let x = self.position;
+        let w = self.direction;
         let w_e = observation.emission_weight;
         let w_e = if w_e.is_nan() {
             1.0
@@ -1047,17 +1142,14 @@ impl<S: Scatter> GuidedVertex<'_, S> {
             }
         };
         let carried = crate::math::finite_radiance(observation.weight * incident);
-        if let (Some(cache), Some(n)) = (&guide.cache, self.vertex.normal)
+        if let (Some(cache), Some(n)) = (&guide.cache, self.normal)
             && let Some(corner) = cache.config().add_uniform(u.cache)
         {
             cache.add(x, n, self.target_level, corner, carried);
         }
         let estimate = luminance(crate::math::finite_radiance(observation.weight * learned));
         let now = guide.frame as f32;
-        let chosen = match sample.lobe {
-            Some(k) => self.set.states()[k as usize],
-            None => self.young_chain().copied().unwrap_or(GridState::EMPTY),
-        };
+        let chosen = self.chosen;
         let obs = Observation {
             x,
             next,
@@ -1066,7 +1158,7 @@ impl<S: Scatter> GuidedVertex<'_, S> {
             now,
             frame_time: 1.0,
         };
-        match update(&chosen, self.set.mean_weight(), &obs, u.accept, params) {
+        match update(&chosen, self.mean_weight, &obs, u.accept, params) {
             Some(new) => {
                 let (kind, key) = guide.key(x, self.class, self.target_level, &u.store);
                 if guide.grid(kind).store(&key, &new) {
@@ -1076,9 +1168,8 @@ impl<S: Scatter> GuidedVertex<'_, S> {
                 }
             }
             None => {
-                if let Some(k) = sample.lobe
+                if let Some((kind, slot)) = self.lobe_slot
                     && should_discard(&chosen, x, w, estimate, now, params)
-                    && let Some((kind, slot)) = self.slots[k as usize]
                 {
                     guide.grid(kind).discard(slot);
                     return Transition::Discarded;

@@ -101,8 +101,8 @@ pub use grid::{GridEnsemble, GridSlot, GridUniforms};
 pub use guide::{
     BeginUniforms, CandidateUniforms, FinishUniforms, Guide, GuideConfig, GuidedSample,
     GuidedVertex, Hemisphere, IsotropicPhase, Lambertian, MAX_CANDIDATES, PAPER_SCENE_EXTENT,
-    SLOTS_PER_PIXEL, SampleUniforms, Scatter, Traced, Transition, Vertex, VertexObservation,
-    luminance,
+    PendingFinish, SLOTS_PER_PIXEL, SampleUniforms, Scatter, Traced, Transition, Vertex,
+    VertexObservation, luminance,
 };
 #[cfg(feature = "std")]
 pub use irradiance_cache::{CacheCell, CacheConfig, IrradianceCache};

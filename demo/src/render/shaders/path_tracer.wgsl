@@ -32,9 +32,10 @@
     vmf_posterior_one_minus_mean_cosine, vmf_sample, vmf_try_normalize
 }
 #import mcg::mcpg::{
-    McpgBeginUniforms, McpgFinishUniforms, McpgGuidedVertex, McpgSample, McpgVertex, mcpg_begin,
-    mcpg_choose, mcpg_finish, mcpg_observation_escaped, mcpg_observation_hit, mcpg_params,
-    mcpg_pdf_with, mcpg_sample_lobe
+    McpgBeginUniforms, McpgFinishUniforms, McpgGuidedVertex, McpgObservation, McpgPending,
+    McpgSample, McpgVertex, mcpg_begin, mcpg_choose, mcpg_finish_pending,
+    mcpg_observation_escaped, mcpg_observation_hit, mcpg_params, mcpg_pdf_with, mcpg_pending,
+    mcpg_sample_lobe
 }
 #import mcg::adgi::{
     AdgiRaySample, adgi_irradiance_at, adgi_params, adgi_pilot_direction, adgi_probe_position,
@@ -127,6 +128,8 @@ struct Params {
     moment_stride: u32,
     // The root of the emitters' tree in `nodes` (`gpu::joined_trees`).
     emitter_root: u32,
+    // 1: `mcpg` trains on the path's own L_r (`guided::Reflected::Path`), 0: on the cache's.
+    mcpg_reflected: u32,
     // `mcpg`'s emission-only directions per vertex of depth d = 4i + j in [i][j] this frame
     // (`gpu::frame_counts`).
     emission_counts: array<vec4<u32>, 4>,
@@ -482,37 +485,53 @@ fn guided_lobe_direction(g: ptr<function, McpgGuidedVertex>, v: Vertex, k: u32,
     return mcpg_sample_lobe(g, k, u);
 }
 
-// Alg. 3 for the vertex `g` once its ray is traced, with five uniforms from `grng` (accept,
+// Alg. 3 for the vertex `p` once its ray is traced, with five uniforms from `grng` (accept,
 // store grid, level, corner, cache corner).
-fn guided_finish(g: ptr<function, McpgGuidedVertex>, s: McpgSample, hit: bool, position: vec3<f32>,
-                 normal: vec3<f32>, emitted: vec3<f32>, emission_weight: f32, weight: vec3<f32>,
-                 grng: ptr<function, u32>) {
+fn guided_finish(p: McpgPending, obs: McpgObservation, grng: ptr<function, u32>) {
     let accept = mcg_rng_uniform(grng);
     let grid = mcg_rng_uniform(grng);
     let level = mcg_rng_uniform(grng);
     let corner = mcg_rng_uniform(grng);
     let cache = mcg_rng_uniform(grng);
-    let u = McpgFinishUniforms(accept, grid, level, corner, cache);
-    if hit {
-        var obs = mcpg_observation_hit(position, normal, emitted, weight);
-        obs.emission_weight = emission_weight;
-        mcpg_finish(g, s, obs, u);
-    } else {
-        mcpg_finish(g, s, mcpg_observation_escaped(vec3<f32>(0.0), weight), u);
-    }
+    mcpg_finish_pending(p, obs, McpgFinishUniforms(accept, grid, level, corner, cache));
+}
+
+// A vertex whose finish waits for the end of its path (`guided::Reflected::Path`): what the
+// ray found, and the path's radiance and throughput at that hit, from which the end of the
+// path gives L_r there (`cpu::report_recorded`): incident = (radiance_end − offset)/throughput,
+// offset = the radiance before the hit less the part of the hit's emission its MIS weight
+// (or share beside the emission-only directions) left out, and L_r = incident − L_e.
+struct HeldVertex {
+    pending: McpgPending,
+    observation: McpgObservation,
+    offset: vec3<f32>,
+    throughput: vec3<f32>,
+}
+
+// `guided_finish` of a held vertex, with L_r from the path's final `radiance`.
+fn finish_held(h: HeldVertex, radiance: vec3<f32>, grng: ptr<function, u32>) {
+    let incident = select(vec3<f32>(0.0), (radiance - h.offset) / h.throughput,
+                          h.throughput > vec3<f32>(0.0));
+    var obs = h.observation;
+    obs.has_reflected = 1u;
+    obs.reflected = max(incident - obs.emitted, vec3<f32>(0.0));
+    guided_finish(h.pending, obs, grng);
 }
 #endif
 
 // A learning guide needs `finish`: what arrived along each sampled direction. MCPG's
-// observation is only the next hit (position, normal, emission) and the sample's weight f·cos/p
-// (the radiance reflected there comes from the guide's irradiance cache), as in
-// `guided::McpgSampler::finish`; so the GPU finishes a vertex as soon as its ray is traced (at
-// the next hit, or after the loop when it escaped or its weight ended the path), keeping one
-// open vertex instead of the CPU's per-depth records. Vertices deeper than MAX_RECORDED are
-// not finished, as on the CPU. The guide's uniforms come from a stream of their own, seeded
-// like the CPU sampler's (`cpu::SAMPLER_SALT`); they are drawn per vertex (begin, finish)
-// rather than all begins before all finishes, so the guide's updates are not bit-equal to the
-// CPU's (they race across invocations anyway), only the same in distribution.
+// observation is the next hit (position, normal, emission), the sample's weight f·cos/p and
+// L_r, the radiance reflected at the hit: the paper reads it from the guide's irradiance cache,
+// so that a vertex is finished as soon as its ray is traced (`params.mcpg_reflected` 0,
+// `guided::Reflected::Cache`). With `params.mcpg_reflected` 1 (`Reflected::Path`, mcg's
+// extension and the CPU tracer's default) a vertex whose next hit scatters again waits for the
+// end of the path and learns the path's own estimate of L_r there, as on the CPU; the GPU holds
+// at most two such vertices (`HeldVertex`: every vertex but the last at the default 3 bounces),
+// deeper ones read the cache. Vertices deeper than MAX_RECORDED are not finished, as on the
+// CPU. The guide's uniforms come from a stream of their own, seeded like the CPU sampler's
+// (`cpu::SAMPLER_SALT`); they are drawn per vertex (begin, finish) rather than all begins
+// before all finishes, so the guide's updates are not bit-equal to the CPU's (they race across
+// invocations anyway), only the same in distribution.
 
 // ---------------------------------------------------------------------------------------------
 // The integrator (`cpu::trace_path`)
@@ -653,6 +672,10 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
     var open_sample: McpgSample;
     var open_weight = vec3<f32>(0.0);
     var is_open = false;
+    // Vertices waiting for the end of the path (`HeldVertex`), the older first.
+    var held0: HeldVertex;
+    var held1: HeldVertex;
+    var held = 0u;
 #endif
     loop {
         let hit = bvh_walk(o, d, 0.0, FAR, false);
@@ -671,6 +694,8 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
         // emission-only directions of `mcpg`'s vertex that sampled the ray).
         var emission_weight = 1.0;
         var share = 1.0;
+        // The radiance before the hit, less the part of its emission left out below.
+        var offset = radiance;
         if cos_front > 0.0 && any(material.emission > vec3<f32>(0.0)) {
             if samples_lights() && last_pdf > 0.0 {
                 let light_pdf = tri.emitter_pmf / area * hit.t * hit.t / cos_front;
@@ -680,13 +705,25 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
                 share = last_share;
             }
             radiance += throughput * material.emission * share;
+            offset -= throughput * material.emission * (1.0 - share);
         }
 #ifdef MCG_DEMO_MCPG
         if is_open {
             let emitted = select(vec3<f32>(0.0), material.emission, cos_front > 0.0);
             let n_hit = select(-n_front, n_front, cos_front > 0.0);
-            guided_finish(&open, open_sample, true, position, n_hit, emitted, emission_weight,
-                          open_weight, &grng);
+            var obs = mcpg_observation_hit(position, n_hit, emitted, open_weight);
+            obs.emission_weight = emission_weight;
+            let pending = mcpg_pending(&open, open_sample);
+            // The path scatters again here (`cpu::report_recorded`'s rule).
+            let holds = params.mcpg_reflected != 0u && depth < params.bounces && held < 2u;
+            if holds && held == 0u {
+                held0 = HeldVertex(pending, obs, offset, throughput);
+            } else if holds {
+                held1 = HeldVertex(pending, obs, offset, throughput);
+            } else {
+                guided_finish(pending, obs, &grng);
+            }
+            held += u32(holds);
             is_open = false;
         }
 #endif
@@ -781,8 +818,14 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
     // The last ray left the scene, or its weight ended the path (the CPU reports both as
     // escaped, seeing nothing).
     if is_open {
-        let zero = vec3<f32>(0.0);
-        guided_finish(&open, open_sample, false, zero, zero, zero, 1.0, open_weight, &grng);
+        guided_finish(mcpg_pending(&open, open_sample),
+                      mcpg_observation_escaped(vec3<f32>(0.0), open_weight), &grng);
+    }
+    if held > 0u {
+        finish_held(held0, radiance, &grng);
+    }
+    if held > 1u {
+        finish_held(held1, radiance, &grng);
     }
 #endif
     return radiance;

@@ -7,6 +7,9 @@
 //   ... trace ω, weight = f·cos/s.pdf ...
 //   mcpg_finish(&v, s, mcpg_observation_hit(y, n_y, emitted, weight), finish_uniforms); // Alg. 3
 //
+// or, to finish once the path is done (with its own L_r at y in `obs.reflected`), keep
+// `let p = mcpg_pending(&v, s);` and call `mcpg_finish_pending(p, obs, finish_uniforms)` then.
+//
 // A renderer with its own BSDF sets `vertex.scatter = MCPG_SCATTER_CUSTOM` and calls
 // `mcpg_choose`, `mcpg_sample_lobe` and `mcpg_pdf_with` itself (see `mcpg_sample`).
 //
@@ -752,11 +755,66 @@ fn mcpg_finite_radiance(v: vec3<f32>) -> vec3<f32> {
 // a surface x; acceptance against the mean candidate score (eq. 8); the MLE update of the chosen
 // state (or the empty one after a scatter sample), T ← now, v from the hit's previous position
 // (eq. 9), stored at a fresh vertex (line 12); a rejected lobe sample may discard its state.
-// Returns MCPG_TRANSITION_*.
+// Returns MCPG_TRANSITION_*. The same as `mcpg_finish_pending(mcpg_pending(v, sample), obs, u)`.
 fn mcpg_finish(v: ptr<function, McpgGuidedVertex>, sample: McpgSample, obs: McpgObservation, u: McpgFinishUniforms) -> u32 {
+    return mcpg_finish_pending(mcpg_pending(v, sample), obs, u);
+}
+
+// What `mcpg_finish` needs of a begun vertex once its sample is drawn (`PendingFinish`): where
+// the vertex is, the sampled direction and lobe, the chain the transition continues (the
+// sampled lobe's state, a young chosen state's after a scatter sample, else the empty state:
+// Alg. 2 line 4), the candidates' mean score (eq. 8) and the slot of the sampled lobe's state
+// (for the discard). A tracer that finishes its vertices only when the path is done, to train
+// on the path's own L_r, keeps one of these per vertex instead of the whole McpgGuidedVertex.
+struct McpgPending {
+    position: vec3<f32>,
+    has_normal: u32,
+    normal: vec3<f32>,
+    normal_class: u32,
+    direction: vec3<f32>,
+    target_level: u32,
+    chosen: MarkovGridState,
+    mean_weight: f32,
+    lobe: u32,
+    lobe_slot: u32,
+    lobe_is_static: u32,
+}
+
+// `GuidedVertex::pending`.
+fn mcpg_pending(v: ptr<function, McpgGuidedVertex>, sample: McpgSample) -> McpgPending {
+    var p: McpgPending;
+    p.position = (*v).vertex.position;
+    p.has_normal = (*v).vertex.has_normal;
+    p.normal = (*v).vertex.normal;
+    p.normal_class = (*v).normal_class;
+    p.direction = sample.direction;
+    p.target_level = (*v).target_level;
+    if sample.lobe != MCPG_NO_LOBE || mcpg_young_chain(v) != MCPG_NO_LOBE {
+        p.chosen = (*v).chosen;
+    }
+    p.mean_weight = 0.0;
+    if (*v).count > 0u {
+        p.mean_weight = (*v).weight_sum / f32((*v).count);
+    }
+    if !(p.mean_weight >= 0.0 && mcg_is_finite(p.mean_weight)) {
+        p.mean_weight = 0.0;
+    }
+    let k = sample.lobe;
+    p.lobe = k;
+    p.lobe_slot = HASHGRID_NO_SLOT;
+    p.lobe_is_static = 0u;
+    if k != MCPG_NO_LOBE {
+        p.lobe_slot = (*v).slots[k];
+        p.lobe_is_static = ((*v).static_mask >> k) & 1u;
+    }
+    return p;
+}
+
+// `PendingFinish::finish`: `mcpg_finish` of the vertex `p` was taken from.
+fn mcpg_finish_pending(p: McpgPending, obs: McpgObservation, u: McpgFinishUniforms) -> u32 {
     let frame = mcpg_frame();
-    let x = (*v).vertex.position;
-    let w = sample.direction;
+    let x = p.position;
+    let w = p.direction;
     var next: vec3<f32>;
     var next_previous: vec3<f32>;
     var incident: vec3<f32>;
@@ -787,25 +845,14 @@ fn mcpg_finish(v: ptr<function, McpgGuidedVertex>, sample: McpgSample, obs: Mcpg
     // it reaches 1 (with s = 1, always an add at u).
     let scale = mcpg_params.cache_add_scale;
     let add_corner = u.cache * scale;
-    if mcpg_params.cache_enabled != 0u && (*v).vertex.has_normal != 0u
+    if mcpg_params.cache_enabled != 0u && p.has_normal != 0u
         && (scale <= 1.0 || add_corner < 1.0) {
-        mcpg_cache_add_at(x, (*v).vertex.normal, (*v).target_level, add_corner, carried, frame);
+        mcpg_cache_add_at(x, p.normal, p.target_level, add_corner, carried, frame);
     }
     let estimate = mcpg_luminance(mcpg_finite_radiance(obs.weight * learned));
     let now = f32(frame);
-    // The chain the transition continues: the sampled lobe's, a young chosen state's after a
-    // scatter sample, else the empty state (Alg. 2 line 4).
-    var chosen: MarkovGridState;
-    if sample.lobe != MCPG_NO_LOBE || mcpg_young_chain(v) != MCPG_NO_LOBE {
-        chosen = (*v).chosen;
-    }
-    var mean_weight = 0.0;
-    if (*v).count > 0u {
-        mean_weight = (*v).weight_sum / f32((*v).count);
-    }
-    if !(mean_weight >= 0.0 && mcg_is_finite(mean_weight)) {
-        mean_weight = 0.0;
-    }
+    let chosen = p.chosen;
+    let mean_weight = p.mean_weight;
     // `update`: eq. 8's acceptance u < f/(sum/N), then the MLE step, stored at a fresh vertex;
     // or the discard of the chosen state. Both end in one locked write of a slot (`store`, or
     // `clear_weight` on the words read under the lock), so that code exists once.
@@ -814,18 +861,17 @@ fn mcpg_finish(v: ptr<function, McpgGuidedVertex>, sample: McpgSample, obs: Mcpg
     var slot = HASHGRID_NO_SLOT;
     var words: array<u32, 8>;
     let acceptable = estimate >= 0.0 && mcg_is_finite(estimate) && mcg_is_finite(now);
-    let k = sample.lobe;
     if acceptable && estimate > 0.0 && u.accept * mean_weight < estimate {
         var stats = markov_grid_state_stats(chosen);
         vmf_stats_update(&stats, x, next, estimate, mcpg_params.fit);
         words = mcpg_words_of_state(markov_grid_state_pack(stats, now, next - next_previous));
-        let key = mcpg_key(x, (*v).normal_class, (*v).target_level, u.store_grid, u.store_level, u.store_corner);
+        let key = mcpg_key(x, p.normal_class, p.target_level, u.store_grid, u.store_level, u.store_corner);
         is_static = key.is_static;
         slot = mcpg_insert(mcpg_table(is_static), key.key, mcpg_params.age_tracking != 0u, frame);
         transition = MCPG_TRANSITION_DROPPED;
-    } else if k != MCPG_NO_LOBE && mcpg_should_discard(chosen, x, w, estimate, now) && (*v).slots[k] != HASHGRID_NO_SLOT {
-        is_static = ((*v).static_mask & (1u << k)) != 0u;
-        slot = (*v).slots[k];
+    } else if p.lobe != MCPG_NO_LOBE && p.lobe_slot != HASHGRID_NO_SLOT && mcpg_should_discard(chosen, x, w, estimate, now) {
+        is_static = p.lobe_is_static != 0u;
+        slot = p.lobe_slot;
         transition = MCPG_TRANSITION_DISCARDED;
     }
     if slot != HASHGRID_NO_SLOT && mcpg_lock(mcpg_guard_word(is_static, slot)) {

@@ -16,6 +16,13 @@
 //! sets `obs.emission_weight` on the observation to that weight before `mcpg_finish` (the
 //! chain then learns only the share its direction carries; `VertexObservation::emission_weight`).
 //!
+//! A tracer that finishes its vertices only when the path is done, to train each on the
+//! path's own estimate of the radiance reflected at its next hit (`obs.has_reflected = 1`,
+//! `obs.reflected`), keeps `mcpg_pending(&v, s)` (an `McpgPending`, 96 bytes: what Alg. 3
+//! needs of the vertex, without its lobes) and calls `mcpg_finish_pending(p, obs, u)` at the
+//! end; `mcpg_finish(&v, s, obs, u)` is exactly that composition (the CPU's
+//! `GuidedVertex::pending` and `PendingFinish::finish`).
+//!
 //! The module is composed with [`GpuMcpgGuide::shader_defs`]`(group)`, its pipeline layout holding
 //! [`GpuMcpgGuide::bind_group_layout`] at `group`, and [`GpuMcpgGuide::bind_group`] set there.
 //! After the frame's dispatches, [`GpuMcpgGuide::record_end_frame`] records the cache's fold,
@@ -23,7 +30,7 @@
 //!
 //! The functions mirror `mcg_markov_guide::mcpg::Guide`'s vertex API call for call
 //! (`Vertex::surface`/`volume` → `mcpg_surface_vertex`/`mcpg_volume_vertex`, `begin`, `sample`,
-//! `pdf`, `finish`, `end_frame`); for the same states, inputs and uniforms they make the same
+//! `pdf`, `finish`, `pending`, `end_frame`); for the same states, inputs and uniforms they make the same
 //! choices (the parity tests hold them to it). States stay the CPU's 32-byte `GridState`; each
 //! slot adds a guard word that makes racing stores safe (see the module's header).
 //!
