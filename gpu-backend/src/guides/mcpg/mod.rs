@@ -34,10 +34,11 @@
 //! choices (the parity tests hold them to it). States stay the CPU's 32-byte `GridState`; each
 //! slot adds a guard word that makes racing stores safe (see the module's header).
 //!
-//! Performance: on lavapipe (llvmpipe, software) a guided vertex costs 146-165× a
-//! cosine-sampled one in `benches/mcpg.rs` (the target of 6× is not met; llvmpipe runs every
-//! branch masked and makes each of the vertex's ~100 storage accesses a loop over 8 lanes);
-//! `benches/README.md` has the measurements and the GPU demo's frame-time ratios.
+//! Performance: on lavapipe (llvmpipe, software) a guided vertex costs 31-69× a
+//! cosine-sampled one in `benches/mcpg.rs` on an idle 2-vCPU VM (146-165× on a loaded one; the
+//! target of 6× is not met: llvmpipe runs every branch masked and makes each of the vertex's
+//! storage accesses a loop over 8 lanes); `benches/README.md` has the measurements and the GPU
+//! demo's frame-time ratios.
 
 #[cfg(feature = "runtime")]
 mod guide;
