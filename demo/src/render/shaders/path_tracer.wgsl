@@ -667,9 +667,11 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
     var depth = 0u;
 #ifdef MCG_DEMO_MCPG
     var grng = mcg_pcg_hash(*rng ^ SAMPLER_SALT);
-    // The vertex whose ray is being traced, waiting for its finish.
+    // The vertex begun last, and what its finish needs once its ray is traced (only this
+    // lives across the walk, not the vertex's lobes).
     var open: McpgGuidedVertex;
     var open_sample: McpgSample;
+    var open_pending: McpgPending;
     var open_weight = vec3<f32>(0.0);
     var is_open = false;
     // Vertices waiting for the end of the path (`HeldVertex`), the older first.
@@ -713,7 +715,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
             let n_hit = select(-n_front, n_front, cos_front > 0.0);
             var obs = mcpg_observation_hit(position, n_hit, emitted, open_weight);
             obs.emission_weight = emission_weight;
-            let pending = mcpg_pending(&open, open_sample);
+            let pending = open_pending;
             // The path scatters again here (`cpu::report_recorded`'s rule).
             let holds = params.mcpg_reflected != 0u && depth < params.bounces && held < 2u;
             if holds && held == 0u {
@@ -792,6 +794,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
         let s = BsdfSample(wi, open_sample.pdf,
                            material_eval(material, normal, -d, wi) / open_sample.pdf, true);
         is_open = depth < MAX_RECORDED;
+        open_pending = mcpg_pending(&open, open_sample);
         open_weight = s.weight;
 #else
         if samples_lights() {
@@ -818,7 +821,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
     // The last ray left the scene, or its weight ended the path (the CPU reports both as
     // escaped, seeing nothing).
     if is_open {
-        guided_finish(mcpg_pending(&open, open_sample),
+        guided_finish(open_pending,
                       mcpg_observation_escaped(vec3<f32>(0.0), open_weight), &grng);
     }
     if held > 0u {
