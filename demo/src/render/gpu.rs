@@ -74,6 +74,13 @@ pub const GUIDE_GROUP: u32 = 1;
 /// [`GUIDE_GROUP`]).
 pub const MCPG_DEF: &str = "MCG_DEMO_MCPG";
 
+/// The shader def of the methods that take a light sample per vertex (`nee`, `mcpg-nee`):
+/// light sampling is compiled into their pipelines and out of `bsdf`'s and `mcpg`'s, so that
+/// no method runs another's code. (A run-time branch on the method cost lavapipe's `bsdf`
+/// frames 25 % and its `mcpg` frames 3 %: llvmpipe executes every block, masked or not; a
+/// real GPU skips the branch but still allocates registers for it.)
+pub const LIGHTS_DEF: &str = "MCG_DEMO_LIGHTS";
+
 /// The shader def that compiles `render_mcmm`, MCMM at group [`GUIDE_GROUP`].
 pub const MCMM_DEF: &str = "MCG_DEMO_MCMM";
 
@@ -367,6 +374,9 @@ struct Guided<G> {
     layout: wgpu::BindGroupLayout,
 }
 
+/// A pipeline with its group 0 layout.
+type Pipeline = (wgpu::ComputePipeline, wgpu::BindGroupLayout);
+
 /// The GPU path tracer: a device, the compiled kernels and the uploaded scene.
 pub struct GpuTracer {
     ctx: GpuContext,
@@ -386,6 +396,11 @@ pub struct GpuTracer {
     mcpg_moments: Option<EmissionMoments>,
     /// The compiled `mcpg` shader, kept for rebuilding its pipeline with a new guide.
     guided_module: Option<wgpu::ShaderModule>,
+    /// `nee`'s `render` ([`LIGHTS_DEF`]), compiled on its first frame.
+    nee: Option<ComputeKernel>,
+    /// `mcpg-nee`'s shader and its pipeline around the current guide, made on its first frame.
+    guided_lights_module: Option<wgpu::ShaderModule>,
+    guided_lights: Option<Pipeline>,
     mcmm: Option<Guided<GpuMcmmGuide>>,
     /// The compiled `mcmm` shader.
     mcmm_module: Option<wgpu::ShaderModule>,
@@ -405,17 +420,18 @@ impl std::fmt::Debug for GpuTracer {
     }
 }
 
-/// The tracer's WGSL for `bsdf` and `nee`, composed with the modules of
-/// [`mcg_gpu_backend::shaders`] it imports (`mcg::mcpg` among them, at group [`GUIDE_GROUP`],
-/// unused by `render` without [`MCPG_DEF`]).
+/// The tracer's WGSL for `bsdf` (`lights` false) or `nee` (true, [`LIGHTS_DEF`]), composed
+/// with the modules of [`mcg_gpu_backend::shaders`] it imports (`mcg::mcpg` among them, at
+/// group [`GUIDE_GROUP`], unused by `render` without [`MCPG_DEF`]).
 ///
 /// # Errors
 /// When composition fails (an unknown import).
-pub fn composed_shader() -> Result<String> {
-    Ok(shaders::compose(
-        SHADER,
-        &guide_defs(GUIDE_GROUP, UNUSED_GROUP, PROBE_UNUSED_GROUP),
-    )?)
+pub fn composed_shader(lights: bool) -> Result<String> {
+    let mut defs = guide_defs(GUIDE_GROUP, UNUSED_GROUP, PROBE_UNUSED_GROUP);
+    if lights {
+        defs.push((LIGHTS_DEF, 1));
+    }
+    Ok(shaders::compose(SHADER, &defs)?)
 }
 
 /// The shader defs placing `mcg::mcpg` at group `mcpg`, `mcg::mcmm` at group `mcmm` and
@@ -438,13 +454,17 @@ pub fn composed_mcmm_shader() -> Result<String> {
     Ok(shaders::compose(SHADER, &defs)?)
 }
 
-/// The tracer's WGSL for `mcpg`: [`composed_shader`] with [`MCPG_DEF`] defined.
+/// The tracer's WGSL for `mcpg` (`lights` false) or `mcpg-nee` (true): [`composed_shader`]
+/// with [`MCPG_DEF`] defined.
 ///
 /// # Errors
 /// When composition fails (an unknown import).
-pub fn composed_mcpg_shader() -> Result<String> {
+pub fn composed_mcpg_shader(lights: bool) -> Result<String> {
     let mut defs = guide_defs(GUIDE_GROUP, UNUSED_GROUP, PROBE_UNUSED_GROUP);
     defs.push((MCPG_DEF, 1));
+    if lights {
+        defs.push((LIGHTS_DEF, 1));
+    }
     Ok(shaders::compose(SHADER, &defs)?)
 }
 
@@ -493,7 +513,7 @@ impl GpuTracer {
     /// # Errors
     /// When the shader does not compile.
     pub fn on(ctx: GpuContext) -> Result<Self> {
-        let source = composed_shader()?;
+        let source = composed_shader(false)?;
         let render = ctx.compute_kernel(&source, "render")?;
         let rays = ctx.compute_kernel(&source, "trace_rays")?;
         let params = ctx.uniform_buffer("mcg-demo params", &GpuParams::default());
@@ -515,6 +535,9 @@ impl GpuTracer {
             mcpg_reflected: Reflected::Cache,
             mcpg_moments: None,
             guided_module: None,
+            nee: None,
+            guided_lights_module: None,
+            guided_lights: None,
             mcmm: None,
             mcmm_module: None,
             probes: None,
@@ -551,8 +574,11 @@ impl GpuTracer {
         guide.end_frame(&self.ctx)?;
         guide.reset(&self.ctx);
         if self.guided_module.is_none() {
-            self.guided_module = Some(self.module("mcg-demo render mcpg", composed_mcpg_shader()?));
+            let source = composed_mcpg_shader(false)?;
+            self.guided_module = Some(self.module("mcg-demo render mcpg", source));
         }
+        // `mcpg-nee`'s pipeline is rebuilt around the new guide on its first frame.
+        self.guided_lights = None;
         let module = self.guided_module.as_ref().expect("compiled above");
         let (pipeline, layout) =
             self.guided_pipeline(module, "render", guide.bind_group_layout())?;
@@ -867,6 +893,7 @@ impl GpuTracer {
         settings: &RenderSettings,
         frame: u32,
     ) -> Result<(Vec<Vec3>, f64)> {
+        self.prepare_pipeline(settings.method)?;
         let base = self.frame_params(settings, frame)?;
         let scope = self
             .ctx
@@ -1016,7 +1043,14 @@ impl GpuTracer {
             );
         }
         match (method, &self.guided, &self.mcmm) {
-            (Method::Mcpg | Method::McpgNee, Some(g), _) => (
+            (Method::McpgNee, Some(g), _) => {
+                let (pipeline, layout) = self
+                    .guided_lights
+                    .as_ref()
+                    .expect("made by prepare_pipeline");
+                (pipeline, layout, Some(g.guide.bind_group()), (GROUP, GROUP))
+            }
+            (Method::Mcpg, Some(g), _) => (
                 &g.pipeline,
                 &g.layout,
                 Some(g.guide.bind_group()),
@@ -1028,6 +1062,15 @@ impl GpuTracer {
                 Some(g.guide.bind_group()),
                 (MCMM_GROUP.0, MCMM_GROUP.1),
             ),
+            (Method::Nee, _, _) => {
+                let nee = self.nee.as_ref().expect("made by prepare_pipeline");
+                (
+                    nee.pipeline(),
+                    nee.bind_group_layout(),
+                    None,
+                    (GROUP, GROUP),
+                )
+            }
             _ => (
                 self.render.pipeline(),
                 self.render.bind_group_layout(),
@@ -1035,6 +1078,33 @@ impl GpuTracer {
                 (GROUP, GROUP),
             ),
         }
+    }
+
+    /// Compiles the light-sampling pipeline `method` needs on its first frame (`nee`, or
+    /// `mcpg-nee` around the current guide); the other methods' are made up front.
+    fn prepare_pipeline(&mut self, method: Method) -> Result<()> {
+        match method {
+            Method::Nee if self.nee.is_none() => {
+                let source = composed_shader(true)?;
+                self.nee = Some(self.ctx.compute_kernel(&source, "render")?);
+            }
+            Method::McpgNee if self.guided_lights.is_none() => {
+                let Some(g) = &self.guided else {
+                    return Ok(());
+                };
+                if self.guided_lights_module.is_none() {
+                    let source = composed_mcpg_shader(true)?;
+                    self.guided_lights_module =
+                        Some(self.module("mcg-demo render mcpg-nee", source));
+                }
+                let module = self.guided_lights_module.as_ref().expect("compiled above");
+                let pipeline =
+                    self.guided_pipeline(module, "render", g.guide.bind_group_layout())?;
+                self.guided_lights = Some(pipeline);
+            }
+            _ => {}
+        }
+        Ok(())
     }
 
     /// Records and submits one pass per tile of [`TILE`] pixels with `base`'s settings;
@@ -1379,7 +1449,12 @@ mod tests {
     /// guarantees and nothing of the guide's group; `mcpg`'s adds the guide's 3.
     #[test]
     fn shader_validates_without_an_adapter() {
-        let (module, tracer, guide) = validate(&composed_shader().unwrap());
+        let (module, tracer, guide) = validate(&composed_shader(false).unwrap());
+        assert_eq!(
+            validate(&composed_shader(true).unwrap()).1,
+            8,
+            "nee's render"
+        );
         let names: Vec<&str> = module
             .entry_points
             .iter()
@@ -1387,9 +1462,11 @@ mod tests {
             .collect();
         assert_eq!(names, ["render", "trace_rays"]);
         assert_eq!((tracer, guide), (8, 0), "render binds 1–8 as storage");
-        let (_, tracer, guide) = validate(&composed_mcpg_shader().unwrap());
-        assert_eq!(tracer + guide, MCPG_STORAGE_BUFFERS as usize);
-        assert_eq!(guide, 3, "the mcpg render binds the guide");
+        for lights in [false, true] {
+            let (_, tracer, guide) = validate(&composed_mcpg_shader(lights).unwrap());
+            assert_eq!(tracer + guide, MCPG_STORAGE_BUFFERS as usize);
+            assert_eq!(guide, 3, "the mcpg render binds the guide");
+        }
         // `GpuParams` is `Params` in WGSL, byte for byte.
         let mut layouter = naga::proc::Layouter::default();
         layouter.update(module.to_ctx()).unwrap();

@@ -585,7 +585,12 @@ fn luminance(c: vec3<f32>) -> f32 {
 
 // Whether the method takes a light sample per vertex (`Method::samples_lights`).
 fn samples_lights() -> bool {
-    return params.method == METHOD_NEE || params.method == METHOD_MCPG_NEE;
+    // Compiled per method (`gpu::LIGHTS_DEF`): no pipeline runs another method's code.
+#ifdef MCG_DEMO_LIGHTS
+    return true;
+#else
+    return false;
+#endif
 }
 
 // How many directions `mcpg` draws at a vertex of `depth`, besides the path's, for the emission
