@@ -250,11 +250,14 @@ impl Drop for McpgSampler<'_> {
 /// Scene (a), 128², 8 spp, 64 frames, 2 threads, seeds 7-8 (`markov-guide/benches/README.md`):
 /// relMSE 0.0247 with K = 0, 0.0135 (K = 1), 0.0104 (2), 0.0088 (3), 0.0080 (4), 0.0070 (6),
 /// 0.0066 (8), each direction adding about 8 % of a K = 0 frame's instructions; error × cost
-/// is lowest and flat from K = 4 to 6, so 4 is the default. The directions come from the
-/// whole mixture ([`GuidedVertex::sample_mixture`]), not only from the state Alg. 1 chose
-/// (4-6 % less error than from that state's lobe), and K is the mean of a per-depth
-/// allocation ([`super::emission_allocation`]) on either device.
-pub const EMISSION_SAMPLES: u32 = 4;
+/// was lowest and flat from K = 4 to 6 then. Measured again once both devices trained on the
+/// path's own L_r (seeds 7-12 on the CPU, 64 frames): K = 6 gives 3 % less relMSE × CPU time
+/// than 4 on average (lower on four of six seeds, its late frames 11-26 % lower), and 4-7 %
+/// less relMSE × frame time on lavapipe (seeds 7-8, 32 frames), so 6 is the default. The
+/// directions come from the whole mixture ([`GuidedVertex::sample_mixture`]), not only from
+/// the state Alg. 1 chose (4-6 % less error than from that state's lobe), and K is the mean
+/// of a per-depth allocation ([`super::emission_allocation`]) on either device.
+pub const EMISSION_SAMPLES: u32 = 6;
 
 /// The guide's own uniforms in the CPU tracer: two 24-bit uniforms from each 64-bit output of
 /// WyRand (Wang Yi's wyhash generator, through `fastrand`), seeded per path.
