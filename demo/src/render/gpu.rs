@@ -1005,10 +1005,8 @@ impl GpuTracer {
             uv_count: scene.uvs.len() as u32,
             texture_count: scene.textures.len() as u32,
             emitter_root: scene.emitter_root,
-            mcpg_reflected: u32::from(
-                matches!(settings.method, Method::Mcpg | Method::McpgNee)
-                    && self.mcpg_reflected == Reflected::Path,
-            ),
+            // Read by the guided pipelines only (`MCPG_DEF`).
+            mcpg_reflected: u32::from(self.mcpg_reflected == Reflected::Path),
             moment_stride,
             emission_counts: if mcpg {
                 bytemuck::cast(frame_counts(

@@ -166,9 +166,8 @@ struct RayHit {
 @group(0) @binding(9) var<storage, read> rays: array<Ray>;
 @group(0) @binding(10) var<storage, read_write> ray_hits: array<RayHit>;
 
-const METHOD_NEE: u32 = 1u;
+// `gpu::method_code` of `mcpg` (light sampling is a shader def, `gpu::LIGHTS_DEF`).
 const METHOD_MCPG: u32 = 2u;
-const METHOD_MCPG_NEE: u32 = 4u;
 // `cpu::MAX_RECORDED`: the deepest vertex a guide learns from.
 const MAX_RECORDED: u32 = 16u;
 // `cpu::SAMPLER_SALT`: the guide's stream starts away from the path's.
@@ -720,15 +719,14 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
             let n_hit = select(-n_front, n_front, cos_front > 0.0);
             var obs = mcpg_observation_hit(position, n_hit, emitted, open_weight);
             obs.emission_weight = emission_weight;
-            let pending = open_pending;
             // The path scatters again here (`cpu::report_recorded`'s rule).
             let holds = params.mcpg_reflected != 0u && depth < params.bounces && held < 2u;
             if holds && held == 0u {
-                held0 = HeldVertex(pending, obs, offset, throughput);
+                held0 = HeldVertex(open_pending, obs, offset, throughput);
             } else if holds {
-                held1 = HeldVertex(pending, obs, offset, throughput);
+                held1 = HeldVertex(open_pending, obs, offset, throughput);
             } else {
-                guided_finish(pending, obs, &grng);
+                guided_finish(open_pending, obs, &grng);
             }
             held += u32(holds);
             is_open = false;

@@ -761,7 +761,7 @@ fn mcpg_finish(v: ptr<function, McpgGuidedVertex>, sample: McpgSample, obs: Mcpg
 }
 
 // What `mcpg_finish` needs of a begun vertex once its sample is drawn (`PendingFinish`): where
-// the vertex is, the sampled direction and lobe, the chain the transition continues (the
+// the vertex is, the sampled direction, the chain the transition continues (the
 // sampled lobe's state, a young chosen state's after a scatter sample, else the empty state:
 // Alg. 2 line 4), the candidates' mean score (eq. 8) and the slot of the sampled lobe's state
 // (for the discard). A tracer that finishes its vertices only when the path is done, to train
@@ -775,7 +775,8 @@ struct McpgPending {
     target_level: u32,
     chosen: MarkovGridState,
     mean_weight: f32,
-    lobe: u32,
+    // The slot of the sampled lobe's state; HASHGRID_NO_SLOT after a scatter sample or for a
+    // state that was not found.
     lobe_slot: u32,
     lobe_is_static: u32,
 }
@@ -800,7 +801,6 @@ fn mcpg_pending(v: ptr<function, McpgGuidedVertex>, sample: McpgSample) -> McpgP
         p.mean_weight = 0.0;
     }
     let k = sample.lobe;
-    p.lobe = k;
     p.lobe_slot = HASHGRID_NO_SLOT;
     p.lobe_is_static = 0u;
     if k != MCPG_NO_LOBE {
@@ -869,7 +869,7 @@ fn mcpg_finish_pending(p: McpgPending, obs: McpgObservation, u: McpgFinishUnifor
         is_static = key.is_static;
         slot = mcpg_insert(mcpg_table(is_static), key.key, mcpg_params.age_tracking != 0u, frame);
         transition = MCPG_TRANSITION_DROPPED;
-    } else if p.lobe != MCPG_NO_LOBE && p.lobe_slot != HASHGRID_NO_SLOT && mcpg_should_discard(chosen, x, w, estimate, now) {
+    } else if p.lobe_slot != HASHGRID_NO_SLOT && mcpg_should_discard(chosen, x, w, estimate, now) {
         is_static = p.lobe_is_static != 0u;
         slot = p.lobe_slot;
         transition = MCPG_TRANSITION_DISCARDED;
