@@ -103,8 +103,13 @@ const GROUP: u32 = 8;
 /// of [`super::mcmm::TILE_SIZE`] chains.
 const MCMM_GROUP: (u32, u32) = (super::mcmm::TILE_WIDTH, super::mcmm::TILE_HEIGHT);
 
-/// Invocations per workgroup of the `trace_rays` kernel.
+/// Invocations per workgroup of the `trace_rays` and `trace_segments` kernels.
 const RAY_GROUP: u32 = 64;
+
+/// The most segments that [`GpuTracer::unoccluded_segments`] walks from one origin: the
+/// emission-only directions of a vertex whose shadow rays the tracer walks together (WGSL
+/// `EMISSION_BATCH`).
+pub const SEGMENT_BATCH: u32 = 8;
 
 /// The method's code in the shader (`METHOD_*`), or `None` when the GPU tracer does not have
 /// the method yet.
@@ -398,6 +403,8 @@ pub struct GpuTracer {
     guided_module: Option<wgpu::ShaderModule>,
     /// `nee`'s `render` ([`LIGHTS_DEF`]), compiled on its first frame.
     nee: Option<ComputeKernel>,
+    /// `trace_segments`, compiled on the first [`GpuTracer::unoccluded_segments`].
+    segments: Option<ComputeKernel>,
     /// `mcpg-nee`'s shader and its pipeline around the current guide, made on its first frame.
     guided_lights_module: Option<wgpu::ShaderModule>,
     guided_lights: Option<Pipeline>,
@@ -536,6 +543,7 @@ impl GpuTracer {
             mcpg_moments: None,
             guided_module: None,
             nee: None,
+            segments: None,
             guided_lights_module: None,
             guided_lights: None,
             mcmm: None,
@@ -1235,8 +1243,72 @@ impl GpuTracer {
     /// # Errors
     /// No scene uploaded, more rays than one dispatch row holds, or a device error.
     pub fn trace_rays(&self, rays: &[GpuRay]) -> Result<Vec<GpuHit>> {
+        self.dispatch_rays(&self.rays, rays, rays.len() as u32)
+    }
+
+    /// Walks the uploaded scene's BVH for the occlusion of up to [`SEGMENT_BATCH`] segments
+    /// from one origin at a time, `origin + t·direction` for `t ∈ (0, t_max)`, as the tracer
+    /// walks the shadow rays of `mcpg`'s emission-only directions (the WGSL
+    /// `unoccluded_segments`: the segments one after the other in one traversal loop), for
+    /// comparing with [`super::bvh::Bvh::occluded`]. Each batch is `(origin, segments)` with
+    /// segments `(direction, t_max)`; the answer holds, per batch, bit j set when segment j
+    /// is unoccluded.
+    ///
+    /// # Errors
+    /// No scene uploaded, a batch of more than [`SEGMENT_BATCH`] segments, more batches than
+    /// one dispatch row holds, or a device error.
+    pub fn unoccluded_segments(
+        &mut self,
+        batches: &[(Vec3, Vec<(Vec3, f32)>)],
+    ) -> Result<Vec<u32>> {
+        let mut rays = Vec::with_capacity(batches.len() * SEGMENT_BATCH as usize);
+        for (i, (origin, segments)) in batches.iter().enumerate() {
+            if segments.len() > SEGMENT_BATCH as usize {
+                return Err(format!(
+                    "batch {i} holds {} segments, more than {SEGMENT_BATCH}",
+                    segments.len()
+                )
+                .into());
+            }
+            let ray = GpuRay {
+                origin: origin.to_array(),
+                ..GpuRay::default()
+            };
+            rays.extend(segments.iter().map(|&(d, t_max)| GpuRay {
+                direction: d.to_array(),
+                t_max,
+                any_hit: 1,
+                ..ray
+            }));
+            rays.resize((i + 1) * SEGMENT_BATCH as usize, ray);
+        }
+        if self.segments.is_none() {
+            let source = composed_shader(false)?;
+            self.segments = Some(self.ctx.compute_kernel(&source, "trace_segments")?);
+        }
+        let kernel = self.segments.as_ref().expect("compiled above");
+        let hits = self.dispatch_rays(kernel, &rays, batches.len() as u32)?;
+        Ok(batches
+            .iter()
+            .zip(hits.chunks_exact(SEGMENT_BATCH as usize))
+            .map(|((_, segments), hits)| {
+                (0..segments.len())
+                    .filter(|&j| hits[j].triangle == GpuHit::MISS)
+                    .fold(0, |mask, j| mask | 1 << j)
+            })
+            .collect())
+    }
+
+    /// Runs `kernel` (`trace_rays` or `trace_segments`, bindings 1, 2, 9 and 10) over
+    /// `invocations` invocations with `rays` and reads back one hit per ray.
+    fn dispatch_rays(
+        &self,
+        kernel: &ComputeKernel,
+        rays: &[GpuRay],
+        invocations: u32,
+    ) -> Result<Vec<GpuHit>> {
         let scene = self.scene()?;
-        let groups = (rays.len() as u32).div_ceil(RAY_GROUP).max(1);
+        let groups = invocations.div_ceil(RAY_GROUP).max(1);
         let max_groups = self
             .ctx
             .device()
@@ -1248,8 +1320,8 @@ impl GpuTracer {
         let queries = self.ctx.storage_buffer("mcg-demo rays", rays);
         let hits: GpuBuffer<GpuHit> = self.ctx.zeroed_buffer("mcg-demo hits", rays.len());
         let bind_group = self.bind_group(
-            self.rays.entry_point(),
-            self.rays.bind_group_layout(),
+            kernel.entry_point(),
+            kernel.bind_group_layout(),
             &[1, 2, 9, 10],
             &[
                 scene.nodes.raw(),
@@ -1264,7 +1336,7 @@ impl GpuTracer {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
-            pass.set_pipeline(self.rays.pipeline());
+            pass.set_pipeline(kernel.pipeline());
             pass.set_bind_group(0, &bind_group, &[]);
             pass.dispatch_workgroups(groups, 1, 1);
         }
@@ -1274,7 +1346,7 @@ impl GpuTracer {
     }
 
     /// A bind group of group 0 with `layout`, `buffers` at the WGSL `bindings`: `render` uses
-    /// 0–8, `trace_rays` 1, 2, 9 and 10.
+    /// 0–8, `trace_rays` and `trace_segments` 1, 2, 9 and 10.
     fn bind_group(
         &self,
         label: &str,
@@ -1458,7 +1530,19 @@ mod tests {
             .iter()
             .map(|e| e.name.as_str())
             .collect();
-        assert_eq!(names, ["render", "trace_rays"]);
+        assert_eq!(names, ["render", "trace_rays", "trace_segments"]);
+        let batch = module
+            .constants
+            .iter()
+            .find(|(_, c)| c.name.as_deref() == Some("EMISSION_BATCH"))
+            .map(|(_, c)| &module.global_expressions[c.init]);
+        assert!(
+            matches!(
+                batch,
+                Some(naga::Expression::Literal(naga::Literal::U32(SEGMENT_BATCH)))
+            ),
+            "the WGSL EMISSION_BATCH is SEGMENT_BATCH: {batch:?}"
+        );
         assert_eq!((tracer, guide), (8, 0), "render binds 1–8 as storage");
         for lights in [false, true] {
             let (_, tracer, guide) = validate(&composed_mcpg_shader(lights).unwrap());

@@ -232,17 +232,19 @@ fn bvh_walk(origin: vec3<f32>, direction: vec3<f32>, t_min: f32, t_max: f32,
     return bvh_walk_tree(0u, false, origin, direction, t_min, t_max, any_hit);
 }
 
+// 1/d with zero components replaced by a tiny signed value: the CPU's ±∞ times a zero slab
+// distance is NaN, which GPUs compare inconsistently.
+fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
+    let tiny = vec3<f32>(1e-30);
+    return 1.0 / select(d, select(tiny, -tiny, d < vec3<f32>(0.0)), abs(d) < tiny);
+}
+
 // `bvh_walk` in the tree whose root is `nodes[root]` (0: the scene's; `params.emitter_root`:
 // the emitters', `gpu::joined_trees`), with `front_only` hitting front faces only.
 fn bvh_walk_tree(root: u32, front_only: bool, origin: vec3<f32>, direction: vec3<f32>,
                  t_min: f32, t_max: f32, any_hit: bool) -> RayHit {
     var best = RayHit(t_max, NO_HIT, 0.0, 0.0);
-    // 1/d with zero components replaced by a tiny signed value: the CPU's ±∞ times a zero
-    // slab distance is NaN, which GPUs compare inconsistently.
-    let tiny = vec3<f32>(1e-30);
-    let safe = select(direction, select(tiny, -tiny, direction < vec3<f32>(0.0)),
-                      abs(direction) < tiny);
-    let inv = 1.0 / safe;
+    let inv = safe_inverse(direction);
     // `Bvh::walk`: front-face queries (emission from the emitters' small tree, which most of
     // their rays miss) test the root's box first.
     if front_only && box_entry(nodes[root], origin, inv, t_min, best.t) >= FAR {
@@ -286,6 +288,71 @@ fn bvh_walk_tree(root: u32, front_only: bool, origin: vec3<f32>, direction: vec3
         }
     }
     return best;
+}
+
+// The segments of one `emission_batch` (`EMISSION_BATCH` at most): a direction in .xyz and the
+// distance to the emitter it meets in .w.
+struct Segments {
+    ray: array<vec4<f32>, EMISSION_BATCH>,
+    // The emitting triangle at the end of each segment.
+    triangle: array<u32, EMISSION_BATCH>,
+}
+
+// The first `n` segments of `s` from `origin` walked for occlusion (`bvh_walk(origin, d, 0.0,
+// t, true)` each, the CPU's test in `cpu::emission_along`) in one traversal loop that moves
+// on to the next segment when a walk ends: a SIMD group (a GPU's warp, llvmpipe's lanes) then
+// runs as many steps as its busiest invocation's segments take together, where a walk per
+// segment costs, segment after segment, the longest walk of any invocation. Bit j of the
+// result is set when segment j is unoccluded.
+fn unoccluded_segments(origin: vec3<f32>, s: ptr<function, Segments>, n: u32) -> u32 {
+    var visible = 0u;
+    var stack: array<u32, STACK_SIZE>;
+    var top = 0u;
+    // The segment being walked; n once all are.
+    var r = 0u;
+    var d = vec3<f32>(0.0);
+    var inv = vec3<f32>(0.0);
+    var t_max = 0.0;
+    loop {
+        if top == 0u {
+            if r >= n {
+                break;
+            }
+            d = (*s).ray[r].xyz;
+            t_max = (*s).ray[r].w;
+            inv = safe_inverse(d);
+            stack[0] = 0u;
+            top = 1u;
+            visible |= 1u << r;
+        }
+        top -= 1u;
+        let node = nodes[stack[top]];
+        if node.count > 0u {
+            for (var i = node.index; i < node.index + node.count; i++) {
+                if triangle_intersect(triangles[i], origin, d, 0.0, t_max, false).w > 0.0 {
+                    visible &= ~(1u << r);
+                    top = 0u;
+                    break;
+                }
+            }
+        } else {
+            let a = node.index;
+            let ta = box_entry(nodes[a], origin, inv, 0.0, t_max);
+            let tb = box_entry(nodes[a + 1u], origin, inv, 0.0, t_max);
+            let a_first = ta <= tb;
+            if max(ta, tb) < FAR && top < STACK_SIZE {
+                stack[top] = select(a, a + 1u, a_first);
+                top += 1u;
+            }
+            if min(ta, tb) < FAR && top < STACK_SIZE {
+                stack[top] = select(a + 1u, a, a_first);
+                top += 1u;
+            }
+        }
+        // This segment's walk ended: the next one starts in the next step.
+        r += u32(top == 0u);
+    }
+    return visible;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -604,6 +671,9 @@ fn emission_samples(depth: u32) -> u32 {
     return params.emission_counts[d / 4u][d % 4u];
 }
 
+// The emission-only directions whose shadow rays are walked together (`unoccluded_segments`).
+const EMISSION_BATCH: u32 = 8u;
+
 // `cpu::EMISSION_LATTICE`: the generator of the R3 lattice (1/φ₃, 1/φ₃², 1/φ₃³).
 const EMISSION_LATTICE: vec3<f32> = vec3<f32>(0.8191725, 0.6710436, 0.5497005);
 
@@ -618,16 +688,6 @@ fn emission_uniforms(first: vec3<f32>, i: u32) -> vec3<f32> {
 // (`gpu::moment_entries`), NO_MOMENTS for a pixel that records none.
 var<private> moment_base: u32;
 const NO_MOMENTS: u32 = 0xffffffffu;
-
-// `cpu::emission_along`: the emission a ray from `origin` along `d` finds first, as the
-// nearest emitter facing the ray (the emitters' tree) that nothing blocks.
-fn emission_along(origin: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
-    let e = bvh_walk_tree(params.emitter_root, true, origin, d, 0.0, FAR, false);
-    if e.triangle == NO_HIT || bvh_walk(origin, d, 0.0, e.t, true).triangle != NO_HIT {
-        return vec3<f32>(0.0);
-    }
-    return materials[triangles[e.triangle].material].emission;
-}
 
 // `cpu::light_sample` before its MIS weight, which the caller applies against the density of
 // its own direction sampler (the material's, or the guide's mixture for `mcpg-nee`).
@@ -767,20 +827,40 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
             // `EmissionMoments::add_direction`'s sums of the directions' luminance.
             var first = 0.0;
             var second = 0.0;
-            for (var i = 0u; i < count; i++) {
-                let ue = emission_uniforms(vec3<f32>(ul, u1, u2), i);
-                let wi = guided_mixture_direction(&open, vertex, ue);
-                let emitted = emission_along(origin_next, wi);
-                if any(emitted > vec3<f32>(0.0)) {
-                    let p = mcpg_pdf_with(&open, wi, material_pdf(material, normal, -d, wi));
-                    if p > 0.0 {
-                        let value = throughput * material_eval(material, normal, -d, wi) / p
-                            * emitted;
-                        radiance += share * value;
-                        let l = luminance(value);
-                        if mcg_is_finite(l) {
-                            first += l;
-                            second += l * l;
+            // In batches: the directions and their emitters first, then their shadow rays in
+            // one walk, then the density and material of the unoccluded ones only (a SIMD
+            // group runs every block of its invocations, llvmpipe even those none takes).
+            var i = 0u;
+            while i < count {
+                let end = min(i + EMISSION_BATCH, count);
+                var segments: Segments;
+                var n = 0u;
+                for (; i < end; i++) {
+                    let ue = emission_uniforms(vec3<f32>(ul, u1, u2), i);
+                    let wi = guided_mixture_direction(&open, vertex, ue);
+                    let e = bvh_walk_tree(params.emitter_root, true, origin_next, wi, 0.0, FAR,
+                                          false);
+                    if e.triangle != NO_HIT {
+                        segments.ray[n] = vec4<f32>(wi, e.t);
+                        segments.triangle[n] = e.triangle;
+                        n += 1u;
+                    }
+                }
+                let visible = unoccluded_segments(origin_next, &segments, n);
+                for (var j = 0u; j < n; j++) {
+                    let wi = segments.ray[j].xyz;
+                    let emitted = materials[triangles[segments.triangle[j]].material].emission;
+                    if (visible & (1u << j)) != 0u && any(emitted > vec3<f32>(0.0)) {
+                        let p = mcpg_pdf_with(&open, wi, material_pdf(material, normal, -d, wi));
+                        if p > 0.0 {
+                            let value = throughput * material_eval(material, normal, -d, wi) / p
+                                * emitted;
+                            radiance += share * value;
+                            let l = luminance(value);
+                            if mcg_is_finite(l) {
+                                first += l;
+                                second += l * l;
+                            }
                         }
                     }
                 }
@@ -888,6 +968,33 @@ fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>) {
     let r = rays[id.x];
     ray_hits[id.x] = bvh_walk_tree(r.root, r.front_only != 0u, r.origin, r.direction, 0.0,
                                    r.t_max, r.any_hit != 0u);
+}
+
+// `GpuTracer::unoccluded_segments`: invocation i walks, with `unoccluded_segments`, the leading
+// rays of rays[8i … 8i + 7] whose `any_hit` is 1, as segments from the first one's origin;
+// `ray_hits[8i + j].triangle` is 0 when segment j is occluded, NO_HIT when it is not.
+@compute @workgroup_size(64)
+fn trace_segments(@builtin(global_invocation_id) id: vec3<u32>) {
+    let first = id.x * EMISSION_BATCH;
+    let count = arrayLength(&rays);
+    if first >= count {
+        return;
+    }
+    var segments: Segments;
+    var n = 0u;
+    for (var j = 0u; j < EMISSION_BATCH && first + j < count; j++) {
+        let r = rays[first + j];
+        if r.any_hit != 1u {
+            break;
+        }
+        segments.ray[j] = vec4<f32>(r.direction, r.t_max);
+        n += 1u;
+    }
+    let visible = unoccluded_segments(rays[first].origin, &segments, n);
+    for (var j = 0u; j < n; j++) {
+        let hit = select(0u, NO_HIT, ((visible >> j) & 1u) != 0u);
+        ray_hits[first + j] = RayHit(segments.ray[j].w, hit, 0.0, 0.0);
+    }
 }
 
 #ifdef MCG_DEMO_PROBE_GI
