@@ -232,6 +232,12 @@ fn bvh_walk(origin: vec3<f32>, direction: vec3<f32>, t_min: f32, t_max: f32,
     return bvh_walk_tree(0u, false, origin, direction, t_min, t_max, any_hit);
 }
 
+// The walks' node stack (`bvh_walk_tree`, `unoccluded_segments`; they never nest). A private
+// variable is zero-initialised once per invocation, where a function's `var` array is
+// zero-initialised on every call (WGSL's rule), which llvmpipe executes as STACK_SIZE stores
+// per walk.
+var<private> walk_stack: array<u32, STACK_SIZE>;
+
 // 1/d with zero components replaced by a tiny signed value: the CPU's ±∞ times a zero slab
 // distance is NaN, which GPUs compare inconsistently.
 fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
@@ -250,12 +256,11 @@ fn bvh_walk_tree(root: u32, front_only: bool, origin: vec3<f32>, direction: vec3
     if front_only && box_entry(nodes[root], origin, inv, t_min, best.t) >= FAR {
         return best;
     }
-    var stack: array<u32, STACK_SIZE>;
-    stack[0] = root;
+    walk_stack[0] = root;
     var top = 1u;
     while top > 0u {
         top -= 1u;
-        let node = nodes[stack[top]];
+        let node = nodes[walk_stack[top]];
         if node.count > 0u {
             for (var i = node.index; i < node.index + node.count; i++) {
                 let h = triangle_intersect(triangles[i], origin, direction, t_min, best.t,
@@ -279,11 +284,11 @@ fn bvh_walk_tree(root: u32, front_only: bool, origin: vec3<f32>, direction: vec3
         let t_near = min(ta, tb);
         let t_far = max(ta, tb);
         if t_far < FAR && top < STACK_SIZE {
-            stack[top] = far;
+            walk_stack[top] = far;
             top += 1u;
         }
         if t_near < FAR && top < STACK_SIZE {
-            stack[top] = near;
+            walk_stack[top] = near;
             top += 1u;
         }
     }
@@ -306,7 +311,6 @@ struct Segments {
 // result is set when segment j is unoccluded.
 fn unoccluded_segments(origin: vec3<f32>, s: ptr<function, Segments>, n: u32) -> u32 {
     var visible = 0u;
-    var stack: array<u32, STACK_SIZE>;
     var top = 0u;
     // The segment being walked; n once all are.
     var r = 0u;
@@ -321,12 +325,12 @@ fn unoccluded_segments(origin: vec3<f32>, s: ptr<function, Segments>, n: u32) ->
             d = (*s).ray[r].xyz;
             t_max = (*s).ray[r].w;
             inv = safe_inverse(d);
-            stack[0] = 0u;
+            walk_stack[0] = 0u;
             top = 1u;
             visible |= 1u << r;
         }
         top -= 1u;
-        let node = nodes[stack[top]];
+        let node = nodes[walk_stack[top]];
         if node.count > 0u {
             for (var i = node.index; i < node.index + node.count; i++) {
                 if triangle_intersect(triangles[i], origin, d, 0.0, t_max, false).w > 0.0 {
@@ -341,11 +345,11 @@ fn unoccluded_segments(origin: vec3<f32>, s: ptr<function, Segments>, n: u32) ->
             let tb = box_entry(nodes[a + 1u], origin, inv, 0.0, t_max);
             let a_first = ta <= tb;
             if max(ta, tb) < FAR && top < STACK_SIZE {
-                stack[top] = select(a, a + 1u, a_first);
+                walk_stack[top] = select(a, a + 1u, a_first);
                 top += 1u;
             }
             if min(ta, tb) < FAR && top < STACK_SIZE {
-                stack[top] = select(a + 1u, a, a_first);
+                walk_stack[top] = select(a + 1u, a, a_first);
                 top += 1u;
             }
         }
