@@ -295,21 +295,25 @@ fn bvh_walk_tree(root: u32, front_only: bool, origin: vec3<f32>, direction: vec3
     return best;
 }
 
-// The segments of one `emission_batch` (`EMISSION_BATCH` at most): a direction in .xyz and the
-// distance to the emitter it meets in .w.
+// The segments of one batch of emission-only directions (`EMISSION_BATCH` at most): a
+// direction in .xyz and the distance to the emitter it meets in .w.
 struct Segments {
     ray: array<vec4<f32>, EMISSION_BATCH>,
     // The emitting triangle at the end of each segment.
     triangle: array<u32, EMISSION_BATCH>,
 }
 
-// The first `n` segments of `s` from `origin` walked for occlusion (`bvh_walk(origin, d, 0.0,
+// The batch being walked: private, as `walk_stack`, so that it is not zero-initialised at
+// every vertex.
+var<private> segments: Segments;
+
+// The first `n` of `segments` from `origin` walked for occlusion (`bvh_walk(origin, d, 0.0,
 // t, true)` each, the CPU's test in `cpu::emission_along`) in one traversal loop that moves
 // on to the next segment when a walk ends: a SIMD group (a GPU's warp, llvmpipe's lanes) then
 // runs as many steps as its busiest invocation's segments take together, where a walk per
 // segment costs, segment after segment, the longest walk of any invocation. Bit j of the
 // result is set when segment j is unoccluded.
-fn unoccluded_segments(origin: vec3<f32>, s: ptr<function, Segments>, n: u32) -> u32 {
+fn unoccluded_segments(origin: vec3<f32>, n: u32) -> u32 {
     var visible = 0u;
     var top = 0u;
     // The segment being walked; n once all are.
@@ -322,8 +326,8 @@ fn unoccluded_segments(origin: vec3<f32>, s: ptr<function, Segments>, n: u32) ->
             if r >= n {
                 break;
             }
-            d = (*s).ray[r].xyz;
-            t_max = (*s).ray[r].w;
+            d = segments.ray[r].xyz;
+            t_max = segments.ray[r].w;
             inv = safe_inverse(d);
             walk_stack[0] = 0u;
             top = 1u;
@@ -512,22 +516,25 @@ fn material_scatter_sample(m: Material, n: vec3<f32>, wo: vec3<f32>, u: vec2<f32
 }
 
 #ifdef MCG_DEMO_MCPG
+// `guided_begin`'s uniforms (private: not zero-initialised at every vertex).
+var<private> begin_uniforms: McpgBeginUniforms;
+
 // MCPG (Alber et al. 2025) at a vertex, the twin of `guided::McpgSampler`: `mcpg_begin` (Alg. 1)
-// with four uniforms per candidate from the guide's own stream `grng`, then Alg. 2 with the
-// material as the fallback technique (`MCPG_SCATTER_CUSTOM`: `mcpg_choose`, the chosen lobe or
-// `material_scatter_sample`, and the exact mixture density of MCPG eq. 6-7 from
-// `mcpg_pdf_with` and the material's pdf).
-fn guided_begin(v: Vertex, grng: ptr<function, u32>) -> McpgGuidedVertex {
-    var u: McpgBeginUniforms;
+// into `g` (`mcpg_begin_at`, the path's one begun vertex) with four uniforms per candidate from
+// the guide's own stream `grng`, then Alg. 2 with the material as the fallback technique
+// (`MCPG_SCATTER_CUSTOM`: `mcpg_choose`, the chosen lobe or `material_scatter_sample`, and the
+// exact mixture density of MCPG eq. 6-7 from `mcpg_pdf_with` and the material's pdf).
+fn guided_begin(v: Vertex, g: ptr<function, McpgGuidedVertex>, grng: ptr<function, u32>) {
     let count = min(mcpg_params.candidates, MCPG_MAX_CANDIDATES);
     for (var k = 0u; k < count; k++) {
         let grid = mcg_rng_uniform(grng);
         let level = mcg_rng_uniform(grng);
         let corner = mcg_rng_uniform(grng);
         let reservoir = mcg_rng_uniform(grng);
-        u.candidates[k] = vec4<f32>(grid, level, corner, reservoir);
+        begin_uniforms.candidates[k] = vec4<f32>(grid, level, corner, reservoir);
     }
-    return mcpg_begin(McpgVertex(v.position, MCPG_SCATTER_CUSTOM, v.normal, 1u, v.normal), u);
+    mcpg_begin_at(McpgVertex(v.position, MCPG_SCATTER_CUSTOM, v.normal, 1u, v.normal),
+                  begin_uniforms, g);
 }
 
 // Alg. 2 at the begun vertex `g` from the path's three uniforms (ξ against p_bsdf, then the
@@ -811,7 +818,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
         let uz = mcg_rng_uniform(rng);
 #ifdef MCG_DEMO_MCPG
         // The direction before the light sample, whose MIS weight needs the guide's density.
-        open = guided_begin(vertex, &grng);
+        guided_begin(vertex, &open, &grng);
         open_sample = guided_sample(&open, vertex, vec3<f32>(ux, uy, uz));
         if samples_lights() {
             let l = light_sample(vertex, origin_next, vec3<f32>(ul, u1, u2));
@@ -837,7 +844,6 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
             var i = 0u;
             while i < count {
                 let end = min(i + EMISSION_BATCH, count);
-                var segments: Segments;
                 var n = 0u;
                 for (; i < end; i++) {
                     let ue = emission_uniforms(vec3<f32>(ul, u1, u2), i);
@@ -850,7 +856,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
                         n += 1u;
                     }
                 }
-                let visible = unoccluded_segments(origin_next, &segments, n);
+                let visible = unoccluded_segments(origin_next, n);
                 for (var j = 0u; j < n; j++) {
                     let wi = segments.ray[j].xyz;
                     let emitted = materials[triangles[segments.triangle[j]].material].emission;
@@ -984,7 +990,6 @@ fn trace_segments(@builtin(global_invocation_id) id: vec3<u32>) {
     if first >= count {
         return;
     }
-    var segments: Segments;
     var n = 0u;
     for (var j = 0u; j < EMISSION_BATCH && first + j < count; j++) {
         let r = rays[first + j];
@@ -994,7 +999,7 @@ fn trace_segments(@builtin(global_invocation_id) id: vec3<u32>) {
         segments.ray[j] = vec4<f32>(r.direction, r.t_max);
         n += 1u;
     }
-    let visible = unoccluded_segments(rays[first].origin, &segments, n);
+    let visible = unoccluded_segments(rays[first].origin, n);
     for (var j = 0u; j < n; j++) {
         let hit = select(0u, NO_HIT, ((visible >> j) & 1u) != 0u);
         ray_hits[first + j] = RayHit(segments.ray[j].w, hit, 0.0, 0.0);

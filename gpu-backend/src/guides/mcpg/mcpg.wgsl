@@ -434,19 +434,34 @@ fn mcpg_product_lobe(a: Vmf, b: Vmf) -> Vmf {
 // every candidate's lobe built once. A non-finite position loads nothing.
 fn mcpg_begin(vertex: McpgVertex, u: McpgBeginUniforms) -> McpgGuidedVertex {
     var v: McpgGuidedVertex;
-    v.vertex = vertex;
-    v.selected = MCPG_NO_LOBE;
-    v.normal_class = hashgrid_normal_class(vertex.key_direction);
+    mcpg_begin_at(vertex, u, &v);
+    return v;
+}
+
+// `mcpg_begin` written into `*v`, a vertex the caller keeps (e.g. one per path, reused at each
+// of its vertices): no copy of the vertex out, and only what the vertex reads is reset. A
+// candidate's lobe and normalisation are read only where its share is > 0, so they are left
+// as they were elsewhere.
+fn mcpg_begin_at(vertex: McpgVertex, u: McpgBeginUniforms, v: ptr<function, McpgGuidedVertex>) {
+    (*v).vertex = vertex;
+    (*v).selected = MCPG_NO_LOBE;
+    (*v).normal_class = hashgrid_normal_class(vertex.key_direction);
     let x = vertex.position;
-    v.target_level = hashgrid_target_level(mcpg_params.levels, distance(mcpg_params.camera, x));
+    (*v).target_level = hashgrid_target_level(mcpg_params.levels, distance(mcpg_params.camera, x));
+    (*v).count = 0u;
+    (*v).weight_sum = 0.0;
+    (*v).scatter_share = 0.0;
+    (*v).static_mask = 0u;
+    (*v).chosen = MarkovGridState();
     let count = min(mcpg_params.candidates, MCPG_MAX_CANDIDATES);
     for (var k = 0u; k < MCPG_MAX_CANDIDATES; k += 1u) {
-        v.slots[k] = HASHGRID_NO_SLOT;
+        (*v).slots[k] = HASHGRID_NO_SLOT;
+        (*v).shares[k] = 0.0;
     }
     if !mcg_is_finite3(x) {
-        return v;
+        return;
     }
-    v.count = count;
+    (*v).count = count;
     let frame = mcpg_frame();
     let now = f32(frame);
     let touch = mcpg_params.age_tracking != 0u;
@@ -464,35 +479,35 @@ fn mcpg_begin(vertex: McpgVertex, u: McpgBeginUniforms) -> McpgGuidedVertex {
     var young_counts: array<u32, 8>;
     for (var k = 0u; k < count; k += 1u) {
         let c = u.candidates[k];
-        let key = mcpg_key(x, v.normal_class, v.target_level, c.x, c.y, c.z);
+        let key = mcpg_key(x, (*v).normal_class, (*v).target_level, c.x, c.y, c.z);
         let slot = mcpg_find(mcpg_table(key.is_static), key.key, touch, frame);
         var state: MarkovGridState;
         var collided = true;
         if slot != HASHGRID_NO_SLOT && mcpg_load_state(key.is_static, slot, &state) {
             collided = false;
-            v.slots[k] = slot;
-            v.static_mask |= select(0u, 1u << k, key.is_static);
+            (*v).slots[k] = slot;
+            (*v).static_mask |= select(0u, 1u << k, key.is_static);
         }
         let candidate = mcpg_prepare_candidate(state, collided, key.is_static, x, vertex, now);
         // `Reservoir::offer`: Σw̄ saturates at f32::MAX; weight 0 is never taken.
         let w = markov_grid_state_resampling_weight(candidate);
-        v.weight_sum = min(v.weight_sum + w, MCG_F32_MAX);
-        if w > 0.0 && c.w * v.weight_sum < w {
-            v.selected = k;
-            v.chosen = candidate;
+        (*v).weight_sum = min((*v).weight_sum + w, MCG_F32_MAX);
+        if w > 0.0 && c.w * (*v).weight_sum < w {
+            (*v).selected = k;
+            (*v).chosen = candidate;
         }
         if !(w > 0.0) {
             continue;
         }
-        v.shares[k] = w;
+        (*v).shares[k] = w;
         young_counts[k] = markov_grid_state_sample_count(candidate);
         var lobe: Vmf;
         if markov_grid_state_lobe(candidate, x, mcpg_distance_prior(candidate, x), &lobe) {
             if has_cosine {
                 lobe = mcpg_product_lobe(lobe, cosine);
             }
-            v.lobes[k] = lobe;
-            v.normalizations[k] = vmf_normalization(lobe.kappa);
+            (*v).lobes[k] = lobe;
+            (*v).normalizations[k] = vmf_normalization(lobe.kappa);
         } else {
             lobeless |= 1u << k;
         }
@@ -501,23 +516,22 @@ fn mcpg_begin(vertex: McpgVertex, u: McpgBeginUniforms) -> McpgGuidedVertex {
     // read at constant indices (a loop over N_mc made the whole guide 1.3x slower on llvmpipe).
     // A young candidate lends the part `mcpg_young_share` of its share to the scatter
     // technique (`confidence_samples`, mcg's extension; 0 without it).
-    let total = v.weight_sum;
+    let total = (*v).weight_sum;
     for (var k = 0u; k < MCPG_MAX_CANDIDATES; k += 1u) {
-        let w = v.shares[k];
+        let w = (*v).shares[k];
         if !(w > 0.0) {
             continue;
         }
         let share = w / total;
         if (lobeless & (1u << k)) != 0u {
-            v.scatter_share += share;
-            v.shares[k] = 0.0;
+            (*v).scatter_share += share;
+            (*v).shares[k] = 0.0;
         } else {
             let young = mcpg_young_share(young_counts[k]);
-            v.scatter_share += share * young;
-            v.shares[k] = share * (1.0 - young);
+            (*v).scatter_share += share * young;
+            (*v).shares[k] = share * (1.0 - young);
         }
     }
-    return v;
 }
 
 // `McpgParams::young_share`: the part of a state's mixture share that goes to the scatter
