@@ -15,7 +15,7 @@
 //! 4. the median frame time of each method and device.
 //!
 //! Every method runs on the CPU, and again on the GPU when the report's device list
-//! ([`super::guided_rendering::devices`]: hardware adapters only, unless `MCG_REPORT_GPU=1`)
+//! ([`super::guided_rendering::devices`]: any wgpu adapter, unless `MCG_REPORT_GPU=0`)
 //! has one; the GPU's runs are labelled `<method> (gpu)`.
 
 use std::path::PathBuf;
