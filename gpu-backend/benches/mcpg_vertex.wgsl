@@ -8,7 +8,7 @@
 #import mcg::dispatch::mcg_invocation_index
 #import mcg::sampling::{mcg_cosine_hemisphere_sample, mcg_pcg_hash, mcg_rng_uniform}
 #import mcg::mcpg::{
-    McpgBeginUniforms, McpgFinishUniforms, McpgSampleUniforms, mcpg_begin, mcpg_finish,
+    McpgBeginUniforms, McpgFinishUniforms, McpgGuidedVertex, McpgSampleUniforms, mcpg_begin_at, mcpg_finish,
     mcpg_frame, mcpg_observation_escaped, mcpg_observation_hit, mcpg_sample, mcpg_surface_vertex
 }
 
@@ -43,7 +43,8 @@ fn guided_vertex(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_work
     for (var k = 0u; k < 8u; k += 1u) {
         u.candidates[k] = vec4<f32>(mcg_rng_uniform(&rng), mcg_rng_uniform(&rng), mcg_rng_uniform(&rng), mcg_rng_uniform(&rng));
     }
-    var v = mcpg_begin(mcpg_surface_vertex(x, n), u);
+    var v: McpgGuidedVertex;
+    mcpg_begin_at(mcpg_surface_vertex(x, n), u, &v);
     let choice = mcg_rng_uniform(&rng);
     let s = mcpg_sample(&v, McpgSampleUniforms(choice, vec2<f32>(mcg_rng_uniform(&rng), mcg_rng_uniform(&rng))));
     let cos = max(dot(n, s.direction), 0.0);

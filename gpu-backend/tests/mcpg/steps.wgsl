@@ -1,13 +1,15 @@
 // A renderer's own kernel using the MCPG guide: its I/O at group 0, the guide at group 1
 // (composed with `GpuMcpgGuide::shader_defs(1)`). One guided vertex per input: begin, sample,
-// the pdf at a probe direction, and (except in `mcpg_sample_only`) finish.
+// the pdf at a probe direction, and (except in `mcpg_sample_only`) finish. The serial kernel
+// begins every input's vertex into the same variable (`mcpg_begin_at`, as a tracer reuses its
+// path's vertex), so what one vertex leaves there must not reach the next.
 
 #import mcg::constants::{MCG_WORKGROUP_SIZE, MCPG_NO_LOBE}
 #import mcg::dispatch::mcg_invocation_index
 #import mcg::markov::MarkovGridState
 #import mcg::mcpg::{
     McpgBeginUniforms, McpgFinishUniforms, McpgGuidedVertex, McpgObservation, McpgSampleUniforms,
-    McpgVertex, mcpg_begin, mcpg_choose_mixture, mcpg_finish, mcpg_load_state, mcpg_pdf,
+    McpgVertex, mcpg_begin_at, mcpg_choose_mixture, mcpg_finish, mcpg_load_state, mcpg_pdf,
     mcpg_sample, mcpg_sample_lobe, mcpg_scatter_sample, mcpg_store_state, mcpg_volume_vertex
 }
 
@@ -42,28 +44,29 @@ struct StepOutput {
 @group(0) @binding(0) var<storage, read> inputs: array<StepInput>;
 @group(0) @binding(1) var<storage, read_write> outputs: array<StepOutput>;
 
-fn step(i: u32, finish: bool) {
+fn step(i: u32, finish: bool, v: ptr<function, McpgGuidedVertex>) {
     let input = inputs[i];
-    var v = mcpg_begin(input.vertex, input.begin);
-    let s = mcpg_sample(&v, McpgSampleUniforms(input.sample.x, input.sample.yz));
+    mcpg_begin_at(input.vertex, input.begin, v);
+    let s = mcpg_sample(v, McpgSampleUniforms(input.sample.x, input.sample.yz));
     let probe = input.cache_and_probe.yzw;
-    let k = mcpg_choose_mixture(&v, input.sample.x);
-    var mixture = mcpg_scatter_sample(&v, input.sample.yz);
+    let k = mcpg_choose_mixture(v, input.sample.x);
+    var mixture = mcpg_scatter_sample(v, input.sample.yz);
     if k != MCPG_NO_LOBE {
-        mixture = mcpg_sample_lobe(&v, k, input.sample.yz);
+        mixture = mcpg_sample_lobe(v, k, input.sample.yz);
     }
-    var out = StepOutput(s.direction, s.pdf, mcpg_pdf(&v, probe), s.lobe, v.selected, 0xffffffffu, v.weight_sum, v.count, v.target_level, v.normal_class, mixture, k);
+    var out = StepOutput(s.direction, s.pdf, mcpg_pdf(v, probe), s.lobe, (*v).selected, 0xffffffffu, (*v).weight_sum, (*v).count, (*v).target_level, (*v).normal_class, mixture, k);
     if finish {
         let f = input.finish;
-        out.transition = mcpg_finish(&v, s, input.observation, McpgFinishUniforms(f.x, f.y, f.z, f.w, input.cache_and_probe.x));
+        out.transition = mcpg_finish(v, s, input.observation, McpgFinishUniforms(f.x, f.y, f.z, f.w, input.cache_and_probe.x));
     }
     outputs[i] = out;
 }
 
 @compute @workgroup_size(1)
 fn mcpg_steps_serial() {
+    var v: McpgGuidedVertex;
     for (var i = 0u; i < arrayLength(&inputs); i += 1u) {
-        step(i, true);
+        step(i, true, &v);
     }
 }
 
@@ -71,7 +74,8 @@ fn mcpg_steps_serial() {
 fn mcpg_steps_parallel(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = mcg_invocation_index(id, groups);
     if i < arrayLength(&inputs) {
-        step(i, true);
+        var v: McpgGuidedVertex;
+        step(i, true, &v);
     }
 }
 
@@ -79,7 +83,8 @@ fn mcpg_steps_parallel(@builtin(global_invocation_id) id: vec3<u32>, @builtin(nu
 fn mcpg_sample_only(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = mcg_invocation_index(id, groups);
     if i < arrayLength(&inputs) {
-        step(i, false);
+        var v: McpgGuidedVertex;
+        step(i, false, &v);
     }
 }
 

@@ -12,6 +12,11 @@
 //! mcpg_finish(&v, s, mcpg_observation_hit(y, n_y, emitted, weight), finish_uniforms); // Alg. 3
 //! ```
 //!
+//! `mcpg_begin` returns the vertex by value, which WGSL zero-initialises and copies (a few hundred
+//! bytes); a tracer that keeps one vertex per path and begins into it at each bounce calls
+//! `mcpg_begin_at(vertex, u, &v)` instead (the same vertex, 15 % off the bench's guided kernel
+//! on lavapipe, `benches/README.md`).
+//!
 //! A tracer that also samples its lights and weights the emission `s.direction` hit by MIS
 //! sets `obs.emission_weight` on the observation to that weight before `mcpg_finish` (the
 //! chain then learns only the share its direction carries; `VertexObservation::emission_weight`).
