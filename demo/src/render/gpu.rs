@@ -81,6 +81,16 @@ pub const MCPG_DEF: &str = "MCG_DEMO_MCPG";
 /// real GPU skips the branch but still allocates registers for it.)
 pub const LIGHTS_DEF: &str = "MCG_DEMO_LIGHTS";
 
+/// The shader def of the guided pipelines for paths of at most [`HELD_VERTICES`] bounces:
+/// every vertex waits for the end of its path and all are finished after the path's loop,
+/// through one call site (without it, a vertex past the first two held is finished inside
+/// the loop, whose finish code a SIMD group then runs at every bounce: llvmpipe's `mcpg`
+/// frames are 5 % shorter with it).
+pub const HOLD_ALL_DEF: &str = "MCG_DEMO_HOLD_ALL";
+
+/// The vertices a path holds under [`HOLD_ALL_DEF`] (the WGSL `HeldVertex` records).
+pub const HELD_VERTICES: u32 = 3;
+
 /// The shader def that compiles `render_mcmm`, MCMM at group [`GUIDE_GROUP`].
 pub const MCMM_DEF: &str = "MCG_DEMO_MCMM";
 
@@ -180,8 +190,9 @@ pub struct GpuParams {
     /// holds it after the scene's ([`joined_trees`]).
     pub emitter_root: u32,
     /// 1 when `mcpg`'s chains learn the radiance reflected at the next hit from the path
-    /// ([`Reflected::Path`]: the GPU tracer then finishes the first two vertices of a path at
-    /// its end), 0 from the irradiance cache at every vertex ([`Reflected::Cache`]).
+    /// ([`Reflected::Path`]: the GPU tracer then finishes a path's vertices at its end, the
+    /// first two of a path deeper than [`HELD_VERTICES`]), 0 from the irradiance cache at
+    /// every vertex ([`Reflected::Cache`]).
     pub mcpg_reflected: u32,
     /// Padding to the array's 16-byte alignment.
     pub pad: u32,
@@ -401,6 +412,9 @@ pub struct GpuTracer {
     mcpg_moments: Option<EmissionMoments>,
     /// The compiled `mcpg` shader, kept for rebuilding its pipeline with a new guide.
     guided_module: Option<wgpu::ShaderModule>,
+    /// Whether the guided shaders are compiled with [`HOLD_ALL_DEF`] (for paths of at most
+    /// [`HELD_VERTICES`] bounces; rebuilt when a frame's bounces cross it).
+    guided_hold_all: bool,
     /// `nee`'s `render` ([`LIGHTS_DEF`]), compiled on its first frame.
     nee: Option<ComputeKernel>,
     /// `trace_segments`, compiled on the first [`GpuTracer::unoccluded_segments`].
@@ -462,15 +476,19 @@ pub fn composed_mcmm_shader() -> Result<String> {
 }
 
 /// The tracer's WGSL for `mcpg` (`lights` false) or `mcpg-nee` (true): [`composed_shader`]
-/// with [`MCPG_DEF`] defined.
+/// with [`MCPG_DEF`] defined, and [`HOLD_ALL_DEF`] with `hold_all` (paths of at most
+/// [`HELD_VERTICES`] bounces).
 ///
 /// # Errors
 /// When composition fails (an unknown import).
-pub fn composed_mcpg_shader(lights: bool) -> Result<String> {
+pub fn composed_mcpg_shader(lights: bool, hold_all: bool) -> Result<String> {
     let mut defs = guide_defs(GUIDE_GROUP, UNUSED_GROUP, PROBE_UNUSED_GROUP);
     defs.push((MCPG_DEF, 1));
     if lights {
         defs.push((LIGHTS_DEF, 1));
+    }
+    if hold_all {
+        defs.push((HOLD_ALL_DEF, 1));
     }
     Ok(shaders::compose(SHADER, &defs)?)
 }
@@ -542,6 +560,7 @@ impl GpuTracer {
             mcpg_reflected: Reflected::Cache,
             mcpg_moments: None,
             guided_module: None,
+            guided_hold_all: true,
             nee: None,
             segments: None,
             guided_lights_module: None,
@@ -582,7 +601,7 @@ impl GpuTracer {
         guide.end_frame(&self.ctx)?;
         guide.reset(&self.ctx);
         if self.guided_module.is_none() {
-            let source = composed_mcpg_shader(false)?;
+            let source = composed_mcpg_shader(false, self.guided_hold_all)?;
             self.guided_module = Some(self.module("mcg-demo render mcpg", source));
         }
         // `mcpg-nee`'s pipeline is rebuilt around the new guide on its first frame.
@@ -601,10 +620,10 @@ impl GpuTracer {
     /// Where `mcpg`'s chains take the radiance reflected at the next hit, as the CPU tracer's
     /// [`super::guided::McpgSampler::with_reflected`] (the default: [`Reflected::Cache`], the
     /// paper's rule, each vertex finished as soon as its ray is traced). With
-    /// [`Reflected::Path`] the tracer holds the first two vertices of a path whose next hit
-    /// scatters again (`HeldVertex`, 240 bytes each) and finishes them at the end of
-    /// the path with what it gathered from that hit on: every vertex but the last at 3
-    /// bounces, as on the CPU; the next frame uses it.
+    /// [`Reflected::Path`] a vertex whose next hit scatters again waits for the end of its
+    /// path (a `HeldVertex`) and is finished with what the path gathered from that
+    /// hit on: every vertex but the last, as on the CPU, for paths of at most
+    /// [`HELD_VERTICES`] bounces (deeper paths: the first two); the next frame uses it.
     pub fn set_mcpg_reflected(&mut self, reflected: Reflected) {
         self.mcpg_reflected = reflected;
     }
@@ -901,7 +920,7 @@ impl GpuTracer {
         settings: &RenderSettings,
         frame: u32,
     ) -> Result<(Vec<Vec3>, f64)> {
-        self.prepare_pipeline(settings.method)?;
+        self.prepare_pipeline(settings.method, settings.bounces)?;
         let base = self.frame_params(settings, frame)?;
         let scope = self
             .ctx
@@ -1087,8 +1106,30 @@ impl GpuTracer {
     }
 
     /// Compiles the light-sampling pipeline `method` needs on its first frame (`nee`, or
-    /// `mcpg-nee` around the current guide); the other methods' are made up front.
-    fn prepare_pipeline(&mut self, method: Method) -> Result<()> {
+    /// `mcpg-nee` around the current guide; the other methods' are made up front), and the
+    /// guided shaders again when a frame of `bounces` falls on the other side of
+    /// [`HELD_VERTICES`] than they were compiled for ([`HOLD_ALL_DEF`]).
+    fn prepare_pipeline(&mut self, method: Method, bounces: u32) -> Result<()> {
+        let hold_all = bounces <= HELD_VERTICES;
+        if matches!(method, Method::Mcpg | Method::McpgNee) && hold_all != self.guided_hold_all {
+            // Both guided shaders again, for the other side of HELD_VERTICES.
+            self.guided_hold_all = hold_all;
+            self.guided_module = None;
+            self.guided_lights_module = None;
+            self.guided_lights = None;
+            if let Some(g) = self.guided.take() {
+                let source = composed_mcpg_shader(false, hold_all)?;
+                let module = self.module("mcg-demo render mcpg", source);
+                let (pipeline, layout) =
+                    self.guided_pipeline(&module, "render", g.guide.bind_group_layout())?;
+                self.guided_module = Some(module);
+                self.guided = Some(Guided {
+                    guide: g.guide,
+                    pipeline,
+                    layout,
+                });
+            }
+        }
         match method {
             Method::Nee if self.nee.is_none() => {
                 let source = composed_shader(true)?;
@@ -1099,7 +1140,7 @@ impl GpuTracer {
                     return Ok(());
                 };
                 if self.guided_lights_module.is_none() {
-                    let source = composed_mcpg_shader(true)?;
+                    let source = composed_mcpg_shader(true, self.guided_hold_all)?;
                     self.guided_lights_module =
                         Some(self.module("mcg-demo render mcpg-nee", source));
                 }
@@ -1545,9 +1586,11 @@ mod tests {
         );
         assert_eq!((tracer, guide), (8, 0), "render binds 1–8 as storage");
         for lights in [false, true] {
-            let (_, tracer, guide) = validate(&composed_mcpg_shader(lights).unwrap());
-            assert_eq!(tracer + guide, MCPG_STORAGE_BUFFERS as usize);
-            assert_eq!(guide, 3, "the mcpg render binds the guide");
+            for hold_all in [false, true] {
+                let (_, tracer, guide) = validate(&composed_mcpg_shader(lights, hold_all).unwrap());
+                assert_eq!(tracer + guide, MCPG_STORAGE_BUFFERS as usize);
+                assert_eq!(guide, 3, "the mcpg render binds the guide");
+            }
         }
         // `GpuParams` is `Params` in WGSL, byte for byte.
         let mut layouter = naga::proc::Layouter::default();

@@ -334,9 +334,9 @@ impl GuideUniforms {
 /// Caching"): a real-time tracer finishes a vertex as soon as its ray is traced, before the
 /// path knows more. A tracer that finishes its vertices when the path is complete also has
 /// the path's own estimate of L_r: what the path gathered from the next hit on. The CPU tracer
-/// keeps every vertex of a path for it; the GPU tracer holds the first two
-/// ([`super::gpu::GpuTracer::set_mcpg_reflected`], `mcg_markov_guide::mcpg::PendingFinish`'s
-/// WGSL twin), every vertex but the last at 3 bounces. Scene (a), 128², 8 spp, 64 frames,
+/// keeps every vertex of a path for it; the GPU tracer too up to 3 bounces, and the first two
+/// of deeper paths ([`super::gpu::GpuTracer::set_mcpg_reflected`],
+/// `mcg_markov_guide::mcpg::PendingFinish`'s WGSL twin). Scene (a), 128², 8 spp, 64 frames,
 /// seeds 7-12: on the CPU the path's estimate gave a lower relMSE than the cache on all six
 /// seeds (0.0239-0.0262 against 0.0255-0.0284) and a 3-12 % cheaper guided frame, as two of
 /// three cache queries are gone; on lavapipe the frame costs the same and the relMSE after 16

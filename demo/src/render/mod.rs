@@ -123,7 +123,7 @@ pub struct RenderArgs {
     pub no_irradiance_cache: bool,
     /// Where `mcpg`'s training takes the radiance reflected at the next hit, on either device:
     /// the path's own estimate where the path went on (mcg's extension; the GPU tracer holds
-    /// the first two vertices of a path for it), or the irradiance cache at every vertex (the
+    /// a path's vertices for it, the first two of paths deeper than 3 bounces), or the irradiance cache at every vertex (the
     /// paper's rule) ([`guided::Reflected`]); with `--no-irradiance-cache`, neither.
     #[arg(long, value_enum, default_value_t = guided::Reflected::Path)]
     pub mcpg_reflected: guided::Reflected,

@@ -541,7 +541,7 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
          estimate wherever the path went on, and from the irradiance cache only at a path's \
          last vertex (mcg's extension; `render --mcpg-reflected cache` is the paper's rule, \
          which finishes a vertex as soon as its ray is traced; the GPU tracer holds a path's \
-         first two vertices for it), and one vertex in {} adds its sample to the cache \
+         vertices for it, up to 3 bounces, and the first two of deeper paths), and one vertex in {} adds its sample to the cache \
          (`--mcpg-cache-add 1` adds all): on the CPU together a guided frame about 15 % \
          cheaper at the same error, on lavapipe 12 % less error at the same frame time. On \
          both devices, mcpg \

@@ -583,17 +583,36 @@ struct HeldVertex {
     observation: McpgObservation,
     offset: vec3<f32>,
     throughput: vec3<f32>,
+    // 1: L_r from the path; 0: the observation as it is (L_r from the cache at a path's last
+    // hit or with `params.mcpg_reflected` 0, nothing after an escape).
+    by_path: u32,
 }
 
-// `guided_finish` of a held vertex, with L_r from the path's final `radiance`.
+// `guided_finish` of a held vertex, with L_r from the path's final `radiance` (`by_path`).
 fn finish_held(h: HeldVertex, radiance: vec3<f32>, grng: ptr<function, u32>) {
     let incident = select(vec3<f32>(0.0), (radiance - h.offset) / h.throughput,
                           h.throughput > vec3<f32>(0.0));
     var obs = h.observation;
-    obs.has_reflected = 1u;
-    obs.reflected = max(incident - obs.emitted, vec3<f32>(0.0));
+    if h.by_path != 0u {
+        obs.has_reflected = 1u;
+        obs.reflected = max(incident - obs.emitted, vec3<f32>(0.0));
+    }
     guided_finish(h.pending, obs, grng);
 }
+
+#ifdef MCG_DEMO_HOLD_ALL
+// `h` into the path's held record `i` (< `gpu::HELD_VERTICES`).
+fn hold(h: HeldVertex, i: u32, r0: ptr<function, HeldVertex>, r1: ptr<function, HeldVertex>,
+        r2: ptr<function, HeldVertex>) {
+    if i == 0u {
+        *r0 = h;
+    } else if i == 1u {
+        *r1 = h;
+    } else {
+        *r2 = h;
+    }
+}
+#endif
 #endif
 
 // A learning guide needs `finish`: what arrived along each sampled direction. MCPG's
@@ -602,10 +621,13 @@ fn finish_held(h: HeldVertex, radiance: vec3<f32>, grng: ptr<function, u32>) {
 // so that a vertex is finished as soon as its ray is traced (`params.mcpg_reflected` 0,
 // `guided::Reflected::Cache`). With `params.mcpg_reflected` 1 (`Reflected::Path`, mcg's
 // extension and the CPU tracer's default) a vertex whose next hit scatters again waits for the
-// end of the path and learns the path's own estimate of L_r there, as on the CPU; the GPU holds
-// at most two such vertices (`HeldVertex`: every vertex but the last at the default 3 bounces),
-// deeper ones read the cache. Vertices deeper than MAX_RECORDED are not finished, as on the
-// CPU. The guide's uniforms come from a stream of their own, seeded like the CPU sampler's
+// end of the path and learns the path's own estimate of L_r there, as on the CPU. With at most
+// `gpu::HELD_VERTICES` (3) bounces the pipeline is built with MCG_DEMO_HOLD_ALL
+// (`gpu::HOLD_ALL_DEF`): every vertex of a path waits in a `HeldVertex` and all are finished
+// after the path's loop through one call site (a SIMD group runs a finish's code once per
+// call site and loop trip, taken or not). Deeper paths hold the first two such vertices,
+// deeper ones read the cache and are finished as soon as their ray is traced. Vertices deeper
+// than MAX_RECORDED are not finished, as on the CPU. The guide's uniforms come from a stream of their own, seeded like the CPU sampler's
 // (`cpu::SAMPLER_SALT`); they are drawn per vertex (begin, finish) rather than all begins
 // before all finishes, so the guide's updates are not bit-equal to the CPU's (they race across
 // invocations anyway), only the same in distribution.
@@ -752,6 +774,9 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
     // Vertices waiting for the end of the path (`HeldVertex`), the older first.
     var held0: HeldVertex;
     var held1: HeldVertex;
+#ifdef MCG_DEMO_HOLD_ALL
+    var held2: HeldVertex;
+#endif
     var held = 0u;
 #endif
     loop {
@@ -791,15 +816,24 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
             var obs = mcpg_observation_hit(position, n_hit, emitted, open_weight);
             obs.emission_weight = emission_weight;
             // The path scatters again here (`cpu::report_recorded`'s rule).
-            let holds = params.mcpg_reflected != 0u && depth < params.bounces && held < 2u;
+            let by_path = params.mcpg_reflected != 0u && depth < params.bounces;
+#ifdef MCG_DEMO_HOLD_ALL
+            // Every vertex waits for the end of the path (`gpu::HOLD_ALL_DEF`), so that the
+            // finish code exists once, after the loop.
+            hold(HeldVertex(open_pending, obs, offset, throughput, u32(by_path)), held, &held0,
+                 &held1, &held2);
+            held += 1u;
+#else
+            let holds = by_path && held < 2u;
             if holds && held == 0u {
-                held0 = HeldVertex(open_pending, obs, offset, throughput);
+                held0 = HeldVertex(open_pending, obs, offset, throughput, 1u);
             } else if holds {
-                held1 = HeldVertex(open_pending, obs, offset, throughput);
+                held1 = HeldVertex(open_pending, obs, offset, throughput, 1u);
             } else {
                 guided_finish(open_pending, obs, &grng);
             }
             held += u32(holds);
+#endif
             is_open = false;
         }
 #endif
@@ -913,6 +947,22 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
 #ifdef MCG_DEMO_MCPG
     // The last ray left the scene, or its weight ended the path (the CPU reports both as
     // escaped, seeing nothing).
+#ifdef MCG_DEMO_HOLD_ALL
+    if is_open {
+        hold(HeldVertex(open_pending, mcpg_observation_escaped(vec3<f32>(0.0), open_weight),
+                        vec3<f32>(0.0), vec3<f32>(0.0), 0u), held, &held0, &held1, &held2);
+        held += 1u;
+    }
+    for (var i = 0u; i < held; i++) {
+        var h = held0;
+        if i == 1u {
+            h = held1;
+        } else if i == 2u {
+            h = held2;
+        }
+        finish_held(h, radiance, &grng);
+    }
+#else
     if is_open {
         guided_finish(open_pending,
                       mcpg_observation_escaped(vec3<f32>(0.0), open_weight), &grng);
@@ -923,6 +973,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
     if held > 1u {
         finish_held(held1, radiance, &grng);
     }
+#endif
 #endif
     return radiance;
 }
