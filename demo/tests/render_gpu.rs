@@ -332,90 +332,20 @@ fn gpu_mcpg_furnace_matches_the_truncated_neumann_series() {
     let Some(mut gpu) = mcpg_tracer("gpu_mcpg_furnace", &scene, 16, 16) else {
         return;
     };
+    use Allocation::{Adaptive, Uniform};
+    use Method::{Mcpg, McpgNee};
+    use Reflected::{Cache, Path};
     for (method, size, spp, emission, allocation, reflected, bounces) in [
-        (
-            Method::Mcpg,
-            16,
-            16,
-            0,
-            Allocation::Uniform,
-            Reflected::Cache,
-            3,
-        ),
-        (
-            Method::Mcpg,
-            16,
-            16,
-            3,
-            Allocation::Uniform,
-            Reflected::Cache,
-            3,
-        ),
-        (
-            Method::Mcpg,
-            16,
-            16,
-            3,
-            Allocation::Adaptive,
-            Reflected::Cache,
-            3,
-        ),
-        (
-            Method::Mcpg,
-            16,
-            16,
-            3,
-            Allocation::Adaptive,
-            Reflected::Path,
-            3,
-        ),
-        (
-            Method::McpgNee,
-            32,
-            32,
-            0,
-            Allocation::Uniform,
-            Reflected::Cache,
-            3,
-        ),
-        (
-            Method::McpgNee,
-            32,
-            32,
-            0,
-            Allocation::Uniform,
-            Reflected::Path,
-            3,
-        ),
-        // Deeper than `gpu::HELD_VERTICES`: the pipelines without `HOLD_ALL_DEF`.
-        (
-            Method::Mcpg,
-            16,
-            16,
-            3,
-            Allocation::Adaptive,
-            Reflected::Path,
-            5,
-        ),
-        (
-            Method::McpgNee,
-            32,
-            32,
-            0,
-            Allocation::Uniform,
-            Reflected::Path,
-            5,
-        ),
-        // And back.
-        (
-            Method::Mcpg,
-            16,
-            16,
-            3,
-            Allocation::Uniform,
-            Reflected::Path,
-            3,
-        ),
+        (Mcpg, 16, 16, 0, Uniform, Cache, 3),
+        (Mcpg, 16, 16, 3, Uniform, Cache, 3),
+        (Mcpg, 16, 16, 3, Adaptive, Cache, 3),
+        (Mcpg, 16, 16, 3, Adaptive, Path, 3),
+        (McpgNee, 32, 32, 0, Uniform, Cache, 3),
+        (McpgNee, 32, 32, 0, Uniform, Path, 3),
+        // Deeper than `gpu::HELD_VERTICES`: the pipelines without `HOLD_ALL_DEF`, and back.
+        (Mcpg, 16, 16, 3, Adaptive, Path, 5),
+        (McpgNee, 32, 32, 0, Uniform, Path, 5),
+        (Mcpg, 16, 16, 3, Uniform, Path, 3),
     ] {
         let expected: Vec3 = (0..=bounces).map(|k| rho.powf(k as f32) * le).sum();
         let settings = RenderSettings {
