@@ -627,10 +627,11 @@ fn hold(h: HeldVertex, i: u32, r0: ptr<function, HeldVertex>, r1: ptr<function, 
 // after the path's loop through one call site (a SIMD group runs a finish's code once per
 // call site and loop trip, taken or not). Deeper paths hold the first two such vertices,
 // deeper ones read the cache and are finished as soon as their ray is traced. Vertices deeper
-// than MAX_RECORDED are not finished, as on the CPU. The guide's uniforms come from a stream of their own, seeded like the CPU sampler's
-// (`cpu::SAMPLER_SALT`); they are drawn per vertex (begin, finish) rather than all begins
-// before all finishes, so the guide's updates are not bit-equal to the CPU's (they race across
-// invocations anyway), only the same in distribution.
+// than MAX_RECORDED are not finished, as on the CPU. The guide's uniforms come from a stream
+// of their own, seeded like the CPU sampler's (`cpu::SAMPLER_SALT`); they are drawn per vertex
+// (begin, finish) rather than all begins before all finishes, so the guide's updates are not
+// bit-equal to the CPU's (they race across invocations anyway), only the same in
+// distribution.
 
 // ---------------------------------------------------------------------------------------------
 // The integrator (`cpu::trace_path`)
