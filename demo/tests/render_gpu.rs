@@ -70,6 +70,30 @@ fn uniform_direction(u: &mut impl FnMut() -> f32) -> Vec3 {
     Vec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 
+/// A point uniform in the box of `scene`'s BVH root (inside and outside its walls), from three
+/// of `u`'s uniforms.
+fn point_in_scene_box(scene: &Scene, u: &mut impl FnMut() -> f32) -> Vec3 {
+    let root = scene.bvh.nodes[0];
+    let (lo, hi) = (Vec3::from(root.min), Vec3::from(root.max));
+    lo + (hi - lo) * Vec3::new(u(), u(), u())
+}
+
+/// A point of a random emitter triangle of `scene`, its barycentrics uniform in
+/// [−spill, 1 + spill) and folded back into the triangle where they sum past 1 (so `spill`
+/// > 0 reaches past the edges), from three of `u`'s uniforms.
+fn emitter_point(scene: &Scene, spill: f32, u: &mut impl FnMut() -> f32) -> Vec3 {
+    let k = ((u() * scene.emitters.len() as f32) as usize).min(scene.emitters.len() - 1);
+    let tri = scene.bvh.triangles[scene.emitters[k] as usize];
+    let width = 1.0 + 2.0 * spill;
+    let (b1, b2) = (width * u() - spill, width * u() - spill);
+    let (b1, b2) = if b1 + b2 > 1.0 {
+        (1.0 - b1, 1.0 - b2)
+    } else {
+        (b1, b2)
+    };
+    tri.point(b1, b2)
+}
+
 /// Hypothesis: the WGSL `bvh_walk_tree` over the uploaded buffers answers every query as the
 /// CPU's [`Bvh::intersect`](mcg_demo::render::bvh::Bvh::intersect) and
 /// [`Bvh::occluded`](mcg_demo::render::bvh::Bvh::occluded) over the scene, and as
@@ -88,15 +112,13 @@ fn gpu_bvh_walk_matches_cpu() {
     let Some(gpu) = tracer("gpu_bvh_walk_matches_cpu", &scene) else {
         return;
     };
-    let root = scene.bvh.nodes[0];
-    let (lo, hi) = (Vec3::from(root.min), Vec3::from(root.max));
     let emitter_root = gpu.emitter_root().unwrap();
     let mut state = 2024u32;
     let mut u = || next_uniform(&mut state);
     let mut rays = Vec::new();
     let mut cpu = Vec::new();
     for _ in 0..4096 {
-        let o = lo + (hi - lo) * Vec3::new(u(), u(), u());
+        let o = point_in_scene_box(&scene, &mut u);
         let d = uniform_direction(&mut u);
         let closest = scene.bvh.intersect(o, d, 0.0, f32::INFINITY);
         let t_max = closest.map_or(10.0, |h| h.t) * 1.5 * u();
@@ -115,15 +137,7 @@ fn gpu_bvh_walk_matches_cpu() {
         });
         // The emitters' tree is asked along a ray aimed at a point of a random emitter (at
         // times past its edges), which meets the emitters far more often than `d`.
-        let k = ((u() * scene.emitters.len() as f32) as usize).min(scene.emitters.len() - 1);
-        let tri = scene.bvh.triangles[scene.emitters[k] as usize];
-        let (b1, b2) = (1.2 * u() - 0.1, 1.2 * u() - 0.1);
-        let (b1, b2) = if b1 + b2 > 1.0 {
-            (1.0 - b1, 1.0 - b2)
-        } else {
-            (b1, b2)
-        };
-        let aim = (tri.point(b1, b2) - o).normalize();
+        let aim = (emitter_point(&scene, 0.1, &mut u) - o).normalize();
         rays.push(GpuRay {
             direction: aim.to_array(),
             root: emitter_root,
@@ -216,29 +230,18 @@ fn gpu_unoccluded_segments_match_cpu_occlusion() {
     let Some(mut gpu) = tracer("gpu_unoccluded_segments_match_cpu_occlusion", &scene) else {
         return;
     };
-    let root = scene.bvh.nodes[0];
-    let (lo, hi) = (Vec3::from(root.min), Vec3::from(root.max));
     let mut state = 77u32;
     let mut u = || next_uniform(&mut state);
     let mut batches = Vec::new();
     let mut cpu = Vec::new();
     for _ in 0..2048 {
-        let o = lo + (hi - lo) * Vec3::new(u(), u(), u());
+        let o = point_in_scene_box(&scene, &mut u);
         let n = ((u() * (SEGMENT_BATCH + 1) as f32) as usize).min(SEGMENT_BATCH as usize);
         let mut segments = Vec::new();
         let mut visible = 0u32;
         for j in 0..n {
             let (d, t_max) = if u() < 0.5 {
-                let k =
-                    ((u() * scene.emitters.len() as f32) as usize).min(scene.emitters.len() - 1);
-                let tri = scene.bvh.triangles[scene.emitters[k] as usize];
-                let (b1, b2) = (u(), u());
-                let (b1, b2) = if b1 + b2 > 1.0 {
-                    (1.0 - b1, 1.0 - b2)
-                } else {
-                    (b1, b2)
-                };
-                let to = tri.point(b1, b2) - o;
+                let to = emitter_point(&scene, 0.0, &mut u) - o;
                 (to.normalize(), to.length() * (0.3 + 0.8 * u()))
             } else {
                 let d = uniform_direction(&mut u);

@@ -600,21 +600,27 @@ impl GpuTracer {
         // the first frame's time; `reset` then empties the guide again.
         guide.end_frame(&self.ctx)?;
         guide.reset(&self.ctx);
+        // `mcpg-nee`'s pipeline is rebuilt around the new guide on its first frame.
+        self.guided_lights = None;
+        self.guided = Some(self.mcpg_guided(guide)?);
+        Ok(())
+    }
+
+    /// `mcpg`'s pipeline around `guide`, its shader compiled first where it is not (with
+    /// [`HOLD_ALL_DEF`] as `guided_hold_all` says).
+    fn mcpg_guided(&mut self, guide: GpuMcpgGuide) -> Result<Guided<GpuMcpgGuide>> {
         if self.guided_module.is_none() {
             let source = composed_mcpg_shader(false, self.guided_hold_all)?;
             self.guided_module = Some(self.module("mcg-demo render mcpg", source));
         }
-        // `mcpg-nee`'s pipeline is rebuilt around the new guide on its first frame.
-        self.guided_lights = None;
         let module = self.guided_module.as_ref().expect("compiled above");
         let (pipeline, layout) =
             self.guided_pipeline(module, "render", guide.bind_group_layout())?;
-        self.guided = Some(Guided {
+        Ok(Guided {
             guide,
             pipeline,
             layout,
-        });
-        Ok(())
+        })
     }
 
     /// Where `mcpg`'s chains take the radiance reflected at the next hit, as the CPU tracer's
@@ -1118,16 +1124,7 @@ impl GpuTracer {
             self.guided_lights_module = None;
             self.guided_lights = None;
             if let Some(g) = self.guided.take() {
-                let source = composed_mcpg_shader(false, hold_all)?;
-                let module = self.module("mcg-demo render mcpg", source);
-                let (pipeline, layout) =
-                    self.guided_pipeline(&module, "render", g.guide.bind_group_layout())?;
-                self.guided_module = Some(module);
-                self.guided = Some(Guided {
-                    guide: g.guide,
-                    pipeline,
-                    layout,
-                });
+                self.guided = Some(self.mcpg_guided(g.guide)?);
             }
         }
         match method {

@@ -33,7 +33,7 @@
 }
 #import mcg::mcpg::{
     McpgBeginUniforms, McpgFinishUniforms, McpgGuidedVertex, McpgObservation, McpgPending,
-    McpgSample, McpgVertex, mcpg_begin, mcpg_choose, mcpg_finish_pending,
+    McpgSample, McpgVertex, mcpg_begin_at, mcpg_choose, mcpg_finish_pending,
     mcpg_observation_escaped, mcpg_observation_hit, mcpg_params, mcpg_pdf_with, mcpg_pending,
     mcpg_sample_lobe
 }
@@ -274,25 +274,27 @@ fn bvh_walk_tree(root: u32, front_only: bool, origin: vec3<f32>, direction: vec3
             }
             continue;
         }
-        let a = node.index;
-        let ta = box_entry(nodes[a], origin, inv, t_min, best.t);
-        let tb = box_entry(nodes[a + 1u], origin, inv, t_min, best.t);
-        // The farther child goes first, so the nearer one is popped next.
-        let a_first = ta <= tb;
-        let near = select(a + 1u, a, a_first);
-        let far = select(a, a + 1u, a_first);
-        let t_near = min(ta, tb);
-        let t_far = max(ta, tb);
-        if t_far < FAR && top < STACK_SIZE {
-            walk_stack[top] = far;
-            top += 1u;
-        }
-        if t_near < FAR && top < STACK_SIZE {
-            walk_stack[top] = near;
-            top += 1u;
-        }
+        push_children(node, origin, inv, t_min, best.t, &top);
     }
     return best;
+}
+
+// The children of the interior `node` whose boxes the ray meets within (t_min, t_max) onto
+// `walk_stack` above `*top`: the farther first, so the nearer one is popped next.
+fn push_children(node: BvhNode, origin: vec3<f32>, inv: vec3<f32>, t_min: f32, t_max: f32,
+                 top: ptr<function, u32>) {
+    let a = node.index;
+    let ta = box_entry(nodes[a], origin, inv, t_min, t_max);
+    let tb = box_entry(nodes[a + 1u], origin, inv, t_min, t_max);
+    let a_first = ta <= tb;
+    if max(ta, tb) < FAR && *top < STACK_SIZE {
+        walk_stack[*top] = select(a, a + 1u, a_first);
+        *top += 1u;
+    }
+    if min(ta, tb) < FAR && *top < STACK_SIZE {
+        walk_stack[*top] = select(a + 1u, a, a_first);
+        *top += 1u;
+    }
 }
 
 // The segments of one batch of emission-only directions (`EMISSION_BATCH` at most): a
@@ -344,18 +346,7 @@ fn unoccluded_segments(origin: vec3<f32>, n: u32) -> u32 {
                 }
             }
         } else {
-            let a = node.index;
-            let ta = box_entry(nodes[a], origin, inv, 0.0, t_max);
-            let tb = box_entry(nodes[a + 1u], origin, inv, 0.0, t_max);
-            let a_first = ta <= tb;
-            if max(ta, tb) < FAR && top < STACK_SIZE {
-                walk_stack[top] = select(a, a + 1u, a_first);
-                top += 1u;
-            }
-            if min(ta, tb) < FAR && top < STACK_SIZE {
-                walk_stack[top] = select(a + 1u, a, a_first);
-                top += 1u;
-            }
+            push_children(node, origin, inv, 0.0, t_max, &top);
         }
         // This segment's walk ended: the next one starts in the next step.
         r += u32(top == 0u);
