@@ -98,14 +98,17 @@ fn emitter_point(scene: &Scene, spill: f32, u: &mut impl FnMut() -> f32) -> Vec3
 /// CPU's [`Bvh::intersect`](mcg_demo::render::bvh::Bvh::intersect) and
 /// [`Bvh::occluded`](mcg_demo::render::bvh::Bvh::occluded) over the scene, and as
 /// [`Bvh::intersect_front`](mcg_demo::render::bvh::Bvh::intersect_front) over the emitters'
-/// tree (`Scene::emitter_bvh`, joined after the scene's: the same emitter and distance). Sample: 4096 rays of fixed seed
+/// tree (`Scene::emitter_bvh`, joined after the scene's: the same emitter and distance), and
+/// so does `emitter_list_hit` over the emitters' triangles one after the other (what `mcpg`'s
+/// emission-only directions use in scenes of few emitters). Sample: 4096 rays of fixed seed
 /// with origins uniform in the box of the many-lights room (inside and outside its walls) and
 /// uniform directions, each asked for the closest hit and for any hit before a random
 /// fraction (0 to 1.5) of the CPU's hit distance. Threshold: the same hit or miss for every
 /// ray; the same distance within 10⁻⁵·max(1, t) (GPUs may fuse the multiply-adds of
 /// Möller–Trumbore, a few ulps); the same triangle unless two triangles tie at that distance
 /// (a ray through a shared edge). Deterministic, so any difference fails: a `hi`/`lo` swap in
-/// the WGSL `box_entry` fails at the first ray (checked once).
+/// the WGSL `box_entry` fails at the first ray, a list that skips its last triangle at the
+/// eleventh (both checked once).
 #[test]
 fn gpu_bvh_walk_matches_cpu() {
     let scene = built_in("many_lights_room.gltf");
@@ -113,6 +116,7 @@ fn gpu_bvh_walk_matches_cpu() {
         return;
     };
     let emitter_root = gpu.emitter_root().unwrap();
+    let emitter_list = gpu.emitter_list().unwrap();
     let mut state = 2024u32;
     let mut u = || next_uniform(&mut state);
     let mut rays = Vec::new();
@@ -144,6 +148,11 @@ fn gpu_bvh_walk_matches_cpu() {
             front_only: 1,
             ..ray
         });
+        rays.push(GpuRay {
+            direction: aim.to_array(),
+            list: emitter_list,
+            ..ray
+        });
         let emitter = scene
             .emitter_bvh
             .intersect_front(o, aim, 0.0, f32::INFINITY);
@@ -152,12 +161,19 @@ fn gpu_bvh_walk_matches_cpu() {
     let hits = gpu.trace_rays(&rays).unwrap();
     let (mut found, mut emitters_found) = (0, 0);
     let first_emitter = scene.bvh.triangles.len() as u32;
-    for (i, ((closest, occluded, emitter), triple)) in
-        cpu.iter().zip(hits.chunks_exact(3)).enumerate()
+    assert_eq!(
+        emitter_list,
+        [first_emitter, scene.emitter_bvh.triangles.len() as u32]
+    );
+    for (i, ((closest, occluded, emitter), answers)) in
+        cpu.iter().zip(hits.chunks_exact(4)).enumerate()
     {
-        let (g, any, e) = (triple[0], triple[1], triple[2]);
+        let (g, any, e, listed) = (answers[0], answers[1], answers[2], answers[3]);
         match emitter {
-            None => assert_eq!(e.triangle, GpuHit::MISS, "ray {i}: GPU met an emitter"),
+            None => {
+                assert_eq!(e.triangle, GpuHit::MISS, "ray {i}: GPU met an emitter");
+                assert_eq!(listed.triangle, GpuHit::MISS, "ray {i}: the list met one");
+            }
             Some(h) => {
                 emitters_found += 1;
                 assert_eq!(
@@ -168,6 +184,10 @@ fn gpu_bvh_walk_matches_cpu() {
                 assert!(
                     (e.t - h.t).abs() <= 1e-5 * h.t.max(1.0),
                     "ray {i}: {e:?} vs {h:?}"
+                );
+                assert_eq!(
+                    listed, e,
+                    "ray {i}: the emitters' list disagrees with the tree"
                 );
             }
         }
@@ -193,8 +213,8 @@ fn gpu_bvh_walk_matches_cpu() {
                 );
                 if g.triangle != h.triangle {
                     let other = scene.bvh.triangles[g.triangle as usize];
-                    let o = Vec3::from(rays[2 * i].origin);
-                    let d = Vec3::from(rays[2 * i].direction);
+                    let o = Vec3::from(rays[4 * i].origin);
+                    let d = Vec3::from(rays[4 * i].direction);
                     let t_other = other.intersect(o, d, 0.0, f32::INFINITY).map(|x| x.0);
                     assert!(
                         t_other.is_some_and(|t| (t - h.t).abs() <= tol),

@@ -91,6 +91,37 @@ pub const HOLD_ALL_DEF: &str = "MCG_DEMO_HOLD_ALL";
 /// The vertices a path holds under [`HOLD_ALL_DEF`] (the WGSL `HeldVertex` records).
 pub const HELD_VERTICES: u32 = 3;
 
+/// The shader def of the guided pipelines for scenes of at most [`EMITTER_LIST_MAX`] emitter
+/// triangles: `mcpg`'s emission-only directions test the emitters' triangles one after the
+/// other (WGSL `emitter_list_hit`, the same triangles in the same order in every invocation)
+/// instead of walking their tree (lavapipe's `mcpg` frames on scene (a), two emitter
+/// triangles, 7 % shorter).
+pub const EMITTER_LIST_DEF: &str = "MCG_DEMO_EMITTER_LIST";
+
+/// The most emitter triangles a scene may have for [`EMITTER_LIST_DEF`].
+pub const EMITTER_LIST_MAX: usize = 8;
+
+/// The compile-time choices of the guided (`mcpg`, `mcpg-nee`) shaders, made from the
+/// frame's bounces and the uploaded scene; the tracer rebuilds its guided pipelines when they
+/// change.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GuidedDefs {
+    /// [`HOLD_ALL_DEF`]: paths of at most [`HELD_VERTICES`] bounces.
+    pub hold_all: bool,
+    /// [`EMITTER_LIST_DEF`]: at most [`EMITTER_LIST_MAX`] emitter triangles.
+    pub emitter_list: bool,
+}
+
+impl Default for GuidedDefs {
+    /// Held vertices for short paths, the emitters' tree.
+    fn default() -> Self {
+        Self {
+            hold_all: true,
+            emitter_list: false,
+        }
+    }
+}
+
 /// The shader def that compiles `render_mcmm`, MCMM at group [`GUIDE_GROUP`].
 pub const MCMM_DEF: &str = "MCG_DEMO_MCMM";
 
@@ -194,8 +225,9 @@ pub struct GpuParams {
     /// first two of a path deeper than [`HELD_VERTICES`]), 0 from the irradiance cache at
     /// every vertex ([`Reflected::Cache`]).
     pub mcpg_reflected: u32,
-    /// Padding to the array's 16-byte alignment.
-    pub pad: u32,
+    /// The emitters' first triangle in the triangle buffer ([`joined_trees`]: the
+    /// `emitter_count` triangles from it are the emitters' tree's, in its order).
+    pub emitter_first: u32,
     /// `mcpg`'s emission-only directions per vertex of depth d in this frame (depth `4i + j`
     /// in `[i][j]`): [`frame_counts`] of the allocation's K(d); 0 for the other methods.
     pub emission_counts: [[u32; 4]; 4],
@@ -323,8 +355,11 @@ pub struct GpuRay {
     pub root: u32,
     /// 1: front faces only ([`super::bvh::Bvh::intersect_front`]); 0: both faces.
     pub front_only: u32,
-    /// Padding to 16 bytes; always 0.
-    pub pad: [u32; 2],
+    /// `[first, count]`: with `count` > 0 no tree is walked, the triangles `first..first +
+    /// count` are tested one after the other, front faces only, with no upper end (the WGSL
+    /// `emitter_list_hit` of [`EMITTER_LIST_DEF`]; [`GpuTracer::emitter_list`] gives the
+    /// emitters'); `[0, 0]` walks the tree.
+    pub list: [u32; 2],
 }
 
 /// The answer to a [`GpuRay`].
@@ -351,6 +386,10 @@ struct SceneBuffers {
     camera: Camera,
     /// [`GpuParams::emitter_root`].
     emitter_root: u32,
+    /// [`GpuParams::emitter_first`].
+    emitter_first: u32,
+    /// Entries of the emitter table.
+    emitter_count: u32,
     nodes: GpuBuffer<BvhNode>,
     triangles: GpuBuffer<Triangle>,
     materials: GpuBuffer<Material>,
@@ -412,9 +451,9 @@ pub struct GpuTracer {
     mcpg_moments: Option<EmissionMoments>,
     /// The compiled `mcpg` shader, kept for rebuilding its pipeline with a new guide.
     guided_module: Option<wgpu::ShaderModule>,
-    /// Whether the guided shaders are compiled with [`HOLD_ALL_DEF`] (for paths of at most
-    /// [`HELD_VERTICES`] bounces; rebuilt when a frame's bounces cross it).
-    guided_hold_all: bool,
+    /// What the guided shaders are compiled with (rebuilt when a frame's bounces cross
+    /// [`HELD_VERTICES`] or an uploaded scene's emitters cross [`EMITTER_LIST_MAX`]).
+    guided_defs: GuidedDefs,
     /// `nee`'s `render` ([`LIGHTS_DEF`]), compiled on its first frame.
     nee: Option<ComputeKernel>,
     /// `trace_segments`, compiled on the first [`GpuTracer::unoccluded_segments`].
@@ -476,19 +515,21 @@ pub fn composed_mcmm_shader() -> Result<String> {
 }
 
 /// The tracer's WGSL for `mcpg` (`lights` false) or `mcpg-nee` (true): [`composed_shader`]
-/// with [`MCPG_DEF`] defined, and [`HOLD_ALL_DEF`] with `hold_all` (paths of at most
-/// [`HELD_VERTICES`] bounces).
+/// with [`MCPG_DEF`] defined, and [`HOLD_ALL_DEF`] and [`EMITTER_LIST_DEF`] as `guided` says.
 ///
 /// # Errors
 /// When composition fails (an unknown import).
-pub fn composed_mcpg_shader(lights: bool, hold_all: bool) -> Result<String> {
+pub fn composed_mcpg_shader(lights: bool, guided: GuidedDefs) -> Result<String> {
     let mut defs = guide_defs(GUIDE_GROUP, UNUSED_GROUP, PROBE_UNUSED_GROUP);
     defs.push((MCPG_DEF, 1));
     if lights {
         defs.push((LIGHTS_DEF, 1));
     }
-    if hold_all {
+    if guided.hold_all {
         defs.push((HOLD_ALL_DEF, 1));
+    }
+    if guided.emitter_list {
+        defs.push((EMITTER_LIST_DEF, 1));
     }
     Ok(shaders::compose(SHADER, &defs)?)
 }
@@ -560,7 +601,7 @@ impl GpuTracer {
             mcpg_reflected: Reflected::Cache,
             mcpg_moments: None,
             guided_module: None,
-            guided_hold_all: true,
+            guided_defs: GuidedDefs::default(),
             nee: None,
             segments: None,
             guided_lights_module: None,
@@ -607,10 +648,10 @@ impl GpuTracer {
     }
 
     /// `mcpg`'s pipeline around `guide`, its shader compiled first where it is not (with
-    /// [`HOLD_ALL_DEF`] as `guided_hold_all` says).
+    /// the defs of `guided_defs`).
     fn mcpg_guided(&mut self, guide: GpuMcpgGuide) -> Result<Guided<GpuMcpgGuide>> {
         if self.guided_module.is_none() {
-            let source = composed_mcpg_shader(false, self.guided_hold_all)?;
+            let source = composed_mcpg_shader(false, self.guided_defs)?;
             self.guided_module = Some(self.module("mcg-demo render mcpg", source));
         }
         let module = self.guided_module.as_ref().expect("compiled above");
@@ -889,6 +930,8 @@ impl GpuTracer {
         self.scene = Some(SceneBuffers {
             camera: scene.camera,
             emitter_root: scene.bvh.nodes.len() as u32,
+            emitter_first: scene.bvh.triangles.len() as u32,
+            emitter_count: scene.emitters.len() as u32,
             nodes: ctx.storage_buffer("mcg-demo nodes", &nodes),
             triangles: ctx.storage_buffer("mcg-demo triangles", &triangles),
             materials: ctx.storage_buffer("mcg-demo materials", &scene.materials),
@@ -897,7 +940,10 @@ impl GpuTracer {
             textures: ctx.storage_buffer("mcg-demo textures", &scene.textures),
             texels: ctx.storage_buffer("mcg-demo texels", &scene.texels),
         });
-        Ok(())
+        self.set_guided_defs(GuidedDefs {
+            emitter_list: scene.emitters.len() <= EMITTER_LIST_MAX,
+            ..self.guided_defs
+        })
     }
 
     fn scene(&self) -> Result<&SceneBuffers> {
@@ -1034,7 +1080,8 @@ impl GpuTracer {
             seed: settings.seed,
             frame,
             method,
-            emitter_count: scene.emitters.len() as u32,
+            emitter_count: scene.emitter_count,
+            emitter_first: scene.emitter_first,
             uv_count: scene.uvs.len() as u32,
             texture_count: scene.textures.len() as u32,
             emitter_root: scene.emitter_root,
@@ -1116,16 +1163,11 @@ impl GpuTracer {
     /// guided shaders again when a frame of `bounces` falls on the other side of
     /// [`HELD_VERTICES`] than they were compiled for ([`HOLD_ALL_DEF`]).
     fn prepare_pipeline(&mut self, method: Method, bounces: u32) -> Result<()> {
-        let hold_all = bounces <= HELD_VERTICES;
-        if matches!(method, Method::Mcpg | Method::McpgNee) && hold_all != self.guided_hold_all {
-            // Both guided shaders again, for the other side of HELD_VERTICES.
-            self.guided_hold_all = hold_all;
-            self.guided_module = None;
-            self.guided_lights_module = None;
-            self.guided_lights = None;
-            if let Some(g) = self.guided.take() {
-                self.guided = Some(self.mcpg_guided(g.guide)?);
-            }
+        if matches!(method, Method::Mcpg | Method::McpgNee) {
+            self.set_guided_defs(GuidedDefs {
+                hold_all: bounces <= HELD_VERTICES,
+                ..self.guided_defs
+            })?;
         }
         match method {
             Method::Nee if self.nee.is_none() => {
@@ -1137,7 +1179,7 @@ impl GpuTracer {
                     return Ok(());
                 };
                 if self.guided_lights_module.is_none() {
-                    let source = composed_mcpg_shader(true, self.guided_hold_all)?;
+                    let source = composed_mcpg_shader(true, self.guided_defs)?;
                     self.guided_lights_module =
                         Some(self.module("mcg-demo render mcpg-nee", source));
                 }
@@ -1147,6 +1189,22 @@ impl GpuTracer {
                 self.guided_lights = Some(pipeline);
             }
             _ => {}
+        }
+        Ok(())
+    }
+
+    /// Both guided shaders again, and `mcpg`'s pipeline around its guide, when `defs` differ
+    /// from what they were compiled with (`mcpg-nee`'s pipeline is made on its next frame).
+    fn set_guided_defs(&mut self, defs: GuidedDefs) -> Result<()> {
+        if defs == self.guided_defs {
+            return Ok(());
+        }
+        self.guided_defs = defs;
+        self.guided_module = None;
+        self.guided_lights_module = None;
+        self.guided_lights = None;
+        if let Some(g) = self.guided.take() {
+            self.guided = Some(self.mcpg_guided(g.guide)?);
         }
         Ok(())
     }
@@ -1271,6 +1329,16 @@ impl GpuTracer {
     /// No scene uploaded.
     pub fn emitter_root(&self) -> Result<u32> {
         Ok(self.scene()?.emitter_root)
+    }
+
+    /// The uploaded emitters' triangles as a [`GpuRay::list`]: `[first, count]` in the
+    /// triangle buffer.
+    ///
+    /// # Errors
+    /// No scene uploaded.
+    pub fn emitter_list(&self) -> Result<[u32; 2]> {
+        let scene = self.scene()?;
+        Ok([scene.emitter_first, scene.emitter_count])
     }
 
     /// Walks the uploaded scene's BVH (or the emitters', [`GpuRay::root`]) for each ray on the
@@ -1583,8 +1651,12 @@ mod tests {
         );
         assert_eq!((tracer, guide), (8, 0), "render binds 1–8 as storage");
         for lights in [false, true] {
-            for hold_all in [false, true] {
-                let (_, tracer, guide) = validate(&composed_mcpg_shader(lights, hold_all).unwrap());
+            for (hold_all, emitter_list) in [(false, false), (true, false), (true, true)] {
+                let defs = GuidedDefs {
+                    hold_all,
+                    emitter_list,
+                };
+                let (_, tracer, guide) = validate(&composed_mcpg_shader(lights, defs).unwrap());
                 assert_eq!(tracer + guide, MCPG_STORAGE_BUFFERS as usize);
                 assert_eq!(guide, 3, "the mcpg render binds the guide");
             }

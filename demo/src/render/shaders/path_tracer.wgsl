@@ -130,6 +130,9 @@ struct Params {
     emitter_root: u32,
     // 1: `mcpg` trains on the path's own L_r (`guided::Reflected::Path`), 0: on the cache's.
     mcpg_reflected: u32,
+    // The emitters' first triangle in `triangles` (`gpu::joined_trees`: the emitter_count
+    // triangles from it are the emitters' tree's).
+    emitter_first: u32,
     // `mcpg`'s emission-only directions per vertex of depth d = 4i + j in [i][j] this frame
     // (`gpu::frame_counts`).
     emission_counts: array<vec4<u32>, 4>,
@@ -143,7 +146,9 @@ struct Ray {
     any_hit: u32,
     root: u32,
     front_only: u32,
-    pad: vec2<u32>,
+    // With list.y > 0: the triangles list.x … list.x + list.y − 1 one after the other
+    // (`emitter_list_hit`), front faces only, instead of a tree.
+    list: vec2<u32>,
 }
 
 // `gpu::GpuHit`: the answer to a `Ray`; `triangle` is 0xffffffff for a miss.
@@ -295,6 +300,35 @@ fn push_children(node: BvhNode, origin: vec3<f32>, inv: vec3<f32>, t_min: f32, t
         walk_stack[*top] = select(a + 1u, a, a_first);
         *top += 1u;
     }
+}
+
+// The closest emitter whose front face the ray from `origin` along `direction` meets
+// (`Scene::emitter_bvh`'s `intersect_front`), for `mcpg`'s emission-only directions. With
+// MCG_DEMO_EMITTER_LIST (`gpu::EMITTER_LIST_DEF`, scenes of at most `gpu::EMITTER_LIST_MAX`
+// emitter triangles) the emitters' triangles one after the other, else a walk of their tree.
+fn emitter_hit(origin: vec3<f32>, direction: vec3<f32>) -> RayHit {
+#ifdef MCG_DEMO_EMITTER_LIST
+    return emitter_list_hit(params.emitter_first, params.emitter_count, origin, direction);
+#else
+    return bvh_walk_tree(params.emitter_root, true, origin, direction, 0.0, FAR, false);
+#endif
+}
+
+// The closest front face among triangles[first … first + count − 1] along the ray, as the
+// emitters' tree walk finds it. Every invocation reads the same triangles in the same order
+// (uniform addresses): a SIMD group loads each once, where a walk's node and triangle loads
+// are per invocation (on llvmpipe a loop over the group's lanes each), and a tree of a few
+// triangles is mostly that overhead (`mcg-markov-guide`'s benches README, 2026-11-29, fifth
+// session: lavapipe's `mcpg` frames 7 % shorter on scene (a)).
+fn emitter_list_hit(first: u32, count: u32, origin: vec3<f32>, direction: vec3<f32>) -> RayHit {
+    var best = RayHit(FAR, NO_HIT, 0.0, 0.0);
+    for (var i = first; i < first + count; i++) {
+        let h = triangle_intersect(triangles[i], origin, direction, 0.0, best.t, true);
+        if h.w > 0.0 {
+            best = RayHit(h.x, i, h.y, h.z);
+        }
+    }
+    return best;
 }
 
 // The segments of one batch of emission-only directions (`EMISSION_BATCH` at most): a
@@ -874,8 +908,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
                 for (; i < end; i++) {
                     let ue = emission_uniforms(vec3<f32>(ul, u1, u2), i);
                     let wi = guided_mixture_direction(&open, vertex, ue);
-                    let e = bvh_walk_tree(params.emitter_root, true, origin_next, wi, 0.0, FAR,
-                                          false);
+                    let e = emitter_hit(origin_next, wi);
                     if e.triangle != NO_HIT {
                         segments.ray[n] = vec4<f32>(wi, e.t);
                         segments.triangle[n] = e.triangle;
@@ -1011,14 +1044,18 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     image[index] = vec4<f32>(sum / f32(params.spp), 1.0);
 }
 
-// One invocation per ray of `rays`: the BVH query of `bvh_walk_tree`, for the CPU/GPU agreement
-// test.
+// One invocation per ray of `rays`: the BVH query of `bvh_walk_tree` (or, for a ray with a
+// list, `emitter_list_hit`), for the CPU/GPU agreement test.
 @compute @workgroup_size(64)
 fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= arrayLength(&rays) {
         return;
     }
     let r = rays[id.x];
+    if r.list.y > 0u {
+        ray_hits[id.x] = emitter_list_hit(r.list.x, r.list.y, r.origin, r.direction);
+        return;
+    }
     ray_hits[id.x] = bvh_walk_tree(r.root, r.front_only != 0u, r.origin, r.direction, 0.0,
                                    r.t_max, r.any_hit != 0u);
 }
