@@ -1,13 +1,15 @@
 //! The GPU MCPG guide's cost (group `mcpg_vertex`): 65 536 invocations, one path vertex each
 //! (a shading point on a plane under one sphere light), guided by `mcg::mcpg` (begin, sample
 //! with the exact pdf, an analytic trace, finish) against the same kernel with cosine
-//! sampling, and against the same dispatch of a kernel that only writes its output (`launch`:
-//! what both pay before any sampling, to read the ratio net of it); and the per-frame pass
-//! alone (`end_frame`: cache fold, eviction of both grids and the cache, frame advance) on the
-//! guide's tables (2¹⁶ adaptive, 2¹² static, 2¹² cache slots). The guide is trained for 8
-//! frames first, and keeps training: the steady state of a renderer. Each iteration is one
-//! submission and the wait for it; on lavapipe read the ratios. Without an adapter the bench
-//! prints why and does nothing.
+//! sampling, against a kernel that only finds and reads the N_mc candidates' states as
+//! `mcpg_begin` does (`reads`: the memory reads no implementation of MCPG Alg. 1 avoids, a
+//! floor under `guided`), and against the same dispatch of a kernel that only writes its
+//! output (`launch`: what all pay before any sampling, to read the ratio net of it); and the
+//! per-frame pass alone (`end_frame`: cache fold, eviction of both grids and the cache, frame
+//! advance) on the guide's tables (2¹⁶ adaptive, 2¹² static, 2¹² cache slots). The guide is
+//! trained for 8 frames first, and keeps training: the steady state of a renderer. Each
+//! iteration is one submission and the wait for it; on lavapipe read the ratios. Without an
+//! adapter the bench prints why and does nothing.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::Vec3;
@@ -54,6 +56,7 @@ fn benches(c: &mut Criterion) {
     );
     let guided = kernel.pipeline(ctx, "guided_vertex");
     let cosine = kernel.pipeline(ctx, "cosine_vertex");
+    let reads = kernel.pipeline(ctx, "reads_vertex");
     let launch = kernel.pipeline(ctx, "launch_vertex");
     let estimates: GpuBuffer<f32> = ctx.zeroed_buffer("estimates", VERTICES as usize);
     let io = kernel.io_bind_group(ctx, &[estimates.raw()]);
@@ -77,6 +80,7 @@ fn benches(c: &mut Criterion) {
     g.sample_size(20);
     g.bench_function("guided", |b| b.iter(|| run(&guided, &guide)));
     g.bench_function("cosine", |b| b.iter(|| run(&cosine, &guide)));
+    g.bench_function("reads", |b| b.iter(|| run(&reads, &guide)));
     g.bench_function("launch", |b| b.iter(|| run(&launch, &guide)));
     g.bench_function("end_frame", |b| {
         b.iter(|| {

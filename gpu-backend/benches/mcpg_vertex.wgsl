@@ -1,15 +1,20 @@
 // One guided path vertex per invocation, as a renderer's kernel runs it with `mcg::mcpg` (the
 // guide at group 1): a shading point on a plane, MCPG's begin, sample (with its exact pdf), an
 // analytic trace to one sphere light, finish; `cosine_vertex` is the same kernel with cosine
-// sampling and no guide; `launch_vertex` only writes its output (the cost of the dispatch, the
-// bounds check and the store that both kernels pay).
+// sampling and no guide; `reads_vertex` only finds and reads the N_mc candidates' states, as
+// `mcpg_begin` does (the reads no implementation of Alg. 1 avoids: a floor under `guided_vertex`);
+// `launch_vertex` only writes its output (the cost of the dispatch, the bounds check and the
+// store that every kernel pays).
 
-#import mcg::constants::{MCG_FRAC_1_PI, MCG_PI, MCG_WORKGROUP_SIZE}
+#import mcg::constants::{HASHGRID_NO_SLOT, MCG_FRAC_1_PI, MCG_PI, MCG_WORKGROUP_SIZE}
+#import mcg::hashgrid::{hashgrid_normal_class, hashgrid_target_level}
+#import mcg::markov::MarkovGridState
 #import mcg::dispatch::mcg_invocation_index
 #import mcg::sampling::{mcg_cosine_hemisphere_sample, mcg_pcg_hash, mcg_rng_uniform}
 #import mcg::mcpg::{
-    McpgBeginUniforms, McpgFinishUniforms, McpgGuidedVertex, McpgSampleUniforms, mcpg_begin_at, mcpg_finish,
-    mcpg_frame, mcpg_observation_escaped, mcpg_observation_hit, mcpg_sample, mcpg_surface_vertex
+    McpgBeginUniforms, McpgFinishUniforms, McpgGuidedVertex, McpgSampleUniforms, mcpg_begin_at, mcpg_find,
+    mcpg_finish, mcpg_frame, mcpg_key, mcpg_load_state, mcpg_observation_escaped, mcpg_observation_hit,
+    mcpg_params, mcpg_sample, mcpg_surface_vertex, mcpg_table
 }
 
 const SIDE: u32 = 256u;
@@ -73,6 +78,30 @@ fn cosine_vertex(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_work
     var rng = mcg_pcg_hash(i ^ mcg_pcg_hash(mcpg_frame()));
     let d = mcg_cosine_hemisphere_sample(n, vec2<f32>(mcg_rng_uniform(&rng), mcg_rng_uniform(&rng))).direction;
     estimates[i] = select(0.0, 40.0 * MCG_PI, light_hit(x, d) > 0.0);
+}
+
+@compute @workgroup_size(MCG_WORKGROUP_SIZE)
+fn reads_vertex(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = mcg_invocation_index(id, groups);
+    if i >= arrayLength(&estimates) {
+        return;
+    }
+    let x = point(i);
+    let n = vec3<f32>(0.0, 0.0, 1.0);
+    let frame = mcpg_frame();
+    var rng = mcg_pcg_hash(i ^ mcg_pcg_hash(frame));
+    let normal_class = hashgrid_normal_class(n);
+    let level = hashgrid_target_level(mcpg_params.levels, distance(mcpg_params.camera, x));
+    var sum = 0.0;
+    for (var k = 0u; k < mcpg_params.candidates; k += 1u) {
+        let key = mcpg_key(x, normal_class, level, mcg_rng_uniform(&rng), mcg_rng_uniform(&rng), mcg_rng_uniform(&rng));
+        let slot = mcpg_find(mcpg_table(key.is_static), key.key, false, frame);
+        var state: MarkovGridState;
+        if slot != HASHGRID_NO_SLOT && mcpg_load_state(key.is_static, slot, &state) {
+            sum += state.weight_sum;
+        }
+    }
+    estimates[i] = sum;
 }
 
 @compute @workgroup_size(MCG_WORKGROUP_SIZE)
