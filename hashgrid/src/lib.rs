@@ -65,8 +65,8 @@
 //! deciding the chunk before it; with SSE2 instead, four at a time, `find_many` warm
 //! 0.87–0.89 / 0.88–0.96 at 50 instructions, `get_many` 0.84–0.86 / 0.68–0.72); an
 //! insert 0.87–1.06 / 0.71–0.75 (fourth session); [`ConcurrentTable`] inserted from two
-//! threads 5.7× faster than `DashMap` at 2¹⁹ in a criterion run at moderate load (1.45–2.84×
-//! on two cores shared with four builds). The rest of the gap is instructions per lookup:
+//! threads 4.0–4.7× / 3.4–5.4× faster than `DashMap` and 3.9–10.1× at 2²² on the idle VM
+//! (ninth session; 1.45–2.84× on two cores shared with four builds). The rest of the gap is instructions per lookup:
 //! the 4-word key's hash is 20 of `get`'s 33 (foldhash hashes a packed `u64` in ≈ 5) and no
 //! cheaper finisher passes the occupancy suite, while a prototype with the checksum beside the
 //! value (one line per lookup) gained at most 8 %. Run
