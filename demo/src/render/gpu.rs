@@ -388,8 +388,6 @@ struct SceneBuffers {
     emitter_root: u32,
     /// [`GpuParams::emitter_first`].
     emitter_first: u32,
-    /// Entries of the emitter table.
-    emitter_count: u32,
     nodes: GpuBuffer<BvhNode>,
     triangles: GpuBuffer<Triangle>,
     materials: GpuBuffer<Material>,
@@ -931,7 +929,6 @@ impl GpuTracer {
             camera: scene.camera,
             emitter_root: scene.bvh.nodes.len() as u32,
             emitter_first: scene.bvh.triangles.len() as u32,
-            emitter_count: scene.emitters.len() as u32,
             nodes: ctx.storage_buffer("mcg-demo nodes", &nodes),
             triangles: ctx.storage_buffer("mcg-demo triangles", &triangles),
             materials: ctx.storage_buffer("mcg-demo materials", &scene.materials),
@@ -1080,7 +1077,7 @@ impl GpuTracer {
             seed: settings.seed,
             frame,
             method,
-            emitter_count: scene.emitter_count,
+            emitter_count: scene.emitters.len() as u32,
             emitter_first: scene.emitter_first,
             uv_count: scene.uvs.len() as u32,
             texture_count: scene.textures.len() as u32,
@@ -1338,7 +1335,7 @@ impl GpuTracer {
     /// No scene uploaded.
     pub fn emitter_list(&self) -> Result<[u32; 2]> {
         let scene = self.scene()?;
-        Ok([scene.emitter_first, scene.emitter_count])
+        Ok([scene.emitter_first, scene.emitters.len() as u32])
     }
 
     /// Walks the uploaded scene's BVH (or the emitters', [`GpuRay::root`]) for each ray on the
