@@ -845,6 +845,49 @@ fn base_colour_texture_multiplies_the_factor() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// What a file uses and the loader does not read is named in the scene's warnings (one
+/// sentence per feature), and a file that uses none of it has none.
+#[test]
+fn unread_features_are_named_in_the_warnings() {
+    let dir = temp_dir("unread");
+    let plain = minimal_gltf(&dir, "plain.gltf", true, true, 4);
+    let scene = SceneFile::open(&plain).unwrap().build(0.0).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&plain).unwrap()).unwrap();
+    doc["extensionsUsed"] =
+        serde_json::json!(["KHR_lights_punctual", "KHR_materials_emissive_strength"]);
+    doc["extensions"] =
+        serde_json::json!({ "KHR_lights_punctual": { "lights": [{ "type": "point" }] } });
+    doc["materials"][0]["alphaMode"] = serde_json::json!("MASK");
+    doc["materials"][0]["emissiveTexture"] = serde_json::json!({ "index": 0 });
+    doc["materials"][0]["pbrMetallicRoughness"] =
+        serde_json::json!({ "metallicRoughnessTexture": { "index": 0 } });
+    doc["textures"] = serde_json::json!([{ "source": 0 }]);
+    doc["images"] = serde_json::json!([{ "uri": "unused.png" }]);
+    let colours =
+        serde_json::json!({ "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3" });
+    doc["accessors"].as_array_mut().unwrap().push(colours);
+    doc["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = serde_json::json!(1);
+    let path = dir.join("unread.gltf");
+    std::fs::write(&path, serde_json::to_string(&doc).unwrap()).unwrap();
+    let warnings = SceneFile::open(&path).unwrap().build(0.0).unwrap().warnings;
+    for expected in [
+        "extension KHR_lights_punctual",
+        "material 0: the emissiveTexture",
+        "material 0: the metallicRoughnessTexture",
+        "material 0: alphaMode",
+        "mesh 0: vertex colours",
+    ] {
+        assert!(
+            warnings.iter().any(|w| w.contains(expected)),
+            "no warning with {expected:?} in {warnings:?}"
+        );
+    }
+    assert_eq!(warnings.len(), 5, "{warnings:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// Hypothesis: mcg's lobe prior ([`mcg_demo::render::mcmm::CHAIN_PRIOR`], r_p = 0.9) makes
 /// `mcmm`'s chains warm up faster than the paper's uninformed prior (r_p = 0): a neighbour
 /// that adopts a young state hits its light again and confirms it. Scene: the many-lights

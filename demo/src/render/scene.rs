@@ -16,6 +16,9 @@
 //!   base-colour texture (8-bit PNG or JPEG, sRGB-decoded, `TEXCOORD_0`, nearest texel with
 //!   REPEAT wrapping — the glTF sampler is not read), which multiplies `baseColorFactor`.
 //!   A texture on another coordinate set is ignored, and [`Scene::warnings`] says so.
+//!   Emissive, metallic-roughness, normal and occlusion textures, alpha modes, vertex colours
+//!   and extensions other than [`READ_EXTENSIONS`] are not read; [`Scene::warnings`] names
+//!   those that change what a surface looks like (all but normal and occlusion textures).
 //! - **Animations**: translation, rotation and scale channels with STEP or LINEAR
 //!   interpolation (rotations LINEAR by normalised lerp of the quaternions), evaluated at
 //!   the time of the frame ([`frame_time`]); the dynamic built-in scene uses them.
@@ -33,6 +36,9 @@ use bytemuck::{Pod, Zeroable};
 
 use super::bvh::{Bvh, Hit, Triangle};
 use super::material::{Material, NO_TEXTURE};
+
+/// The glTF extensions the loader reads; [`Scene::warnings`] names any other a file uses.
+pub const READ_EXTENSIONS: [&str; 1] = ["KHR_materials_emissive_strength"];
 
 /// Frames per second of the renderer's clock: frame `f` shows the scene at `f / FRAME_RATE`
 /// seconds of its animations.
@@ -372,6 +378,7 @@ impl SceneFile {
 
         let mut warnings = Vec::new();
         let materials = self.materials(&mut warnings)?;
+        self.unread_features(&mut warnings);
 
         let mut triangles = Vec::new();
         let mut uvs = Vec::new();
@@ -464,6 +471,72 @@ impl SceneFile {
             materials.push(material);
         }
         Ok(materials)
+    }
+
+    /// Warns of what the file uses and the renderer does not read, so that a scene that looks
+    /// wrong says why: extensions other than [`READ_EXTENSIONS`] (punctual lights, texture
+    /// transforms, transmission, …), emissive and metallic-roughness textures (the factors
+    /// apply to the whole surface), alpha modes other than `OPAQUE` (rendered opaque) and
+    /// vertex colours. One sentence per feature, naming the materials or meshes that use it.
+    fn unread_features(&self, warnings: &mut Vec<String>) {
+        let document = &self.document;
+        for extension in document.extensions_used() {
+            if !READ_EXTENSIONS.contains(&extension) {
+                warnings.push(format!(
+                    "the file uses the extension {extension}, which the renderer does not read"
+                ));
+            }
+        }
+        let materials_with = |has: &dyn Fn(&gltf::Material) -> bool| -> Option<String> {
+            let which: Vec<String> = document
+                .materials()
+                .filter(|m| has(m))
+                .map(|m| m.index().unwrap_or(0).to_string())
+                .collect();
+            match which.len() {
+                0 => None,
+                1 => Some(format!("material {}", which[0])),
+                _ => Some(format!("materials {}", which.join(", "))),
+            }
+        };
+        if let Some(which) = materials_with(&|m| m.emissive_texture().is_some()) {
+            warnings.push(format!(
+                "{which}: the emissiveTexture is not read, so the whole surface emits \
+                 emissiveFactor × strength"
+            ));
+        }
+        if let Some(which) = materials_with(&|m| {
+            m.pbr_metallic_roughness()
+                .metallic_roughness_texture()
+                .is_some()
+        }) {
+            warnings.push(format!(
+                "{which}: the metallicRoughnessTexture is not read, so metallicFactor and \
+                 roughnessFactor apply to the whole surface"
+            ));
+        }
+        if let Some(which) =
+            materials_with(&|m| m.alpha_mode() != gltf::material::AlphaMode::Opaque)
+        {
+            warnings.push(format!(
+                "{which}: alphaMode MASK or BLEND is not read; the surface is rendered opaque"
+            ));
+        }
+        let coloured: Vec<String> = document
+            .meshes()
+            .filter(|mesh| {
+                mesh.primitives()
+                    .any(|p| p.get(&gltf::Semantic::Colors(0)).is_some())
+            })
+            .map(|mesh| mesh.index().to_string())
+            .collect();
+        if !coloured.is_empty() {
+            warnings.push(format!(
+                "mesh{} {}: vertex colours (COLOR_0) are not read",
+                if coloured.len() > 1 { "es" } else { "" },
+                coloured.join(", ")
+            ));
+        }
     }
 
     /// The camera of `node` placed by its `world` transform, if it is a perspective one.
