@@ -524,3 +524,49 @@ fn volume_vertices_take_the_cpus_key_direction() {
         assert_eq!(out.lobe, codes::MCPG_SCATTER_ISOTROPIC);
     }
 }
+
+/// `fitted_config` gives the largest adaptive table the device binds: the halved table builds,
+/// twice it is `GuideTooLarge`; a configuration that fits, or one `new` rejects for another
+/// reason, comes back unchanged. The shared context binds at most WebGPU's default 128 MiB,
+/// which 2²⁴ slots (704 MiB) exceed.
+#[test]
+fn fitted_config_is_the_largest_adaptive_table_the_device_binds() {
+    let Some(ctx) = mcg_gpu_backend::testing::gpu_or_skip(
+        "fitted_config_is_the_largest_adaptive_table_the_device_binds",
+    ) else {
+        return;
+    };
+    let (_, small) = configs()[0];
+    assert_eq!(GpuMcpgGuide::fitted_config(ctx, &small), small);
+    let invalid = GuideConfig {
+        adaptive_capacity: 4,
+        ..small
+    };
+    assert_eq!(GpuMcpgGuide::fitted_config(ctx, &invalid), invalid);
+    let large = GuideConfig {
+        adaptive_capacity: 1 << 24,
+        ..small
+    };
+    let fitted = GpuMcpgGuide::fitted_config(ctx, &large);
+    assert!(
+        fitted.adaptive_capacity < large.adaptive_capacity && fitted.adaptive_capacity >= 1 << 12,
+        "{}",
+        fitted.adaptive_capacity
+    );
+    assert_eq!(
+        fitted,
+        GuideConfig {
+            adaptive_capacity: fitted.adaptive_capacity,
+            ..large
+        }
+    );
+    GpuMcpgGuide::new(ctx, &fitted).unwrap();
+    let twice = GuideConfig {
+        adaptive_capacity: 2 * fitted.adaptive_capacity,
+        ..large
+    };
+    assert!(matches!(
+        GpuMcpgGuide::new(ctx, &twice),
+        Err(mcg_gpu_backend::GpuError::GuideTooLarge { .. })
+    ));
+}

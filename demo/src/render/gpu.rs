@@ -619,6 +619,9 @@ impl GpuTracer {
     /// on the first call) is rebuilt around it. The emission-only directions' allocation
     /// starts again at K̄ at every depth.
     /// [`GpuTracer::render_frame`] with [`Method::Mcpg`] then learns from frame to frame.
+    /// An adaptive table larger than the device binds is halved until it fits
+    /// ([`GpuMcpgGuide::fitted_config`]; lavapipe holds 2²¹ slots, a 1920 × 1080 image asks
+    /// for 2²⁴), and a line on standard error says so.
     ///
     /// # Errors
     /// When the device binds fewer than [`MCPG_STORAGE_BUFFERS`] storage buffers per stage,
@@ -627,6 +630,21 @@ impl GpuTracer {
         // A fresh render's first frame spends K̄ at every depth, as on the CPU.
         self.set_mcpg_emission_allocation(self.mcpg_emission.policy());
         self.mcpg_moments = None;
+        let fitted = GpuMcpgGuide::fitted_config(&self.ctx, config);
+        if fitted.adaptive_capacity < config.adaptive_capacity {
+            let limits = self.ctx.device().limits();
+            eprintln!(
+                "mcg-demo: the device binds at most {} MiB per buffer, so the GPU guide's \
+                 adaptive table has {} slots instead of {} (the CPU guide's)",
+                limits
+                    .max_storage_buffer_binding_size
+                    .min(limits.max_buffer_size)
+                    >> 20,
+                fitted.adaptive_capacity,
+                config.adaptive_capacity
+            );
+        }
+        let config = &fitted;
         if let Some(g) = &mut self.guided
             && g.guide.config() == config
         {

@@ -193,11 +193,12 @@ impl GuideConfig {
     }
 
     /// The adaptive table's slots for an image of `pixels`: [`SLOTS_PER_PIXEL`] per pixel,
-    /// rounded up to a power of two, at least 2¹² and at most [`PAPER`](Self::PAPER)'s 2²⁰.
+    /// rounded up to a power of two, at least 2¹² and at most [`MAX_ADAPTIVE_CAPACITY`]
+    /// (2²⁴ at 1920 × 1080).
     #[must_use]
     pub fn adaptive_capacity_for(pixels: u64) -> u32 {
         let slots = pixels.saturating_mul(u64::from(SLOTS_PER_PIXEL));
-        let max = u64::from(Self::PAPER.adaptive_capacity);
+        let max = u64::from(MAX_ADAPTIVE_CAPACITY);
         slots.clamp(1 << 12, max).next_power_of_two() as u32
     }
 
@@ -221,6 +222,19 @@ impl GuideConfig {
 
 /// Adaptive-table slots per pixel of [`GuideConfig::for_pixels`].
 pub const SLOTS_PER_PIXEL: u32 = 8;
+
+/// The most adaptive-table slots [`GuideConfig::for_pixels`] gives: 2²⁴, [`SLOTS_PER_PIXEL`]
+/// per pixel up to 1920 × 1080 (the paper's engine ships 32,777,259 slots). Memory per slot:
+/// 72 bytes in the CPU guide (a state on its own 64-byte line, its checksum and age; 1.1 GiB
+/// at 2²⁴), 44 bytes in `mcg-gpu-backend`'s `GpuMcpgGuide` (704 MiB).
+///
+/// It used to be [`GuideConfig::PAPER`]'s 2²⁰, which a 1920 × 1080 image outgrows: with
+/// [`GuideConfig::for_camera`]'s cells a grid holds about 1.75 states per pixel once learned
+/// (28,700 at 128 × 128 after 64 frames of `mcg-demo`'s hidden-light room), so about 3.6
+/// million at 1920 × 1080, and a full table stops storing new chains. At 128 × 128 with
+/// 2¹³ slots (3.5 times too few) the 64-frame error was 1.41 times that with 2¹⁷, with 2¹⁴
+/// (1.75 times too few) 1.08 times (`benches/README.md`).
+pub const MAX_ADAPTIVE_CAPACITY: u32 = 1 << 24;
 
 impl Default for GuideConfig {
     /// [`GuideConfig::PAPER`].
@@ -1193,8 +1207,12 @@ mod tests {
         assert_eq!(GuideConfig::adaptive_capacity_for(16 * 16), 1 << 12);
         assert_eq!(GuideConfig::adaptive_capacity_for(128 * 128), 1 << 17);
         assert_eq!(GuideConfig::adaptive_capacity_for(100 * 100), 1 << 17);
-        assert_eq!(GuideConfig::adaptive_capacity_for(1920 * 1080), 1 << 20);
-        assert_eq!(GuideConfig::adaptive_capacity_for(u64::MAX), 1 << 20);
+        assert_eq!(GuideConfig::adaptive_capacity_for(1920 * 1080), 1 << 24);
+        assert_eq!(GuideConfig::adaptive_capacity_for(3840 * 2160), 1 << 24);
+        assert_eq!(
+            GuideConfig::adaptive_capacity_for(u64::MAX),
+            MAX_ADAPTIVE_CAPACITY
+        );
         let c = GuideConfig::PAPER.for_pixels(64 * 64);
         assert_eq!(c.adaptive_capacity, 1 << 15);
         assert_eq!(c.static_capacity, GuideConfig::PAPER.static_capacity);

@@ -100,9 +100,9 @@ pub use grid::{GridEnsemble, GridSlot, GridUniforms};
 #[cfg(feature = "std")]
 pub use guide::{
     BeginUniforms, CandidateUniforms, FinishUniforms, Guide, GuideConfig, GuidedSample,
-    GuidedVertex, Hemisphere, IsotropicPhase, Lambertian, MAX_CANDIDATES, PAPER_SCENE_EXTENT,
-    PendingFinish, SLOTS_PER_PIXEL, SampleUniforms, Scatter, Traced, Transition, Vertex,
-    VertexObservation, luminance,
+    GuidedVertex, Hemisphere, IsotropicPhase, Lambertian, MAX_ADAPTIVE_CAPACITY, MAX_CANDIDATES,
+    PAPER_SCENE_EXTENT, PendingFinish, SLOTS_PER_PIXEL, SampleUniforms, Scatter, Traced,
+    Transition, Vertex, VertexObservation, luminance,
 };
 #[cfg(feature = "std")]
 pub use irradiance_cache::{CacheCell, CacheConfig, IrradianceCache};

@@ -101,6 +101,28 @@ impl GpuMcpgGuide {
     /// and the candidate is dropped, as a torn atomic read was.
     pub const GUIDE_WORDS_VEC4_BINDING: u32 = 3;
 
+    /// `config` with its adaptive table halved until the guide's two buffers fit one storage
+    /// binding of `ctx`'s device (`max_storage_buffer_binding_size` and `max_buffer_size`):
+    /// the largest adaptive grid of this configuration the device holds, for
+    /// [`new`](Self::new). The table is not halved below 2¹² slots, and a configuration
+    /// [`new`](Self::new) rejects for another reason comes back unchanged (`new` says why).
+    ///
+    /// A `GuideConfig::for_pixels` table at 1920 × 1080 (2²⁴ slots, 704 MiB) fits a desktop
+    /// GPU's bindings; WebGPU's default 128 MiB binding (and lavapipe's) holds 2²¹.
+    #[must_use]
+    pub fn fitted_config(ctx: &GpuContext, config: &GuideConfig) -> GuideConfig {
+        let maximum = buffer_maximum(ctx);
+        let mut fitted = *config;
+        while fitted.adaptive_capacity / 2 >= 1 << 12 {
+            match McpgGpuParams::new(&fitted) {
+                Ok((_, sizes)) if 4 * sizes.table_words.max(sizes.guide_words) <= maximum => break,
+                Ok(_) | Err(GpuError::GuideTooLarge { .. }) => fitted.adaptive_capacity /= 2,
+                Err(_) => return *config,
+            }
+        }
+        fitted
+    }
+
     /// An empty guide on `ctx`'s device.
     ///
     /// # Errors
@@ -108,7 +130,7 @@ impl GpuMcpgGuide {
     /// [`GpuError::GuideTooLarge`] when a buffer exceeds the device's binding size.
     pub fn new(ctx: &GpuContext, config: &GuideConfig) -> Result<Self, GpuError> {
         let (params, sizes) = McpgGpuParams::new(config)?;
-        let maximum = ctx.device().limits().max_storage_buffer_binding_size;
+        let maximum = buffer_maximum(ctx);
         for words in [sizes.table_words, sizes.guide_words] {
             let bytes = 4 * words;
             if bytes > maximum {
@@ -377,4 +399,12 @@ impl GpuMcpgGuide {
             params: size_of::<McpgGpuParams>() as u64,
         }
     }
+}
+
+/// The largest buffer the guide may bind on `ctx`'s device, in bytes.
+fn buffer_maximum(ctx: &GpuContext) -> u64 {
+    let limits = ctx.device().limits();
+    limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size)
 }
