@@ -7,8 +7,8 @@
 mod common;
 
 use common::{
-    assert_lit_pixels_agree, assert_pixel_mean, assert_spread, assert_tiles_agree, furnace,
-    scenes_dir, tile_stats,
+    assert_lit_pixels_agree, assert_pixel_mean, assert_spread, assert_tiles_agree,
+    emissive_texture_furnace, furnace, scenes_dir, tile_stats, with_texture,
 };
 use glam::Vec3;
 use mcg_demo::render::cpu::{BsdfSampler, Method, RenderSettings, render_frame};
@@ -16,7 +16,7 @@ use mcg_demo::render::emission_allocation::Allocation;
 use mcg_demo::render::gpu::{GpuHit, GpuRay, GpuTiming, GpuTracer, SEGMENT_BATCH, frame_counts};
 use mcg_demo::render::guided::{McpgSampler, Reflected, guide_config};
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
-use mcg_demo::render::scene::{Scene, SceneFile, TextureInfo, TriangleUv};
+use mcg_demo::render::scene::{Scene, SceneFile};
 use mcg_demo::render::{Device, ProbeOptions, RenderArgs, render};
 use mcg_gpu_backend::sampling::next_uniform;
 use mcg_gpu_backend::testing::gpu_or_skip;
@@ -711,66 +711,118 @@ fn gpu_tiles_cover_every_pixel() {
     }
 }
 
-/// Base-colour textures on the GPU: the furnace with a 2×2 texture (red, green / grey, blue)
-/// on every face, texture coordinates (0,0), (1,0), (0,1) at each triangle's corners, `bsdf`,
-/// B = 1, 1 spp, seed 9. Every path returns exactly L_e + ρ_tex(x₁)·L_e, with x₁ the camera
-/// ray's hit, which both devices find from the same jitter; so the GPU image equals the CPU
-/// image to f32 rounding, except where x₁ sits on a texel boundary. Threshold: ≥ 99 % of the
-/// 32×32 pixels equal to 10⁻⁵ relative, and at least three distinct pixel values (the texture
-/// shows). Ignoring the texture on the GPU leaves 0 of 1024 pixels equal (checked once).
+/// Base-colour and emissive textures on the GPU: the furnace with [`with_texture`]'s 2×2
+/// texture (red, green / grey, blue) on every face as its base-colour texture, then as its
+/// emissive texture, `bsdf`, B = 1, 1 spp, seed 9. Every path returns exactly
+/// L_e(x₁) + ρ(x₁)·L_e(x₂), with x₁ the camera ray's hit and x₂ the next, which both devices
+/// find from the same stream; so the GPU image equals the CPU image to f32 rounding, except
+/// where a hit sits on a texel boundary. Threshold: ≥ 99 % of the 32×32 pixels equal to 10⁻⁵
+/// relative, and at least three distinct pixel values (the texture shows). Ignoring the
+/// base-colour texture on the GPU leaves 0 of 1024 pixels equal, ignoring the emissive one
+/// (checked once each).
 #[test]
-fn gpu_reads_base_colour_textures_as_the_cpu() {
+fn gpu_reads_textures_as_the_cpu() {
     let le = Vec3::new(1.0, 2.0, 0.5);
-    let mut scene = furnace(Vec3::ONE, le);
-    scene.materials[0].base_color_texture = 0;
-    scene.textures = vec![TextureInfo {
-        offset: 0,
-        width: 2,
-        height: 2,
-        pad: 0,
-    }];
-    scene.texels = vec![
-        [1.0, 0.0, 0.0, 1.0],
-        [0.0, 1.0, 0.0, 1.0],
-        [0.5, 0.5, 0.5, 1.0],
-        [0.0, 0.0, 1.0, 1.0],
-    ];
-    scene.uvs = vec![
-        TriangleUv {
-            uv: [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
-            pad: [0.0; 2],
+    for emissive in [false, true] {
+        let mut scene = with_texture(furnace(Vec3::ONE, le));
+        if emissive {
+            scene.materials[0].emissive_texture = 0;
+        } else {
+            scene.materials[0].base_color_texture = 0;
+        }
+        let Some(mut gpu) = tracer("gpu_reads_textures_as_the_cpu", &scene) else {
+            return;
         };
-        scene.bvh.triangles.len()
-    ];
-    let Some(mut gpu) = tracer("gpu_reads_base_colour_textures_as_the_cpu", &scene) else {
+        let settings = RenderSettings {
+            width: 32,
+            height: 32,
+            spp: 1,
+            bounces: 1,
+            seed: 9,
+            method: Method::Bsdf,
+        };
+        let (g, _) = gpu.render_frame(&settings, 0).unwrap();
+        let c = render_frame(&scene, &settings, 0, || BsdfSampler, || ());
+        let same = c
+            .iter()
+            .zip(&g)
+            .filter(|(c, g)| (**c - **g).abs().max_element() <= 1e-5 * c.max_element())
+            .count();
+        let mut distinct: Vec<[u32; 3]> = c
+            .iter()
+            .map(|p| p.to_array().map(|x| (x * 1e4).round() as u32))
+            .collect();
+        distinct.sort_unstable();
+        distinct.dedup();
+        let label = if emissive { "emissive" } else { "base colour" };
+        assert!(
+            distinct.len() >= 3,
+            "{label}: the texture shows: {distinct:?}"
+        );
+        assert!(
+            same * 100 >= c.len() * 99,
+            "{label}: only {same} of {} pixels agree",
+            c.len()
+        );
+    }
+}
+
+/// Emissive textures where the GPU reads emission away from a hit: a light sample reads the
+/// texel at the point it samples (`light_sample`), and `mcpg`'s emission-only directions the
+/// texel of the scene triangle behind the emitters' copy they meet (`emitter_emission`,
+/// `Triangle::source`). Scene: [`emissive_texture_furnace`], 32×32 pixels (4 tiles of 16×16),
+/// B = 2. (1) `nee` follows the CPU's random stream, 1 spp, seed 5: at least 90 % of the
+/// pixels agree to 10⁻³ (the CPU's light samples are checked unbiased in
+/// `render::textured_emission_is_unbiased_for_every_method`); the factor alone in the WGSL light
+/// sample leaves 35 of 1024 equal. (2) `mcpg` with 2 emission-only directions per vertex (16
+/// runs of an emptied guide over 2 frames of 4 spp, seeds 100–115) agrees with `nee` (64 frames of 4 spp, seed 12) per tile and channel
+/// by Welch's t-test, Bonferroni over the 12 tests at family-wise α = 10⁻⁴; the factor alone
+/// for the emission-only directions fails it (checked once each).
+#[test]
+fn gpu_reads_emissive_textures_where_light_is_sampled() {
+    let scene = emissive_texture_furnace();
+    let (w, h) = (32u32, 32u32);
+    let Some(mut gpu) = mcpg_tracer(
+        "gpu_reads_emissive_textures_where_light_is_sampled",
+        &scene,
+        w,
+        h,
+    ) else {
         return;
     };
-    let settings = RenderSettings {
-        width: 32,
-        height: 32,
-        spp: 1,
-        bounces: 1,
-        seed: 9,
-        method: Method::Bsdf,
+    let settings = |method, spp, seed| RenderSettings {
+        width: w,
+        height: h,
+        spp,
+        bounces: 2,
+        seed,
+        method,
     };
-    let (g, _) = gpu.render_frame(&settings, 0).unwrap();
-    let c = render_frame(&scene, &settings, 0, || BsdfSampler, || ());
-    let same = c
-        .iter()
-        .zip(&g)
-        .filter(|(c, g)| (**c - **g).abs().max_element() <= 1e-5 * c.max_element())
-        .count();
-    let mut distinct: Vec<[u32; 3]> = c
-        .iter()
-        .map(|p| p.to_array().map(|x| (x * 1e4).round() as u32))
-        .collect();
-    distinct.sort_unstable();
-    distinct.dedup();
-    assert!(distinct.len() >= 3, "the texture shows: {distinct:?}");
-    assert!(
-        same * 100 >= c.len() * 99,
-        "only {same} of {} pixels agree",
-        c.len()
+    let one = settings(Method::Nee, 1, 5);
+    let (g, _) = gpu.render_frame(&one, 3).unwrap();
+    let c = render_frame(&scene, &one, 3, || BsdfSampler, || ());
+    assert_lit_pixels_agree(&c, &g, "nee, emissive texture");
+    let nee = settings(Method::Nee, 4, 12);
+    let reference = tile_stats((w, h, 16, 64), |f| gpu.render_frame(&nee, f).unwrap().0);
+    let config = guide_config(&scene, w, h);
+    gpu.set_mcpg_emission_samples(2);
+    let guided = tile_stats((w, h, 16, 16), |run| {
+        let s = settings(Method::Mcpg, 4, 100 + run);
+        gpu.start_mcpg(&config).unwrap();
+        let mut sum = vec![Vec3::ZERO; (w * h) as usize];
+        for f in 0..2 {
+            let (image, _) = gpu.render_frame(&s, f).unwrap();
+            for (a, p) in sum.iter_mut().zip(image) {
+                *a += p / 2.0;
+            }
+        }
+        sum
+    });
+    assert_tiles_agree(
+        &guided,
+        &reference,
+        1e-4,
+        "GPU mcpg vs GPU nee, emissive texture",
     );
 }
 

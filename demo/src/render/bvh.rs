@@ -51,8 +51,10 @@ pub struct Triangle {
     pub emitter_pmf: f32,
     /// `v2 − v0`.
     pub e2: [f32; 3],
-    /// Padding to 16 bytes; always 0.
-    pub pad: u32,
+    /// In the emitters' tree ([`Scene::emitter_bvh`](super::scene::Scene::emitter_bvh)), the
+    /// index of the same triangle in the scene's tree (whose texture coordinates it takes);
+    /// 0 elsewhere.
+    pub source: u32,
 }
 
 impl Triangle {
@@ -65,7 +67,7 @@ impl Triangle {
             e1: (v1 - v0).to_array(),
             emitter_pmf: 0.0,
             e2: (v2 - v0).to_array(),
-            pad: 0,
+            source: 0,
         }
     }
 

@@ -25,7 +25,7 @@ use glam::Vec3;
 use mcg_gpu_backend::sampling::{next_uniform, pcg_hash};
 use rayon::prelude::*;
 
-use super::bvh::Triangle;
+use super::bvh::{Hit, Triangle};
 use super::material::{BsdfSample, Material};
 use super::scene::Scene;
 
@@ -453,7 +453,7 @@ fn emission_along(scene: &Scene, origin: Vec3, d: Vec3) -> Vec3 {
     if scene.bvh.occluded(origin, d, 0.0, e.t) {
         return Vec3::ZERO;
     }
-    scene.materials[scene.emitter_bvh.triangles[e.triangle as usize].material as usize].emission()
+    scene.emitter_emission(e.triangle, e.b1, e.b2)
 }
 
 /// What a surface of `material` hit at cosine `cos_front` with its front normal emits back
@@ -610,7 +610,8 @@ pub(crate) fn direct_light(
     let (t, pmf) = scene.pick_emitter(u[0]);
     let tri = scene.bvh.triangles[t as usize];
     let su = u[1].sqrt();
-    let y = tri.point(su * (1.0 - u[2]), su * u[2]);
+    let (b1, b2) = (su * (1.0 - u[2]), su * u[2]);
+    let y = tri.point(b1, b2);
     let to_light = y - origin;
     let dist2 = to_light.length_squared();
     let dist = dist2.sqrt();
@@ -626,11 +627,15 @@ pub(crate) fn direct_light(
         return None;
     }
     let light_pdf = pmf / area * dist2 / cos_light;
-    Some((
-        f_cos * scene.material(t).emission() / light_pdf,
-        light_pdf,
-        wi,
-    ))
+    let emitted = scene
+        .material_at(&Hit {
+            t: dist,
+            triangle: t,
+            b1,
+            b2,
+        })
+        .emission();
+    Some((f_cos * emitted / light_pdf, light_pdf, wi))
 }
 
 /// Renders one frame: `spp` paths per pixel, returns the per-pixel mean radiance, row-major

@@ -26,7 +26,8 @@ use mcg_vmf::Frame;
 /// (the integrator has no delta lobes).
 pub const MIN_ALPHA: f32 = 1e-3;
 
-/// [`Material::base_color_texture`] of a material without texture.
+/// [`Material::base_color_texture`] and [`Material::emissive_texture`] of a material without
+/// that texture.
 pub const NO_TEXTURE: u32 = u32::MAX;
 
 /// A material, 48 bytes (three `vec4`s in WGSL).
@@ -44,8 +45,11 @@ pub struct Material {
     /// Index of the base-colour texture in the scene's textures, or [`NO_TEXTURE`]; the
     /// texture's linear RGB multiplies `base_color`.
     pub base_color_texture: u32,
+    /// Index of the emissive texture in the scene's textures, or [`NO_TEXTURE`]; the
+    /// texture's linear RGB multiplies `emission` (glTF 2.0, `emissiveTexture`).
+    pub emissive_texture: u32,
     /// Padding to 16 bytes; always 0.
-    pub pad: [u32; 3],
+    pub pad: [u32; 2],
 }
 
 impl Default for Material {
@@ -57,7 +61,8 @@ impl Default for Material {
             emission: [0.0; 3],
             roughness: 1.0,
             base_color_texture: NO_TEXTURE,
-            pad: [0; 3],
+            emissive_texture: NO_TEXTURE,
+            pad: [0; 2],
         }
     }
 }
@@ -91,7 +96,13 @@ impl Material {
         Vec3::from(self.emission)
     }
 
-    /// Whether the material emits at all.
+    /// Whether the material has a texture (and so needs texture coordinates).
+    #[must_use]
+    pub fn is_textured(&self) -> bool {
+        self.base_color_texture != NO_TEXTURE || self.emissive_texture != NO_TEXTURE
+    }
+
+    /// Whether the material emits at all (its factor; a texture may darken parts of it).
     #[must_use]
     pub fn is_emitter(&self) -> bool {
         self.emission.iter().any(|&e| e > 0.0)

@@ -13,10 +13,13 @@
 //!   section "Cameras"). `yfov` is used; the aspect ratio is the image's.
 //! - **Materials** ([`Material`]): `baseColorFactor` (RGB), `metallicFactor`,
 //!   `roughnessFactor`, `emissiveFactor × KHR_materials_emissive_strength`, and the
-//!   base-colour texture (8-bit PNG or JPEG, sRGB-decoded, `TEXCOORD_0`, nearest texel with
-//!   REPEAT wrapping — the glTF sampler is not read), which multiplies `baseColorFactor`.
+//!   base-colour and emissive textures (8-bit PNG or JPEG, sRGB-decoded, `TEXCOORD_0`,
+//!   nearest texel with REPEAT wrapping — the glTF sampler is not read), which multiply
+//!   `baseColorFactor` and the emission. Light sampling picks emitting triangles by area ×
+//!   the luminance of the factors alone, so a dark part of an emissive texture is picked as
+//!   often as a bright one (unbiased, only less efficient).
 //!   A texture on another coordinate set is ignored, and [`Scene::warnings`] says so.
-//!   Emissive, metallic-roughness, normal and occlusion textures, alpha modes, vertex colours
+//!   Metallic-roughness, normal and occlusion textures, alpha modes, vertex colours
 //!   and extensions other than [`READ_EXTENSIONS`] are not read; [`Scene::warnings`] names
 //!   those that change what a surface looks like (all but normal and occlusion textures).
 //! - **Animations**: translation, rotation and scale channels with STEP or LINEAR
@@ -325,9 +328,10 @@ impl SceneFile {
         if document.scenes().len() == 0 {
             return Err(SceneError::NoScene { path });
         }
-        let textured = document
-            .materials()
-            .any(|m| m.pbr_metallic_roughness().base_color_texture().is_some());
+        let textured = document.materials().any(|m| {
+            m.pbr_metallic_roughness().base_color_texture().is_some()
+                || m.emissive_texture().is_some()
+        });
         let mut images = Vec::new();
         if textured {
             let decoded =
@@ -431,26 +435,31 @@ impl SceneFile {
             let [r, g, b, _] = pbr.base_color_factor();
             let strength = m.emissive_strength().unwrap_or(1.0);
             let emission = Vec3::from(m.emissive_factor()) * strength;
-            let texture = match pbr.base_color_texture() {
-                Some(info) if info.tex_coord() == 0 => info.texture().source().index() as u32,
-                Some(info) => {
-                    warnings.push(format!(
-                        "material {} takes its base-colour texture from TEXCOORD_{}; only \
-                         TEXCOORD_0 is read, so its baseColorFactor is used alone",
-                        m.index().unwrap_or(0),
-                        info.tex_coord()
-                    ));
-                    NO_TEXTURE
-                }
-                None => NO_TEXTURE,
-            };
+            let mut texture =
+                |info: Option<gltf::texture::Info>, what: &str, factor: &str| match info {
+                    Some(info) if info.tex_coord() == 0 => info.texture().source().index() as u32,
+                    Some(info) => {
+                        warnings.push(format!(
+                            "material {} takes its {what} texture from TEXCOORD_{}; only \
+                             TEXCOORD_0 is read, so its {factor} is used alone",
+                            m.index().unwrap_or(0),
+                            info.tex_coord()
+                        ));
+                        NO_TEXTURE
+                    }
+                    None => NO_TEXTURE,
+                };
+            let base_color_texture =
+                texture(pbr.base_color_texture(), "base-colour", "baseColorFactor");
+            let emissive_texture = texture(m.emissive_texture(), "emissive", "emissiveFactor");
             let material = Material {
                 base_color: [r, g, b],
                 metallic: pbr.metallic_factor().clamp(0.0, 1.0),
                 emission: emission.to_array(),
                 roughness: pbr.roughness_factor().clamp(0.0, 1.0),
-                base_color_texture: texture,
-                pad: [0; 3],
+                base_color_texture,
+                emissive_texture,
+                pad: [0; 2],
             };
             let values = [
                 r,
@@ -475,8 +484,8 @@ impl SceneFile {
 
     /// Warns of what the file uses and the renderer does not read, so that a scene that looks
     /// wrong says why: extensions other than [`READ_EXTENSIONS`] (punctual lights, texture
-    /// transforms, transmission, …), emissive and metallic-roughness textures (the factors
-    /// apply to the whole surface), alpha modes other than `OPAQUE` (rendered opaque) and
+    /// transforms, transmission, …), metallic-roughness textures (the factors apply to the
+    /// whole surface), alpha modes other than `OPAQUE` (rendered opaque) and
     /// vertex colours. One sentence per feature, naming the materials or meshes that use it.
     fn unread_features(&self, warnings: &mut Vec<String>) {
         let document = &self.document;
@@ -499,12 +508,6 @@ impl SceneFile {
                 _ => Some(format!("materials {}", which.join(", "))),
             }
         };
-        if let Some(which) = materials_with(&|m| m.emissive_texture().is_some()) {
-            warnings.push(format!(
-                "{which}: the emissiveTexture is not read, so the whole surface emits \
-                 emissiveFactor × strength"
-            ));
-        }
         if let Some(which) = materials_with(&|m| {
             m.pbr_metallic_roughness()
                 .metallic_roughness_texture()
@@ -623,7 +626,7 @@ impl SceneFile {
             let material = primitive.material().index().map_or(0, |i| i as u32 + 1);
             let tex_coords: Vec<[f32; 2]> = match reader
                 .read_tex_coords(0)
-                .filter(|_| materials[material as usize].base_color_texture != NO_TEXTURE)
+                .filter(|_| materials[material as usize].is_textured())
             {
                 Some(t) => t.into_f32().collect(),
                 None => Vec::new(),
@@ -855,7 +858,10 @@ impl Scene {
         *emitter_cdf.last_mut().expect("non-empty") = 1.0;
         let emitter_triangles: Vec<Triangle> = emitters
             .iter()
-            .map(|&i| bvh.triangles[i as usize])
+            .map(|&i| Triangle {
+                source: i,
+                ..bvh.triangles[i as usize]
+            })
             .collect();
         Some(Self {
             camera,
@@ -871,31 +877,57 @@ impl Scene {
         })
     }
 
-    /// The material at a hit, with its base-colour texture (if any) looked up at the hit's
-    /// texture coordinates — nearest texel, REPEAT wrapping — and multiplied in.
+    /// The material at a hit, with its base-colour and emissive textures (where it has them)
+    /// looked up at the hit's texture coordinates — nearest texel, REPEAT wrapping — and
+    /// multiplied into `base_color` and `emission`.
     #[must_use]
     pub fn material_at(&self, hit: &Hit) -> Material {
         let mut m = *self.material(hit.triangle);
-        if m.base_color_texture == NO_TEXTURE {
-            return m;
+        if let Some(texel) = self.texel(m.base_color_texture, hit) {
+            for (b, t) in m.base_color.iter_mut().zip(texel) {
+                *b *= t;
+            }
         }
-        let (Some(uv), Some(tex)) = (
-            self.uvs.get(hit.triangle as usize),
-            self.textures.get(m.base_color_texture as usize),
-        ) else {
-            return m;
+        if let Some(texel) = self.texel(m.emissive_texture, hit) {
+            for (e, t) in m.emission.iter_mut().zip(texel) {
+                *e *= t;
+            }
+        }
+        m
+    }
+
+    /// The emitted radiance of the emitters' tree's triangle `emitter` at barycentrics
+    /// (`b1`, `b2`): its material's emission with the emissive texture of the same triangle
+    /// in the scene's tree ([`Triangle::source`]).
+    #[must_use]
+    pub fn emitter_emission(&self, emitter: u32, b1: f32, b2: f32) -> Vec3 {
+        let triangle = self.emitter_bvh.triangles[emitter as usize].source;
+        let hit = Hit {
+            t: 0.0,
+            triangle,
+            b1,
+            b2,
         };
+        self.material_at(&hit).emission()
+    }
+
+    /// Texture `texture`'s linear RGBA at `hit`'s texture coordinates (nearest texel, REPEAT
+    /// wrapping); `None` for [`NO_TEXTURE`] or a triangle without coordinates.
+    fn texel(&self, texture: u32, hit: &Hit) -> Option<[f32; 4]> {
+        if texture == NO_TEXTURE {
+            return None;
+        }
+        let uv = self.uvs.get(hit.triangle as usize)?;
+        let tex = self.textures.get(texture as usize)?;
         let b0 = 1.0 - hit.b1 - hit.b2;
         let u = b0 * uv.uv[0][0] + hit.b1 * uv.uv[1][0] + hit.b2 * uv.uv[2][0];
         let v = b0 * uv.uv[0][1] + hit.b1 * uv.uv[1][1] + hit.b2 * uv.uv[2][1];
         let x = ((u - u.floor()) * tex.width as f32) as u32;
         let y = ((v - v.floor()) * tex.height as f32) as u32;
-        let texel = self.texels
-            [(tex.offset + y.min(tex.height - 1) * tex.width + x.min(tex.width - 1)) as usize];
-        for (b, t) in m.base_color.iter_mut().zip(texel) {
-            *b *= t;
-        }
-        m
+        Some(
+            self.texels
+                [(tex.offset + y.min(tex.height - 1) * tex.width + x.min(tex.width - 1)) as usize],
+        )
     }
 
     /// The material of triangle `triangle` (leaf order).

@@ -9,7 +9,7 @@ use mcg_demo::render::bvh::Triangle;
 use mcg_demo::render::cpu::Method;
 use mcg_demo::render::material::Material;
 use mcg_demo::render::mcmm::McmmScore;
-use mcg_demo::render::scene::{Camera, Scene};
+use mcg_demo::render::scene::{Camera, Scene, TextureInfo, TriangleUv};
 use mcg_demo::render::{Device, ProbeOptions, RenderArgs};
 use mcg_tests::{RunningStats, welch_t_test};
 
@@ -64,6 +64,42 @@ pub fn furnace(rho: Vec3, le: Vec3) -> Scene {
         Vec::new(),
     )
     .unwrap()
+}
+
+/// A 2×2 texture (red, green / grey, blue; linear RGBA) as texture 0 of `scene`, with texture
+/// coordinates (0,0), (1,0), (0,1) at every triangle's corners, rotated by one corner from
+/// triangle to triangle (so that a texel read through the wrong triangle shows): each
+/// triangle shows three of the texels.
+pub fn with_texture(mut scene: Scene) -> Scene {
+    scene.textures = vec![TextureInfo {
+        offset: 0,
+        width: 2,
+        height: 2,
+        pad: 0,
+    }];
+    scene.texels = vec![
+        [1.0, 0.0, 0.0, 1.0],
+        [0.0, 1.0, 0.0, 1.0],
+        [0.5, 0.5, 0.5, 1.0],
+        [0.0, 0.0, 1.0, 1.0],
+    ];
+    let corners = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+    scene.uvs = (0..scene.bvh.triangles.len())
+        .map(|i| TriangleUv {
+            uv: [0, 1, 2].map(|k| corners[(k + i) % 3]),
+            pad: [0.0; 2],
+        })
+        .collect();
+    scene
+}
+
+/// The furnace (ρ = 0.5 grey, L_e = (2, 3, 1)) with [`with_texture`]'s texture as the
+/// emissive texture of every face: an emission that varies across each triangle, which a
+/// light sample must read at the point it samples.
+pub fn emissive_texture_furnace() -> Scene {
+    let mut scene = with_texture(furnace(Vec3::splat(0.5), Vec3::new(2.0, 3.0, 1.0)));
+    scene.materials[0].emissive_texture = 0;
+    scene
 }
 
 /// Per `tile × tile` tile (row-major) and channel of a `w × h` image, over `samples`

@@ -63,7 +63,7 @@ struct Triangle {
     e1: vec3<f32>,
     emitter_pmf: f32,
     e2: vec3<f32>,
-    pad: u32,
+    source: u32,
 }
 
 // `material::Material`.
@@ -73,7 +73,7 @@ struct Material {
     emission: vec3<f32>,
     roughness: f32,
     base_color_texture: u32,
-    pad_a: u32,
+    emissive_texture: u32,
     pad_b: u32,
     pad_c: u32,
 }
@@ -335,8 +335,10 @@ fn emitter_list_hit(first: u32, count: u32, origin: vec3<f32>, direction: vec3<f
 // direction in .xyz and the distance to the emitter it meets in .w.
 struct Segments {
     ray: array<vec4<f32>, EMISSION_BATCH>,
-    // The emitting triangle at the end of each segment.
+    // The emitting triangle at the end of each segment (an emitters' copy) and where on it
+    // (barycentrics).
     triangle: array<u32, EMISSION_BATCH>,
+    bary: array<vec2<f32>, EMISSION_BATCH>,
 }
 
 // The batch being walked: private, as `walk_stack`, so that it is not zero-initialised at
@@ -481,23 +483,38 @@ fn material_sample(m: Material, n: vec3<f32>, wo: vec3<f32>, u: vec3<f32>) -> Bs
     return BsdfSample(wi, pdf, material_eval(m, n, wo, wi) / pdf, true);
 }
 
-// `Scene::material_at`: the triangle's material with its base-colour texture (nearest texel,
-// REPEAT wrapping) multiplied in.
-fn material_at(hit: RayHit) -> Material {
-    var m = materials[triangles[hit.triangle].material];
-    if m.base_color_texture == NO_TEXTURE || hit.triangle >= params.uv_count
-        || m.base_color_texture >= params.texture_count {
-        return m;
+// `Scene::texel`: texture `texture`'s linear RGBA at the hit's texture coordinates (nearest
+// texel, REPEAT wrapping); white without texture or coordinates.
+fn texel_at(texture: u32, hit: RayHit) -> vec4<f32> {
+    if texture == NO_TEXTURE || hit.triangle >= params.uv_count || texture >= params.texture_count {
+        return vec4<f32>(1.0);
     }
     let uv = uvs[hit.triangle];
-    let tex = textures[m.base_color_texture];
+    let tex = textures[texture];
     let b0 = 1.0 - hit.b1 - hit.b2;
     let c = b0 * uv.uv_a + hit.b1 * uv.uv_b + hit.b2 * uv.uv_c;
     let x = u32((c.x - floor(c.x)) * f32(tex.width));
     let y = u32((c.y - floor(c.y)) * f32(tex.height));
-    let texel = texels[tex.offset + min(y, tex.height - 1u) * tex.width + min(x, tex.width - 1u)];
-    m.base_color *= texel.rgb;
+    return texels[tex.offset + min(y, tex.height - 1u) * tex.width + min(x, tex.width - 1u)];
+}
+
+// `Scene::material_at`: the triangle's material with its base-colour and emissive textures
+// (nearest texel, REPEAT wrapping) multiplied in.
+fn material_at(hit: RayHit) -> Material {
+    var m = materials[triangles[hit.triangle].material];
+    if m.base_color_texture != NO_TEXTURE {
+        m.base_color *= texel_at(m.base_color_texture, hit).rgb;
+    }
+    if m.emissive_texture != NO_TEXTURE {
+        m.emission *= texel_at(m.emissive_texture, hit).rgb;
+    }
     return m;
+}
+
+// `Scene::emitter_emission`: the emission of the emitters' copy `t` (the list's or the tree's
+// triangle) at barycentrics `b`, textured as its scene triangle (`Triangle::source`).
+fn emitter_emission(t: u32, b: vec2<f32>) -> vec3<f32> {
+    return material_at(RayHit(0.0, triangles[t].source, b.x, b.y)).emission;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -755,7 +772,8 @@ fn light_sample(v: Vertex, origin: vec3<f32>, u: vec3<f32>) -> LightSample {
     let t = pick_emitter(u.x);
     let tri = triangles[t];
     let su = sqrt(u.y);
-    let y = tri.v0 + (su * (1.0 - u.z)) * tri.e1 + (su * u.z) * tri.e2;
+    let b = vec2<f32>(su * (1.0 - u.z), su * u.z);
+    let y = tri.v0 + b.x * tri.e1 + b.y * tri.e2;
     let to_light = y - origin;
     let dist2 = dot(to_light, to_light);
     let dist = sqrt(dist2);
@@ -774,7 +792,8 @@ fn light_sample(v: Vertex, origin: vec3<f32>, u: vec3<f32>) -> LightSample {
         return none;
     }
     let light_pdf = tri.emitter_pmf / area * dist2 / cos_light;
-    return LightSample(f_cos * materials[tri.material].emission / light_pdf, wi, light_pdf);
+    let emitted = material_at(RayHit(dist, t, b.x, b.y)).emission;
+    return LightSample(f_cos * emitted / light_pdf, wi, light_pdf);
 }
 
 // One path from the camera ray (origin, direction); its radiance.
@@ -912,13 +931,14 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
                     if e.triangle != NO_HIT {
                         segments.ray[n] = vec4<f32>(wi, e.t);
                         segments.triangle[n] = e.triangle;
+                        segments.bary[n] = vec2<f32>(e.b1, e.b2);
                         n += 1u;
                     }
                 }
                 let visible = unoccluded_segments(origin_next, n);
                 for (var j = 0u; j < n; j++) {
                     let wi = segments.ray[j].xyz;
-                    let emitted = materials[triangles[segments.triangle[j]].material].emission;
+                    let emitted = emitter_emission(segments.triangle[j], segments.bary[j]);
                     if (visible & (1u << j)) != 0u && any(emitted > vec3<f32>(0.0)) {
                         let p = mcpg_pdf_with(&open, wi, material_pdf(material, normal, -d, wi));
                         if p > 0.0 {
