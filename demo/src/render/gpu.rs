@@ -621,7 +621,7 @@ impl GpuTracer {
     /// [`GpuTracer::render_frame`] with [`Method::Mcpg`] then learns from frame to frame.
     /// An adaptive table larger than the device binds is halved until it fits
     /// ([`GpuMcpgGuide::fitted_config`]; lavapipe holds 2²¹ slots, a 1920 × 1080 image asks
-    /// for 2²⁴), and a line on standard error says so.
+    /// for 2²²), and a line on standard error says so.
     ///
     /// # Errors
     /// When the device binds fewer than [`MCPG_STORAGE_BUFFERS`] storage buffers per stage,

@@ -194,7 +194,7 @@ impl GuideConfig {
 
     /// The adaptive table's slots for an image of `pixels`: [`SLOTS_PER_PIXEL`] per pixel,
     /// rounded up to a power of two, at least 2¹² and at most [`MAX_ADAPTIVE_CAPACITY`]
-    /// (2²⁴ at 1920 × 1080).
+    /// (2²² at 1920 × 1080).
     #[must_use]
     pub fn adaptive_capacity_for(pixels: u64) -> u32 {
         let slots = pixels.saturating_mul(u64::from(SLOTS_PER_PIXEL));
@@ -223,18 +223,19 @@ impl GuideConfig {
 /// Adaptive-table slots per pixel of [`GuideConfig::for_pixels`].
 pub const SLOTS_PER_PIXEL: u32 = 8;
 
-/// The most adaptive-table slots [`GuideConfig::for_pixels`] gives: 2²⁴, [`SLOTS_PER_PIXEL`]
-/// per pixel up to 1920 × 1080 (the paper's engine ships 32,777,259 slots). Memory per slot:
-/// 72 bytes in the CPU guide (a state on its own 64-byte line, its checksum and age; 1.1 GiB
-/// at 2²⁴), 44 bytes in `mcg-gpu-backend`'s `GpuMcpgGuide` (704 MiB).
+/// The most adaptive-table slots [`GuideConfig::for_pixels`] gives: 2²², [`SLOTS_PER_PIXEL`]
+/// per pixel up to 724 × 724 pixels and 2 per pixel at 1920 × 1080 (the paper's engine ships
+/// 32,777,259 slots). Memory per slot: 72 bytes in the CPU guide (a state on its own 64-byte
+/// line, its checksum and age; 288 MiB at 2²²), 44 bytes in `mcg-gpu-backend`'s
+/// `GpuMcpgGuide` (176 MiB).
 ///
-/// It used to be [`GuideConfig::PAPER`]'s 2²⁰, which a 1920 × 1080 image outgrows: with
-/// [`GuideConfig::for_camera`]'s cells a grid holds about 1.75 states per pixel once learned
-/// (28,700 at 128 × 128 after 64 frames of `mcg-demo`'s hidden-light room), so about 3.6
-/// million at 1920 × 1080, and a full table stops storing new chains. At 128 × 128 with
-/// 2¹³ slots (3.5 times too few) the 64-frame error was 1.41 times that with 2¹⁷, with 2¹⁴
-/// (1.75 times too few) 1.08 times (`benches/README.md`).
-pub const MAX_ADAPTIVE_CAPACITY: u32 = 1 << 24;
+/// It used to be [`GuideConfig::PAPER`]'s 2²⁰, which 1920 × 1080 fills: `mcg-demo`'s
+/// hidden-light room (CPU, 1 spp, 3 bounces) holds 1.46 million states after 96 frames in a
+/// larger table, still growing, and a full table stops storing new chains (at 128 × 128 a
+/// table 3.5 times too small raised the 64-frame error 1.41-fold). At 1920 × 1080 over 96
+/// frames, 2²² slots against 2²⁰: the late frames' error −9 %, the frame +3 %; 2²⁴ slots
+/// gave −7 % for +13 % (more cache misses), so the cap is 2²² (`benches/README.md`).
+pub const MAX_ADAPTIVE_CAPACITY: u32 = 1 << 22;
 
 impl Default for GuideConfig {
     /// [`GuideConfig::PAPER`].
@@ -1207,8 +1208,8 @@ mod tests {
         assert_eq!(GuideConfig::adaptive_capacity_for(16 * 16), 1 << 12);
         assert_eq!(GuideConfig::adaptive_capacity_for(128 * 128), 1 << 17);
         assert_eq!(GuideConfig::adaptive_capacity_for(100 * 100), 1 << 17);
-        assert_eq!(GuideConfig::adaptive_capacity_for(1920 * 1080), 1 << 24);
-        assert_eq!(GuideConfig::adaptive_capacity_for(3840 * 2160), 1 << 24);
+        assert_eq!(GuideConfig::adaptive_capacity_for(1920 * 1080), 1 << 22);
+        assert_eq!(GuideConfig::adaptive_capacity_for(512 * 512), 1 << 21);
         assert_eq!(
             GuideConfig::adaptive_capacity_for(u64::MAX),
             MAX_ADAPTIVE_CAPACITY

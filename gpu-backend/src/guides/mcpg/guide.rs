@@ -107,7 +107,7 @@ impl GpuMcpgGuide {
     /// [`new`](Self::new). The table is not halved below 2¹² slots, and a configuration
     /// [`new`](Self::new) rejects for another reason comes back unchanged (`new` says why).
     ///
-    /// A `GuideConfig::for_pixels` table at 1920 × 1080 (2²⁴ slots, 704 MiB) fits a desktop
+    /// A `GuideConfig::for_pixels` table at 1920 × 1080 (2²² slots, 176 MiB) fits a desktop
     /// GPU's bindings; WebGPU's default 128 MiB binding (and lavapipe's) holds 2²¹.
     #[must_use]
     pub fn fitted_config(ctx: &GpuContext, config: &GuideConfig) -> GuideConfig {
