@@ -775,9 +775,10 @@ fn gpu_reads_textures_as_the_cpu() {
 /// pixels agree to 10⁻³ (the CPU's light samples are checked unbiased in
 /// `render::textured_emission_is_unbiased_for_every_method`); the factor alone in the WGSL light
 /// sample leaves 35 of 1024 equal. (2) `mcpg` with 2 emission-only directions per vertex (16
-/// runs of an emptied guide over 2 frames of 4 spp, seeds 100–115) agrees with `nee` (64 frames of 4 spp, seed 12) per tile and channel
-/// by Welch's t-test, Bonferroni over the 12 tests at family-wise α = 10⁻⁴; the factor alone
-/// for the emission-only directions fails it (checked once each).
+/// runs of an emptied guide over 2 frames of 4 spp, seeds 100–115) agrees with `nee` (64
+/// frames of 4 spp, seed 12) per tile and channel by Welch's t-test, Bonferroni over the 12
+/// tests at family-wise α = 10⁻⁴; the factor alone for the emission-only directions fails it
+/// at t = 96, copies whose `Triangle::source` is 0 at t = 9.2 (checked once each).
 #[test]
 fn gpu_reads_emissive_textures_where_light_is_sampled() {
     let scene = emissive_texture_furnace();
