@@ -370,15 +370,11 @@ fn guided_methods_agree_with_nee_per_tile() {
         let guided = common::tile_stats((w, h, 16, 32), |run| {
             let s = settings(method, 100 + run);
             let mut guide = new_guide(&scene, w, h).unwrap();
-            let mut sum = vec![Vec3::ZERO; (w * h) as usize];
-            for f in 0..frames {
+            common::run_mean(frames, |f| {
                 let image = render_frame(&scene, &s, f, || McpgSampler::new(&guide), || ());
                 guide.end_frame();
-                for (a, p) in sum.iter_mut().zip(image) {
-                    *a += p / frames as f32;
-                }
-            }
-            sum
+                image
+            })
         });
         let name = format!("{} vs nee", method.name());
         assert_tiles_agree(&guided, &reference, 1e-4, &name);
@@ -425,16 +421,12 @@ fn textured_emission_is_unbiased_for_every_method() {
     let guided = common::tile_stats((w, h, 16, 16), |run| {
         let s = settings(Method::Mcpg, 100 + run);
         let mut guide = new_guide(&scene, w, h).unwrap();
-        let mut sum = vec![Vec3::ZERO; (w * h) as usize];
-        for f in 0..2 {
+        common::run_mean(2, |f| {
             let sampler = || McpgSampler::new(&guide).with_emission_samples(2);
             let image = render_frame(&scene, &s, f, sampler, || ());
             guide.end_frame();
-            for (a, p) in sum.iter_mut().zip(image) {
-                *a += p / 2.0;
-            }
-        }
-        sum
+            image
+        })
     });
     assert_tiles_agree(&guided, &bsdf, 1e-4, "mcpg vs bsdf, emissive texture");
 }
@@ -600,14 +592,7 @@ fn mcmm_agrees_with_nee_per_tile() {
     let guided = common::tile_stats((w, h, 16, 32), |run| {
         let s = direct_settings(Method::Mcmm, 100 + run);
         let mut r = McmmRenderer::new(w, h, mcmm_params(McmmScore::TileMixture, h)).unwrap();
-        let mut sum = vec![Vec3::ZERO; (w * h) as usize];
-        for f in 0..4 {
-            let image = r.render_frame(scene, &s, f).unwrap();
-            for (a, p) in sum.iter_mut().zip(image) {
-                *a += p / 4.0;
-            }
-        }
-        sum
+        common::run_mean(4, |f| r.render_frame(scene, &s, f).unwrap())
     });
     assert_tiles_agree(&guided, reference, 1e-4, "mcmm vs nee");
 }

@@ -8,7 +8,7 @@ mod common;
 
 use common::{
     assert_lit_pixels_agree, assert_pixel_mean, assert_spread, assert_tiles_agree,
-    emissive_texture_furnace, furnace, scenes_dir, tile_stats, with_texture,
+    emissive_texture_furnace, furnace, run_mean, scenes_dir, tile_stats, with_texture,
 };
 use glam::Vec3;
 use mcg_demo::render::cpu::{BsdfSampler, Method, RenderSettings, render_frame};
@@ -564,14 +564,7 @@ fn gpu_mcpg_agrees_with_gpu_nee_per_tile() {
     let guided = tile_stats((w, h, 16, 32), |run| {
         let s = settings(Method::Mcpg, 100 + run);
         gpu.start_mcpg(&config).unwrap();
-        let mut sum = vec![Vec3::ZERO; (w * h) as usize];
-        for f in 0..4 {
-            let (image, _) = gpu.render_frame(&s, f).unwrap();
-            for (a, p) in sum.iter_mut().zip(image) {
-                *a += p / 4.0;
-            }
-        }
-        sum
+        run_mean(4, |f| gpu.render_frame(&s, f).unwrap().0)
     });
     assert_tiles_agree(&guided, &reference, 1e-4, "GPU mcpg vs GPU nee");
 }
@@ -810,14 +803,7 @@ fn gpu_reads_emissive_textures_where_light_is_sampled() {
     let guided = tile_stats((w, h, 16, 16), |run| {
         let s = settings(Method::Mcpg, 4, 100 + run);
         gpu.start_mcpg(&config).unwrap();
-        let mut sum = vec![Vec3::ZERO; (w * h) as usize];
-        for f in 0..2 {
-            let (image, _) = gpu.render_frame(&s, f).unwrap();
-            for (a, p) in sum.iter_mut().zip(image) {
-                *a += p / 2.0;
-            }
-        }
-        sum
+        run_mean(2, |f| gpu.render_frame(&s, f).unwrap().0)
     });
     assert_tiles_agree(
         &guided,
@@ -980,14 +966,7 @@ fn gpu_mcmm_agrees_with_gpu_nee_per_tile() {
     let guided = tile_stats((w, h, 16, 32), |run| {
         let s = settings(Method::Mcmm, 100 + run);
         gpu.start_mcmm(&params, w, h).unwrap();
-        let mut sum = vec![Vec3::ZERO; (w * h) as usize];
-        for f in 0..4 {
-            let (image, _) = gpu.render_frame(&s, f).unwrap();
-            for (a, p) in sum.iter_mut().zip(image) {
-                *a += p / 4.0;
-            }
-        }
-        sum
+        run_mean(4, |f| gpu.render_frame(&s, f).unwrap().0)
     });
     assert_tiles_agree(&guided, &reference, 1e-4, "GPU mcmm vs GPU nee");
 }

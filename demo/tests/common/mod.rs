@@ -102,6 +102,20 @@ pub fn emissive_texture_furnace() -> Scene {
     scene
 }
 
+/// The mean image of one run's `frames` frames, `frame(f)` rendering frame `f` (a guided
+/// run's frames share its guide or chains, so only whole runs are independent samples).
+pub fn run_mean(frames: u32, mut frame: impl FnMut(u32) -> Vec<Vec3>) -> Vec<Vec3> {
+    let mut sum: Vec<Vec3> = Vec::new();
+    for f in 0..frames {
+        let image = frame(f);
+        sum.resize(image.len(), Vec3::ZERO);
+        for (a, p) in sum.iter_mut().zip(image) {
+            *a += p / frames as f32;
+        }
+    }
+    sum
+}
+
 /// Per `tile × tile` tile (row-major) and channel of a `w × h` image, over `samples`
 /// independent images: the running statistics of the tile's mean pixel value, one value per
 /// image. `image(i)` renders independent image `i` (one frame, or one run's mean image).
