@@ -632,14 +632,10 @@ impl GpuTracer {
         self.mcpg_moments = None;
         let fitted = GpuMcpgGuide::fitted_config(&self.ctx, config);
         if fitted.adaptive_capacity < config.adaptive_capacity {
-            let limits = self.ctx.device().limits();
             eprintln!(
                 "mcg-demo: the device binds at most {} MiB per buffer, so the GPU guide's \
                  adaptive table has {} slots instead of {} (the CPU guide's)",
-                limits
-                    .max_storage_buffer_binding_size
-                    .min(limits.max_buffer_size)
-                    >> 20,
+                GpuMcpgGuide::max_buffer_bytes(&self.ctx) >> 20,
                 fitted.adaptive_capacity,
                 config.adaptive_capacity
             );

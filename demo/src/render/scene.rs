@@ -883,12 +883,18 @@ impl Scene {
     #[must_use]
     pub fn material_at(&self, hit: &Hit) -> Material {
         let mut m = *self.material(hit.triangle);
-        if let Some(texel) = self.texel(m.base_color_texture, hit) {
+        if !m.is_textured() {
+            return m;
+        }
+        let Some(uv) = self.uv_at(hit) else {
+            return m;
+        };
+        if let Some(texel) = self.texel(m.base_color_texture, uv) {
             for (b, t) in m.base_color.iter_mut().zip(texel) {
                 *b *= t;
             }
         }
-        if let Some(texel) = self.texel(m.emissive_texture, hit) {
+        if let Some(texel) = self.texel(m.emissive_texture, uv) {
             for (e, t) in m.emission.iter_mut().zip(texel) {
                 *e *= t;
             }
@@ -911,17 +917,18 @@ impl Scene {
         self.material_at(&hit).emission()
     }
 
-    /// Texture `texture`'s linear RGBA at `hit`'s texture coordinates (nearest texel, REPEAT
-    /// wrapping); `None` for [`NO_TEXTURE`] or a triangle without coordinates.
-    fn texel(&self, texture: u32, hit: &Hit) -> Option<[f32; 4]> {
-        if texture == NO_TEXTURE {
-            return None;
-        }
+    /// The hit's texture coordinates (its triangle's [`TriangleUv`] interpolated); `None`
+    /// for a triangle without them.
+    fn uv_at(&self, hit: &Hit) -> Option<[f32; 2]> {
         let uv = self.uvs.get(hit.triangle as usize)?;
-        let tex = self.textures.get(texture as usize)?;
         let b0 = 1.0 - hit.b1 - hit.b2;
-        let u = b0 * uv.uv[0][0] + hit.b1 * uv.uv[1][0] + hit.b2 * uv.uv[2][0];
-        let v = b0 * uv.uv[0][1] + hit.b1 * uv.uv[1][1] + hit.b2 * uv.uv[2][1];
+        Some([0, 1].map(|k| b0 * uv.uv[0][k] + hit.b1 * uv.uv[1][k] + hit.b2 * uv.uv[2][k]))
+    }
+
+    /// Texture `texture`'s linear RGBA at texture coordinates `[u, v]` (nearest texel, REPEAT
+    /// wrapping); `None` for [`NO_TEXTURE`].
+    fn texel(&self, texture: u32, [u, v]: [f32; 2]) -> Option<[f32; 4]> {
+        let tex = self.textures.get(texture as usize)?;
         let x = ((u - u.floor()) * tex.width as f32) as u32;
         let y = ((v - v.floor()) * tex.height as f32) as u32;
         Some(

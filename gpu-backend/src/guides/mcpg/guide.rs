@@ -101,6 +101,16 @@ impl GpuMcpgGuide {
     /// and the candidate is dropped, as a torn atomic read was.
     pub const GUIDE_WORDS_VEC4_BINDING: u32 = 3;
 
+    /// The largest buffer, in bytes, the guide may bind on `ctx`'s device: the smaller of
+    /// `max_storage_buffer_binding_size` and `max_buffer_size`.
+    #[must_use]
+    pub fn max_buffer_bytes(ctx: &GpuContext) -> u64 {
+        let limits = ctx.device().limits();
+        limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size)
+    }
+
     /// `config` with its adaptive table halved until the guide's two buffers fit one storage
     /// binding of `ctx`'s device (`max_storage_buffer_binding_size` and `max_buffer_size`):
     /// the largest adaptive grid of this configuration the device holds, for
@@ -111,7 +121,7 @@ impl GpuMcpgGuide {
     /// GPU's bindings; WebGPU's default 128 MiB binding (and lavapipe's) holds 2²¹.
     #[must_use]
     pub fn fitted_config(ctx: &GpuContext, config: &GuideConfig) -> GuideConfig {
-        let maximum = buffer_maximum(ctx);
+        let maximum = Self::max_buffer_bytes(ctx);
         let mut fitted = *config;
         while fitted.adaptive_capacity / 2 >= 1 << 12 {
             match McpgGpuParams::new(&fitted) {
@@ -130,7 +140,7 @@ impl GpuMcpgGuide {
     /// [`GpuError::GuideTooLarge`] when a buffer exceeds the device's binding size.
     pub fn new(ctx: &GpuContext, config: &GuideConfig) -> Result<Self, GpuError> {
         let (params, sizes) = McpgGpuParams::new(config)?;
-        let maximum = buffer_maximum(ctx);
+        let maximum = Self::max_buffer_bytes(ctx);
         for words in [sizes.table_words, sizes.guide_words] {
             let bytes = 4 * words;
             if bytes > maximum {
@@ -399,12 +409,4 @@ impl GpuMcpgGuide {
             params: size_of::<McpgGpuParams>() as u64,
         }
     }
-}
-
-/// The largest buffer the guide may bind on `ctx`'s device, in bytes.
-fn buffer_maximum(ctx: &GpuContext) -> u64 {
-    let limits = ctx.device().limits();
-    limits
-        .max_storage_buffer_binding_size
-        .min(limits.max_buffer_size)
 }
