@@ -200,11 +200,11 @@ fn gltf_errors_are_typed_and_name_the_file() {
         "{e}"
     );
 
+    // Lines are skipped (with a warning), so a file of lines alone has no triangles.
     let lines = minimal_gltf(&dir, "lines.gltf", true, true, 1);
     let e = SceneFile::open(&lines).unwrap().build(0.0).unwrap_err();
     assert!(
-        matches!(e, SceneError::UnsupportedPrimitiveMode { .. })
-            && e.to_string().contains("lines.gltf"),
+        matches!(e, SceneError::NoTriangles { .. }) && e.to_string().contains("lines.gltf"),
         "{e}"
     );
 
@@ -224,6 +224,87 @@ fn gltf_errors_are_typed_and_name_the_file() {
     std::fs::write(&truncated, &glb(json, bin)[..100]).unwrap();
     let e = SceneFile::open(&truncated).unwrap_err();
     assert!(e.to_string().contains("truncated.glb"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Strips and fans become the triangles glTF defines, in their primitive's winding (the
+/// specification's "Topology Types"), and lines are skipped with a warning. One mesh draws a
+/// convex pentagon, counter-clockwise seen from +Z, three times — as TRIANGLES, as a
+/// TRIANGLE_STRIP (P0 P1 P4 P2 P3) and as a TRIANGLE_FAN (P0 … P4) — and has a LINES
+/// primitive: 9 triangles, all facing +Z, of three pentagons' area, and one warning. A strip
+/// that keeps the odd triangles' order flips every second triangle, and fails.
+#[test]
+fn strips_and_fans_are_triangulated_and_lines_skipped() {
+    let dir = temp_dir("topology");
+    let pentagon: [[f32; 3]; 5] = [
+        [0.0, 0.0, -1.0],
+        [1.0, 0.0, -1.0],
+        [1.5, 1.0, -1.0],
+        [0.5, 1.5, -1.0],
+        [-0.5, 1.0, -1.0],
+    ];
+    let lists: [&[u16]; 4] = [
+        &[0, 1, 2, 0, 2, 3, 0, 3, 4],
+        &[0, 1, 4, 2, 3],
+        &[0, 1, 2, 3, 4],
+        &[0, 1, 1, 2],
+    ];
+    let mut bytes: Vec<u8> = pentagon
+        .iter()
+        .flatten()
+        .flat_map(|f| f.to_le_bytes())
+        .collect();
+    let mut views = vec![serde_json::json!({ "buffer": 0, "byteLength": 60 })];
+    let mut accessors = vec![serde_json::json!({ "bufferView": 0, "componentType": 5126,
+        "count": 5, "type": "VEC3", "min": [-0.5, 0.0, -1.0], "max": [1.5, 1.5, -1.0] })];
+    for list in lists {
+        views.push(serde_json::json!({ "buffer": 0, "byteOffset": bytes.len(),
+            "byteLength": 2 * list.len() }));
+        accessors.push(serde_json::json!({ "bufferView": views.len() - 1,
+            "componentType": 5123, "count": list.len(), "type": "SCALAR" }));
+        bytes.extend(list.iter().flat_map(|i| i.to_le_bytes()));
+        while !bytes.len().is_multiple_of(4) {
+            bytes.push(0);
+        }
+    }
+    let primitives: Vec<serde_json::Value> = [4, 5, 6, 1]
+        .iter()
+        .enumerate()
+        .map(|(k, mode)| {
+            serde_json::json!({ "attributes": { "POSITION": 0 }, "indices": k + 1,
+                "material": 0, "mode": mode })
+        })
+        .collect();
+    let doc = serde_json::json!({
+        "asset": { "version": "2.0" },
+        "scene": 0,
+        "scenes": [{ "nodes": [0, 1] }],
+        "nodes": [{ "mesh": 0 }, { "camera": 0 }],
+        "cameras": [{ "type": "perspective", "perspective": { "yfov": 1.0, "znear": 0.1 } }],
+        "meshes": [{ "primitives": primitives }],
+        "materials": [{ "emissiveFactor": [1.0, 1.0, 1.0] }],
+        "accessors": accessors,
+        "bufferViews": views,
+        "buffers": [{ "byteLength": bytes.len(),
+            "uri": format!("data:application/octet-stream;base64,{}", base64(&bytes)) }],
+    });
+    let path = dir.join("topology.gltf");
+    std::fs::write(&path, serde_json::to_string(&doc).unwrap()).unwrap();
+    let scene = SceneFile::open(&path).unwrap().build(0.0).unwrap();
+    let triangles = &scene.bvh.triangles;
+    assert_eq!(triangles.len(), 9);
+    for t in triangles {
+        let n = t.cross().normalize();
+        assert!((n - Vec3::Z).length() < 1e-6, "a triangle faces {n}");
+    }
+    let area: f32 = triangles.iter().map(|t| t.area()).sum();
+    // The shoelace formula gives the pentagon an area of 2.
+    assert!((area - 3.0 * 2.0).abs() < 1e-5, "area {area}");
+    assert_eq!(scene.emitters.len(), 9);
+    assert_eq!(
+        scene.warnings,
+        ["mesh 0: points and lines have no area and are not rendered"]
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

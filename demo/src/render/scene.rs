@@ -2,9 +2,10 @@
 //!
 //! What is read (everything else in a file is ignored):
 //!
-//! - **Geometry**: every triangle primitive (`mode` TRIANGLES, with or without indices) of
-//!   every mesh node of the default scene (or the first scene), with the node's world
-//!   transform. A transform that mirrors (negative determinant) swaps the winding back, as
+//! - **Geometry**: every triangle primitive (`mode` TRIANGLES, TRIANGLE_STRIP or
+//!   TRIANGLE_FAN, with or without indices) of every mesh node of the default scene (or the
+//!   first scene), with the node's world transform. Points and lines have no area to hit:
+//!   they are skipped, and [`Scene::warnings`] names their meshes. A transform that mirrors (negative determinant) swaps the winding back, as
 //!   the glTF 2.0 specification requires (section "Transformations"), so front faces stay
 //!   front faces. Shading normals are not used: shading uses the geometric normal.
 //!   `TEXCOORD_0` is read for textured materials.
@@ -83,15 +84,6 @@ pub enum SceneError {
         /// The file.
         path: PathBuf,
     },
-    /// A mesh primitive is not made of triangles (points, lines, strips or fans).
-    UnsupportedPrimitiveMode {
-        /// The file.
-        path: PathBuf,
-        /// Index of the mesh.
-        mesh: usize,
-        /// The primitive's mode, as glTF names it.
-        mode: String,
-    },
     /// A mesh primitive has no POSITION attribute.
     MissingPositions {
         /// The file.
@@ -159,11 +151,6 @@ impl fmt::Display for SceneError {
                 f,
                 "{}: no emitters — no material has a positive emissiveFactor, so the image \
                  would be black",
-                path.display()
-            ),
-            Self::UnsupportedPrimitiveMode { path, mesh, mode } => write!(
-                f,
-                "{}: mesh {mesh} has a primitive of mode {mode}; only TRIANGLES are supported",
                 path.display()
             ),
             Self::MissingPositions { path, mesh } => write!(
@@ -485,8 +472,8 @@ impl SceneFile {
     /// Warns of what the file uses and the renderer does not read, so that a scene that looks
     /// wrong says why: extensions other than [`READ_EXTENSIONS`] (punctual lights, texture
     /// transforms, transmission, …), metallic-roughness textures (the factors apply to the
-    /// whole surface), alpha modes other than `OPAQUE` (rendered opaque) and
-    /// vertex colours. One sentence per feature, naming the materials or meshes that use it.
+    /// whole surface), alpha modes other than `OPAQUE` (rendered opaque), point and line
+    /// primitives (skipped) and vertex colours. One sentence per feature, naming the materials or meshes that use it.
     fn unread_features(&self, warnings: &mut Vec<String>) {
         let document = &self.document;
         for extension in document.extensions_used() {
@@ -523,6 +510,18 @@ impl SceneFile {
         {
             warnings.push(format!(
                 "{which}: alphaMode MASK or BLEND is not read; the surface is rendered opaque"
+            ));
+        }
+        let lines: Vec<String> = document
+            .meshes()
+            .filter(|mesh| mesh.primitives().any(|p| !is_triangles(p.mode())))
+            .map(|mesh| mesh.index().to_string())
+            .collect();
+        if !lines.is_empty() {
+            warnings.push(format!(
+                "mesh{} {}: points and lines have no area and are not rendered",
+                if lines.len() > 1 { "es" } else { "" },
+                lines.join(", ")
             ));
         }
         let coloured: Vec<String> = document
@@ -596,12 +595,8 @@ impl SceneFile {
         let path = &self.path;
         let mirrored = world.determinant() < 0.0;
         for primitive in mesh.primitives() {
-            if primitive.mode() != gltf::mesh::Mode::Triangles {
-                return Err(SceneError::UnsupportedPrimitiveMode {
-                    path: path.clone(),
-                    mesh: mesh.index(),
-                    mode: format!("{:?}", primitive.mode()),
-                });
+            if !is_triangles(primitive.mode()) {
+                continue;
             }
             let reader = primitive.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
             let positions: Vec<Vec3> = reader
@@ -622,6 +617,7 @@ impl SceneFile {
                 Some(i) => i.into_u32().collect(),
                 None => (0..positions.len() as u32).collect(),
             };
+            let indices = triangle_list(primitive.mode(), indices);
             // glTF's default material is our material 0; file materials start at 1.
             let material = primitive.material().index().map_or(0, |i| i as u32 + 1);
             let tex_coords: Vec<[f32; 2]> = match reader
@@ -737,6 +733,36 @@ impl SceneFile {
                 None => Mat4::from_cols_array_2d(&n.transform().matrix()),
             })
             .collect())
+    }
+}
+
+/// Whether primitives of `mode` have area (triangles, strips and fans) and so are rendered.
+fn is_triangles(mode: gltf::mesh::Mode) -> bool {
+    use gltf::mesh::Mode;
+    matches!(
+        mode,
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+    )
+}
+
+/// The vertex indices of a triangle primitive of `mode` as a list of triangles (three
+/// indices each), each in its primitive's winding: for a strip, triangle `i` is
+/// `(vᵢ, vᵢ₊₁₊ᵢ﹪₂, vᵢ₊₂₋ᵢ﹪₂)`, for a fan `(vᵢ₊₁, vᵢ₊₂, v₀)` (glTF 2.0 specification,
+/// section "Topology Types"). A strip or fan of fewer than three vertices has no triangle.
+fn triangle_list(mode: gltf::mesh::Mode, indices: Vec<u32>) -> Vec<u32> {
+    use gltf::mesh::Mode;
+    let count = indices.len().saturating_sub(2);
+    match mode {
+        Mode::TriangleStrip => (0..count)
+            .flat_map(|i| {
+                let odd = i % 2;
+                [indices[i], indices[i + 1 + odd], indices[i + 2 - odd]]
+            })
+            .collect(),
+        Mode::TriangleFan => (0..count)
+            .flat_map(|i| [indices[i + 1], indices[i + 2], indices[0]])
+            .collect(),
+        _ => indices,
     }
 }
 
