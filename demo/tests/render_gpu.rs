@@ -704,24 +704,31 @@ fn gpu_tiles_cover_every_pixel() {
     }
 }
 
-/// Base-colour and emissive textures on the GPU: the furnace with [`with_texture`]'s 2×2
-/// texture (red, green / grey, blue) on every face as its base-colour texture, then as its
-/// emissive texture, `bsdf`, B = 1, 1 spp, seed 9. Every path returns exactly
-/// L_e(x₁) + ρ(x₁)·L_e(x₂), with x₁ the camera ray's hit and x₂ the next, which both devices
-/// find from the same stream; so the GPU image equals the CPU image to f32 rounding, except
-/// where a hit sits on a texel boundary. Threshold: ≥ 99 % of the 32×32 pixels equal to 10⁻⁵
-/// relative, and at least three distinct pixel values (the texture shows). Ignoring the
-/// base-colour texture on the GPU leaves 0 of 1024 pixels equal, ignoring the emissive one
-/// (checked once each).
+/// Base-colour, emissive and metallic-roughness textures on the GPU: the furnace with
+/// [`with_texture`]'s 2×2 texture (red, green / grey, blue) on every face as its base-colour
+/// texture, then as its emissive texture, then as its metallic-roughness texture (factors 1:
+/// Lambertian, Lambertian / a half blend with roughness ½, a smooth conductor), `bsdf`, B = 1,
+/// 1 spp, seed 9. Every path returns exactly L_e(x₁) + w·L_e(x₂), with x₁ the camera ray's
+/// hit, x₂ the next and w the material's sample weight at x₁, which both devices find from the
+/// same stream; so the GPU image equals the CPU image to f32 rounding, except where a hit
+/// sits on a texel boundary. Threshold: ≥ 99 % of the 32×32 pixels equal to 10⁻⁵ relative,
+/// and at least three distinct pixel values (the texture shows). Ignoring the base-colour
+/// texture on the GPU leaves 0 of 1024 pixels equal, ignoring the emissive one
+/// (checked once each), and ignoring the metallic-roughness one leaves 14 of 1024.
 #[test]
 fn gpu_reads_textures_as_the_cpu() {
     let le = Vec3::new(1.0, 2.0, 0.5);
-    for emissive in [false, true] {
+    for label in ["base colour", "emissive", "metallic-roughness"] {
         let mut scene = with_texture(furnace(Vec3::ONE, le));
-        if emissive {
-            scene.materials[0].emissive_texture = 0;
-        } else {
-            scene.materials[0].base_color_texture = 0;
+        let m = &mut scene.materials[0];
+        match label {
+            "base colour" => m.base_color_texture = 0,
+            "emissive" => m.emissive_texture = 0,
+            _ => {
+                m.metallic_roughness_texture = 0;
+                m.metallic = 1.0;
+                m.roughness = 1.0;
+            }
         }
         let Some(mut gpu) = tracer("gpu_reads_textures_as_the_cpu", &scene) else {
             return;
@@ -747,7 +754,6 @@ fn gpu_reads_textures_as_the_cpu() {
             .collect();
         distinct.sort_unstable();
         distinct.dedup();
-        let label = if emissive { "emissive" } else { "base colour" };
         assert!(
             distinct.len() >= 3,
             "{label}: the texture shows: {distinct:?}"

@@ -26,8 +26,8 @@ use mcg_vmf::Frame;
 /// (the integrator has no delta lobes).
 pub const MIN_ALPHA: f32 = 1e-3;
 
-/// [`Material::base_color_texture`] and [`Material::emissive_texture`] of a material without
-/// that texture.
+/// [`Material::base_color_texture`], [`Material::emissive_texture`] and
+/// [`Material::metallic_roughness_texture`] of a material without that texture.
 pub const NO_TEXTURE: u32 = u32::MAX;
 
 /// A material, 48 bytes (three `vec4`s in WGSL).
@@ -48,8 +48,12 @@ pub struct Material {
     /// Index of the emissive texture in the scene's textures, or [`NO_TEXTURE`]; the
     /// texture's linear RGB multiplies `emission` (glTF 2.0, `emissiveTexture`).
     pub emissive_texture: u32,
+    /// Index of the metallic-roughness texture in the scene's textures, or [`NO_TEXTURE`]:
+    /// its linear green channel multiplies `roughness` and its blue channel `metallic`
+    /// (glTF 2.0, `metallicRoughnessTexture`).
+    pub metallic_roughness_texture: u32,
     /// Padding to 16 bytes; always 0.
-    pub pad: [u32; 2],
+    pub pad: u32,
 }
 
 impl Default for Material {
@@ -62,7 +66,8 @@ impl Default for Material {
             roughness: 1.0,
             base_color_texture: NO_TEXTURE,
             emissive_texture: NO_TEXTURE,
-            pad: [0; 2],
+            metallic_roughness_texture: NO_TEXTURE,
+            pad: 0,
         }
     }
 }
@@ -99,7 +104,9 @@ impl Material {
     /// Whether the material has a texture (and so needs texture coordinates).
     #[must_use]
     pub fn is_textured(&self) -> bool {
-        self.base_color_texture != NO_TEXTURE || self.emissive_texture != NO_TEXTURE
+        self.base_color_texture != NO_TEXTURE
+            || self.emissive_texture != NO_TEXTURE
+            || self.metallic_roughness_texture != NO_TEXTURE
     }
 
     /// Whether the material emits at all (its factor; a texture may darken parts of it).

@@ -14,15 +14,16 @@
 //!   section "Cameras"). `yfov` is used; the aspect ratio is the image's.
 //! - **Materials** ([`Material`]): `baseColorFactor` (RGB), `metallicFactor`,
 //!   `roughnessFactor`, `emissiveFactor × KHR_materials_emissive_strength`, and the
-//!   base-colour and emissive textures (8-bit PNG or JPEG, sRGB-decoded, `TEXCOORD_0`,
+//!   base-colour, emissive and metallic-roughness textures (8-bit PNG or JPEG, `TEXCOORD_0`,
 //!   nearest texel with REPEAT wrapping — the glTF sampler is not read), which multiply
-//!   `baseColorFactor` and the emission. Light sampling picks emitting triangles by area ×
+//!   `baseColorFactor` and the emission (sRGB-decoded), and `roughnessFactor` (green) and
+//!   `metallicFactor` (blue; both linear). Light sampling picks emitting triangles by area ×
 //!   the luminance of the factors alone, so a dark part of an emissive texture is picked as
 //!   often as a bright one (unbiased, only less efficient).
 //!   A texture on another coordinate set is ignored, and [`Scene::warnings`] says so.
-//!   Metallic-roughness, normal and occlusion textures, alpha modes, vertex colours
-//!   and extensions other than [`READ_EXTENSIONS`] are not read; [`Scene::warnings`] names
-//!   those that change what a surface looks like (all but normal and occlusion textures).
+//!   Normal and occlusion textures, alpha modes, vertex colours and extensions other than
+//!   [`READ_EXTENSIONS`] are not read; [`Scene::warnings`] names those that change what a
+//!   surface looks like (all but normal and occlusion textures).
 //! - **Animations**: translation, rotation and scale channels with STEP or LINEAR
 //!   interpolation (rotations LINEAR by normalised lerp of the quaternions), evaluated at
 //!   the time of the frame ([`frame_time`]); the dynamic built-in scene uses them.
@@ -106,7 +107,7 @@ pub enum SceneError {
         /// The depth of the tree.
         depth: usize,
     },
-    /// A base-colour texture is not an 8-bit image, or cannot be decoded.
+    /// A texture is not an 8-bit image, or cannot be decoded.
     UnsupportedTexture {
         /// The file.
         path: PathBuf,
@@ -178,7 +179,7 @@ impl fmt::Display for SceneError {
                 reason,
             } => write!(
                 f,
-                "{}: image {image} cannot be used as a base-colour texture: {reason}",
+                "{}: image {image} cannot be used as a texture: {reason}",
                 path.display()
             ),
             Self::UnsupportedAnimation {
@@ -230,8 +231,22 @@ pub struct SceneFile {
     path: PathBuf,
     document: gltf::Document,
     buffers: Vec<gltf::buffer::Data>,
-    /// Every image of the file, decoded to linear RGBA (empty when no material uses one).
-    images: Vec<(u32, u32, Vec<[f32; 4]>)>,
+    /// Every texture the materials use, as linear RGBA in the order of `texture_uses`.
+    textures: Vec<(u32, u32, Vec<[f32; 4]>)>,
+    /// The image and encoding of each of `textures` (an image used both ways is decoded
+    /// twice).
+    texture_uses: Vec<(usize, TexelEncoding)>,
+}
+
+/// How a texture's 8-bit colour channels become linear values: glTF 2.0 stores base-colour
+/// and emissive textures in sRGB and metallic-roughness textures linearly (specification,
+/// section "Materials").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum TexelEncoding {
+    /// sRGB transfer function (IEC 61966-2-1).
+    Srgb,
+    /// `byte / 255`.
+    Linear,
 }
 
 /// Where a texture's texels are in [`Scene::texels`]: 16 bytes, one `vec4<u32>` in WGSL.
@@ -290,7 +305,7 @@ pub struct Scene {
     /// Texture coordinates per triangle, in the order of `bvh.triangles` (empty when no
     /// material has a texture).
     pub uvs: Vec<TriangleUv>,
-    /// The textures, indexed by [`Material::base_color_texture`].
+    /// The textures, indexed by [`Material::base_color_texture`] and its siblings.
     pub textures: Vec<TextureInfo>,
     /// Linear RGBA texels of all textures.
     pub texels: Vec<[f32; 4]>,
@@ -315,19 +330,16 @@ impl SceneFile {
         if document.scenes().len() == 0 {
             return Err(SceneError::NoScene { path });
         }
-        let textured = document.materials().any(|m| {
-            m.pbr_metallic_roughness().base_color_texture().is_some()
-                || m.emissive_texture().is_some()
-        });
-        let mut images = Vec::new();
-        if textured {
+        let texture_uses = texture_uses(&document);
+        let mut textures = Vec::new();
+        if !texture_uses.is_empty() {
             let decoded =
                 gltf::import_images(&document, path.parent(), &buffers).map_err(unreadable)?;
-            for (i, data) in decoded.into_iter().enumerate() {
-                images.push(linear_rgba(data).map_err(|reason| {
+            for &(image, encoding) in &texture_uses {
+                textures.push(linear_rgba(&decoded[image], encoding).map_err(|reason| {
                     SceneError::UnsupportedTexture {
                         path: path.clone(),
-                        image: i,
+                        image,
                         reason,
                     }
                 })?);
@@ -337,7 +349,8 @@ impl SceneFile {
             path,
             document,
             buffers,
-            images,
+            textures,
+            texture_uses,
         })
     }
 
@@ -413,7 +426,7 @@ impl SceneFile {
     }
 
     /// The document's materials after the default one (index 0), checked finite; warns of
-    /// base-colour textures on other texture coordinates than `TEXCOORD_0`.
+    /// textures on other texture coordinates than `TEXCOORD_0`.
     fn materials(&self, warnings: &mut Vec<String>) -> Result<Vec<Material>, SceneError> {
         let path = &self.path;
         let mut materials = vec![Material::default()];
@@ -422,23 +435,47 @@ impl SceneFile {
             let [r, g, b, _] = pbr.base_color_factor();
             let strength = m.emissive_strength().unwrap_or(1.0);
             let emission = Vec3::from(m.emissive_factor()) * strength;
-            let mut texture =
-                |info: Option<gltf::texture::Info>, what: &str, factor: &str| match info {
-                    Some(info) if info.tex_coord() == 0 => info.texture().source().index() as u32,
-                    Some(info) => {
-                        warnings.push(format!(
-                            "material {} takes its {what} texture from TEXCOORD_{}; only \
+            let mut texture = |info: Option<gltf::texture::Info>,
+                               encoding: TexelEncoding,
+                               what: &str,
+                               factor: &str| match info {
+                Some(info) if info.tex_coord() == 0 => {
+                    let image = info.texture().source().index();
+                    let used = self
+                        .texture_uses
+                        .iter()
+                        .position(|&u| u == (image, encoding));
+                    used.map_or(NO_TEXTURE, |i| i as u32)
+                }
+                Some(info) => {
+                    warnings.push(format!(
+                        "material {} takes its {what} texture from TEXCOORD_{}; only \
                              TEXCOORD_0 is read, so its {factor} is used alone",
-                            m.index().unwrap_or(0),
-                            info.tex_coord()
-                        ));
-                        NO_TEXTURE
-                    }
-                    None => NO_TEXTURE,
-                };
-            let base_color_texture =
-                texture(pbr.base_color_texture(), "base-colour", "baseColorFactor");
-            let emissive_texture = texture(m.emissive_texture(), "emissive", "emissiveFactor");
+                        m.index().unwrap_or(0),
+                        info.tex_coord()
+                    ));
+                    NO_TEXTURE
+                }
+                None => NO_TEXTURE,
+            };
+            let base_color_texture = texture(
+                pbr.base_color_texture(),
+                TexelEncoding::Srgb,
+                "base-colour",
+                "baseColorFactor",
+            );
+            let emissive_texture = texture(
+                m.emissive_texture(),
+                TexelEncoding::Srgb,
+                "emissive",
+                "emissiveFactor",
+            );
+            let metallic_roughness_texture = texture(
+                pbr.metallic_roughness_texture(),
+                TexelEncoding::Linear,
+                "metallic-roughness",
+                "metallicFactor and roughnessFactor",
+            );
             let material = Material {
                 base_color: [r, g, b],
                 metallic: pbr.metallic_factor().clamp(0.0, 1.0),
@@ -446,7 +483,8 @@ impl SceneFile {
                 roughness: pbr.roughness_factor().clamp(0.0, 1.0),
                 base_color_texture,
                 emissive_texture,
-                pad: [0; 2],
+                metallic_roughness_texture,
+                pad: 0,
             };
             let values = [
                 r,
@@ -471,9 +509,8 @@ impl SceneFile {
 
     /// Warns of what the file uses and the renderer does not read, so that a scene that looks
     /// wrong says why: extensions other than [`READ_EXTENSIONS`] (punctual lights, texture
-    /// transforms, transmission, …), metallic-roughness textures (the factors apply to the
-    /// whole surface), alpha modes other than `OPAQUE` (rendered opaque), point and line
-    /// primitives (skipped) and vertex colours. One sentence per feature, naming the materials or meshes that use it.
+    /// transforms, transmission, …), alpha modes other than `OPAQUE` (rendered opaque), point
+    /// and line primitives (skipped) and vertex colours. One sentence per feature, naming the materials or meshes that use it.
     fn unread_features(&self, warnings: &mut Vec<String>) {
         let document = &self.document;
         for extension in document.extensions_used() {
@@ -495,16 +532,6 @@ impl SceneFile {
                 _ => Some(format!("materials {}", which.join(", "))),
             }
         };
-        if let Some(which) = materials_with(&|m| {
-            m.pbr_metallic_roughness()
-                .metallic_roughness_texture()
-                .is_some()
-        }) {
-            warnings.push(format!(
-                "{which}: the metallicRoughnessTexture is not read, so metallicFactor and \
-                 roughnessFactor apply to the whole surface"
-            ));
-        }
         if let Some(which) =
             materials_with(&|m| m.alpha_mode() != gltf::material::AlphaMode::Opaque)
         {
@@ -566,11 +593,11 @@ impl SceneFile {
     }
 
     /// Gives `scene` the file's textures and the triangles' texture coordinates (in BVH
-    /// order), when the file has images.
+    /// order), when its materials use textures.
     fn attach_textures(&self, scene: &mut Scene, uvs: &[TriangleUv]) {
-        if !self.images.is_empty() {
+        if !self.textures.is_empty() {
             scene.uvs = scene.bvh.source.iter().map(|&i| uvs[i as usize]).collect();
-            for (width, height, texels) in &self.images {
+            for (width, height, texels) in &self.textures {
                 scene.textures.push(TextureInfo {
                     offset: scene.texels.len() as u32,
                     width: *width,
@@ -736,6 +763,29 @@ impl SceneFile {
     }
 }
 
+/// The (image, encoding) of every texture the document's materials read from `TEXCOORD_0`,
+/// each once, in the order of first use.
+fn texture_uses(document: &gltf::Document) -> Vec<(usize, TexelEncoding)> {
+    let mut uses = Vec::new();
+    for m in document.materials() {
+        let pbr = m.pbr_metallic_roughness();
+        for (info, encoding) in [
+            (pbr.base_color_texture(), TexelEncoding::Srgb),
+            (m.emissive_texture(), TexelEncoding::Srgb),
+            (pbr.metallic_roughness_texture(), TexelEncoding::Linear),
+        ] {
+            let Some(info) = info.filter(|i| i.tex_coord() == 0) else {
+                continue;
+            };
+            let used = (info.texture().source().index(), encoding);
+            if !uses.contains(&used) {
+                uses.push(used);
+            }
+        }
+    }
+    uses
+}
+
 /// Whether primitives of `mode` have area (triangles, strips and fans) and so are rendered.
 fn is_triangles(mode: gltf::mesh::Mode) -> bool {
     use gltf::mesh::Mode;
@@ -794,9 +844,12 @@ fn sample_keyframes(
     core::array::from_fn(|i| a[i] + s * (sign * b[i] - a[i]))
 }
 
-/// An 8-bit glTF image as linear RGBA: colour channels sRGB-decoded (IEC 61966-2-1; glTF
-/// stores base colours in sRGB), alpha linear; grey images are replicated to RGB.
-fn linear_rgba(data: gltf::image::Data) -> Result<(u32, u32, Vec<[f32; 4]>), String> {
+/// An 8-bit glTF image as linear RGBA: colour channels decoded by `encoding`, alpha linear;
+/// grey images are replicated to RGB.
+fn linear_rgba(
+    data: &gltf::image::Data,
+    encoding: TexelEncoding,
+) -> Result<(u32, u32, Vec<[f32; 4]>), String> {
     use gltf::image::Format;
     let channels = match data.format {
         Format::R8 => 1,
@@ -807,7 +860,9 @@ fn linear_rgba(data: gltf::image::Data) -> Result<(u32, u32, Vec<[f32; 4]>), Str
     };
     let decode = |b: u8| {
         let c = f32::from(b) / 255.0;
-        if c <= 0.04045 {
+        if encoding == TexelEncoding::Linear {
+            c
+        } else if c <= 0.04045 {
             c / 12.92
         } else {
             ((c + 0.055) / 1.055).powf(2.4)
@@ -903,9 +958,9 @@ impl Scene {
         })
     }
 
-    /// The material at a hit, with its base-colour and emissive textures (where it has them)
-    /// looked up at the hit's texture coordinates — nearest texel, REPEAT wrapping — and
-    /// multiplied into `base_color` and `emission`.
+    /// The material at a hit, with its textures (where it has them) looked up at the hit's
+    /// texture coordinates — nearest texel, REPEAT wrapping — and multiplied into
+    /// `base_color`, `emission`, `roughness` (green) and `metallic` (blue).
     #[must_use]
     pub fn material_at(&self, hit: &Hit) -> Material {
         let mut m = *self.material(hit.triangle);
@@ -924,6 +979,10 @@ impl Scene {
             for (e, t) in m.emission.iter_mut().zip(texel) {
                 *e *= t;
             }
+        }
+        if let Some(texel) = self.texel(m.metallic_roughness_texture, uv) {
+            m.roughness *= texel[1];
+            m.metallic *= texel[2];
         }
         m
     }

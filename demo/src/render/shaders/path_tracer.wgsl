@@ -74,8 +74,8 @@ struct Material {
     roughness: f32,
     base_color_texture: u32,
     emissive_texture: u32,
-    pad_b: u32,
-    pad_c: u32,
+    metallic_roughness_texture: u32,
+    pad: u32,
 }
 
 // One entry of the emitter table: the triangle and the inclusive cumulative probability
@@ -504,9 +504,10 @@ fn texel_at(texture: u32, c: vec2<f32>) -> vec4<f32> {
     return texels[tex.offset + min(y, tex.height - 1u) * tex.width + min(x, tex.width - 1u)];
 }
 
-// `Scene::material_at`: the triangle's material with its base-colour and emissive textures
-// (nearest texel, REPEAT wrapping) multiplied in. A scene without textures returns first, on
-// a uniform condition (llvmpipe still runs the rest with every invocation masked off).
+// `Scene::material_at`: the triangle's material with its base-colour, emissive and
+// metallic-roughness textures (nearest texel, REPEAT wrapping) multiplied in. A scene without
+// textures returns first, on a uniform condition (llvmpipe still runs the rest with every
+// invocation masked off).
 fn material_at(hit: RayHit) -> Material {
     var m = materials[triangles[hit.triangle].material];
     if params.texture_count == 0u {
@@ -515,6 +516,9 @@ fn material_at(hit: RayHit) -> Material {
     let c = uv_at(hit);
     m.base_color *= texel_at(m.base_color_texture, c).rgb;
     m.emission *= texel_at(m.emissive_texture, c).rgb;
+    let metallic_roughness = texel_at(m.metallic_roughness_texture, c);
+    m.roughness *= metallic_roughness.g;
+    m.metallic *= metallic_roughness.b;
     return m;
 }
 
