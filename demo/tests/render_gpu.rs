@@ -706,7 +706,8 @@ fn gpu_tiles_cover_every_pixel() {
 
 /// Base-colour, emissive and metallic-roughness textures on the GPU: the furnace with
 /// [`with_texture`]'s 2×2 texture (red, green / grey, blue) on every face as its base-colour
-/// texture, then as its emissive texture, then as its metallic-roughness texture (factors 1:
+/// texture, then as its emissive texture (both read sRGB-encoded, as glTF stores them), then
+/// as its metallic-roughness texture (read linearly; factors 1:
 /// Lambertian, Lambertian / a half blend with roughness ½, a smooth conductor), `bsdf`, B = 1,
 /// 1 spp, seed 9. Every path returns exactly L_e(x₁) + w·L_e(x₂), with x₁ the camera ray's
 /// hit, x₂ the next and w the material's sample weight at x₁, which both devices find from the
@@ -714,7 +715,8 @@ fn gpu_tiles_cover_every_pixel() {
 /// sits on a texel boundary. Threshold: ≥ 99 % of the 32×32 pixels equal to 10⁻⁵ relative,
 /// and at least three distinct pixel values (the texture shows). Ignoring the base-colour
 /// texture on the GPU leaves 0 of 1024 pixels equal, ignoring the emissive one
-/// (checked once each), and ignoring the metallic-roughness one leaves 14 of 1024.
+/// (checked once each), ignoring the metallic-roughness one leaves 14 of 1024, and skipping
+/// the sRGB decoding leaves 803 (the grey texel's pixels).
 #[test]
 fn gpu_reads_textures_as_the_cpu() {
     let le = Vec3::new(1.0, 2.0, 0.5);

@@ -394,7 +394,7 @@ struct SceneBuffers {
     emitters: GpuBuffer<GpuEmitter>,
     uvs: GpuBuffer<TriangleUv>,
     textures: GpuBuffer<TextureInfo>,
-    texels: GpuBuffer<[f32; 4]>,
+    texels: GpuBuffer<u32>,
 }
 
 /// Timestamp queries around each tile's pass.
@@ -934,7 +934,8 @@ impl GpuTracer {
         .unwrap_or(0) as u64;
         if largest > max {
             return Err(format!(
-                "the scene needs a {largest}-byte storage buffer; this GPU binds at most {max}"
+                "the scene needs a {largest}-byte storage buffer; this GPU binds at most {max} \
+                 (--device cpu renders it on the CPU)"
             )
             .into());
         }

@@ -231,22 +231,10 @@ pub struct SceneFile {
     path: PathBuf,
     document: gltf::Document,
     buffers: Vec<gltf::buffer::Data>,
-    /// Every texture the materials use, as linear RGBA in the order of `texture_uses`.
-    textures: Vec<(u32, u32, Vec<[f32; 4]>)>,
-    /// The image and encoding of each of `textures` (an image used both ways is decoded
-    /// twice).
-    texture_uses: Vec<(usize, TexelEncoding)>,
-}
-
-/// How a texture's 8-bit colour channels become linear values: glTF 2.0 stores base-colour
-/// and emissive textures in sRGB and metallic-roughness textures linearly (specification,
-/// section "Materials").
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum TexelEncoding {
-    /// sRGB transfer function (IEC 61966-2-1).
-    Srgb,
-    /// `byte / 255`.
-    Linear,
+    /// Every image a material's texture reads (each once, in the order of first use: the
+    /// scene's texture index), packed as [`Scene::texels`] are: its index in the document,
+    /// width, height and texels.
+    images: Vec<(usize, u32, u32, Vec<u32>)>,
 }
 
 /// Where a texture's texels are in [`Scene::texels`]: 16 bytes, one `vec4<u32>` in WGSL.
@@ -307,8 +295,11 @@ pub struct Scene {
     pub uvs: Vec<TriangleUv>,
     /// The textures, indexed by [`Material::base_color_texture`] and its siblings.
     pub textures: Vec<TextureInfo>,
-    /// Linear RGBA texels of all textures.
-    pub texels: Vec<[f32; 4]>,
+    /// The texels of all textures, 8-bit RGBA packed red in the low byte (WGSL
+    /// `unpack4x8unorm`), as the file stores them: [`Scene::material_at`] decodes each as its
+    /// use asks (glTF 2.0, "Materials": base-colour and emissive textures are sRGB-encoded,
+    /// metallic-roughness textures linear), so one image serves both kinds of use.
+    pub texels: Vec<u32>,
     /// Things the loader ignored, one sentence each.
     pub warnings: Vec<String>,
 }
@@ -330,27 +321,26 @@ impl SceneFile {
         if document.scenes().len() == 0 {
             return Err(SceneError::NoScene { path });
         }
-        let texture_uses = texture_uses(&document);
-        let mut textures = Vec::new();
-        if !texture_uses.is_empty() {
+        let used = used_images(&document);
+        let mut images = Vec::new();
+        if !used.is_empty() {
             let decoded =
                 gltf::import_images(&document, path.parent(), &buffers).map_err(unreadable)?;
-            for &(image, encoding) in &texture_uses {
-                textures.push(linear_rgba(&decoded[image], encoding).map_err(|reason| {
-                    SceneError::UnsupportedTexture {
-                        path: path.clone(),
-                        image,
-                        reason,
-                    }
-                })?);
+            for image in used {
+                let data = &decoded[image];
+                let texels = rgba8(data).map_err(|reason| SceneError::UnsupportedTexture {
+                    path: path.clone(),
+                    image,
+                    reason,
+                })?;
+                images.push((image, data.width, data.height, texels));
             }
         }
         Ok(Self {
             path,
             document,
             buffers,
-            textures,
-            texture_uses,
+            images,
         })
     }
 
@@ -435,44 +425,29 @@ impl SceneFile {
             let [r, g, b, _] = pbr.base_color_factor();
             let strength = m.emissive_strength().unwrap_or(1.0);
             let emission = Vec3::from(m.emissive_factor()) * strength;
-            let mut texture = |info: Option<gltf::texture::Info>,
-                               encoding: TexelEncoding,
-                               what: &str,
-                               factor: &str| match info {
-                Some(info) if info.tex_coord() == 0 => {
-                    let image = info.texture().source().index();
-                    let used = self
-                        .texture_uses
-                        .iter()
-                        .position(|&u| u == (image, encoding));
-                    used.map_or(NO_TEXTURE, |i| i as u32)
-                }
-                Some(info) => {
-                    warnings.push(format!(
-                        "material {} takes its {what} texture from TEXCOORD_{}; only \
+            let mut texture =
+                |info: Option<gltf::texture::Info>, what: &str, factor: &str| match info {
+                    Some(info) if info.tex_coord() == 0 => {
+                        let image = info.texture().source().index();
+                        let used = self.images.iter().position(|i| i.0 == image);
+                        used.map_or(NO_TEXTURE, |i| i as u32)
+                    }
+                    Some(info) => {
+                        warnings.push(format!(
+                            "material {} takes its {what} texture from TEXCOORD_{}; only \
                              TEXCOORD_0 is read, so its {factor} is used alone",
-                        m.index().unwrap_or(0),
-                        info.tex_coord()
-                    ));
-                    NO_TEXTURE
-                }
-                None => NO_TEXTURE,
-            };
-            let base_color_texture = texture(
-                pbr.base_color_texture(),
-                TexelEncoding::Srgb,
-                "base-colour",
-                "baseColorFactor",
-            );
-            let emissive_texture = texture(
-                m.emissive_texture(),
-                TexelEncoding::Srgb,
-                "emissive",
-                "emissiveFactor",
-            );
+                            m.index().unwrap_or(0),
+                            info.tex_coord()
+                        ));
+                        NO_TEXTURE
+                    }
+                    None => NO_TEXTURE,
+                };
+            let base_color_texture =
+                texture(pbr.base_color_texture(), "base-colour", "baseColorFactor");
+            let emissive_texture = texture(m.emissive_texture(), "emissive", "emissiveFactor");
             let metallic_roughness_texture = texture(
                 pbr.metallic_roughness_texture(),
-                TexelEncoding::Linear,
                 "metallic-roughness",
                 "metallicFactor and roughnessFactor",
             );
@@ -595,17 +570,18 @@ impl SceneFile {
     /// Gives `scene` the file's textures and the triangles' texture coordinates (in BVH
     /// order), when its materials use textures.
     fn attach_textures(&self, scene: &mut Scene, uvs: &[TriangleUv]) {
-        if !self.textures.is_empty() {
-            scene.uvs = scene.bvh.source.iter().map(|&i| uvs[i as usize]).collect();
-            for (width, height, texels) in &self.textures {
-                scene.textures.push(TextureInfo {
-                    offset: scene.texels.len() as u32,
-                    width: *width,
-                    height: *height,
-                    pad: 0,
-                });
-                scene.texels.extend_from_slice(texels);
-            }
+        if self.images.is_empty() {
+            return;
+        }
+        scene.uvs = scene.bvh.source.iter().map(|&i| uvs[i as usize]).collect();
+        for (_, width, height, texels) in &self.images {
+            scene.textures.push(TextureInfo {
+                offset: scene.texels.len() as u32,
+                width: *width,
+                height: *height,
+                pad: 0,
+            });
+            scene.texels.extend_from_slice(texels);
         }
     }
 
@@ -763,27 +739,27 @@ impl SceneFile {
     }
 }
 
-/// The (image, encoding) of every texture the document's materials read from `TEXCOORD_0`,
-/// each once, in the order of first use.
-fn texture_uses(document: &gltf::Document) -> Vec<(usize, TexelEncoding)> {
-    let mut uses = Vec::new();
+/// The images the document's materials read from `TEXCOORD_0` (base-colour, emissive and
+/// metallic-roughness textures), each once, in the order of first use.
+fn used_images(document: &gltf::Document) -> Vec<usize> {
+    let mut used = Vec::new();
     for m in document.materials() {
         let pbr = m.pbr_metallic_roughness();
-        for (info, encoding) in [
-            (pbr.base_color_texture(), TexelEncoding::Srgb),
-            (m.emissive_texture(), TexelEncoding::Srgb),
-            (pbr.metallic_roughness_texture(), TexelEncoding::Linear),
+        for info in [
+            pbr.base_color_texture(),
+            m.emissive_texture(),
+            pbr.metallic_roughness_texture(),
         ] {
             let Some(info) = info.filter(|i| i.tex_coord() == 0) else {
                 continue;
             };
-            let used = (info.texture().source().index(), encoding);
-            if !uses.contains(&used) {
-                uses.push(used);
+            let image = info.texture().source().index();
+            if !used.contains(&image) {
+                used.push(image);
             }
         }
     }
-    uses
+    used
 }
 
 /// Whether primitives of `mode` have area (triangles, strips and fans) and so are rendered.
@@ -844,12 +820,9 @@ fn sample_keyframes(
     core::array::from_fn(|i| a[i] + s * (sign * b[i] - a[i]))
 }
 
-/// An 8-bit glTF image as linear RGBA: colour channels decoded by `encoding`, alpha linear;
-/// grey images are replicated to RGB.
-fn linear_rgba(
-    data: &gltf::image::Data,
-    encoding: TexelEncoding,
-) -> Result<(u32, u32, Vec<[f32; 4]>), String> {
+/// An 8-bit glTF image's texels as packed RGBA8 ([`Scene::texels`]); grey images are
+/// replicated to RGB, and images without alpha get an opaque one.
+fn rgba8(data: &gltf::image::Data) -> Result<Vec<u32>, String> {
     use gltf::image::Format;
     let channels = match data.format {
         Format::R8 => 1,
@@ -858,46 +831,38 @@ fn linear_rgba(
         Format::R8G8B8A8 => 4,
         other => return Err(format!("{other:?} texels; only 8-bit images are supported")),
     };
-    let decode = |b: u8| {
-        let c = f32::from(b) / 255.0;
-        if encoding == TexelEncoding::Linear {
-            c
-        } else if c <= 0.04045 {
-            c / 12.92
-        } else {
-            ((c + 0.055) / 1.055).powf(2.4)
-        }
-    };
     if data.pixels.len() != (data.width * data.height) as usize * channels || data.width == 0 {
         return Err("the pixel data does not match the image size".to_owned());
     }
-    let texels = data
+    Ok(data
         .pixels
         .chunks_exact(channels)
-        .map(|p| match channels {
-            1 | 2 => {
-                let g = decode(p[0]);
-                [
-                    g,
-                    g,
-                    g,
-                    if channels == 2 {
-                        f32::from(p[1]) / 255.0
-                    } else {
-                        1.0
-                    },
-                ]
-            }
-            3 => [decode(p[0]), decode(p[1]), decode(p[2]), 1.0],
-            _ => [
-                decode(p[0]),
-                decode(p[1]),
-                decode(p[2]),
-                f32::from(p[3]) / 255.0,
-            ],
+        .map(|p| {
+            let [r, g, b, a] = match *p {
+                [grey] => [grey, grey, grey, u8::MAX],
+                [grey, alpha] => [grey, grey, grey, alpha],
+                [r, g, b] => [r, g, b, u8::MAX],
+                [r, g, b, a, ..] => [r, g, b, a],
+                [] => [0; 4],
+            };
+            u32::from_le_bytes([r, g, b, a])
         })
-        .collect();
-    Ok((data.width, data.height, texels))
+        .collect())
+}
+
+/// [`srgb_to_linear`] of every byte value `b / 255`.
+static SRGB_BYTES: std::sync::LazyLock<[f32; 256]> =
+    std::sync::LazyLock::new(|| core::array::from_fn(|b| srgb_to_linear(b as f32 / 255.0)));
+
+/// The sRGB electro-optical transfer function (IEC 61966-2-1): an encoded value in [0, 1] to
+/// linear.
+#[must_use]
+pub fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
 }
 
 /// Rec. 709 luminance of linear RGB.
@@ -960,7 +925,8 @@ impl Scene {
 
     /// The material at a hit, with its textures (where it has them) looked up at the hit's
     /// texture coordinates — nearest texel, REPEAT wrapping — and multiplied into
-    /// `base_color`, `emission`, `roughness` (green) and `metallic` (blue).
+    /// `base_color` and `emission` (sRGB-decoded), `roughness` (green) and `metallic` (blue;
+    /// both linear).
     #[must_use]
     pub fn material_at(&self, hit: &Hit) -> Material {
         let mut m = *self.material(hit.triangle);
@@ -972,17 +938,17 @@ impl Scene {
         };
         if let Some(texel) = self.texel(m.base_color_texture, uv) {
             for (b, t) in m.base_color.iter_mut().zip(texel) {
-                *b *= t;
+                *b *= SRGB_BYTES[usize::from(t)];
             }
         }
         if let Some(texel) = self.texel(m.emissive_texture, uv) {
             for (e, t) in m.emission.iter_mut().zip(texel) {
-                *e *= t;
+                *e *= SRGB_BYTES[usize::from(t)];
             }
         }
-        if let Some(texel) = self.texel(m.metallic_roughness_texture, uv) {
-            m.roughness *= texel[1];
-            m.metallic *= texel[2];
+        if let Some([_, g, b, _]) = self.texel(m.metallic_roughness_texture, uv) {
+            m.roughness *= f32::from(g) / 255.0;
+            m.metallic *= f32::from(b) / 255.0;
         }
         m
     }
@@ -1010,16 +976,14 @@ impl Scene {
         Some([0, 1].map(|k| b0 * uv.uv[0][k] + hit.b1 * uv.uv[1][k] + hit.b2 * uv.uv[2][k]))
     }
 
-    /// Texture `texture`'s linear RGBA at texture coordinates `[u, v]` (nearest texel, REPEAT
+    /// Texture `texture`'s RGBA bytes at texture coordinates `[u, v]` (nearest texel, REPEAT
     /// wrapping); `None` for [`NO_TEXTURE`].
-    fn texel(&self, texture: u32, [u, v]: [f32; 2]) -> Option<[f32; 4]> {
+    fn texel(&self, texture: u32, [u, v]: [f32; 2]) -> Option<[u8; 4]> {
         let tex = self.textures.get(texture as usize)?;
         let x = ((u - u.floor()) * tex.width as f32) as u32;
         let y = ((v - v.floor()) * tex.height as f32) as u32;
-        Some(
-            self.texels
-                [(tex.offset + y.min(tex.height - 1) * tex.width + x.min(tex.width - 1)) as usize],
-        )
+        let index = tex.offset + y.min(tex.height - 1) * tex.width + x.min(tex.width - 1);
+        Some(self.texels[index as usize].to_le_bytes())
     }
 
     /// The material of triangle `triangle` (leaf order).

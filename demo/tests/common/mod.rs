@@ -66,7 +66,7 @@ pub fn furnace(rho: Vec3, le: Vec3) -> Scene {
     .unwrap()
 }
 
-/// A 2×2 texture (red, green / grey, blue; linear RGBA) as texture 0 of `scene`, with texture
+/// A 2×2 texture (red, green / grey, blue; RGBA8) as texture 0 of `scene`, with texture
 /// coordinates (0,0), (1,0), (0,1) at every triangle's corners, rotated by one corner from
 /// triangle to triangle (so that a texel read through the wrong triangle shows): each
 /// triangle shows three of the texels.
@@ -77,12 +77,7 @@ pub fn with_texture(mut scene: Scene) -> Scene {
         height: 2,
         pad: 0,
     }];
-    scene.texels = vec![
-        [1.0, 0.0, 0.0, 1.0],
-        [0.0, 1.0, 0.0, 1.0],
-        [0.5, 0.5, 0.5, 1.0],
-        [0.0, 0.0, 1.0, 1.0],
-    ];
+    scene.texels = vec![0xff00_00ff, 0xff00_ff00, 0xff80_8080, 0xffff_0000];
     let corners = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
     scene.uvs = (0..scene.bvh.triangles.len())
         .map(|i| TriangleUv {

@@ -166,7 +166,7 @@ struct RayHit {
 @group(0) @binding(4) var<storage, read> emitters: array<Emitter>;
 @group(0) @binding(5) var<storage, read> uvs: array<TriangleUv>;
 @group(0) @binding(6) var<storage, read> textures: array<TextureInfo>;
-@group(0) @binding(7) var<storage, read> texels: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read> texels: array<u32>;
 @group(0) @binding(8) var<storage, read_write> image: array<vec4<f32>>;
 @group(0) @binding(9) var<storage, read> rays: array<Ray>;
 @group(0) @binding(10) var<storage, read_write> ray_hits: array<RayHit>;
@@ -492,8 +492,8 @@ fn uv_at(hit: RayHit) -> vec2<f32> {
     return (1.0 - hit.b1 - hit.b2) * uv.uv_a + hit.b1 * uv.uv_b + hit.b2 * uv.uv_c;
 }
 
-// `Scene::texel`: texture `texture`'s linear RGBA at texture coordinates `c` (nearest texel,
-// REPEAT wrapping); white without texture.
+// `Scene::texel`: texture `texture`'s RGBA8 at texture coordinates `c` (nearest texel, REPEAT
+// wrapping) as values in [0, 1], not decoded; white without texture.
 fn texel_at(texture: u32, c: vec2<f32>) -> vec4<f32> {
     if texture >= params.texture_count {
         return vec4<f32>(1.0);
@@ -501,7 +501,15 @@ fn texel_at(texture: u32, c: vec2<f32>) -> vec4<f32> {
     let tex = textures[texture];
     let x = u32((c.x - floor(c.x)) * f32(tex.width));
     let y = u32((c.y - floor(c.y)) * f32(tex.height));
-    return texels[tex.offset + min(y, tex.height - 1u) * tex.width + min(x, tex.width - 1u)];
+    return unpack4x8unorm(
+        texels[tex.offset + min(y, tex.height - 1u) * tex.width + min(x, tex.width - 1u)]
+    );
+}
+
+// `scene::srgb_to_linear` per channel (IEC 61966-2-1); 1 stays 1, so a colour without texture
+// (`texel_at`'s white) is unchanged.
+fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
+    return select(pow((c + 0.055) / 1.055, vec3<f32>(2.4)), c / 12.92, c <= vec3<f32>(0.04045));
 }
 
 // `Scene::material_at`: the triangle's material with its base-colour, emissive and
@@ -514,8 +522,8 @@ fn material_at(hit: RayHit) -> Material {
         return m;
     }
     let c = uv_at(hit);
-    m.base_color *= texel_at(m.base_color_texture, c).rgb;
-    m.emission *= texel_at(m.emissive_texture, c).rgb;
+    m.base_color *= srgb_to_linear(texel_at(m.base_color_texture, c).rgb);
+    m.emission *= srgb_to_linear(texel_at(m.emissive_texture, c).rgb);
     let metallic_roughness = texel_at(m.metallic_roughness_texture, c);
     m.roughness *= metallic_roughness.g;
     m.metallic *= metallic_roughness.b;
@@ -536,7 +544,7 @@ fn triangle_emission(material: u32, hit: RayHit) -> vec3<f32> {
     if params.texture_count == 0u {
         return emission;
     }
-    return emission * texel_at(materials[material].emissive_texture, uv_at(hit)).rgb;
+    return emission * srgb_to_linear(texel_at(materials[material].emissive_texture, uv_at(hit)).rgb);
 }
 
 // ---------------------------------------------------------------------------------------------
