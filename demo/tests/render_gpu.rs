@@ -768,6 +768,30 @@ fn gpu_reads_textures_as_the_cpu() {
     }
 }
 
+/// An image the device cannot bind is refused by `GpuTracer::image_entries`, which `render`
+/// asks before it allocates the frame's host buffers (a 16384² `mcpg` render on lavapipe took
+/// 16 GB and 31 s to fail in `render_frame` before): 16384² pixels need 4 GiB + 1 MiB of
+/// `vec4<f32>`, above the 2³² − 1 bytes of any Vulkan storage binding; 64² pixels fit, one
+/// entry per pixel for `bsdf`.
+#[test]
+fn images_the_device_cannot_bind_are_refused_up_front() {
+    let scene = furnace(Vec3::splat(0.5), Vec3::ONE);
+    let Some(gpu) = tracer("images_the_device_cannot_bind_are_refused_up_front", &scene) else {
+        return;
+    };
+    let settings = |side| RenderSettings {
+        width: side,
+        height: side,
+        spp: 1,
+        bounces: 1,
+        seed: 0,
+        method: Method::Bsdf,
+    };
+    let e = gpu.image_entries(&settings(16384)).unwrap_err();
+    assert!(e.to_string().contains("binds at most"), "{e}");
+    assert_eq!(gpu.image_entries(&settings(64)).unwrap(), (64 * 64, 0));
+}
+
 /// Emissive textures where the GPU reads emission away from a hit: a light sample reads the
 /// texel at the point it samples (`light_sample`), and `mcpg`'s emission-only directions the
 /// texel of the scene triangle behind the emitters' copy they meet (`emitter_emission`,

@@ -1028,15 +1028,14 @@ impl GpuTracer {
         ))
     }
 
-    /// Checks `settings` against the device and the started guides, allocates the image and
-    /// returns the frame's uniform (tile fields zero); the `mcpg` guide follows the camera.
-    fn frame_params(&mut self, settings: &RenderSettings, frame: u32) -> Result<GpuParams> {
-        let method = method_code(settings.method).ok_or_else(|| {
-            format!(
-                "the GPU tracer has no method {} yet (use --device cpu)",
-                settings.method.name()
-            )
-        })?;
+    /// The image buffer's entries for `settings` (the pixels, then the `mcpg` moments every
+    /// `moment_stride` pixels where its emission directions are allocated adaptively) and that
+    /// stride; checking it early spares a caller the host memory of a render the device could
+    /// not hold.
+    ///
+    /// # Errors
+    /// When the image exceeds the device's largest storage binding.
+    pub fn image_entries(&self, settings: &RenderSettings) -> Result<(usize, u32)> {
         let (width, height) = (settings.width, settings.height);
         let mcpg = settings.method == Method::Mcpg;
         let moment_stride = if mcpg && self.mcpg_emission.policy() == Allocation::Adaptive {
@@ -1050,10 +1049,26 @@ impl GpuTracer {
         let max = self.ctx.device().limits().max_storage_buffer_binding_size;
         if bytes > max {
             return Err(format!(
-                "a {width}×{height} image needs {bytes} bytes; this GPU binds at most {max}"
+                "a {width}×{height} image needs {bytes} bytes; this GPU binds at most {max} \
+                 (--device cpu renders it on the CPU)"
             )
             .into());
         }
+        Ok((entries, moment_stride))
+    }
+
+    /// Checks `settings` against the device and the started guides, allocates the image and
+    /// returns the frame's uniform (tile fields zero); the `mcpg` guide follows the camera.
+    fn frame_params(&mut self, settings: &RenderSettings, frame: u32) -> Result<GpuParams> {
+        let method = method_code(settings.method).ok_or_else(|| {
+            format!(
+                "the GPU tracer has no method {} yet (use --device cpu)",
+                settings.method.name()
+            )
+        })?;
+        let (width, height) = (settings.width, settings.height);
+        let mcpg = settings.method == Method::Mcpg;
+        let (entries, moment_stride) = self.image_entries(settings)?;
         if self.image.as_ref().is_none_or(|b| b.len() != entries) {
             self.image = Some(self.ctx.zeroed_buffer("mcg-demo image", entries));
         }

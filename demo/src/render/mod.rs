@@ -382,6 +382,9 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         g.upload(&scene)?;
     }
     let mut guide = start_guide(args, &scene, &mut gpu)?;
+    if let Some(g) = gpu.as_deref() {
+        g.image_entries(&settings)?;
+    }
     let progress = progress_bar(args)?;
     let pixels = (args.width * args.height) as usize;
     let mut sum = Accumulation::new(pixels, args.ramp_frames);
