@@ -5,10 +5,10 @@
 //! - **Geometry**: every triangle primitive (`mode` TRIANGLES, TRIANGLE_STRIP or
 //!   TRIANGLE_FAN, with or without indices) of every mesh node of the default scene (or the
 //!   first scene), with the node's world transform. Points and lines have no area to hit:
-//!   they are skipped, and [`Scene::warnings`] names their meshes. A transform that mirrors (negative determinant) swaps the winding back, as
-//!   the glTF 2.0 specification requires (section "Transformations"), so front faces stay
-//!   front faces. Shading normals are not used: shading uses the geometric normal.
-//!   `TEXCOORD_0` is read for textured materials.
+//!   they are skipped, and [`Scene::warnings`] names their meshes. A transform that mirrors
+//!   (negative determinant) swaps the winding back, as the glTF 2.0 specification requires
+//!   (section "Transformations"), so front faces stay front faces. Shading normals are not
+//!   used: shading uses the geometric normal. `TEXCOORD_0` is read for textured materials.
 //! - **Camera**: the first node of the default scene, depth first, that carries a
 //!   perspective camera; it looks down its local −Z with +Y up (glTF 2.0 specification,
 //!   section "Cameras"). `yfov` is used; the aspect ratio is the image's.
@@ -485,7 +485,8 @@ impl SceneFile {
     /// Warns of what the file uses and the renderer does not read, so that a scene that looks
     /// wrong says why: extensions other than [`READ_EXTENSIONS`] (punctual lights, texture
     /// transforms, transmission, …), alpha modes other than `OPAQUE` (rendered opaque), point
-    /// and line primitives (skipped) and vertex colours. One sentence per feature, naming the materials or meshes that use it.
+    /// and line primitives (skipped) and vertex colours. One sentence per feature, naming the
+    /// materials or meshes that use it.
     fn unread_features(&self, warnings: &mut Vec<String>) {
         let document = &self.document;
         for extension in document.extensions_used() {

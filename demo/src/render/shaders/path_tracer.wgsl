@@ -544,7 +544,8 @@ fn triangle_emission(material: u32, hit: RayHit) -> vec3<f32> {
     if params.texture_count == 0u {
         return emission;
     }
-    return emission * srgb_to_linear(texel_at(materials[material].emissive_texture, uv_at(hit)).rgb);
+    let texel = texel_at(materials[material].emissive_texture, uv_at(hit));
+    return emission * srgb_to_linear(texel.rgb);
 }
 
 // ---------------------------------------------------------------------------------------------
