@@ -902,17 +902,11 @@ fn finish_reports_incident_radiance() {
     );
 }
 
-/// Base-colour, emissive and metallic-roughness textures are read: a triangle with texture
-/// coordinates (0,0), (1,0), (0,1) at its corners and a 2×2 PNG (red, green / grey, blue)
-/// embedded as a data URI, as the base-colour texture with factor (0.5, 1, 1), as the
-/// emissive texture with factor (2, 2, 2) and as the metallic-roughness texture with
-/// metallicFactor 0.5 and roughnessFactor 0.8. The material at barycentrics (b1, b2) =
-/// texture coordinates (u, v) has each colour factor times the sRGB-decoded texel there, and
-/// roughness and metallic their factors times the texel's green and blue bytes / 255 (the
-/// same image read linearly).
-#[test]
-fn textures_multiply_their_factors() {
-    let dir = temp_dir("texture");
+/// The scene of one triangle at z = −1 with texture coordinates (0,0), (1,0), (0,1) at its
+/// corners (so barycentrics (b1, b2) are its texture coordinates (u, v)), seen by a camera
+/// at the origin, whose material (glTF JSON) reads texture 0: a 2×2 PNG (red, green / grey,
+/// blue) embedded as a data URI. The file lists `extensions_used`.
+fn textured_triangle(dir: &Path, material: serde_json::Value, extensions_used: &[&str]) -> Scene {
     let mut png = Vec::new();
     let texels = vec![255, 0, 0, 0, 255, 0, 128, 128, 128, 0, 0, 255];
     image::RgbImage::from_raw(2, 2, texels)
@@ -925,19 +919,13 @@ fn textures_multiply_their_factors() {
     let bytes: Vec<u8> = floats.iter().flat_map(|f| f.to_le_bytes()).collect();
     let doc = serde_json::json!({
         "asset": { "version": "2.0" },
+        "extensionsUsed": extensions_used,
         "scene": 0,
         "scenes": [{ "nodes": [0, 1] }],
         "nodes": [{ "mesh": 0 }, { "camera": 0 }],
         "cameras": [{ "type": "perspective", "perspective": { "yfov": 1.0, "znear": 0.1 } }],
         "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0, "TEXCOORD_0": 1 }, "material": 0 }] }],
-        "materials": [{
-            "pbrMetallicRoughness": {
-                "baseColorFactor": [0.5, 1.0, 1.0, 1.0], "baseColorTexture": { "index": 0 },
-                "metallicFactor": 0.5, "roughnessFactor": 0.8, "metallicRoughnessTexture": { "index": 0 },
-            },
-            "emissiveFactor": [2.0, 2.0, 2.0],
-            "emissiveTexture": { "index": 0 },
-        }],
+        "materials": [material],
         "textures": [{ "source": 0 }],
         "images": [{ "uri": format!("data:image/png;base64,{}", base64(&png)) }],
         "accessors": [
@@ -950,7 +938,28 @@ fn textures_multiply_their_factors() {
     });
     let path = dir.join("textured.gltf");
     std::fs::write(&path, serde_json::to_string(&doc).unwrap()).unwrap();
-    let scene = SceneFile::open(&path).unwrap().build(0.0).unwrap();
+    SceneFile::open(&path).unwrap().build(0.0).unwrap()
+}
+
+/// Base-colour, emissive and metallic-roughness textures are read: [`textured_triangle`]'s
+/// texture as the base-colour texture with factor (0.5, 1, 1), as the
+/// emissive texture with factor (2, 2, 2) and as the metallic-roughness texture with
+/// metallicFactor 0.5 and roughnessFactor 0.8. The material at barycentrics (b1, b2) =
+/// texture coordinates (u, v) has each colour factor times the sRGB-decoded texel there, and
+/// roughness and metallic their factors times the texel's green and blue bytes / 255 (the
+/// same image read linearly).
+#[test]
+fn textures_multiply_their_factors() {
+    let dir = temp_dir("texture");
+    let material = serde_json::json!({
+        "pbrMetallicRoughness": {
+            "baseColorFactor": [0.5, 1.0, 1.0, 1.0], "baseColorTexture": { "index": 0 },
+            "metallicFactor": 0.5, "roughnessFactor": 0.8, "metallicRoughnessTexture": { "index": 0 },
+        },
+        "emissiveFactor": [2.0, 2.0, 2.0],
+        "emissiveTexture": { "index": 0 },
+    });
+    let scene = textured_triangle(&dir, material, &[]);
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
     let grey = (128.0f32 / 255.0 + 0.055).powf(2.4) / 1.055f32.powf(2.4);
     let hit = |b1, b2| Hit {
@@ -992,6 +1001,66 @@ fn textures_multiply_their_factors() {
             "({b1}, {b2}): emission {got} vs {}",
             2.0 * texel
         );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `KHR_texture_transform` maps a slot's texture coordinates, and its `texCoord` overrides the
+/// slot's: on [`textured_triangle`], the base-colour texture with offset (0.5, 0), rotation
+/// π/2 and scale (1, 2) reads (u, v) at (0.5 − 2v, u); the emissive texture, without the
+/// extension, at (u, v); the metallic-roughness texture's transform asks for `TEXCOORD_1`, so
+/// it is not read (a warning says so) and the factors stand alone. Expected texels worked by
+/// hand at four points, one per texel of the base colour; a transform applied to every slot,
+/// or not at all, fails.
+#[test]
+fn texture_transforms_map_each_slot_s_coordinates() {
+    let dir = temp_dir("texture_transform");
+    let transform = serde_json::json!({ "KHR_texture_transform": {
+        "offset": [0.5, 0.0], "rotation": core::f32::consts::FRAC_PI_2, "scale": [1.0, 2.0] } });
+    let material = serde_json::json!({
+        "pbrMetallicRoughness": {
+            "baseColorTexture": { "index": 0, "extensions": transform },
+            "metallicFactor": 0.5, "roughnessFactor": 0.8,
+            "metallicRoughnessTexture": { "index": 0,
+                "extensions": { "KHR_texture_transform": { "texCoord": 1 } } },
+        },
+        "emissiveFactor": [1.0, 1.0, 1.0],
+        "emissiveTexture": { "index": 0 },
+    });
+    let scene = textured_triangle(&dir, material, &["KHR_texture_transform"]);
+    assert_eq!(
+        scene.warnings,
+        [
+            "material 0 takes its metallic-roughness texture from TEXCOORD_1; only TEXCOORD_0 \
+          is read, so its metallicFactor and roughnessFactor is used alone"
+        ]
+    );
+    let grey = (128.0f32 / 255.0 + 0.055).powf(2.4) / 1.055f32.powf(2.4);
+    let [red, green, grey, blue] = [Vec3::X, Vec3::Y, Vec3::splat(grey), Vec3::Z];
+    for (u, v, base, emitted) in [
+        (0.1, 0.1, red, red),
+        (0.1, 0.3, green, red),
+        (0.6, 0.1, grey, green),
+        (0.6, 0.3, blue, green),
+    ] {
+        let hit = Hit {
+            t: 1.0,
+            triangle: 0,
+            b1: u,
+            b2: v,
+        };
+        let m = scene.material_at(&hit);
+        assert!(
+            (Vec3::from(m.base_color) - base).abs().max_element() < 1e-5,
+            "({u}, {v}): base colour {:?} vs {base}",
+            m.base_color
+        );
+        assert!(
+            (m.emission() - emitted).abs().max_element() < 1e-5,
+            "({u}, {v}): emission {} vs {emitted}",
+            m.emission()
+        );
+        assert_eq!((m.metallic, m.roughness), (0.5, 0.8));
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

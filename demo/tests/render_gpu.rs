@@ -16,7 +16,7 @@ use mcg_demo::render::emission_allocation::Allocation;
 use mcg_demo::render::gpu::{GpuHit, GpuRay, GpuTiming, GpuTracer, SEGMENT_BATCH, frame_counts};
 use mcg_demo::render::guided::{McpgSampler, Reflected, guide_config};
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
-use mcg_demo::render::scene::{Scene, SceneFile};
+use mcg_demo::render::scene::{Scene, SceneFile, TextureInfo};
 use mcg_demo::render::{Device, ProbeOptions, RenderArgs, render};
 use mcg_gpu_backend::sampling::next_uniform;
 use mcg_gpu_backend::testing::gpu_or_skip;
@@ -716,20 +716,31 @@ fn gpu_tiles_cover_every_pixel() {
 /// and at least three distinct pixel values (the texture shows). Ignoring the base-colour
 /// texture on the GPU leaves 0 of 1024 pixels equal, ignoring the emissive one
 /// (checked once each), ignoring the metallic-roughness one leaves 14 of 1024, and skipping
-/// the sRGB decoding leaves 803 (the grey texel's pixels).
+/// the sRGB decoding leaves 803 (the grey texel's pixels). Last, the base-colour texture
+/// through a `KHR_texture_transform` map (offset (0.5, 0.25), rotation 0.7, scale (1.5, 2));
+/// ignoring the map in WGSL leaves 268 of 1024 equal.
 #[test]
 fn gpu_reads_textures_as_the_cpu() {
     let le = Vec3::new(1.0, 2.0, 0.5);
-    for label in ["base colour", "emissive", "metallic-roughness"] {
+    for label in [
+        "base colour",
+        "emissive",
+        "metallic-roughness",
+        "transformed",
+    ] {
         let mut scene = with_texture(furnace(Vec3::ONE, le));
         let m = &mut scene.materials[0];
         match label {
             "base colour" => m.base_color_texture = 0,
             "emissive" => m.emissive_texture = 0,
-            _ => {
+            "metallic-roughness" => {
                 m.metallic_roughness_texture = 0;
                 m.metallic = 1.0;
                 m.roughness = 1.0;
+            }
+            _ => {
+                m.base_color_texture = 0;
+                scene.textures[0].map = TextureInfo::transform([0.5, 0.25], 0.7, [1.5, 2.0]);
             }
         }
         let Some(mut gpu) = tracer("gpu_reads_textures_as_the_cpu", &scene) else {

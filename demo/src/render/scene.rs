@@ -15,7 +15,8 @@
 //! - **Materials** ([`Material`]): `baseColorFactor` (RGB), `metallicFactor`,
 //!   `roughnessFactor`, `emissiveFactor × KHR_materials_emissive_strength`, and the
 //!   base-colour, emissive and metallic-roughness textures (8-bit PNG or JPEG, `TEXCOORD_0`,
-//!   nearest texel with REPEAT wrapping — the glTF sampler is not read), which multiply
+//!   `KHR_texture_transform`, nearest texel with REPEAT wrapping — the glTF sampler is not
+//!   read), which multiply
 //!   `baseColorFactor` and the emission (sRGB-decoded), and `roughnessFactor` (green) and
 //!   `metallicFactor` (blue; both linear). Light sampling picks emitting triangles by area ×
 //!   the luminance of the factors alone, so a dark part of an emissive texture is picked as
@@ -43,7 +44,7 @@ use super::bvh::{Bvh, Hit, Triangle};
 use super::material::{Material, NO_TEXTURE};
 
 /// The glTF extensions the loader reads; [`Scene::warnings`] names any other a file uses.
-pub const READ_EXTENSIONS: [&str; 1] = ["KHR_materials_emissive_strength"];
+pub const READ_EXTENSIONS: [&str; 2] = ["KHR_materials_emissive_strength", "KHR_texture_transform"];
 
 /// Frames per second of the renderer's clock: frame `f` shows the scene at `f / FRAME_RATE`
 /// seconds of its animations.
@@ -231,15 +232,19 @@ pub struct SceneFile {
     path: PathBuf,
     document: gltf::Document,
     buffers: Vec<gltf::buffer::Data>,
-    /// Every image a material's texture reads (each once, in the order of first use: the
-    /// scene's texture index), packed as [`Scene::texels`] are: its index in the document,
-    /// width, height and texels.
+    /// Every image a material's texture reads (each once, in the order of first use), packed
+    /// as [`Scene::texels`] are: its index in the document, width, height and texels.
     images: Vec<(usize, u32, u32, Vec<u32>)>,
+    /// The textures the materials read ([`Scene::textures`]): the image (its document index)
+    /// and the map of texture coordinates ([`TextureInfo::map`]).
+    textures: Vec<(usize, [[f32; 4]; 2])>,
 }
 
-/// Where a texture's texels are in [`Scene::texels`]: 16 bytes, one `vec4<u32>` in WGSL.
+/// A texture as materials read it: where its texels are in [`Scene::texels`] and the map of
+/// texture coordinates in front of the lookup (`KHR_texture_transform`); 48 bytes, a
+/// `vec4<u32>` and two `vec4<f32>` in WGSL.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct TextureInfo {
     /// Index of the first texel (row-major from the top-left).
     pub offset: u32,
@@ -249,6 +254,33 @@ pub struct TextureInfo {
     pub height: u32,
     /// Padding; always 0.
     pub pad: u32,
+    /// The rows `(a, b, c, 0)` and `(d, e, f, 0)` of the affine map
+    /// `(u, v) ↦ (a·u + b·v + c, d·u + e·v + f)` applied to a hit's texture coordinates
+    /// ([`TextureInfo::transform`]); [`TextureInfo::IDENTITY`] without the extension.
+    pub map: [[f32; 4]; 2],
+}
+
+impl TextureInfo {
+    /// The map of a texture without `KHR_texture_transform`.
+    pub const IDENTITY: [[f32; 4]; 2] = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]];
+
+    /// `KHR_texture_transform`'s map of texture coordinates, `translation · rotation · scale`
+    /// (the extension's specification, in column-major GLSL): rotation by `rotation` radians
+    /// counter-clockwise, `(u, v) ↦ (cos·s_u·u − sin·s_v·v + o_u, sin·s_u·u + cos·s_v·v + o_v)`.
+    #[must_use]
+    pub fn transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> [[f32; 4]; 2] {
+        let (sin, cos) = rotation.sin_cos();
+        [
+            [cos * scale[0], -sin * scale[1], offset[0], 0.0],
+            [sin * scale[0], cos * scale[1], offset[1], 0.0],
+        ]
+    }
+
+    /// `[u, v]` through [`TextureInfo::map`].
+    #[must_use]
+    pub fn mapped(&self, [u, v]: [f32; 2]) -> [f32; 2] {
+        self.map.map(|[a, b, c, _]| a * u + b * v + c)
+    }
 }
 
 /// The texture coordinates (`TEXCOORD_0`) of a triangle's three vertices: 32 bytes, two
@@ -321,12 +353,15 @@ impl SceneFile {
         if document.scenes().len() == 0 {
             return Err(SceneError::NoScene { path });
         }
-        let used = used_images(&document);
-        let mut images = Vec::new();
-        if !used.is_empty() {
+        let textures = used_textures(&document);
+        let mut images: Vec<(usize, u32, u32, Vec<u32>)> = Vec::new();
+        if !textures.is_empty() {
             let decoded =
                 gltf::import_images(&document, path.parent(), &buffers).map_err(unreadable)?;
-            for image in used {
+            for &(image, _) in &textures {
+                if images.iter().any(|i| i.0 == image) {
+                    continue;
+                }
                 let data = &decoded[image];
                 let texels = rgba8(data).map_err(|reason| SceneError::UnsupportedTexture {
                     path: path.clone(),
@@ -341,6 +376,7 @@ impl SceneFile {
             document,
             buffers,
             images,
+            textures,
         })
     }
 
@@ -427,30 +463,39 @@ impl SceneFile {
             let emission = Vec3::from(m.emissive_factor()) * strength;
             let mut texture =
                 |info: Option<gltf::texture::Info>, what: &str, factor: &str| match info {
-                    Some(info) if info.tex_coord() == 0 => {
-                        let image = info.texture().source().index();
-                        let used = self.images.iter().position(|i| i.0 == image);
-                        used.map_or(NO_TEXTURE, |i| i as u32)
-                    }
-                    Some(info) => {
-                        warnings.push(format!(
-                            "material {} takes its {what} texture from TEXCOORD_{}; only \
-                             TEXCOORD_0 is read, so its {factor} is used alone",
-                            m.index().unwrap_or(0),
-                            info.tex_coord()
-                        ));
-                        NO_TEXTURE
-                    }
-                    None => NO_TEXTURE,
+                    None => Ok(NO_TEXTURE),
+                    Some(info) => match texture_use(&info) {
+                        Ok(used) => {
+                            if used.1.iter().flatten().any(|v| !v.is_finite()) {
+                                return Err(SceneError::NonFinite {
+                                    path: path.clone(),
+                                    what: format!(
+                                        "the {what} texture transform of material {}",
+                                        m.index().unwrap_or(0)
+                                    ),
+                                });
+                            }
+                            let index = self.textures.iter().position(|&t| t == used);
+                            Ok(index.map_or(NO_TEXTURE, |i| i as u32))
+                        }
+                        Err(tex_coord) => {
+                            warnings.push(format!(
+                                "material {} takes its {what} texture from TEXCOORD_{tex_coord}; \
+                                 only TEXCOORD_0 is read, so its {factor} is used alone",
+                                m.index().unwrap_or(0),
+                            ));
+                            Ok(NO_TEXTURE)
+                        }
+                    },
                 };
             let base_color_texture =
-                texture(pbr.base_color_texture(), "base-colour", "baseColorFactor");
-            let emissive_texture = texture(m.emissive_texture(), "emissive", "emissiveFactor");
+                texture(pbr.base_color_texture(), "base-colour", "baseColorFactor")?;
+            let emissive_texture = texture(m.emissive_texture(), "emissive", "emissiveFactor")?;
             let metallic_roughness_texture = texture(
                 pbr.metallic_roughness_texture(),
                 "metallic-roughness",
                 "metallicFactor and roughnessFactor",
-            );
+            )?;
             let material = Material {
                 base_color: [r, g, b],
                 metallic: pbr.metallic_factor().clamp(0.0, 1.0),
@@ -575,14 +620,21 @@ impl SceneFile {
             return;
         }
         scene.uvs = scene.bvh.source.iter().map(|&i| uvs[i as usize]).collect();
-        for (_, width, height, texels) in &self.images {
-            scene.textures.push(TextureInfo {
-                offset: scene.texels.len() as u32,
-                width: *width,
-                height: *height,
-                pad: 0,
-            });
+        let mut offsets = Vec::new();
+        for (image, _, _, texels) in &self.images {
+            offsets.push((*image, scene.texels.len() as u32));
             scene.texels.extend_from_slice(texels);
+        }
+        for &(image, map) in &self.textures {
+            let k = self.images.iter().position(|i| i.0 == image);
+            let k = k.expect("SceneFile::open packs the image of every texture");
+            scene.textures.push(TextureInfo {
+                offset: offsets[k].1,
+                width: self.images[k].1,
+                height: self.images[k].2,
+                pad: 0,
+                map,
+            });
         }
     }
 
@@ -740,9 +792,10 @@ impl SceneFile {
     }
 }
 
-/// The images the document's materials read from `TEXCOORD_0` (base-colour, emissive and
-/// metallic-roughness textures), each once, in the order of first use.
-fn used_images(document: &gltf::Document) -> Vec<usize> {
+/// The textures the document's materials read from `TEXCOORD_0` (base-colour, emissive and
+/// metallic-roughness textures) as [`texture_use`] gives them, each once, in the order of
+/// first use.
+fn used_textures(document: &gltf::Document) -> Vec<(usize, [[f32; 4]; 2])> {
     let mut used = Vec::new();
     for m in document.materials() {
         let pbr = m.pbr_metallic_roughness();
@@ -751,16 +804,31 @@ fn used_images(document: &gltf::Document) -> Vec<usize> {
             m.emissive_texture(),
             pbr.metallic_roughness_texture(),
         ] {
-            let Some(info) = info.filter(|i| i.tex_coord() == 0) else {
-                continue;
-            };
-            let image = info.texture().source().index();
-            if !used.contains(&image) {
-                used.push(image);
+            if let Some(Ok(texture)) = info.as_ref().map(texture_use)
+                && !used.contains(&texture)
+            {
+                used.push(texture);
             }
         }
     }
     used
+}
+
+/// What a material's texture slot reads: the image (its document index) and the map of
+/// texture coordinates (`KHR_texture_transform`, [`TextureInfo::transform`]); or the texture
+/// coordinate set it reads when that is not `TEXCOORD_0` (the extension's `texCoord`
+/// overrides the slot's).
+fn texture_use(info: &gltf::texture::Info) -> Result<(usize, [[f32; 4]; 2]), u32> {
+    let transform = info.texture_transform();
+    let tex_coord = transform.as_ref().and_then(|t| t.tex_coord());
+    let tex_coord = tex_coord.unwrap_or(info.tex_coord());
+    if tex_coord != 0 {
+        return Err(tex_coord);
+    }
+    let map = transform.map_or(TextureInfo::IDENTITY, |t| {
+        TextureInfo::transform(t.offset(), t.rotation(), t.scale())
+    });
+    Ok((info.texture().source().index(), map))
 }
 
 /// Whether primitives of `mode` have area (triangles, strips and fans) and so are rendered.
@@ -977,10 +1045,11 @@ impl Scene {
         Some([0, 1].map(|k| b0 * uv.uv[0][k] + hit.b1 * uv.uv[1][k] + hit.b2 * uv.uv[2][k]))
     }
 
-    /// Texture `texture`'s RGBA bytes at texture coordinates `[u, v]` (nearest texel, REPEAT
-    /// wrapping); `None` for [`NO_TEXTURE`].
-    fn texel(&self, texture: u32, [u, v]: [f32; 2]) -> Option<[u8; 4]> {
+    /// Texture `texture`'s RGBA bytes at texture coordinates `uv` (mapped by
+    /// [`TextureInfo::map`], nearest texel, REPEAT wrapping); `None` for [`NO_TEXTURE`].
+    fn texel(&self, texture: u32, uv: [f32; 2]) -> Option<[u8; 4]> {
         let tex = self.textures.get(texture as usize)?;
+        let [u, v] = tex.mapped(uv);
         let x = ((u - u.floor()) * tex.width as f32) as u32;
         let y = ((v - v.floor()) * tex.height as f32) as u32;
         let index = tex.offset + y.min(tex.height - 1) * tex.width + x.min(tex.width - 1);

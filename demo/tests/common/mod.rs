@@ -76,6 +76,7 @@ pub fn with_texture(mut scene: Scene) -> Scene {
         width: 2,
         height: 2,
         pad: 0,
+        map: TextureInfo::IDENTITY,
     }];
     scene.texels = vec![0xff00_00ff, 0xff00_ff00, 0xff80_8080, 0xffff_0000];
     let corners = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];

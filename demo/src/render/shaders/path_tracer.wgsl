@@ -99,6 +99,8 @@ struct TextureInfo {
     width: u32,
     height: u32,
     pad: u32,
+    map_u: vec4<f32>,
+    map_v: vec4<f32>,
 }
 
 // `gpu::GpuParams`: the camera, the settings of the frame, and the tile of this dispatch.
@@ -492,13 +494,16 @@ fn uv_at(hit: RayHit) -> vec2<f32> {
     return (1.0 - hit.b1 - hit.b2) * uv.uv_a + hit.b1 * uv.uv_b + hit.b2 * uv.uv_c;
 }
 
-// `Scene::texel`: texture `texture`'s RGBA8 at texture coordinates `c` (nearest texel, REPEAT
-// wrapping) as values in [0, 1], not decoded; white without texture.
-fn texel_at(texture: u32, c: vec2<f32>) -> vec4<f32> {
+// `Scene::texel`: texture `texture`'s RGBA8 at texture coordinates `uv` (mapped by
+// `TextureInfo::map`, nearest texel, REPEAT wrapping) as values in [0, 1], not decoded; white
+// without texture.
+fn texel_at(texture: u32, uv: vec2<f32>) -> vec4<f32> {
     if texture >= params.texture_count {
         return vec4<f32>(1.0);
     }
     let tex = textures[texture];
+    let h = vec3<f32>(uv, 1.0);
+    let c = vec2<f32>(dot(tex.map_u.xyz, h), dot(tex.map_v.xyz, h));
     let x = u32((c.x - floor(c.x)) * f32(tex.width));
     let y = u32((c.y - floor(c.y)) * f32(tex.height));
     return unpack4x8unorm(
