@@ -905,8 +905,14 @@ fn finish_reports_incident_radiance() {
 /// The scene of one triangle at z = −1 with texture coordinates (0,0), (1,0), (0,1) at its
 /// corners (so barycentrics (b1, b2) are its texture coordinates (u, v)), seen by a camera
 /// at the origin, whose material (glTF JSON) reads texture 0: a 2×2 PNG (red, green / grey,
-/// blue) embedded as a data URI. The file lists `extensions_used`.
-fn textured_triangle(dir: &Path, material: serde_json::Value, extensions_used: &[&str]) -> Scene {
+/// blue) embedded as a data URI, through `sampler` (glTF JSON; none when null). The file lists
+/// `extensions_used`.
+fn textured_triangle(
+    dir: &Path,
+    material: serde_json::Value,
+    sampler: serde_json::Value,
+    extensions_used: &[&str],
+) -> Scene {
     let mut png = Vec::new();
     let texels = vec![255, 0, 0, 0, 255, 0, 128, 128, 128, 0, 0, 255];
     image::RgbImage::from_raw(2, 2, texels)
@@ -917,6 +923,14 @@ fn textured_triangle(dir: &Path, material: serde_json::Value, extensions_used: &
         0.0, 0.0, -1.0, 1.0, 0.0, -1.0, 0.0, 1.0, -1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0,
     ];
     let bytes: Vec<u8> = floats.iter().flat_map(|f| f.to_le_bytes()).collect();
+    let (texture, samplers) = if sampler.is_null() {
+        (serde_json::json!({ "source": 0 }), serde_json::json!([]))
+    } else {
+        (
+            serde_json::json!({ "source": 0, "sampler": 0 }),
+            serde_json::json!([sampler]),
+        )
+    };
     let doc = serde_json::json!({
         "asset": { "version": "2.0" },
         "extensionsUsed": extensions_used,
@@ -926,7 +940,8 @@ fn textured_triangle(dir: &Path, material: serde_json::Value, extensions_used: &
         "cameras": [{ "type": "perspective", "perspective": { "yfov": 1.0, "znear": 0.1 } }],
         "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0, "TEXCOORD_0": 1 }, "material": 0 }] }],
         "materials": [material],
-        "textures": [{ "source": 0 }],
+        "textures": [texture],
+        "samplers": samplers,
         "images": [{ "uri": format!("data:image/png;base64,{}", base64(&png)) }],
         "accessors": [
             { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
@@ -959,7 +974,7 @@ fn textures_multiply_their_factors() {
         "emissiveFactor": [2.0, 2.0, 2.0],
         "emissiveTexture": { "index": 0 },
     });
-    let scene = textured_triangle(&dir, material, &[]);
+    let scene = textured_triangle(&dir, material, serde_json::Value::Null, &[]);
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
     let grey = (128.0f32 / 255.0 + 0.055).powf(2.4) / 1.055f32.powf(2.4);
     let hit = |b1, b2| Hit {
@@ -1027,7 +1042,12 @@ fn texture_transforms_map_each_slot_s_coordinates() {
         "emissiveFactor": [1.0, 1.0, 1.0],
         "emissiveTexture": { "index": 0 },
     });
-    let scene = textured_triangle(&dir, material, &["KHR_texture_transform"]);
+    let scene = textured_triangle(
+        &dir,
+        material,
+        serde_json::Value::Null,
+        &["KHR_texture_transform"],
+    );
     assert_eq!(
         scene.warnings,
         [
@@ -1061,6 +1081,44 @@ fn texture_transforms_map_each_slot_s_coordinates() {
             m.emission()
         );
         assert_eq!((m.metallic, m.roughness), (0.5, 0.8));
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A texture's sampler decides how coordinates outside [0, 1] wrap: on [`textured_triangle`],
+/// the base-colour texture scaled by 3 (`KHR_texture_transform`) through a sampler with wrapS
+/// CLAMP_TO_EDGE and wrapT MIRRORED_REPEAT reads (u, v) at (clamp(3u), mirror(3v)). Expected
+/// texels worked by hand at four points; REPEAT in place of either mode changes two of them.
+#[test]
+fn samplers_wrap_coordinates_outside_the_unit_square() {
+    let dir = temp_dir("texture_wrap");
+    let material = serde_json::json!({
+        "pbrMetallicRoughness": { "baseColorTexture": { "index": 0,
+            "extensions": { "KHR_texture_transform": { "scale": [3.0, 3.0] } } } },
+        "emissiveFactor": [1.0, 1.0, 1.0],
+    });
+    let sampler = serde_json::json!({ "wrapS": 33071, "wrapT": 33648 });
+    let scene = textured_triangle(&dir, material, sampler, &["KHR_texture_transform"]);
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let grey = (128.0f32 / 255.0 + 0.055).powf(2.4) / 1.055f32.powf(2.4);
+    // (3u, 3v) → (clamped to [0, 1], mirrored into [0, 1]) → texel of the 2×2 image.
+    for (u, v, expected) in [
+        (0.1, 0.1, Vec3::X),            // (0.3, 0.3): red
+        (0.4, 0.1, Vec3::Y),            // (1, 0.3): green (REPEAT: 0.2, red)
+        (0.1, 0.45, Vec3::splat(grey)), // (0.3, 0.65): grey (REPEAT: 0.35, red)
+        (0.45, 0.45, Vec3::Z),          // (1, 0.65): blue
+    ] {
+        let hit = Hit {
+            t: 1.0,
+            triangle: 0,
+            b1: u,
+            b2: v,
+        };
+        let got = Vec3::from(scene.material_at(&hit).base_color);
+        assert!(
+            (got - expected).abs().max_element() < 1e-5,
+            "({u}, {v}): {got} vs {expected}"
+        );
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -16,7 +16,7 @@ use mcg_demo::render::emission_allocation::Allocation;
 use mcg_demo::render::gpu::{GpuHit, GpuRay, GpuTiming, GpuTracer, SEGMENT_BATCH, frame_counts};
 use mcg_demo::render::guided::{McpgSampler, Reflected, guide_config};
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
-use mcg_demo::render::scene::{Scene, SceneFile, TextureInfo};
+use mcg_demo::render::scene::{Scene, SceneFile, TextureInfo, WRAP_CLAMP, WRAP_MIRROR};
 use mcg_demo::render::{Device, ProbeOptions, RenderArgs, render};
 use mcg_gpu_backend::sampling::next_uniform;
 use mcg_gpu_backend::testing::gpu_or_skip;
@@ -718,7 +718,9 @@ fn gpu_tiles_cover_every_pixel() {
 /// (checked once each), ignoring the metallic-roughness one leaves 14 of 1024, and skipping
 /// the sRGB decoding leaves 803 (the grey texel's pixels). Last, the base-colour texture
 /// through a `KHR_texture_transform` map (offset (0.5, 0.25), rotation 0.7, scale (1.5, 2));
-/// ignoring the map in WGSL leaves 268 of 1024 equal.
+/// ignoring the map in WGSL leaves 268 of 1024 equal. Then through the map
+/// (u, v) ↦ (3u − 0.6, 3v − 0.3) with wrap modes CLAMP_TO_EDGE and MIRRORED_REPEAT; REPEAT in
+/// WGSL for both leaves 325 of 1024 equal.
 #[test]
 fn gpu_reads_textures_as_the_cpu() {
     let le = Vec3::new(1.0, 2.0, 0.5);
@@ -727,6 +729,7 @@ fn gpu_reads_textures_as_the_cpu() {
         "emissive",
         "metallic-roughness",
         "transformed",
+        "wrapped",
     ] {
         let mut scene = with_texture(furnace(Vec3::ONE, le));
         let m = &mut scene.materials[0];
@@ -738,9 +741,14 @@ fn gpu_reads_textures_as_the_cpu() {
                 m.metallic = 1.0;
                 m.roughness = 1.0;
             }
-            _ => {
+            "transformed" => {
                 m.base_color_texture = 0;
                 scene.textures[0].map = TextureInfo::transform([0.5, 0.25], 0.7, [1.5, 2.0]);
+            }
+            _ => {
+                m.base_color_texture = 0;
+                scene.textures[0].map = TextureInfo::transform([-0.6, -0.3], 0.0, [3.0, 3.0]);
+                scene.textures[0].wrap = WRAP_CLAMP | WRAP_MIRROR << 16;
             }
         }
         let Some(mut gpu) = tracer("gpu_reads_textures_as_the_cpu", &scene) else {

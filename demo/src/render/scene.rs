@@ -15,7 +15,7 @@
 //! - **Materials** ([`Material`]): `baseColorFactor` (RGB), `metallicFactor`,
 //!   `roughnessFactor`, `emissiveFactor × KHR_materials_emissive_strength`, and the
 //!   base-colour, emissive and metallic-roughness textures (8-bit PNG or JPEG, `TEXCOORD_0`,
-//!   `KHR_texture_transform`, nearest texel with REPEAT wrapping — the glTF sampler is not
+//!   `KHR_texture_transform`, nearest texel, the sampler's wrap modes — its filters are not
 //!   read), which multiply
 //!   `baseColorFactor` and the emission (sRGB-decoded), and `roughnessFactor` (green) and
 //!   `metallicFactor` (blue; both linear). Light sampling picks emitting triangles by area ×
@@ -235,9 +235,17 @@ pub struct SceneFile {
     /// Every image a material's texture reads (each once, in the order of first use), packed
     /// as [`Scene::texels`] are: its index in the document, width, height and texels.
     images: Vec<(usize, u32, u32, Vec<u32>)>,
-    /// The textures the materials read ([`Scene::textures`]): the image (its document index)
-    /// and the map of texture coordinates ([`TextureInfo::map`]).
-    textures: Vec<(usize, [[f32; 4]; 2])>,
+    /// The textures the materials read ([`Scene::textures`]).
+    textures: Vec<TextureUse>,
+}
+
+/// What a material's texture slot reads: an image (its index in the document) through a map
+/// of texture coordinates ([`TextureInfo::map`]) and wrap modes ([`TextureInfo::wrap`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct TextureUse {
+    image: usize,
+    map: [[f32; 4]; 2],
+    wrap: u32,
 }
 
 /// A texture as materials read it: where its texels are in [`Scene::texels`] and the map of
@@ -252,8 +260,9 @@ pub struct TextureInfo {
     pub width: u32,
     /// Height in texels.
     pub height: u32,
-    /// Padding; always 0.
-    pub pad: u32,
+    /// How coordinates outside [0, 1] wrap (the glTF sampler's `wrapS` and `wrapT`):
+    /// `s | t << 16`, each [`WRAP_REPEAT`], [`WRAP_CLAMP`] or [`WRAP_MIRROR`].
+    pub wrap: u32,
     /// The rows `(a, b, c, 0)` and `(d, e, f, 0)` of the affine map
     /// `(u, v) ↦ (a·u + b·v + c, d·u + e·v + f)` applied to a hit's texture coordinates
     /// ([`TextureInfo::transform`]); [`TextureInfo::IDENTITY`] without the extension.
@@ -281,6 +290,28 @@ impl TextureInfo {
     pub fn mapped(&self, [u, v]: [f32; 2]) -> [f32; 2] {
         self.map.map(|[a, b, c, _]| a * u + b * v + c)
     }
+}
+
+/// [`TextureInfo::wrap`] of glTF's REPEAT (the default): the coordinate's fraction.
+pub const WRAP_REPEAT: u32 = 0;
+/// [`TextureInfo::wrap`] of glTF's CLAMP_TO_EDGE: the coordinate clamped to [0, 1].
+pub const WRAP_CLAMP: u32 = 1;
+/// [`TextureInfo::wrap`] of glTF's MIRRORED_REPEAT: every other period mirrored.
+pub const WRAP_MIRROR: u32 = 2;
+
+/// A texture coordinate `c` wrapped by `mode` ([`TextureInfo::wrap`]) to the texel index
+/// below `size` (nearest texel).
+#[must_use]
+pub fn wrapped_texel(c: f32, mode: u32, size: u32) -> u32 {
+    let f = match mode {
+        WRAP_CLAMP => c.clamp(0.0, 1.0),
+        WRAP_MIRROR => {
+            let t = c - 2.0 * (0.5 * c).floor();
+            if t > 1.0 { 2.0 - t } else { t }
+        }
+        _ => c - c.floor(),
+    };
+    ((f * size as f32) as u32).min(size - 1)
 }
 
 /// The texture coordinates (`TEXCOORD_0`) of a triangle's three vertices: 32 bytes, two
@@ -358,7 +389,7 @@ impl SceneFile {
         if !textures.is_empty() {
             let decoded =
                 gltf::import_images(&document, path.parent(), &buffers).map_err(unreadable)?;
-            for &(image, _) in &textures {
+            for &TextureUse { image, .. } in &textures {
                 if images.iter().any(|i| i.0 == image) {
                     continue;
                 }
@@ -466,7 +497,7 @@ impl SceneFile {
                     None => Ok(NO_TEXTURE),
                     Some(info) => match texture_use(&info) {
                         Ok(used) => {
-                            if used.1.iter().flatten().any(|v| !v.is_finite()) {
+                            if used.map.iter().flatten().any(|v| !v.is_finite()) {
                                 return Err(SceneError::NonFinite {
                                     path: path.clone(),
                                     what: format!(
@@ -625,14 +656,14 @@ impl SceneFile {
             offsets.push((*image, scene.texels.len() as u32));
             scene.texels.extend_from_slice(texels);
         }
-        for &(image, map) in &self.textures {
+        for &TextureUse { image, map, wrap } in &self.textures {
             let k = self.images.iter().position(|i| i.0 == image);
             let k = k.expect("SceneFile::open packs the image of every texture");
             scene.textures.push(TextureInfo {
                 offset: offsets[k].1,
                 width: self.images[k].1,
                 height: self.images[k].2,
-                pad: 0,
+                wrap,
                 map,
             });
         }
@@ -795,7 +826,7 @@ impl SceneFile {
 /// The textures the document's materials read from `TEXCOORD_0` (base-colour, emissive and
 /// metallic-roughness textures) as [`texture_use`] gives them, each once, in the order of
 /// first use.
-fn used_textures(document: &gltf::Document) -> Vec<(usize, [[f32; 4]; 2])> {
+fn used_textures(document: &gltf::Document) -> Vec<TextureUse> {
     let mut used = Vec::new();
     for m in document.materials() {
         let pbr = m.pbr_metallic_roughness();
@@ -814,11 +845,11 @@ fn used_textures(document: &gltf::Document) -> Vec<(usize, [[f32; 4]; 2])> {
     used
 }
 
-/// What a material's texture slot reads: the image (its document index) and the map of
-/// texture coordinates (`KHR_texture_transform`, [`TextureInfo::transform`]); or the texture
-/// coordinate set it reads when that is not `TEXCOORD_0` (the extension's `texCoord`
+/// What a material's texture slot reads: the image, the map of texture coordinates
+/// (`KHR_texture_transform`, [`TextureInfo::transform`]) and the sampler's wrap modes; or the
+/// texture coordinate set it reads when that is not `TEXCOORD_0` (the extension's `texCoord`
 /// overrides the slot's).
-fn texture_use(info: &gltf::texture::Info) -> Result<(usize, [[f32; 4]; 2]), u32> {
+fn texture_use(info: &gltf::texture::Info) -> Result<TextureUse, u32> {
     let transform = info.texture_transform();
     let tex_coord = transform.as_ref().and_then(|t| t.tex_coord());
     let tex_coord = tex_coord.unwrap_or(info.tex_coord());
@@ -828,7 +859,17 @@ fn texture_use(info: &gltf::texture::Info) -> Result<(usize, [[f32; 4]; 2]), u32
     let map = transform.map_or(TextureInfo::IDENTITY, |t| {
         TextureInfo::transform(t.offset(), t.rotation(), t.scale())
     });
-    Ok((info.texture().source().index(), map))
+    let mode = |m: gltf::texture::WrappingMode| match m {
+        gltf::texture::WrappingMode::ClampToEdge => WRAP_CLAMP,
+        gltf::texture::WrappingMode::MirroredRepeat => WRAP_MIRROR,
+        gltf::texture::WrappingMode::Repeat => WRAP_REPEAT,
+    };
+    let sampler = info.texture().sampler();
+    Ok(TextureUse {
+        image: info.texture().source().index(),
+        map,
+        wrap: mode(sampler.wrap_s()) | mode(sampler.wrap_t()) << 16,
+    })
 }
 
 /// Whether primitives of `mode` have area (triangles, strips and fans) and so are rendered.
@@ -1046,13 +1087,14 @@ impl Scene {
     }
 
     /// Texture `texture`'s RGBA bytes at texture coordinates `uv` (mapped by
-    /// [`TextureInfo::map`], nearest texel, REPEAT wrapping); `None` for [`NO_TEXTURE`].
+    /// [`TextureInfo::map`], wrapped by [`TextureInfo::wrap`], nearest texel); `None` for
+    /// [`NO_TEXTURE`].
     fn texel(&self, texture: u32, uv: [f32; 2]) -> Option<[u8; 4]> {
         let tex = self.textures.get(texture as usize)?;
         let [u, v] = tex.mapped(uv);
-        let x = ((u - u.floor()) * tex.width as f32) as u32;
-        let y = ((v - v.floor()) * tex.height as f32) as u32;
-        let index = tex.offset + y.min(tex.height - 1) * tex.width + x.min(tex.width - 1);
+        let x = wrapped_texel(u, tex.wrap & 0xffff, tex.width);
+        let y = wrapped_texel(v, tex.wrap >> 16, tex.height);
+        let index = tex.offset + y * tex.width + x;
         Some(self.texels[index as usize].to_le_bytes())
     }
 

@@ -9,7 +9,7 @@ use mcg_demo::render::bvh::Triangle;
 use mcg_demo::render::cpu::Method;
 use mcg_demo::render::material::Material;
 use mcg_demo::render::mcmm::McmmScore;
-use mcg_demo::render::scene::{Camera, Scene, TextureInfo, TriangleUv};
+use mcg_demo::render::scene::{Camera, Scene, TextureInfo, TriangleUv, WRAP_REPEAT};
 use mcg_demo::render::{Device, ProbeOptions, RenderArgs};
 use mcg_tests::{RunningStats, welch_t_test};
 
@@ -75,7 +75,7 @@ pub fn with_texture(mut scene: Scene) -> Scene {
         offset: 0,
         width: 2,
         height: 2,
-        pad: 0,
+        wrap: WRAP_REPEAT,
         map: TextureInfo::IDENTITY,
     }];
     scene.texels = vec![0xff00_00ff, 0xff00_ff00, 0xff80_8080, 0xffff_0000];

@@ -98,7 +98,7 @@ struct TextureInfo {
     offset: u32,
     width: u32,
     height: u32,
-    pad: u32,
+    wrap: u32,
     map_u: vec4<f32>,
     map_v: vec4<f32>,
 }
@@ -495,8 +495,8 @@ fn uv_at(hit: RayHit) -> vec2<f32> {
 }
 
 // `Scene::texel`: texture `texture`'s RGBA8 at texture coordinates `uv` (mapped by
-// `TextureInfo::map`, nearest texel, REPEAT wrapping) as values in [0, 1], not decoded; white
-// without texture.
+// `TextureInfo::map`, wrapped by `TextureInfo::wrap`, nearest texel) as values in [0, 1], not
+// decoded; white without texture.
 fn texel_at(texture: u32, uv: vec2<f32>) -> vec4<f32> {
     if texture >= params.texture_count {
         return vec4<f32>(1.0);
@@ -504,11 +504,18 @@ fn texel_at(texture: u32, uv: vec2<f32>) -> vec4<f32> {
     let tex = textures[texture];
     let h = vec3<f32>(uv, 1.0);
     let c = vec2<f32>(dot(tex.map_u.xyz, h), dot(tex.map_v.xyz, h));
-    let x = u32((c.x - floor(c.x)) * f32(tex.width));
-    let y = u32((c.y - floor(c.y)) * f32(tex.height));
-    return unpack4x8unorm(
-        texels[tex.offset + min(y, tex.height - 1u) * tex.width + min(x, tex.width - 1u)]
-    );
+    let x = wrapped_texel(c.x, tex.wrap & 0xffffu, tex.width);
+    let y = wrapped_texel(c.y, tex.wrap >> 16u, tex.height);
+    return unpack4x8unorm(texels[tex.offset + y * tex.width + x]);
+}
+
+// `scene::wrapped_texel`: coordinate `c` wrapped by `mode` (0 REPEAT, 1 CLAMP_TO_EDGE,
+// 2 MIRRORED_REPEAT) to the nearest texel's index below `size`.
+fn wrapped_texel(c: f32, mode: u32, size: u32) -> u32 {
+    let t = c - 2.0 * floor(0.5 * c);
+    let mirrored = select(t, 2.0 - t, t > 1.0);
+    let f = select(select(c - floor(c), clamp(c, 0.0, 1.0), mode == 1u), mirrored, mode == 2u);
+    return min(u32(f * f32(size)), size - 1u);
 }
 
 // `scene::srgb_to_linear` per channel (IEC 61966-2-1); 1 stays 1, so a colour without texture
