@@ -19,8 +19,10 @@
 //!   read), which multiply
 //!   `baseColorFactor` and the emission (sRGB-decoded), and `roughnessFactor` (green) and
 //!   `metallicFactor` (blue; both linear). Light sampling picks emitting triangles by area ×
-//!   the luminance of the factors alone, so a dark part of an emissive texture is picked as
-//!   often as a bright one (unbiased, only less efficient).
+//!   the luminance of their emission, textured where they have an emissive texture
+//!   ([`Scene::weigh_emitters_by_texture`]); within a triangle it samples area uniformly, so
+//!   a dark part of a triangle's texture is sampled as often as a bright one (unbiased, only
+//!   less efficient).
 //!   A texture on another coordinate set is ignored, and [`Scene::warnings`] says so.
 //!   Normal and occlusion textures, alpha modes, vertex colours and extensions other than
 //!   [`READ_EXTENSIONS`] are not read; [`Scene::warnings`] names those that change what a
@@ -292,6 +294,28 @@ impl TextureInfo {
     }
 }
 
+/// The barycentric points (b1, b2) at which [`Scene::weigh_emitters_by_texture`] reads an
+/// emitter's texture: the centroids of the ten upright triangles of its 4 × 4 subdivision.
+pub const EMISSION_PROBES: [(f32, f32); 10] = {
+    let mut points = [(0.0, 0.0); 10];
+    let mut k = 0;
+    let mut i = 0;
+    while i < 4 {
+        let mut j = 0;
+        while i + j < 4 {
+            points[k] = ((i as f32 + 1.0 / 3.0) / 4.0, (j as f32 + 1.0 / 3.0) / 4.0);
+            k += 1;
+            j += 1;
+        }
+        i += 1;
+    }
+    points
+};
+
+/// The least share of its factor's power an emitter with an emissive texture keeps in light
+/// selection ([`Scene::weigh_emitters_by_texture`]).
+pub const MIN_TEXTURE_POWER: f32 = 1.0 / 32.0;
+
 /// [`TextureInfo::wrap`] of glTF's REPEAT (the default): the coordinate's fraction.
 pub const WRAP_REPEAT: u32 = 0;
 /// [`TextureInfo::wrap`] of glTF's CLAMP_TO_EDGE: the coordinate clamped to [0, 1].
@@ -479,6 +503,7 @@ impl SceneFile {
             });
         }
         self.attach_textures(&mut scene, &uvs);
+        scene.weigh_emitters_by_texture();
         Ok(scene)
     }
 
@@ -990,51 +1015,106 @@ impl Scene {
         materials: Vec<Material>,
         warnings: Vec<String>,
     ) -> Option<Self> {
-        let mut bvh = Bvh::build(triangles);
+        let bvh = Bvh::build(triangles);
         let mut emitters = Vec::new();
         let mut power = Vec::new();
         for (i, t) in bvh.triangles.iter().enumerate() {
             let p = t.area() * luminance(materials[t.material as usize].emission());
             if p > 0.0 {
                 emitters.push(i as u32);
-                power.push(f64::from(p));
+                power.push(p);
             }
         }
         if emitters.is_empty() {
             return None;
         }
-        let total: f64 = power.iter().sum();
-        let mut acc = 0.0;
-        let mut emitter_cdf = Vec::with_capacity(power.len());
-        for (&i, p) in emitters.iter().zip(&power) {
-            acc += p;
-            emitter_cdf.push((acc / total) as f32);
-            bvh.triangles[i as usize].emitter_pmf = (p / total) as f32;
-        }
-        *emitter_cdf.last_mut().expect("non-empty") = 1.0;
-        let emitter_triangles: Vec<Triangle> = emitters
-            .iter()
-            .map(|&i| Triangle {
-                source: i,
-                ..bvh.triangles[i as usize]
-            })
-            .collect();
-        Some(Self {
+        let mut scene = Self {
             camera,
-            emitter_bvh: Bvh::build(&emitter_triangles),
+            emitter_bvh: Bvh::default(),
             bvh,
             materials,
             emitters,
-            emitter_cdf,
+            emitter_cdf: Vec::new(),
             uvs: Vec::new(),
             textures: Vec::new(),
             texels: Vec::new(),
             warnings,
-        })
+        };
+        scene.set_emitter_power(&power);
+        Some(scene)
+    }
+
+    /// Light selection proportional to `power` (one value per [`Scene::emitters`], all
+    /// positive): the emitters' [`Triangle::emitter_pmf`], [`Scene::emitter_cdf`] and the
+    /// emitters' tree of copies.
+    fn set_emitter_power(&mut self, power: &[f32]) {
+        let total: f64 = power.iter().map(|&p| f64::from(p)).sum();
+        let mut acc = 0.0;
+        self.emitter_cdf.clear();
+        for (&i, &p) in self.emitters.iter().zip(power) {
+            acc += f64::from(p);
+            self.emitter_cdf.push((acc / total) as f32);
+            self.bvh.triangles[i as usize].emitter_pmf = (f64::from(p) / total) as f32;
+        }
+        *self.emitter_cdf.last_mut().expect("a scene has emitters") = 1.0;
+        let emitter_triangles: Vec<Triangle> = self
+            .emitters
+            .iter()
+            .map(|&i| Triangle {
+                source: i,
+                ..self.bvh.triangles[i as usize]
+            })
+            .collect();
+        self.emitter_bvh = Bvh::build(&emitter_triangles);
+    }
+
+    /// Weighs light selection by each emitter's emissive texture too, once textures are
+    /// attached: an emitter's power becomes its area × the mean luminance of its textured
+    /// emission at [`EMISSION_PROBES`] barycentric points (the centroids of its 4 × 4
+    /// subdivision's upright triangles), but at least [`MIN_TEXTURE_POWER`] × its area ×
+    /// the luminance of its factor, so that every triangle that may emit keeps a positive
+    /// probability and light sampling stays unbiased wherever the probes miss a bright texel.
+    /// Emitters without an emissive texture keep area × the factor's luminance. Without it a
+    /// mesh whose emissive texture is dark but for a few windows sends most light samples to
+    /// dark triangles.
+    pub fn weigh_emitters_by_texture(&mut self) {
+        if !self
+            .materials
+            .iter()
+            .any(|m| m.emissive_texture != NO_TEXTURE)
+        {
+            return;
+        }
+        let power: Vec<f32> = self
+            .emitters
+            .iter()
+            .map(|&i| {
+                let t = self.bvh.triangles[i as usize];
+                let factor = luminance(self.materials[t.material as usize].emission());
+                if self.materials[t.material as usize].emissive_texture == NO_TEXTURE {
+                    return t.area() * factor;
+                }
+                let probes: f32 = EMISSION_PROBES
+                    .iter()
+                    .map(|&(b1, b2)| {
+                        let hit = Hit {
+                            t: 0.0,
+                            triangle: i,
+                            b1,
+                            b2,
+                        };
+                        luminance(self.material_at(&hit).emission())
+                    })
+                    .sum();
+                let mean = probes / EMISSION_PROBES.len() as f32;
+                t.area() * mean.max(MIN_TEXTURE_POWER * factor)
+            })
+            .collect();
+        self.set_emitter_power(&power);
     }
 
     /// The material at a hit, with its textures (where it has them) looked up at the hit's
-    /// texture coordinates — nearest texel, REPEAT wrapping — and multiplied into
+    /// texture coordinates ([`TextureInfo`]: mapped, wrapped, nearest texel) and multiplied into
     /// `base_color` and `emission` (sRGB-decoded), `roughness` (green) and `metallic` (blue;
     /// both linear).
     #[must_use]
