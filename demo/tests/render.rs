@@ -464,6 +464,31 @@ fn guided_methods_agree_with_nee_per_tile() {
     }
 }
 
+/// The settings of the emissive-texture tests: 32×32 pixels (4 tiles of 16×16), 4 spp, B = 2.
+fn emission_settings(method: Method, seed: u32) -> RenderSettings {
+    RenderSettings {
+        width: 32,
+        height: 32,
+        spp: 4,
+        bounces: 2,
+        seed,
+        method,
+    }
+}
+
+/// Per 16×16 tile, 64 independent CPU frames of [`emission_settings`] (no guide).
+fn emission_tiles(scene: &Scene, method: Method, seed: u32) -> TileStats {
+    common::tile_stats((32, 32, 16, 64), |f| {
+        render_frame(
+            scene,
+            &emission_settings(method, seed),
+            f,
+            || BsdfSampler,
+            || (),
+        )
+    })
+}
+
 /// Hypothesis: with an emission that varies across each emitter (an emissive texture), `nee`
 /// and `mcpg` estimate the `bsdf` image: a light sample must read the texel at the point it
 /// samples, and `mcpg`'s emission-only directions the texel of the scene triangle behind the
@@ -481,28 +506,15 @@ fn guided_methods_agree_with_nee_per_tile() {
 fn textured_emission_is_unbiased_for_every_method() {
     let scene = emissive_texture_furnace();
     let (w, h) = (32u32, 32u32);
-    let settings = |method, seed| RenderSettings {
-        width: w,
-        height: h,
-        spp: 4,
-        bounces: 2,
-        seed,
-        method,
-    };
-    let frames = |method, seed| {
-        common::tile_stats((w, h, 16, 64), |f| {
-            render_frame(&scene, &settings(method, seed), f, || BsdfSampler, || ())
-        })
-    };
-    let bsdf = frames(Method::Bsdf, 11);
+    let bsdf = emission_tiles(&scene, Method::Bsdf, 11);
     assert_tiles_agree(
-        &frames(Method::Nee, 12),
+        &emission_tiles(&scene, Method::Nee, 12),
         &bsdf,
         1e-4,
         "nee vs bsdf, emissive texture",
     );
     let guided = common::tile_stats((w, h, 16, 16), |run| {
-        let s = settings(Method::Mcpg, 100 + run);
+        let s = emission_settings(Method::Mcpg, 100 + run);
         let mut guide = new_guide(&scene, w, h).unwrap();
         common::run_mean(2, |f| {
             let sampler = || McpgSampler::new(&guide).with_emission_samples(2);
@@ -553,23 +565,9 @@ fn emissive_textures_weigh_light_selection_without_bias() {
             assert!(pmf(i) >= 10.0 * odd, "triangle {i}: {} vs {odd}", pmf(i));
         }
     }
-    let (w, h) = (32u32, 32u32);
-    let settings = |method, seed| RenderSettings {
-        width: w,
-        height: h,
-        spp: 4,
-        bounces: 2,
-        seed,
-        method,
-    };
-    let frames = |method, seed| {
-        common::tile_stats((w, h, 16, 64), |f| {
-            render_frame(&scene, &settings(method, seed), f, || BsdfSampler, || ())
-        })
-    };
     assert_tiles_agree(
-        &frames(Method::Nee, 22),
-        &frames(Method::Bsdf, 21),
+        &emission_tiles(&scene, Method::Nee, 22),
+        &emission_tiles(&scene, Method::Bsdf, 21),
         1e-4,
         "nee vs bsdf, light selection by emissive texture",
     );
