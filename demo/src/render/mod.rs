@@ -62,8 +62,8 @@ use states::{DynamicErrors, ReferenceSettings, SceneStates};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Device {
-    /// The GPU when a wgpu adapter exists and the method has a WGSL twin, the CPU otherwise
-    /// (with a one-line message saying why).
+    /// The GPU when a wgpu adapter exists, the method has a WGSL twin and the device can
+    /// hold the scene and the image; the CPU otherwise (with a one-line message saying why).
     Auto,
     /// The CPU tracer (rayon threads).
     Cpu,
@@ -378,8 +378,16 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     let warnings = scene.warnings.clone();
     let gpu = gpu_tracer(args.device, args.method)?;
     let mut gpu = gpu.map(|g| g.lock().unwrap_or_else(std::sync::PoisonError::into_inner));
-    if let Some(g) = gpu.as_deref_mut() {
-        g.upload(&scene)?;
+    if let Some(g) = gpu.as_deref_mut()
+        && let Err(e) = g
+            .upload(&scene)
+            .and_then(|()| g.image_entries(&settings).map(drop))
+    {
+        if args.device == Device::Gpu {
+            return Err(e);
+        }
+        eprintln!("mcg-demo: the GPU cannot hold this render ({e}) — rendering on the CPU");
+        gpu = None;
     }
     let mut guide = start_guide(args, &scene, &mut gpu)?;
     if let Some(g) = gpu.as_deref() {
