@@ -16,7 +16,9 @@ use mcg_demo::render::emission_allocation::Allocation;
 use mcg_demo::render::gpu::{GpuHit, GpuRay, GpuTiming, GpuTracer, SEGMENT_BATCH, frame_counts};
 use mcg_demo::render::guided::{McpgSampler, Reflected, guide_config};
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
-use mcg_demo::render::scene::{Scene, SceneFile, TextureInfo, WRAP_CLAMP, WRAP_MIRROR};
+use mcg_demo::render::scene::{
+    Scene, SceneFile, TextureInfo, TriangleAttributes, WRAP_CLAMP, WRAP_MIRROR,
+};
 use mcg_demo::render::{Device, ProbeOptions, RenderArgs, render};
 use mcg_gpu_backend::sampling::next_uniform;
 use mcg_gpu_backend::testing::gpu_or_skip;
@@ -720,7 +722,8 @@ fn gpu_tiles_cover_every_pixel() {
 /// through a `KHR_texture_transform` map (offset (0.5, 0.25), rotation 0.7, scale (1.5, 2));
 /// ignoring the map in WGSL leaves 268 of 1024 equal. Then through the map
 /// (u, v) ↦ (3u − 0.6, 3v − 0.3) with wrap modes CLAMP_TO_EDGE and MIRRORED_REPEAT; REPEAT in
-/// WGSL for both leaves 325 of 1024 equal.
+/// WGSL for both leaves 325 of 1024 equal. Last, vertex colours varying over every triangle,
+/// without textures; ignoring them in WGSL leaves 0 of 1024 equal.
 #[test]
 fn gpu_reads_textures_as_the_cpu() {
     let le = Vec3::new(1.0, 2.0, 0.5);
@@ -730,6 +733,7 @@ fn gpu_reads_textures_as_the_cpu() {
         "metallic-roughness",
         "transformed",
         "wrapped",
+        "vertex colours",
     ] {
         let mut scene = with_texture(furnace(Vec3::ONE, le));
         let m = &mut scene.materials[0];
@@ -745,10 +749,19 @@ fn gpu_reads_textures_as_the_cpu() {
                 m.base_color_texture = 0;
                 scene.textures[0].map = TextureInfo::transform([0.5, 0.25], 0.7, [1.5, 2.0]);
             }
-            _ => {
+            "wrapped" => {
                 m.base_color_texture = 0;
                 scene.textures[0].map = TextureInfo::transform([-0.6, -0.3], 0.0, [3.0, 3.0]);
                 scene.textures[0].wrap = WRAP_CLAMP | WRAP_MIRROR << 16;
+            }
+            _ => {
+                scene.textures.clear();
+                scene.texels.clear();
+                for (i, a) in scene.attributes.iter_mut().enumerate() {
+                    let shade = |k: usize| ((i * 3 + k) % 7) as f32 / 6.0;
+                    a.color = [0, 1, 2]
+                        .map(|k| TriangleAttributes::pack_color([shade(k), 1.0 - shade(k), 0.5]));
+                }
             }
         }
         let Some(mut gpu) = tracer("gpu_reads_textures_as_the_cpu", &scene) else {

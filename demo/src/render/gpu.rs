@@ -58,7 +58,7 @@ use super::emission_allocation::{
 };
 use super::guided::Reflected;
 use super::material::Material;
-use super::scene::{Camera, Scene, TextureInfo, TriangleUv};
+use super::scene::{Camera, Scene, TextureInfo, TriangleAttributes};
 use crate::Result;
 
 /// The WGSL source of the tracer, before composition with mcg's modules.
@@ -209,8 +209,9 @@ pub struct GpuParams {
     pub tile_width: u32,
     /// Tile height.
     pub tile_height: u32,
-    /// Entries of the texture-coordinate array (0 when the scene has none).
-    pub uv_count: u32,
+    /// Entries of the triangle-attribute array (0 when the scene has none:
+    /// [`Scene::attributes`]).
+    pub attribute_count: u32,
     /// Number of textures.
     pub texture_count: u32,
     /// Every how many pixels one records the statistics of `mcpg`'s emission-only directions
@@ -392,7 +393,7 @@ struct SceneBuffers {
     triangles: GpuBuffer<Triangle>,
     materials: GpuBuffer<Material>,
     emitters: GpuBuffer<GpuEmitter>,
-    uvs: GpuBuffer<TriangleUv>,
+    attributes: GpuBuffer<TriangleAttributes>,
     textures: GpuBuffer<TextureInfo>,
     texels: GpuBuffer<u32>,
 }
@@ -948,7 +949,7 @@ impl GpuTracer {
             triangles: ctx.storage_buffer("mcg-demo triangles", &triangles),
             materials: ctx.storage_buffer("mcg-demo materials", &scene.materials),
             emitters: ctx.storage_buffer("mcg-demo emitters", &emitters),
-            uvs: ctx.storage_buffer("mcg-demo uvs", &scene.uvs),
+            attributes: ctx.storage_buffer("mcg-demo attributes", &scene.attributes),
             textures: ctx.storage_buffer("mcg-demo textures", &scene.textures),
             texels: ctx.storage_buffer("mcg-demo texels", &scene.texels),
         });
@@ -1109,7 +1110,7 @@ impl GpuTracer {
             method,
             emitter_count: scene.emitters.len() as u32,
             emitter_first: scene.emitter_first,
-            uv_count: scene.uvs.len() as u32,
+            attribute_count: scene.attributes.len() as u32,
             texture_count: scene.textures.len() as u32,
             emitter_root: scene.emitter_root,
             // Read by the guided pipelines only (`MCPG_DEF`).
@@ -1253,7 +1254,7 @@ impl GpuTracer {
                 scene.triangles.raw(),
                 scene.materials.raw(),
                 scene.emitters.raw(),
-                scene.uvs.raw(),
+                scene.attributes.raw(),
                 scene.textures.raw(),
                 scene.texels.raw(),
                 image.raw(),

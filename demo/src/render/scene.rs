@@ -24,9 +24,10 @@
 //!   a dark part of a triangle's texture is sampled as often as a bright one (unbiased, only
 //!   less efficient).
 //!   A texture on another coordinate set is ignored, and [`Scene::warnings`] says so.
-//!   Normal and occlusion textures, alpha modes, vertex colours and extensions other than
-//!   [`READ_EXTENSIONS`] are not read; [`Scene::warnings`] names those that change what a
-//!   surface looks like (all but normal and occlusion textures).
+//!   Vertex colours (`COLOR_0`, linear RGB) multiply the base colour. Normal and occlusion
+//!   textures, alpha modes and extensions other than [`READ_EXTENSIONS`] are not read;
+//!   [`Scene::warnings`] names those that change what a surface looks like (all but normal
+//!   and occlusion textures).
 //! - **Animations**: translation, rotation and scale channels with STEP or LINEAR
 //!   interpolation (rotations LINEAR by normalised lerp of the quaternions), evaluated at
 //!   the time of the frame ([`frame_time`]); the dynamic built-in scene uses them.
@@ -338,15 +339,54 @@ pub fn wrapped_texel(c: f32, mode: u32, size: u32) -> u32 {
     ((f * size as f32) as u32).min(size - 1)
 }
 
-/// The texture coordinates (`TEXCOORD_0`) of a triangle's three vertices: 32 bytes, two
-/// `vec4`s in WGSL; all zero for a triangle without them.
+/// What a triangle's three vertices carry besides their positions: texture coordinates
+/// (`TEXCOORD_0`) and colours (`COLOR_0`); 48 bytes, three `vec2<f32>` and three
+/// `vec2<u32>` in WGSL.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct TriangleUv {
-    /// `(u, v)` of `v0`, `v1` and `v2`.
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct TriangleAttributes {
+    /// `(u, v)` of `v0`, `v1` and `v2`; zero without them.
     pub uv: [[f32; 2]; 3],
-    /// Padding; always 0.
-    pub pad: [f32; 2],
+    /// The linear RGB of `v0`, `v1` and `v2` as 16-bit unorms, `[r | g << 16, b | 0xffff << 16]`
+    /// (WGSL `unpack2x16unorm`); [`TriangleAttributes::WHITE`] without them.
+    pub color: [[u32; 2]; 3],
+}
+
+impl TriangleAttributes {
+    /// [`TriangleAttributes::color`] of a vertex without a colour.
+    pub const WHITE: [u32; 2] = [u32::MAX; 2];
+
+    /// Linear RGB in [0, 1] as [`TriangleAttributes::color`] stores it.
+    #[must_use]
+    pub fn pack_color(rgb: [f32; 3]) -> [u32; 2] {
+        let unorm = |c: f32| (c.clamp(0.0, 1.0) * 65535.0).round() as u32;
+        [
+            unorm(rgb[0]) | unorm(rgb[1]) << 16,
+            unorm(rgb[2]) | 0xffff << 16,
+        ]
+    }
+
+    /// The colour at barycentrics (`b1`, `b2`): `c₀ + b1·(c₁ − c₀) + b2·(c₂ − c₀)`, which is
+    /// exactly `c₀` where the three are equal (white stays 1).
+    #[must_use]
+    pub fn color_at(&self, b1: f32, b2: f32) -> Vec3 {
+        let unpack = |[rg, b]: [u32; 2]| {
+            let unorm = |v: u32| (v & 0xffff) as f32 / 65535.0;
+            Vec3::new(unorm(rg), unorm(rg >> 16), unorm(b))
+        };
+        let [c0, c1, c2] = self.color.map(unpack);
+        c0 + b1 * (c1 - c0) + b2 * (c2 - c0)
+    }
+}
+
+impl Default for TriangleAttributes {
+    /// No texture coordinates, white.
+    fn default() -> Self {
+        Self {
+            uv: [[0.0; 2]; 3],
+            color: [Self::WHITE; 3],
+        }
+    }
 }
 
 impl fmt::Debug for SceneFile {
@@ -377,9 +417,9 @@ pub struct Scene {
     /// Inclusive cumulative distribution over `emitters`, proportional to each triangle's
     /// emitted power `area × luminance(L_e)`; the last entry is 1.
     pub emitter_cdf: Vec<f32>,
-    /// Texture coordinates per triangle, in the order of `bvh.triangles` (empty when no
-    /// material has a texture).
-    pub uvs: Vec<TriangleUv>,
+    /// Texture coordinates and vertex colours per triangle, in the order of `bvh.triangles`
+    /// (empty when no material has a texture and no primitive has colours).
+    pub attributes: Vec<TriangleAttributes>,
     /// The textures, indexed by [`Material::base_color_texture`] and its siblings.
     pub textures: Vec<TextureInfo>,
     /// The texels of all textures, 8-bit RGBA packed red in the low byte (WGSL
@@ -466,7 +506,7 @@ impl SceneFile {
         self.unread_features(&mut warnings);
 
         let mut triangles = Vec::new();
-        let mut uvs = Vec::new();
+        let mut attributes = Vec::new();
         let mut camera = None;
         let mut stack: Vec<(gltf::Node, Mat4)> =
             scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
@@ -483,7 +523,7 @@ impl SceneFile {
                 camera = self.node_camera(&node, world)?;
             }
             if let Some(mesh) = node.mesh() {
-                self.push_mesh(&mesh, world, &materials, &mut triangles, &mut uvs)?;
+                self.push_mesh(&mesh, world, &materials, &mut triangles, &mut attributes)?;
             }
             for child in node.children().collect::<Vec<_>>().into_iter().rev() {
                 stack.push((child, world));
@@ -502,7 +542,7 @@ impl SceneFile {
                 depth,
             });
         }
-        self.attach_textures(&mut scene, &uvs);
+        self.attach_attributes(&mut scene, &attributes);
         scene.weigh_emitters_by_texture();
         Ok(scene)
     }
@@ -586,8 +626,8 @@ impl SceneFile {
     /// Warns of what the file uses and the renderer does not read, so that a scene that looks
     /// wrong says why: extensions other than [`READ_EXTENSIONS`] (punctual lights, texture
     /// transforms, transmission, …), alpha modes other than `OPAQUE` (rendered opaque), point
-    /// and line primitives (skipped) and vertex colours. One sentence per feature, naming the
-    /// materials or meshes that use it.
+    /// and line primitives (skipped). One sentence per feature, naming the materials or meshes
+    /// that use it.
     fn unread_features(&self, warnings: &mut Vec<String>) {
         let document = &self.document;
         for extension in document.extensions_used() {
@@ -628,21 +668,6 @@ impl SceneFile {
                 lines.join(", ")
             ));
         }
-        let coloured: Vec<String> = document
-            .meshes()
-            .filter(|mesh| {
-                mesh.primitives()
-                    .any(|p| p.get(&gltf::Semantic::Colors(0)).is_some())
-            })
-            .map(|mesh| mesh.index().to_string())
-            .collect();
-        if !coloured.is_empty() {
-            warnings.push(format!(
-                "mesh{} {}: vertex colours (COLOR_0) are not read",
-                if coloured.len() > 1 { "es" } else { "" },
-                coloured.join(", ")
-            ));
-        }
     }
 
     /// The camera of `node` placed by its `world` transform, if it is a perspective one.
@@ -669,13 +694,21 @@ impl SceneFile {
         }))
     }
 
-    /// Gives `scene` the file's textures and the triangles' texture coordinates (in BVH
-    /// order), when its materials use textures.
-    fn attach_textures(&self, scene: &mut Scene, uvs: &[TriangleUv]) {
-        if self.images.is_empty() {
+    /// Gives `scene` the triangles' attributes (in BVH order) when its materials use textures
+    /// or a primitive has vertex colours, and the file's textures.
+    fn attach_attributes(&self, scene: &mut Scene, attributes: &[TriangleAttributes]) {
+        let coloured = attributes
+            .iter()
+            .any(|a| a.color != [TriangleAttributes::WHITE; 3]);
+        if self.images.is_empty() && !coloured {
             return;
         }
-        scene.uvs = scene.bvh.source.iter().map(|&i| uvs[i as usize]).collect();
+        scene.attributes = scene
+            .bvh
+            .source
+            .iter()
+            .map(|&i| attributes[i as usize])
+            .collect();
         let mut offsets = Vec::new();
         for (image, _, _, texels) in &self.images {
             offsets.push((*image, scene.texels.len() as u32));
@@ -702,7 +735,7 @@ impl SceneFile {
         world: Mat4,
         materials: &[Material],
         out: &mut Vec<Triangle>,
-        out_uvs: &mut Vec<TriangleUv>,
+        out_attributes: &mut Vec<TriangleAttributes>,
     ) -> Result<(), SceneError> {
         let path = &self.path;
         let mirrored = world.determinant() < 0.0;
@@ -739,6 +772,16 @@ impl SceneFile {
                 Some(t) => t.into_f32().collect(),
                 None => Vec::new(),
             };
+            let colors: Vec<[f32; 3]> = match reader.read_colors(0) {
+                Some(c) => c.into_rgb_f32().collect(),
+                None => Vec::new(),
+            };
+            if colors.iter().flatten().any(|c| !c.is_finite()) {
+                return Err(SceneError::NonFinite {
+                    path: path.clone(),
+                    what: format!("a vertex colour of mesh {}", mesh.index()),
+                });
+            }
             for t in indices.chunks_exact(3) {
                 let vertex = |k: usize| {
                     positions
@@ -751,18 +794,26 @@ impl SceneFile {
                 };
                 let (a, mut b, mut c) = (vertex(0)?, vertex(1)?, vertex(2)?);
                 let uv = |k: usize| tex_coords.get(t[k] as usize).copied().unwrap_or_default();
-                let mut uv = TriangleUv {
+                let color = |k: usize| {
+                    colors
+                        .get(t[k] as usize)
+                        .map_or(TriangleAttributes::WHITE, |&c| {
+                            TriangleAttributes::pack_color(c)
+                        })
+                };
+                let mut attributes = TriangleAttributes {
                     uv: [uv(0), uv(1), uv(2)],
-                    pad: [0.0; 2],
+                    color: [color(0), color(1), color(2)],
                 };
                 if mirrored {
                     core::mem::swap(&mut b, &mut c);
-                    uv.uv.swap(1, 2);
+                    attributes.uv.swap(1, 2);
+                    attributes.color.swap(1, 2);
                 }
                 let tri = Triangle::new(a, b, c, material);
                 if tri.area() > 0.0 {
                     out.push(tri);
-                    out_uvs.push(uv);
+                    out_attributes.push(attributes);
                 }
             }
         }
@@ -1035,7 +1086,7 @@ impl Scene {
             materials,
             emitters,
             emitter_cdf: Vec::new(),
-            uvs: Vec::new(),
+            attributes: Vec::new(),
             textures: Vec::new(),
             texels: Vec::new(),
             warnings,
@@ -1120,6 +1171,11 @@ impl Scene {
     #[must_use]
     pub fn material_at(&self, hit: &Hit) -> Material {
         let mut m = *self.material(hit.triangle);
+        let Some(attributes) = self.attributes.get(hit.triangle as usize) else {
+            return m;
+        };
+        let color = attributes.color_at(hit.b1, hit.b2);
+        m.base_color = (Vec3::from(m.base_color) * color).to_array();
         if !m.is_textured() {
             return m;
         }
@@ -1158,10 +1214,10 @@ impl Scene {
         self.material_at(&hit).emission()
     }
 
-    /// The hit's texture coordinates (its triangle's [`TriangleUv`] interpolated); `None`
+    /// The hit's texture coordinates (its triangle's [`TriangleAttributes::uv`] interpolated); `None`
     /// for a triangle without them.
     fn uv_at(&self, hit: &Hit) -> Option<[f32; 2]> {
-        let uv = self.uvs.get(hit.triangle as usize)?;
+        let uv = self.attributes.get(hit.triangle as usize)?;
         let b0 = 1.0 - hit.b1 - hit.b2;
         Some([0, 1].map(|k| b0 * uv.uv[0][k] + hit.b1 * uv.uv[1][k] + hit.b2 * uv.uv[2][k]))
     }

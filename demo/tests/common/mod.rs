@@ -9,7 +9,7 @@ use mcg_demo::render::bvh::Triangle;
 use mcg_demo::render::cpu::Method;
 use mcg_demo::render::material::Material;
 use mcg_demo::render::mcmm::McmmScore;
-use mcg_demo::render::scene::{Camera, Scene, TextureInfo, TriangleUv, WRAP_REPEAT};
+use mcg_demo::render::scene::{Camera, Scene, TextureInfo, TriangleAttributes, WRAP_REPEAT};
 use mcg_demo::render::{Device, ProbeOptions, RenderArgs};
 use mcg_tests::{RunningStats, welch_t_test};
 
@@ -80,10 +80,10 @@ pub fn with_texture(mut scene: Scene) -> Scene {
     }];
     scene.texels = vec![0xff00_00ff, 0xff00_ff00, 0xff80_8080, 0xffff_0000];
     let corners = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
-    scene.uvs = (0..scene.bvh.triangles.len())
-        .map(|i| TriangleUv {
+    scene.attributes = (0..scene.bvh.triangles.len())
+        .map(|i| TriangleAttributes {
             uv: [0, 1, 2].map(|k| corners[(k + i) % 3]),
-            pad: [0.0; 2],
+            ..TriangleAttributes::default()
         })
         .collect();
     scene

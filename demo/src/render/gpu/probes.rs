@@ -898,7 +898,7 @@ fn scene_bindings<'a>(
         (2, s.triangles.raw()),
         (3, s.materials.raw()),
         (4, s.emitters.raw()),
-        (5, s.uvs.raw()),
+        (5, s.attributes.raw()),
         (6, s.textures.raw()),
         (7, s.texels.raw()),
     ]

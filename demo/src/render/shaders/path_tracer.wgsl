@@ -85,12 +85,14 @@ struct Emitter {
     cdf: f32,
 }
 
-// `scene::TriangleUv`.
-struct TriangleUv {
+// `scene::TriangleAttributes`.
+struct TriangleAttributes {
     uv_a: vec2<f32>,
     uv_b: vec2<f32>,
     uv_c: vec2<f32>,
-    pad: vec2<f32>,
+    color_a: vec2<u32>,
+    color_b: vec2<u32>,
+    color_c: vec2<u32>,
 }
 
 // `scene::TextureInfo`.
@@ -123,7 +125,7 @@ struct Params {
     tile_y: u32,
     tile_width: u32,
     tile_height: u32,
-    uv_count: u32,
+    attribute_count: u32,
     texture_count: u32,
     // Every how many pixels one records the statistics of `mcpg`'s emission-only directions
     // after the pixels in `image` (`gpu::moment_entries`); 0: none.
@@ -166,7 +168,7 @@ struct RayHit {
 @group(0) @binding(2) var<storage, read> triangles: array<Triangle>;
 @group(0) @binding(3) var<storage, read> materials: array<Material>;
 @group(0) @binding(4) var<storage, read> emitters: array<Emitter>;
-@group(0) @binding(5) var<storage, read> uvs: array<TriangleUv>;
+@group(0) @binding(5) var<storage, read> attributes: array<TriangleAttributes>;
 @group(0) @binding(6) var<storage, read> textures: array<TextureInfo>;
 @group(0) @binding(7) var<storage, read> texels: array<u32>;
 @group(0) @binding(8) var<storage, read_write> image: array<vec4<f32>>;
@@ -485,13 +487,24 @@ fn material_sample(m: Material, n: vec3<f32>, wo: vec3<f32>, u: vec3<f32>) -> Bs
     return BsdfSample(wi, pdf, material_eval(m, n, wo, wi) / pdf, true);
 }
 
-// The hit's texture coordinates (`TriangleUv` interpolated); (0, 0) for a triangle without.
+// The hit's texture coordinates (`TriangleAttributes` interpolated); (0, 0) for a triangle
+// without.
 fn uv_at(hit: RayHit) -> vec2<f32> {
-    if hit.triangle >= params.uv_count {
+    if hit.triangle >= params.attribute_count {
         return vec2<f32>(0.0);
     }
-    let uv = uvs[hit.triangle];
+    let uv = attributes[hit.triangle];
     return (1.0 - hit.b1 - hit.b2) * uv.uv_a + hit.b1 * uv.uv_b + hit.b2 * uv.uv_c;
+}
+
+// `TriangleAttributes::color_at`: the vertex colour at `hit`, exactly white where the three
+// are white.
+fn color_at(hit: RayHit) -> vec3<f32> {
+    let a = attributes[hit.triangle];
+    let c0 = vec3<f32>(unpack2x16unorm(a.color_a.x), unpack2x16unorm(a.color_a.y).x);
+    let c1 = vec3<f32>(unpack2x16unorm(a.color_b.x), unpack2x16unorm(a.color_b.y).x);
+    let c2 = vec3<f32>(unpack2x16unorm(a.color_c.x), unpack2x16unorm(a.color_c.y).x);
+    return c0 + hit.b1 * (c1 - c0) + hit.b2 * (c2 - c0);
 }
 
 // `Scene::texel`: texture `texture`'s RGBA8 at texture coordinates `uv` (mapped by
@@ -524,12 +537,16 @@ fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
     return select(pow((c + 0.055) / 1.055, vec3<f32>(2.4)), c / 12.92, c <= vec3<f32>(0.04045));
 }
 
-// `Scene::material_at`: the triangle's material with its base-colour, emissive and
-// metallic-roughness textures (nearest texel, REPEAT wrapping) multiplied in. A scene without
-// textures returns first, on a uniform condition (llvmpipe still runs the rest with every
-// invocation masked off).
+// `Scene::material_at`: the triangle's material with its vertex colour and its base-colour,
+// emissive and metallic-roughness textures (`texel_at`) multiplied in. A scene without
+// attributes or textures returns first, on a uniform condition (llvmpipe still runs the rest
+// with every invocation masked off).
 fn material_at(hit: RayHit) -> Material {
     var m = materials[triangles[hit.triangle].material];
+    if params.attribute_count == 0u {
+        return m;
+    }
+    m.base_color *= color_at(hit);
     if params.texture_count == 0u {
         return m;
     }
