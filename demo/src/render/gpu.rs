@@ -98,6 +98,15 @@ pub const HELD_VERTICES: u32 = 3;
 /// triangles, 7 % shorter).
 pub const EMITTER_LIST_DEF: &str = "MCG_DEMO_EMITTER_LIST";
 
+/// The shader def that compiles the reading of vertex colours and textures (WGSL
+/// `material_at`, `triangle_emission`), set where the uploaded scene has
+/// [`Scene::attributes`]: without it a scene without textures would pay for that code on
+/// llvmpipe, which runs it in every kernel that contains it (+11 % on a `nee` frame, +4 % on
+/// `bsdf`). The `bsdf`, `nee`, `mcpg` and `mcpg-nee` kernels follow the scene
+/// ([`GpuTracer::upload`] rebuilds them when it changes); `mcmm`'s and the probes' are always
+/// compiled with it.
+pub const ATTRIBUTES_DEF: &str = "MCG_DEMO_ATTRIBUTES";
+
 /// The most emitter triangles a scene may have for [`EMITTER_LIST_DEF`].
 pub const EMITTER_LIST_MAX: usize = 8;
 
@@ -110,14 +119,17 @@ pub struct GuidedDefs {
     pub hold_all: bool,
     /// [`EMITTER_LIST_DEF`]: at most [`EMITTER_LIST_MAX`] emitter triangles.
     pub emitter_list: bool,
+    /// [`ATTRIBUTES_DEF`]: the scene has vertex colours or textures.
+    pub attributes: bool,
 }
 
 impl Default for GuidedDefs {
-    /// Held vertices for short paths, the emitters' tree.
+    /// Held vertices for short paths, the emitters' tree, no attributes.
     fn default() -> Self {
         Self {
             hold_all: true,
             emitter_list: false,
+            attributes: false,
         }
     }
 }
@@ -485,10 +497,13 @@ impl std::fmt::Debug for GpuTracer {
 ///
 /// # Errors
 /// When composition fails (an unknown import).
-pub fn composed_shader(lights: bool) -> Result<String> {
+pub fn composed_shader(lights: bool, attributes: bool) -> Result<String> {
     let mut defs = guide_defs(GUIDE_GROUP, UNUSED_GROUP, PROBE_UNUSED_GROUP);
     if lights {
         defs.push((LIGHTS_DEF, 1));
+    }
+    if attributes {
+        defs.push((ATTRIBUTES_DEF, 1));
     }
     Ok(shaders::compose(SHADER, &defs)?)
 }
@@ -510,6 +525,7 @@ fn guide_defs(mcpg: u32, mcmm: u32, adgi: u32) -> Vec<(&'static str, u32)> {
 pub fn composed_mcmm_shader() -> Result<String> {
     let mut defs = guide_defs(UNUSED_GROUP, GUIDE_GROUP, PROBE_UNUSED_GROUP);
     defs.push((MCMM_DEF, 1));
+    defs.push((ATTRIBUTES_DEF, 1));
     Ok(shaders::compose(SHADER, &defs)?)
 }
 
@@ -521,6 +537,9 @@ pub fn composed_mcmm_shader() -> Result<String> {
 pub fn composed_mcpg_shader(lights: bool, guided: GuidedDefs) -> Result<String> {
     let mut defs = guide_defs(GUIDE_GROUP, UNUSED_GROUP, PROBE_UNUSED_GROUP);
     defs.push((MCPG_DEF, 1));
+    if guided.attributes {
+        defs.push((ATTRIBUTES_DEF, 1));
+    }
     if lights {
         defs.push((LIGHTS_DEF, 1));
     }
@@ -578,7 +597,7 @@ impl GpuTracer {
     /// # Errors
     /// When the shader does not compile.
     pub fn on(ctx: GpuContext) -> Result<Self> {
-        let source = composed_shader(false)?;
+        let source = composed_shader(false, false)?;
         let render = ctx.compute_kernel(&source, "render")?;
         let rays = ctx.compute_kernel(&source, "trace_rays")?;
         let params = ctx.uniform_buffer("mcg-demo params", &GpuParams::default());
@@ -955,6 +974,7 @@ impl GpuTracer {
         });
         self.set_guided_defs(GuidedDefs {
             emitter_list: scene.emitters.len() <= EMITTER_LIST_MAX,
+            attributes: !scene.attributes.is_empty(),
             ..self.guided_defs
         })
     }
@@ -1199,7 +1219,7 @@ impl GpuTracer {
         }
         match method {
             Method::Nee if self.nee.is_none() => {
-                let source = composed_shader(true)?;
+                let source = composed_shader(true, self.guided_defs.attributes)?;
                 self.nee = Some(self.ctx.compute_kernel(&source, "render")?);
             }
             Method::McpgNee if self.guided_lights.is_none() => {
@@ -1222,10 +1242,19 @@ impl GpuTracer {
     }
 
     /// Both guided shaders again, and `mcpg`'s pipeline around its guide, when `defs` differ
-    /// from what they were compiled with (`mcpg-nee`'s pipeline is made on its next frame).
+    /// from what they were compiled with (`mcpg-nee`'s pipeline is made on its next frame);
+    /// with [`GuidedDefs::attributes`] changed, the `bsdf` kernels too (`nee`'s and the
+    /// segments' are made on their next use).
     fn set_guided_defs(&mut self, defs: GuidedDefs) -> Result<()> {
         if defs == self.guided_defs {
             return Ok(());
+        }
+        if defs.attributes != self.guided_defs.attributes {
+            let source = composed_shader(false, defs.attributes)?;
+            self.render = self.ctx.compute_kernel(&source, "render")?;
+            self.rays = self.ctx.compute_kernel(&source, "trace_rays")?;
+            self.nee = None;
+            self.segments = None;
         }
         self.guided_defs = defs;
         self.guided_module = None;
@@ -1417,7 +1446,7 @@ impl GpuTracer {
             rays.resize((i + 1) * SEGMENT_BATCH as usize, ray);
         }
         if self.segments.is_none() {
-            let source = composed_shader(false)?;
+            let source = composed_shader(false, self.guided_defs.attributes)?;
             self.segments = Some(self.ctx.compute_kernel(&source, "trace_segments")?);
         }
         let kernel = self.segments.as_ref().expect("compiled above");
@@ -1653,12 +1682,14 @@ mod tests {
     /// guarantees and nothing of the guide's group; `mcpg`'s adds the guide's 3.
     #[test]
     fn shader_validates_without_an_adapter() {
-        let (module, tracer, guide) = validate(&composed_shader(false).unwrap());
-        assert_eq!(
-            validate(&composed_shader(true).unwrap()).1,
-            8,
-            "nee's render"
-        );
+        let (module, tracer, guide) = validate(&composed_shader(false, false).unwrap());
+        for (lights, attributes) in [(true, false), (false, true), (true, true)] {
+            assert_eq!(
+                validate(&composed_shader(lights, attributes).unwrap()).1,
+                8,
+                "render with lights {lights}, attributes {attributes}"
+            );
+        }
         let names: Vec<&str> = module
             .entry_points
             .iter()
@@ -1679,10 +1710,15 @@ mod tests {
         );
         assert_eq!((tracer, guide), (8, 0), "render binds 1–8 as storage");
         for lights in [false, true] {
-            for (hold_all, emitter_list) in [(false, false), (true, false), (true, true)] {
+            for (hold_all, emitter_list, attributes) in [
+                (false, false, false),
+                (true, false, true),
+                (true, true, false),
+            ] {
                 let defs = GuidedDefs {
                     hold_all,
                     emitter_list,
+                    attributes,
                 };
                 let (_, tracer, guide) = validate(&composed_mcpg_shader(lights, defs).unwrap());
                 assert_eq!(tracer + guide, MCPG_STORAGE_BUFFERS as usize);

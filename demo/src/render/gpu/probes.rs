@@ -342,6 +342,7 @@ pub(super) struct GpuProbes {
 pub fn composed_probe_shader() -> Result<String> {
     let mut defs = guide_defs(UNUSED_GROUP, MCMM_UNUSED_GROUP, GUIDE_GROUP);
     defs.push((PROBE_GI_DEF, 1));
+    defs.push((super::ATTRIBUTES_DEF, 1));
     Ok(mcg_gpu_backend::shaders::compose(super::SHADER, &defs)?)
 }
 

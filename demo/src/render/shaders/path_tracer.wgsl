@@ -538,11 +538,12 @@ fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
 }
 
 // `Scene::material_at`: the triangle's material with its vertex colour and its base-colour,
-// emissive and metallic-roughness textures (`texel_at`) multiplied in. A scene without
-// attributes or textures returns first, on a uniform condition (llvmpipe still runs the rest
-// with every invocation masked off).
+// emissive and metallic-roughness textures (`texel_at`) multiplied in. Compiled only where
+// the scene has attributes (`MCG_DEMO_ATTRIBUTES`, `gpu::ATTRIBUTES_DEF`): llvmpipe pays for
+// this code in every kernel that contains it, taken or not (+11 % on a `nee` frame).
 fn material_at(hit: RayHit) -> Material {
     var m = materials[triangles[hit.triangle].material];
+#ifdef MCG_DEMO_ATTRIBUTES
     if params.attribute_count == 0u {
         return m;
     }
@@ -556,6 +557,10 @@ fn material_at(hit: RayHit) -> Material {
     let metallic_roughness = texel_at(m.metallic_roughness_texture, c);
     m.roughness *= metallic_roughness.g;
     m.metallic *= metallic_roughness.b;
+#else
+    // The bindings stay in the pipeline's layout, which the tracer binds whole.
+    _ = arrayLength(&attributes) + arrayLength(&textures) + arrayLength(&texels);
+#endif
     return m;
 }
 
@@ -567,14 +572,16 @@ fn emitter_emission(t: u32, b: vec2<f32>) -> vec3<f32> {
 }
 
 // The emission of triangle `hit.triangle`'s material `material` at `hit`: its factor alone
-// (one 12-byte load) in a scene without textures, a uniform condition.
+// (one 12-byte load) in a scene without textures.
 fn triangle_emission(material: u32, hit: RayHit) -> vec3<f32> {
     let emission = materials[material].emission;
-    if params.texture_count == 0u {
-        return emission;
+#ifdef MCG_DEMO_ATTRIBUTES
+    if params.texture_count > 0u {
+        let texel = texel_at(materials[material].emissive_texture, uv_at(hit));
+        return emission * srgb_to_linear(texel.rgb);
     }
-    let texel = texel_at(materials[material].emissive_texture, uv_at(hit));
-    return emission * srgb_to_linear(texel.rgb);
+#endif
+    return emission;
 }
 
 // ---------------------------------------------------------------------------------------------
