@@ -800,6 +800,76 @@ fn gpu_reads_textures_as_the_cpu() {
     }
 }
 
+/// The kernels follow the uploaded scene's attributes (`gpu::ATTRIBUTES_DEF`): a tracer with
+/// `mcpg` and `mcmm` started on the furnace without textures, then given the furnace with
+/// [`with_texture`]'s base-colour texture, renders `bsdf` as the CPU does (≥ 99 % of 32×32
+/// pixels equal to 10⁻⁵ relative, B = 1, seed 9: the kernel was rebuilt with the texture
+/// code), and `mcpg` and `mcmm` frames around their existing guides that show the texture
+/// (untextured, every pixel's red ÷ green is L_e's 0.5; textured, some pixel's is not).
+/// Leaving the kernels as they were fails.
+#[test]
+fn kernels_follow_the_uploaded_scenes_attributes() {
+    let le = Vec3::new(1.0, 2.0, 0.5);
+    let plain = furnace(Vec3::ONE, le);
+    let mut textured = with_texture(furnace(Vec3::ONE, le));
+    textured.materials[0].base_color_texture = 0;
+    let (w, h) = (32, 32);
+    let Some(mut gpu) = mcpg_tracer(
+        "kernels_follow_the_uploaded_scenes_attributes",
+        &plain,
+        w,
+        h,
+    ) else {
+        return;
+    };
+    gpu.start_mcmm(&mcmm_params(McmmScore::TileMixture, h), w, h)
+        .unwrap();
+    let settings = |method, bounces| RenderSettings {
+        width: w,
+        height: h,
+        spp: 1,
+        bounces,
+        seed: 9,
+        method,
+    };
+    let guided = |gpu: &mut GpuTracer| {
+        [(Method::Mcpg, 2), (Method::Mcmm, 1)]
+            .map(|(m, b)| gpu.render_frame(&settings(m, b), 0).unwrap().0)
+    };
+    let before = guided(&mut gpu);
+    gpu.upload(&textured).unwrap();
+    let (g, _) = gpu.render_frame(&settings(Method::Bsdf, 1), 0).unwrap();
+    let c = render_frame(
+        &textured,
+        &settings(Method::Bsdf, 1),
+        0,
+        || BsdfSampler,
+        || (),
+    );
+    let same = c
+        .iter()
+        .zip(&g)
+        .filter(|(c, g)| (**c - **g).abs().max_element() <= 1e-5 * c.max_element())
+        .count();
+    assert!(
+        same * 100 >= c.len() * 99,
+        "bsdf: only {same} of {} pixels agree",
+        c.len()
+    );
+    // Untextured (ρ = 1) every pixel is L_e·(1 + w) with a scalar w, so red ÷ green is
+    // exactly L_e's 0.5; the texture's colours move it.
+    let shows = |image: &[Vec3]| {
+        image
+            .iter()
+            .any(|p| p.y > 0.0 && (p.x / p.y - 0.5).abs() > 0.01)
+    };
+    let after = guided(&mut gpu);
+    for ((b, a), method) in before.iter().zip(&after).zip(["mcpg", "mcmm"]) {
+        assert!(!shows(b), "{method}: colour before the texture");
+        assert!(shows(a), "{method}: the texture does not show");
+    }
+}
+
 /// An image the device cannot bind is refused by `GpuTracer::image_entries`, which `render`
 /// asks before it allocates the frame's host buffers (a 16384² `mcpg` render on lavapipe took
 /// 16 GB and 31 s to fail in `render_frame` before): 16384² pixels need 4 GiB + 1 MiB of

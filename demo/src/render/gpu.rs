@@ -102,8 +102,8 @@ pub const EMITTER_LIST_DEF: &str = "MCG_DEMO_EMITTER_LIST";
 /// `material_at`, `triangle_emission`), set where the uploaded scene has
 /// [`Scene::attributes`]: without it a scene without textures would pay for that code on
 /// llvmpipe, which runs it in every kernel that contains it (+11 % on a `nee` frame, +4 % on
-/// `bsdf`). The `bsdf`, `nee`, `mcpg` and `mcpg-nee` kernels follow the scene
-/// ([`GpuTracer::upload`] rebuilds them when it changes); `mcmm`'s and the probes' are always
+/// `bsdf`, +3 % on `mcmm`). The `bsdf`, `nee`, `mcpg`, `mcpg-nee` and `mcmm` kernels follow
+/// the scene ([`GpuTracer::upload`] rebuilds them when it changes); the probes' are always
 /// compiled with it.
 pub const ATTRIBUTES_DEF: &str = "MCG_DEMO_ATTRIBUTES";
 
@@ -518,14 +518,16 @@ fn guide_defs(mcpg: u32, mcmm: u32, adgi: u32) -> Vec<(&'static str, u32)> {
 }
 
 /// The tracer's WGSL for `mcmm`: `render_mcmm` ([`MCMM_DEF`]) with `mcg::mcmm` at group
-/// [`GUIDE_GROUP`].
+/// [`GUIDE_GROUP`], with [`ATTRIBUTES_DEF`] where `attributes`.
 ///
 /// # Errors
 /// When composition fails (an unknown import).
-pub fn composed_mcmm_shader() -> Result<String> {
+pub fn composed_mcmm_shader(attributes: bool) -> Result<String> {
     let mut defs = guide_defs(UNUSED_GROUP, GUIDE_GROUP, PROBE_UNUSED_GROUP);
     defs.push((MCMM_DEF, 1));
-    defs.push((ATTRIBUTES_DEF, 1));
+    if attributes {
+        defs.push((ATTRIBUTES_DEF, 1));
+    }
     Ok(shaders::compose(SHADER, &defs)?)
 }
 
@@ -756,18 +758,25 @@ impl GpuTracer {
         }
         self.check_storage_buffers("mcmm", MCPG_STORAGE_BUFFERS)?;
         let guide = GpuMcmmGuide::new(&self.ctx, width, height, params)?;
+        self.mcmm = Some(self.mcmm_guided(guide)?);
+        Ok(())
+    }
+
+    /// `mcmm`'s pipeline around `guide`, its shader compiled first where it is not (with
+    /// [`GuidedDefs::attributes`] of `guided_defs`).
+    fn mcmm_guided(&mut self, guide: GpuMcmmGuide) -> Result<Guided<GpuMcmmGuide>> {
         if self.mcmm_module.is_none() {
-            self.mcmm_module = Some(self.module("mcg-demo render mcmm", composed_mcmm_shader()?));
+            let source = composed_mcmm_shader(self.guided_defs.attributes)?;
+            self.mcmm_module = Some(self.module("mcg-demo render mcmm", source));
         }
         let module = self.mcmm_module.as_ref().expect("compiled above");
         let (pipeline, layout) =
             self.guided_pipeline(module, "render_mcmm", guide.bind_group_layout())?;
-        self.mcmm = Some(Guided {
+        Ok(Guided {
             guide,
             pipeline,
             layout,
-        });
-        Ok(())
+        })
     }
 
     /// The guide of `mcmm` ([`GpuTracer::start_mcmm`]), e.g. for reading its states.
@@ -1243,13 +1252,14 @@ impl GpuTracer {
 
     /// Both guided shaders again, and `mcpg`'s pipeline around its guide, when `defs` differ
     /// from what they were compiled with (`mcpg-nee`'s pipeline is made on its next frame);
-    /// with [`GuidedDefs::attributes`] changed, the `bsdf` kernels too (`nee`'s and the
-    /// segments' are made on their next use).
+    /// with [`GuidedDefs::attributes`] changed, the `bsdf` kernels and `mcmm`'s pipeline
+    /// around its guide too (`nee`'s and the segments' kernels are made on their next use).
     fn set_guided_defs(&mut self, defs: GuidedDefs) -> Result<()> {
         if defs == self.guided_defs {
             return Ok(());
         }
-        if defs.attributes != self.guided_defs.attributes {
+        let attributes_changed = defs.attributes != self.guided_defs.attributes;
+        if attributes_changed {
             let source = composed_shader(false, defs.attributes)?;
             self.render = self.ctx.compute_kernel(&source, "render")?;
             self.rays = self.ctx.compute_kernel(&source, "trace_rays")?;
@@ -1257,6 +1267,12 @@ impl GpuTracer {
             self.segments = None;
         }
         self.guided_defs = defs;
+        if attributes_changed {
+            self.mcmm_module = None;
+            if let Some(g) = self.mcmm.take() {
+                self.mcmm = Some(self.mcmm_guided(g.guide)?);
+            }
+        }
         self.guided_module = None;
         self.guided_lights_module = None;
         self.guided_lights = None;
@@ -1724,6 +1740,18 @@ mod tests {
                 assert_eq!(tracer + guide, MCPG_STORAGE_BUFFERS as usize);
                 assert_eq!(guide, 3, "the mcpg render binds the guide");
             }
+        }
+        // `mcmm`'s shader, with and without the attribute code.
+        for attributes in [false, true] {
+            let source = composed_mcmm_shader(attributes).unwrap();
+            let module = naga::front::wgsl::parse_str(&source)
+                .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
+            naga::valid::Validator::new(
+                naga::valid::ValidationFlags::all(),
+                naga::valid::Capabilities::empty(),
+            )
+            .validate(&module)
+            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
         }
         // `GpuParams` is `Params` in WGSL, byte for byte.
         let mut layouter = naga::proc::Layouter::default();
