@@ -1259,15 +1259,13 @@ impl GpuTracer {
             return Ok(());
         }
         let attributes_changed = defs.attributes != self.guided_defs.attributes;
+        self.guided_defs = defs;
         if attributes_changed {
             let source = composed_shader(false, defs.attributes)?;
             self.render = self.ctx.compute_kernel(&source, "render")?;
             self.rays = self.ctx.compute_kernel(&source, "trace_rays")?;
             self.nee = None;
             self.segments = None;
-        }
-        self.guided_defs = defs;
-        if attributes_changed {
             self.mcmm_module = None;
             if let Some(g) = self.mcmm.take() {
                 self.mcmm = Some(self.mcmm_guided(g.guide)?);

@@ -390,6 +390,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         gpu = None;
     }
     let mut guide = start_guide(args, &scene, &mut gpu)?;
+    // Again: `mcpg`'s guide, started now, may add its emission statistics to the image.
     if let Some(g) = gpu.as_deref() {
         g.image_entries(&settings)?;
     }

@@ -16,9 +16,8 @@
 //!   `roughnessFactor`, `emissiveFactor × KHR_materials_emissive_strength`, and the
 //!   base-colour, emissive and metallic-roughness textures (8-bit PNG or JPEG, `TEXCOORD_0`,
 //!   `KHR_texture_transform`, nearest texel, the sampler's wrap modes — its filters are not
-//!   read), which multiply
-//!   `baseColorFactor` and the emission (sRGB-decoded), and `roughnessFactor` (green) and
-//!   `metallicFactor` (blue; both linear). Light sampling picks emitting triangles by area ×
+//!   read), which multiply `baseColorFactor` and the emission (sRGB-decoded), and
+//!   `roughnessFactor` (green) and `metallicFactor` (blue; both linear). Light sampling picks emitting triangles by area ×
 //!   the luminance of their emission, textured where they have an emissive texture
 //!   ([`Scene::weigh_emitters_by_texture`]); within a triangle it samples area uniformly, so
 //!   a dark part of a triangle's texture is sampled as often as a bright one (unbiased, only
@@ -366,6 +365,13 @@ impl TriangleAttributes {
         ]
     }
 
+    /// The texture coordinates at barycentrics (`b1`, `b2`).
+    #[must_use]
+    pub fn uv_at(&self, b1: f32, b2: f32) -> [f32; 2] {
+        let b0 = 1.0 - b1 - b2;
+        [0, 1].map(|k| b0 * self.uv[0][k] + b1 * self.uv[1][k] + b2 * self.uv[2][k])
+    }
+
     /// The colour at barycentrics (`b1`, `b2`): `c₀ + b1·(c₁ − c₀) + b2·(c₂ − c₀)`, which is
     /// exactly `c₀` where the three are equal (white stays 1).
     #[must_use]
@@ -710,15 +716,15 @@ impl SceneFile {
             .map(|&i| attributes[i as usize])
             .collect();
         let mut offsets = Vec::new();
-        for (image, _, _, texels) in &self.images {
-            offsets.push((*image, scene.texels.len() as u32));
+        for (_, _, _, texels) in &self.images {
+            offsets.push(scene.texels.len() as u32);
             scene.texels.extend_from_slice(texels);
         }
         for &TextureUse { image, map, wrap } in &self.textures {
             let k = self.images.iter().position(|i| i.0 == image);
             let k = k.expect("SceneFile::open packs the image of every texture");
             scene.textures.push(TextureInfo {
-                offset: offsets[k].1,
+                offset: offsets[k],
                 width: self.images[k].1,
                 height: self.images[k].2,
                 wrap,
@@ -1079,9 +1085,16 @@ impl Scene {
         if emitters.is_empty() {
             return None;
         }
+        let emitter_triangles: Vec<Triangle> = emitters
+            .iter()
+            .map(|&i| Triangle {
+                source: i,
+                ..bvh.triangles[i as usize]
+            })
+            .collect();
         let mut scene = Self {
             camera,
-            emitter_bvh: Bvh::default(),
+            emitter_bvh: Bvh::build(&emitter_triangles),
             bvh,
             materials,
             emitters,
@@ -1096,8 +1109,8 @@ impl Scene {
     }
 
     /// Light selection proportional to `power` (one value per [`Scene::emitters`], all
-    /// positive): the emitters' [`Triangle::emitter_pmf`], [`Scene::emitter_cdf`] and the
-    /// emitters' tree of copies.
+    /// positive): [`Scene::emitter_cdf`] and the emitters' [`Triangle::emitter_pmf`], in the
+    /// scene's tree and in the emitters' tree of copies (whose shape does not depend on it).
     fn set_emitter_power(&mut self, power: &[f32]) {
         let total: f64 = power.iter().map(|&p| f64::from(p)).sum();
         let mut acc = 0.0;
@@ -1108,15 +1121,9 @@ impl Scene {
             self.bvh.triangles[i as usize].emitter_pmf = (f64::from(p) / total) as f32;
         }
         *self.emitter_cdf.last_mut().expect("a scene has emitters") = 1.0;
-        let emitter_triangles: Vec<Triangle> = self
-            .emitters
-            .iter()
-            .map(|&i| Triangle {
-                source: i,
-                ..self.bvh.triangles[i as usize]
-            })
-            .collect();
-        self.emitter_bvh = Bvh::build(&emitter_triangles);
+        for copy in &mut self.emitter_bvh.triangles {
+            copy.emitter_pmf = self.bvh.triangles[copy.source as usize].emitter_pmf;
+        }
     }
 
     /// Weighs light selection by each emitter's emissive texture too, once textures are
@@ -1141,8 +1148,9 @@ impl Scene {
             .iter()
             .map(|&i| {
                 let t = self.bvh.triangles[i as usize];
-                let factor = luminance(self.materials[t.material as usize].emission());
-                if self.materials[t.material as usize].emissive_texture == NO_TEXTURE {
+                let material = &self.materials[t.material as usize];
+                let factor = luminance(material.emission());
+                if material.emissive_texture == NO_TEXTURE {
                     return t.area() * factor;
                 }
                 let probes: f32 = EMISSION_PROBES
@@ -1179,9 +1187,7 @@ impl Scene {
         if !m.is_textured() {
             return m;
         }
-        let Some(uv) = self.uv_at(hit) else {
-            return m;
-        };
+        let uv = attributes.uv_at(hit.b1, hit.b2);
         if let Some(texel) = self.texel(m.base_color_texture, uv) {
             for (b, t) in m.base_color.iter_mut().zip(texel) {
                 *b *= SRGB_BYTES[usize::from(t)];
@@ -1212,14 +1218,6 @@ impl Scene {
             b2,
         };
         self.material_at(&hit).emission()
-    }
-
-    /// The hit's texture coordinates (its triangle's [`TriangleAttributes::uv`] interpolated); `None`
-    /// for a triangle without them.
-    fn uv_at(&self, hit: &Hit) -> Option<[f32; 2]> {
-        let uv = self.attributes.get(hit.triangle as usize)?;
-        let b0 = 1.0 - hit.b1 - hit.b2;
-        Some([0, 1].map(|k| b0 * uv.uv[0][k] + hit.b1 * uv.uv[1][k] + hit.b2 * uv.uv[2][k]))
     }
 
     /// Texture `texture`'s RGBA bytes at texture coordinates `uv` (mapped by

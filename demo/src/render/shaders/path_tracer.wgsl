@@ -487,20 +487,14 @@ fn material_sample(m: Material, n: vec3<f32>, wo: vec3<f32>, u: vec3<f32>) -> Bs
     return BsdfSample(wi, pdf, material_eval(m, n, wo, wi) / pdf, true);
 }
 
-// The hit's texture coordinates (`TriangleAttributes` interpolated); (0, 0) for a triangle
-// without.
-fn uv_at(hit: RayHit) -> vec2<f32> {
-    if hit.triangle >= params.attribute_count {
-        return vec2<f32>(0.0);
-    }
-    let uv = attributes[hit.triangle];
-    return (1.0 - hit.b1 - hit.b2) * uv.uv_a + hit.b1 * uv.uv_b + hit.b2 * uv.uv_c;
+// `TriangleAttributes::uv_at`: the texture coordinates of `a`'s triangle at `hit`.
+fn uv_at(a: TriangleAttributes, hit: RayHit) -> vec2<f32> {
+    return (1.0 - hit.b1 - hit.b2) * a.uv_a + hit.b1 * a.uv_b + hit.b2 * a.uv_c;
 }
 
-// `TriangleAttributes::color_at`: the vertex colour at `hit`, exactly white where the three
-// are white.
-fn color_at(hit: RayHit) -> vec3<f32> {
-    let a = attributes[hit.triangle];
+// `TriangleAttributes::color_at`: the vertex colour of `a`'s triangle at `hit`, exactly white
+// where the three are white.
+fn color_at(a: TriangleAttributes, hit: RayHit) -> vec3<f32> {
     let c0 = vec3<f32>(unpack2x16unorm(a.color_a.x), unpack2x16unorm(a.color_a.y).x);
     let c1 = vec3<f32>(unpack2x16unorm(a.color_b.x), unpack2x16unorm(a.color_b.y).x);
     let c2 = vec3<f32>(unpack2x16unorm(a.color_c.x), unpack2x16unorm(a.color_c.y).x);
@@ -547,11 +541,12 @@ fn material_at(hit: RayHit) -> Material {
     if params.attribute_count == 0u {
         return m;
     }
-    m.base_color *= color_at(hit);
+    let a = attributes[hit.triangle];
+    m.base_color *= color_at(a, hit);
     if params.texture_count == 0u {
         return m;
     }
-    let c = uv_at(hit);
+    let c = uv_at(a, hit);
     m.base_color *= srgb_to_linear(texel_at(m.base_color_texture, c).rgb);
     m.emission *= srgb_to_linear(texel_at(m.emissive_texture, c).rgb);
     let metallic_roughness = texel_at(m.metallic_roughness_texture, c);
@@ -577,7 +572,8 @@ fn triangle_emission(material: u32, hit: RayHit) -> vec3<f32> {
     let emission = materials[material].emission;
 #ifdef MCG_DEMO_ATTRIBUTES
     if params.texture_count > 0u {
-        let texel = texel_at(materials[material].emissive_texture, uv_at(hit));
+        let uv = uv_at(attributes[hit.triangle], hit);
+        let texel = texel_at(materials[material].emissive_texture, uv);
         return emission * srgb_to_linear(texel.rgb);
     }
 #endif
