@@ -777,11 +777,6 @@ fn gpu_reads_textures_as_the_cpu() {
         };
         let (g, _) = gpu.render_frame(&settings, 0).unwrap();
         let c = render_frame(&scene, &settings, 0, || BsdfSampler, || ());
-        let same = c
-            .iter()
-            .zip(&g)
-            .filter(|(c, g)| (**c - **g).abs().max_element() <= 1e-5 * c.max_element())
-            .count();
         let mut distinct: Vec<[u32; 3]> = c
             .iter()
             .map(|p| p.to_array().map(|x| (x * 1e4).round() as u32))
@@ -792,12 +787,24 @@ fn gpu_reads_textures_as_the_cpu() {
             distinct.len() >= 3,
             "{label}: the texture shows: {distinct:?}"
         );
-        assert!(
-            same * 100 >= c.len() * 99,
-            "{label}: only {same} of {} pixels agree",
-            c.len()
-        );
+        assert_pixels_equal(&c, &g, label);
     }
+}
+
+/// Asserts that at least 99 % of the pixels of `cpu` equal those of `gpu` to 10⁻⁵ relative
+/// (of the CPU pixel's largest channel): the same paths, apart from f32 rounding and hits on
+/// texel boundaries.
+fn assert_pixels_equal(cpu: &[Vec3], gpu: &[Vec3], what: &str) {
+    let same = cpu
+        .iter()
+        .zip(gpu)
+        .filter(|(c, g)| (**c - **g).abs().max_element() <= 1e-5 * c.max_element())
+        .count();
+    assert!(
+        same * 100 >= cpu.len() * 99,
+        "{what}: only {same} of {} pixels agree",
+        cpu.len()
+    );
 }
 
 /// The kernels follow the uploaded scene's attributes (`gpu::ATTRIBUTES_DEF`): a tracer with
@@ -846,16 +853,7 @@ fn kernels_follow_the_uploaded_scenes_attributes() {
         || BsdfSampler,
         || (),
     );
-    let same = c
-        .iter()
-        .zip(&g)
-        .filter(|(c, g)| (**c - **g).abs().max_element() <= 1e-5 * c.max_element())
-        .count();
-    assert!(
-        same * 100 >= c.len() * 99,
-        "bsdf: only {same} of {} pixels agree",
-        c.len()
-    );
+    assert_pixels_equal(&c, &g, "bsdf");
     // Untextured (ρ = 1) every pixel is L_e·(1 + w) with a scalar w, so red ÷ green is
     // exactly L_e's 0.5; the texture's colours move it.
     let shows = |image: &[Vec3]| {
