@@ -245,7 +245,22 @@ impl Bvh {
     /// The closest triangle hit by the ray `origin + t·direction`, `t ∈ (t_min, t_max)`.
     #[must_use]
     pub fn intersect(&self, origin: Vec3, direction: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
-        self.closest::<false>(origin, direction, t_min, t_max)
+        self.closest::<false>(origin, direction, t_min, t_max, |_, _, _| true)
+    }
+
+    /// [`intersect`](Self::intersect) where a hit on triangle `i` at barycentrics
+    /// `(b1, b2)` counts only if `keep(i, b1, b2)` (alpha-masked surfaces, which rays pass
+    /// where they are cut out).
+    #[must_use]
+    pub fn intersect_where(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        t_min: f32,
+        t_max: f32,
+        keep: impl Fn(u32, f32, f32) -> bool,
+    ) -> Option<Hit> {
+        self.closest::<false>(origin, direction, t_min, t_max, keep)
     }
 
     /// The closest triangle whose front face the ray `origin + t·direction` meets, `t ∈
@@ -258,20 +273,36 @@ impl Bvh {
         t_min: f32,
         t_max: f32,
     ) -> Option<Hit> {
-        self.closest::<true>(origin, direction, t_min, t_max)
+        self.closest::<true>(origin, direction, t_min, t_max, |_, _, _| true)
     }
 
-    /// The closest hit of both faces or, with `FRONT`, of front faces only.
+    /// [`intersect_front`](Self::intersect_front) with the hits that `keep` refuses passed
+    /// through, as [`intersect_where`](Self::intersect_where).
+    #[must_use]
+    pub fn intersect_front_where(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        t_min: f32,
+        t_max: f32,
+        keep: impl Fn(u32, f32, f32) -> bool,
+    ) -> Option<Hit> {
+        self.closest::<true>(origin, direction, t_min, t_max, keep)
+    }
+
+    /// The closest hit of both faces or, with `FRONT`, of front faces only, among those that
+    /// `keep` accepts.
     fn closest<const FRONT: bool>(
         &self,
         origin: Vec3,
         direction: Vec3,
         t_min: f32,
         t_max: f32,
+        keep: impl Fn(u32, f32, f32) -> bool,
     ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         let mut t_far = t_max;
-        self.walk::<FRONT>(origin, direction, t_min, &mut t_far, |i, (t, b1, b2)| {
+        let on_hit = |i, (t, b1, b2)| {
             best = Some(Hit {
                 t,
                 triangle: i,
@@ -279,16 +310,31 @@ impl Bvh {
                 b2,
             });
             false
-        });
+        };
+        self.walk::<FRONT>(origin, direction, t_min, &mut t_far, keep, on_hit);
         best
     }
 
     /// Whether any triangle blocks the ray within `(t_min, t_max)` (shadow rays).
     #[must_use]
     pub fn occluded(&self, origin: Vec3, direction: Vec3, t_min: f32, t_max: f32) -> bool {
+        self.occluded_where(origin, direction, t_min, t_max, |_, _, _| true)
+    }
+
+    /// [`occluded`](Self::occluded) where only the hits that `keep` accepts block, as
+    /// [`intersect_where`](Self::intersect_where).
+    #[must_use]
+    pub fn occluded_where(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        t_min: f32,
+        t_max: f32,
+        keep: impl Fn(u32, f32, f32) -> bool,
+    ) -> bool {
         let mut hit = false;
         let mut t_far = t_max;
-        self.walk::<false>(origin, direction, t_min, &mut t_far, |_, _| {
+        self.walk::<false>(origin, direction, t_min, &mut t_far, keep, |_, _| {
             hit = true;
             true
         });
@@ -296,14 +342,15 @@ impl Bvh {
     }
 
     /// The stack walk shared by both queries: `on_hit(triangle, (t, b1, b2))` is called for
-    /// each hit closer than `t_far` (which then shrinks to `t`) and stops the walk by returning
-    /// `true`. With `FRONT`, only front faces are hit.
+    /// each hit closer than `t_far` that `keep(triangle, b1, b2)` accepts (`t_far` then shrinks
+    /// to `t`) and stops the walk by returning `true`. With `FRONT`, only front faces are hit.
     fn walk<const FRONT: bool>(
         &self,
         origin: Vec3,
         direction: Vec3,
         t_min: f32,
         t_far: &mut f32,
+        keep: impl Fn(u32, f32, f32) -> bool,
         mut on_hit: impl FnMut(u32, (f32, f32, f32)) -> bool,
     ) {
         if self.nodes.is_empty() {
@@ -324,6 +371,7 @@ impl Bvh {
                 for i in node.index..node.index + node.count {
                     if let Some(hit) = self.triangles[i as usize]
                         .intersect_faces::<FRONT>(origin, direction, t_min, *t_far)
+                        .filter(|&(_, b1, b2)| keep(i, b1, b2))
                     {
                         *t_far = hit.0;
                         if on_hit(i, hit) {

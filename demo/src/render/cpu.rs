@@ -309,7 +309,7 @@ pub fn trace_path<S: VertexSampler>(
     // The weight of the emission the last sampled direction meets: 1/(K + 1) beside the K
     // emission-only directions of its vertex (a guide's, without light sampling).
     let mut share = 1.0;
-    while let Some(hit) = scene.bvh.intersect(o, d, 0.0, f32::INFINITY) {
+    while let Some(hit) = scene.intersect(o, d, 0.0, f32::INFINITY) {
         let tri = scene.bvh.triangles[hit.triangle as usize];
         let material = scene.material_at(&hit);
         let (area, n_front, cos_front) = front_face(&tri, d);
@@ -444,13 +444,10 @@ fn emission_weighted<S: VertexSampler>(
 /// which the strict `t < t_max` of [`Bvh::occluded`](super::bvh::Bvh::occluded) excludes),
 /// and a ray that meets no emitter — most of them — walks only the emitters' small tree.
 fn emission_along(scene: &Scene, origin: Vec3, d: Vec3) -> Vec3 {
-    let Some(e) = scene
-        .emitter_bvh
-        .intersect_front(origin, d, 0.0, f32::INFINITY)
-    else {
+    let Some(e) = scene.intersect_emitter(origin, d) else {
         return Vec3::ZERO;
     };
-    if scene.bvh.occluded(origin, d, 0.0, e.t) {
+    if scene.occluded(origin, d, 0.0, e.t) {
         return Vec3::ZERO;
     }
     scene.emitter_emission(e.triangle, e.b1, e.b2)
@@ -623,7 +620,10 @@ pub(crate) fn direct_light(
         return None;
     }
     let f_cos = vertex.material.eval(vertex.normal, vertex.wo, wi);
-    if f_cos == Vec3::ZERO || scene.bvh.occluded(origin, wi, 0.0, dist * (1.0 - 1e-4)) {
+    if f_cos == Vec3::ZERO
+        || !scene.is_surface_at(t, b1, b2)
+        || scene.occluded(origin, wi, 0.0, dist * (1.0 - 1e-4))
+    {
         return None;
     }
     let light_pdf = pmf / area * dist2 / cos_light;
@@ -755,7 +755,7 @@ mod tests {
     /// The first hit's emission as the tracer's main loop finds it: the scene's closest hit,
     /// then its front-face emission.
     fn first_hit_emission(scene: &Scene, origin: Vec3, d: Vec3) -> Vec3 {
-        let Some(hit) = scene.bvh.intersect(origin, d, 0.0, f32::INFINITY) else {
+        let Some(hit) = scene.intersect(origin, d, 0.0, f32::INFINITY) else {
             return Vec3::ZERO;
         };
         let (_, _, cos_front) = front_face(&scene.bvh.triangles[hit.triangle as usize], d);
@@ -806,9 +806,7 @@ mod tests {
                     expected,
                     "{name}: ray {origin} along {d}"
                 );
-                let facing = scene
-                    .emitter_bvh
-                    .intersect_front(origin, d, 0.0, f32::INFINITY);
+                let facing = scene.intersect_emitter(origin, d);
                 lit += usize::from(expected != Vec3::ZERO);
                 hidden += usize::from(facing.is_some() && expected == Vec3::ZERO);
             }

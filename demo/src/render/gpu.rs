@@ -107,6 +107,45 @@ pub const EMITTER_LIST_DEF: &str = "MCG_DEMO_EMITTER_LIST";
 /// compiled with it.
 pub const ATTRIBUTES_DEF: &str = "MCG_DEMO_ATTRIBUTES";
 
+/// The shader def that compiles the alpha test of masked materials (glTF `alphaMode` MASK)
+/// into every walk of the scene and light sample (WGSL `is_surface_hit`, `is_surface_at`; CPU
+/// [`Scene::is_surface_at`]), set where the uploaded scene has a material with
+/// [`Material::alpha_cutoff`](super::material::Material::alpha_cutoff) above 0 and the
+/// attributes it reads: like [`ATTRIBUTES_DEF`], so that the walks of other scenes carry none
+/// of its code. Every kernel follows the scene ([`GpuTracer::upload`]).
+pub const ALPHA_MASK_DEF: &str = "MCG_DEMO_ALPHA_MASK";
+
+/// The compile-time choices that the uploaded scene makes for the kernels that read it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SceneDefs {
+    /// [`ATTRIBUTES_DEF`]: the scene has vertex colours or textures.
+    pub attributes: bool,
+    /// [`ALPHA_MASK_DEF`]: the scene has alpha masks (and the attributes they read).
+    pub alpha_mask: bool,
+}
+
+impl SceneDefs {
+    /// The defs `scene` asks for.
+    #[must_use]
+    pub fn of(scene: &Scene) -> Self {
+        let attributes = !scene.attributes.is_empty();
+        Self {
+            attributes,
+            alpha_mask: attributes && scene.materials.iter().any(|m| m.alpha_cutoff > 0.0),
+        }
+    }
+
+    /// Appends the defs that are set to `defs`.
+    fn push_to(self, defs: &mut Vec<(&'static str, u32)>) {
+        if self.attributes {
+            defs.push((ATTRIBUTES_DEF, 1));
+        }
+        if self.alpha_mask {
+            defs.push((ALPHA_MASK_DEF, 1));
+        }
+    }
+}
+
 /// The most emitter triangles a scene may have for [`EMITTER_LIST_DEF`].
 pub const EMITTER_LIST_MAX: usize = 8;
 
@@ -119,17 +158,17 @@ pub struct GuidedDefs {
     pub hold_all: bool,
     /// [`EMITTER_LIST_DEF`]: at most [`EMITTER_LIST_MAX`] emitter triangles.
     pub emitter_list: bool,
-    /// [`ATTRIBUTES_DEF`]: the scene has vertex colours or textures.
-    pub attributes: bool,
+    /// What the uploaded scene asks of every kernel (attributes, alpha masks).
+    pub scene: SceneDefs,
 }
 
 impl Default for GuidedDefs {
-    /// Held vertices for short paths, the emitters' tree, no attributes.
+    /// Held vertices for short paths, the emitters' tree, no attributes, no masks.
     fn default() -> Self {
         Self {
             hold_all: true,
             emitter_list: false,
-            attributes: false,
+            scene: SceneDefs::default(),
         }
     }
 }
@@ -497,14 +536,12 @@ impl std::fmt::Debug for GpuTracer {
 ///
 /// # Errors
 /// When composition fails (an unknown import).
-pub fn composed_shader(lights: bool, attributes: bool) -> Result<String> {
+pub fn composed_shader(lights: bool, scene: SceneDefs) -> Result<String> {
     let mut defs = guide_defs(GUIDE_GROUP, UNUSED_GROUP, PROBE_UNUSED_GROUP);
     if lights {
         defs.push((LIGHTS_DEF, 1));
     }
-    if attributes {
-        defs.push((ATTRIBUTES_DEF, 1));
-    }
+    scene.push_to(&mut defs);
     Ok(shaders::compose(SHADER, &defs)?)
 }
 
@@ -518,16 +555,14 @@ fn guide_defs(mcpg: u32, mcmm: u32, adgi: u32) -> Vec<(&'static str, u32)> {
 }
 
 /// The tracer's WGSL for `mcmm`: `render_mcmm` ([`MCMM_DEF`]) with `mcg::mcmm` at group
-/// [`GUIDE_GROUP`], with [`ATTRIBUTES_DEF`] where `attributes`.
+/// [`GUIDE_GROUP`], with the defs of `scene`.
 ///
 /// # Errors
 /// When composition fails (an unknown import).
-pub fn composed_mcmm_shader(attributes: bool) -> Result<String> {
+pub fn composed_mcmm_shader(scene: SceneDefs) -> Result<String> {
     let mut defs = guide_defs(UNUSED_GROUP, GUIDE_GROUP, PROBE_UNUSED_GROUP);
     defs.push((MCMM_DEF, 1));
-    if attributes {
-        defs.push((ATTRIBUTES_DEF, 1));
-    }
+    scene.push_to(&mut defs);
     Ok(shaders::compose(SHADER, &defs)?)
 }
 
@@ -539,9 +574,7 @@ pub fn composed_mcmm_shader(attributes: bool) -> Result<String> {
 pub fn composed_mcpg_shader(lights: bool, guided: GuidedDefs) -> Result<String> {
     let mut defs = guide_defs(GUIDE_GROUP, UNUSED_GROUP, PROBE_UNUSED_GROUP);
     defs.push((MCPG_DEF, 1));
-    if guided.attributes {
-        defs.push((ATTRIBUTES_DEF, 1));
-    }
+    guided.scene.push_to(&mut defs);
     if lights {
         defs.push((LIGHTS_DEF, 1));
     }
@@ -599,7 +632,7 @@ impl GpuTracer {
     /// # Errors
     /// When the shader does not compile.
     pub fn on(ctx: GpuContext) -> Result<Self> {
-        let source = composed_shader(false, false)?;
+        let source = composed_shader(false, SceneDefs::default())?;
         let render = ctx.compute_kernel(&source, "render")?;
         let rays = ctx.compute_kernel(&source, "trace_rays")?;
         let params = ctx.uniform_buffer("mcg-demo params", &GpuParams::default());
@@ -766,7 +799,7 @@ impl GpuTracer {
     /// [`GuidedDefs::attributes`] of `guided_defs`).
     fn mcmm_guided(&mut self, guide: GpuMcmmGuide) -> Result<Guided<GpuMcmmGuide>> {
         if self.mcmm_module.is_none() {
-            let source = composed_mcmm_shader(self.guided_defs.attributes)?;
+            let source = composed_mcmm_shader(self.guided_defs.scene)?;
             self.mcmm_module = Some(self.module("mcg-demo render mcmm", source));
         }
         let module = self.mcmm_module.as_ref().expect("compiled above");
@@ -983,7 +1016,7 @@ impl GpuTracer {
         });
         self.set_guided_defs(GuidedDefs {
             emitter_list: scene.emitters.len() <= EMITTER_LIST_MAX,
-            attributes: !scene.attributes.is_empty(),
+            scene: SceneDefs::of(scene),
             ..self.guided_defs
         })
     }
@@ -1228,7 +1261,7 @@ impl GpuTracer {
         }
         match method {
             Method::Nee if self.nee.is_none() => {
-                let source = composed_shader(true, self.guided_defs.attributes)?;
+                let source = composed_shader(true, self.guided_defs.scene)?;
                 self.nee = Some(self.ctx.compute_kernel(&source, "render")?);
             }
             Method::McpgNee if self.guided_lights.is_none() => {
@@ -1252,16 +1285,22 @@ impl GpuTracer {
 
     /// Both guided shaders again, and `mcpg`'s pipeline around its guide, when `defs` differ
     /// from what they were compiled with (`mcpg-nee`'s pipeline is made on its next frame);
-    /// with [`GuidedDefs::attributes`] changed, the `bsdf` kernels and `mcmm`'s pipeline
-    /// around its guide too (`nee`'s and the segments' kernels are made on their next use).
+    /// with [`GuidedDefs::scene`] changed, the `bsdf` kernels and `mcmm`'s pipeline around its
+    /// guide too (`nee`'s and the segments' kernels are made on their next use), and the
+    /// probes' when the scene's masks change (made on the next probe frame, with a fresh
+    /// cache).
     fn set_guided_defs(&mut self, defs: GuidedDefs) -> Result<()> {
         if defs == self.guided_defs {
             return Ok(());
         }
-        let attributes_changed = defs.attributes != self.guided_defs.attributes;
+        let scene_changed = defs.scene != self.guided_defs.scene;
+        if defs.scene.alpha_mask != self.guided_defs.scene.alpha_mask {
+            self.probe_module = None;
+            self.probes = None;
+        }
         self.guided_defs = defs;
-        if attributes_changed {
-            let source = composed_shader(false, defs.attributes)?;
+        if scene_changed {
+            let source = composed_shader(false, defs.scene)?;
             self.render = self.ctx.compute_kernel(&source, "render")?;
             self.rays = self.ctx.compute_kernel(&source, "trace_rays")?;
             self.nee = None;
@@ -1460,7 +1499,7 @@ impl GpuTracer {
             rays.resize((i + 1) * SEGMENT_BATCH as usize, ray);
         }
         if self.segments.is_none() {
-            let source = composed_shader(false, self.guided_defs.attributes)?;
+            let source = composed_shader(false, self.guided_defs.scene)?;
             self.segments = Some(self.ctx.compute_kernel(&source, "trace_segments")?);
         }
         let kernel = self.segments.as_ref().expect("compiled above");
@@ -1496,17 +1535,47 @@ impl GpuTracer {
         }
         let queries = self.ctx.storage_buffer("mcg-demo rays", rays);
         let hits: GpuBuffer<GpuHit> = self.ctx.zeroed_buffer("mcg-demo hits", rays.len());
-        let bind_group = self.bind_group(
-            kernel.entry_point(),
-            kernel.bind_group_layout(),
-            &[1, 2, 9, 10],
-            &[
-                scene.nodes.raw(),
-                scene.triangles.raw(),
-                queries.raw(),
-                hits.raw(),
-            ],
-        );
+        let bind_group = if self.guided_defs.scene.alpha_mask {
+            // The alpha test reads the scene's materials, attributes and textures, and
+            // where they end (`GpuParams`).
+            let params = GpuParams {
+                emitter_count: scene.emitters.len() as u32,
+                emitter_first: scene.emitter_first,
+                attribute_count: scene.attributes.len() as u32,
+                texture_count: scene.textures.len() as u32,
+                emitter_root: scene.emitter_root,
+                ..GpuParams::default()
+            };
+            self.ctx.write(&self.params, &[params])?;
+            self.bind_group(
+                kernel.entry_point(),
+                kernel.bind_group_layout(),
+                &[0, 1, 2, 3, 5, 6, 7, 9, 10],
+                &[
+                    self.params.raw(),
+                    scene.nodes.raw(),
+                    scene.triangles.raw(),
+                    scene.materials.raw(),
+                    scene.attributes.raw(),
+                    scene.textures.raw(),
+                    scene.texels.raw(),
+                    queries.raw(),
+                    hits.raw(),
+                ],
+            )
+        } else {
+            self.bind_group(
+                kernel.entry_point(),
+                kernel.bind_group_layout(),
+                &[1, 2, 9, 10],
+                &[
+                    scene.nodes.raw(),
+                    scene.triangles.raw(),
+                    queries.raw(),
+                    hits.raw(),
+                ],
+            )
+        };
         let mut encoder = self
             .ctx
             .device()
@@ -1523,7 +1592,8 @@ impl GpuTracer {
     }
 
     /// A bind group of group 0 with `layout`, `buffers` at the WGSL `bindings`: `render` uses
-    /// 0–8, `trace_rays` and `trace_segments` 1, 2, 9 and 10.
+    /// 0–8, `trace_rays` and `trace_segments` 1, 2, 9 and 10 (and 0, 3, 5, 6 and 7 for the
+    /// alpha test of a scene with masks).
     fn bind_group(
         &self,
         label: &str,
@@ -1696,12 +1766,25 @@ mod tests {
     /// guarantees and nothing of the guide's group; `mcpg`'s adds the guide's 3.
     #[test]
     fn shader_validates_without_an_adapter() {
-        let (module, tracer, guide) = validate(&composed_shader(false, false).unwrap());
-        for (lights, attributes) in [(true, false), (false, true), (true, true)] {
+        let (module, tracer, guide) =
+            validate(&composed_shader(false, SceneDefs::default()).unwrap());
+        let masked = SceneDefs {
+            attributes: true,
+            alpha_mask: true,
+        };
+        let textured = SceneDefs {
+            attributes: true,
+            alpha_mask: false,
+        };
+        for (lights, scene) in [
+            (true, SceneDefs::default()),
+            (false, textured),
+            (true, masked),
+        ] {
             assert_eq!(
-                validate(&composed_shader(lights, attributes).unwrap()).1,
+                validate(&composed_shader(lights, scene).unwrap()).1,
                 8,
-                "render with lights {lights}, attributes {attributes}"
+                "render with lights {lights}, {scene:?}"
             );
         }
         let names: Vec<&str> = module
@@ -1724,24 +1807,24 @@ mod tests {
         );
         assert_eq!((tracer, guide), (8, 0), "render binds 1–8 as storage");
         for lights in [false, true] {
-            for (hold_all, emitter_list, attributes) in [
-                (false, false, false),
-                (true, false, true),
-                (true, true, false),
+            for (hold_all, emitter_list, scene) in [
+                (false, false, SceneDefs::default()),
+                (true, false, textured),
+                (true, true, masked),
             ] {
                 let defs = GuidedDefs {
                     hold_all,
                     emitter_list,
-                    attributes,
+                    scene,
                 };
                 let (_, tracer, guide) = validate(&composed_mcpg_shader(lights, defs).unwrap());
                 assert_eq!(tracer + guide, MCPG_STORAGE_BUFFERS as usize);
                 assert_eq!(guide, 3, "the mcpg render binds the guide");
             }
         }
-        // `mcmm`'s shader, with and without the attribute code.
-        for attributes in [false, true] {
-            let source = composed_mcmm_shader(attributes).unwrap();
+        // `mcmm`'s shader, with and without the attribute and mask code.
+        for scene in [SceneDefs::default(), textured, masked] {
+            let source = composed_mcmm_shader(scene).unwrap();
             let module = naga::front::wgsl::parse_str(&source)
                 .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
             naga::valid::Validator::new(

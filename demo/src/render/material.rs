@@ -52,8 +52,12 @@ pub struct Material {
     /// its linear green channel multiplies `roughness` and its blue channel `metallic`
     /// (glTF 2.0, `metallicRoughnessTexture`).
     pub metallic_roughness_texture: u32,
-    /// Padding to 16 bytes; always 0.
-    pub pad: u32,
+    /// The alpha below which a hit is no surface (glTF 2.0 `alphaMode` MASK, a cutout), as a
+    /// threshold on the base-colour texture's alpha × the vertex colour's alpha: the file's
+    /// `alphaCutoff` over `baseColorFactor`'s alpha, so that `factor · texel · vertex ≥ cutoff`
+    /// is `texel · vertex ≥ alpha_cutoff`. 0 for opaque materials (every hit is a surface);
+    /// the loader drops the triangles of a mask that no texel can pass (above 1).
+    pub alpha_cutoff: f32,
 }
 
 impl Default for Material {
@@ -67,7 +71,7 @@ impl Default for Material {
             base_color_texture: NO_TEXTURE,
             emissive_texture: NO_TEXTURE,
             metallic_roughness_texture: NO_TEXTURE,
-            pad: 0,
+            alpha_cutoff: 0.0,
         }
     }
 }

@@ -414,7 +414,7 @@ impl McmmRenderer {
             settings.height,
         );
         let origin = scene.camera.position;
-        let Some(hit) = scene.bvh.intersect(origin, d, 0.0, f32::INFINITY) else {
+        let Some(hit) = scene.intersect(origin, d, 0.0, f32::INFINITY) else {
             return Vec3::ZERO;
         };
         let tri = scene.bvh.triangles[hit.triangle as usize];
@@ -477,7 +477,7 @@ fn lane_pixel(settings: &RenderSettings, tile: u32, lane: usize) -> Option<(u32,
 /// The point the ray `(origin, w)` hits and the radiance it carries back (front faces emit);
 /// `origin + w` and zero when it leaves the scene.
 fn emitter_along(scene: &Scene, origin: Vec3, w: Vec3) -> (Vec3, Vec3) {
-    match scene.bvh.intersect(origin, w, 0.0, f32::INFINITY) {
+    match scene.intersect(origin, w, 0.0, f32::INFINITY) {
         Some(hit) => {
             let tri = scene.bvh.triangles[hit.triangle as usize];
             let emitted = if tri.cross().dot(w) < 0.0 {

@@ -134,7 +134,7 @@ impl ShadingProbes {
             radiance: Vec3::ZERO,
             distance: f32::INFINITY,
         };
-        let Some(hit) = scene.bvh.intersect(origin, direction, 0.0, f32::INFINITY) else {
+        let Some(hit) = scene.intersect(origin, direction, 0.0, f32::INFINITY) else {
             return miss;
         };
         let tri = scene.bvh.triangles[hit.triangle as usize];
@@ -164,7 +164,7 @@ impl ShadingProbes {
     pub fn camera_ray(&self, scene: &Scene, d: Vec3, rng: &mut u32) -> Vec3 {
         let u = [next_uniform(rng), next_uniform(rng), next_uniform(rng)];
         let o = scene.camera.position;
-        let Some(hit) = scene.bvh.intersect(o, d, 0.0, f32::INFINITY) else {
+        let Some(hit) = scene.intersect(o, d, 0.0, f32::INFINITY) else {
             return Vec3::ZERO;
         };
         let tri = scene.bvh.triangles[hit.triangle as usize];

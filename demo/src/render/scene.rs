@@ -23,8 +23,14 @@
 //!   a dark part of a triangle's texture is sampled as often as a bright one (unbiased, only
 //!   less efficient).
 //!   A texture on another coordinate set is ignored, and [`Scene::warnings`] says so.
-//!   Vertex colours (`COLOR_0`, linear RGB) multiply the base colour. Normal and occlusion
-//!   textures, alpha modes and extensions other than [`READ_EXTENSIONS`] are not read;
+//!   Vertex colours (`COLOR_0`, linear RGB) multiply the base colour.
+//! - **Alpha** (glTF 2.0, "Alpha Coverage"): `alphaMode` MASK cuts holes where
+//!   `baseColorFactor`'s alpha × the base-colour texture's × `COLOR_0`'s is below
+//!   `alphaCutoff` (default ½; [`Material::alpha_cutoff`]): rays pass through them, both when
+//!   looking for the closest hit and for occlusion, and they neither reflect nor emit
+//!   ([`Scene::is_surface_at`]); a mask that no texel can pass is not loaded. BLEND is
+//!   rendered opaque, with a warning.
+//! - Normal and occlusion textures and extensions other than [`READ_EXTENSIONS`] are not read;
 //!   [`Scene::warnings`] names those that change what a surface looks like (all but normal
 //!   and occlusion textures).
 //! - **Animations**: translation, rotation and scale channels with STEP or LINEAR
@@ -339,30 +345,27 @@ pub fn wrapped_texel(c: f32, mode: u32, size: u32) -> u32 {
 }
 
 /// What a triangle's three vertices carry besides their positions: texture coordinates
-/// (`TEXCOORD_0`) and colours (`COLOR_0`); 48 bytes, three `vec2<f32>` and three
-/// `vec2<u32>` in WGSL.
+/// (`TEXCOORD_0`) and colours with their alpha (`COLOR_0`); 48 bytes, three `vec2<f32>` and
+/// three `vec2<u32>` in WGSL.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct TriangleAttributes {
     /// `(u, v)` of `v0`, `v1` and `v2`; zero without them.
     pub uv: [[f32; 2]; 3],
-    /// The linear RGB of `v0`, `v1` and `v2` as 16-bit unorms, `[r | g << 16, b | 0xffff << 16]`
+    /// The linear RGBA of `v0`, `v1` and `v2` as 16-bit unorms, `[r | g << 16, b | a << 16]`
     /// (WGSL `unpack2x16unorm`); [`TriangleAttributes::WHITE`] without them.
     pub color: [[u32; 2]; 3],
 }
 
 impl TriangleAttributes {
-    /// [`TriangleAttributes::color`] of a vertex without a colour.
+    /// [`TriangleAttributes::color`] of a vertex without a colour: opaque white.
     pub const WHITE: [u32; 2] = [u32::MAX; 2];
 
-    /// Linear RGB in [0, 1] as [`TriangleAttributes::color`] stores it.
+    /// Linear RGBA in [0, 1] as [`TriangleAttributes::color`] stores it.
     #[must_use]
-    pub fn pack_color(rgb: [f32; 3]) -> [u32; 2] {
+    pub fn pack_color([r, g, b, a]: [f32; 4]) -> [u32; 2] {
         let unorm = |c: f32| (c.clamp(0.0, 1.0) * 65535.0).round() as u32;
-        [
-            unorm(rgb[0]) | unorm(rgb[1]) << 16,
-            unorm(rgb[2]) | 0xffff << 16,
-        ]
+        [unorm(r) | unorm(g) << 16, unorm(b) | unorm(a) << 16]
     }
 
     /// The texture coordinates at barycentrics (`b1`, `b2`).
@@ -382,6 +385,14 @@ impl TriangleAttributes {
         };
         let [c0, c1, c2] = self.color.map(unpack);
         c0 + b1 * (c1 - c0) + b2 * (c2 - c0)
+    }
+
+    /// The vertex colours' alpha at barycentrics (`b1`, `b2`), interpolated as
+    /// [`color_at`](Self::color_at) (exactly 1 where the three are opaque).
+    #[must_use]
+    pub fn alpha_at(&self, b1: f32, b2: f32) -> f32 {
+        let [a0, a1, a2] = self.color.map(|[_, ba]| (ba >> 16) as f32 / 65535.0);
+        a0 + b1 * (a1 - a0) + b2 * (a2 - a0)
     }
 }
 
@@ -560,7 +571,7 @@ impl SceneFile {
         let mut materials = vec![Material::default()];
         for m in self.document.materials() {
             let pbr = m.pbr_metallic_roughness();
-            let [r, g, b, _] = pbr.base_color_factor();
+            let [r, g, b, a] = pbr.base_color_factor();
             let strength = m.emissive_strength().unwrap_or(1.0);
             let emission = Vec3::from(m.emissive_factor()) * strength;
             let mut texture =
@@ -606,12 +617,13 @@ impl SceneFile {
                 base_color_texture,
                 emissive_texture,
                 metallic_roughness_texture,
-                pad: 0,
+                alpha_cutoff: alpha_cutoff(m.alpha_mode(), m.alpha_cutoff(), a),
             };
             let values = [
                 r,
                 g,
                 b,
+                a,
                 material.metallic,
                 material.roughness,
                 emission.x,
@@ -631,7 +643,7 @@ impl SceneFile {
 
     /// Warns of what the file uses and the renderer does not read, so that a scene that looks
     /// wrong says why: extensions other than [`READ_EXTENSIONS`] (punctual lights, texture
-    /// transforms, transmission, …), alpha modes other than `OPAQUE` (rendered opaque), point
+    /// transforms, transmission, …), alpha mode `BLEND` (rendered opaque), point
     /// and line primitives (skipped). One sentence per feature, naming the materials or meshes
     /// that use it.
     fn unread_features(&self, warnings: &mut Vec<String>) {
@@ -655,11 +667,10 @@ impl SceneFile {
                 _ => Some(format!("materials {}", which.join(", "))),
             }
         };
-        if let Some(which) =
-            materials_with(&|m| m.alpha_mode() != gltf::material::AlphaMode::Opaque)
+        if let Some(which) = materials_with(&|m| m.alpha_mode() == gltf::material::AlphaMode::Blend)
         {
             warnings.push(format!(
-                "{which}: alphaMode MASK or BLEND is not read; the surface is rendered opaque"
+                "{which}: alphaMode BLEND is not read; the surface is rendered opaque"
             ));
         }
         let lines: Vec<String> = document
@@ -707,6 +718,11 @@ impl SceneFile {
             .iter()
             .any(|a| a.color != [TriangleAttributes::WHITE; 3]);
         if self.images.is_empty() && !coloured {
+            // No texture and opaque white vertices: every alpha is the factor's, which
+            // passes the masks left (the loader dropped those it cuts out).
+            for m in &mut scene.materials {
+                m.alpha_cutoff = 0.0;
+            }
             return;
         }
         scene.attributes = scene
@@ -771,6 +787,10 @@ impl SceneFile {
             let indices = triangle_list(primitive.mode(), indices);
             // glTF's default material is our material 0; file materials start at 1.
             let material = primitive.material().index().map_or(0, |i| i as u32 + 1);
+            if materials[material as usize].alpha_cutoff > 1.0 {
+                // A mask whose factor alone is below its cutoff: cut out everywhere.
+                continue;
+            }
             let tex_coords: Vec<[f32; 2]> = match reader
                 .read_tex_coords(0)
                 .filter(|_| materials[material as usize].is_textured())
@@ -778,8 +798,8 @@ impl SceneFile {
                 Some(t) => t.into_f32().collect(),
                 None => Vec::new(),
             };
-            let colors: Vec<[f32; 3]> = match reader.read_colors(0) {
-                Some(c) => c.into_rgb_f32().collect(),
+            let colors: Vec<[f32; 4]> = match reader.read_colors(0) {
+                Some(c) => c.into_rgba_f32().collect(),
                 None => Vec::new(),
             };
             if colors.iter().flatten().any(|c| !c.is_finite()) {
@@ -955,6 +975,21 @@ fn texture_use(info: &gltf::texture::Info) -> Result<TextureUse, u32> {
 }
 
 /// Whether primitives of `mode` have area (triangles, strips and fans) and so are rendered.
+/// [`Material::alpha_cutoff`] of a material with alpha mode `mode`, the file's `alphaCutoff`
+/// `cutoff` (glTF's default 0.5 where it has none) and the alpha `factor` of its
+/// `baseColorFactor`: `cutoff / factor` for MASK (+∞ where the factor is 0 and the cutoff is
+/// not, so that nothing passes), 0 for OPAQUE and BLEND (rendered opaque).
+fn alpha_cutoff(mode: gltf::material::AlphaMode, cutoff: Option<f32>, factor: f32) -> f32 {
+    let cutoff = cutoff.unwrap_or(0.5).max(0.0);
+    if mode != gltf::material::AlphaMode::Mask || cutoff == 0.0 {
+        0.0
+    } else if factor > 0.0 {
+        cutoff / factor
+    } else {
+        f32::INFINITY
+    }
+}
+
 fn is_triangles(mode: gltf::mesh::Mode) -> bool {
     use gltf::mesh::Mode;
     matches!(
@@ -1203,6 +1238,58 @@ impl Scene {
             m.metallic *= f32::from(b) / 255.0;
         }
         m
+    }
+
+    /// Whether triangle `triangle` (leaf order) is a surface at barycentrics (`b1`, `b2`):
+    /// always for an opaque material; for an alpha mask (glTF 2.0, "Alpha Coverage",
+    /// `alphaMode` MASK) where the base-colour texture's alpha × the vertex colour's alpha
+    /// reaches [`Material::alpha_cutoff`]. Rays pass through the rest, light samples that
+    /// land there carry nothing, and nothing is emitted there.
+    #[inline]
+    #[must_use]
+    pub fn is_surface_at(&self, triangle: u32, b1: f32, b2: f32) -> bool {
+        let m = self.material(triangle);
+        if m.alpha_cutoff <= 0.0 {
+            return true;
+        }
+        let Some(a) = self.attributes.get(triangle as usize) else {
+            return true;
+        };
+        let texel = self
+            .texel(m.base_color_texture, a.uv_at(b1, b2))
+            .map_or(1.0, |[.., alpha]| f32::from(alpha) / 255.0);
+        texel * a.alpha_at(b1, b2) >= m.alpha_cutoff
+    }
+
+    /// The closest surface the ray `origin + t·direction` hits, `t ∈ (t_min, t_max)`:
+    /// [`Bvh::intersect`] through the holes of alpha masks ([`Scene::is_surface_at`]).
+    #[must_use]
+    pub fn intersect(&self, origin: Vec3, direction: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
+        self.bvh
+            .intersect_where(origin, direction, t_min, t_max, |i, b1, b2| {
+                self.is_surface_at(i, b1, b2)
+            })
+    }
+
+    /// Whether a surface blocks the ray within `(t_min, t_max)` (shadow rays):
+    /// [`Bvh::occluded`] through the holes of alpha masks ([`Scene::is_surface_at`]).
+    #[must_use]
+    pub fn occluded(&self, origin: Vec3, direction: Vec3, t_min: f32, t_max: f32) -> bool {
+        self.bvh
+            .occluded_where(origin, direction, t_min, t_max, |i, b1, b2| {
+                self.is_surface_at(i, b1, b2)
+            })
+    }
+
+    /// The closest emitter whose front face the ray from `origin` along the unit `direction`
+    /// meets, in [`Scene::emitter_bvh`] (the hit's triangle indexes that tree), through the
+    /// holes of alpha masks ([`Scene::is_surface_at`] of its [`Triangle::source`]).
+    #[must_use]
+    pub fn intersect_emitter(&self, origin: Vec3, direction: Vec3) -> Option<Hit> {
+        let tree = &self.emitter_bvh;
+        tree.intersect_front_where(origin, direction, 0.0, f32::INFINITY, |i, b1, b2| {
+            self.is_surface_at(tree.triangles[i as usize].source, b1, b2)
+        })
     }
 
     /// The emitted radiance of the emitters' tree's triangle `emitter` at barycentrics

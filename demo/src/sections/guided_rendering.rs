@@ -356,7 +356,7 @@ fn guide_picture(guide: &Guide, s: &Settings) -> Result<Vec<Option<(Vec3, f32, u
                 .camera
                 .direction(x as f32 + 0.5, y as f32 + 0.5, s.size, s.size);
             let o = scene.camera.position;
-            let Some(hit) = scene.bvh.intersect(o, d, 0.0, f32::INFINITY) else {
+            let Some(hit) = scene.intersect(o, d, 0.0, f32::INFINITY) else {
                 out.push(None);
                 continue;
             };

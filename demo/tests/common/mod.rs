@@ -98,6 +98,19 @@ pub fn emissive_texture_furnace() -> Scene {
     scene
 }
 
+/// The furnace (ρ = 1, L_e = (2, 3, 1)) with [`with_texture`]'s texture as the base-colour
+/// texture of every face, its grey texel made transparent (alpha 0) and the faces alpha masks
+/// at cutoff ½: every triangle has a hole where the grey texel maps, through which rays leave
+/// the cube, and which neither emits nor reflects. With ρ = 1 elsewhere, what escapes through
+/// the holes is all that is lost.
+pub fn masked_furnace() -> Scene {
+    let mut scene = with_texture(furnace(Vec3::ONE, Vec3::new(2.0, 3.0, 1.0)));
+    scene.materials[0].base_color_texture = 0;
+    scene.materials[0].alpha_cutoff = 0.5;
+    scene.texels[2] = 0x0080_8080;
+    scene
+}
+
 /// The mean image of one run's `frames` frames, `frame(f)` rendering frame `f` (a guided
 /// run's frames share its guide or chains, so only whole runs are independent samples).
 pub fn run_mean(frames: u32, mut frame: impl FnMut(u32) -> Vec<Vec3>) -> Vec<Vec3> {

@@ -335,14 +335,18 @@ pub(super) struct GpuProbes {
 
 /// The tracer's WGSL for the probe methods: `render` and `trace_probe_rays` with
 /// [`PROBE_GI_DEF`], `mcg::adgi` at [`GUIDE_GROUP`] (`mcg::mcpg` and `mcg::mcmm` at unused
-/// groups).
+/// groups), with the attributes' code and, where `alpha_mask`, the alpha test
+/// ([`super::ALPHA_MASK_DEF`]).
 ///
 /// # Errors
 /// When composition fails (an unknown import).
-pub fn composed_probe_shader() -> Result<String> {
+pub fn composed_probe_shader(alpha_mask: bool) -> Result<String> {
     let mut defs = guide_defs(UNUSED_GROUP, MCMM_UNUSED_GROUP, GUIDE_GROUP);
     defs.push((PROBE_GI_DEF, 1));
     defs.push((super::ATTRIBUTES_DEF, 1));
+    if alpha_mask {
+        defs.push((super::ALPHA_MASK_DEF, 1));
+    }
     Ok(mcg_gpu_backend::shaders::compose(super::SHADER, &defs)?)
 }
 
@@ -431,7 +435,8 @@ impl GpuTracer {
         let ctx = &self.ctx;
         let cache = GpuProbeCache::new(ctx, &config)?;
         if self.probe_module.is_none() {
-            self.probe_module = Some(self.module("mcg-demo probe gi", composed_probe_shader()?));
+            let source = composed_probe_shader(self.guided_defs.scene.alpha_mask)?;
+            self.probe_module = Some(self.module("mcg-demo probe gi", source));
         }
         let module = self.probe_module.as_ref().expect("compiled above");
         let (pipeline, layout) =
@@ -1098,7 +1103,7 @@ mod tests {
     /// the requests; the host structs have the WGSL sizes.
     #[test]
     fn probe_shader_validates_without_an_adapter() {
-        let source = composed_probe_shader().unwrap();
+        let source = composed_probe_shader(true).unwrap();
         let module = naga::front::wgsl::parse_str(&source)
             .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
         let info = naga::valid::Validator::new(

@@ -75,7 +75,8 @@ struct Material {
     base_color_texture: u32,
     emissive_texture: u32,
     metallic_roughness_texture: u32,
-    pad: u32,
+    // `Material::alpha_cutoff`: 0 for opaque materials.
+    alpha_cutoff: f32,
 }
 
 // One entry of the emitter table: the triangle and the inclusive cumulative probability
@@ -223,6 +224,20 @@ fn triangle_intersect(tri: Triangle, origin: vec3<f32>, direction: vec3<f32>, t_
     return vec4<f32>(0.0);
 }
 
+// Whether the hit `h` (`triangle_intersect`'s) of triangle `i` counts: `is_surface_at` in
+// scenes with alpha masks (MCG_DEMO_ALPHA_MASK, `gpu::ALPHA_MASK_DEF`), always elsewhere, so
+// that the walks of other scenes carry none of its code.
+fn is_surface_hit(i: u32, h: vec4<f32>) -> bool {
+#ifdef MCG_DEMO_ALPHA_MASK
+    let tri = triangles[i];
+    // An emitters' copy reads its scene triangle's attributes (`Triangle::source`).
+    let scene_triangle = select(i, tri.source, i >= params.emitter_first);
+    return is_surface_at(tri.material, RayHit(h.x, scene_triangle, h.y, h.z));
+#else
+    return true;
+#endif
+}
+
 // `box_entry`: the slab test's entry distance, FAR on a miss.
 fn box_entry(node: BvhNode, origin: vec3<f32>, inv: vec3<f32>, t_min: f32, t_max: f32) -> f32 {
     let t0 = (node.lo - origin) * inv;
@@ -274,7 +289,7 @@ fn bvh_walk_tree(root: u32, front_only: bool, origin: vec3<f32>, direction: vec3
             for (var i = node.index; i < node.index + node.count; i++) {
                 let h = triangle_intersect(triangles[i], origin, direction, t_min, best.t,
                                            front_only);
-                if h.w > 0.0 {
+                if h.w > 0.0 && is_surface_hit(i, h) {
                     best = RayHit(h.x, i, h.y, h.z);
                     if any_hit {
                         return best;
@@ -328,7 +343,7 @@ fn emitter_list_hit(first: u32, count: u32, origin: vec3<f32>, direction: vec3<f
     var best = RayHit(FAR, NO_HIT, 0.0, 0.0);
     for (var i = first; i < first + count; i++) {
         let h = triangle_intersect(triangles[i], origin, direction, 0.0, best.t, true);
-        if h.w > 0.0 {
+        if h.w > 0.0 && is_surface_hit(i, h) {
             best = RayHit(h.x, i, h.y, h.z);
         }
     }
@@ -379,7 +394,8 @@ fn unoccluded_segments(origin: vec3<f32>, n: u32) -> u32 {
         let node = nodes[walk_stack[top]];
         if node.count > 0u {
             for (var i = node.index; i < node.index + node.count; i++) {
-                if triangle_intersect(triangles[i], origin, d, 0.0, t_max, false).w > 0.0 {
+                let h = triangle_intersect(triangles[i], origin, d, 0.0, t_max, false);
+                if h.w > 0.0 && is_surface_hit(i, h) {
                     visible &= ~(1u << r);
                     top = 0u;
                     break;
@@ -516,6 +532,14 @@ fn texel_at(texture: u32, uv: vec2<f32>) -> vec4<f32> {
     return unpack4x8unorm(texels[tex.offset + y * tex.width + x]);
 }
 
+// `TriangleAttributes::alpha_at`: the vertex colours' alpha of `a`'s triangle at `hit`.
+fn alpha_at(a: TriangleAttributes, hit: RayHit) -> f32 {
+    let a0 = unpack2x16unorm(a.color_a.y).y;
+    let a1 = unpack2x16unorm(a.color_b.y).y;
+    let a2 = unpack2x16unorm(a.color_c.y).y;
+    return a0 + hit.b1 * (a1 - a0) + hit.b2 * (a2 - a0);
+}
+
 // `scene::wrapped_texel`: coordinate `c` wrapped by `mode` (0 REPEAT, 1 CLAMP_TO_EDGE,
 // 2 MIRRORED_REPEAT) to the nearest texel's index below `size`.
 fn wrapped_texel(c: f32, mode: u32, size: u32) -> u32 {
@@ -578,6 +602,18 @@ fn triangle_emission(material: u32, hit: RayHit) -> vec3<f32> {
     }
 #endif
     return emission;
+}
+
+// `Scene::is_surface_at`: whether `hit.triangle` (the scene's), of material `material`, is a
+// surface at `hit`: always for an opaque material; for an alpha mask where the base-colour
+// texture's alpha × the vertex colour's alpha reaches `Material::alpha_cutoff`.
+fn is_surface_at(material: u32, hit: RayHit) -> bool {
+    let m = materials[material];
+    if m.alpha_cutoff <= 0.0 || params.attribute_count == 0u {
+        return true;
+    }
+    let a = attributes[hit.triangle];
+    return texel_at(m.base_color_texture, uv_at(a, hit)).a * alpha_at(a, hit) >= m.alpha_cutoff;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -851,6 +887,11 @@ fn light_sample(v: Vertex, origin: vec3<f32>, u: vec3<f32>) -> LightSample {
     if all(f_cos == vec3<f32>(0.0)) {
         return none;
     }
+#ifdef MCG_DEMO_ALPHA_MASK
+    if !is_surface_at(tri.material, RayHit(dist, t, b.x, b.y)) {
+        return none;
+    }
+#endif
     if bvh_walk(origin, wi, 0.0, dist * (1.0 - 1e-4), true).triangle != NO_HIT {
         return none;
     }
