@@ -8,7 +8,7 @@ use std::sync::OnceLock;
 
 use common::{
     TileStats, assert_pixel_mean, assert_spread, assert_tiles_agree, emissive_texture_furnace,
-    furnace, masked_furnace, scenes_dir, with_texture,
+    furnace, masked_furnace, scenes_dir, sky_floor, sky_settings, with_texture,
 };
 use glam::Vec3;
 use mcg_demo::render::bvh::Hit;
@@ -20,7 +20,9 @@ use mcg_demo::render::emission_allocation::{Allocation, EmissionAllocation};
 use mcg_demo::render::guided::{McpgSampler, new_guide};
 use mcg_demo::render::material::BsdfSample;
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
-use mcg_demo::render::scene::{MIN_TEXTURE_POWER, Scene, SceneError, SceneFile, frame_time};
+use mcg_demo::render::scene::{
+    ENVIRONMENT_PICK, MIN_TEXTURE_POWER, Scene, SceneError, SceneFile, frame_time,
+};
 use mcg_demo::render::scene_generator::{DOOR_OPENS_AT_FRAME, SCENE_NAMES, built_in_scenes};
 use mcg_demo::render::{Device, ProbeOptions, RenderArgs, output, render, write_outputs};
 use mcg_tests::RunningStats;
@@ -196,9 +198,22 @@ fn gltf_errors_are_typed_and_name_the_file() {
     let dark = minimal_gltf(&dir, "dark.gltf", true, false, 4);
     let e = SceneFile::open(&dark).unwrap().build(0.0).unwrap_err();
     assert!(
-        matches!(e, SceneError::NoEmitters { .. }) && e.to_string().contains("dark.gltf"),
+        matches!(e, SceneError::NoEmitters { .. })
+            && e.to_string().contains("dark.gltf")
+            && e.to_string().contains("--environment"),
         "{e}"
     );
+    // An environment lights it; a non-finite or negative one is refused.
+    let sky = SceneFile::open(&dark).unwrap().with_environment(Vec3::ONE);
+    let lit = sky.unwrap().build(0.0).unwrap();
+    assert_eq!((lit.environment, lit.environment_pmf), (Vec3::ONE, 1.0));
+    for bad in [Vec3::new(f32::NAN, 1.0, 1.0), Vec3::new(1.0, -1.0, 1.0)] {
+        let e = SceneFile::open(&dark)
+            .unwrap()
+            .with_environment(bad)
+            .unwrap_err();
+        assert!(matches!(e, SceneError::NonFinite { .. }), "{e}");
+    }
 
     // Lines are skipped (with a warning), so a file of lines alone has no triangles.
     let lines = minimal_gltf(&dir, "lines.gltf", true, true, 1);
@@ -376,6 +391,90 @@ fn furnace_matches_the_truncated_neumann_series() {
     }
 }
 
+/// Environment furnace. Hypothesis: under a uniform environment L_env, a Lambertian floor of
+/// albedo ρ whose upper hemisphere is all sky shows ρ·L_env in every pixel, and the sky
+/// itself L_env ([`sky_floor`], whose hidden emitter makes light sampling pick the
+/// environment half of the time). Sample: 16×16 pixels × 16 spp, B = 2, seed 5, ρ = (0.5,
+/// 0.3, 0.8), L_env = (1, 2, 0.5), for `bsdf`, `nee`, `mcpg` (fourth frame, after three of
+/// learning), `mcpg-nee`, and `mcmm` at B = 1 (fourth frame). Threshold: |z| < 5 on the pixel mean per channel, with a floor
+/// of 10⁻⁵ relative for `bsdf`, exact here (cosine sampling of a Lambertian floor). Counting
+/// the environment at full weight after a BSDF sample in `nee` (no MIS weight) fails it at
+/// z = 59.9, and dropping [`Scene::environment_pmf`] from the light sample's density at
+/// z = 12.2 (checked once each).
+#[test]
+fn environment_furnace_matches_albedo_times_sky() {
+    let (rho, sky) = (Vec3::new(0.5, 0.3, 0.8), Vec3::new(1.0, 2.0, 0.5));
+    for (up, expected) in [(false, rho * sky), (true, sky)] {
+        let scene = sky_floor(rho, sky, up);
+        assert_eq!(scene.environment_pmf, ENVIRONMENT_PICK);
+        for method in [Method::Bsdf, Method::Nee, Method::Mcpg, Method::McpgNee] {
+            let settings = sky_settings(method, 2);
+            let label = format!("{method:?}, looking {}", if up { "up" } else { "down" });
+            let image = if method.is_guided() {
+                let mut guide = new_guide(&scene, 16, 16).unwrap();
+                for frame in 0..3 {
+                    render_frame(&scene, &settings, frame, || McpgSampler::new(&guide), || ());
+                    guide.end_frame();
+                }
+                render_frame(&scene, &settings, 3, || McpgSampler::new(&guide), || ())
+            } else {
+                render_frame(&scene, &settings, 0, || BsdfSampler, || ())
+            };
+            assert_pixel_mean(&image, expected, 1e-5, &label);
+        }
+        // `mcmm` renders direct light only (B = 1), which is all there is here.
+        let settings = sky_settings(Method::Mcmm, 1);
+        let mut r = McmmRenderer::new(16, 16, mcmm_params(McmmScore::TileMixture, 16)).unwrap();
+        for frame in 0..3 {
+            r.render_frame(&scene, &settings, frame).unwrap();
+        }
+        let image = r.render_frame(&scene, &settings, 3).unwrap();
+        assert_pixel_mean(&image, expected, 1e-5, &format!("mcmm, looking up: {up}"));
+    }
+}
+
+/// Hypothesis: with light from the environment and from emitting triangles together, `nee`,
+/// `mcpg-nee` and `mcpg` estimate the `bsdf` image: light selection shares its samples
+/// between the two ([`ENVIRONMENT_PICK`]) and each MIS weight uses that share. Scene:
+/// [`masked_furnace`] under L_env = (1.5, 1, 0.5) (light enters through the holes of the
+/// emitting walls), 32×32 pixels (4 tiles of 16×16), B = 2; `bsdf`, `nee` and `mcpg-nee` 64
+/// independent frames of 4 spp (seeds 41, 42), `mcpg` and `mcpg-nee` 16 runs of a fresh guide
+/// over 2 frames of 4 spp, `mcpg` with 2 emission-only directions (seeds 400-415 and
+/// 500-515); per tile and channel Welch's
+/// t-test against `bsdf`, Bonferroni over a method's 12 tests at family-wise α = 10⁻⁴.
+/// Triangles' pmfs left summing to 1 beside the environment's share fail `nee` at t = −52.8
+/// (checked once).
+#[test]
+fn environment_and_emitters_share_light_sampling_without_bias() {
+    let mut scene = masked_furnace();
+    scene.set_environment(Vec3::new(1.5, 1.0, 0.5));
+    assert_eq!(scene.environment_pmf, ENVIRONMENT_PICK);
+    let pmfs: f32 = scene
+        .emitters
+        .iter()
+        .map(|&i| scene.bvh.triangles[i as usize].emitter_pmf)
+        .sum();
+    assert!(
+        (pmfs - (1.0 - ENVIRONMENT_PICK)).abs() < 1e-5,
+        "triangles' pmfs sum to {pmfs}"
+    );
+    let bsdf = emission_tiles(&scene, Method::Bsdf, 41);
+    assert_tiles_agree(
+        &emission_tiles(&scene, Method::Nee, 42),
+        &bsdf,
+        1e-4,
+        "nee vs bsdf, environment and emitters",
+    );
+    for (method, seed) in [(Method::Mcpg, 400), (Method::McpgNee, 500)] {
+        assert_tiles_agree(
+            &emission_guided_tiles(&scene, method, seed),
+            &bsdf,
+            1e-4,
+            &format!("{} vs bsdf, environment and emitters", method.name()),
+        );
+    }
+}
+
 /// Hypothesis: `bsdf` and `nee` estimate the same image. Scene: the built-in many-lights room,
 /// 48×48 pixels (9 tiles of 16×16), B = 2, 64 independent frames of 4 spp per method (seed
 /// 11). Per tile and channel, the mean over its pixels and frames is compared between the two
@@ -488,11 +587,12 @@ fn emission_tiles(scene: &Scene, method: Method, seed: u32) -> TileStats {
 }
 
 /// Per 16×16 tile, 16 runs of a fresh CPU guide over 2 frames of [`emission_settings`]'
-/// `mcpg` with 2 emission-only directions per vertex, seeds `first_seed` on.
-fn emission_guided_tiles(scene: &Scene, first_seed: u32) -> TileStats {
+/// `method` (`mcpg` with 2 emission-only directions per vertex, or `mcpg-nee`), seeds
+/// `first_seed` on.
+fn emission_guided_tiles(scene: &Scene, method: Method, first_seed: u32) -> TileStats {
     let (w, h) = (32, 32);
     common::tile_stats((w, h, 16, 16), |run| {
-        let s = emission_settings(Method::Mcpg, first_seed + run);
+        let s = emission_settings(method, first_seed + run);
         let mut guide = new_guide(scene, w, h).unwrap();
         common::run_mean(2, |f| {
             let sampler = || McpgSampler::new(&guide).with_emission_samples(2);
@@ -526,7 +626,7 @@ fn textured_emission_is_unbiased_for_every_method() {
         1e-4,
         "nee vs bsdf, emissive texture",
     );
-    let guided = emission_guided_tiles(&scene, 100);
+    let guided = emission_guided_tiles(&scene, Method::Mcpg, 100);
     assert_tiles_agree(&guided, &bsdf, 1e-4, "mcpg vs bsdf, emissive texture");
 }
 
@@ -587,7 +687,7 @@ fn alpha_masks_cut_holes_without_bias() {
         1e-4,
         "nee vs bsdf, alpha masks",
     );
-    let guided = emission_guided_tiles(&scene, 300);
+    let guided = emission_guided_tiles(&scene, Method::Mcpg, 300);
     assert_tiles_agree(&guided, &bsdf, 1e-4, "mcpg vs bsdf, alpha masks");
 }
 
@@ -861,6 +961,7 @@ fn render_command_writes_exr_png_and_json() {
         mcpg_alpha_min: mcg_demo::render::guided::ALPHA_MIN,
         ramp_frames: 1,
         mcmm_score: McmmScore::TileMixture,
+        environment: None,
         probes: ProbeOptions::default(),
     };
     let first = render(&args).unwrap();

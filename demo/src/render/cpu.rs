@@ -21,13 +21,14 @@
 //! (MCPG's begin / sample / pdf / finish) replaces BSDF sampling without touching the rest of
 //! the loop.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use mcg_gpu_backend::sampling::{next_uniform, pcg_hash};
+use mcg_markov_guide::{cosine_hemisphere, cosine_hemisphere_pdf};
 use rayon::prelude::*;
 
 use super::bvh::{Hit, Triangle};
 use super::material::{BsdfSample, Material};
-use super::scene::Scene;
+use super::scene::{Light, Scene};
 
 /// How directions are chosen and lights are found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
@@ -163,6 +164,11 @@ pub struct Observation {
     pub radiance: Vec3,
     /// What the sampled ray hit; `None` when it left the scene.
     pub next: Option<NextHit>,
+    /// Where the ray left the scene ([`Observation::next`] is `None`): the environment's
+    /// radiance along it ([`Scene::environment`], zero without one) and the MIS weight the
+    /// path gave it against a light sample of the environment (1 without light sampling), as
+    /// [`NextHit::emission_weight`] for emitters.
+    pub escaped: (Vec3, f32),
     /// The part of `radiance` reflected at the next hit, `radiance` − its emission: the path's
     /// own estimate of L_r(hit_next, −ω), present when the path scattered at the next hit
     /// (so that `radiance` carries what it gathered from there on); `None` when the path
@@ -280,6 +286,8 @@ struct Recorded {
     discarded: Vec3,
     /// What the sampled ray hit.
     next: Option<NextHit>,
+    /// The MIS weight the path gave the environment where the sampled ray left the scene.
+    environment_weight: f32,
 }
 
 /// The salt of [`VertexSampler::begin_path`]'s seed: the sampler's stream starts away from
@@ -309,7 +317,21 @@ pub fn trace_path<S: VertexSampler>(
     // The weight of the emission the last sampled direction meets: 1/(K + 1) beside the K
     // emission-only directions of its vertex (a guide's, without light sampling).
     let mut share = 1.0;
-    while let Some(hit) = scene.intersect(o, d, 0.0, f32::INFINITY) {
+    // The normal of the vertex that sampled the current ray (for the density with which a
+    // light sample of the environment would have found it).
+    let mut last_normal = Vec3::ZERO;
+    loop {
+        let Some(hit) = scene.intersect(o, d, 0.0, f32::INFINITY) else {
+            if scene.environment != Vec3::ZERO {
+                let weight = environment_weight(scene, method, last_pdf, last_normal, d);
+                radiance += throughput * scene.environment * weight;
+                if let Some(r) = previous_record(&mut recorded, depth) {
+                    r.discarded += throughput * scene.environment * (1.0 - weight);
+                    r.environment_weight = weight;
+                }
+            }
+            break;
+        };
         let tri = scene.bvh.triangles[hit.triangle as usize];
         let material = scene.material_at(&hit);
         let (area, n_front, cos_front) = front_face(&tri, d);
@@ -384,6 +406,7 @@ pub fn trace_path<S: VertexSampler>(
         throughput *= sample.weight;
         record_vertex(&mut recorded, depth, vertex, sample, before, throughput);
         last_pdf = sample.pdf;
+        last_normal = normal;
         o = origin_next;
         d = sample.direction;
         depth += 1;
@@ -391,7 +414,7 @@ pub fn trace_path<S: VertexSampler>(
             break;
         }
     }
-    report_recorded(sampler, &recorded, radiance, bounces);
+    report_recorded(sampler, &recorded, radiance, bounces, scene.environment);
     radiance
 }
 
@@ -500,6 +523,7 @@ fn record_vertex(
             throughput,
             discarded: Vec3::ZERO,
             next: None,
+            environment_weight: 1.0,
         });
     }
 }
@@ -539,6 +563,20 @@ fn emitter_weight(
     }
 }
 
+/// The weight of the environment seen along `d` by a ray sampled with density `last_pdf` at a
+/// vertex of normal `normal`: the MIS weight against a light sample of the environment
+/// ([`Scene::environment_pmf`] × cos/π, [`environment_light`]) for methods that sample lights,
+/// else 1 (a guide's emission-only directions gather only emitting triangles, and the camera
+/// ray has no alternative).
+fn environment_weight(scene: &Scene, method: Method, last_pdf: f32, normal: Vec3, d: Vec3) -> f32 {
+    if last_pdf > 0.0 && method.samples_lights() {
+        let light_pdf = scene.environment_pmf * cosine_hemisphere_pdf(normal, d);
+        power_heuristic(last_pdf, light_pdf)
+    } else {
+        1.0
+    }
+}
+
 /// Reports every recorded vertex to the sampler with the radiance its sample gained, in
 /// path order, once the path's total `radiance` of a path of at most `bounces` scattering
 /// events is known.
@@ -547,6 +585,7 @@ fn report_recorded<S: VertexSampler>(
     recorded: &[Option<Recorded>],
     radiance: Vec3,
     bounces: u32,
+    environment: Vec3,
 ) {
     for r in recorded.iter().flatten() {
         let Recorded {
@@ -556,6 +595,7 @@ fn report_recorded<S: VertexSampler>(
             throughput,
             discarded,
             next,
+            environment_weight,
         } = r;
         let gained = radiance - *before + *discarded;
         let incident = Vec3::select(
@@ -572,6 +612,11 @@ fn report_recorded<S: VertexSampler>(
             sample: *sample,
             radiance: incident,
             next: *next,
+            escaped: if next.is_none() {
+                (environment, *environment_weight)
+            } else {
+                (Vec3::ZERO, 1.0)
+            },
             reflected,
         });
     }
@@ -592,19 +637,44 @@ fn light_sample<S: VertexSampler>(
     estimate * power_heuristic(light_pdf, sampler.pdf(vertex, wi))
 }
 
+/// A light sample of the environment at `vertex` ([`direct_light`]'s, picked with
+/// probability [`Scene::environment_pmf`]): a direction cosine-distributed about the vertex's
+/// normal (`u`), density `environment_pmf · cos/π`; `None` where the material reflects
+/// nothing along it or the scene blocks it.
+fn environment_light(
+    scene: &Scene,
+    vertex: &Vertex,
+    origin: Vec3,
+    u: [f32; 2],
+) -> Option<(Vec3, f32, Vec3)> {
+    let (wi, cos_pdf) = cosine_hemisphere(vertex.normal, Vec2::from(u));
+    let light_pdf = scene.environment_pmf * cos_pdf;
+    if !(light_pdf > 0.0) {
+        return None;
+    }
+    let f_cos = vertex.material.eval(vertex.normal, vertex.wo, wi);
+    if f_cos == Vec3::ZERO || scene.occluded(origin, wi, 0.0, f32::INFINITY) {
+        return None;
+    }
+    Some((f_cos * scene.environment / light_pdf, light_pdf, wi))
+}
+
 /// One light sample at `vertex` without MIS weight: the estimate `f·cos·L_e / p_light` of the
 /// light scattered at `vertex` toward `wo` straight from the emitters, the light sample's
 /// solid-angle density and its direction; `None` when the sample carries nothing (occluded,
-/// on the emitter's back face, or below the surface). An emitter triangle is picked in
-/// proportion to its power ([`Scene::pick_emitter`], `u[0]`) and a uniform point on it
-/// (`u[1]`, `u[2]`).
+/// on the emitter's back face, or below the surface). A light is picked by
+/// [`Scene::pick_light`] (`u[0]`): an emitter triangle in proportion to its power and a
+/// uniform point on it (`u[1]`, `u[2]`), or the environment ([`environment_light`]).
 pub(crate) fn direct_light(
     scene: &Scene,
     vertex: &Vertex,
     origin: Vec3,
     u: [f32; 3],
 ) -> Option<(Vec3, f32, Vec3)> {
-    let (t, pmf) = scene.pick_emitter(u[0]);
+    let (t, pmf) = match scene.pick_light(u[0]) {
+        Light::Environment => return environment_light(scene, vertex, origin, [u[1], u[2]]),
+        Light::Triangle(t, pmf) => (t, pmf),
+    };
     let tri = scene.bvh.triangles[t as usize];
     let su = u[1].sqrt();
     let (b1, b2) = (su * (1.0 - u[2]), su * u[2]);

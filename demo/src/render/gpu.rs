@@ -115,6 +115,12 @@ pub const ATTRIBUTES_DEF: &str = "MCG_DEMO_ATTRIBUTES";
 /// of its code. Every kernel follows the scene ([`GpuTracer::upload`]).
 pub const ALPHA_MASK_DEF: &str = "MCG_DEMO_ALPHA_MASK";
 
+/// The shader def that compiles the environment (`render --environment`,
+/// [`Scene::environment`]) into the light sample and the paths' escapes (WGSL `light_sample`,
+/// `trace_path`), set where the uploaded scene has one, as [`ATTRIBUTES_DEF`]: lavapipe's
+/// `nee` frame took 2-3 % longer with the code present in a scene without environment.
+pub const ENVIRONMENT_DEF: &str = "MCG_DEMO_ENVIRONMENT";
+
 /// The compile-time choices that the uploaded scene makes for the kernels that read it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SceneDefs {
@@ -122,6 +128,8 @@ pub struct SceneDefs {
     pub attributes: bool,
     /// [`ALPHA_MASK_DEF`]: the scene has alpha masks (and the attributes they read).
     pub alpha_mask: bool,
+    /// [`ENVIRONMENT_DEF`]: the scene has an environment.
+    pub environment: bool,
 }
 
 impl SceneDefs {
@@ -132,6 +140,7 @@ impl SceneDefs {
         Self {
             attributes,
             alpha_mask: attributes && scene.materials.iter().any(|m| m.alpha_cutoff > 0.0),
+            environment: scene.environment != Vec3::ZERO,
         }
     }
 
@@ -142,6 +151,9 @@ impl SceneDefs {
         }
         if self.alpha_mask {
             defs.push((ALPHA_MASK_DEF, 1));
+        }
+        if self.environment {
+            defs.push((ENVIRONMENT_DEF, 1));
         }
     }
 }
@@ -220,7 +232,7 @@ pub fn method_code(method: Method) -> Option<u32> {
 }
 
 /// The uniform block of the `render` kernel (`Params` in WGSL): the camera, the frame's
-/// settings and the tile of one dispatch. 192 bytes.
+/// settings and the tile of one dispatch. 208 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuParams {
@@ -283,6 +295,10 @@ pub struct GpuParams {
     /// `mcpg`'s emission-only directions per vertex of depth d in this frame (depth `4i + j`
     /// in `[i][j]`): [`frame_counts`] of the allocation's K(d); 0 for the other methods.
     pub emission_counts: [[u32; 4]; 4],
+    /// [`Scene::environment`]: the radiance of a ray that leaves the scene.
+    pub environment: [f32; 3],
+    /// [`Scene::environment_pmf`]: the probability that a light sample picks the environment.
+    pub environment_pmf: f32,
 }
 
 /// The salt of [`frame_counts`]' draws.
@@ -440,6 +456,10 @@ struct SceneBuffers {
     emitter_root: u32,
     /// [`GpuParams::emitter_first`].
     emitter_first: u32,
+    /// [`GpuParams::environment`].
+    environment: Vec3,
+    /// [`GpuParams::environment_pmf`].
+    environment_pmf: f32,
     nodes: GpuBuffer<BvhNode>,
     triangles: GpuBuffer<Triangle>,
     materials: GpuBuffer<Material>,
@@ -447,6 +467,24 @@ struct SceneBuffers {
     attributes: GpuBuffer<TriangleAttributes>,
     textures: GpuBuffer<TextureInfo>,
     texels: GpuBuffer<u32>,
+}
+
+impl SceneBuffers {
+    /// The fields of [`GpuParams`] that describe the scene (the rest zero): what every kernel
+    /// reads of it, written by [`GpuTracer::upload`] for kernels dispatched outside a frame
+    /// and by every frame.
+    fn params(&self) -> GpuParams {
+        GpuParams {
+            emitter_count: self.emitters.len() as u32,
+            emitter_first: self.emitter_first,
+            attribute_count: self.attributes.len() as u32,
+            texture_count: self.textures.len() as u32,
+            emitter_root: self.emitter_root,
+            environment: self.environment.to_array(),
+            environment_pmf: self.environment_pmf,
+            ..GpuParams::default()
+        }
+    }
 }
 
 /// Timestamp queries around each tile's pass.
@@ -1006,6 +1044,8 @@ impl GpuTracer {
             camera: scene.camera,
             emitter_root: scene.bvh.nodes.len() as u32,
             emitter_first: scene.bvh.triangles.len() as u32,
+            environment: scene.environment,
+            environment_pmf: scene.environment_pmf,
             nodes: ctx.storage_buffer("mcg-demo nodes", &nodes),
             triangles: ctx.storage_buffer("mcg-demo triangles", &triangles),
             materials: ctx.storage_buffer("mcg-demo materials", &scene.materials),
@@ -1014,6 +1054,7 @@ impl GpuTracer {
             textures: ctx.storage_buffer("mcg-demo textures", &scene.textures),
             texels: ctx.storage_buffer("mcg-demo texels", &scene.texels),
         });
+        self.ctx.write(&self.params, &[self.scene()?.params()])?;
         self.set_guided_defs(GuidedDefs {
             emitter_list: scene.emitters.len() <= EMITTER_LIST_MAX,
             scene: SceneDefs::of(scene),
@@ -1170,11 +1211,6 @@ impl GpuTracer {
             seed: settings.seed,
             frame,
             method,
-            emitter_count: scene.emitters.len() as u32,
-            emitter_first: scene.emitter_first,
-            attribute_count: scene.attributes.len() as u32,
-            texture_count: scene.textures.len() as u32,
-            emitter_root: scene.emitter_root,
             // Read by the guided pipelines only (`MCPG_DEF`).
             mcpg_reflected: u32::from(self.mcpg_reflected == Reflected::Path),
             moment_stride,
@@ -1187,7 +1223,7 @@ impl GpuTracer {
             } else {
                 [[0; 4]; 4]
             },
-            ..GpuParams::default()
+            ..scene.params()
         })
     }
 
@@ -1287,14 +1323,15 @@ impl GpuTracer {
     /// from what they were compiled with (`mcpg-nee`'s pipeline is made on its next frame);
     /// with [`GuidedDefs::scene`] changed, the `bsdf` kernels and `mcmm`'s pipeline around its
     /// guide too (`nee`'s and the segments' kernels are made on their next use), and the
-    /// probes' when the scene's masks change (made on the next probe frame, with a fresh
-    /// cache).
+    /// probes' when the scene's masks or environment change (made on the next probe frame,
+    /// with a fresh cache).
     fn set_guided_defs(&mut self, defs: GuidedDefs) -> Result<()> {
         if defs == self.guided_defs {
             return Ok(());
         }
         let scene_changed = defs.scene != self.guided_defs.scene;
-        if defs.scene.alpha_mask != self.guided_defs.scene.alpha_mask {
+        let probe_defs = |d: GuidedDefs| (d.scene.alpha_mask, d.scene.environment);
+        if probe_defs(defs) != probe_defs(self.guided_defs) {
             self.probe_module = None;
             self.probes = None;
         }
@@ -1536,17 +1573,8 @@ impl GpuTracer {
         let queries = self.ctx.storage_buffer("mcg-demo rays", rays);
         let hits: GpuBuffer<GpuHit> = self.ctx.zeroed_buffer("mcg-demo hits", rays.len());
         let bind_group = if self.guided_defs.scene.alpha_mask {
-            // The alpha test reads the scene's materials, attributes and textures, and
-            // where they end (`GpuParams`).
-            let params = GpuParams {
-                emitter_count: scene.emitters.len() as u32,
-                emitter_first: scene.emitter_first,
-                attribute_count: scene.attributes.len() as u32,
-                texture_count: scene.textures.len() as u32,
-                emitter_root: scene.emitter_root,
-                ..GpuParams::default()
-            };
-            self.ctx.write(&self.params, &[params])?;
+            // The alpha test reads the scene's materials, attributes and textures, and where
+            // they end (`GpuParams`, as `upload` wrote them).
             self.bind_group(
                 kernel.entry_point(),
                 kernel.bind_group_layout(),
@@ -1771,10 +1799,11 @@ mod tests {
         let masked = SceneDefs {
             attributes: true,
             alpha_mask: true,
+            environment: true,
         };
         let textured = SceneDefs {
             attributes: true,
-            alpha_mask: false,
+            ..SceneDefs::default()
         };
         for (lights, scene) in [
             (true, SceneDefs::default()),
@@ -1844,6 +1873,6 @@ mod tests {
             .map(|(h, _)| h)
             .unwrap();
         assert_eq!(layouter[params].size as usize, size_of::<GpuParams>());
-        assert_eq!(size_of::<GpuParams>(), 192);
+        assert_eq!(size_of::<GpuParams>(), 208);
     }
 }

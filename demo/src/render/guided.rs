@@ -459,14 +459,12 @@ impl VertexSampler for McpgSampler<'_> {
         let weight = o.sample.weight;
         let mut seen = match o.next {
             Some(hit) => VertexObservation::hit(hit.position, hit.normal, hit.emitted, weight),
-            None => VertexObservation::escaped(Vec3::ZERO, weight),
+            None => VertexObservation::escaped(o.escaped.0, weight),
         };
         if self.reflected == Reflected::Path {
             seen.reflected = o.reflected;
         }
-        if let Some(hit) = o.next {
-            seen.emission_weight = hit.emission_weight;
-        }
+        seen.emission_weight = o.next.map_or(o.escaped.1, |hit| hit.emission_weight);
         pending.finish(&seen, &self.rng.finish());
     }
 }

@@ -415,7 +415,7 @@ impl McmmRenderer {
         );
         let origin = scene.camera.position;
         let Some(hit) = scene.intersect(origin, d, 0.0, f32::INFINITY) else {
-            return Vec3::ZERO;
+            return scene.environment;
         };
         let tri = scene.bvh.triangles[hit.triangle as usize];
         let material = scene.material_at(&hit);
@@ -475,7 +475,7 @@ fn lane_pixel(settings: &RenderSettings, tile: u32, lane: usize) -> Option<(u32,
 }
 
 /// The point the ray `(origin, w)` hits and the radiance it carries back (front faces emit);
-/// `origin + w` and zero when it leaves the scene.
+/// `origin + w` and the environment's radiance when it leaves the scene.
 fn emitter_along(scene: &Scene, origin: Vec3, w: Vec3) -> (Vec3, Vec3) {
     match scene.intersect(origin, w, 0.0, f32::INFINITY) {
         Some(hit) => {
@@ -487,7 +487,7 @@ fn emitter_along(scene: &Scene, origin: Vec3, w: Vec3) -> (Vec3, Vec3) {
             };
             (origin + hit.t * w, emitted)
         }
-        None => (origin + w, Vec3::ZERO),
+        None => (origin + w, scene.environment),
     }
 }
 

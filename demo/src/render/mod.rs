@@ -164,6 +164,13 @@ pub struct RenderArgs {
     /// the chain's own technique density (with the paper's p_h = 0.2).
     #[arg(long, value_enum, default_value_t = McmmScore::TileMixture)]
     pub mcmm_score: McmmScore,
+    /// A uniform environment of radiance `R,G,B` (linear, W·sr⁻¹·m⁻² per channel) around the
+    /// scene: what a ray that leaves it sees ([`scene::Scene::environment`]; glTF has no
+    /// environment). A scene lit by it needs no emissive material; `nee` samples it with
+    /// cosine-distributed directions ([`scene::ENVIRONMENT_PICK`] of its light samples where
+    /// the scene also has emitters).
+    #[arg(long, value_parser = parse_rgb)]
+    pub environment: Option<Vec3>,
     /// Probe GI and per-state reference options.
     #[command(flatten)]
     pub probes: ProbeOptions,
@@ -220,6 +227,23 @@ fn parse_seed(v: &str) -> Result<u64, String> {
         None => v.parse(),
     }
     .map_err(|_| format!("not a number: {v}"))
+}
+
+/// `--environment`: three comma-separated non-negative numbers, `R,G,B`.
+fn parse_rgb(v: &str) -> Result<Vec3, String> {
+    let channels: Vec<f32> = v
+        .split(',')
+        .map(|c| {
+            c.trim()
+                .parse::<f32>()
+                .map_err(|_| format!("not a number: {c}"))
+        })
+        .collect::<Result<_, _>>()?;
+    match channels[..] {
+        [r, g, b] if [r, g, b].iter().all(|c| c.is_finite() && *c >= 0.0) => Ok(Vec3::new(r, g, b)),
+        [_, _, _] => Err(format!("{v}: channels must be finite and non-negative")),
+        _ => Err(format!("{v}: expected R,G,B")),
+    }
 }
 
 /// `--mcpg-alpha-min`: a blend factor in [0, 1] (0 gives a plain running mean up to N_max).
@@ -369,7 +393,10 @@ pub struct Rendered {
 /// # Errors
 /// Scene errors ([`scene::SceneError`]), an unreadable reference or one of another size.
 pub fn render(args: &RenderArgs) -> Result<Rendered> {
-    let file = SceneFile::open(&args.scene)?;
+    let mut file = SceneFile::open(&args.scene)?;
+    if let Some(radiance) = args.environment {
+        file = file.with_environment(radiance)?;
+    }
     let reference = read_reference(args)?;
     let reference_own_error = read_reference_own_error(args, reference.as_ref())?;
     let settings = render_settings(args)?;
@@ -736,6 +763,16 @@ pub fn mcpg_config(scene: &Scene, args: &RenderArgs) -> GuideConfig {
     config
 }
 
+/// `mcpg`'s emission-only directions per vertex: `--mcpg-emission-samples`, or none in a scene
+/// lit by its environment alone, where they have no emitting triangle to find.
+fn emission_samples(args: &RenderArgs, scene: &Scene) -> u32 {
+    if scene.emitters.is_empty() {
+        0
+    } else {
+        args.mcpg_emission_samples
+    }
+}
+
 /// Starts the method's guide on the GPU when `gpu` holds a tracer (under `--device auto`, a
 /// guide the GPU cannot run drops `gpu` with a one-line message), else on the CPU.
 fn start_guide(
@@ -755,7 +792,7 @@ fn start_guide(
         let started = match args.method {
             Method::Mcpg | Method::McpgNee => {
                 g.set_mcpg_reflected(reflected);
-                g.set_mcpg_emission_samples(args.mcpg_emission_samples);
+                g.set_mcpg_emission_samples(emission_samples(args, scene));
                 g.set_mcpg_emission_allocation(args.mcpg_emission_allocation);
                 g.start_mcpg(&mcpg_config(scene, args))
             }
@@ -788,7 +825,7 @@ fn start_guide(
                 Box::new(guide),
                 reflected,
                 Box::new(EmissionAllocation::new(
-                    args.mcpg_emission_samples,
+                    emission_samples(args, scene),
                     args.mcpg_emission_allocation,
                 )),
             )

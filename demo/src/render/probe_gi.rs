@@ -134,6 +134,8 @@ impl ShadingProbes {
             radiance: Vec3::ZERO,
             distance: f32::INFINITY,
         };
+        // Probes hold reflected light only: emission, the environment's included, is the
+        // shading point's light sample's.
         let Some(hit) = scene.intersect(origin, direction, 0.0, f32::INFINITY) else {
             return miss;
         };
@@ -165,7 +167,7 @@ impl ShadingProbes {
         let u = [next_uniform(rng), next_uniform(rng), next_uniform(rng)];
         let o = scene.camera.position;
         let Some(hit) = scene.intersect(o, d, 0.0, f32::INFINITY) else {
-            return Vec3::ZERO;
+            return scene.environment;
         };
         let tri = scene.bvh.triangles[hit.triangle as usize];
         let (_, n_front, cos_front) = front_face(&tri, d);

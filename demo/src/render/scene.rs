@@ -38,7 +38,10 @@
 //!   the time of the frame ([`frame_time`]); the dynamic built-in scene uses them.
 //!
 //! Conventions (glTF 2.0): metres, radians, linear scene-referred RGB radiance; emission from
-//! the front face only (counter-clockwise winding seen from the front).
+//! the front face only (counter-clockwise winding seen from the front). glTF has no
+//! environment: [`SceneFile::with_environment`] (`render --environment R,G,B`) adds a uniform
+//! one ([`Scene::environment`]), seen by every ray that leaves the scene, which light sampling
+//! picks with [`Scene::environment_pmf`] and samples with cosine-distributed directions.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -160,7 +163,7 @@ impl fmt::Display for SceneError {
             Self::NoEmitters { path } => write!(
                 f,
                 "{}: no emitters — no material has a positive emissiveFactor, so the image \
-                 would be black",
+                 would be black (--environment R,G,B lights it from outside)",
                 path.display()
             ),
             Self::MissingPositions { path, mesh } => write!(
@@ -245,6 +248,8 @@ pub struct SceneFile {
     images: Vec<(usize, u32, u32, Vec<u32>)>,
     /// The textures the materials read ([`Scene::textures`]).
     textures: Vec<TextureUse>,
+    /// [`Scene::environment`] of the scenes it builds.
+    environment: Vec3,
 }
 
 /// What a material's texture slot reads: an image (its index in the document) through a map
@@ -298,6 +303,19 @@ impl TextureInfo {
     pub fn mapped(&self, [u, v]: [f32; 2]) -> [f32; 2] {
         self.map.map(|[a, b, c, _]| a * u + b * v + c)
     }
+}
+
+/// [`Scene::environment_pmf`] of a scene with both an environment and emitting triangles.
+pub const ENVIRONMENT_PICK: f32 = 0.5;
+
+/// What light sampling picked ([`Scene::pick_light`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Light {
+    /// The environment, with probability [`Scene::environment_pmf`].
+    Environment,
+    /// An emitting triangle (its index in the scene's tree, leaf order) and the probability
+    /// of picking it ([`Triangle::emitter_pmf`]).
+    Triangle(u32, f32),
 }
 
 /// The barycentric points (b1, b2) at which [`Scene::weigh_emitters_by_texture`] reads an
@@ -434,6 +452,14 @@ pub struct Scene {
     /// Inclusive cumulative distribution over `emitters`, proportional to each triangle's
     /// emitted power `area × luminance(L_e)`; the last entry is 1.
     pub emitter_cdf: Vec<f32>,
+    /// The radiance that arrives from outside the scene along every direction (a uniform
+    /// environment, as a sky seen through the scene's openings), linear RGB: what a ray that
+    /// leaves the scene sees. Zero (the default) for none.
+    pub environment: Vec3,
+    /// The probability that light sampling picks the environment rather than a triangle
+    /// ([`Scene::pick_light`]): 0 without an environment, 1 without emitting triangles, else
+    /// [`ENVIRONMENT_PICK`]. The triangles' [`Triangle::emitter_pmf`] sum to 1 − this.
+    pub environment_pmf: f32,
     /// Texture coordinates and vertex colours per triangle, in the order of `bvh.triangles`
     /// (empty when no material has a texture and no primitive has colours).
     pub attributes: Vec<TriangleAttributes>,
@@ -489,7 +515,25 @@ impl SceneFile {
             buffers,
             images,
             textures,
+            environment: Vec3::ZERO,
         })
+    }
+
+    /// The file lit by a uniform environment of radiance `radiance` too ([`Scene::environment`];
+    /// glTF has none): the scenes it builds need no emitting triangle then. Non-finite or
+    /// negative channels are an error.
+    ///
+    /// # Errors
+    /// [`SceneError::NonFinite`] for a radiance that is not finite and non-negative.
+    pub fn with_environment(mut self, radiance: Vec3) -> Result<Self, SceneError> {
+        if !(radiance.is_finite() && radiance.min_element() >= 0.0) {
+            return Err(SceneError::NonFinite {
+                path: self.path.clone(),
+                what: format!("the environment radiance {radiance}"),
+            });
+        }
+        self.environment = radiance;
+        Ok(self)
     }
 
     /// The file's path.
@@ -550,7 +594,7 @@ impl SceneFile {
         if triangles.is_empty() {
             return Err(SceneError::NoTriangles { path: path.clone() });
         }
-        let mut scene = Scene::new(camera, &triangles, materials, warnings)
+        let mut scene = Scene::new_lit(camera, &triangles, materials, warnings, self.environment)
             .ok_or_else(|| SceneError::NoEmitters { path: path.clone() })?;
         let depth = scene.bvh.depth();
         if depth > super::bvh::STACK_SIZE {
@@ -1107,6 +1151,19 @@ impl Scene {
         materials: Vec<Material>,
         warnings: Vec<String>,
     ) -> Option<Self> {
+        Self::new_lit(camera, triangles, materials, warnings, Vec3::ZERO)
+    }
+
+    /// [`Scene::new`] lit by a uniform environment of radiance `environment` too
+    /// ([`Scene::environment`]); `None` when no triangle emits and the environment is black.
+    #[must_use]
+    pub fn new_lit(
+        camera: Camera,
+        triangles: &[Triangle],
+        materials: Vec<Material>,
+        warnings: Vec<String>,
+        environment: Vec3,
+    ) -> Option<Self> {
         let bvh = Bvh::build(triangles);
         let mut emitters = Vec::new();
         let mut power = Vec::new();
@@ -1117,7 +1174,7 @@ impl Scene {
                 power.push(p);
             }
         }
-        if emitters.is_empty() {
+        if emitters.is_empty() && !(luminance(environment) > 0.0) {
             return None;
         }
         let emitter_triangles: Vec<Triangle> = emitters
@@ -1134,28 +1191,61 @@ impl Scene {
             materials,
             emitters,
             emitter_cdf: Vec::new(),
+            environment: Vec3::ZERO,
+            environment_pmf: 0.0,
             attributes: Vec::new(),
             textures: Vec::new(),
             texels: Vec::new(),
             warnings,
         };
         scene.set_emitter_power(&power);
+        scene.set_environment(environment);
         Some(scene)
     }
 
+    /// Lights the scene by a uniform environment of radiance `radiance` ([`Scene::environment`];
+    /// zero for none) and shares light selection between it and the emitting triangles
+    /// ([`Scene::environment_pmf`]; the triangles keep their ratios). A scene without
+    /// emitting triangles and a black environment renders black.
+    pub fn set_environment(&mut self, radiance: Vec3) {
+        let lit = luminance(radiance) > 0.0;
+        let pmf = if self.emitters.is_empty() {
+            1.0
+        } else if lit {
+            ENVIRONMENT_PICK
+        } else {
+            0.0
+        };
+        if !self.emitters.is_empty() {
+            let scale = (1.0 - pmf) / (1.0 - self.environment_pmf);
+            for &i in &self.emitters {
+                self.bvh.triangles[i as usize].emitter_pmf *= scale;
+            }
+            for copy in &mut self.emitter_bvh.triangles {
+                copy.emitter_pmf = self.bvh.triangles[copy.source as usize].emitter_pmf;
+            }
+        }
+        self.environment = if lit { radiance } else { Vec3::ZERO };
+        self.environment_pmf = pmf;
+    }
+
     /// Light selection proportional to `power` (one value per [`Scene::emitters`], all
-    /// positive): [`Scene::emitter_cdf`] and the emitters' [`Triangle::emitter_pmf`], in the
-    /// scene's tree and in the emitters' tree of copies (whose shape does not depend on it).
+    /// positive): [`Scene::emitter_cdf`] and the emitters' [`Triangle::emitter_pmf`] (which
+    /// leave [`Scene::environment_pmf`] to the environment), in the scene's tree and in the
+    /// emitters' tree of copies (whose shape does not depend on it).
     fn set_emitter_power(&mut self, power: &[f32]) {
         let total: f64 = power.iter().map(|&p| f64::from(p)).sum();
+        let share = f64::from(1.0 - self.environment_pmf);
         let mut acc = 0.0;
         self.emitter_cdf.clear();
         for (&i, &p) in self.emitters.iter().zip(power) {
             acc += f64::from(p);
             self.emitter_cdf.push((acc / total) as f32);
-            self.bvh.triangles[i as usize].emitter_pmf = (f64::from(p) / total) as f32;
+            self.bvh.triangles[i as usize].emitter_pmf = (share * f64::from(p) / total) as f32;
         }
-        *self.emitter_cdf.last_mut().expect("a scene has emitters") = 1.0;
+        if let Some(last) = self.emitter_cdf.last_mut() {
+            *last = 1.0;
+        }
         for copy in &mut self.emitter_bvh.triangles {
             copy.emitter_pmf = self.bvh.triangles[copy.source as usize].emitter_pmf;
         }
@@ -1325,15 +1415,22 @@ impl Scene {
         &self.materials[self.bvh.triangles[triangle as usize].material as usize]
     }
 
-    /// Picks an emitter from a uniform `u ∈ [0, 1)` by binary search in
-    /// [`Scene::emitter_cdf`]: its triangle index and probability.
+    /// Picks a light from a uniform `u ∈ [0, 1)`: the environment where `u` is below
+    /// [`Scene::environment_pmf`], else an emitting triangle by binary search in
+    /// [`Scene::emitter_cdf`] for `u` rescaled to [0, 1) past it (`u` itself without an
+    /// environment).
     #[must_use]
-    pub fn pick_emitter(&self, u: f32) -> (u32, f32) {
+    pub fn pick_light(&self, u: f32) -> Light {
+        let p = self.environment_pmf;
+        if u < p || self.emitters.is_empty() {
+            return Light::Environment;
+        }
+        let u = if p > 0.0 { (u - p) / (1.0 - p) } else { u };
         let k = self
             .emitter_cdf
             .partition_point(|&c| c <= u)
             .min(self.emitters.len() - 1);
         let t = self.emitters[k];
-        (t, self.bvh.triangles[t as usize].emitter_pmf)
+        Light::Triangle(t, self.bvh.triangles[t as usize].emitter_pmf)
     }
 }

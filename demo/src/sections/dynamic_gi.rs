@@ -148,6 +148,7 @@ fn args(
         mcpg_alpha_min: crate::render::guided::ALPHA_MIN,
         ramp_frames: 1,
         mcmm_score: McmmScore::TileMixture,
+        environment: None,
         probes: ProbeOptions {
             probe_spacing: s.probe_spacing,
             probe_rays: s.probe_rays,

@@ -196,6 +196,7 @@ fn args(
         mcpg_alpha_min: crate::render::guided::ALPHA_MIN,
         ramp_frames: 1,
         mcmm_score: McmmScore::TileMixture,
+        environment: None,
         probes: ProbeOptions::default(),
     }
 }

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use mcg_demo::render::bvh::Triangle;
-use mcg_demo::render::cpu::Method;
+use mcg_demo::render::cpu::{Method, RenderSettings};
 use mcg_demo::render::material::Material;
 use mcg_demo::render::mcmm::McmmScore;
 use mcg_demo::render::scene::{Camera, Scene, TextureInfo, TriangleAttributes, WRAP_REPEAT};
@@ -109,6 +109,60 @@ pub fn masked_furnace() -> Scene {
     scene.materials[0].alpha_cutoff = 0.5;
     scene.texels[2] = 0x0080_8080;
     scene
+}
+
+/// A Lambertian floor of albedo `rho` (a 200 m square at y = 0, facing up) under a uniform
+/// environment of radiance `sky`, seen by a camera 1 m above it looking straight down (every
+/// pixel sees the floor) or, with `up`, straight up (every pixel sees the sky). Below the
+/// floor an emitting triangle faces down, away from everything the camera sees: light
+/// sampling picks it half of the time ([`ENVIRONMENT_PICK`](mcg_demo::render::scene::ENVIRONMENT_PICK))
+/// and finds its back face. The floor's upper hemisphere is all sky, so every pixel's radiance
+/// is ρ·L_env (looking down, any B ≥ 1) or L_env (looking up).
+pub fn sky_floor(rho: Vec3, sky: Vec3, up: bool) -> Scene {
+    let c = [
+        (-100.0, -100.0),
+        (100.0, -100.0),
+        (100.0, 100.0),
+        (-100.0, 100.0),
+    ]
+    .map(|(x, z)| Vec3::new(x, 0.0, z));
+    // Counter-clockwise seen from above: the front face points up.
+    let below = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)].map(|(x, z)| Vec3::new(x, -1.0, z));
+    let tris = [
+        Triangle::new(c[0], c[3], c[2], 0),
+        Triangle::new(c[0], c[2], c[1], 0),
+        Triangle::new(below[0], below[1], below[2], 1),
+    ];
+    assert!(
+        tris[..2].iter().all(|t| t.cross().y > 0.0),
+        "the floor faces up"
+    );
+    assert!(tris[2].cross().y < 0.0, "the hidden emitter faces down");
+    let forward = if up { Vec3::Y } else { Vec3::NEG_Y };
+    let camera = Camera {
+        position: Vec3::new(0.3, 1.0, -0.2),
+        right: Vec3::X,
+        up: if up { Vec3::NEG_Z } else { Vec3::Z },
+        forward,
+        yfov: 1.0,
+    };
+    let materials = vec![
+        Material::lambertian(rho, Vec3::ZERO),
+        Material::lambertian(Vec3::ZERO, Vec3::splat(5.0)),
+    ];
+    Scene::new_lit(camera, &tris, materials, Vec::new(), sky).unwrap()
+}
+
+/// The settings of the environment furnace tests: 16×16 pixels × 16 spp, seed 5.
+pub fn sky_settings(method: Method, bounces: u32) -> RenderSettings {
+    RenderSettings {
+        width: 16,
+        height: 16,
+        spp: 16,
+        bounces,
+        seed: 5,
+        method,
+    }
 }
 
 /// The mean image of one run's `frames` frames, `frame(f)` rendering frame `f` (a guided
@@ -297,6 +351,7 @@ pub fn door_args(method: Method, out: PathBuf, frames: u32) -> RenderArgs {
         mcpg_alpha_min: mcg_demo::render::guided::ALPHA_MIN,
         ramp_frames: 1,
         mcmm_score: McmmScore::TileMixture,
+        environment: None,
         probes: ProbeOptions {
             probe_spacing: 1.0,
             probe_rays: 16,

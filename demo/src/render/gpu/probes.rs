@@ -335,18 +335,19 @@ pub(super) struct GpuProbes {
 
 /// The tracer's WGSL for the probe methods: `render` and `trace_probe_rays` with
 /// [`PROBE_GI_DEF`], `mcg::adgi` at [`GUIDE_GROUP`] (`mcg::mcpg` and `mcg::mcmm` at unused
-/// groups), with the attributes' code and, where `alpha_mask`, the alpha test
-/// ([`super::ALPHA_MASK_DEF`]).
+/// groups), with the attributes' code and the other defs of `scene` (the alpha test, the
+/// environment).
 ///
 /// # Errors
 /// When composition fails (an unknown import).
-pub fn composed_probe_shader(alpha_mask: bool) -> Result<String> {
+pub fn composed_probe_shader(scene: super::SceneDefs) -> Result<String> {
     let mut defs = guide_defs(UNUSED_GROUP, MCMM_UNUSED_GROUP, GUIDE_GROUP);
     defs.push((PROBE_GI_DEF, 1));
-    defs.push((super::ATTRIBUTES_DEF, 1));
-    if alpha_mask {
-        defs.push((super::ALPHA_MASK_DEF, 1));
+    super::SceneDefs {
+        attributes: true,
+        ..scene
     }
+    .push_to(&mut defs);
     Ok(mcg_gpu_backend::shaders::compose(super::SHADER, &defs)?)
 }
 
@@ -435,7 +436,7 @@ impl GpuTracer {
         let ctx = &self.ctx;
         let cache = GpuProbeCache::new(ctx, &config)?;
         if self.probe_module.is_none() {
-            let source = composed_probe_shader(self.guided_defs.scene.alpha_mask)?;
+            let source = composed_probe_shader(self.guided_defs.scene)?;
             self.probe_module = Some(self.module("mcg-demo probe gi", source));
         }
         let module = self.probe_module.as_ref().expect("compiled above");
@@ -1103,7 +1104,12 @@ mod tests {
     /// the requests; the host structs have the WGSL sizes.
     #[test]
     fn probe_shader_validates_without_an_adapter() {
-        let source = composed_probe_shader(true).unwrap();
+        let all = super::super::SceneDefs {
+            attributes: true,
+            alpha_mask: true,
+            environment: true,
+        };
+        let source = composed_probe_shader(all).unwrap();
         let module = naga::front::wgsl::parse_str(&source)
             .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
         let info = naga::valid::Validator::new(

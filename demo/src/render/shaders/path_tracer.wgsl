@@ -141,6 +141,10 @@ struct Params {
     // `mcpg`'s emission-only directions per vertex of depth d = 4i + j in [i][j] this frame
     // (`gpu::frame_counts`).
     emission_counts: array<vec4<u32>, 4>,
+    // `Scene::environment`: the radiance of a ray that leaves the scene.
+    environment: vec3<f32>,
+    // `Scene::environment_pmf`: the probability that a light sample picks the environment.
+    environment_pmf: f32,
 }
 
 // `gpu::GpuRay`: a query of the `trace_rays` kernel (closest hit, or any hit when `any_hit`).
@@ -864,40 +868,81 @@ fn emission_uniforms(first: vec3<f32>, i: u32) -> vec3<f32> {
 var<private> moment_base: u32;
 const NO_MOMENTS: u32 = 0xffffffffu;
 
-// `cpu::light_sample` before its MIS weight, which the caller applies against the density of
-// its own direction sampler (the material's, or the guide's mixture for `mcpg-nee`).
+// `cpu::direct_light`: a light sample before its MIS weight, which the caller applies against
+// the density of its own direction sampler (the material's, or the guide's mixture for
+// `mcpg-nee`). `Scene::pick_light`: the environment below `environment_pmf` (a direction
+// cosine-distributed about the vertex's normal, `cpu::environment_light`), else a triangle.
+// Both kinds share one shadow walk, so that the kernel holds one walk's code here, and the
+// environment's part is compiled only for scenes that have one (MCG_DEMO_ENVIRONMENT,
+// `gpu::ENVIRONMENT_DEF`): llvmpipe pays for code present, taken or not (a walk of its own for
+// the environment cost lavapipe's `nee` frame 9 %, the shared walk 2-3 %).
 fn light_sample(v: Vertex, origin: vec3<f32>, u: vec3<f32>) -> LightSample {
     let none = LightSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0);
-    let t = pick_emitter(u.x);
-    let tri = triangles[t];
-    let su = sqrt(u.y);
-    let b = vec2<f32>(su * (1.0 - u.z), su * u.z);
-    let y = tri.v0 + b.x * tri.e1 + b.y * tri.e2;
-    let to_light = y - origin;
-    let dist2 = dot(to_light, to_light);
-    let dist = sqrt(dist2);
-    let wi = to_light / dist;
-    let c = cross(tri.e1, tri.e2);
-    let area = 0.5 * length(c);
-    let cos_light = -dot(c / (2.0 * area), wi);
-    if !(cos_light > 0.0) || dot(v.normal, wi) <= 0.0 {
-        return none;
+    let p = params.environment_pmf;
+    var environment = false;
+    var wi: vec3<f32>;
+    var t_max = FAR;
+    var light_pdf: f32;
+    var hit = RayHit(0.0, NO_HIT, 0.0, 0.0);
+#ifdef MCG_DEMO_ENVIRONMENT
+    environment = u.x < p || params.emitter_count == 0u;
+    if environment {
+        let s = mcg_cosine_hemisphere_sample(v.normal, u.yz);
+        wi = s.direction;
+        light_pdf = p * s.pdf;
+        if !(light_pdf > 0.0) {
+            return none;
+        }
+    }
+#endif
+    if !environment {
+        let t = pick_emitter(select(u.x, (u.x - p) / (1.0 - p), p > 0.0));
+        let tri = triangles[t];
+        let su = sqrt(u.y);
+        let b = vec2<f32>(su * (1.0 - u.z), su * u.z);
+        let y = tri.v0 + b.x * tri.e1 + b.y * tri.e2;
+        let to_light = y - origin;
+        let dist2 = dot(to_light, to_light);
+        let dist = sqrt(dist2);
+        wi = to_light / dist;
+        let c = cross(tri.e1, tri.e2);
+        let area = 0.5 * length(c);
+        let cos_light = -dot(c / (2.0 * area), wi);
+        if !(cos_light > 0.0) || dot(v.normal, wi) <= 0.0 {
+            return none;
+        }
+        hit = RayHit(dist, t, b.x, b.y);
+#ifdef MCG_DEMO_ALPHA_MASK
+        if !is_surface_at(tri.material, hit) {
+            return none;
+        }
+#endif
+        t_max = dist * (1.0 - 1e-4);
+        light_pdf = tri.emitter_pmf / area * dist2 / cos_light;
     }
     let f_cos = material_eval(v.material, v.normal, v.wo, wi);
     if all(f_cos == vec3<f32>(0.0)) {
         return none;
     }
-#ifdef MCG_DEMO_ALPHA_MASK
-    if !is_surface_at(tri.material, RayHit(dist, t, b.x, b.y)) {
+    if bvh_walk(origin, wi, 0.0, t_max, true).triangle != NO_HIT {
         return none;
     }
-#endif
-    if bvh_walk(origin, wi, 0.0, dist * (1.0 - 1e-4), true).triangle != NO_HIT {
-        return none;
+    if environment {
+        return LightSample(f_cos * params.environment / light_pdf, wi, light_pdf);
     }
-    let light_pdf = tri.emitter_pmf / area * dist2 / cos_light;
-    let emitted = triangle_emission(tri.material, RayHit(dist, t, b.x, b.y));
+    let emitted = triangle_emission(triangles[hit.triangle].material, hit);
     return LightSample(f_cos * emitted / light_pdf, wi, light_pdf);
+}
+
+// `cpu::environment_weight`: the weight of the environment seen along `d` by a ray sampled
+// with density `last_pdf` at a vertex of normal `normal` (MIS against its light sample for
+// the methods that sample lights, else 1).
+fn environment_weight(last_pdf: f32, normal: vec3<f32>, d: vec3<f32>) -> f32 {
+    if samples_lights() && last_pdf > 0.0 {
+        let light_pdf = params.environment_pmf * mcg_cosine_hemisphere_pdf(normal, d);
+        return power_heuristic(last_pdf, light_pdf);
+    }
+    return 1.0;
 }
 
 // One path from the camera ray (origin, direction); its radiance.
@@ -910,6 +955,11 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
     var last_pdf = 0.0;
     // 1/(K + 1) of the vertex that sampled the ray, K its emission-only directions.
     var last_share = 1.0;
+    // The normal of the vertex that sampled the ray (`environment_weight`).
+    var last_normal = vec3<f32>(0.0);
+    // The environment seen where the last ray left the scene, and its MIS weight.
+    var escaped = vec3<f32>(0.0);
+    var escaped_weight = 1.0;
     var depth = 0u;
 #ifdef MCG_DEMO_MCPG
     var grng = mcg_pcg_hash(*rng ^ SAMPLER_SALT);
@@ -931,6 +981,11 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
     loop {
         let hit = bvh_walk(o, d, 0.0, FAR, false);
         if hit.triangle == NO_HIT {
+#ifdef MCG_DEMO_ENVIRONMENT
+            escaped = params.environment;
+            escaped_weight = environment_weight(last_pdf, last_normal, d);
+            radiance += throughput * escaped * escaped_weight;
+#endif
             break;
         }
         let tri = triangles[hit.triangle];
@@ -1086,6 +1141,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
 #endif
         throughput *= s.weight;
         last_pdf = s.pdf;
+        last_normal = normal;
         o = origin_next;
         d = s.direction;
         depth += 1u;
@@ -1095,11 +1151,13 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
     }
 #ifdef MCG_DEMO_MCPG
     // The last ray left the scene, or its weight ended the path (the CPU reports both as
-    // escaped, seeing nothing).
+    // escaped, seeing the environment).
+    var escape = mcpg_observation_escaped(escaped, open_weight);
+    escape.emission_weight = escaped_weight;
 #ifdef MCG_DEMO_HOLD_ALL
     if is_open {
-        hold(HeldVertex(open_pending, mcpg_observation_escaped(vec3<f32>(0.0), open_weight),
-                        vec3<f32>(0.0), vec3<f32>(0.0), 0u), held, &held0, &held1, &held2);
+        hold(HeldVertex(open_pending, escape, vec3<f32>(0.0), vec3<f32>(0.0), 0u), held, &held0,
+             &held1, &held2);
         held += 1u;
     }
     for (var i = 0u; i < held; i++) {
@@ -1113,8 +1171,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
     }
 #else
     if is_open {
-        guided_finish(open_pending,
-                      mcpg_observation_escaped(vec3<f32>(0.0), open_weight), &grng);
+        guided_finish(open_pending, escape, &grng);
     }
     if held > 0u {
         finish_held(held0, radiance, &grng);
@@ -1288,7 +1345,7 @@ fn probe_camera_ray(d: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
     let o = params.camera_position;
     let hit = bvh_walk(o, d, 0.0, FAR, false);
     if hit.triangle == NO_HIT {
-        return vec3<f32>(0.0);
+        return params.environment;
     }
     let tri = triangles[hit.triangle];
     let c = cross(tri.e1, tri.e2);
@@ -1512,7 +1569,7 @@ struct EmitterHit {
 fn emitter_along(origin: vec3<f32>, w: vec3<f32>) -> EmitterHit {
     let hit = bvh_walk(origin, w, 0.0, FAR, false);
     if hit.triangle == NO_HIT {
-        return EmitterHit(origin + w, vec3<f32>(0.0));
+        return EmitterHit(origin + w, params.environment);
     }
     let tri = triangles[hit.triangle];
     var emitted = vec3<f32>(0.0);
@@ -1607,7 +1664,7 @@ fn mcmm_shade(x: u32, y: u32, tentative: ptr<function, MarkovPixelState>,
     let d = camera_direction(f32(x) + jx, f32(y) + jy);
     let hit = bvh_walk(params.camera_position, d, 0.0, FAR, false);
     if hit.triangle == NO_HIT {
-        return vec3<f32>(0.0);
+        return params.environment;
     }
     let tri = triangles[hit.triangle];
     let material = material_at(hit);
