@@ -23,7 +23,9 @@ use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
 use mcg_demo::render::scene::{
     ENVIRONMENT_PICK, MIN_TEXTURE_POWER, Scene, SceneError, SceneFile, frame_time,
 };
-use mcg_demo::render::scene_generator::{DOOR_OPENS_AT_FRAME, SCENE_NAMES, built_in_scenes};
+use mcg_demo::render::scene_generator::{
+    DOOR_OPENS_AT_FRAME, SCENE_NAMES, SKY_ROOM_ENVIRONMENT, built_in_scenes,
+};
 use mcg_demo::render::{Device, ProbeOptions, RenderArgs, output, render, write_outputs};
 use mcg_tests::RunningStats;
 
@@ -34,7 +36,8 @@ fn temp_dir(name: &str) -> PathBuf {
 }
 
 /// The committed scenes are the generator's output, byte for byte (regenerate them with
-/// `cargo run --release -p mcg-demo -- scenes`), and each loads with a camera and emitters.
+/// `cargo run --release -p mcg-demo -- scenes`), and each loads with a camera and light
+/// (emitters, or the sky room's environment).
 #[test]
 fn built_in_scenes_are_the_generators_output_and_load() {
     for (name, json, bin) in built_in_scenes() {
@@ -47,7 +50,8 @@ fn built_in_scenes_are_the_generators_output_and_load() {
         );
         assert!(std::fs::read(scenes_dir().join(format!("{name}.bin"))).unwrap_or_default() == bin);
         let scene = SceneFile::open(&gltf).unwrap().build(0.0).unwrap();
-        assert!(!scene.emitters.is_empty() && scene.warnings.is_empty());
+        let lit = !scene.emitters.is_empty() || scene.environment != Vec3::ZERO;
+        assert!(lit && scene.warnings.is_empty(), "{name}");
         assert!(scene.bvh.triangles.len() > 20);
     }
 }
@@ -203,6 +207,24 @@ fn gltf_errors_are_typed_and_name_the_file() {
             && e.to_string().contains("--environment"),
         "{e}"
     );
+    // The built-in sky room names its environment in its scene's extras; a malformed one is
+    // refused.
+    let sky_room = SceneFile::open(scenes_dir().join("sky_room.gltf")).unwrap();
+    let sky_room = sky_room.build(0.0).unwrap();
+    assert!(sky_room.emitters.is_empty());
+    assert_eq!(sky_room.environment, Vec3::from(SKY_ROOM_ENVIRONMENT));
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&dark).unwrap()).unwrap();
+    for bad in [
+        serde_json::json!([1.0, 1.0]),
+        serde_json::json!([1.0, -1.0, 1.0]),
+    ] {
+        doc["scenes"][0]["extras"] = serde_json::json!({ "mcg": { "environment": bad } });
+        let path = dir.join("bad_sky.gltf");
+        std::fs::write(&path, serde_json::to_string(&doc).unwrap()).unwrap();
+        let e = SceneFile::open(&path).unwrap_err();
+        assert!(matches!(e, SceneError::NonFinite { .. }), "{e}");
+    }
     // An environment lights it; a non-finite or negative one is refused.
     let sky = SceneFile::open(&dark).unwrap().with_environment(Vec3::ONE);
     let lit = sky.unwrap().build(0.0).unwrap();

@@ -475,11 +475,14 @@ pub struct Scene {
 }
 
 impl SceneFile {
-    /// Reads a `.gltf` (with `.bin` files or embedded base64 buffers) or a `.glb`.
+    /// Reads a `.gltf` (with `.bin` files or embedded base64 buffers) or a `.glb`, with the
+    /// environment its scene's extras name (`"extras": {"mcg": {"environment": [r, g, b]}}`,
+    /// as the built-in `sky_room`; [`SceneFile::with_environment`] replaces it).
     ///
     /// # Errors
     /// [`SceneError::Unreadable`] when the file is missing or not glTF 2.0,
-    /// [`SceneError::NoScene`] when it holds no scene.
+    /// [`SceneError::NoScene`] when it holds no scene, [`SceneError::NonFinite`] for an
+    /// environment in the extras that is not three finite non-negative numbers.
     pub fn open(path: impl AsRef<Path>) -> Result<Self, SceneError> {
         let path = path.as_ref().to_path_buf();
         let unreadable = |e: gltf::Error| SceneError::Unreadable {
@@ -491,6 +494,10 @@ impl SceneFile {
         if document.scenes().len() == 0 {
             return Err(SceneError::NoScene { path });
         }
+        let environment = extras_environment(&document).ok_or_else(|| SceneError::NonFinite {
+            path: path.clone(),
+            what: "the environment in the scene's extras (mcg.environment: [r, g, b])".to_owned(),
+        })?;
         let textures = used_textures(&document);
         let mut images: Vec<(usize, u32, u32, Vec<u32>)> = Vec::new();
         if !textures.is_empty() {
@@ -515,7 +522,7 @@ impl SceneFile {
             buffers,
             images,
             textures,
-            environment: Vec3::ZERO,
+            environment,
         })
     }
 
@@ -1019,6 +1026,33 @@ fn texture_use(info: &gltf::texture::Info) -> Result<TextureUse, u32> {
 }
 
 /// Whether primitives of `mode` have area (triangles, strips and fans) and so are rendered.
+/// The environment that the default scene's extras name (`mcg.environment`, three finite
+/// non-negative numbers; see [`SceneFile::open`]): zero without one, `None` for a malformed
+/// one.
+fn extras_environment(document: &gltf::Document) -> Option<Vec3> {
+    let scene = document
+        .default_scene()
+        .or_else(|| document.scenes().next())?;
+    let Some(raw) = scene.extras() else {
+        return Some(Vec3::ZERO);
+    };
+    let extras: serde_json::Value = serde_json::from_str(raw.get()).ok()?;
+    let Some(value) = extras.pointer("/mcg/environment") else {
+        return Some(Vec3::ZERO);
+    };
+    let channels: Vec<f32> = value
+        .as_array()?
+        .iter()
+        .map(|c| c.as_f64().map(|c| c as f32))
+        .collect::<Option<_>>()?;
+    match channels[..] {
+        [r, g, b] if [r, g, b].iter().all(|c| c.is_finite() && *c >= 0.0) => {
+            Some(Vec3::new(r, g, b))
+        }
+        _ => None,
+    }
+}
+
 /// [`Material::alpha_cutoff`] of a material with alpha mode `mode`, the file's `alphaCutoff`
 /// `cutoff` (glTF's default 0.5 where it has none) and the alpha `factor` of its
 /// `baseColorFactor`: `cutoff / factor` for MASK (+∞ where the factor is 0 and the cutoff is

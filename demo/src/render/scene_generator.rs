@@ -1,9 +1,9 @@
 //! The generator of the built-in scenes in `demo/scenes/` (`mcg-demo scenes` rewrites them;
 //! a test checks that the committed files equal its output byte for byte).
 //!
-//! All four are closed rooms, 4 m wide (x ∈ [−2, 2]), 3 m high (y ∈ [0, 3]) and 5 m deep
+//! All five are rooms 4 m wide (x ∈ [−2, 2]), 3 m high (y ∈ [0, 3]) and 5 m deep
 //! (z ∈ [−2.5, 2.5]), seen by a 60° camera at (0, 1.5, 2.3) looking down −z, with a red left
-//! wall, a green right wall and two boxes. Each is a `.gltf` with its geometry in a `.bin`
+//! wall, a green right wall and two boxes; all but the last are closed. Each is a `.gltf` with its geometry in a `.bin`
 //! next to it (non-indexed triangles, counter-clockwise seen from the front).
 //!
 //! - `hidden_light_room`: a 1.2 m square light lying in a 2.2 m square tray hung under the
@@ -22,6 +22,11 @@
 //!   right wall a side room lit brightly by a warm light. The door turns open by 90° at frame
 //!   [`DOOR_ROOM_OPENS_AT_FRAME`] (STEP) and nothing else moves, so the scene has exactly two
 //!   states (door closed, door open).
+//! - `sky_room`: no lamp — a 0.6 m × 0.8 m window high in the right wall, out of the camera's
+//!   view, opens onto a uniform sky of radiance [`SKY_ROOM_ENVIRONMENT`], which the scene's
+//!   `extras.mcg.environment` names (the loader reads it, [`super::scene::SceneFile::open`]):
+//!   all light enters through the window, the case of path guiding's interiors lit through an
+//!   opening.
 
 use std::path::Path;
 
@@ -50,12 +55,30 @@ const DOOR_ROOM_SIDE_STRENGTH: f32 = 150.0;
 const DYNAMIC_ROOM_SIDE_STRENGTH: f32 = 60.0;
 
 /// Names of the built-in scenes (file stems under `demo/scenes/`).
-pub const SCENE_NAMES: [&str; 4] = [
+pub const SCENE_NAMES: [&str; 5] = [
     "hidden_light_room",
     "many_lights_room",
     "dynamic_room",
     "door_room",
+    "sky_room",
 ];
+
+/// The opening of a room's right wall (x = 2 m).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Opening {
+    /// A closed wall.
+    None,
+    /// A doorway 1 m wide and 2.2 m high at z ∈ [−0.5, 0.5] (scenes (c) and (d)).
+    Doorway,
+    /// A window [`WINDOW`] (`sky_room`).
+    Window,
+}
+
+/// `sky_room`'s window in the right wall: z from 0 to 0.6 m, y from 1.4 to 2.2 m.
+const WINDOW: (f32, f32, f32, f32) = (0.0, 0.6, 1.4, 2.2);
+
+/// The sky's radiance in `sky_room` (linear RGB, a pale blue).
+pub const SKY_ROOM_ENVIRONMENT: [f32; 3] = [4.0, 4.5, 5.5];
 
 /// A material of the generator: glTF metallic-roughness factors and emission.
 #[derive(Clone, Copy)]
@@ -127,9 +150,9 @@ fn part(material: Mat, triangles: Vec<[Vec3; 3]>) -> Part {
     }
 }
 
-/// The room's shell (front faces inwards) with an optional doorway in the right wall
-/// (z ∈ [−0.5, 0.5], y ∈ [0, 2.2]), and the two boxes.
-fn room(doorway: bool) -> Vec<Part> {
+/// The room's shell (front faces inwards) with `opening` in the right wall, and the two
+/// boxes.
+fn room(opening: Opening) -> Vec<Part> {
     let (w, h, d) = (2.0, 3.0, 2.5);
     let mut floor = Vec::new();
     quad(
@@ -173,12 +196,20 @@ fn room(doorway: bool) -> Vec<Part> {
             Vec3::Y * (y1 - y0),
         );
     };
-    if doorway {
-        right(&mut green, -d, -0.5, 0.0, h);
-        right(&mut green, 0.5, d, 0.0, h);
-        right(&mut green, -0.5, 0.5, 2.2, h);
-    } else {
-        right(&mut green, -d, d, 0.0, h);
+    match opening {
+        Opening::None => right(&mut green, -d, d, 0.0, h),
+        Opening::Doorway => {
+            right(&mut green, -d, -0.5, 0.0, h);
+            right(&mut green, 0.5, d, 0.0, h);
+            right(&mut green, -0.5, 0.5, 2.2, h);
+        }
+        Opening::Window => {
+            let (z0, z1, y0, y1) = WINDOW;
+            right(&mut green, -d, z0, 0.0, h);
+            right(&mut green, z1, d, 0.0, h);
+            right(&mut green, z0, z1, 0.0, y0);
+            right(&mut green, z0, z1, y1, h);
+        }
     }
     let mut boxes = Vec::new();
     cuboid(
@@ -480,12 +511,27 @@ pub fn built_in_scenes() -> Vec<(&'static str, String, Vec<u8>)> {
     let (b_json, b_bin) = many_lights_scene();
     let (c_json, c_bin) = dynamic_scene();
     let (d_json, d_bin) = door_scene();
+    let (e_json, e_bin) = sky_room_scene();
     vec![
         (SCENE_NAMES[0], a_json, a_bin),
         (SCENE_NAMES[1], b_json, b_bin),
         (SCENE_NAMES[2], c_json, c_bin),
         (SCENE_NAMES[3], d_json, d_bin),
+        (SCENE_NAMES[4], e_json, e_bin),
     ]
+}
+
+/// (e) The room with a window in its right wall open onto a uniform sky, and no lamp.
+fn sky_room_scene() -> (String, Vec<u8>) {
+    write_gltf(
+        SCENE_NAMES[4],
+        &[static_node(room(Opening::Window))],
+        &[],
+        json!({
+            "description": "a room lit only by a uniform sky through a doorway",
+            "environment": SKY_ROOM_ENVIRONMENT,
+        }),
+    )
 }
 
 /// The room as one static node.
@@ -499,7 +545,7 @@ fn static_node(parts: Vec<Part>) -> Node {
 
 /// (a) Hidden light: a closed room lit through a slit by a light in a tray under the ceiling.
 fn hidden_light_scene() -> (String, Vec<u8>) {
-    let mut parts = room(false);
+    let mut parts = room(Opening::None);
     parts.extend(cove_light());
     write_gltf(
         SCENE_NAMES[0],
@@ -512,7 +558,7 @@ fn hidden_light_scene() -> (String, Vec<u8>) {
 /// (b) Many lights: 4×4 on the ceiling, 8 on the back wall, colours around the hue circle, and
 /// a copper block.
 fn many_lights_scene() -> (String, Vec<u8>) {
-    let mut parts = room(false);
+    let mut parts = room(Opening::None);
     let mut k = 0;
     let colour = |k: usize| {
         let hue = k as f32 / 24.0 * core::f32::consts::TAU;
@@ -605,7 +651,7 @@ fn door_channel(node: usize, frame: u32) -> Channel {
 
 /// (c) Dynamic: the moving hidden light and a door to a lit side room opening at a known frame.
 fn dynamic_scene() -> (String, Vec<u8>) {
-    let mut parts = room(true);
+    let mut parts = room(Opening::Doorway);
     let (side, door) = side_room_and_door(DYNAMIC_ROOM_SIDE_STRENGTH);
     parts.extend(side);
     let nodes = [
@@ -643,7 +689,7 @@ fn dynamic_scene() -> (String, Vec<u8>) {
 /// (d) Door: a room lit directly by one ceiling light, and a door to a brightly lit side room
 /// that opens at [`DOOR_ROOM_OPENS_AT_FRAME`] — the only change (ADGI Fig. 1's gate).
 fn door_scene() -> (String, Vec<u8>) {
-    let mut parts = room(true);
+    let mut parts = room(Opening::Doorway);
     let (side, door) = side_room_and_door(DOOR_ROOM_SIDE_STRENGTH);
     parts.extend(side);
     let l = DOOR_ROOM_LIGHT_HALF;
