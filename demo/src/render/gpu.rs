@@ -834,7 +834,7 @@ impl GpuTracer {
     }
 
     /// `mcmm`'s pipeline around `guide`, its shader compiled first where it is not (with
-    /// [`GuidedDefs::attributes`] of `guided_defs`).
+    /// [`GuidedDefs::scene`] of `guided_defs`).
     fn mcmm_guided(&mut self, guide: GpuMcmmGuide) -> Result<Guided<GpuMcmmGuide>> {
         if self.mcmm_module.is_none() {
             let source = composed_mcmm_shader(self.guided_defs.scene)?;

@@ -800,7 +800,8 @@ fn offset_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return p + n * (RAY_OFFSET * max(max(max(a.x, a.y), a.z), 1.0));
 }
 
-// `Scene::pick_emitter`: the first entry whose cumulative probability exceeds u.
+// `Scene::pick_light` among the triangles: the first entry whose cumulative probability
+// exceeds u.
 fn pick_emitter(u: f32) -> u32 {
     var lo = 0u;
     var hi = params.emitter_count;
