@@ -198,6 +198,29 @@ fn gltf_errors_are_typed_and_name_the_file() {
         matches!(e, SceneError::NoCamera { .. }) && e.to_string().contains("no_camera.gltf"),
         "{e}"
     );
+    // --auto-camera: one looking down −Z at the whole scene, with a warning; its central ray
+    // meets the triangle's centroid region (the triangle fills part of the view).
+    let auto = SceneFile::open(&no_camera).unwrap().with_auto_camera();
+    let scene = auto.build(0.0).unwrap();
+    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
+    let c = scene.camera;
+    assert_eq!((c.forward, c.up), (Vec3::NEG_Z, Vec3::Y));
+    let centroid = scene.bvh.triangles[0].point(1.0 / 3.0, 1.0 / 3.0);
+    let d = (centroid - c.position).normalize();
+    assert!(scene.intersect(c.position, d, 0.0, f32::INFINITY).is_some());
+    let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)];
+    for (b1, b2) in corners {
+        let p = scene.bvh.triangles[0].point(b1, b2) - c.position;
+        let (x, y) = (
+            p.dot(c.right) / -p.dot(c.forward),
+            p.dot(c.up) / -p.dot(c.forward),
+        );
+        let tan = (0.5 * c.yfov).tan();
+        assert!(
+            x.abs() <= tan && y.abs() <= tan,
+            "corner ({b1}, {b2}) is in view"
+        );
+    }
 
     let dark = minimal_gltf(&dir, "dark.gltf", true, false, 4);
     let e = SceneFile::open(&dark).unwrap().build(0.0).unwrap_err();
@@ -984,6 +1007,7 @@ fn render_command_writes_exr_png_and_json() {
         ramp_frames: 1,
         mcmm_score: McmmScore::TileMixture,
         environment: None,
+        auto_camera: false,
         probes: ProbeOptions::default(),
     };
     let first = render(&args).unwrap();

@@ -1162,6 +1162,7 @@ fn render_on_the_gpu(method: Method) {
         ramp_frames: 1,
         mcmm_score: McmmScore::TileMixture,
         environment: None,
+        auto_camera: false,
         probes: ProbeOptions::default(),
     };
     let rendered = render(&args).unwrap();

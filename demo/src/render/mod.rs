@@ -171,6 +171,11 @@ pub struct RenderArgs {
     /// the scene also has emitters).
     #[arg(long, value_parser = parse_rgb)]
     pub environment: Option<Vec3>,
+    /// For a file without a camera: one looking down −Z at the whole scene (45° vertical
+    /// field of view; [`scene::SceneFile::with_auto_camera`]); without it such a file is an
+    /// error.
+    #[arg(long)]
+    pub auto_camera: bool,
     /// Probe GI and per-state reference options.
     #[command(flatten)]
     pub probes: ProbeOptions,
@@ -396,6 +401,9 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     let mut file = SceneFile::open(&args.scene)?;
     if let Some(radiance) = args.environment {
         file = file.with_environment(radiance)?;
+    }
+    if args.auto_camera {
+        file = file.with_auto_camera();
     }
     let reference = read_reference(args)?;
     let reference_own_error = read_reference_own_error(args, reference.as_ref())?;

@@ -11,7 +11,8 @@
 //!   used: shading uses the geometric normal. `TEXCOORD_0` is read for textured materials.
 //! - **Camera**: the first node of the default scene, depth first, that carries a
 //!   perspective camera; it looks down its local −Z with +Y up (glTF 2.0 specification,
-//!   section "Cameras"). `yfov` is used; the aspect ratio is the image's.
+//!   section "Cameras"). `yfov` is used; the aspect ratio is the image's. A file without one
+//!   is an error, unless [`SceneFile::with_auto_camera`] (`render --auto-camera`) places one.
 //! - **Materials** ([`Material`]): `baseColorFactor` (RGB), `metallicFactor`,
 //!   `roughnessFactor`, `emissiveFactor × KHR_materials_emissive_strength`, and the
 //!   base-colour, emissive and metallic-roughness textures (8-bit PNG or JPEG, `TEXCOORD_0`,
@@ -154,7 +155,7 @@ impl fmt::Display for SceneError {
             Self::NoCamera { path } => write!(
                 f,
                 "{}: the default scene has no perspective camera (the renderer looks through \
-                 the first one)",
+                 the first one; --auto-camera places one)",
                 path.display()
             ),
             Self::NoTriangles { path } => {
@@ -250,6 +251,8 @@ pub struct SceneFile {
     textures: Vec<TextureUse>,
     /// [`Scene::environment`] of the scenes it builds.
     environment: Vec3,
+    /// Whether a scene without a camera gets [`auto_camera`]'s.
+    auto_camera: bool,
 }
 
 /// What a material's texture slot reads: an image (its index in the document) through a map
@@ -523,7 +526,18 @@ impl SceneFile {
             images,
             textures,
             environment,
+            auto_camera: false,
         })
+    }
+
+    /// The file with a camera placed for scenes that have none ([`SceneFile::build`] warns
+    /// when it does): looking down −Z (glTF's forward) at the centre of the triangles'
+    /// bounding box from far enough that its bounding sphere fills the 45° vertical field of
+    /// view, +Y up. A camera in the file still wins.
+    #[must_use]
+    pub fn with_auto_camera(mut self) -> Self {
+        self.auto_camera = true;
+        self
     }
 
     /// The file lit by a uniform environment of radiance `radiance` too ([`Scene::environment`];
@@ -597,10 +611,19 @@ impl SceneFile {
                 stack.push((child, world));
             }
         }
-        let camera = camera.ok_or_else(|| SceneError::NoCamera { path: path.clone() })?;
         if triangles.is_empty() {
             return Err(SceneError::NoTriangles { path: path.clone() });
         }
+        let camera = match camera {
+            Some(camera) => camera,
+            None if self.auto_camera => {
+                warnings.push(
+                    "the file has no camera: one looks down -Z at the whole scene".to_owned(),
+                );
+                auto_camera(&triangles)
+            }
+            None => return Err(SceneError::NoCamera { path: path.clone() }),
+        };
         let mut scene = Scene::new_lit(camera, &triangles, materials, warnings, self.environment)
             .ok_or_else(|| SceneError::NoEmitters { path: path.clone() })?;
         let depth = scene.bvh.depth();
@@ -1026,6 +1049,29 @@ fn texture_use(info: &gltf::texture::Info) -> Result<TextureUse, u32> {
 }
 
 /// Whether primitives of `mode` have area (triangles, strips and fans) and so are rendered.
+/// The camera of [`SceneFile::with_auto_camera`] for `triangles` (not empty): 45° vertical
+/// field of view, looking down −Z at the centre of their bounding box from the distance at
+/// which the box's bounding sphere just fits the field of view.
+fn auto_camera(triangles: &[Triangle]) -> Camera {
+    let (lo, hi) = triangles
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), t| {
+            let v0 = Vec3::from(t.v0);
+            let (v1, v2) = (v0 + Vec3::from(t.e1), v0 + Vec3::from(t.e2));
+            (lo.min(v0).min(v1).min(v2), hi.max(v0).max(v1).max(v2))
+        });
+    let yfov = core::f32::consts::FRAC_PI_4;
+    let centre = 0.5 * (lo + hi);
+    let radius = (0.5 * (hi - lo).length()).max(1e-3);
+    Camera {
+        position: centre + Vec3::Z * radius / (0.5 * yfov).sin(),
+        right: Vec3::X,
+        up: Vec3::Y,
+        forward: Vec3::NEG_Z,
+        yfov,
+    }
+}
+
 /// The environment that the default scene's extras name (`mcg.environment`, three finite
 /// non-negative numbers; see [`SceneFile::open`]): zero without one, `None` for a malformed
 /// one.

@@ -149,6 +149,7 @@ fn args(
         ramp_frames: 1,
         mcmm_score: McmmScore::TileMixture,
         environment: None,
+        auto_camera: false,
         probes: ProbeOptions {
             probe_spacing: s.probe_spacing,
             probe_rays: s.probe_rays,

@@ -211,6 +211,7 @@ fn args(
         ramp_frames: 1,
         mcmm_score: McmmScore::TileMixture,
         environment: None,
+        auto_camera: false,
         probes: ProbeOptions::default(),
     }
 }

@@ -352,6 +352,7 @@ pub fn door_args(method: Method, out: PathBuf, frames: u32) -> RenderArgs {
         ramp_frames: 1,
         mcmm_score: McmmScore::TileMixture,
         environment: None,
+        auto_camera: false,
         probes: ProbeOptions {
             probe_spacing: 1.0,
             probe_rays: 16,
