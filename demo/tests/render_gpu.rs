@@ -7,7 +7,7 @@
 mod common;
 
 use common::{
-    TileStats, assert_lit_pixels_agree, assert_pixel_mean, assert_spread, assert_tiles_agree,
+    assert_lit_pixels_agree, assert_pixel_mean, assert_spread, assert_tiles_agree,
     emissive_texture_furnace, furnace, masked_furnace, run_mean, scenes_dir, sky_floor,
     sky_settings, tile_stats, with_texture,
 };
@@ -918,55 +918,62 @@ fn gpu_reads_emissive_textures_where_light_is_sampled() {
     ) else {
         return;
     };
-    let settings = |method, spp, seed| RenderSettings {
-        width: w,
-        height: h,
+    assert_light_paths_on_the_gpu(
+        &mut gpu,
+        &scene,
+        &[Method::Nee],
+        (12, 100),
+        "emissive texture",
+    );
+}
+
+/// The settings of the GPU light-path checks ([`assert_light_paths_on_the_gpu`]): 32×32
+/// pixels, B = 2.
+fn light_path_settings(method: Method, spp: u32, seed: u32) -> RenderSettings {
+    RenderSettings {
+        width: 32,
+        height: 32,
         spp,
         bounces: 2,
         seed,
         method,
-    };
-    let one = settings(Method::Nee, 1, 5);
-    let (g, _) = gpu.render_frame(&one, 3).unwrap();
-    let c = render_frame(&scene, &one, 3, || BsdfSampler, || ());
-    assert_lit_pixels_agree(&c, &g, "nee, emissive texture");
-    let (guided, reference) = gpu_mcpg_and_nee_tiles(&mut gpu, &scene, 12, 100);
+    }
+}
+
+/// The GPU's light paths on `scene` (uploaded to `gpu`), 32×32 pixels (4 tiles of 16×16),
+/// B = 2: (1) each of `methods` follows the CPU's random stream (1 spp, seed 5, frame 3: at
+/// least 90 % of the lit pixels agree to 10⁻³); (2) `mcpg` with 2 emission-only directions
+/// per vertex (16 runs of an emptied guide over 2 frames of 4 spp, seeds `mcpg_seed` on)
+/// agrees with `nee` (64 frames of 4 spp, seed `nee_seed`) per tile and channel by Welch's
+/// t-test, Bonferroni over the 12 tests at family-wise α = 10⁻⁴. `what` names the case.
+fn assert_light_paths_on_the_gpu(
+    gpu: &mut GpuTracer,
+    scene: &Scene,
+    methods: &[Method],
+    (nee_seed, mcpg_seed): (u32, u32),
+    what: &str,
+) {
+    for &method in methods {
+        let one = light_path_settings(method, 1, 5);
+        let (g, _) = gpu.render_frame(&one, 3).unwrap();
+        let c = render_frame(scene, &one, 3, || BsdfSampler, || ());
+        assert_lit_pixels_agree(&c, &g, &format!("{}, {what}", method.name()));
+    }
+    let nee = light_path_settings(Method::Nee, 4, nee_seed);
+    let reference = tile_stats((32, 32, 16, 64), |f| gpu.render_frame(&nee, f).unwrap().0);
+    let config = guide_config(scene, 32, 32);
+    gpu.set_mcpg_emission_samples(2);
+    let guided = tile_stats((32, 32, 16, 16), |run| {
+        let s = light_path_settings(Method::Mcpg, 4, mcpg_seed + run);
+        gpu.start_mcpg(&config).unwrap();
+        run_mean(2, |f| gpu.render_frame(&s, f).unwrap().0)
+    });
     assert_tiles_agree(
         &guided,
         &reference,
         1e-4,
-        "GPU mcpg vs GPU nee, emissive texture",
+        &format!("GPU mcpg vs GPU nee, {what}"),
     );
-}
-
-/// Per 16×16 tile of 32×32 pixels at B = 2 on the GPU: `mcpg` with 2 emission-only
-/// directions per vertex (16 runs of an emptied guide over 2 frames of 4 spp, seeds
-/// `mcpg_seed` on) and `nee` (64 frames of 4 spp, seed `nee_seed`).
-fn gpu_mcpg_and_nee_tiles(
-    gpu: &mut GpuTracer,
-    scene: &Scene,
-    nee_seed: u32,
-    mcpg_seed: u32,
-) -> (TileStats, TileStats) {
-    let (w, h) = (32, 32);
-    let settings = |method, seed| RenderSettings {
-        width: w,
-        height: h,
-        spp: 4,
-        bounces: 2,
-        seed,
-        method,
-    };
-    let nee = settings(Method::Nee, nee_seed);
-    let reference = tile_stats((w, h, 16, 64), |f| gpu.render_frame(&nee, f).unwrap().0);
-    let config = guide_config(scene, w, h);
-    gpu.set_mcpg_emission_samples(2);
-    let guided = tile_stats((w, h, 16, 16), |run| {
-        let s = settings(Method::Mcpg, mcpg_seed + run);
-        gpu.start_mcpg(&config).unwrap();
-        run_mean(2, |f| gpu.render_frame(&s, f).unwrap().0)
-    });
-    (guided, reference)
 }
 
 /// Alpha masks on the GPU (`gpu::ALPHA_MASK_DEF`): the walks, the light samples and `mcpg`'s
@@ -993,27 +1000,8 @@ fn gpu_passes_through_alpha_masks_as_the_cpu() {
     else {
         return;
     };
-    let settings = |method, spp, seed| RenderSettings {
-        width: w,
-        height: h,
-        spp,
-        bounces: 2,
-        seed,
-        method,
-    };
-    for method in [Method::Bsdf, Method::Nee] {
-        let one = settings(method, 1, 5);
-        let (g, _) = gpu.render_frame(&one, 3).unwrap();
-        let c = render_frame(&scene, &one, 3, || BsdfSampler, || ());
-        assert_lit_pixels_agree(&c, &g, &format!("{}, alpha masks", method.name()));
-    }
-    let (guided, reference) = gpu_mcpg_and_nee_tiles(&mut gpu, &scene, 32, 300);
-    assert_tiles_agree(
-        &guided,
-        &reference,
-        1e-4,
-        "GPU mcpg vs GPU nee, alpha masks",
-    );
+    let methods = [Method::Bsdf, Method::Nee];
+    assert_light_paths_on_the_gpu(&mut gpu, &scene, &methods, (32, 300), "alpha masks");
     let mut state = 41u32;
     let mut u = || next_uniform(&mut state);
     let mut batches = Vec::new();
@@ -1103,26 +1091,9 @@ fn gpu_renders_the_environment_as_the_cpu() {
     let mut scene = masked_furnace();
     scene.set_environment(Vec3::new(1.5, 1.0, 0.5));
     gpu.upload(&scene).unwrap();
-    for method in [Method::Bsdf, Method::Nee] {
-        let one = RenderSettings {
-            width: 32,
-            height: 32,
-            spp: 1,
-            bounces: 2,
-            seed: 5,
-            method,
-        };
-        let (g, _) = gpu.render_frame(&one, 3).unwrap();
-        let c = render_frame(&scene, &one, 3, || BsdfSampler, || ());
-        assert_lit_pixels_agree(&c, &g, &format!("{}, environment", method.name()));
-    }
-    let (guided, reference) = gpu_mcpg_and_nee_tiles(&mut gpu, &scene, 52, 600);
-    assert_tiles_agree(
-        &guided,
-        &reference,
-        1e-4,
-        "GPU mcpg vs GPU nee, environment and emitters",
-    );
+    let methods = [Method::Bsdf, Method::Nee];
+    let what = "environment and emitters";
+    assert_light_paths_on_the_gpu(&mut gpu, &scene, &methods, (52, 600), what);
 }
 
 /// `render` with `--device gpu` renders on the GPU and says so in its report (for `nee` and

@@ -170,7 +170,7 @@ pub struct GuidedDefs {
     pub hold_all: bool,
     /// [`EMITTER_LIST_DEF`]: at most [`EMITTER_LIST_MAX`] emitter triangles.
     pub emitter_list: bool,
-    /// What the uploaded scene asks of every kernel (attributes, alpha masks).
+    /// What the uploaded scene asks of every kernel (attributes, alpha masks, environment).
     pub scene: SceneDefs,
 }
 
@@ -1574,7 +1574,7 @@ impl GpuTracer {
         let hits: GpuBuffer<GpuHit> = self.ctx.zeroed_buffer("mcg-demo hits", rays.len());
         let bind_group = if self.guided_defs.scene.alpha_mask {
             // The alpha test reads the scene's materials, attributes and textures, and where
-            // they end (`GpuParams`, as `upload` wrote them).
+            // they end (`GpuParams`, which holds the scene's fields from `upload` on).
             self.bind_group(
                 kernel.entry_point(),
                 kernel.bind_group_layout(),
