@@ -6,28 +6,34 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
+use std::f64::consts::PI;
+
 use common::{
     TileStats, assert_pixel_mean, assert_spread, assert_tiles_agree, emissive_texture_furnace,
-    furnace, masked_furnace, scenes_dir, sky_floor, sky_settings, with_texture,
+    furnace, masked_furnace, scenes_dir, sky_floor, sky_map, sky_map_floor, sky_settings,
+    upward_reflection, with_texture,
 };
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use mcg_demo::render::bvh::Hit;
 use mcg_demo::render::cpu::{
     BsdfSampler, Method, Observation, RenderSettings, Vertex, VertexSampler, path_seed,
     render_frame, trace_path,
 };
 use mcg_demo::render::emission_allocation::{Allocation, EmissionAllocation};
+use mcg_demo::render::environment::EnvironmentMap;
 use mcg_demo::render::guided::{McpgSampler, new_guide};
 use mcg_demo::render::material::BsdfSample;
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
 use mcg_demo::render::scene::{
-    ENVIRONMENT_PICK, MIN_TEXTURE_POWER, Scene, SceneError, SceneFile, frame_time,
+    ENVIRONMENT_PICK, MIN_TEXTURE_POWER, Scene, SceneError, SceneFile, frame_time, luminance,
 };
 use mcg_demo::render::scene_generator::{
     DOOR_OPENS_AT_FRAME, SCENE_NAMES, SKY_ROOM_ENVIRONMENT, built_in_scenes,
 };
 use mcg_demo::render::{Device, ProbeOptions, RenderArgs, output, render, write_outputs};
+use mcg_gpu_backend::sampling::next_uniform;
 use mcg_tests::RunningStats;
+use mcg_tests::assert_chi_square;
 
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("mcg-render-{name}-{}", std::process::id()));
@@ -516,6 +522,205 @@ fn environment_and_emitters_share_light_sampling_without_bias() {
             &bsdf,
             1e-4,
             &format!("{} vs bsdf, environment and emitters", method.name()),
+        );
+    }
+}
+
+/// Hypothesis: an environment map's light sampling draws texel (i, j) with probability
+/// ∝ luminance × sin θ at the row's centre (pbrt-v3 14.2.4), and `EnvironmentMap::pdf` is the
+/// solid-angle density of what `EnvironmentMap::sample` draws. Map: [`sky_map`] (32 × 16, a
+/// black row and a black texel, a sun 600 times the sky). (1) ∫ pdf dω over the sphere, by the
+/// midpoint rule on 4 × 4 points per texel with dω = 2π² sin θ du dv: 1 within 10⁻⁴. (2)
+/// 200,000 samples (uniforms from seed 77): the density `sample` returns equals `pdf` of its
+/// direction to 10⁻³ relative for all but 0.1 % (texel boundaries may round either way), no
+/// sample lands in a black texel, and the texels' counts pass a chi-square test against the
+/// probabilities computed here in `f64` from the texels (bins below 5 expected merged),
+/// α = 10⁻⁴ (X² = 437 on 478 degrees of freedom). Weights without sin θ fail (2) at X² =
+/// 44,168, and a density without its 1/sin θ fails (1) at 0.699 (checked once each).
+#[test]
+fn environment_maps_sample_in_proportion_to_their_luminance() {
+    let map = sky_map();
+    let (w, h) = (map.width() as usize, map.height() as usize);
+    let n = 4;
+    let mut integral = 0.0f64;
+    for j in 0..h * n {
+        for i in 0..w * n {
+            let uv = Vec2::new(
+                (i as f32 + 0.5) / (w * n) as f32,
+                (j as f32 + 0.5) / (h * n) as f32,
+            );
+            let d = EnvironmentMap::direction(uv);
+            let jacobian = 2.0 * PI * PI * f64::from((std::f32::consts::PI * uv.y).sin());
+            integral += f64::from(map.pdf(d)) * jacobian / ((w * n * h * n) as f64);
+        }
+    }
+    assert!((integral - 1.0).abs() < 1e-4, "∫ pdf dω = {integral}");
+
+    let weights: Vec<f64> = map
+        .texels()
+        .iter()
+        .enumerate()
+        .map(|(k, t)| {
+            let theta = ((k / w) as f64 + 0.5) / h as f64 * PI;
+            f64::from(luminance(*t)) * theta.sin()
+        })
+        .collect();
+    let total: f64 = weights.iter().sum();
+    let samples = 200_000u64;
+    let mut counts = vec![0u64; w * h];
+    let mut mismatched = 0;
+    let mut state = 77u32;
+    for _ in 0..samples {
+        let u = Vec2::new(next_uniform(&mut state), next_uniform(&mut state));
+        let (d, pdf) = map.sample(u).expect("a direction with a density");
+        assert!((d.length() - 1.0).abs() < 1e-5, "unit direction {d}");
+        let uv = EnvironmentMap::coordinates(d);
+        let texel =
+            ((uv.y * h as f32) as usize).min(h - 1) * w + ((uv.x * w as f32) as usize).min(w - 1);
+        counts[texel] += 1;
+        if (pdf - map.pdf(d)).abs() > 1e-3 * pdf {
+            mismatched += 1;
+        }
+    }
+    assert!(
+        mismatched * 1000 <= samples,
+        "{mismatched} densities differ from pdf"
+    );
+    let (mut observed, mut expected) = (Vec::new(), Vec::new());
+    for (k, &c) in counts.iter().enumerate() {
+        if weights[k] == 0.0 {
+            assert_eq!(c, 0, "texel {k} is black and was sampled");
+        } else {
+            observed.push(c);
+            expected.push(samples as f64 * weights[k] / total);
+        }
+    }
+    let result = assert_chi_square("environment map texels", &observed, &expected, 1e-4);
+    eprintln!(
+        "X² = {:.1}, {} degrees of freedom",
+        result.statistic, result.degrees_of_freedom
+    );
+}
+
+/// Environment-map furnace. Hypothesis: a Lambertian floor of albedo ρ under [`sky_map`],
+/// nothing above it, shows ρ × [`upward_reflection`] in every pixel (computed texel by texel;
+/// the sun gives 62-88 % of it per channel), and light sampling in proportion to the map's
+/// luminance lowers the variance. Scene: [`sky_map_floor`] (its hidden emitter takes half of the light samples),
+/// 16×16 pixels × 16 spp, B = 2, seed 5, ρ = (0.5, 0.3, 0.8): `bsdf`, `nee`, `mcpg` and
+/// `mcpg-nee` (fourth frame of a fresh guide), `mcmm` at B = 1 (fourth frame). Threshold: |z|
+/// < 5 on the pixel mean per channel; `nee`'s per-pixel variance below a quarter of `bsdf`'s
+/// (0.0094 of it here). Columns drawn uniformly within the picked row while the density stays
+/// the tables' fails `nee` at z = −201, and the escaped rays' MIS weight taken against the
+/// cosine density instead of the map's at z = 5.5 (checked once each).
+#[test]
+fn environment_map_furnace_matches_the_map_s_reflection() {
+    let rho = Vec3::new(0.5, 0.3, 0.8);
+    let scene = sky_map_floor(rho);
+    let expected = rho * upward_reflection(&sky_map());
+    let mut variances = Vec::new();
+    for method in [Method::Bsdf, Method::Nee, Method::Mcpg, Method::McpgNee] {
+        let settings = sky_settings(method, 2);
+        let image = if method.is_guided() {
+            let mut guide = new_guide(&scene, 16, 16).unwrap();
+            for frame in 0..3 {
+                render_frame(&scene, &settings, frame, || McpgSampler::new(&guide), || ());
+                guide.end_frame();
+            }
+            render_frame(&scene, &settings, 3, || McpgSampler::new(&guide), || ())
+        } else {
+            render_frame(&scene, &settings, 0, || BsdfSampler, || ())
+        };
+        assert_pixel_mean(
+            &image,
+            expected,
+            0.0,
+            &format!("{method:?}, environment map"),
+        );
+        let stats: RunningStats = image.iter().map(|p| f64::from(luminance(*p))).collect();
+        variances.push(stats.variance());
+    }
+    eprintln!(
+        "per-pixel variance, bsdf {:.4e}, nee {:.4e}",
+        variances[0], variances[1]
+    );
+    assert!(
+        variances[1] < 0.25 * variances[0],
+        "nee's variance {} is not below a quarter of bsdf's {}",
+        variances[1],
+        variances[0]
+    );
+    let settings = sky_settings(Method::Mcmm, 1);
+    let mut r = McmmRenderer::new(16, 16, mcmm_params(McmmScore::TileMixture, 16)).unwrap();
+    for frame in 0..3 {
+        r.render_frame(&scene, &settings, frame).unwrap();
+    }
+    let image = r.render_frame(&scene, &settings, 3).unwrap();
+    assert_pixel_mean(&image, expected, 0.0, "mcmm, environment map");
+}
+
+/// Environment maps from files: an OpenEXR file of [`sky_map`]'s texels, given to
+/// `SceneFile::with_environment_map` or named (as a string) by the scene's extras, lights a
+/// file without emitters with exactly those texels; a missing map, a PNG, and a map with a
+/// negative texel are errors that name the scene file, the map and what is wrong.
+#[test]
+fn environment_maps_load_from_files() {
+    let dir = temp_dir("environment-maps");
+    let map = sky_map();
+    let exr = dir.join("sky.exr");
+    output::RgbImage {
+        width: map.width(),
+        height: map.height(),
+        pixels: map.texels().to_vec(),
+    }
+    .write_exr(&exr)
+    .unwrap();
+    let dark = minimal_gltf(&dir, "dark.gltf", true, false, 4);
+    assert!(matches!(
+        SceneFile::open(&dark).unwrap().build(0.0).unwrap_err(),
+        SceneError::NoEmitters { .. }
+    ));
+    let scene = SceneFile::open(&dark)
+        .unwrap()
+        .with_environment_map(&exr)
+        .unwrap()
+        .build(0.0)
+        .unwrap();
+    assert_eq!(scene.environment_map.as_deref(), Some(&map));
+    assert_eq!((scene.environment, scene.environment_pmf), (Vec3::ONE, 1.0));
+
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&dark).unwrap()).unwrap();
+    doc["scenes"][0]["extras"] = serde_json::json!({ "mcg": { "environment": "sky.exr" } });
+    let named = dir.join("named.gltf");
+    std::fs::write(&named, doc.to_string()).unwrap();
+    let scene = SceneFile::open(&named).unwrap().build(0.0).unwrap();
+    assert_eq!(scene.environment_map.as_deref(), Some(&map));
+
+    let file = || SceneFile::open(&dark).unwrap();
+    let png = dir.join("sky.png");
+    std::fs::write(&png, b"not an image").unwrap();
+    let mut negative = map.texels().to_vec();
+    negative[5] = Vec3::new(1.0, -1.0, 0.0);
+    let bad = dir.join("negative.exr");
+    output::RgbImage {
+        width: map.width(),
+        height: map.height(),
+        pixels: negative,
+    }
+    .write_exr(&bad)
+    .unwrap();
+    for (path, what) in [
+        (dir.join("missing.exr"), "missing.exr"),
+        (png, ".exr"),
+        (bad, "texel (5, 0)"),
+    ] {
+        let e = file().with_environment_map(&path).err().unwrap();
+        let message = e.to_string();
+        assert!(
+            matches!(e, SceneError::Unreadable { .. })
+                && message.contains("dark.gltf")
+                && message.contains(what),
+            "{message}"
         );
     }
 }

@@ -8,8 +8,8 @@ mod common;
 
 use common::{
     assert_lit_pixels_agree, assert_pixel_mean, assert_spread, assert_tiles_agree,
-    emissive_texture_furnace, furnace, masked_furnace, run_mean, scenes_dir, sky_floor,
-    sky_settings, tile_stats, with_texture,
+    emissive_texture_furnace, furnace, masked_furnace, run_mean, scenes_dir, sky_floor, sky_map,
+    sky_map_floor, sky_settings, tile_stats, upward_reflection, with_texture,
 };
 use glam::Vec3;
 use mcg_demo::render::cpu::{BsdfSampler, Method, RenderSettings, render_frame};
@@ -24,6 +24,7 @@ use mcg_demo::render::{Device, ProbeOptions, RenderArgs, render};
 use mcg_gpu_backend::sampling::next_uniform;
 use mcg_gpu_backend::testing::gpu_or_skip;
 use mcg_markov_guide::mcpg::{GridState, Guide};
+use std::sync::Arc;
 
 /// A tracer on the shared test device with `scene` uploaded, or `None` (skip).
 fn tracer(test: &str, scene: &Scene) -> Option<GpuTracer> {
@@ -1094,6 +1095,71 @@ fn gpu_renders_the_environment_as_the_cpu() {
     let methods = [Method::Bsdf, Method::Nee];
     let what = "environment and emitters";
     assert_light_paths_on_the_gpu(&mut gpu, &scene, &methods, (52, 600), what);
+}
+
+/// Environment maps on the GPU (`gpu::ENVIRONMENT_MAP_DEF`), as on the CPU. (1) The
+/// environment-map furnace (`render::environment_map_furnace_matches_the_map_s_reflection`):
+/// [`sky_map_floor`], ρ = (0.5, 0.3, 0.8), 16×16 pixels × 16 spp, B = 2, seed 5: `bsdf`, `nee`,
+/// `mcpg` and `mcpg-nee` (fourth frame of a fresh guide) and `mcmm` at B = 1 (fourth frame) show
+/// ρ × [`upward_reflection`], |z| < 5 per channel. (2) The map seen straight up
+/// ([`sky_floor`] looking up under [`sky_map`], 32×32, 1 spp, seed 5, `bsdf`: the camera rays'
+/// lookups) equals the CPU's image in ≥ 90 % of the pixels to 10⁻³. (3) [`masked_furnace`]
+/// under the map (light from the map through the holes and from the walls), 32×32, B = 2:
+/// `bsdf` and `nee` follow the CPU's random stream (1 spp, seed 5; the map's light samples and
+/// MIS weights), and `mcpg` (16 runs of 2 frames, seeds 700–715) agrees with `nee` (64 frames,
+/// seed 62) per tile and channel by Welch's t-test, Bonferroni over 12 tests at family-wise
+/// α = 10⁻⁴. A column picked from the row table in WGSL fails (1) at z = −1187 (`nee`); the
+/// map's texels read one row too low fail (1) at z = −6.7 (`mcpg`; `bsdf` and `nee` see the
+/// sun's share move by less than their noise) and (2) alone with 0 of 639 pixels equal
+/// (checked once each).
+#[test]
+fn gpu_renders_environment_maps_as_the_cpu() {
+    let rho = Vec3::new(0.5, 0.3, 0.8);
+    let scene = sky_map_floor(rho);
+    let expected = rho * upward_reflection(&sky_map());
+    let Some(mut gpu) = mcpg_tracer("gpu_renders_environment_maps_as_the_cpu", &scene, 16, 16)
+    else {
+        return;
+    };
+    for method in [Method::Bsdf, Method::Nee, Method::Mcpg, Method::McpgNee] {
+        let settings = sky_settings(method, 2);
+        if method.is_guided() {
+            gpu.start_mcpg(&guide_config(&scene, 16, 16)).unwrap();
+            for frame in 0..3 {
+                gpu.render_frame(&settings, frame).unwrap();
+            }
+        }
+        let (image, _) = gpu.render_frame(&settings, 3).unwrap();
+        assert_pixel_mean(
+            &image,
+            expected,
+            0.0,
+            &format!("GPU {method:?}, environment map"),
+        );
+    }
+    let settings = sky_settings(Method::Mcmm, 1);
+    gpu.start_mcmm(&mcmm_params(McmmScore::TileMixture, 16), 16, 16)
+        .unwrap();
+    for frame in 0..3 {
+        gpu.render_frame(&settings, frame).unwrap();
+    }
+    let (image, _) = gpu.render_frame(&settings, 3).unwrap();
+    assert_pixel_mean(&image, expected, 0.0, "GPU mcmm, environment map");
+
+    let mut up = sky_floor(rho, Vec3::ONE, true);
+    up.set_environment_map(Arc::new(sky_map()));
+    gpu.upload(&up).unwrap();
+    let one = light_path_settings(Method::Bsdf, 1, 5);
+    let (g, _) = gpu.render_frame(&one, 0).unwrap();
+    let c = render_frame(&up, &one, 0, || BsdfSampler, || ());
+    assert_lit_pixels_agree(&c, &g, "the environment map seen straight up");
+
+    let mut scene = masked_furnace();
+    scene.set_environment_map(Arc::new(sky_map()));
+    gpu.upload(&scene).unwrap();
+    let methods = [Method::Bsdf, Method::Nee];
+    let what = "environment map and emitters";
+    assert_light_paths_on_the_gpu(&mut gpu, &scene, &methods, (62, 700), what);
 }
 
 /// `render` with `--device gpu` renders on the GPU and says so in its report (for `nee` and

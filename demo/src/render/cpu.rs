@@ -5,8 +5,9 @@
 //!
 //! Conventions: `bounces` counts scattering events (1 = direct light only: emission seen by the
 //! camera plus light scattered once); no Russian roulette; a box pixel filter (uniform jitter
-//! in the pixel); no environment light (rays that leave the scene carry nothing); emission
-//! from front faces only; both faces scatter.
+//! in the pixel); rays that leave the scene see its environment
+//! ([`Scene::environment_radiance`]: uniform or a map; none by default); emission from front
+//! faces only; both faces scatter.
 //!
 //! Methods ([`Method`]): `bsdf` samples directions from the BSDF and finds lights only by
 //! chance; `nee` adds one light sample per scattering event (an emitter triangle picked in
@@ -23,7 +24,6 @@
 
 use glam::{Vec2, Vec3};
 use mcg_gpu_backend::sampling::{next_uniform, pcg_hash};
-use mcg_markov_guide::{cosine_hemisphere, cosine_hemisphere_pdf};
 use rayon::prelude::*;
 
 use super::bvh::{Hit, Triangle};
@@ -286,8 +286,9 @@ struct Recorded {
     discarded: Vec3,
     /// What the sampled ray hit.
     next: Option<NextHit>,
-    /// The MIS weight the path gave the environment where the sampled ray left the scene.
-    environment_weight: f32,
+    /// Where the sampled ray left the scene: the environment's radiance along it and the MIS
+    /// weight the path gave it ([`Observation::escaped`]).
+    escaped: (Vec3, f32),
 }
 
 /// The salt of [`VertexSampler::begin_path`]'s seed: the sampler's stream starts away from
@@ -323,11 +324,12 @@ pub fn trace_path<S: VertexSampler>(
     loop {
         let Some(hit) = scene.intersect(o, d, 0.0, f32::INFINITY) else {
             if scene.environment != Vec3::ZERO {
+                let seen = scene.environment_radiance(d);
                 let weight = environment_weight(scene, method, last_pdf, last_normal, d);
-                radiance += throughput * scene.environment * weight;
+                radiance += throughput * seen * weight;
                 if let Some(r) = previous_record(&mut recorded, depth) {
-                    r.discarded += throughput * scene.environment * (1.0 - weight);
-                    r.environment_weight = weight;
+                    r.discarded += throughput * seen * (1.0 - weight);
+                    r.escaped = (seen, weight);
                 }
             }
             break;
@@ -414,7 +416,7 @@ pub fn trace_path<S: VertexSampler>(
             break;
         }
     }
-    report_recorded(sampler, &recorded, radiance, bounces, scene.environment);
+    report_recorded(sampler, &recorded, radiance, bounces);
     radiance
 }
 
@@ -523,7 +525,7 @@ fn record_vertex(
             throughput,
             discarded: Vec3::ZERO,
             next: None,
-            environment_weight: 1.0,
+            escaped: (Vec3::ZERO, 1.0),
         });
     }
 }
@@ -565,12 +567,13 @@ fn emitter_weight(
 
 /// The weight of the environment seen along `d` by a ray sampled with density `last_pdf` at a
 /// vertex of normal `normal`: the MIS weight against a light sample of the environment
-/// ([`Scene::environment_pmf`] × cos/π, [`environment_light`]) for methods that sample lights,
+/// ([`Scene::environment_pmf`] × [`Scene::environment_pdf`], [`environment_light`]) for
+/// methods that sample lights,
 /// else 1 (a guide's emission-only directions gather only emitting triangles, and the camera
 /// ray has no alternative).
 fn environment_weight(scene: &Scene, method: Method, last_pdf: f32, normal: Vec3, d: Vec3) -> f32 {
     if last_pdf > 0.0 && method.samples_lights() {
-        let light_pdf = scene.environment_pmf * cosine_hemisphere_pdf(normal, d);
+        let light_pdf = scene.environment_pmf * scene.environment_pdf(normal, d);
         power_heuristic(last_pdf, light_pdf)
     } else {
         1.0
@@ -585,7 +588,6 @@ fn report_recorded<S: VertexSampler>(
     recorded: &[Option<Recorded>],
     radiance: Vec3,
     bounces: u32,
-    environment: Vec3,
 ) {
     for r in recorded.iter().flatten() {
         let Recorded {
@@ -595,7 +597,7 @@ fn report_recorded<S: VertexSampler>(
             throughput,
             discarded,
             next,
-            environment_weight,
+            escaped,
         } = r;
         let gained = radiance - *before + *discarded;
         let incident = Vec3::select(
@@ -613,7 +615,7 @@ fn report_recorded<S: VertexSampler>(
             radiance: incident,
             next: *next,
             escaped: if next.is_none() {
-                (environment, *environment_weight)
+                *escaped
             } else {
                 (Vec3::ZERO, 1.0)
             },
@@ -638,25 +640,30 @@ fn light_sample<S: VertexSampler>(
 }
 
 /// A light sample of the environment at `vertex` ([`direct_light`]'s, picked with
-/// probability [`Scene::environment_pmf`]): a direction cosine-distributed about the vertex's
-/// normal (`u`), density `environment_pmf · cos/π`; `None` where the material reflects
-/// nothing along it or the scene blocks it.
+/// probability [`Scene::environment_pmf`]): a direction from [`Scene::sample_environment`]
+/// (`u`; cosine-distributed about the vertex's normal for a uniform environment, in proportion
+/// to an environment map's luminance), density `environment_pmf` × its density; `None` where
+/// the material reflects nothing along it or the scene blocks it.
 fn environment_light(
     scene: &Scene,
     vertex: &Vertex,
     origin: Vec3,
     u: [f32; 2],
 ) -> Option<(Vec3, f32, Vec3)> {
-    let (wi, cos_pdf) = cosine_hemisphere(vertex.normal, Vec2::from(u));
-    let light_pdf = scene.environment_pmf * cos_pdf;
-    if !(light_pdf > 0.0) {
+    let (wi, pdf) = scene.sample_environment(vertex.normal, Vec2::from(u))?;
+    let light_pdf = scene.environment_pmf * pdf;
+    if !(light_pdf > 0.0) || vertex.normal.dot(wi) <= 0.0 {
         return None;
     }
     let f_cos = vertex.material.eval(vertex.normal, vertex.wo, wi);
     if f_cos == Vec3::ZERO || scene.occluded(origin, wi, 0.0, f32::INFINITY) {
         return None;
     }
-    Some((f_cos * scene.environment / light_pdf, light_pdf, wi))
+    Some((
+        f_cos * scene.environment_radiance(wi) / light_pdf,
+        light_pdf,
+        wi,
+    ))
 }
 
 /// One light sample at `vertex` without MIS weight: the estimate `f·cos·L_e / p_light` of the

@@ -32,6 +32,7 @@
 //! each tile's pass when the adapter has `TIMESTAMP_QUERY`, else from the wall clock around
 //! the submissions and the wait for them.
 
+use std::borrow::Cow;
 use std::time::Instant;
 
 use bytemuck::{Pod, Zeroable};
@@ -121,6 +122,12 @@ pub const ALPHA_MASK_DEF: &str = "MCG_DEMO_ALPHA_MASK";
 /// `nee` frame took 2-3 % longer with the code present in a scene without environment.
 pub const ENVIRONMENT_DEF: &str = "MCG_DEMO_ENVIRONMENT";
 
+/// The shader def that compiles the environment map's lookup and sampling (WGSL
+/// `environment_radiance`, `environment_sample`, `environment_map_pdf`;
+/// [`Scene::environment_map`]) in place of the uniform environment's, set with
+/// [`ENVIRONMENT_DEF`] where the uploaded scene has a map.
+pub const ENVIRONMENT_MAP_DEF: &str = "MCG_DEMO_ENVIRONMENT_MAP";
+
 /// The compile-time choices that the uploaded scene makes for the kernels that read it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SceneDefs {
@@ -130,6 +137,8 @@ pub struct SceneDefs {
     pub alpha_mask: bool,
     /// [`ENVIRONMENT_DEF`]: the scene has an environment.
     pub environment: bool,
+    /// [`ENVIRONMENT_MAP_DEF`]: the environment is a map.
+    pub environment_map: bool,
 }
 
 impl SceneDefs {
@@ -137,10 +146,12 @@ impl SceneDefs {
     #[must_use]
     pub fn of(scene: &Scene) -> Self {
         let attributes = !scene.attributes.is_empty();
+        let environment = scene.environment != Vec3::ZERO;
         Self {
             attributes,
             alpha_mask: attributes && scene.materials.iter().any(|m| m.alpha_cutoff > 0.0),
-            environment: scene.environment != Vec3::ZERO,
+            environment,
+            environment_map: environment && scene.environment_map.is_some(),
         }
     }
 
@@ -154,6 +165,9 @@ impl SceneDefs {
         }
         if self.environment {
             defs.push((ENVIRONMENT_DEF, 1));
+        }
+        if self.environment_map {
+            defs.push((ENVIRONMENT_MAP_DEF, 1));
         }
     }
 }
@@ -232,7 +246,7 @@ pub fn method_code(method: Method) -> Option<u32> {
 }
 
 /// The uniform block of the `render` kernel (`Params` in WGSL): the camera, the frame's
-/// settings and the tile of one dispatch. 208 bytes.
+/// settings and the tile of one dispatch. 224 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuParams {
@@ -299,6 +313,10 @@ pub struct GpuParams {
     pub environment: [f32; 3],
     /// [`Scene::environment_pmf`]: the probability that a light sample picks the environment.
     pub environment_pmf: f32,
+    /// The [`Scene::environment_map`]: the index of its first word in the texel buffer
+    /// ([`EnvironmentMap::gpu_words`](super::environment::EnvironmentMap::gpu_words), after the textures' texels), its width and its height;
+    /// zeros without one.
+    pub environment_map: [u32; 4],
 }
 
 /// The salt of [`frame_counts`]' draws.
@@ -460,6 +478,8 @@ struct SceneBuffers {
     environment: Vec3,
     /// [`GpuParams::environment_pmf`].
     environment_pmf: f32,
+    /// [`GpuParams::environment_map`].
+    environment_map: [u32; 4],
     nodes: GpuBuffer<BvhNode>,
     triangles: GpuBuffer<Triangle>,
     materials: GpuBuffer<Material>,
@@ -482,6 +502,7 @@ impl SceneBuffers {
             emitter_root: self.emitter_root,
             environment: self.environment.to_array(),
             environment_pmf: self.environment_pmf,
+            environment_map: self.environment_map,
             ..GpuParams::default()
         }
     }
@@ -1023,11 +1044,21 @@ impl GpuTracer {
             .map(|(&triangle, &cdf)| GpuEmitter { triangle, cdf })
             .collect();
         let (nodes, triangles) = joined_trees(scene);
+        // The environment map's tables and texels follow the textures' texels.
+        let (texels, environment_map) = match &scene.environment_map {
+            Some(map) => {
+                let mut words = scene.texels.clone();
+                words.extend(map.gpu_words());
+                let at = scene.texels.len() as u32;
+                (Cow::Owned(words), [at, map.width(), map.height(), 0])
+            }
+            None => (Cow::Borrowed(&scene.texels), [0; 4]),
+        };
         let max = self.ctx.device().limits().max_storage_buffer_binding_size;
         let largest = [
             size_of_val(nodes.as_slice()),
             size_of_val(triangles.as_slice()),
-            size_of_val(scene.texels.as_slice()),
+            size_of_val(texels.as_slice()),
         ]
         .into_iter()
         .max()
@@ -1046,13 +1077,14 @@ impl GpuTracer {
             emitter_first: scene.bvh.triangles.len() as u32,
             environment: scene.environment,
             environment_pmf: scene.environment_pmf,
+            environment_map,
             nodes: ctx.storage_buffer("mcg-demo nodes", &nodes),
             triangles: ctx.storage_buffer("mcg-demo triangles", &triangles),
             materials: ctx.storage_buffer("mcg-demo materials", &scene.materials),
             emitters: ctx.storage_buffer("mcg-demo emitters", &emitters),
             attributes: ctx.storage_buffer("mcg-demo attributes", &scene.attributes),
             textures: ctx.storage_buffer("mcg-demo textures", &scene.textures),
-            texels: ctx.storage_buffer("mcg-demo texels", &scene.texels),
+            texels: ctx.storage_buffer("mcg-demo texels", &texels),
         });
         self.ctx.write(&self.params, &[self.scene()?.params()])?;
         self.set_guided_defs(GuidedDefs {
@@ -1330,7 +1362,10 @@ impl GpuTracer {
             return Ok(());
         }
         let scene_changed = defs.scene != self.guided_defs.scene;
-        let probe_defs = |d: GuidedDefs| (d.scene.alpha_mask, d.scene.environment);
+        let probe_defs = |d: GuidedDefs| {
+            let s = d.scene;
+            (s.alpha_mask, s.environment, s.environment_map)
+        };
         if probe_defs(defs) != probe_defs(self.guided_defs) {
             self.probe_module = None;
             self.probes = None;
@@ -1800,6 +1835,7 @@ mod tests {
             attributes: true,
             alpha_mask: true,
             environment: true,
+            environment_map: true,
         };
         let textured = SceneDefs {
             attributes: true,
@@ -1873,6 +1909,6 @@ mod tests {
             .map(|(h, _)| h)
             .unwrap();
         assert_eq!(layouter[params].size as usize, size_of::<GpuParams>());
-        assert_eq!(size_of::<GpuParams>(), 208);
+        assert_eq!(size_of::<GpuParams>(), 224);
     }
 }

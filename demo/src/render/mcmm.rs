@@ -415,7 +415,7 @@ impl McmmRenderer {
         );
         let origin = scene.camera.position;
         let Some(hit) = scene.intersect(origin, d, 0.0, f32::INFINITY) else {
-            return scene.environment;
+            return scene.environment_radiance(d);
         };
         let tri = scene.bvh.triangles[hit.triangle as usize];
         let material = scene.material_at(&hit);
@@ -487,7 +487,7 @@ fn emitter_along(scene: &Scene, origin: Vec3, w: Vec3) -> (Vec3, Vec3) {
             };
             (origin + hit.t * w, emitted)
         }
-        None => (origin + w, scene.environment),
+        None => (origin + w, scene.environment_radiance(w)),
     }
 }
 

@@ -28,6 +28,7 @@
 pub mod bvh;
 pub mod cpu;
 pub mod emission_allocation;
+pub mod environment;
 pub mod gpu;
 pub mod guided;
 pub mod material;
@@ -164,13 +165,16 @@ pub struct RenderArgs {
     /// the chain's own technique density (with the paper's p_h = 0.2).
     #[arg(long, value_enum, default_value_t = McmmScore::TileMixture)]
     pub mcmm_score: McmmScore,
-    /// A uniform environment of radiance `R,G,B` (linear, W·sr⁻¹·m⁻² per channel) around the
-    /// scene: what a ray that leaves it sees ([`scene::Scene::environment`]; glTF has no
-    /// environment). A scene lit by it needs no emissive material; `nee` samples it with
-    /// cosine-distributed directions ([`scene::ENVIRONMENT_PICK`] of its light samples where
-    /// the scene also has emitters).
-    #[arg(long, value_parser = parse_rgb)]
-    pub environment: Option<Vec3>,
+    /// An environment around the scene, what a ray that leaves it sees (glTF has none):
+    /// `R,G,B`, a uniform radiance (linear, W·sr⁻¹·m⁻² per channel;
+    /// [`scene::Scene::environment`]), or `FILE.exr` / `FILE.hdr`, an equirectangular map of
+    /// linear radiance, its centre straight down −Z and its top row the zenith (+Y;
+    /// [`environment::EnvironmentMap`]). A scene lit by it needs no emissive material; `nee`
+    /// samples a uniform one with cosine-distributed directions and a map in proportion to its
+    /// luminance ([`scene::ENVIRONMENT_PICK`] of its light samples where the scene also has
+    /// emitters). It replaces an environment the file's extras name.
+    #[arg(long, value_parser = parse_environment)]
+    pub environment: Option<EnvironmentArg>,
     /// For a file without a camera: one looking down −Z at the whole scene (45° vertical
     /// field of view; [`scene::SceneFile::with_auto_camera`]); without it such a file is an
     /// error.
@@ -234,7 +238,29 @@ fn parse_seed(v: &str) -> Result<u64, String> {
     .map_err(|_| format!("not a number: {v}"))
 }
 
-/// `--environment`: three comma-separated non-negative numbers, `R,G,B`.
+/// What `--environment` names.
+#[derive(Clone, Debug, PartialEq)]
+pub enum EnvironmentArg {
+    /// A uniform radiance.
+    Uniform(Vec3),
+    /// The file of an environment map.
+    Map(PathBuf),
+}
+
+/// `--environment`: a file ending in `.exr` or `.hdr` (any case), else [`parse_rgb`]'s
+/// `R,G,B`.
+fn parse_environment(v: &str) -> Result<EnvironmentArg, String> {
+    let lower = v.to_ascii_lowercase();
+    if lower.ends_with(".exr") || lower.ends_with(".hdr") {
+        Ok(EnvironmentArg::Map(PathBuf::from(v)))
+    } else {
+        parse_rgb(v)
+            .map(EnvironmentArg::Uniform)
+            .map_err(|e| format!("{e} (or an environment map: FILE.exr or FILE.hdr)"))
+    }
+}
+
+/// A uniform radiance: three comma-separated non-negative numbers, `R,G,B`.
 fn parse_rgb(v: &str) -> Result<Vec3, String> {
     let channels: Vec<f32> = v
         .split(',')
@@ -399,8 +425,10 @@ pub struct Rendered {
 /// Scene errors ([`scene::SceneError`]), an unreadable reference or one of another size.
 pub fn render(args: &RenderArgs) -> Result<Rendered> {
     let mut file = SceneFile::open(&args.scene)?;
-    if let Some(radiance) = args.environment {
-        file = file.with_environment(radiance)?;
+    match &args.environment {
+        Some(EnvironmentArg::Uniform(radiance)) => file = file.with_environment(*radiance)?,
+        Some(EnvironmentArg::Map(map)) => file = file.with_environment_map(map)?,
+        None => {}
     }
     if args.auto_camera {
         file = file.with_auto_camera();

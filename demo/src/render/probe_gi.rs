@@ -167,7 +167,7 @@ impl ShadingProbes {
         let u = [next_uniform(rng), next_uniform(rng), next_uniform(rng)];
         let o = scene.camera.position;
         let Some(hit) = scene.intersect(o, d, 0.0, f32::INFINITY) else {
-            return scene.environment;
+            return scene.environment_radiance(d);
         };
         let tri = scene.bvh.triangles[hit.triangle as usize];
         let (_, n_front, cos_front) = front_face(&tri, d);

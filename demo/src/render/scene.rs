@@ -41,18 +41,25 @@
 //! Conventions (glTF 2.0): metres, radians, linear scene-referred RGB radiance; emission from
 //! the front face only (counter-clockwise winding seen from the front). glTF has no
 //! environment: [`SceneFile::with_environment`] (`render --environment R,G,B`) adds a uniform
-//! one ([`Scene::environment`]), seen by every ray that leaves the scene, which light sampling
-//! picks with [`Scene::environment_pmf`] and samples with cosine-distributed directions.
+//! one ([`Scene::environment`]) and [`SceneFile::with_environment_map`] (`render
+//! --environment FILE.exr|FILE.hdr`) an equirectangular map ([`Scene::environment_map`],
+//! [`EnvironmentMap`]), seen by every ray that leaves the scene; light sampling picks it with
+//! [`Scene::environment_pmf`] and samples a uniform one with cosine-distributed directions, a
+//! map in proportion to its luminance. A scene's extras may name either
+//! (`"extras": {"mcg": {"environment": [r, g, b]}}` or `… "environment": "sky.exr"`).
 
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use glam::{Mat4, Quat, Vec3};
+use std::sync::Arc;
+
+use glam::{Mat4, Quat, Vec2, Vec3};
 use gltf::animation::{Interpolation, Property, util::ReadOutputs};
 
 use bytemuck::{Pod, Zeroable};
 
 use super::bvh::{Bvh, Hit, Triangle};
+use super::environment::EnvironmentMap;
 use super::material::{Material, NO_TEXTURE};
 
 /// The glTF extensions the loader reads; [`Scene::warnings`] names any other a file uses.
@@ -251,6 +258,8 @@ pub struct SceneFile {
     textures: Vec<TextureUse>,
     /// [`Scene::environment`] of the scenes it builds.
     environment: Vec3,
+    /// [`Scene::environment_map`] of the scenes it builds.
+    environment_map: Option<Arc<EnvironmentMap>>,
     /// Whether a scene without a camera gets [`auto_camera`]'s.
     auto_camera: bool,
 }
@@ -457,8 +466,14 @@ pub struct Scene {
     pub emitter_cdf: Vec<f32>,
     /// The radiance that arrives from outside the scene along every direction (a uniform
     /// environment, as a sky seen through the scene's openings), linear RGB: what a ray that
-    /// leaves the scene sees. Zero (the default) for none.
+    /// leaves the scene sees. Zero (the default) for none. With an
+    /// [`Scene::environment_map`], the factor its radiance is multiplied by
+    /// ([`Scene::environment_radiance`]).
     pub environment: Vec3,
+    /// An environment map ([`EnvironmentMap`]) that gives the environment's radiance per
+    /// direction, times [`Scene::environment`]; light sampling then draws directions in
+    /// proportion to its luminance instead of cosine-distributed ones.
+    pub environment_map: Option<Arc<EnvironmentMap>>,
     /// The probability that light sampling picks the environment rather than a triangle
     /// ([`Scene::pick_light`]): 0 without an environment, 1 without emitting triangles, else
     /// [`ENVIRONMENT_PICK`]. The triangles' [`Triangle::emitter_pmf`] sum to 1 − this.
@@ -480,12 +495,15 @@ pub struct Scene {
 impl SceneFile {
     /// Reads a `.gltf` (with `.bin` files or embedded base64 buffers) or a `.glb`, with the
     /// environment its scene's extras name (`"extras": {"mcg": {"environment": [r, g, b]}}`,
-    /// as the built-in `sky_room`; [`SceneFile::with_environment`] replaces it).
+    /// as the built-in `sky_room`, or an environment map's file relative to the glTF file,
+    /// `"environment": "sky.exr"`; [`SceneFile::with_environment`] and
+    /// [`SceneFile::with_environment_map`] replace it).
     ///
     /// # Errors
     /// [`SceneError::Unreadable`] when the file is missing or not glTF 2.0,
     /// [`SceneError::NoScene`] when it holds no scene, [`SceneError::NonFinite`] for an
-    /// environment in the extras that is not three finite non-negative numbers.
+    /// environment in the extras that is neither three finite non-negative numbers nor a
+    /// string, [`SceneError::Unreadable`] for an environment map that cannot be read.
     pub fn open(path: impl AsRef<Path>) -> Result<Self, SceneError> {
         let path = path.as_ref().to_path_buf();
         let unreadable = |e: gltf::Error| SceneError::Unreadable {
@@ -497,10 +515,22 @@ impl SceneFile {
         if document.scenes().len() == 0 {
             return Err(SceneError::NoScene { path });
         }
-        let environment = extras_environment(&document).ok_or_else(|| SceneError::NonFinite {
+        let extras = extras_environment(&document).ok_or_else(|| SceneError::NonFinite {
             path: path.clone(),
-            what: "the environment in the scene's extras (mcg.environment: [r, g, b])".to_owned(),
+            what: "the environment in the scene's extras (mcg.environment: [r, g, b] or \
+                   \"map.exr\")"
+                .to_owned(),
         })?;
+        let (environment, environment_map) = match extras {
+            Err(radiance) => (radiance, None),
+            Ok(file) => {
+                let map = open_environment_map(
+                    &path,
+                    &path.parent().unwrap_or(Path::new("")).join(file),
+                )?;
+                (Vec3::ONE, Some(map))
+            }
+        };
         let textures = used_textures(&document);
         let mut images: Vec<(usize, u32, u32, Vec<u32>)> = Vec::new();
         if !textures.is_empty() {
@@ -526,6 +556,7 @@ impl SceneFile {
             images,
             textures,
             environment,
+            environment_map,
             auto_camera: false,
         })
     }
@@ -554,6 +585,19 @@ impl SceneFile {
             });
         }
         self.environment = radiance;
+        self.environment_map = None;
+        Ok(self)
+    }
+
+    /// The file lit by the environment map in the file `map` too (an equirectangular OpenEXR
+    /// or Radiance image, [`EnvironmentMap::open`]; [`Scene::environment_map`]), replacing any
+    /// environment the file names: the scenes it builds need no emitting triangle then.
+    ///
+    /// # Errors
+    /// [`SceneError::Unreadable`] when the map cannot be read, naming it and what is wrong.
+    pub fn with_environment_map(mut self, map: &Path) -> Result<Self, SceneError> {
+        self.environment_map = Some(open_environment_map(&self.path, map)?);
+        self.environment = Vec3::ONE;
         Ok(self)
     }
 
@@ -626,6 +670,9 @@ impl SceneFile {
         };
         let mut scene = Scene::new_lit(camera, &triangles, materials, warnings, self.environment)
             .ok_or_else(|| SceneError::NoEmitters { path: path.clone() })?;
+        if let Some(map) = &self.environment_map {
+            scene.environment_map = Some(Arc::clone(map));
+        }
         let depth = scene.bvh.depth();
         if depth > super::bvh::STACK_SIZE {
             return Err(SceneError::BvhTooDeep {
@@ -1072,20 +1119,35 @@ fn auto_camera(triangles: &[Triangle]) -> Camera {
     }
 }
 
-/// The environment that the default scene's extras name (`mcg.environment`, three finite
-/// non-negative numbers; see [`SceneFile::open`]): zero without one, `None` for a malformed
-/// one.
-fn extras_environment(document: &gltf::Document) -> Option<Vec3> {
+/// Reads the environment map `map` for the scene file `path`, as [`SceneError::Unreadable`]
+/// (naming both) when it cannot.
+fn open_environment_map(path: &Path, map: &Path) -> Result<Arc<EnvironmentMap>, SceneError> {
+    EnvironmentMap::open(map)
+        .map(Arc::new)
+        .map_err(|reason| SceneError::Unreadable {
+            path: path.to_path_buf(),
+            reason: format!("its environment map: {reason}"),
+        })
+}
+
+/// The environment that the default scene's extras name (see [`SceneFile::open`]): `Err` of
+/// a uniform radiance (`mcg.environment` as three finite non-negative numbers; zero without
+/// one) or `Ok` of an environment map's file name (`mcg.environment` as a string, relative to
+/// the glTF file); `None` for a malformed one.
+fn extras_environment(document: &gltf::Document) -> Option<Result<PathBuf, Vec3>> {
     let scene = document
         .default_scene()
         .or_else(|| document.scenes().next())?;
     let Some(raw) = scene.extras() else {
-        return Some(Vec3::ZERO);
+        return Some(Err(Vec3::ZERO));
     };
     let extras: serde_json::Value = serde_json::from_str(raw.get()).ok()?;
     let Some(value) = extras.pointer("/mcg/environment") else {
-        return Some(Vec3::ZERO);
+        return Some(Err(Vec3::ZERO));
     };
+    if let Some(file) = value.as_str() {
+        return Some(Ok(PathBuf::from(file)));
+    }
     let channels: Vec<f32> = value
         .as_array()?
         .iter()
@@ -1093,7 +1155,7 @@ fn extras_environment(document: &gltf::Document) -> Option<Vec3> {
         .collect::<Option<_>>()?;
     match channels[..] {
         [r, g, b] if [r, g, b].iter().all(|c| c.is_finite() && *c >= 0.0) => {
-            Some(Vec3::new(r, g, b))
+            Some(Err(Vec3::new(r, g, b)))
         }
         _ => None,
     }
@@ -1273,6 +1335,7 @@ impl Scene {
             emitter_cdf: Vec::new(),
             environment: Vec3::ZERO,
             environment_pmf: 0.0,
+            environment_map: None,
             attributes: Vec::new(),
             textures: Vec::new(),
             texels: Vec::new(),
@@ -1284,7 +1347,7 @@ impl Scene {
     }
 
     /// Lights the scene by a uniform environment of radiance `radiance` ([`Scene::environment`];
-    /// zero for none) and shares light selection between it and the emitting triangles
+    /// zero for none; with an [`Scene::environment_map`], the map's factor) and shares light selection between it and the emitting triangles
     /// ([`Scene::environment_pmf`]; the triangles keep their ratios). A scene without
     /// emitting triangles and a black environment renders black.
     pub fn set_environment(&mut self, radiance: Vec3) {
@@ -1307,6 +1370,50 @@ impl Scene {
         }
         self.environment = if lit { radiance } else { Vec3::ZERO };
         self.environment_pmf = pmf;
+    }
+
+    /// Lights the scene by the environment map `map` ([`Scene::environment_map`]) at its own
+    /// radiance ([`Scene::environment`] = 1), sharing light selection as
+    /// [`Scene::set_environment`] does.
+    pub fn set_environment_map(&mut self, map: Arc<EnvironmentMap>) {
+        self.environment_map = Some(map);
+        self.set_environment(Vec3::ONE);
+    }
+
+    /// The radiance seen looking along the unit direction `d` out of the scene:
+    /// [`Scene::environment`], times the [`Scene::environment_map`]'s texel where there is one.
+    #[must_use]
+    pub fn environment_radiance(&self, d: Vec3) -> Vec3 {
+        match &self.environment_map {
+            Some(map) => self.environment * map.radiance(d),
+            None => self.environment,
+        }
+    }
+
+    /// A direction of a light sample of the environment at a vertex of normal `normal`, from
+    /// uniforms `u`, and its solid-angle density without [`Scene::environment_pmf`]: drawn
+    /// from the [`Scene::environment_map`] ([`EnvironmentMap::sample`]) where there is one, else
+    /// cosine-distributed about `normal` (the uniform environment's radiance times the
+    /// Lambertian cosine); `None` when it has no density.
+    #[must_use]
+    pub fn sample_environment(&self, normal: Vec3, u: Vec2) -> Option<(Vec3, f32)> {
+        match &self.environment_map {
+            Some(map) => map.sample(u),
+            None => {
+                let (wi, pdf) = mcg_markov_guide::cosine_hemisphere(normal, u);
+                (pdf > 0.0).then_some((wi, pdf))
+            }
+        }
+    }
+
+    /// The density with which [`Scene::sample_environment`] at a vertex of normal `normal`
+    /// draws the unit direction `d` (without [`Scene::environment_pmf`]).
+    #[must_use]
+    pub fn environment_pdf(&self, normal: Vec3, d: Vec3) -> f32 {
+        match &self.environment_map {
+            Some(map) => map.pdf(d),
+            None => mcg_markov_guide::cosine_hemisphere_pdf(normal, d),
+        }
     }
 
     /// Light selection proportional to `power` (one value per [`Scene::emitters`], all

@@ -3,10 +3,12 @@
 #![allow(dead_code)] // each test file uses a part
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use glam::Vec3;
 use mcg_demo::render::bvh::Triangle;
 use mcg_demo::render::cpu::{Method, RenderSettings};
+use mcg_demo::render::environment::EnvironmentMap;
 use mcg_demo::render::material::Material;
 use mcg_demo::render::mcmm::McmmScore;
 use mcg_demo::render::scene::{Camera, Scene, TextureInfo, TriangleAttributes, WRAP_REPEAT};
@@ -151,6 +153,55 @@ pub fn sky_floor(rho: Vec3, sky: Vec3, up: bool) -> Scene {
         Material::lambertian(Vec3::ZERO, Vec3::splat(5.0)),
     ];
     Scene::new_lit(camera, &tris, materials, Vec::new(), sky).unwrap()
+}
+
+/// A 32 × 16 environment map for the tests: a blue sky brightening toward the horizon in
+/// the upper half (rows 0-7), its row 1 black (a row light sampling never picks) and texel
+/// (4, 2) black too, a sun in texel (20, 3) about 600 times as bright as the sky (θ ≈ 39°),
+/// and brown ground in the lower half (rows 8-15).
+pub fn sky_map() -> EnvironmentMap {
+    let (w, h) = (32u32, 16u32);
+    let texels = (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            match (x, y) {
+                (_, 1) | (4, 2) => Vec3::ZERO,
+                (20, 3) => Vec3::new(400.0, 360.0, 300.0),
+                (_, y) if y < h / 2 => Vec3::new(0.3, 0.5, 1.0) * (1.0 + y as f32 / h as f32),
+                _ => Vec3::new(0.2, 0.15, 0.1),
+            }
+        })
+        .collect();
+    EnvironmentMap::new(w, h, texels).unwrap()
+}
+
+/// The radiance that a white Lambertian surface facing up (+Y) reflects under `map`, with
+/// nothing above it: (1/π) ∫ L(ω) cos θ dω over the upper hemisphere, summed in `f64` texel by
+/// texel (the map's texels hold constant radiance; a texel of rows θ₀ to θ₁ spans 2π/W of
+/// azimuth and ∫ cos θ sin θ dθ = (sin² θ₁ − sin² θ₀)/2). The map's height must be even, so
+/// that the horizon is a row boundary.
+pub fn upward_reflection(map: &EnvironmentMap) -> Vec3 {
+    let (w, h) = (map.width() as usize, map.height() as usize);
+    assert_eq!(h % 2, 0, "the horizon must be a row boundary");
+    let mut sum = [0.0f64; 3];
+    for row in 0..h / 2 {
+        let sin2 = |r: usize| (r as f64 / h as f64 * std::f64::consts::PI).sin().powi(2);
+        let band = (sin2(row + 1) - sin2(row)) / 2.0 * std::f64::consts::TAU / w as f64;
+        for texel in &map.texels()[row * w..(row + 1) * w] {
+            for c in 0..3 {
+                sum[c] += f64::from(texel[c]) * band;
+            }
+        }
+    }
+    Vec3::from(sum.map(|c| (c / std::f64::consts::PI) as f32))
+}
+
+/// [`sky_floor`] under [`sky_map`] instead of a uniform sky, looking down: every pixel shows
+/// ρ × [`upward_reflection`].
+pub fn sky_map_floor(rho: Vec3) -> Scene {
+    let mut scene = sky_floor(rho, Vec3::ONE, false);
+    scene.set_environment_map(Arc::new(sky_map()));
+    scene
 }
 
 /// The settings of the environment furnace tests: 16×16 pixels × 16 spp, seed 5.

@@ -1108,6 +1108,7 @@ mod tests {
             attributes: true,
             alpha_mask: true,
             environment: true,
+            environment_map: true,
         };
         let source = composed_probe_shader(all).unwrap();
         let module = naga::front::wgsl::parse_str(&source)

@@ -3,7 +3,8 @@
 // triangles in leaf order (48 bytes), materials (48 bytes) — uploaded as the CPU holds them.
 //
 // Conventions (as on the CPU): `bounces` counts scattering events; no Russian roulette; a box
-// pixel filter; no environment light; emission from front faces only; both faces scatter. The
+// pixel filter; rays that leave the scene see the environment (`environment_radiance`);
+// emission from front faces only; both faces scatter. The
 // random stream of a path is seeded by `path_seed` and drawn in the same order as on the CPU,
 // so both devices trace the same paths up to floating-point rounding.
 //
@@ -145,6 +146,9 @@ struct Params {
     environment: vec3<f32>,
     // `Scene::environment_pmf`: the probability that a light sample picks the environment.
     environment_pmf: f32,
+    // The environment map (`GpuParams::environment_map`): its first word in `texels`, its
+    // width and height; zeros without one.
+    environment_map: vec4<u32>,
 }
 
 // `gpu::GpuRay`: a query of the `trace_rays` kernel (closest hit, or any hit when `any_hit`).
@@ -869,10 +873,108 @@ fn emission_uniforms(first: vec3<f32>, i: u32) -> vec3<f32> {
 var<private> moment_base: u32;
 const NO_MOMENTS: u32 = 0xffffffffu;
 
+// `Scene::environment_radiance`: the radiance seen looking along the unit direction `d` out of
+// the scene (`params.environment`, times the environment map's texel where there is one).
+fn environment_radiance(d: vec3<f32>) -> vec3<f32> {
+#ifdef MCG_DEMO_ENVIRONMENT_MAP
+    let texel = environment_texel(environment_coordinates(d));
+    let h = params.environment_map.z;
+    let at = (h + 1u) + h * (params.environment_map.y + 1u)
+        + 3u * (texel.y * params.environment_map.y + texel.x);
+    return params.environment
+        * vec3<f32>(environment_word(at), environment_word(at + 1u), environment_word(at + 2u));
+#else
+    return params.environment;
+#endif
+}
+
+#ifdef MCG_DEMO_ENVIRONMENT_MAP
+// Word `i` of the environment map in `texels` (`EnvironmentMap::gpu_words`: the row table,
+// the column tables, the texels' RGB), as the `f32` it holds.
+fn environment_word(i: u32) -> f32 {
+    return bitcast<f32>(texels[params.environment_map.x + i]);
+}
+
+// `EnvironmentMap::coordinates`: the image coordinates (u, v) of the unit direction `d`.
+fn environment_coordinates(d: vec3<f32>) -> vec2<f32> {
+    return vec2<f32>(atan2(d.x, -d.z) * (0.5 / MCG_PI) + 0.5,
+                     acos(clamp(d.y, -1.0, 1.0)) * (1.0 / MCG_PI));
+}
+
+// `EnvironmentMap::texel_of`: the texel (column, row) that holds the image coordinates `uv`.
+fn environment_texel(uv: vec2<f32>) -> vec2<u32> {
+    let size = params.environment_map.yz;
+    let x = min(u32(max(uv.x * f32(size.x), 0.0)), size.x - 1u);
+    let y = min(u32(max(uv.y * f32(size.y), 0.0)), size.y - 1u);
+    return vec2<u32>(x, y);
+}
+
+// `EnvironmentMap::texel_probability`: the row's step in the row table times the column's in
+// its row's table.
+fn environment_texel_probability(texel: vec2<u32>) -> f32 {
+    let h = params.environment_map.z;
+    let row = (h + 1u) + texel.y * (params.environment_map.y + 1u);
+    return (environment_word(texel.y + 1u) - environment_word(texel.y))
+        * (environment_word(row + texel.x + 1u) - environment_word(row + texel.x));
+}
+
+// `EnvironmentMap::pdf`: the solid-angle density with which `environment_sample` draws `d`.
+fn environment_map_pdf(d: vec3<f32>) -> f32 {
+    let uv = environment_coordinates(d);
+    let s = sin(MCG_PI * uv.y);
+    if !(s > 0.0) {
+        return 0.0;
+    }
+    let size = params.environment_map.yz;
+    return environment_texel_probability(environment_texel(uv)) * f32(size.x * size.y)
+        / (2.0 * MCG_PI * MCG_PI * s);
+}
+
+// `environment::sample_table`: the step of the cumulative table of `n` + 1 entries from word
+// `first` that holds `u` (the last entry at or below it) in x, where `u` falls within it in y.
+fn environment_table(first: u32, n: u32, u: f32) -> vec2<f32> {
+    var lo = 0u;
+    var hi = n;
+    while hi - lo > 1u {
+        let mid = (lo + hi) / 2u;
+        if environment_word(first + mid) <= u {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let c = environment_word(first + lo);
+    let step = environment_word(first + lo + 1u) - c;
+    var within = 0.5;
+    if step > 0.0 {
+        within = clamp((u - c) / step, 0.0, 0.99999994);
+    }
+    return vec2<f32>(f32(lo), within);
+}
+
+// `EnvironmentMap::sample`: a direction in proportion to the map's luminance from uniforms
+// `u`, and its solid-angle density (0 for none).
+fn environment_sample(u: vec2<f32>) -> McgDirectionSample {
+    let size = params.environment_map.yz;
+    let r = environment_table(0u, size.y, u.y);
+    let row = u32(r.x);
+    let c = environment_table((size.y + 1u) + row * (size.x + 1u), size.x, u.x);
+    let uv = vec2<f32>((c.x + c.y) / f32(size.x), (r.x + r.y) / f32(size.y));
+    let phi = 2.0 * MCG_PI * (uv.x - 0.5);
+    let theta = MCG_PI * uv.y;
+    let st = sin(theta);
+    let d = vec3<f32>(st * sin(phi), cos(theta), -st * cos(phi));
+    let pdf = environment_texel_probability(vec2<u32>(u32(c.x), row)) * f32(size.x * size.y)
+        / (2.0 * MCG_PI * MCG_PI * st);
+    return McgDirectionSample(d, select(0.0, pdf, pdf > 0.0 && pdf <= FAR));
+}
+#endif
+
 // `cpu::direct_light`: a light sample before its MIS weight, which the caller applies against
 // the density of its own direction sampler (the material's, or the guide's mixture for
 // `mcpg-nee`). `Scene::pick_light`: the environment below `environment_pmf` (a direction
-// cosine-distributed about the vertex's normal, `cpu::environment_light`), else a triangle.
+// cosine-distributed about the vertex's normal, or from the environment map,
+// `cpu::environment_light`), else a triangle.
 // Both kinds share one shadow walk, so that the kernel holds one walk's code here, and the
 // environment's part is compiled only for scenes that have one (MCG_DEMO_ENVIRONMENT,
 // `gpu::ENVIRONMENT_DEF`): llvmpipe pays for code present, taken or not (a walk of its own for
@@ -888,10 +990,14 @@ fn light_sample(v: Vertex, origin: vec3<f32>, u: vec3<f32>) -> LightSample {
 #ifdef MCG_DEMO_ENVIRONMENT
     environment = u.x < p || params.emitter_count == 0u;
     if environment {
+#ifdef MCG_DEMO_ENVIRONMENT_MAP
+        let s = environment_sample(u.yz);
+#else
         let s = mcg_cosine_hemisphere_sample(v.normal, u.yz);
+#endif
         wi = s.direction;
         light_pdf = p * s.pdf;
-        if !(light_pdf > 0.0) {
+        if !(light_pdf > 0.0) || dot(v.normal, wi) <= 0.0 {
             return none;
         }
     }
@@ -929,7 +1035,7 @@ fn light_sample(v: Vertex, origin: vec3<f32>, u: vec3<f32>) -> LightSample {
         return none;
     }
     if environment {
-        return LightSample(f_cos * params.environment / light_pdf, wi, light_pdf);
+        return LightSample(f_cos * environment_radiance(wi) / light_pdf, wi, light_pdf);
     }
     let emitted = triangle_emission(triangles[hit.triangle].material, hit);
     return LightSample(f_cos * emitted / light_pdf, wi, light_pdf);
@@ -940,7 +1046,11 @@ fn light_sample(v: Vertex, origin: vec3<f32>, u: vec3<f32>) -> LightSample {
 // the methods that sample lights, else 1).
 fn environment_weight(last_pdf: f32, normal: vec3<f32>, d: vec3<f32>) -> f32 {
     if samples_lights() && last_pdf > 0.0 {
+#ifdef MCG_DEMO_ENVIRONMENT_MAP
+        let light_pdf = params.environment_pmf * environment_map_pdf(d);
+#else
         let light_pdf = params.environment_pmf * mcg_cosine_hemisphere_pdf(normal, d);
+#endif
         return power_heuristic(last_pdf, light_pdf);
     }
     return 1.0;
@@ -983,7 +1093,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
         let hit = bvh_walk(o, d, 0.0, FAR, false);
         if hit.triangle == NO_HIT {
 #ifdef MCG_DEMO_ENVIRONMENT
-            escaped = params.environment;
+            escaped = environment_radiance(d);
             escaped_weight = environment_weight(last_pdf, last_normal, d);
             radiance += throughput * escaped * escaped_weight;
 #endif
@@ -1346,7 +1456,7 @@ fn probe_camera_ray(d: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
     let o = params.camera_position;
     let hit = bvh_walk(o, d, 0.0, FAR, false);
     if hit.triangle == NO_HIT {
-        return params.environment;
+        return environment_radiance(d);
     }
     let tri = triangles[hit.triangle];
     let c = cross(tri.e1, tri.e2);
@@ -1570,7 +1680,7 @@ struct EmitterHit {
 fn emitter_along(origin: vec3<f32>, w: vec3<f32>) -> EmitterHit {
     let hit = bvh_walk(origin, w, 0.0, FAR, false);
     if hit.triangle == NO_HIT {
-        return EmitterHit(origin + w, params.environment);
+        return EmitterHit(origin + w, environment_radiance(w));
     }
     let tri = triangles[hit.triangle];
     var emitted = vec3<f32>(0.0);
@@ -1665,7 +1775,7 @@ fn mcmm_shade(x: u32, y: u32, tentative: ptr<function, MarkovPixelState>,
     let d = camera_direction(f32(x) + jx, f32(y) + jy);
     let hit = bvh_walk(params.camera_position, d, 0.0, FAR, false);
     if hit.triangle == NO_HIT {
-        return params.environment;
+        return environment_radiance(d);
     }
     let tri = triangles[hit.triangle];
     let material = material_at(hit);
