@@ -28,7 +28,8 @@ use mcg_demo::render::scene::{
     ENVIRONMENT_PICK, MIN_TEXTURE_POWER, Scene, SceneError, SceneFile, frame_time, luminance,
 };
 use mcg_demo::render::scene_generator::{
-    DOOR_OPENS_AT_FRAME, SCENE_NAMES, SKY_ROOM_ENVIRONMENT, built_in_scenes,
+    DOOR_OPENS_AT_FRAME, SCENE_NAMES, SKY_ROOM_ENVIRONMENT, built_in_files, built_in_scenes,
+    sun_sky,
 };
 use mcg_demo::render::{Device, ProbeOptions, RenderArgs, output, render, write_outputs};
 use mcg_gpu_backend::sampling::next_uniform;
@@ -59,6 +60,26 @@ fn built_in_scenes_are_the_generators_output_and_load() {
         let lit = !scene.emitters.is_empty() || scene.environment != Vec3::ZERO;
         assert!(lit && scene.warnings.is_empty(), "{name}");
         assert!(scene.bvh.triangles.len() > 20);
+    }
+    for (file, bytes) in built_in_files() {
+        assert!(
+            std::fs::read(scenes_dir().join(file)).unwrap_or_default() == bytes,
+            "{file} differs from the generator: run `mcg-demo scenes`"
+        );
+    }
+    // The sun room's map, as read back from its RGBE file: every texel within 1/64 of its
+    // largest channel of the generator's (RGBE's channels share an exponent and keep 8 bits
+    // of mantissa each, a step of at most 1/128 of the largest).
+    let sun_room = SceneFile::open(scenes_dir().join("sun_room.gltf")).unwrap();
+    let map = sun_room.build(0.0).unwrap().environment_map.unwrap();
+    let (w, h, texels) = sun_sky();
+    assert_eq!((map.width(), map.height()), (w, h));
+    for (read, made) in map.texels().iter().zip(&texels) {
+        let step = made.max_element() / 64.0;
+        assert!(
+            (*read - *made).abs().max_element() <= step,
+            "{read} vs {made}"
+        );
     }
 }
 

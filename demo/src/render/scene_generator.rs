@@ -1,7 +1,7 @@
 //! The generator of the built-in scenes in `demo/scenes/` (`mcg-demo scenes` rewrites them;
 //! a test checks that the committed files equal its output byte for byte).
 //!
-//! All five are rooms 4 m wide (x ∈ [−2, 2]), 3 m high (y ∈ [0, 3]) and 5 m deep
+//! All six are rooms 4 m wide (x ∈ [−2, 2]), 3 m high (y ∈ [0, 3]) and 5 m deep
 //! (z ∈ [−2.5, 2.5]), seen by a 60° camera at (0, 1.5, 2.3) looking down −z, with a red left
 //! wall, a green right wall and two boxes; all but the last are closed. Each is a `.gltf` with its geometry in a `.bin`
 //! next to it (non-indexed triangles, counter-clockwise seen from the front).
@@ -27,6 +27,10 @@
 //!   `extras.mcg.environment` names (the loader reads it, [`super::scene::SceneFile::open`]):
 //!   all light enters through the window, the case of path guiding's interiors lit through an
 //!   opening.
+//! - `sun_room`: the sky room under a sky with a sun ([`sun_sky`], written beside it as the
+//!   Radiance file [`SUN_SKY_FILE`], which its extras name): the sun shines through the window
+//!   onto the floor in view, and light sampling of the map finds the sun, mostly behind the
+//!   walls.
 
 use std::path::Path;
 
@@ -55,13 +59,81 @@ const DOOR_ROOM_SIDE_STRENGTH: f32 = 150.0;
 const DYNAMIC_ROOM_SIDE_STRENGTH: f32 = 60.0;
 
 /// Names of the built-in scenes (file stems under `demo/scenes/`).
-pub const SCENE_NAMES: [&str; 5] = [
+pub const SCENE_NAMES: [&str; 6] = [
     "hidden_light_room",
     "many_lights_room",
     "dynamic_room",
     "door_room",
     "sky_room",
+    "sun_room",
 ];
+
+/// The environment map of `sun_room` in `demo/scenes/` ([`sun_sky`], Radiance RGBE).
+pub const SUN_SKY_FILE: &str = "sun_room_sky.hdr";
+
+/// The direction toward the sun of [`sun_sky`] (unit): 30° above the horizon, on the side of
+/// the rooms' right wall (+x) and behind the camera (+z), so that it shines through
+/// `sun_room`'s window onto the floor at the foot of the left box, in view.
+pub const SUN_DIRECTION: [f32; 3] = [0.7035, 0.5025, 0.5025];
+
+/// The sun's angular radius in [`sun_sky`]: 2.5° (five times the real sun's, so that its
+/// disc covers about 25 texels of the 256 × 128 map).
+pub const SUN_RADIUS_DEGREES: f32 = 2.5;
+
+/// The sun's radiance in [`sun_sky`], linear RGB: its disc's irradiance at normal incidence
+/// (≈ 6 sr⁻¹·10⁻³ × this ≈ 59) is about five times the sky's.
+pub const SUN_RADIANCE: [f32; 3] = [10_000.0, 9_200.0, 8_000.0];
+
+/// `sun_room`'s sky: a 256 × 128 equirectangular map ([`super::environment`]'s
+/// conventions) of a blue sky, brighter toward the horizon ((1.5, 2, 4) at the zenith,
+/// (4, 4.5, 5.5) at the horizon), a uniform brown ground (0.3, 0.25, 0.2) below the horizon
+/// and a sun of [`SUN_RADIANCE`] within [`SUN_RADIUS_DEGREES`] of [`SUN_DIRECTION`]; texel
+/// centres decide. Row-major from the top-left, as [`super::environment::EnvironmentMap::new`]
+/// takes it.
+#[must_use]
+pub fn sun_sky() -> (u32, u32, Vec<Vec3>) {
+    let (w, h) = (256u32, 128u32);
+    let sun = Vec3::from(SUN_DIRECTION).normalize();
+    let cos_radius = SUN_RADIUS_DEGREES.to_radians().cos();
+    let texels = (0..w * h)
+        .map(|i| {
+            let uv = glam::Vec2::new(
+                ((i % w) as f32 + 0.5) / w as f32,
+                ((i / w) as f32 + 0.5) / h as f32,
+            );
+            let d = super::environment::EnvironmentMap::direction(uv);
+            if d.dot(sun) > cos_radius {
+                Vec3::from(SUN_RADIANCE)
+            } else if d.y < 0.0 {
+                Vec3::new(0.3, 0.25, 0.2)
+            } else {
+                Vec3::new(1.5, 2.0, 4.0) + (1.0 - d.y) * Vec3::new(2.5, 2.5, 1.5)
+            }
+        })
+        .collect();
+    (w, h, texels)
+}
+
+/// [`sun_sky`] as a Radiance RGBE file (what the `image` crate writes).
+///
+/// # Panics
+/// Never: encoding to memory does not fail.
+#[must_use]
+pub fn sun_sky_hdr() -> Vec<u8> {
+    let (w, h, texels) = sun_sky();
+    let pixels: Vec<image::Rgb<f32>> = texels.iter().map(|t| image::Rgb(t.to_array())).collect();
+    let mut bytes = Vec::new();
+    image::codecs::hdr::HdrEncoder::new(&mut bytes)
+        .encode(&pixels, w as usize, h as usize)
+        .expect("encoding to memory");
+    bytes
+}
+
+/// The files of `demo/scenes/` besides the scenes' `.gltf` and `.bin`: `(name, bytes)`.
+#[must_use]
+pub fn built_in_files() -> Vec<(&'static str, Vec<u8>)> {
+    vec![(SUN_SKY_FILE, sun_sky_hdr())]
+}
 
 /// The opening of a room's right wall (x = 2 m).
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -512,12 +584,14 @@ pub fn built_in_scenes() -> Vec<(&'static str, String, Vec<u8>)> {
     let (c_json, c_bin) = dynamic_scene();
     let (d_json, d_bin) = door_scene();
     let (e_json, e_bin) = sky_room_scene();
+    let (f_json, f_bin) = sun_room_scene();
     vec![
         (SCENE_NAMES[0], a_json, a_bin),
         (SCENE_NAMES[1], b_json, b_bin),
         (SCENE_NAMES[2], c_json, c_bin),
         (SCENE_NAMES[3], d_json, d_bin),
         (SCENE_NAMES[4], e_json, e_bin),
+        (SCENE_NAMES[5], f_json, f_bin),
     ]
 }
 
@@ -528,8 +602,21 @@ fn sky_room_scene() -> (String, Vec<u8>) {
         &[static_node(room(Opening::Window))],
         &[],
         json!({
-            "description": "a room lit only by a uniform sky through a doorway",
+            "description": "a room lit only by a uniform sky through a window",
             "environment": SKY_ROOM_ENVIRONMENT,
+        }),
+    )
+}
+
+/// (f) The sky room under [`sun_sky`]: a sun shines through the window.
+fn sun_room_scene() -> (String, Vec<u8>) {
+    write_gltf(
+        SCENE_NAMES[5],
+        &[static_node(room(Opening::Window))],
+        &[],
+        json!({
+            "description": "a room lit only by a sky and a sun through a window",
+            "environment": SUN_SKY_FILE,
         }),
     )
 }
@@ -759,15 +846,16 @@ fn side_room() -> Vec<[Vec3; 3]> {
 /// When a file cannot be written.
 pub fn write_built_in_scenes(dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let write = |file: &str, bytes: &[u8]| {
+        let path = dir.join(file);
+        std::fs::write(&path, bytes).map_err(|e| format!("cannot write {}: {e}", path.display()))
+    };
     for (name, text, bin) in built_in_scenes() {
-        for (file, bytes) in [
-            (format!("{name}.gltf"), text.as_bytes()),
-            (format!("{name}.bin"), &bin[..]),
-        ] {
-            let path = dir.join(file);
-            std::fs::write(&path, bytes)
-                .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-        }
+        write(&format!("{name}.gltf"), text.as_bytes())?;
+        write(&format!("{name}.bin"), &bin)?;
+    }
+    for (file, bytes) in built_in_files() {
+        write(file, &bytes)?;
     }
     Ok(())
 }
