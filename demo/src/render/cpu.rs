@@ -22,11 +22,12 @@
 //! (MCPG's begin / sample / pdf / finish) replaces BSDF sampling without touching the rest of
 //! the loop.
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use mcg_gpu_backend::sampling::{next_uniform, pcg_hash};
 use rayon::prelude::*;
 
 use super::bvh::{Hit, Triangle};
+use super::environment::ONE_BELOW;
 use super::material::{BsdfSample, Material};
 use super::scene::{Light, Scene};
 
@@ -325,7 +326,7 @@ pub fn trace_path<S: VertexSampler>(
         let Some(hit) = scene.intersect(o, d, 0.0, f32::INFINITY) else {
             if scene.environment != Vec3::ZERO {
                 let seen = scene.environment_radiance(d);
-                let weight = environment_weight(scene, method, last_pdf, last_normal, d);
+                let weight = environment_weight(scene, method, last_pdf, (o, last_normal), d);
                 radiance += throughput * seen * weight;
                 if let Some(r) = previous_record(&mut recorded, depth) {
                     r.discarded += throughput * seen * (1.0 - weight);
@@ -571,9 +572,15 @@ fn emitter_weight(
 /// methods that sample lights,
 /// else 1 (a guide's emission-only directions gather only emitting triangles, and the camera
 /// ray has no alternative).
-fn environment_weight(scene: &Scene, method: Method, last_pdf: f32, normal: Vec3, d: Vec3) -> f32 {
+fn environment_weight(
+    scene: &Scene,
+    method: Method,
+    last_pdf: f32,
+    (origin, normal): (Vec3, Vec3),
+    d: Vec3,
+) -> f32 {
     if last_pdf > 0.0 && method.samples_lights() {
-        let light_pdf = scene.environment_pmf * scene.environment_pdf(normal, d);
+        let light_pdf = scene.environment_pmf * scene.environment_pdf(origin, normal, d);
         power_heuristic(last_pdf, light_pdf)
     } else {
         1.0
@@ -648,9 +655,9 @@ fn environment_light(
     scene: &Scene,
     vertex: &Vertex,
     origin: Vec3,
-    u: [f32; 2],
+    u: [f32; 3],
 ) -> Option<(Vec3, f32, Vec3)> {
-    let (wi, pdf) = scene.sample_environment(vertex.normal, Vec2::from(u))?;
+    let (wi, pdf) = scene.sample_environment(origin, vertex.normal, Vec3::from(u))?;
     let light_pdf = scene.environment_pmf * pdf;
     if !(light_pdf > 0.0) || vertex.normal.dot(wi) <= 0.0 {
         return None;
@@ -679,7 +686,16 @@ pub(crate) fn direct_light(
     u: [f32; 3],
 ) -> Option<(Vec3, f32, Vec3)> {
     let (t, pmf) = match scene.pick_light(u[0]) {
-        Light::Environment => return environment_light(scene, vertex, origin, [u[1], u[2]]),
+        Light::Environment => {
+            // The pick's uniform, rescaled past it, chooses among the environment's samplers.
+            let p = scene.environment_pmf;
+            let u0 = if p < 1.0 {
+                (u[0] / p).min(ONE_BELOW)
+            } else {
+                u[0]
+            };
+            return environment_light(scene, vertex, origin, [u0, u[1], u[2]]);
+        }
         Light::Triangle(t, pmf) => (t, pmf),
     };
     let tri = scene.bvh.triangles[t as usize];

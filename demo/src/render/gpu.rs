@@ -128,6 +128,12 @@ pub const ENVIRONMENT_DEF: &str = "MCG_DEMO_ENVIRONMENT";
 /// [`ENVIRONMENT_DEF`] where the uploaded scene has a map.
 pub const ENVIRONMENT_MAP_DEF: &str = "MCG_DEMO_ENVIRONMENT_MAP";
 
+/// The shader def that compiles light samples of a uniform environment toward the scene's
+/// portals (WGSL `portals_sample`, `portals_pdf`; [`Scene::portals`]) in place of
+/// cosine-distributed ones, set with [`ENVIRONMENT_DEF`] where the uploaded scene has portals
+/// and no environment map.
+pub const PORTALS_DEF: &str = "MCG_DEMO_PORTALS";
+
 /// The compile-time choices that the uploaded scene makes for the kernels that read it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SceneDefs {
@@ -139,6 +145,8 @@ pub struct SceneDefs {
     pub environment: bool,
     /// [`ENVIRONMENT_MAP_DEF`]: the environment is a map.
     pub environment_map: bool,
+    /// [`PORTALS_DEF`]: a uniform environment's light samples aim at portals.
+    pub portals: bool,
 }
 
 impl SceneDefs {
@@ -152,6 +160,7 @@ impl SceneDefs {
             alpha_mask: attributes && scene.materials.iter().any(|m| m.alpha_cutoff > 0.0),
             environment,
             environment_map: environment && scene.environment_map.is_some(),
+            portals: environment && scene.environment_map.is_none() && !scene.portals.is_empty(),
         }
     }
 
@@ -168,6 +177,9 @@ impl SceneDefs {
         }
         if self.environment_map {
             defs.push((ENVIRONMENT_MAP_DEF, 1));
+        }
+        if self.portals {
+            defs.push((PORTALS_DEF, 1));
         }
     }
 }
@@ -246,7 +258,7 @@ pub fn method_code(method: Method) -> Option<u32> {
 }
 
 /// The uniform block of the `render` kernel (`Params` in WGSL): the camera, the frame's
-/// settings and the tile of one dispatch. 224 bytes.
+/// settings and the tile of one dispatch. 240 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuParams {
@@ -317,6 +329,10 @@ pub struct GpuParams {
     /// ([`EnvironmentMap::gpu_words`](super::environment::EnvironmentMap::gpu_words), after the textures' texels), its width and its height;
     /// zeros without one.
     pub environment_map: [u32; 4],
+    /// The [`Scene::portals`]: the index of their first word in the texel buffer (after the
+    /// textures' texels and the environment map's words, 12 per portal as
+    /// [`Portal`](super::environment::Portal) lays them out) and their number; zeros without.
+    pub portals: [u32; 4],
 }
 
 /// The salt of [`frame_counts`]' draws.
@@ -480,6 +496,8 @@ struct SceneBuffers {
     environment_pmf: f32,
     /// [`GpuParams::environment_map`].
     environment_map: [u32; 4],
+    /// [`GpuParams::portals`].
+    portals: [u32; 4],
     nodes: GpuBuffer<BvhNode>,
     triangles: GpuBuffer<Triangle>,
     materials: GpuBuffer<Material>,
@@ -503,6 +521,7 @@ impl SceneBuffers {
             environment: self.environment.to_array(),
             environment_pmf: self.environment_pmf,
             environment_map: self.environment_map,
+            portals: self.portals,
             ..GpuParams::default()
         }
     }
@@ -1044,16 +1063,22 @@ impl GpuTracer {
             .map(|(&triangle, &cdf)| GpuEmitter { triangle, cdf })
             .collect();
         let (nodes, triangles) = joined_trees(scene);
-        // The environment map's tables and texels follow the textures' texels.
-        let (texels, environment_map) = match &scene.environment_map {
-            Some(map) => {
+        // The environment map's tables and texels, then the portals, follow the textures'
+        // texels.
+        let (texels, environment_map, portals) =
+            if scene.environment_map.is_none() && scene.portals.is_empty() {
+                (Cow::Borrowed(&scene.texels), [0; 4], [0; 4])
+            } else {
                 let mut words = scene.texels.clone();
-                words.extend(map.gpu_words());
-                let at = scene.texels.len() as u32;
-                (Cow::Owned(words), [at, map.width(), map.height(), 0])
-            }
-            None => (Cow::Borrowed(&scene.texels), [0; 4]),
-        };
+                let mut environment_map = [0; 4];
+                if let Some(map) = &scene.environment_map {
+                    environment_map = [words.len() as u32, map.width(), map.height(), 0];
+                    words.extend(map.gpu_words());
+                }
+                let portals = [words.len() as u32, scene.portals.len() as u32, 0, 0];
+                words.extend_from_slice(bytemuck::cast_slice(&scene.portals));
+                (Cow::Owned(words), environment_map, portals)
+            };
         let max = self.ctx.device().limits().max_storage_buffer_binding_size;
         let largest = [
             size_of_val(nodes.as_slice()),
@@ -1078,6 +1103,7 @@ impl GpuTracer {
             environment: scene.environment,
             environment_pmf: scene.environment_pmf,
             environment_map,
+            portals,
             nodes: ctx.storage_buffer("mcg-demo nodes", &nodes),
             triangles: ctx.storage_buffer("mcg-demo triangles", &triangles),
             materials: ctx.storage_buffer("mcg-demo materials", &scene.materials),
@@ -1364,7 +1390,7 @@ impl GpuTracer {
         let scene_changed = defs.scene != self.guided_defs.scene;
         let probe_defs = |d: GuidedDefs| {
             let s = d.scene;
-            (s.alpha_mask, s.environment, s.environment_map)
+            (s.alpha_mask, s.environment, s.environment_map, s.portals)
         };
         if probe_defs(defs) != probe_defs(self.guided_defs) {
             self.probe_module = None;
@@ -1836,15 +1862,22 @@ mod tests {
             alpha_mask: true,
             environment: true,
             environment_map: true,
+            portals: false,
         };
         let textured = SceneDefs {
             attributes: true,
+            ..SceneDefs::default()
+        };
+        let portals = SceneDefs {
+            environment: true,
+            portals: true,
             ..SceneDefs::default()
         };
         for (lights, scene) in [
             (true, SceneDefs::default()),
             (false, textured),
             (true, masked),
+            (true, portals),
         ] {
             assert_eq!(
                 validate(&composed_shader(lights, scene).unwrap()).1,
@@ -1909,6 +1942,6 @@ mod tests {
             .map(|(h, _)| h)
             .unwrap();
         assert_eq!(layouter[params].size as usize, size_of::<GpuParams>());
-        assert_eq!(size_of::<GpuParams>(), 224);
+        assert_eq!(size_of::<GpuParams>(), 240);
     }
 }

@@ -175,6 +175,11 @@ pub struct RenderArgs {
     /// emitters). It replaces an environment the file's extras name.
     #[arg(long, value_parser = parse_environment)]
     pub environment: Option<EnvironmentArg>,
+    /// Ignore the portals the file's extras name (`mcg.portals`, as the built-in sky and sun
+    /// rooms name their windows; [`scene::Scene::portals`]): light samples of the environment
+    /// then do not aim at the openings.
+    #[arg(long)]
+    pub no_portals: bool,
     /// For a file without a camera: one looking down −Z at the whole scene (45° vertical
     /// field of view; [`scene::SceneFile::with_auto_camera`]); without it such a file is an
     /// error.
@@ -432,6 +437,9 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     }
     if args.auto_camera {
         file = file.with_auto_camera();
+    }
+    if args.no_portals {
+        file = file.without_portals();
     }
     let reference = read_reference(args)?;
     let reference_own_error = read_reference_own_error(args, reference.as_ref())?;

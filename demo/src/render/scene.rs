@@ -46,7 +46,11 @@
 //! [`EnvironmentMap`]), seen by every ray that leaves the scene; light sampling picks it with
 //! [`Scene::environment_pmf`] and samples a uniform one with cosine-distributed directions, a
 //! map in proportion to its luminance. A scene's extras may name either
-//! (`"extras": {"mcg": {"environment": [r, g, b]}}` or `… "environment": "sky.exr"`).
+//! (`"extras": {"mcg": {"environment": [r, g, b]}}` or `… "environment": "sky.exr"`), and
+//! the openings through which it lights an interior (`… "portals": [[cx, cy, cz, ux, uy, uz,
+//! vx, vy, vz], …]`, a corner and two edges each, [`Portal`]): light samples of a uniform
+//! environment then aim at uniform points of them ([`Scene::portals`];
+//! [`SceneFile::without_portals`], `render --no-portals`, ignores them).
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -59,7 +63,7 @@ use gltf::animation::{Interpolation, Property, util::ReadOutputs};
 use bytemuck::{Pod, Zeroable};
 
 use super::bvh::{Bvh, Hit, Triangle};
-use super::environment::EnvironmentMap;
+use super::environment::{EnvironmentMap, Portal};
 use super::material::{Material, NO_TEXTURE};
 
 /// The glTF extensions the loader reads; [`Scene::warnings`] names any other a file uses.
@@ -260,6 +264,8 @@ pub struct SceneFile {
     environment: Vec3,
     /// [`Scene::environment_map`] of the scenes it builds.
     environment_map: Option<Arc<EnvironmentMap>>,
+    /// [`Scene::portals`] of the scenes it builds (the extras' `mcg.portals`).
+    portals: Vec<Portal>,
     /// Whether a scene without a camera gets [`auto_camera`]'s.
     auto_camera: bool,
 }
@@ -474,6 +480,12 @@ pub struct Scene {
     /// direction, times [`Scene::environment`]; light sampling then draws directions in
     /// proportion to its luminance instead of cosine-distributed ones.
     pub environment_map: Option<Arc<EnvironmentMap>>,
+    /// The openings through which a uniform environment lights the scene ([`Portal`]; empty
+    /// for none): its light samples aim at them ([`Scene::sample_environment`]; an
+    /// [`Scene::environment_map`]'s follow the map, since aiming uniformly at a window misses
+    /// the sun that the map's own samples find). The scene's extras name them
+    /// (`mcg.portals`); [`Scene::set_portals`] sets their pmfs.
+    pub portals: Vec<Portal>,
     /// The probability that light sampling picks the environment rather than a triangle
     /// ([`Scene::pick_light`]): 0 without an environment, 1 without emitting triangles, else
     /// [`ENVIRONMENT_PICK`]. The triangles' [`Triangle::emitter_pmf`] sum to 1 − this.
@@ -521,6 +533,12 @@ impl SceneFile {
                    \"map.exr\")"
                 .to_owned(),
         })?;
+        let portals = extras_portals(&document).ok_or_else(|| SceneError::NonFinite {
+            path: path.clone(),
+            what: "the portals in the scene's extras (mcg.portals: [[corner, edge, edge] as 9 \
+                   numbers, …], each of positive area)"
+                .to_owned(),
+        })?;
         let (environment, environment_map) = match extras {
             Err(radiance) => (radiance, None),
             Ok(file) => {
@@ -557,6 +575,7 @@ impl SceneFile {
             textures,
             environment,
             environment_map,
+            portals,
             auto_camera: false,
         })
     }
@@ -599,6 +618,14 @@ impl SceneFile {
         self.environment_map = Some(open_environment_map(&self.path, map)?);
         self.environment = Vec3::ONE;
         Ok(self)
+    }
+
+    /// The file without the portals its extras name: light samples of the environment then
+    /// ignore the openings (`render --no-portals`).
+    #[must_use]
+    pub fn without_portals(mut self) -> Self {
+        self.portals.clear();
+        self
     }
 
     /// The file's path.
@@ -672,6 +699,9 @@ impl SceneFile {
             .ok_or_else(|| SceneError::NoEmitters { path: path.clone() })?;
         if let Some(map) = &self.environment_map {
             scene.environment_map = Some(Arc::clone(map));
+        }
+        if scene.environment != Vec3::ZERO && !self.portals.is_empty() {
+            scene.set_portals(self.portals.clone());
         }
         let depth = scene.bvh.depth();
         if depth > super::bvh::STACK_SIZE {
@@ -1161,6 +1191,40 @@ fn extras_environment(document: &gltf::Document) -> Option<Result<PathBuf, Vec3>
     }
 }
 
+/// The portals that the default scene's extras name (`mcg.portals`: a list of
+/// `[cx, cy, cz, ux, uy, uz, vx, vy, vz]`, a corner and two edges in world space, see
+/// [`Portal::new`]): empty without them, `None` for a malformed list.
+fn extras_portals(document: &gltf::Document) -> Option<Vec<Portal>> {
+    let scene = document
+        .default_scene()
+        .or_else(|| document.scenes().next())?;
+    let Some(raw) = scene.extras() else {
+        return Some(Vec::new());
+    };
+    let extras: serde_json::Value = serde_json::from_str(raw.get()).ok()?;
+    let Some(list) = extras.pointer("/mcg/portals") else {
+        return Some(Vec::new());
+    };
+    list.as_array()?
+        .iter()
+        .map(|p| {
+            let n: Vec<f32> = p
+                .as_array()?
+                .iter()
+                .map(|c| c.as_f64().map(|c| c as f32))
+                .collect::<Option<_>>()?;
+            let [cx, cy, cz, ux, uy, uz, vx, vy, vz] = n[..] else {
+                return None;
+            };
+            Portal::new(
+                Vec3::new(cx, cy, cz),
+                Vec3::new(ux, uy, uz),
+                Vec3::new(vx, vy, vz),
+            )
+        })
+        .collect()
+}
+
 /// [`Material::alpha_cutoff`] of a material with alpha mode `mode`, the file's `alphaCutoff`
 /// `cutoff` (glTF's default 0.5 where it has none) and the alpha `factor` of its
 /// `baseColorFactor`: `cutoff / factor` for MASK (+∞ where the factor is 0 and the cutoff is
@@ -1336,6 +1400,7 @@ impl Scene {
             environment: Vec3::ZERO,
             environment_pmf: 0.0,
             environment_map: None,
+            portals: Vec::new(),
             attributes: Vec::new(),
             textures: Vec::new(),
             texels: Vec::new(),
@@ -1390,30 +1455,58 @@ impl Scene {
         }
     }
 
-    /// A direction of a light sample of the environment at a vertex of normal `normal`, from
-    /// uniforms `u`, and its solid-angle density without [`Scene::environment_pmf`]: drawn
-    /// from the [`Scene::environment_map`] ([`EnvironmentMap::sample`]) where there is one, else
-    /// cosine-distributed about `normal` (the uniform environment's radiance times the
-    /// Lambertian cosine); `None` when it has no density.
+    /// A direction of a light sample of the environment at `origin`, a vertex of normal
+    /// `normal`, from uniforms `u` (`u.x` picks a portal, `u.y` and `u.z` the direction), and
+    /// its solid-angle density without [`Scene::environment_pmf`]
+    /// ([`Scene::environment_pdf`]); `None` when it has no density. Directions come from the
+    /// [`Scene::environment_map`] where there is one ([`EnvironmentMap::sample`]); for a
+    /// uniform environment, toward a uniform point of a portal picked in proportion to its
+    /// area ([`Portal::sample`]) where the scene has [`Scene::portals`], else
+    /// cosine-distributed about `normal` (the radiance times the Lambertian cosine).
     #[must_use]
-    pub fn sample_environment(&self, normal: Vec3, u: Vec2) -> Option<(Vec3, f32)> {
-        match &self.environment_map {
-            Some(map) => map.sample(u),
-            None => {
-                let (wi, pdf) = mcg_markov_guide::cosine_hemisphere(normal, u);
-                (pdf > 0.0).then_some((wi, pdf))
-            }
+    pub fn sample_environment(&self, origin: Vec3, normal: Vec3, u: Vec3) -> Option<(Vec3, f32)> {
+        let uv = Vec2::new(u.y, u.z);
+        if let Some(map) = &self.environment_map {
+            return map.sample(uv);
+        }
+        if self.portals.is_empty() {
+            let (wi, pdf) = mcg_markov_guide::cosine_hemisphere(normal, uv);
+            return (pdf > 0.0).then_some((wi, pdf));
+        }
+        let mut v = u.x;
+        let last = self.portals.len() - 1;
+        let mut k = 0;
+        while k < last && v >= self.portals[k].pmf {
+            v -= self.portals[k].pmf;
+            k += 1;
+        }
+        let (wi, _) = self.portals[k].sample(origin, uv)?;
+        let pdf = self.environment_pdf(origin, normal, wi);
+        (pdf > 0.0 && pdf.is_finite()).then_some((wi, pdf))
+    }
+
+    /// The density with which [`Scene::sample_environment`] at `origin`, a vertex of normal
+    /// `normal`, draws the unit direction `d` (without [`Scene::environment_pmf`]): the map's,
+    /// Σ pmf × [`Portal::pdf`] over the portals the ray crosses (portals can overlap as seen
+    /// from `origin`), or the cosine's.
+    #[must_use]
+    pub fn environment_pdf(&self, origin: Vec3, normal: Vec3, d: Vec3) -> f32 {
+        if let Some(map) = &self.environment_map {
+            map.pdf(d)
+        } else if self.portals.is_empty() {
+            mcg_markov_guide::cosine_hemisphere_pdf(normal, d)
+        } else {
+            self.portals.iter().map(|p| p.pmf * p.pdf(origin, d)).sum()
         }
     }
 
-    /// The density with which [`Scene::sample_environment`] at a vertex of normal `normal`
-    /// draws the unit direction `d` (without [`Scene::environment_pmf`]).
-    #[must_use]
-    pub fn environment_pdf(&self, normal: Vec3, d: Vec3) -> f32 {
-        match &self.environment_map {
-            Some(map) => map.pdf(d),
-            None => mcg_markov_guide::cosine_hemisphere_pdf(normal, d),
+    /// Makes `portals` the scene's [`Scene::portals`], each picked in proportion to its area.
+    pub fn set_portals(&mut self, mut portals: Vec<Portal>) {
+        let total: f32 = portals.iter().map(|p| p.area).sum();
+        for p in &mut portals {
+            p.pmf = p.area / total;
         }
+        self.portals = portals;
     }
 
     /// Light selection proportional to `power` (one value per [`Scene::emitters`], all

@@ -26,7 +26,8 @@
 //!   view, opens onto a uniform sky of radiance [`SKY_ROOM_ENVIRONMENT`], which the scene's
 //!   `extras.mcg.environment` names (the loader reads it, [`super::scene::SceneFile::open`]):
 //!   all light enters through the window, the case of path guiding's interiors lit through an
-//!   opening.
+//!   opening. The extras name the window as a portal too (`mcg.portals`), at which `nee`'s
+//!   light samples of the sky aim.
 //! - `sun_room`: the sky room under a sky with a sun ([`sun_sky`], written beside it as the
 //!   Radiance file [`SUN_SKY_FILE`], which its extras name): the sun shines through the window
 //!   onto the floor in view, and light sampling of the map finds the sun, mostly behind the
@@ -148,6 +149,13 @@ enum Opening {
 
 /// `sky_room`'s window in the right wall: z from 0 to 0.6 m, y from 1.4 to 2.2 m.
 const WINDOW: (f32, f32, f32, f32) = (0.0, 0.6, 1.4, 2.2);
+
+/// The window as the portal the sky and sun rooms' extras name (`mcg.portals`: a corner and
+/// two edges, [`super::environment::Portal`]), in the right wall's plane x = 2 m.
+fn window_portal() -> Value {
+    let (z0, z1, y0, y1) = WINDOW;
+    json!([[2.0, y0, z0, 0.0, 0.0, z1 - z0, 0.0, y1 - y0, 0.0]])
+}
 
 /// The sky's radiance in `sky_room` (linear RGB, a pale blue).
 pub const SKY_ROOM_ENVIRONMENT: [f32; 3] = [4.0, 4.5, 5.5];
@@ -604,6 +612,7 @@ fn sky_room_scene() -> (String, Vec<u8>) {
         json!({
             "description": "a room lit only by a uniform sky through a window",
             "environment": SKY_ROOM_ENVIRONMENT,
+            "portals": window_portal(),
         }),
     )
 }

@@ -150,6 +150,7 @@ fn args(
         mcmm_score: McmmScore::TileMixture,
         environment: None,
         auto_camera: false,
+        no_portals: false,
         probes: ProbeOptions {
             probe_spacing: s.probe_spacing,
             probe_rays: s.probe_rays,

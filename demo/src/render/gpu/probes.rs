@@ -1109,7 +1109,14 @@ mod tests {
             alpha_mask: true,
             environment: true,
             environment_map: true,
+            portals: false,
         };
+        let portals = super::super::SceneDefs {
+            environment_map: false,
+            portals: true,
+            ..all
+        };
+        naga::front::wgsl::parse_str(&composed_probe_shader(portals).unwrap()).unwrap();
         let source = composed_probe_shader(all).unwrap();
         let module = naga::front::wgsl::parse_str(&source)
             .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));

@@ -149,6 +149,8 @@ struct Params {
     // The environment map (`GpuParams::environment_map`): its first word in `texels`, its
     // width and height; zeros without one.
     environment_map: vec4<u32>,
+    // The portals (`GpuParams::portals`): their first word in `texels` and their number.
+    portals: vec4<u32>,
 }
 
 // `gpu::GpuRay`: a query of the `trace_rays` kernel (closest hit, or any hit when `any_hit`).
@@ -970,6 +972,65 @@ fn environment_sample(u: vec2<f32>) -> McgDirectionSample {
 }
 #endif
 
+#ifdef MCG_DEMO_PORTALS
+// `environment::Portal` `i` in `texels` (`GpuParams::portals`, 12 words each).
+fn portal_at(i: u32) -> array<vec4<f32>, 3> {
+    let at = params.portals.x + 12u * i;
+    var rows: array<vec4<f32>, 3>;
+    for (var r = 0u; r < 3u; r++) {
+        let w = at + 4u * r;
+        rows[r] = bitcast<vec4<f32>>(vec4<u32>(texels[w], texels[w + 1u], texels[w + 2u],
+                                               texels[w + 3u]));
+    }
+    return rows;
+}
+
+// `Portal::pdf`: the density with which `Portal::sample` from `origin` draws `d` (rows: corner
+// and area, edge u and pmf, edge v).
+fn portal_pdf(q: array<vec4<f32>, 3>, origin: vec3<f32>, d: vec3<f32>) -> f32 {
+    let n = cross(q[1].xyz, q[2].xyz) / q[0].w;
+    let c = dot(n, d);
+    let t = dot(n, q[0].xyz - origin) / c;
+    if !(t > 0.0 && t <= FAR) {
+        return 0.0;
+    }
+    let x = origin + t * d - q[0].xyz;
+    let s = dot(cross(x, q[2].xyz), n) / q[0].w;
+    let r = dot(cross(q[1].xyz, x), n) / q[0].w;
+    if !(s >= 0.0 && s <= 1.0 && r >= 0.0 && r <= 1.0) {
+        return 0.0;
+    }
+    return t * t / (q[0].w * abs(c));
+}
+
+// `Scene::environment_pdf` with portals: Σ pmf × `portal_pdf`.
+fn portals_pdf(origin: vec3<f32>, d: vec3<f32>) -> f32 {
+    var pdf = 0.0;
+    for (var i = 0u; i < params.portals.y; i++) {
+        let q = portal_at(i);
+        pdf += q[1].w * portal_pdf(q, origin, d);
+    }
+    return pdf;
+}
+
+// `Scene::sample_environment` with portals: `u.x` picks a portal by its pmf, `u.yz` a uniform
+// point of it; the direction toward it and `portals_pdf` (0 for none).
+fn portals_sample(origin: vec3<f32>, u: vec3<f32>) -> McgDirectionSample {
+    var v = u.x;
+    var k = 0u;
+    let last = params.portals.y - 1u;
+    while k < last && v >= portal_at(k)[1].w {
+        v -= portal_at(k)[1].w;
+        k += 1u;
+    }
+    let q = portal_at(k);
+    let to = q[0].xyz + u.y * q[1].xyz + u.z * q[2].xyz - origin;
+    let wi = to / sqrt(dot(to, to));
+    let pdf = portals_pdf(origin, wi);
+    return McgDirectionSample(wi, select(0.0, pdf, pdf > 0.0 && pdf <= FAR));
+}
+#endif
+
 // `cpu::direct_light`: a light sample before its MIS weight, which the caller applies against
 // the density of its own direction sampler (the material's, or the guide's mixture for
 // `mcpg-nee`). `Scene::pick_light`: the environment below `environment_pmf` (a direction
@@ -993,7 +1054,13 @@ fn light_sample(v: Vertex, origin: vec3<f32>, u: vec3<f32>) -> LightSample {
 #ifdef MCG_DEMO_ENVIRONMENT_MAP
         let s = environment_sample(u.yz);
 #else
+#ifdef MCG_DEMO_PORTALS
+        // The pick's uniform, rescaled past it, picks the portal (`cpu::direct_light`).
+        let u0 = select(u.x, min(u.x / p, 0.99999994), p < 1.0);
+        let s = portals_sample(origin, vec3<f32>(u0, u.yz));
+#else
         let s = mcg_cosine_hemisphere_sample(v.normal, u.yz);
+#endif
 #endif
         wi = s.direction;
         light_pdf = p * s.pdf;
@@ -1044,12 +1111,16 @@ fn light_sample(v: Vertex, origin: vec3<f32>, u: vec3<f32>) -> LightSample {
 // `cpu::environment_weight`: the weight of the environment seen along `d` by a ray sampled
 // with density `last_pdf` at a vertex of normal `normal` (MIS against its light sample for
 // the methods that sample lights, else 1).
-fn environment_weight(last_pdf: f32, normal: vec3<f32>, d: vec3<f32>) -> f32 {
+fn environment_weight(last_pdf: f32, origin: vec3<f32>, normal: vec3<f32>, d: vec3<f32>) -> f32 {
     if samples_lights() && last_pdf > 0.0 {
 #ifdef MCG_DEMO_ENVIRONMENT_MAP
         let light_pdf = params.environment_pmf * environment_map_pdf(d);
 #else
+#ifdef MCG_DEMO_PORTALS
+        let light_pdf = params.environment_pmf * portals_pdf(origin, d);
+#else
         let light_pdf = params.environment_pmf * mcg_cosine_hemisphere_pdf(normal, d);
+#endif
 #endif
         return power_heuristic(last_pdf, light_pdf);
     }
@@ -1094,7 +1165,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
         if hit.triangle == NO_HIT {
 #ifdef MCG_DEMO_ENVIRONMENT
             escaped = environment_radiance(d);
-            escaped_weight = environment_weight(last_pdf, last_normal, d);
+            escaped_weight = environment_weight(last_pdf, o, last_normal, d);
             radiance += throughput * escaped * escaped_weight;
 #endif
             break;
