@@ -1,6 +1,6 @@
 //! `--method ddgi|adgi|adgi-refill --device gpu`: the probe GI of the WGSL renderer against
-//! the analytic furnace and against the CPU's probe GI, equal ray budgets and per-frame errors
-//! in the JSON.
+//! the analytic furnace, under environments, and against the CPU's probe GI, equal ray budgets
+//! and per-frame errors in the JSON.
 //!
 //! Each test needs a wgpu adapter (lavapipe in CI): without one it is skipped with a message,
 //! unless `MCG_REQUIRE_GPU=1`, which turns the skip into a failure.
@@ -8,7 +8,8 @@
 mod common;
 
 use common::{
-    assert_equal_budgets, assert_tiles_agree, door_args, furnace, scenes_dir, temp_dir, tile_stats,
+    assert_equal_budgets, assert_pixel_mean, assert_tiles_agree, door_args, furnace, scenes_dir,
+    sky_floor, sky_map, sky_map_floor, sky_settings, temp_dir, tile_stats, upward_reflection,
 };
 use glam::Vec3;
 use mcg_demo::render::cpu::{Method, RenderSettings};
@@ -56,6 +57,41 @@ struct Furnace {
 
 /// Runs `frames` frames of `method` on the GPU in the furnace of ρ = 0.3, L_e = 0.5 (4 × 4 × 4
 /// probes, 64 rays per probe, probe seed `seed`).
+/// The probe methods on the GPU under an environment, as on the CPU
+/// (`probe_gi::probe_methods_shade_with_the_environment`): [`sky_floor`] under L_env = (1, 2,
+/// 0.5) and [`sky_map_floor`], ρ = (0.5, 0.3, 0.8), `ddgi` and `adgi` with a 4 × 2 × 4 grid,
+/// 64 rays per probe, the fourth 16×16 frame of 16 spp, seed 5: the pixel mean is ρ·L_env and
+/// ρ × [`upward_reflection`], |z| < 5 per channel. Probe rays that return the environment's
+/// radiance where they leave the scene (WGSL `probe_ray`) fail it at z = 65 (`ddgi`, uniform sky;
+/// checked once).
+#[test]
+fn gpu_probe_methods_shade_with_the_environment() {
+    let rho = Vec3::new(0.5, 0.3, 0.8);
+    let sky = Vec3::new(1.0, 2.0, 0.5);
+    let cases = [
+        (sky_floor(rho, sky, false), rho * sky, "uniform sky"),
+        (
+            sky_map_floor(rho),
+            rho * upward_reflection(&sky_map()),
+            "environment map",
+        ),
+    ];
+    for (scene, expected, what) in cases {
+        for method in [Method::Ddgi, Method::Adgi] {
+            let test = "gpu_probe_methods_shade_with_the_environment";
+            let Some(mut tracer) = probe_tracer(test, &scene, method, (50.0, 64, 0x5eed)) else {
+                return;
+            };
+            let settings = sky_settings(method, 1);
+            let mut image = Vec::new();
+            for frame in 0..4 {
+                image = tracer.render_frame(&settings, frame).unwrap().0;
+            }
+            assert_pixel_mean(&image, expected, 0.0, &format!("GPU {method:?}, {what}"));
+        }
+    }
+}
+
 fn gpu_furnace(test: &str, method: Method, frames: u32, seed: u32) -> Option<Furnace> {
     let (rho, le) = (0.3f32, 0.5f32);
     let scene = furnace(Vec3::splat(rho), Vec3::splat(le));
