@@ -682,7 +682,8 @@ fn environment_map_furnace_matches_the_map_s_reflection() {
 /// Environment maps from files: an OpenEXR file of [`sky_map`]'s texels, given to
 /// `SceneFile::with_environment_map` or named (as a string) by the scene's extras, lights a
 /// file without emitters with exactly those texels; a missing map, a PNG, and a map with a
-/// negative texel are errors that name the scene file, the map and what is wrong.
+/// negative texel are `SceneError::EnvironmentMap`s that name the scene file, the map and what
+/// is wrong.
 #[test]
 fn environment_maps_load_from_files() {
     let dir = temp_dir("environment-maps");
@@ -738,7 +739,7 @@ fn environment_maps_load_from_files() {
         let e = file().with_environment_map(&path).err().unwrap();
         let message = e.to_string();
         assert!(
-            matches!(e, SceneError::Unreadable { .. })
+            matches!(e, SceneError::EnvironmentMap { .. })
                 && message.contains("dark.gltf")
                 && message.contains(what),
             "{message}"

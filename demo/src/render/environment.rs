@@ -1,5 +1,6 @@
-//! Environment maps: the radiance that arrives from outside the scene as an equirectangular
-//! (latitude-longitude) image, and light sampling proportional to it.
+//! Environment maps — the radiance that arrives from outside the scene as an equirectangular
+//! (latitude-longitude) image, and light sampling proportional to it — and portals, the
+//! openings at which light samples of a uniform environment aim ([`Portal`]).
 //!
 //! **Directions.** glTF's +Y is up. A direction `d` at polar angle θ = acos(d.y) from +Y and
 //! azimuth φ = atan2(d.x, −d.z) maps to the image coordinates `u = φ/2π + ½` (left to right)
@@ -52,7 +53,7 @@ impl EnvironmentMap {
     ///
     /// # Errors
     /// When the size does not match the texels or is 0, when a channel is negative or not
-    /// finite, or when every texel is black.
+    /// finite (or so large that the luminance is not), or when every texel is black.
     pub fn new(width: u32, height: u32, texels: Vec<Vec3>) -> Result<Self, String> {
         if width == 0 || height == 0 || texels.len() != width as usize * height as usize {
             return Err(format!(
@@ -62,7 +63,7 @@ impl EnvironmentMap {
         }
         if let Some(i) = texels
             .iter()
-            .position(|t| !(t.is_finite() && t.min_element() >= 0.0))
+            .position(|t| !(t.is_finite() && t.min_element() >= 0.0 && luminance(*t).is_finite()))
         {
             return Err(format!(
                 "texel ({}, {}) is {}, not finite and non-negative",

@@ -261,7 +261,7 @@ fn parse_environment(v: &str) -> Result<EnvironmentArg, String> {
     } else {
         parse_rgb(v)
             .map(EnvironmentArg::Uniform)
-            .map_err(|e| format!("{e} (or an environment map: FILE.exr or FILE.hdr)"))
+            .map_err(|e| format!("{e}; expected R,G,B or an environment map, FILE.exr or FILE.hdr"))
     }
 }
 
@@ -1053,6 +1053,30 @@ pub fn write_outputs(dir: &Path, rendered: &Rendered) -> Result<Vec<PathBuf>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `--environment` takes three non-negative numbers or a file ending in `.exr` or `.hdr`
+    /// (any case), and names both forms when it gets neither.
+    #[test]
+    fn environment_argument_is_a_radiance_or_a_map() {
+        assert_eq!(
+            parse_environment("4, 4.5,5.5"),
+            Ok(EnvironmentArg::Uniform(Vec3::new(4.0, 4.5, 5.5)))
+        );
+        for file in ["sky.exr", "dir/Sky.HDR"] {
+            assert_eq!(
+                parse_environment(file),
+                Ok(EnvironmentArg::Map(PathBuf::from(file)))
+            );
+        }
+        for bad in ["1,2", "1,-2,3", "sky.png", "1,NaN,3"] {
+            let e = parse_environment(bad).unwrap_err();
+            assert!(
+                e.contains("R,G,B") || e.contains("non-negative"),
+                "{bad}: {e}"
+            );
+            assert!(e.contains("FILE.exr"), "{bad}: {e}");
+        }
+    }
 
     /// The ramp's weights rise as (i + 1)/R to 1 and stay there; R ≤ 1 is the plain mean.
     #[test]

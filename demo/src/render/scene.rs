@@ -89,6 +89,14 @@ pub enum SceneError {
         /// The reader's or parser's message.
         reason: String,
     },
+    /// The environment map given for the file, or named by its extras, could not be read or
+    /// is not a map ([`EnvironmentMap::open`]).
+    EnvironmentMap {
+        /// The scene file.
+        path: PathBuf,
+        /// What is wrong, naming the map's file.
+        reason: String,
+    },
     /// The file holds no scene.
     NoScene {
         /// The file.
@@ -161,6 +169,9 @@ impl fmt::Display for SceneError {
                     "{}: not a readable glTF 2.0 file: {reason}",
                     path.display()
                 )
+            }
+            Self::EnvironmentMap { path, reason } => {
+                write!(f, "{}: its environment map: {reason}", path.display())
             }
             Self::NoScene { path } => write!(f, "{}: the file has no scene", path.display()),
             Self::NoCamera { path } => write!(
@@ -515,7 +526,7 @@ impl SceneFile {
     /// [`SceneError::Unreadable`] when the file is missing or not glTF 2.0,
     /// [`SceneError::NoScene`] when it holds no scene, [`SceneError::NonFinite`] for an
     /// environment in the extras that is neither three finite non-negative numbers nor a
-    /// string, [`SceneError::Unreadable`] for an environment map that cannot be read.
+    /// string, [`SceneError::EnvironmentMap`] for an environment map that cannot be read.
     pub fn open(path: impl AsRef<Path>) -> Result<Self, SceneError> {
         let path = path.as_ref().to_path_buf();
         let unreadable = |e: gltf::Error| SceneError::Unreadable {
@@ -613,7 +624,8 @@ impl SceneFile {
     /// environment the file names: the scenes it builds need no emitting triangle then.
     ///
     /// # Errors
-    /// [`SceneError::Unreadable`] when the map cannot be read, naming it and what is wrong.
+    /// [`SceneError::EnvironmentMap`] when the map cannot be read, naming it and what is
+    /// wrong.
     pub fn with_environment_map(mut self, map: &Path) -> Result<Self, SceneError> {
         self.environment_map = Some(open_environment_map(&self.path, map)?);
         self.environment = Vec3::ONE;
@@ -1149,14 +1161,14 @@ fn auto_camera(triangles: &[Triangle]) -> Camera {
     }
 }
 
-/// Reads the environment map `map` for the scene file `path`, as [`SceneError::Unreadable`]
+/// Reads the environment map `map` for the scene file `path`, as [`SceneError::EnvironmentMap`]
 /// (naming both) when it cannot.
 fn open_environment_map(path: &Path, map: &Path) -> Result<Arc<EnvironmentMap>, SceneError> {
     EnvironmentMap::open(map)
         .map(Arc::new)
-        .map_err(|reason| SceneError::Unreadable {
+        .map_err(|reason| SceneError::EnvironmentMap {
             path: path.to_path_buf(),
-            reason: format!("its environment map: {reason}"),
+            reason,
         })
 }
 
