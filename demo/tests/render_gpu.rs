@@ -14,6 +14,7 @@ use common::{
 use glam::Vec3;
 use mcg_demo::render::cpu::{BsdfSampler, Method, RenderSettings, render_frame};
 use mcg_demo::render::emission_allocation::Allocation;
+use mcg_demo::render::environment::EnvironmentMap;
 use mcg_demo::render::gpu::{GpuHit, GpuRay, GpuTiming, GpuTracer, SEGMENT_BATCH, frame_counts};
 use mcg_demo::render::guided::{McpgSampler, Reflected, guide_config};
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
@@ -1103,7 +1104,9 @@ fn gpu_renders_the_environment_as_the_cpu() {
 /// `mcpg` and `mcpg-nee` (fourth frame of a fresh guide) and `mcmm` at B = 1 (fourth frame) show
 /// ρ × [`upward_reflection`], |z| < 5 per channel. (2) The map seen straight up
 /// ([`sky_floor`] looking up under [`sky_map`], 32×32, 1 spp, seed 5, `bsdf`: the camera rays'
-/// lookups) equals the CPU's image in ≥ 90 % of the pixels to 10⁻³. (3) [`masked_furnace`]
+/// lookups), and again under a map of striped columns turned by 1 rad about +Y, equals the
+/// CPU's image in ≥ 90 % of the pixels to 10⁻³ (a lookup turned the wrong way in WGSL leaves
+/// 0 of 1024 equal; checked once). (3) [`masked_furnace`]
 /// under the map (light from the map through the holes and from the walls), 32×32, B = 2:
 /// `bsdf` and `nee` follow the CPU's random stream (1 spp, seed 5; the map's light samples and
 /// MIS weights), and `mcpg` (16 runs of 2 frames, seeds 700–715) agrees with `nee` (64 frames,
@@ -1153,6 +1156,23 @@ fn gpu_renders_environment_maps_as_the_cpu() {
     let (g, _) = gpu.render_frame(&one, 0).unwrap();
     let c = render_frame(&up, &one, 0, || BsdfSampler, || ());
     assert_lit_pixels_agree(&c, &g, "the environment map seen straight up");
+    // Columns of their own colour, so that a turn shows in every pixel.
+    let (w, h) = (32u32, 16u32);
+    let striped = (0..w * h)
+        .map(|i| {
+            Vec3::new(
+                1.0 + (i % w) as f32,
+                1.0 + (i / w) as f32,
+                1.0 + (i % 7) as f32,
+            )
+        })
+        .collect();
+    let striped = EnvironmentMap::new(w, h, striped).unwrap();
+    up.set_environment_map(Arc::new(striped.with_rotation(1.0)));
+    gpu.upload(&up).unwrap();
+    let (g, _) = gpu.render_frame(&one, 0).unwrap();
+    let c = render_frame(&up, &one, 0, || BsdfSampler, || ());
+    assert_lit_pixels_agree(&c, &g, "the turned environment map seen straight up");
 
     let mut scene = masked_furnace();
     scene.set_environment_map(Arc::new(sky_map()));
@@ -1221,6 +1241,7 @@ fn render_on_the_gpu(method: Method) {
         mcmm_score: McmmScore::TileMixture,
         environment: None,
         auto_camera: false,
+        environment_rotation: None,
         no_portals: false,
         probes: ProbeOptions::default(),
     };

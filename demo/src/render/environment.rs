@@ -45,6 +45,8 @@ pub struct EnvironmentMap {
     /// The conditional distributions within each row: `width + 1` increasing entries from 0
     /// to 1 per row, row after row.
     column_cdf: Vec<f32>,
+    /// [`EnvironmentMap::rotation`], radians.
+    rotation: f32,
 }
 
 impl EnvironmentMap {
@@ -92,6 +94,7 @@ impl EnvironmentMap {
             row_cdf: cumulative(&row_weights, total),
             column_cdf,
             texels,
+            rotation: 0.0,
         })
     }
 
@@ -146,6 +149,40 @@ impl EnvironmentMap {
         &self.texels
     }
 
+    /// The map turned by `radians` about +Y (right-handed: at a quarter turn the image's
+    /// centre, straight down −Z unturned, lies along −X), as renderers turn a sky to place
+    /// its sun; the sampling tables stay, since a turn about +Y keeps every texel's polar
+    /// angle. A non-finite angle leaves the map unturned.
+    #[must_use]
+    pub fn with_rotation(mut self, radians: f32) -> Self {
+        self.rotation = if radians.is_finite() { radians } else { 0.0 };
+        self
+    }
+
+    /// The turn about +Y, radians ([`EnvironmentMap::with_rotation`]; 0 by default).
+    #[must_use]
+    pub fn rotation(&self) -> f32 {
+        self.rotation
+    }
+
+    /// The world direction `d` in the map's own frame (turned back by the rotation).
+    fn to_map(&self, d: Vec3) -> Vec3 {
+        if self.rotation == 0.0 {
+            return d;
+        }
+        let (s, c) = self.rotation.sin_cos();
+        Vec3::new(c * d.x - s * d.z, d.y, s * d.x + c * d.z)
+    }
+
+    /// The map's direction `d` in the world (turned by the rotation).
+    fn to_world(&self, d: Vec3) -> Vec3 {
+        if self.rotation == 0.0 {
+            return d;
+        }
+        let (s, c) = self.rotation.sin_cos();
+        Vec3::new(c * d.x + s * d.z, d.y, c * d.z - s * d.x)
+    }
+
     /// The unit direction of the image coordinates `(u, v)` ∈ [0, 1]² (module docs).
     #[must_use]
     pub fn direction(uv: Vec2) -> Vec3 {
@@ -174,7 +211,7 @@ impl EnvironmentMap {
     /// texel's.
     #[must_use]
     pub fn radiance(&self, d: Vec3) -> Vec3 {
-        let (column, row) = self.texel_of(Self::coordinates(d));
+        let (column, row) = self.texel_of(Self::coordinates(self.to_map(d)));
         self.texels[row * self.width as usize + column]
     }
 
@@ -197,7 +234,7 @@ impl EnvironmentMap {
             (column as f32 + s) / self.width as f32,
             (row as f32 + v) / self.height as f32,
         );
-        let d = Self::direction(uv);
+        let d = self.to_world(Self::direction(uv));
         let pdf = self.texel_probability(column, row) * (self.width * self.height) as f32
             / (2.0 * PI * PI * (PI * uv.y).sin());
         (pdf > 0.0 && pdf.is_finite()).then_some((d, pdf))
@@ -207,7 +244,7 @@ impl EnvironmentMap {
     /// `d`: `P(texel)·W·H / (2π² sin θ)`; 0 at the poles and in texels it never picks.
     #[must_use]
     pub fn pdf(&self, d: Vec3) -> f32 {
-        let uv = Self::coordinates(d);
+        let uv = Self::coordinates(self.to_map(d));
         let (column, row) = self.texel_of(uv);
         let sin = (PI * uv.y).sin();
         if !(sin > 0.0) {
@@ -219,7 +256,8 @@ impl EnvironmentMap {
 
     /// The map as the GPU tracer reads it after the textures' texels, as `u32` words (`f32`
     /// bits): the row table (`height + 1`), the column tables (`height × (width + 1)`), then
-    /// the texels' red, green and blue (3 per texel, row-major).
+    /// the texels' red, green and blue (3 per texel, row-major). The rotation travels in
+    /// `GpuParams::environment_map`.
     #[must_use]
     pub fn gpu_words(&self) -> Vec<u32> {
         self.row_cdf

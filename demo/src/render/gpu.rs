@@ -326,8 +326,9 @@ pub struct GpuParams {
     /// [`Scene::environment_pmf`]: the probability that a light sample picks the environment.
     pub environment_pmf: f32,
     /// The [`Scene::environment_map`]: the index of its first word in the texel buffer
-    /// ([`EnvironmentMap::gpu_words`](super::environment::EnvironmentMap::gpu_words), after the textures' texels), its width and its height;
-    /// zeros without one.
+    /// ([`EnvironmentMap::gpu_words`](super::environment::EnvironmentMap::gpu_words), after
+    /// the textures' texels), its width, its height and its rotation (`f32` bits); zeros
+    /// without one.
     pub environment_map: [u32; 4],
     /// The [`Scene::portals`]: the index of their first word in the texel buffer (after the
     /// textures' texels and the environment map's words, 12 per portal as
@@ -1072,7 +1073,12 @@ impl GpuTracer {
                 let mut words = scene.texels.clone();
                 let mut environment_map = [0; 4];
                 if let Some(map) = &scene.environment_map {
-                    environment_map = [words.len() as u32, map.width(), map.height(), 0];
+                    environment_map = [
+                        words.len() as u32,
+                        map.width(),
+                        map.height(),
+                        map.rotation().to_bits(),
+                    ];
                     words.extend(map.gpu_words());
                 }
                 let portals = [words.len() as u32, scene.portals.len() as u32, 0, 0];

@@ -175,6 +175,11 @@ pub struct RenderArgs {
     /// emitters). It replaces an environment the file's extras name.
     #[arg(long, value_parser = parse_environment)]
     pub environment: Option<EnvironmentArg>,
+    /// Turn the environment map by this many degrees about +Y (right-handed: at 90 the map's
+    /// centre lies along −X; [`environment::EnvironmentMap::with_rotation`]), replacing the
+    /// rotation the file's extras name; no effect on a uniform environment.
+    #[arg(long, allow_hyphen_values = true)]
+    pub environment_rotation: Option<f32>,
     /// Ignore the portals the file's extras name (`mcg.portals`, as the built-in sky and sun
     /// rooms name their windows; [`scene::Scene::portals`]): light samples of the environment
     /// then do not aim at the openings.
@@ -437,6 +442,9 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     }
     if args.auto_camera {
         file = file.with_auto_camera();
+    }
+    if let Some(degrees) = args.environment_rotation {
+        file = file.with_environment_rotation(degrees)?;
     }
     if args.no_portals {
         file = file.without_portals();

@@ -46,7 +46,8 @@
 //! [`EnvironmentMap`]), seen by every ray that leaves the scene; light sampling picks it with
 //! [`Scene::environment_pmf`] and samples a uniform one with cosine-distributed directions, a
 //! map in proportion to its luminance. A scene's extras may name either
-//! (`"extras": {"mcg": {"environment": [r, g, b]}}` or `… "environment": "sky.exr"`), and
+//! (`"extras": {"mcg": {"environment": [r, g, b]}}` or `… "environment": "sky.exr"`, turned
+//! about +Y by `… "environment_rotation": degrees`), and
 //! the openings through which it lights an interior (`… "portals": [[cx, cy, cz, ux, uy, uz,
 //! vx, vy, vz], …]`, a corner and two edges each, [`Portal`]): light samples of a uniform
 //! environment then aim at uniform points of them ([`Scene::portals`];
@@ -550,16 +551,29 @@ impl SceneFile {
                    numbers, …], each of positive area)"
                 .to_owned(),
         })?;
-        let (environment, environment_map) = match extras {
-            Err(radiance) => (radiance, None),
-            Ok(file) => {
-                let map = open_environment_map(
-                    &path,
-                    &path.parent().unwrap_or(Path::new("")).join(file),
-                )?;
-                (Vec3::ONE, Some(map))
-            }
-        };
+        let (environment, environment_map) =
+            match extras {
+                Err(radiance) => (radiance, None),
+                Ok(file) => {
+                    let degrees = extras_number(&document, "/mcg/environment_rotation")
+                        .ok_or_else(|| SceneError::NonFinite {
+                            path: path.clone(),
+                            what: "the environment's rotation in the scene's extras \
+                               (mcg.environment_rotation, degrees)"
+                                .to_owned(),
+                        })?;
+                    let map = open_environment_map(
+                        &path,
+                        &path.parent().unwrap_or(Path::new("")).join(file),
+                    )?;
+                    let map = if degrees == 0.0 {
+                        map
+                    } else {
+                        Arc::new((*map).clone().with_rotation(degrees.to_radians()))
+                    };
+                    (Vec3::ONE, Some(map))
+                }
+            };
         let textures = used_textures(&document);
         let mut images: Vec<(usize, u32, u32, Vec<u32>)> = Vec::new();
         if !textures.is_empty() {
@@ -629,6 +643,27 @@ impl SceneFile {
     pub fn with_environment_map(mut self, map: &Path) -> Result<Self, SceneError> {
         self.environment_map = Some(open_environment_map(&self.path, map)?);
         self.environment = Vec3::ONE;
+        Ok(self)
+    }
+
+    /// The file with its environment map turned by `degrees` about +Y
+    /// ([`EnvironmentMap::with_rotation`]; `render --environment-rotation`), replacing any
+    /// rotation its extras name (`mcg.environment_rotation`, degrees); no effect on a uniform
+    /// environment.
+    ///
+    /// # Errors
+    /// [`SceneError::NonFinite`] for an angle that is not finite.
+    pub fn with_environment_rotation(mut self, degrees: f32) -> Result<Self, SceneError> {
+        if !degrees.is_finite() {
+            return Err(SceneError::NonFinite {
+                path: self.path.clone(),
+                what: format!("the environment's rotation {degrees}°"),
+            });
+        }
+        if let Some(map) = &self.environment_map {
+            let turned = (**map).clone().with_rotation(degrees.to_radians());
+            self.environment_map = Some(Arc::new(turned));
+        }
         Ok(self)
     }
 
@@ -1200,6 +1235,22 @@ fn extras_environment(document: &gltf::Document) -> Option<Result<PathBuf, Vec3>
             Some(Err(Vec3::new(r, g, b)))
         }
         _ => None,
+    }
+}
+
+/// The number at `pointer` in the default scene's extras: 0 without one, `None` where it is
+/// not a finite number.
+fn extras_number(document: &gltf::Document, pointer: &str) -> Option<f32> {
+    let scene = document
+        .default_scene()
+        .or_else(|| document.scenes().next())?;
+    let Some(raw) = scene.extras() else {
+        return Some(0.0);
+    };
+    let extras: serde_json::Value = serde_json::from_str(raw.get()).ok()?;
+    match extras.pointer(pointer) {
+        None => Some(0.0),
+        Some(value) => value.as_f64().map(|v| v as f32).filter(|v| v.is_finite()),
     }
 }
 

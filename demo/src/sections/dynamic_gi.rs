@@ -150,6 +150,7 @@ fn args(
         mcmm_score: McmmScore::TileMixture,
         environment: None,
         auto_camera: false,
+        environment_rotation: None,
         no_portals: false,
         probes: ProbeOptions {
             probe_spacing: s.probe_spacing,

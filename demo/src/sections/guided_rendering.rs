@@ -215,6 +215,7 @@ fn args(
         mcmm_score: McmmScore::TileMixture,
         environment: None,
         auto_camera: false,
+        environment_rotation: None,
         no_portals: false,
         probes: ProbeOptions::default(),
     }

@@ -147,7 +147,7 @@ struct Params {
     // `Scene::environment_pmf`: the probability that a light sample picks the environment.
     environment_pmf: f32,
     // The environment map (`GpuParams::environment_map`): its first word in `texels`, its
-    // width and height; zeros without one.
+    // width and height, and its rotation about +Y (`f32` bits); zeros without one.
     environment_map: vec4<u32>,
     // The portals (`GpuParams::portals`): their first word in `texels` and their number.
     portals: vec4<u32>,
@@ -879,7 +879,7 @@ const NO_MOMENTS: u32 = 0xffffffffu;
 // the scene (`params.environment`, times the environment map's texel where there is one).
 fn environment_radiance(d: vec3<f32>) -> vec3<f32> {
 #ifdef MCG_DEMO_ENVIRONMENT_MAP
-    let texel = environment_texel(environment_coordinates(d));
+    let texel = environment_texel(environment_coordinates(environment_turn(d, -1.0)));
     let h = params.environment_map.z;
     let at = (h + 1u) + h * (params.environment_map.y + 1u)
         + 3u * (texel.y * params.environment_map.y + texel.x);
@@ -895,6 +895,18 @@ fn environment_radiance(d: vec3<f32>) -> vec3<f32> {
 // the column tables, the texels' RGB), as the `f32` it holds.
 fn environment_word(i: u32) -> f32 {
     return bitcast<f32>(texels[params.environment_map.x + i]);
+}
+
+// `EnvironmentMap::to_world` (`sign` 1) and `EnvironmentMap::to_map` (`sign` −1): `d` turned by
+// ± the map's rotation about +Y.
+fn environment_turn(d: vec3<f32>, sign: f32) -> vec3<f32> {
+    let a = bitcast<f32>(params.environment_map.w);
+    if a == 0.0 {
+        return d;
+    }
+    let s = sign * sin(a);
+    let c = cos(a);
+    return vec3<f32>(c * d.x + s * d.z, d.y, c * d.z - s * d.x);
 }
 
 // `EnvironmentMap::coordinates`: the image coordinates (u, v) of the unit direction `d`.
@@ -922,7 +934,7 @@ fn environment_texel_probability(texel: vec2<u32>) -> f32 {
 
 // `EnvironmentMap::pdf`: the solid-angle density with which `environment_sample` draws `d`.
 fn environment_map_pdf(d: vec3<f32>) -> f32 {
-    let uv = environment_coordinates(d);
+    let uv = environment_coordinates(environment_turn(d, -1.0));
     let s = sin(MCG_PI * uv.y);
     if !(s > 0.0) {
         return 0.0;
@@ -965,7 +977,7 @@ fn environment_sample(u: vec2<f32>) -> McgDirectionSample {
     let phi = 2.0 * MCG_PI * (uv.x - 0.5);
     let theta = MCG_PI * uv.y;
     let st = sin(theta);
-    let d = vec3<f32>(st * sin(phi), cos(theta), -st * cos(phi));
+    let d = environment_turn(vec3<f32>(st * sin(phi), cos(theta), -st * cos(phi)), 1.0);
     let pdf = environment_texel_probability(vec2<u32>(u32(c.x), row)) * f32(size.x * size.y)
         / (2.0 * MCG_PI * MCG_PI * st);
     return McgDirectionSample(d, select(0.0, pdf, pdf > 0.0 && pdf <= FAR));
