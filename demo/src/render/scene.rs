@@ -551,29 +551,30 @@ impl SceneFile {
                    numbers, …], each of positive area)"
                 .to_owned(),
         })?;
-        let (environment, environment_map) =
-            match extras {
-                Err(radiance) => (radiance, None),
-                Ok(file) => {
-                    let degrees = extras_number(&document, "/mcg/environment_rotation")
-                        .ok_or_else(|| SceneError::NonFinite {
+        let (environment, environment_map) = match extras {
+            Err(radiance) => (radiance, None),
+            Ok(file) => {
+                let degrees =
+                    extras_number(&document, "environment_rotation").ok_or_else(|| {
+                        SceneError::NonFinite {
                             path: path.clone(),
                             what: "the environment's rotation in the scene's extras \
                                (mcg.environment_rotation, degrees)"
                                 .to_owned(),
-                        })?;
-                    let map = open_environment_map(
-                        &path,
-                        &path.parent().unwrap_or(Path::new("")).join(file),
-                    )?;
-                    let map = if degrees == 0.0 {
-                        map
-                    } else {
-                        Arc::new((*map).clone().with_rotation(degrees.to_radians()))
-                    };
-                    (Vec3::ONE, Some(map))
-                }
-            };
+                        }
+                    })?;
+                let map = open_environment_map(
+                    &path,
+                    &path.parent().unwrap_or(Path::new("")).join(file),
+                )?;
+                let map = if degrees == 0.0 {
+                    map
+                } else {
+                    Arc::new((*map).clone().with_rotation(degrees.to_radians()))
+                };
+                (Vec3::ONE, Some(map))
+            }
+        };
         let textures = used_textures(&document);
         let mut images: Vec<(usize, u32, u32, Vec<u32>)> = Vec::new();
         if !textures.is_empty() {
@@ -1207,30 +1208,44 @@ fn open_environment_map(path: &Path, map: &Path) -> Result<Arc<EnvironmentMap>, 
         })
 }
 
+/// The value of `mcg.<key>` in the default scene's extras: `Some(None)` without one, `None`
+/// where the extras are not JSON.
+fn mcg_extra(document: &gltf::Document, key: &str) -> Option<Option<serde_json::Value>> {
+    let scene = document
+        .default_scene()
+        .or_else(|| document.scenes().next())?;
+    let Some(raw) = scene.extras() else {
+        return Some(None);
+    };
+    let mut extras: serde_json::Value = serde_json::from_str(raw.get()).ok()?;
+    Some(
+        extras
+            .pointer_mut(&format!("/mcg/{key}"))
+            .map(serde_json::Value::take),
+    )
+}
+
+/// The numbers of a JSON array, as `f32`; `None` where it is not an array of numbers.
+fn json_numbers(value: &serde_json::Value) -> Option<Vec<f32>> {
+    value
+        .as_array()?
+        .iter()
+        .map(|c| c.as_f64().map(|c| c as f32))
+        .collect()
+}
+
 /// The environment that the default scene's extras name (see [`SceneFile::open`]): `Err` of
 /// a uniform radiance (`mcg.environment` as three finite non-negative numbers; zero without
 /// one) or `Ok` of an environment map's file name (`mcg.environment` as a string, relative to
 /// the glTF file); `None` for a malformed one.
 fn extras_environment(document: &gltf::Document) -> Option<Result<PathBuf, Vec3>> {
-    let scene = document
-        .default_scene()
-        .or_else(|| document.scenes().next())?;
-    let Some(raw) = scene.extras() else {
-        return Some(Err(Vec3::ZERO));
-    };
-    let extras: serde_json::Value = serde_json::from_str(raw.get()).ok()?;
-    let Some(value) = extras.pointer("/mcg/environment") else {
+    let Some(value) = mcg_extra(document, "environment")? else {
         return Some(Err(Vec3::ZERO));
     };
     if let Some(file) = value.as_str() {
         return Some(Ok(PathBuf::from(file)));
     }
-    let channels: Vec<f32> = value
-        .as_array()?
-        .iter()
-        .map(|c| c.as_f64().map(|c| c as f32))
-        .collect::<Option<_>>()?;
-    match channels[..] {
+    match json_numbers(&value)?[..] {
         [r, g, b] if [r, g, b].iter().all(|c| c.is_finite() && *c >= 0.0) => {
             Some(Err(Vec3::new(r, g, b)))
         }
@@ -1238,17 +1253,10 @@ fn extras_environment(document: &gltf::Document) -> Option<Result<PathBuf, Vec3>
     }
 }
 
-/// The number at `pointer` in the default scene's extras: 0 without one, `None` where it is
+/// The number `mcg.<key>` in the default scene's extras: 0 without one, `None` where it is
 /// not a finite number.
-fn extras_number(document: &gltf::Document, pointer: &str) -> Option<f32> {
-    let scene = document
-        .default_scene()
-        .or_else(|| document.scenes().next())?;
-    let Some(raw) = scene.extras() else {
-        return Some(0.0);
-    };
-    let extras: serde_json::Value = serde_json::from_str(raw.get()).ok()?;
-    match extras.pointer(pointer) {
+fn extras_number(document: &gltf::Document, key: &str) -> Option<f32> {
+    match mcg_extra(document, key)? {
         None => Some(0.0),
         Some(value) => value.as_f64().map(|v| v as f32).filter(|v| v.is_finite()),
     }
@@ -1258,25 +1266,13 @@ fn extras_number(document: &gltf::Document, pointer: &str) -> Option<f32> {
 /// `[cx, cy, cz, ux, uy, uz, vx, vy, vz]`, a corner and two edges in world space, see
 /// [`Portal::new`]): empty without them, `None` for a malformed list.
 fn extras_portals(document: &gltf::Document) -> Option<Vec<Portal>> {
-    let scene = document
-        .default_scene()
-        .or_else(|| document.scenes().next())?;
-    let Some(raw) = scene.extras() else {
-        return Some(Vec::new());
-    };
-    let extras: serde_json::Value = serde_json::from_str(raw.get()).ok()?;
-    let Some(list) = extras.pointer("/mcg/portals") else {
+    let Some(list) = mcg_extra(document, "portals")? else {
         return Some(Vec::new());
     };
     list.as_array()?
         .iter()
         .map(|p| {
-            let n: Vec<f32> = p
-                .as_array()?
-                .iter()
-                .map(|c| c.as_f64().map(|c| c as f32))
-                .collect::<Option<_>>()?;
-            let [cx, cy, cz, ux, uy, uz, vx, vy, vz] = n[..] else {
+            let [cx, cy, cz, ux, uy, uz, vx, vy, vz] = json_numbers(p)?[..] else {
                 return None;
             };
             Portal::new(
