@@ -25,7 +25,8 @@ use mcg_demo::render::guided::{McpgSampler, new_guide};
 use mcg_demo::render::material::BsdfSample;
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
 use mcg_demo::render::scene::{
-    ENVIRONMENT_PICK, MIN_TEXTURE_POWER, Scene, SceneError, SceneFile, frame_time, luminance,
+    Camera, ENVIRONMENT_PICK, MIN_TEXTURE_POWER, Scene, SceneError, SceneFile, frame_time,
+    luminance,
 };
 use mcg_demo::render::scene_generator::{
     DOOR_OPENS_AT_FRAME, SCENE_NAMES, SKY_ROOM_ENVIRONMENT, built_in_files, built_in_scenes,
@@ -621,6 +622,65 @@ fn environment_maps_sample_in_proportion_to_their_luminance() {
         "X² = {:.1}, {} degrees of freedom",
         result.statistic, result.degrees_of_freedom
     );
+}
+
+/// `SceneFile::with_camera` (`render --camera`) replaces the file's camera: at the eye, the
+/// image's centre looking at the target, +Y up (+Z looking straight down), an orthonormal
+/// frame; the field of view given, else the file camera's (the rooms' 60°), else 45° for a
+/// file without a camera, which then builds; an eye at the target, a field of view of 180° and
+/// a non-finite eye are `SceneError::NonFinite`s naming the file. An up vector of the other
+/// handedness (`forward × right`) fails it (checked once).
+#[test]
+fn cameras_given_on_the_command_line_replace_the_file_s() {
+    let room = || SceneFile::open(scenes_dir().join("sun_room.gltf")).unwrap();
+    let (eye, target) = (Vec3::new(-1.8, 2.6, 2.4), Vec3::new(0.5, 0.3, -1.2));
+    for (yfov, expected) in [(Some(70.0f32), 70.0f32), (None, 60.0)] {
+        let camera = room()
+            .with_camera(eye, target, yfov)
+            .unwrap()
+            .build(0.0)
+            .unwrap()
+            .camera;
+        assert_eq!(camera.position, eye);
+        let centre = camera.direction(64.0, 64.0, 128, 128);
+        assert!(
+            (centre - (target - eye).normalize()).length() < 1e-6,
+            "{centre}"
+        );
+        assert!(
+            (camera.yfov - expected.to_radians()).abs() < 1e-6,
+            "{}",
+            camera.yfov
+        );
+        assert!(camera.right.y.abs() < 1e-6 && camera.up.y > 0.0);
+        for (a, b) in [(camera.right, camera.up), (camera.up, camera.forward)] {
+            assert!(a.dot(b).abs() < 1e-6 && (a.length() - 1.0).abs() < 1e-6);
+        }
+    }
+    let down = Camera::looking_at(Vec3::Y, Vec3::ZERO, 1.0);
+    assert!((down.up - Vec3::Z).length() < 1e-6 && (down.right - Vec3::NEG_X).length() < 1e-6);
+
+    let dir = temp_dir("cameras");
+    let no_camera = minimal_gltf(&dir, "no_camera.gltf", false, true, 4);
+    let scene = SceneFile::open(&no_camera)
+        .unwrap()
+        .with_camera(Vec3::new(0.3, 0.3, 1.0), Vec3::new(0.3, 0.3, -1.0), None)
+        .unwrap()
+        .build(0.0)
+        .unwrap();
+    assert!((scene.camera.yfov - std::f32::consts::FRAC_PI_4).abs() < 1e-6);
+    for (eye, yfov) in [
+        (target, None),
+        (eye, Some(180.0)),
+        (Vec3::new(f32::NAN, 0.0, 0.0), None),
+    ] {
+        let e = room().with_camera(eye, target, yfov).err().unwrap();
+        let message = e.to_string();
+        assert!(
+            matches!(e, SceneError::NonFinite { .. }) && message.contains("sun_room.gltf"),
+            "{message}"
+        );
+    }
 }
 
 /// A turned environment map (`EnvironmentMap::with_rotation`) is the map seen turned about
@@ -1373,6 +1433,8 @@ fn render_command_writes_exr_png_and_json() {
         mcmm_score: McmmScore::TileMixture,
         environment: None,
         auto_camera: false,
+        camera: None,
+        yfov: None,
         environment_rotation: None,
         no_portals: false,
         probes: ProbeOptions::default(),

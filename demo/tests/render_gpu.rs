@@ -1241,6 +1241,8 @@ fn render_on_the_gpu(method: Method) {
         mcmm_score: McmmScore::TileMixture,
         environment: None,
         auto_camera: false,
+        camera: None,
+        yfov: None,
         environment_rotation: None,
         no_portals: false,
         probes: ProbeOptions::default(),

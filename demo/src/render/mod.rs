@@ -175,6 +175,14 @@ pub struct RenderArgs {
     /// emitters). It replaces an environment the file's extras name.
     #[arg(long, value_parser = parse_environment)]
     pub environment: Option<EnvironmentArg>,
+    /// A camera at EX,EY,EZ looking at TX,TY,TZ with +Y up, replacing the file's (or giving a
+    /// file without one a camera; [`scene::SceneFile::with_camera`]): six comma-separated
+    /// numbers, in the scene's metres.
+    #[arg(long, value_parser = parse_look_at, value_name = "EX,EY,EZ,TX,TY,TZ", allow_hyphen_values = true)]
+    pub camera: Option<[Vec3; 2]>,
+    /// The vertical field of view of `--camera`, degrees (default: the file camera's, else 45).
+    #[arg(long, requires = "camera")]
+    pub yfov: Option<f32>,
     /// Turn the environment map by this many degrees about +Y (right-handed: at 90 the map's
     /// centre lies along −X; [`environment::EnvironmentMap::with_rotation`]), replacing the
     /// rotation the file's extras name; no effect on a uniform environment.
@@ -267,6 +275,26 @@ fn parse_environment(v: &str) -> Result<EnvironmentArg, String> {
         parse_rgb(v)
             .map(EnvironmentArg::Uniform)
             .map_err(|e| format!("{e}; expected R,G,B or an environment map, FILE.exr or FILE.hdr"))
+    }
+}
+
+/// `--camera`: six comma-separated finite numbers, an eye and a target.
+fn parse_look_at(v: &str) -> Result<[Vec3; 2], String> {
+    let n: Vec<f32> = v
+        .split(',')
+        .map(|c| {
+            c.trim()
+                .parse::<f32>()
+                .map_err(|_| format!("not a number: {c}"))
+        })
+        .collect::<Result<_, _>>()?;
+    match n[..] {
+        [ex, ey, ez, tx, ty, tz] if n.iter().all(|c| c.is_finite()) => {
+            Ok([Vec3::new(ex, ey, ez), Vec3::new(tx, ty, tz)])
+        }
+        _ => Err(format!(
+            "{v}: expected EX,EY,EZ,TX,TY,TZ (six finite numbers)"
+        )),
     }
 }
 
@@ -442,6 +470,9 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     }
     if args.auto_camera {
         file = file.with_auto_camera();
+    }
+    if let Some([eye, target]) = args.camera {
+        file = file.with_camera(eye, target, args.yfov)?;
     }
     if let Some(degrees) = args.environment_rotation {
         file = file.with_environment_rotation(degrees)?;
@@ -1061,6 +1092,18 @@ pub fn write_outputs(dir: &Path, rendered: &Rendered) -> Result<Vec<PathBuf>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `--camera` takes six finite numbers, an eye and a target.
+    #[test]
+    fn camera_argument_is_an_eye_and_a_target() {
+        assert_eq!(
+            parse_look_at("-1.8, 2.6,2.4,0.5,0.3,-1.2"),
+            Ok([Vec3::new(-1.8, 2.6, 2.4), Vec3::new(0.5, 0.3, -1.2)])
+        );
+        for bad in ["1,2,3,4,5", "1,2,3,4,5,6,7", "1,2,3,4,5,inf", "1,2,3,a,5,6"] {
+            assert!(parse_look_at(bad).is_err(), "{bad}");
+        }
+    }
 
     /// `--environment` takes three non-negative numbers or a file ending in `.exr` or `.hdr`
     /// (any case), and names both forms when it gets neither.

@@ -12,7 +12,8 @@
 //! - **Camera**: the first node of the default scene, depth first, that carries a
 //!   perspective camera; it looks down its local −Z with +Y up (glTF 2.0 specification,
 //!   section "Cameras"). `yfov` is used; the aspect ratio is the image's. A file without one
-//!   is an error, unless [`SceneFile::with_auto_camera`] (`render --auto-camera`) places one.
+//!   is an error, unless [`SceneFile::with_auto_camera`] (`render --auto-camera`) places one;
+//!   [`SceneFile::with_camera`] (`render --camera`) replaces it with one looking at a point.
 //! - **Materials** ([`Material`]): `baseColorFactor` (RGB), `metallicFactor`,
 //!   `roughnessFactor`, `emissiveFactor × KHR_materials_emissive_strength`, and the
 //!   base-colour, emissive and metallic-roughness textures (8-bit PNG or JPEG, `TEXCOORD_0`,
@@ -249,6 +250,26 @@ pub struct Camera {
 }
 
 impl Camera {
+    /// A camera at `eye` looking at `target` (a different point) with +Y up, or +Z where it
+    /// looks straight up or down, and vertical field of view `yfov` (radians).
+    #[must_use]
+    pub fn looking_at(eye: Vec3, target: Vec3, yfov: f32) -> Self {
+        let forward = (target - eye).normalize();
+        let right = forward.cross(Vec3::Y);
+        let right = if right.length_squared() > 1e-12 {
+            right.normalize()
+        } else {
+            forward.cross(Vec3::Z).normalize()
+        };
+        Self {
+            position: eye,
+            right,
+            up: right.cross(forward),
+            forward,
+            yfov,
+        }
+    }
+
     /// The unit direction through the image point `(x, y)` in pixels (fractional, origin at
     /// the top-left corner, y down) of a `width × height` image.
     #[must_use]
@@ -280,6 +301,9 @@ pub struct SceneFile {
     portals: Vec<Portal>,
     /// Whether a scene without a camera gets [`auto_camera`]'s.
     auto_camera: bool,
+    /// A camera that replaces the file's ([`SceneFile::with_camera`]): eye, target and the
+    /// vertical field of view (radians) if given.
+    camera: Option<(Vec3, Vec3, Option<f32>)>,
 }
 
 /// What a material's texture slot reads: an image (its index in the document) through a map
@@ -603,6 +627,7 @@ impl SceneFile {
             environment_map,
             portals,
             auto_camera: false,
+            camera: None,
         })
     }
 
@@ -644,6 +669,41 @@ impl SceneFile {
     pub fn with_environment_map(mut self, map: &Path) -> Result<Self, SceneError> {
         self.environment_map = Some(open_environment_map(&self.path, map)?);
         self.environment = Vec3::ONE;
+        Ok(self)
+    }
+
+    /// The file seen by a camera at `eye` looking at `target` with +Y up (+Z where it looks
+    /// straight up or down), replacing the file's camera (`render --camera`): the vertical
+    /// field of view is `yfov_degrees`, else the file camera's, else 45°.
+    ///
+    /// # Errors
+    /// [`SceneError::NonFinite`] for an eye or target that is not finite, the two at the same
+    /// point, or a field of view outside (0°, 180°).
+    pub fn with_camera(
+        mut self,
+        eye: Vec3,
+        target: Vec3,
+        yfov_degrees: Option<f32>,
+    ) -> Result<Self, SceneError> {
+        let yfov = yfov_degrees.map(f32::to_radians);
+        let what = if !(eye.is_finite() && target.is_finite()) {
+            Some(format!("the camera at {eye} looking at {target}"))
+        } else if !((target - eye).length() > 0.0) {
+            Some(format!(
+                "the camera's direction (its eye and target are both {eye})"
+            ))
+        } else if !yfov.is_none_or(|f| f > 0.0 && f < core::f32::consts::PI) {
+            yfov_degrees.map(|d| format!("the camera's field of view {d}° (0° to 180°)"))
+        } else {
+            None
+        };
+        if let Some(what) = what {
+            return Err(SceneError::NonFinite {
+                path: self.path.clone(),
+                what,
+            });
+        }
+        self.camera = Some((eye, target, yfov));
         Ok(self)
     }
 
@@ -733,15 +793,21 @@ impl SceneFile {
         if triangles.is_empty() {
             return Err(SceneError::NoTriangles { path: path.clone() });
         }
-        let camera = match camera {
-            Some(camera) => camera,
-            None if self.auto_camera => {
+        let camera = match (camera, self.camera) {
+            (file, Some((eye, target, yfov))) => {
+                let yfov = yfov
+                    .or(file.map(|c| c.yfov))
+                    .unwrap_or(core::f32::consts::FRAC_PI_4);
+                Camera::looking_at(eye, target, yfov)
+            }
+            (Some(camera), None) => camera,
+            (None, None) if self.auto_camera => {
                 warnings.push(
                     "the file has no camera: one looks down -Z at the whole scene".to_owned(),
                 );
                 auto_camera(&triangles)
             }
-            None => return Err(SceneError::NoCamera { path: path.clone() }),
+            (None, None) => return Err(SceneError::NoCamera { path: path.clone() }),
         };
         let mut scene = Scene::new_lit(camera, &triangles, materials, warnings, self.environment)
             .ok_or_else(|| SceneError::NoEmitters { path: path.clone() })?;

@@ -215,6 +215,8 @@ fn args(
         mcmm_score: McmmScore::TileMixture,
         environment: None,
         auto_camera: false,
+        camera: None,
+        yfov: None,
         environment_rotation: None,
         no_portals: false,
         probes: ProbeOptions::default(),

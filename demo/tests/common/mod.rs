@@ -404,6 +404,8 @@ pub fn door_args(method: Method, out: PathBuf, frames: u32) -> RenderArgs {
         mcmm_score: McmmScore::TileMixture,
         environment: None,
         auto_camera: false,
+        camera: None,
+        yfov: None,
         environment_rotation: None,
         no_portals: false,
         probes: ProbeOptions {
