@@ -624,6 +624,56 @@ fn environment_maps_sample_in_proportion_to_their_luminance() {
     );
 }
 
+/// `Scene::fingerprint`, which names cached references, is the same for the same scene built
+/// twice and differs wherever the image would: the sky and sun rooms (the same triangles under
+/// another sky), another uniform sky's radiance, a turned map, another camera, the portals
+/// dropped, and the dynamic room before and after its door opens. Leaving the environment's
+/// radiance out of it fails the second case (checked once).
+#[test]
+fn scene_fingerprints_tell_scenes_apart() {
+    let open = |name: &str| SceneFile::open(scenes_dir().join(name)).unwrap();
+    let sky = open("sky_room.gltf").build(0.0).unwrap();
+    assert_eq!(
+        sky.fingerprint(),
+        open("sky_room.gltf").build(0.0).unwrap().fingerprint()
+    );
+    let mut brighter = sky.clone();
+    brighter.set_environment(2.0 * brighter.environment);
+    let turned = open("sun_room.gltf")
+        .with_environment_rotation(10.0)
+        .unwrap()
+        .build(0.0)
+        .unwrap();
+    let elsewhere = open("sky_room.gltf")
+        .with_camera(Vec3::ONE, Vec3::ZERO, None)
+        .unwrap()
+        .build(0.0)
+        .unwrap();
+    let dynamic = open("dynamic_room.gltf");
+    let others = [
+        open("sun_room.gltf").build(0.0).unwrap(),
+        brighter,
+        turned,
+        elsewhere,
+        open("sky_room.gltf").without_portals().build(0.0).unwrap(),
+        dynamic.build(frame_time(0)).unwrap(),
+    ];
+    for (i, other) in others.iter().enumerate() {
+        assert_ne!(sky.fingerprint(), other.fingerprint(), "case {i}");
+    }
+    let after = dynamic.build(frame_time(DOOR_OPENS_AT_FRAME)).unwrap();
+    assert_ne!(others[5].fingerprint(), after.fingerprint());
+    assert_ne!(
+        others[0].fingerprint(),
+        open("sun_room.gltf")
+            .with_environment_rotation(10.0)
+            .unwrap()
+            .build(0.0)
+            .unwrap()
+            .fingerprint()
+    );
+}
+
 /// `SceneFile::with_camera` (`render --camera`) replaces the file's camera: at the eye, the
 /// image's centre looking at the target, +Y up (+Z looking straight down), an orthonormal
 /// frame; the field of view given, else the file camera's (the rooms' 60°), else 45° for a

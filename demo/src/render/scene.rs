@@ -1814,6 +1814,39 @@ impl Scene {
         Some(self.texels[index as usize].to_le_bytes())
     }
 
+    /// FNV-1a over everything that decides the scene's image — the camera, the triangles (with
+    /// their materials' indices and light-selection weights), materials, attributes, textures
+    /// and texels, the environment with its map and rotation, and the portals — so that a
+    /// cached render of the scene is found again only for the same scene.
+    #[must_use]
+    pub fn fingerprint(&self) -> u64 {
+        let c = &self.camera;
+        let vectors = [c.position, c.right, c.up, c.forward, self.environment];
+        let floats = vectors
+            .iter()
+            .flat_map(|v| v.to_array())
+            .chain([c.yfov, self.environment_pmf])
+            .chain(self.environment_map.iter().flat_map(|m| {
+                m.texels()
+                    .iter()
+                    .flat_map(|t| t.to_array())
+                    .chain([m.rotation(), m.width() as f32])
+            }))
+            .flat_map(f32::to_le_bytes);
+        let bytes = bytemuck::cast_slice::<_, u8>(&self.bvh.triangles)
+            .iter()
+            .chain(bytemuck::cast_slice::<_, u8>(&self.materials))
+            .chain(bytemuck::cast_slice::<_, u8>(&self.attributes))
+            .chain(bytemuck::cast_slice::<_, u8>(&self.textures))
+            .chain(bytemuck::cast_slice::<_, u8>(&self.texels))
+            .chain(bytemuck::cast_slice::<_, u8>(&self.portals))
+            .copied()
+            .chain(floats);
+        bytes.fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+            (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+        })
+    }
+
     /// The material of triangle `triangle` (leaf order).
     #[must_use]
     pub fn material(&self, triangle: u32) -> &Material {

@@ -4,7 +4,7 @@
 //! A scene's *state* is its geometry at a frame: frames whose triangles are bit-identical
 //! share a state (a STEP animation has one state per step; a LINEAR one a state per frame).
 //! Each state gets one `nee` reference, rendered once and cached under
-//! `<out>/reference/` by scene, size, bounces, samples and a hash of the state's triangles.
+//! `<out>/reference/` by scene, size, bounces, samples and the state's [`Scene::fingerprint`].
 //! The **event** is the first change of state; the **event region** the pixels whose
 //! references before and after it differ ([`event_mask`]). A real-time method shows each
 //! frame on its own, so each frame's own image is compared with its state's reference
@@ -68,13 +68,10 @@ pub struct SceneStates {
     record: DynamicErrors,
 }
 
-/// FNV-1a over the bytes of the scene's triangles (positions, materials, emitter weights).
+/// The scene's state: [`Scene::fingerprint`] (frames of equal fingerprints share a state
+/// and a reference; a moving camera or light makes a new one).
 fn state_hash(scene: &Scene) -> u64 {
-    bytemuck::cast_slice::<_, u8>(&scene.bvh.triangles)
-        .iter()
-        .fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
-            (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-        })
+    scene.fingerprint()
 }
 
 /// Settings of the state references: size, samples per pixel and bounces.

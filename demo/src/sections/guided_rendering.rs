@@ -23,7 +23,7 @@
 //! target (`mcpg_targets`, `mcmm_targets`) steps.
 //!
 //! The reference is `nee` with many samples per pixel, cached under
-//! `<out>/reference/` with its settings in the file name.
+//! `<out>/reference/` with its settings and the scene's fingerprint in the file name.
 //!
 //! FLIP (LDR-FLIP of the tone-mapped images, [`crate::render::output::flip`]) stands beside
 //! relMSE in the tables: relMSE weighs the few bright, noisy pixels near a light; FLIP what a
@@ -231,8 +231,11 @@ fn reference(ctx: &Context<'_>, study: &Study, seed: u64) -> Result<PathBuf> {
         .file_stem()
         .and_then(|n| n.to_str())
         .unwrap_or("scene");
+    // The scene's fingerprint keeps a reference of an older version of the scene (a file or
+    // map rewritten by `mcg-demo scenes`) from being taken for this one's.
+    let fingerprint = SceneFile::open(study.scene)?.build(0.0)?.fingerprint();
     let path = dir.join(format!(
-        "{4}_{0}x{0}_b{1}_nee_{2}spp_seed{3:x}.exr",
+        "{4}_{0}x{0}_b{1}_nee_{2}spp_seed{3:x}_{fingerprint:016x}.exr",
         s.size,
         s.bounces,
         s.reference_spp * s.reference_frames,
