@@ -6,8 +6,8 @@
 mod common;
 
 use common::{
-    assert_equal_budgets, assert_pixel_mean, door_args, furnace, scenes_dir, sky_floor, sky_map,
-    sky_map_floor, sky_settings, temp_dir, upward_reflection,
+    assert_equal_budgets, assert_pixel_mean, door_args, environment_floors, furnace, scenes_dir,
+    sky_settings, temp_dir,
 };
 use glam::Vec3;
 use mcg_demo::render::cpu::{Method, RenderSettings};
@@ -90,25 +90,15 @@ fn furnace_probe_irradiance_converges_to_the_analytic_value() {
 /// hemisphere is all sky shows ρ × the sky's reflection in every pixel, all of it the shading
 /// point's light sample (the probes hold reflected light only, and every ray up from the floor
 /// leaves the scene, so their irradiance about the floor's normal is zero). Scenes:
-/// [`common::sky_floor`] under L_env = (1, 2, 0.5) (ρ·L_env) and [`common::sky_map_floor`]
-/// (ρ × [`common::upward_reflection`], its sun included), ρ = (0.5, 0.3, 0.8); `ddgi` and
-/// `adgi` with a 4 × 2 × 4 grid (50 m spacing), 64 rays per probe, the fourth 16×16 frame of
-/// 16 spp, seed 5. Threshold: |z| < 5 on the pixel mean per channel. Probe rays that return
+/// [`common::environment_floors`], [`common::sky_floor`] under L_env = (1, 2, 0.5) (ρ·L_env)
+/// and [`common::sky_map_floor`] (ρ × [`common::upward_reflection`], its sun included),
+/// ρ = (0.5, 0.3, 0.8); `ddgi` and `adgi` with a 4 × 2 × 4 grid (50 m spacing), 64 rays per
+/// probe, the fourth 16×16 frame of 16 spp, seed 5. Threshold: |z| < 5 on the pixel mean per channel. Probe rays that return
 /// the environment's radiance where they leave the scene (counting the sky twice) fail it at
 /// z = 65 (`ddgi`, uniform sky; checked once).
 #[test]
 fn probe_methods_shade_with_the_environment() {
-    let rho = Vec3::new(0.5, 0.3, 0.8);
-    let sky = Vec3::new(1.0, 2.0, 0.5);
-    let cases = [
-        (sky_floor(rho, sky, false), rho * sky, "uniform sky"),
-        (
-            sky_map_floor(rho),
-            rho * upward_reflection(&sky_map()),
-            "environment map",
-        ),
-    ];
-    for (scene, expected, what) in cases {
+    for (scene, expected, what) in environment_floors() {
         for method in [Method::Ddgi, Method::Adgi] {
             let grid = fit_grid(&scene, 50.0).unwrap();
             let mut gi = ProbeGi::new(method, grid, 64, 0x5eed).unwrap();

@@ -8,8 +8,8 @@
 mod common;
 
 use common::{
-    assert_equal_budgets, assert_pixel_mean, assert_tiles_agree, door_args, furnace, scenes_dir,
-    sky_floor, sky_map, sky_map_floor, sky_settings, temp_dir, tile_stats, upward_reflection,
+    assert_equal_budgets, assert_pixel_mean, assert_tiles_agree, door_args, environment_floors,
+    furnace, scenes_dir, sky_settings, temp_dir, tile_stats,
 };
 use glam::Vec3;
 use mcg_demo::render::cpu::{Method, RenderSettings};
@@ -55,28 +55,16 @@ struct Furnace {
     pixel: f32,
 }
 
-/// Runs `frames` frames of `method` on the GPU in the furnace of ρ = 0.3, L_e = 0.5 (4 × 4 × 4
-/// probes, 64 rays per probe, probe seed `seed`).
 /// The probe methods on the GPU under an environment, as on the CPU
-/// (`probe_gi::probe_methods_shade_with_the_environment`): [`sky_floor`] under L_env = (1, 2,
-/// 0.5) and [`sky_map_floor`], ρ = (0.5, 0.3, 0.8), `ddgi` and `adgi` with a 4 × 2 × 4 grid,
-/// 64 rays per probe, the fourth 16×16 frame of 16 spp, seed 5: the pixel mean is ρ·L_env and
-/// ρ × [`upward_reflection`], |z| < 5 per channel. Probe rays that return the environment's
+/// (`probe_gi::probe_methods_shade_with_the_environment`): [`environment_floors`],
+/// `sky_floor` under L_env = (1, 2, 0.5) and `sky_map_floor`, ρ = (0.5, 0.3, 0.8), `ddgi` and
+/// `adgi` with a 4 × 2 × 4 grid, 64 rays per probe, the fourth 16×16 frame of 16 spp, seed 5: the pixel mean is ρ·L_env and
+/// ρ × `upward_reflection`, |z| < 5 per channel. Probe rays that return the environment's
 /// radiance where they leave the scene (WGSL `probe_ray`) fail it at z = 65 (`ddgi`, uniform sky;
 /// checked once).
 #[test]
 fn gpu_probe_methods_shade_with_the_environment() {
-    let rho = Vec3::new(0.5, 0.3, 0.8);
-    let sky = Vec3::new(1.0, 2.0, 0.5);
-    let cases = [
-        (sky_floor(rho, sky, false), rho * sky, "uniform sky"),
-        (
-            sky_map_floor(rho),
-            rho * upward_reflection(&sky_map()),
-            "environment map",
-        ),
-    ];
-    for (scene, expected, what) in cases {
+    for (scene, expected, what) in environment_floors() {
         for method in [Method::Ddgi, Method::Adgi] {
             let test = "gpu_probe_methods_shade_with_the_environment";
             let Some(mut tracer) = probe_tracer(test, &scene, method, (50.0, 64, 0x5eed)) else {
@@ -92,6 +80,8 @@ fn gpu_probe_methods_shade_with_the_environment() {
     }
 }
 
+/// Runs `frames` frames of `method` on the GPU in the furnace of ρ = 0.3, L_e = 0.5 (4 × 4 × 4
+/// probes, 64 rays per probe, probe seed `seed`).
 fn gpu_furnace(test: &str, method: Method, frames: u32, seed: u32) -> Option<Furnace> {
     let (rho, le) = (0.3f32, 0.5f32);
     let scene = furnace(Vec3::splat(rho), Vec3::splat(le));

@@ -146,6 +146,29 @@ fn minimal_gltf(dir: &Path, name: &str, camera: bool, emissive: bool, mode: u32)
     path
 }
 
+/// A copy of the glTF file `gltf`, named `name` beside it, whose default scene's extras are
+/// `{"mcg": mcg}`.
+fn with_scene_extras(gltf: &Path, name: &str, mcg: serde_json::Value) -> PathBuf {
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(gltf).unwrap()).unwrap();
+    doc["scenes"][0]["extras"] = serde_json::json!({ "mcg": mcg });
+    let path = gltf.with_file_name(name);
+    std::fs::write(&path, doc.to_string()).unwrap();
+    path
+}
+
+/// Writes `pixels`, a map of `map`'s size, as the OpenEXR file `path`; returns the path.
+fn write_map(path: &Path, map: &EnvironmentMap, pixels: Vec<Vec3>) -> PathBuf {
+    output::RgbImage {
+        width: map.width(),
+        height: map.height(),
+        pixels,
+    }
+    .write_exr(path)
+    .unwrap();
+    path.to_path_buf()
+}
+
 fn base64(bytes: &[u8]) -> String {
     const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut out = String::new();
@@ -264,15 +287,12 @@ fn gltf_errors_are_typed_and_name_the_file() {
     let sky_room = sky_room.build(0.0).unwrap();
     assert!(sky_room.emitters.is_empty());
     assert_eq!(sky_room.environment, Vec3::from(SKY_ROOM_ENVIRONMENT));
-    let mut doc: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&dark).unwrap()).unwrap();
     for bad in [
         serde_json::json!([1.0, 1.0]),
         serde_json::json!([1.0, -1.0, 1.0]),
     ] {
-        doc["scenes"][0]["extras"] = serde_json::json!({ "mcg": { "environment": bad } });
-        let path = dir.join("bad_sky.gltf");
-        std::fs::write(&path, serde_json::to_string(&doc).unwrap()).unwrap();
+        let extras = serde_json::json!({ "environment": bad });
+        let path = with_scene_extras(&dark, "bad_sky.gltf", extras);
         let e = SceneFile::open(&path).unwrap_err();
         assert!(matches!(e, SceneError::NonFinite { .. }), "{e}");
     }
@@ -480,30 +500,40 @@ fn environment_furnace_matches_albedo_times_sky() {
     for (up, expected) in [(false, rho * sky), (true, sky)] {
         let scene = sky_floor(rho, sky, up);
         assert_eq!(scene.environment_pmf, ENVIRONMENT_PICK);
-        for method in [Method::Bsdf, Method::Nee, Method::Mcpg, Method::McpgNee] {
-            let settings = sky_settings(method, 2);
+        for (method, image) in sky_furnace_images(&scene) {
             let label = format!("{method:?}, looking {}", if up { "up" } else { "down" });
-            let image = if method.is_guided() {
-                let mut guide = new_guide(&scene, 16, 16).unwrap();
-                for frame in 0..3 {
-                    render_frame(&scene, &settings, frame, || McpgSampler::new(&guide), || ());
-                    guide.end_frame();
-                }
-                render_frame(&scene, &settings, 3, || McpgSampler::new(&guide), || ())
-            } else {
-                render_frame(&scene, &settings, 0, || BsdfSampler, || ())
-            };
             assert_pixel_mean(&image, expected, 1e-5, &label);
         }
-        // `mcmm` renders direct light only (B = 1), which is all there is here.
-        let settings = sky_settings(Method::Mcmm, 1);
-        let mut r = McmmRenderer::new(16, 16, mcmm_params(McmmScore::TileMixture, 16)).unwrap();
-        for frame in 0..3 {
-            r.render_frame(&scene, &settings, frame).unwrap();
-        }
-        let image = r.render_frame(&scene, &settings, 3).unwrap();
-        assert_pixel_mean(&image, expected, 1e-5, &format!("mcmm, looking up: {up}"));
     }
+}
+
+/// The images of the sky furnace tests on the CPU ([`sky_settings`]): `bsdf` and `nee` (one
+/// frame), `mcpg` and `mcpg-nee` (the fourth frame of a fresh guide) at B = 2, and `mcmm` at
+/// B = 1 (its fourth frame; it renders direct light only, which is all a floor under the sky
+/// receives).
+fn sky_furnace_images(scene: &Scene) -> Vec<(Method, Vec<Vec3>)> {
+    let mut images = Vec::new();
+    for method in [Method::Bsdf, Method::Nee, Method::Mcpg, Method::McpgNee] {
+        let settings = sky_settings(method, 2);
+        let image = if method.is_guided() {
+            let mut guide = new_guide(scene, 16, 16).unwrap();
+            for frame in 0..3 {
+                render_frame(scene, &settings, frame, || McpgSampler::new(&guide), || ());
+                guide.end_frame();
+            }
+            render_frame(scene, &settings, 3, || McpgSampler::new(&guide), || ())
+        } else {
+            render_frame(scene, &settings, 0, || BsdfSampler, || ())
+        };
+        images.push((method, image));
+    }
+    let settings = sky_settings(Method::Mcmm, 1);
+    let mut r = McmmRenderer::new(16, 16, mcmm_params(McmmScore::TileMixture, 16)).unwrap();
+    for frame in 0..3 {
+        r.render_frame(scene, &settings, frame).unwrap();
+    }
+    images.push((Method::Mcmm, r.render_frame(scene, &settings, 3).unwrap()));
+    images
 }
 
 /// Hypothesis: with light from the environment and from emitting triangles together, `nee`,
@@ -777,14 +807,7 @@ fn turned_environment_maps_move_their_texels_about_y() {
     assert!((centre - Vec3::NEG_X).length() < 1e-6, "{centre}");
 
     let dir = temp_dir("turned-maps");
-    let exr = dir.join("sky.exr");
-    output::RgbImage {
-        width: map.width(),
-        height: map.height(),
-        pixels: map.texels().to_vec(),
-    }
-    .write_exr(&exr)
-    .unwrap();
+    let exr = write_map(&dir.join("sky.exr"), &map, map.texels().to_vec());
     let dark = minimal_gltf(&dir, "dark.gltf", true, false, 4);
     let scene = SceneFile::open(&dark)
         .unwrap()
@@ -796,12 +819,8 @@ fn turned_environment_maps_move_their_texels_about_y() {
         .unwrap();
     let rotation = scene.environment_map.unwrap().rotation();
     assert!((rotation - std::f32::consts::FRAC_PI_2).abs() < 1e-6);
-    let mut doc: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&dark).unwrap()).unwrap();
-    doc["scenes"][0]["extras"] =
-        serde_json::json!({ "mcg": { "environment": "sky.exr", "environment_rotation": -45 } });
-    let named = dir.join("named.gltf");
-    std::fs::write(&named, doc.to_string()).unwrap();
+    let extras = serde_json::json!({ "environment": "sky.exr", "environment_rotation": -45 });
+    let named = with_scene_extras(&dark, "named.gltf", extras);
     let scene = SceneFile::open(&named).unwrap().build(0.0).unwrap();
     let rotation = scene.environment_map.unwrap().rotation();
     assert!((rotation + std::f32::consts::FRAC_PI_4).abs() < 1e-6);
@@ -826,21 +845,9 @@ fn turned_environment_maps_move_their_texels_about_y() {
 #[test]
 fn environment_map_furnace_matches_the_map_s_reflection() {
     let rho = Vec3::new(0.5, 0.3, 0.8);
-    let scene = sky_map_floor(rho);
     let expected = rho * upward_reflection(&sky_map());
     let mut variances = Vec::new();
-    for method in [Method::Bsdf, Method::Nee, Method::Mcpg, Method::McpgNee] {
-        let settings = sky_settings(method, 2);
-        let image = if method.is_guided() {
-            let mut guide = new_guide(&scene, 16, 16).unwrap();
-            for frame in 0..3 {
-                render_frame(&scene, &settings, frame, || McpgSampler::new(&guide), || ());
-                guide.end_frame();
-            }
-            render_frame(&scene, &settings, 3, || McpgSampler::new(&guide), || ())
-        } else {
-            render_frame(&scene, &settings, 0, || BsdfSampler, || ())
-        };
+    for (method, image) in sky_furnace_images(&sky_map_floor(rho)) {
         assert_pixel_mean(
             &image,
             expected,
@@ -860,13 +867,6 @@ fn environment_map_furnace_matches_the_map_s_reflection() {
         variances[1],
         variances[0]
     );
-    let settings = sky_settings(Method::Mcmm, 1);
-    let mut r = McmmRenderer::new(16, 16, mcmm_params(McmmScore::TileMixture, 16)).unwrap();
-    for frame in 0..3 {
-        r.render_frame(&scene, &settings, frame).unwrap();
-    }
-    let image = r.render_frame(&scene, &settings, 3).unwrap();
-    assert_pixel_mean(&image, expected, 0.0, "mcmm, environment map");
 }
 
 /// Environment maps from files: an OpenEXR file of [`sky_map`]'s texels, given to
@@ -878,14 +878,7 @@ fn environment_map_furnace_matches_the_map_s_reflection() {
 fn environment_maps_load_from_files() {
     let dir = temp_dir("environment-maps");
     let map = sky_map();
-    let exr = dir.join("sky.exr");
-    output::RgbImage {
-        width: map.width(),
-        height: map.height(),
-        pixels: map.texels().to_vec(),
-    }
-    .write_exr(&exr)
-    .unwrap();
+    let exr = write_map(&dir.join("sky.exr"), &map, map.texels().to_vec());
     let dark = minimal_gltf(&dir, "dark.gltf", true, false, 4);
     assert!(matches!(
         SceneFile::open(&dark).unwrap().build(0.0).unwrap_err(),
@@ -900,11 +893,8 @@ fn environment_maps_load_from_files() {
     assert_eq!(scene.environment_map.as_deref(), Some(&map));
     assert_eq!((scene.environment, scene.environment_pmf), (Vec3::ONE, 1.0));
 
-    let mut doc: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&dark).unwrap()).unwrap();
-    doc["scenes"][0]["extras"] = serde_json::json!({ "mcg": { "environment": "sky.exr" } });
-    let named = dir.join("named.gltf");
-    std::fs::write(&named, doc.to_string()).unwrap();
+    let extras = serde_json::json!({ "environment": "sky.exr" });
+    let named = with_scene_extras(&dark, "named.gltf", extras);
     let scene = SceneFile::open(&named).unwrap().build(0.0).unwrap();
     assert_eq!(scene.environment_map.as_deref(), Some(&map));
 
@@ -913,14 +903,7 @@ fn environment_maps_load_from_files() {
     std::fs::write(&png, b"not an image").unwrap();
     let mut negative = map.texels().to_vec();
     negative[5] = Vec3::new(1.0, -1.0, 0.0);
-    let bad = dir.join("negative.exr");
-    output::RgbImage {
-        width: map.width(),
-        height: map.height(),
-        pixels: negative,
-    }
-    .write_exr(&bad)
-    .unwrap();
+    let bad = write_map(&dir.join("negative.exr"), &map, negative);
     for (path, what) in [
         (dir.join("missing.exr"), "missing.exr"),
         (png, ".exr"),

@@ -1064,31 +1064,10 @@ fn gpu_renders_the_environment_as_the_cpu() {
     for (up, expected) in [(false, rho * sky), (true, sky)] {
         let scene = sky_floor(rho, sky, up);
         gpu.upload(&scene).unwrap();
-        for method in [Method::Bsdf, Method::Nee, Method::Mcpg, Method::McpgNee] {
-            let settings = sky_settings(method, 2);
-            if method.is_guided() {
-                gpu.start_mcpg(&guide_config(&scene, 16, 16)).unwrap();
-                for frame in 0..3 {
-                    gpu.render_frame(&settings, frame).unwrap();
-                }
-            }
-            let (image, _) = gpu.render_frame(&settings, 3).unwrap();
+        for (method, image) in gpu_sky_furnace_images(&mut gpu, &scene) {
             let label = format!("GPU {method:?}, looking {}", if up { "up" } else { "down" });
             assert_pixel_mean(&image, expected, 1e-5, &label);
         }
-        let settings = sky_settings(Method::Mcmm, 1);
-        gpu.start_mcmm(&mcmm_params(McmmScore::TileMixture, 16), 16, 16)
-            .unwrap();
-        for frame in 0..3 {
-            gpu.render_frame(&settings, frame).unwrap();
-        }
-        let (image, _) = gpu.render_frame(&settings, 3).unwrap();
-        assert_pixel_mean(
-            &image,
-            expected,
-            1e-5,
-            &format!("GPU mcmm, looking up: {up}"),
-        );
     }
     let mut scene = masked_furnace();
     scene.set_environment(Vec3::new(1.5, 1.0, 0.5));
@@ -1096,6 +1075,32 @@ fn gpu_renders_the_environment_as_the_cpu() {
     let methods = [Method::Bsdf, Method::Nee];
     let what = "environment and emitters";
     assert_light_paths_on_the_gpu(&mut gpu, &scene, &methods, (52, 600), what);
+}
+
+/// The images of the sky furnace tests on the GPU, `scene` uploaded to `gpu`
+/// ([`sky_settings`], as `render::sky_furnace_images` on the CPU): `bsdf` and `nee`, `mcpg`
+/// and `mcpg-nee` (the fourth frame of a fresh guide) at B = 2, and `mcmm` at B = 1 (its
+/// fourth frame).
+fn gpu_sky_furnace_images(gpu: &mut GpuTracer, scene: &Scene) -> Vec<(Method, Vec<Vec3>)> {
+    let mut images = Vec::new();
+    for method in [Method::Bsdf, Method::Nee, Method::Mcpg, Method::McpgNee] {
+        let settings = sky_settings(method, 2);
+        if method.is_guided() {
+            gpu.start_mcpg(&guide_config(scene, 16, 16)).unwrap();
+            for frame in 0..3 {
+                gpu.render_frame(&settings, frame).unwrap();
+            }
+        }
+        images.push((method, gpu.render_frame(&settings, 3).unwrap().0));
+    }
+    let settings = sky_settings(Method::Mcmm, 1);
+    gpu.start_mcmm(&mcmm_params(McmmScore::TileMixture, 16), 16, 16)
+        .unwrap();
+    for frame in 0..3 {
+        gpu.render_frame(&settings, frame).unwrap();
+    }
+    images.push((Method::Mcmm, gpu.render_frame(&settings, 3).unwrap().0));
+    images
 }
 
 /// Environment maps on the GPU (`gpu::ENVIRONMENT_MAP_DEF`), as on the CPU. (1) The
@@ -1124,30 +1129,10 @@ fn gpu_renders_environment_maps_as_the_cpu() {
     else {
         return;
     };
-    for method in [Method::Bsdf, Method::Nee, Method::Mcpg, Method::McpgNee] {
-        let settings = sky_settings(method, 2);
-        if method.is_guided() {
-            gpu.start_mcpg(&guide_config(&scene, 16, 16)).unwrap();
-            for frame in 0..3 {
-                gpu.render_frame(&settings, frame).unwrap();
-            }
-        }
-        let (image, _) = gpu.render_frame(&settings, 3).unwrap();
-        assert_pixel_mean(
-            &image,
-            expected,
-            0.0,
-            &format!("GPU {method:?}, environment map"),
-        );
+    for (method, image) in gpu_sky_furnace_images(&mut gpu, &scene) {
+        let label = format!("GPU {method:?}, environment map");
+        assert_pixel_mean(&image, expected, 0.0, &label);
     }
-    let settings = sky_settings(Method::Mcmm, 1);
-    gpu.start_mcmm(&mcmm_params(McmmScore::TileMixture, 16), 16, 16)
-        .unwrap();
-    for frame in 0..3 {
-        gpu.render_frame(&settings, frame).unwrap();
-    }
-    let (image, _) = gpu.render_frame(&settings, 3).unwrap();
-    assert_pixel_mean(&image, expected, 0.0, "GPU mcmm, environment map");
 
     let mut up = sky_floor(rho, Vec3::ONE, true);
     up.set_environment_map(Arc::new(sky_map()));

@@ -204,6 +204,22 @@ pub fn sky_map_floor(rho: Vec3) -> Scene {
     scene
 }
 
+/// The floors of the probe methods' environment tests, ρ = (0.5, 0.3, 0.8), looking down:
+/// [`sky_floor`] under L_env = (1, 2, 0.5) and [`sky_map_floor`], each with the pixel mean it
+/// must show (ρ·L_env, ρ × [`upward_reflection`]) and its name.
+pub fn environment_floors() -> [(Scene, Vec3, &'static str); 2] {
+    let rho = Vec3::new(0.5, 0.3, 0.8);
+    let sky = Vec3::new(1.0, 2.0, 0.5);
+    [
+        (sky_floor(rho, sky, false), rho * sky, "uniform sky"),
+        (
+            sky_map_floor(rho),
+            rho * upward_reflection(&sky_map()),
+            "environment map",
+        ),
+    ]
+}
+
 /// The settings of the environment furnace tests: 16×16 pixels × 16 spp, seed 5.
 pub fn sky_settings(method: Method, bounces: u32) -> RenderSettings {
     RenderSettings {
