@@ -278,16 +278,20 @@ fn parse_environment(v: &str) -> Result<EnvironmentArg, String> {
     }
 }
 
-/// `--camera`: six comma-separated finite numbers, an eye and a target.
-fn parse_look_at(v: &str) -> Result<[Vec3; 2], String> {
-    let n: Vec<f32> = v
-        .split(',')
+/// Comma-separated numbers (spaces allowed around them).
+fn parse_numbers(v: &str) -> Result<Vec<f32>, String> {
+    v.split(',')
         .map(|c| {
             c.trim()
                 .parse::<f32>()
                 .map_err(|_| format!("not a number: {c}"))
         })
-        .collect::<Result<_, _>>()?;
+        .collect()
+}
+
+/// `--camera`: six comma-separated finite numbers, an eye and a target.
+fn parse_look_at(v: &str) -> Result<[Vec3; 2], String> {
+    let n = parse_numbers(v)?;
     match n[..] {
         [ex, ey, ez, tx, ty, tz] if n.iter().all(|c| c.is_finite()) => {
             Ok([Vec3::new(ex, ey, ez), Vec3::new(tx, ty, tz)])
@@ -300,15 +304,7 @@ fn parse_look_at(v: &str) -> Result<[Vec3; 2], String> {
 
 /// A uniform radiance: three comma-separated non-negative numbers, `R,G,B`.
 fn parse_rgb(v: &str) -> Result<Vec3, String> {
-    let channels: Vec<f32> = v
-        .split(',')
-        .map(|c| {
-            c.trim()
-                .parse::<f32>()
-                .map_err(|_| format!("not a number: {c}"))
-        })
-        .collect::<Result<_, _>>()?;
-    match channels[..] {
+    match parse_numbers(v)?[..] {
         [r, g, b] if [r, g, b].iter().all(|c| c.is_finite() && *c >= 0.0) => Ok(Vec3::new(r, g, b)),
         [_, _, _] => Err(format!("{v}: channels must be finite and non-negative")),
         _ => Err(format!("{v}: expected R,G,B")),

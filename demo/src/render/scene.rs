@@ -587,16 +587,8 @@ impl SceneFile {
                                 .to_owned(),
                         }
                     })?;
-                let map = open_environment_map(
-                    &path,
-                    &path.parent().unwrap_or(Path::new("")).join(file),
-                )?;
-                let map = if degrees == 0.0 {
-                    map
-                } else {
-                    Arc::new((*map).clone().with_rotation(degrees.to_radians()))
-                };
-                (Vec3::ONE, Some(map))
+                let map = path.parent().unwrap_or(Path::new("")).join(file);
+                (Vec3::ONE, Some(open_environment_map(&path, &map, degrees)?))
             }
         };
         let textures = used_textures(&document);
@@ -667,7 +659,7 @@ impl SceneFile {
     /// [`SceneError::EnvironmentMap`] when the map cannot be read, naming it and what is
     /// wrong.
     pub fn with_environment_map(mut self, map: &Path) -> Result<Self, SceneError> {
-        self.environment_map = Some(open_environment_map(&self.path, map)?);
+        self.environment_map = Some(open_environment_map(&self.path, map, 0.0)?);
         self.environment = Vec3::ONE;
         Ok(self)
     }
@@ -1263,11 +1255,16 @@ fn auto_camera(triangles: &[Triangle]) -> Camera {
     }
 }
 
-/// Reads the environment map `map` for the scene file `path`, as [`SceneError::EnvironmentMap`]
-/// (naming both) when it cannot.
-fn open_environment_map(path: &Path, map: &Path) -> Result<Arc<EnvironmentMap>, SceneError> {
+/// Reads the environment map `map` for the scene file `path`, turned by `degrees` about +Y
+/// ([`EnvironmentMap::with_rotation`]), as [`SceneError::EnvironmentMap`] (naming both) when it
+/// cannot.
+fn open_environment_map(
+    path: &Path,
+    map: &Path,
+    degrees: f32,
+) -> Result<Arc<EnvironmentMap>, SceneError> {
     EnvironmentMap::open(map)
-        .map(Arc::new)
+        .map(|m| Arc::new(m.with_rotation(degrees.to_radians())))
         .map_err(|reason| SceneError::EnvironmentMap {
             path: path.to_path_buf(),
             reason,

@@ -1030,12 +1030,13 @@ fn portals_pdf(origin: vec3<f32>, d: vec3<f32>) -> f32 {
 fn portals_sample(origin: vec3<f32>, u: vec3<f32>) -> McgDirectionSample {
     var v = u.x;
     var k = 0u;
+    var q = portal_at(0u);
     let last = params.portals.y - 1u;
-    while k < last && v >= portal_at(k)[1].w {
-        v -= portal_at(k)[1].w;
+    while k < last && v >= q[1].w {
+        v -= q[1].w;
         k += 1u;
+        q = portal_at(k);
     }
-    let q = portal_at(k);
     let to = q[0].xyz + u.y * q[1].xyz + u.z * q[2].xyz - origin;
     let wi = to / sqrt(dot(to, to));
     let pdf = portals_pdf(origin, wi);
