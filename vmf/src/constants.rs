@@ -27,6 +27,35 @@ pub const SERIES_LIMIT: f32 = 0.5;
 /// Kahan's expm1 is used for |x| ≤ this; above, `exp(x) − 1` loses nothing (|result| ≥ 0.39).
 pub const EXP_M1_KAHAN_LIMIT: f32 = 0.5;
 
+/// 1/k!, k = 1 … 8: expm1(x)/x = Σ x^(k−1)/k! to x⁷/8!, the remainder below 1.1·10⁻⁸ for
+/// |x| ≤ [`EXP_M1_KAHAN_LIMIT`]. The WGSL twin's expm1 there: Kahan's form needs a log that
+/// is accurate relative to ln u near 1, and WGSL promises only 2⁻²¹ absolute (on an NVIDIA
+/// H200 that made lobes with κ ≈ 10⁻⁷ sample and weigh wrong by tens of per cent).
+pub const EXP_M1_SERIES: [f32; 8] = [
+    1.0,
+    1.0 / 2.0,
+    1.0 / 6.0,
+    1.0 / 24.0,
+    1.0 / 120.0,
+    1.0 / 720.0,
+    1.0 / 5040.0,
+    1.0 / 40320.0,
+];
+
+/// 1/(2k + 1), k = 0 … 6: ln(1 + x) = 2 atanh(s) = 2s Σ s^(2k)/(2k + 1), s = x/(2 + x), to
+/// s¹³/13, the remainder below 1.5·10⁻⁸ |s| for x ∈ [−½, 0] (|s| ≤ ⅓). The WGSL twin's ln(1 + x)
+/// near the peak of the inverse CDF ([`crate::Vmf::sample`]), for the reason of
+/// [`EXP_M1_SERIES`].
+pub const LN_1P_SERIES: [f32; 7] = [
+    1.0,
+    1.0 / 3.0,
+    1.0 / 5.0,
+    1.0 / 7.0,
+    1.0 / 9.0,
+    1.0 / 11.0,
+    1.0 / 13.0,
+];
+
 /// Coefficients of A₃(κ)/κ in powers of κ²: 1/3, −1/45, 2/945, −1/4725, 2/93555 (the odd
 /// series of coth κ − 1/κ), evaluated by Horner's scheme.
 pub const MEAN_COSINE_SERIES: [f32; 5] = [
@@ -92,6 +121,21 @@ pub const F32_CONSTANTS: &[(&str, f32)] = &[
     ("VMF_KAPPA_DIRECT_EXPM1", KAPPA_DIRECT_EXPM1),
     ("VMF_SERIES_LIMIT", SERIES_LIMIT),
     ("VMF_EXP_M1_KAHAN_LIMIT", EXP_M1_KAHAN_LIMIT),
+    ("VMF_EXP_M1_SERIES_0", EXP_M1_SERIES[0]),
+    ("VMF_EXP_M1_SERIES_1", EXP_M1_SERIES[1]),
+    ("VMF_EXP_M1_SERIES_2", EXP_M1_SERIES[2]),
+    ("VMF_EXP_M1_SERIES_3", EXP_M1_SERIES[3]),
+    ("VMF_EXP_M1_SERIES_4", EXP_M1_SERIES[4]),
+    ("VMF_EXP_M1_SERIES_5", EXP_M1_SERIES[5]),
+    ("VMF_EXP_M1_SERIES_6", EXP_M1_SERIES[6]),
+    ("VMF_EXP_M1_SERIES_7", EXP_M1_SERIES[7]),
+    ("VMF_LN_1P_SERIES_0", LN_1P_SERIES[0]),
+    ("VMF_LN_1P_SERIES_1", LN_1P_SERIES[1]),
+    ("VMF_LN_1P_SERIES_2", LN_1P_SERIES[2]),
+    ("VMF_LN_1P_SERIES_3", LN_1P_SERIES[3]),
+    ("VMF_LN_1P_SERIES_4", LN_1P_SERIES[4]),
+    ("VMF_LN_1P_SERIES_5", LN_1P_SERIES[5]),
+    ("VMF_LN_1P_SERIES_6", LN_1P_SERIES[6]),
     ("VMF_MEAN_COSINE_SERIES_0", MEAN_COSINE_SERIES[0]),
     ("VMF_MEAN_COSINE_SERIES_1", MEAN_COSINE_SERIES[1]),
     ("VMF_MEAN_COSINE_SERIES_2", MEAN_COSINE_SERIES[2]),
