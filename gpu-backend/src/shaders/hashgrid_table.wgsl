@@ -90,9 +90,14 @@ fn hashgrid_insert_or_get(table: HashgridTable, home: u32, checksum: u32) -> Has
 // CPU's `evict_older_than` takes `&mut self`): `hashgrid_evict_slot` on every slot, then
 // `hashgrid_trim_slot` on every slot.
 
-// `touch`: slot used in `frame` (a relaxed store, like `ConcurrentTable::touch`).
+// `touch`: slot used in `frame` (a relaxed store, like `ConcurrentTable::touch`), written only
+// when the age changes: the invocations that read a hot slot in one frame then load it
+// instead of all storing to the same word (the CPU twin keeps cache lines unshared so).
 fn hashgrid_touch(table: HashgridTable, slot: u32, frame: u32) {
-    atomicStore(&mcg_hashgrid_words[table.age_offset + slot], frame);
+    let age = table.age_offset + slot;
+    if atomicLoad(&mcg_hashgrid_words[age]) != frame {
+        atomicStore(&mcg_hashgrid_words[age], frame);
+    }
 }
 
 // Stale when frame − age > max_age, with wrapping u32 arithmetic (frames wrap too).
