@@ -422,15 +422,24 @@ fn mean_weight(states: impl IntoIterator<Item = GridState>) -> f64 {
 /// 2, 0.5), B = 3), with the irradiance cache off, so that L_r comes from the path or is 0.
 /// 16×16 pixels × 16 spp, 4 frames, `mcpg` without emission-only directions, seed 7. The
 /// measure: the mean over valid states of w̄, the chains' running mean of f_mc =
-/// lum(weight·(L_e + L_r)). Hypothesis: the GPU's equals the CPU's (the same rule, the same
-/// expectation; they differ by the random streams and the GPU's racing stores) within 5 %,
-/// and without L_r (`Reflected::Cache` with no cache) it is at least 20 % lower: the true
+/// lum(weight·(L_e + L_r)), with L_r from the path and without it (`Reflected::Cache` with
+/// no cache), on each device. Hypothesis: what L_r adds is the same on both, i.e. the ratio
+/// w̄(with L_r)/w̄(without) on the GPU is the CPU's within 5 %, and at least 1.2 (the true
 /// incident radiance of depths 0, 1 and 2 is L_e·(1 + ρ + ρ²), L_e·(1 + ρ) and L_e, against
-/// L_e alone. Five runs: the GPU 0.6 %, 3.0 % and 1.9 % above the CPU, 0.5 % and 0.6 % below
-/// (the pipeline that holds every vertex, `gpu::HOLD_ALL_DEF`), and 29-32 % above the GPU
-/// without L_r. Not dividing the held vertex's gain by its throughput puts the GPU 16 % below
-/// the CPU, leaving the hit's emission out of the gain 21 % below, and not finishing a path's
-/// first held vertex 8 % below (checked once each).
+/// L_e alone).
+///
+/// The ratio rather than w̄ itself: w̄ depends on how many paths run at once. The GPU's
+/// paths of a frame read the states when they begin and race to store them when they
+/// finish (MCPG's last writer wins), where the CPU's threads take their paths one after
+/// the other. On lavapipe, which runs few paths at a time, the GPU's w̄ was the CPU's within
+/// 3 % over five runs; on an NVIDIA H200 (2026-11-30) it was 11 % below with and without
+/// L_r (0.712 and 0.577 against 0.804 and 0.631), also at 1 spp × 64 frames, but the CPU's
+/// within 2 % with one path per frame (1 px, 1 spp, 512 frames: 0.741 against 0.729). The
+/// H200's ratio was 1.234 against the CPU's 1.274 (−3.2 %). Not dividing the held vertex's
+/// gain by its throughput, leaving the hit's emission out of the gain and not finishing a
+/// path's first held vertex put the GPU's w̄ with L_r 16 %, 21 % and 8 % below the CPU's on
+/// lavapipe, where w̄ without L_r does not change (checked once each, when the test compared
+/// w̄; with the ratio, dropping L_r from held vertices fails it too, checked once).
 #[test]
 fn gpu_mcpg_learns_the_paths_reflected_radiance_as_the_cpu() {
     let (rho, le) = (Vec3::new(0.5, 0.3, 0.8), Vec3::new(1.0, 2.0, 0.5));
@@ -467,19 +476,25 @@ fn gpu_mcpg_learns_the_paths_reflected_radiance_as_the_cpu() {
     };
     let gpu_path = on_gpu(Reflected::Path);
     let gpu_none = on_gpu(Reflected::Cache);
-    let mut guide = Guide::new(config).unwrap();
-    guide.set_camera(scene.camera.position);
-    for frame in 0..frames {
-        let sampler = || McpgSampler::new(&guide).with_reflected(Reflected::Path);
-        render_frame(&scene, &settings, frame, sampler, || ());
-        guide.end_frame();
-    }
-    let (adaptive, fixed) = guide.grids_mut();
-    let cpu_path = mean_weight(adaptive.snapshot().into_iter().chain(fixed.snapshot()));
-    let label =
-        format!("mean w̄: GPU {gpu_path:.4}, CPU {cpu_path:.4}, GPU without L_r {gpu_none:.4}");
-    assert!((gpu_path / cpu_path - 1.0).abs() < 0.05, "{label}");
-    assert!(gpu_path > 1.2 * gpu_none, "{label}");
+    let on_cpu = |reflected| {
+        let mut guide = Guide::new(config).unwrap();
+        guide.set_camera(scene.camera.position);
+        for frame in 0..frames {
+            let sampler = || McpgSampler::new(&guide).with_reflected(reflected);
+            render_frame(&scene, &settings, frame, sampler, || ());
+            guide.end_frame();
+        }
+        let (adaptive, fixed) = guide.grids_mut();
+        mean_weight(adaptive.snapshot().into_iter().chain(fixed.snapshot()))
+    };
+    let (cpu_path, cpu_none) = (on_cpu(Reflected::Path), on_cpu(Reflected::Cache));
+    let (gpu_ratio, cpu_ratio) = (gpu_path / gpu_none, cpu_path / cpu_none);
+    let label = format!(
+        "mean w̄ with / without L_r: GPU {gpu_path:.4} / {gpu_none:.4} = {gpu_ratio:.4}, \
+         CPU {cpu_path:.4} / {cpu_none:.4} = {cpu_ratio:.4}"
+    );
+    assert!((gpu_ratio / cpu_ratio - 1.0).abs() < 0.05, "{label}");
+    assert!(gpu_ratio > 1.2, "{label}");
 }
 
 /// The GPU tracer's adaptive allocation of `mcpg`'s emission-only directions: its recording
