@@ -528,6 +528,17 @@ impl SceneBuffers {
     }
 }
 
+/// How the guide's end of a frame was timed ([`GpuTracer::render_frame`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum GuideEnd {
+    /// No per-frame pass (not `mcpg`).
+    None,
+    /// In the timer's query pair after the tiles'.
+    Timestamped,
+    /// On the wall clock: these seconds.
+    Wall(f64),
+}
+
 /// Timestamp queries around each tile's pass.
 struct Timer {
     queries: wgpu::QuerySet,
@@ -992,8 +1003,9 @@ impl GpuTracer {
         self.guided.as_ref().map(|g| &g.guide)
     }
 
-    /// Wall-clock seconds of the guide's per-frame pass in the last [`GpuTracer::render_frame`]
-    /// (part of its time), `None` when that frame was not `mcpg`.
+    /// Seconds of the guide's per-frame pass in the last [`GpuTracer::render_frame`] (part of
+    /// its time; timestamped when the frame's passes are, else on the wall clock), `None` when
+    /// that frame was not `mcpg`.
     #[must_use]
     pub fn last_end_frame_s(&self) -> Option<f64> {
         self.last_end_frame_s
@@ -1138,9 +1150,9 @@ impl GpuTracer {
     ///
     /// With [`Method::Mcpg`] the guide of [`GpuTracer::start_mcpg`] follows the camera, guides
     /// and learns in the frame's passes, and its per-frame pass ([`GpuMcpgGuide::end_frame`])
-    /// runs after them; the frame's time includes that pass (its wall clock, submission to
-    /// the end of the wait, added to the timestamps when the adapter has them; also
-    /// [`GpuTracer::last_end_frame_s`]). With [`Method::Mcmm`] (`bounces` 1) the chains of
+    /// runs after them; the frame's time includes that pass (timestamped like the tiles when
+    /// the adapter has timestamps, else its wall clock, submission to the end of the wait;
+    /// also [`GpuTracer::last_end_frame_s`]). With [`Method::Mcmm`] (`bounces` 1) the chains of
     /// [`GpuTracer::start_mcmm`] guide and learn, and their buffers swap after the frame.
     ///
     /// # Errors
@@ -1164,7 +1176,7 @@ impl GpuTracer {
             self.update_probes(frame)?;
         }
         let (timed_tiles, tiles) = self.dispatch_tiles(settings.method, &base)?;
-        let end_frame_s = self.end_guide_frame(settings.method)?;
+        let end = self.end_guide_frame(settings.method, timed_tiles)?;
         self.wait()?;
         let wall = started.elapsed().as_secs_f64();
         if let Some(error) = pollster::block_on(scope.pop()) {
@@ -1175,7 +1187,16 @@ impl GpuTracer {
                 if timed_tiles == tiles
                     && self.timing_of(settings.method) == GpuTiming::Timestamps =>
             {
-                timer.read(&self.ctx, timed_tiles)? + end_frame_s
+                let timed = timed_tiles + u32::from(end == GuideEnd::Timestamped);
+                let passes = timer.read(&self.ctx, timed)?;
+                if end == GuideEnd::Timestamped {
+                    self.last_end_frame_s = passes.last().copied();
+                }
+                let wall_end = match end {
+                    GuideEnd::Wall(seconds) => seconds,
+                    GuideEnd::None | GuideEnd::Timestamped => 0.0,
+                };
+                passes.iter().sum::<f64>() + wall_end
             }
             _ => wall,
         };
@@ -1503,12 +1524,30 @@ impl GpuTracer {
         Ok((timed_tiles, tiles.len() as u32))
     }
 
-    /// The guide's end of frame after the tiles: `mcpg`'s per-frame pass, timed on the wall
-    /// clock (its seconds; also [`GpuTracer::last_end_frame_s`]), or `mcmm`'s buffer swap.
-    fn end_guide_frame(&mut self, method: Method) -> Result<f64> {
+    /// The guide's end of frame after the tiles: `mcpg`'s per-frame pass, or `mcmm`'s buffer
+    /// swap. The pass is timestamped in the timer's query pair `free_pair` when the timer has
+    /// it (read with the tiles' pairs in [`GpuTracer::render_frame`]), else timed on the wall
+    /// clock (also [`GpuTracer::last_end_frame_s`]).
+    fn end_guide_frame(&mut self, method: Method, free_pair: u32) -> Result<GuideEnd> {
         self.last_end_frame_s = None;
         match method {
             Method::Mcpg | Method::McpgNee => {
+                let g = self.guided.as_mut().expect("checked in frame_params");
+                if let Some(t) = self.timer.as_ref().filter(|t| free_pair < t.pairs) {
+                    let mut encoder = self
+                        .ctx
+                        .device()
+                        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+                    let writes = wgpu::ComputePassTimestampWrites {
+                        query_set: &t.queries,
+                        beginning_of_pass_write_index: Some(2 * free_pair),
+                        end_of_pass_write_index: Some(2 * free_pair + 1),
+                    };
+                    g.guide
+                        .record_end_frame_timed(&self.ctx, &mut encoder, Some(writes))?;
+                    self.ctx.queue().submit([encoder.finish()]);
+                    return Ok(GuideEnd::Timestamped);
+                }
                 self.wait()?;
                 let ended = Instant::now();
                 let g = self.guided.as_mut().expect("checked in frame_params");
@@ -1516,7 +1555,7 @@ impl GpuTracer {
                 self.wait()?;
                 let seconds = ended.elapsed().as_secs_f64();
                 self.last_end_frame_s = Some(seconds);
-                Ok(seconds)
+                Ok(GuideEnd::Wall(seconds))
             }
             Method::Mcmm => {
                 self.mcmm
@@ -1524,7 +1563,7 @@ impl GpuTracer {
                     .expect("checked in frame_params")
                     .guide
                     .swap();
-                Ok(0.0)
+                Ok(GuideEnd::None)
             }
             // The probe methods update their probes before the tiles (`update_probes`).
             Method::Bsdf
@@ -1532,7 +1571,7 @@ impl GpuTracer {
             | Method::Adgi
             | Method::AdgiRefill
             | Method::AdgiBlend
-            | Method::Ddgi => Ok(0.0),
+            | Method::Ddgi => Ok(GuideEnd::None),
         }
     }
 
@@ -1753,8 +1792,8 @@ impl Timer {
         }
     }
 
-    /// The summed GPU time of the first `pairs` query pairs, in seconds.
-    fn read(&self, ctx: &GpuContext, pairs: u32) -> Result<f64> {
+    /// The GPU time of each of the first `pairs` query pairs, in seconds.
+    fn read(&self, ctx: &GpuContext, pairs: u32) -> Result<Vec<f64>> {
         let bytes = u64::from(2 * pairs) * u64::from(wgpu::QUERY_SIZE);
         let mut encoder = ctx
             .device()
@@ -1776,11 +1815,10 @@ impl Timer {
             bytemuck::pod_collect_to_vec(&view[..])
         };
         self.staging.unmap();
-        let total: u64 = ticks
+        Ok(ticks
             .chunks_exact(2)
-            .map(|p| p[1].saturating_sub(p[0]))
-            .sum();
-        Ok(total as f64 * self.period_ns * 1e-9)
+            .map(|p| p[1].saturating_sub(p[0]) as f64 * self.period_ns * 1e-9)
+            .collect())
     }
 }
 

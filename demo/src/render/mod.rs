@@ -395,6 +395,10 @@ pub struct RenderReport {
     /// How GPU frame times were measured (timestamp queries or wall clock), when the GPU
     /// rendered.
     pub gpu_timing: Option<GpuTiming>,
+    /// The GPU adapter's kind (wgpu's `DeviceType`: `Cpu` for a software implementation such
+    /// as lavapipe, whose passes run on this machine's cores; `DiscreteGpu`, …), when the GPU
+    /// rendered.
+    pub adapter_type: Option<String>,
     /// Seconds of each frame's tracing (scene building and upload of animated frames
     /// excluded): wall clock on the CPU; on the GPU the summed timestamp-query time of the
     /// frame's passes when the adapter has timestamps, else the wall clock from the first
@@ -405,9 +409,9 @@ pub struct RenderReport {
     /// system reports them (Linux `/proc/self/stat`; empty elsewhere). On a machine shared with
     /// other work they measure a frame's cost better than the wall clock.
     pub frame_cpu_times_s: Vec<f64>,
-    /// Of the wall-clock seconds, those of each frame's [`Guide::end_frame`] (`mcpg` only; empty for the
-    /// other methods); on the GPU the wall clock of the guide's per-frame pass
-    /// ([`GpuTracer::last_end_frame_s`]).
+    /// Of the frame times, those of each frame's [`Guide::end_frame`] (`mcpg` only; empty for
+    /// the other methods); on the GPU the guide's per-frame pass, timestamped like the frame
+    /// or on the wall clock ([`GpuTracer::last_end_frame_s`]).
     pub end_frame_times_s: Vec<f64>,
     /// The reference, if any.
     pub reference: Option<PathBuf>,
@@ -559,6 +563,9 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         threads: rayon::current_num_threads(),
         adapter: gpu.as_deref().map(GpuTracer::adapter_name),
         gpu_timing: gpu.as_deref().map(|g| g.timing_of(args.method)),
+        adapter_type: gpu
+            .as_deref()
+            .map(|g| format!("{:?}", g.adapter_info().device_type)),
         width: args.width,
         height: args.height,
         spp: args.spp,

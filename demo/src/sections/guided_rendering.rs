@@ -39,6 +39,7 @@ use super::Context;
 use crate::Result;
 use crate::plot::{self, Axis, LineChart, PALETTE, Series, SeriesLabelPosition};
 use crate::render::cpu::Method;
+use crate::render::gpu::GpuTiming;
 use crate::render::guided::{EMISSION_SAMPLES, MaterialScatter};
 use crate::render::mcmm::McmmScore;
 use crate::render::output::{self, Errors, RgbImage, srgb_encode};
@@ -276,9 +277,11 @@ const MIN_CPU_SECONDS: f64 = 0.1;
 /// The most frames an equal-time render gets, as a multiple of the equal-samples frames.
 const MAX_EQUAL_TIME_FACTOR: u32 = 8;
 
-/// The cost of each frame: its CPU seconds where the system reports them (steadier than the
-/// wall clock on a shared machine) and they add up to at least [`MIN_CPU_SECONDS`], else its
-/// wall-clock seconds.
+/// The cost of each frame: its CPU seconds where the frame ran on this machine's cores (the
+/// CPU tracer, or a software GPU such as lavapipe), the system reports them (steadier than the
+/// wall clock on a shared machine) and they add up to at least [`MIN_CPU_SECONDS`]; else its
+/// frame time (on a hardware GPU the timestamp queries' GPU time: its CPU seconds there would
+/// be the host's wait for the GPU).
 fn frame_costs(r: &Rendered) -> &[f64] {
     if costs_are_cpu(r) {
         &r.report.frame_cpu_times_s
@@ -289,7 +292,8 @@ fn frame_costs(r: &Rendered) -> &[f64] {
 
 /// Whether [`frame_costs`] are CPU seconds.
 fn costs_are_cpu(r: &Rendered) -> bool {
-    r.report.frame_cpu_times_s.iter().sum::<f64>() >= MIN_CPU_SECONDS
+    let on_cores = r.report.device == "cpu" || r.report.adapter_type.as_deref() == Some("Cpu");
+    on_cores && r.report.frame_cpu_times_s.iter().sum::<f64>() >= MIN_CPU_SECONDS
 }
 
 fn cumulative_seconds(r: &Rendered) -> Vec<f64> {
@@ -747,6 +751,11 @@ fn study_section(
         let device_name = runs[0].equal_samples.report.device;
         let clock = if runs.iter().all(|r| costs_are_cpu(&r.equal_samples)) {
             "CPU seconds (all threads)"
+        } else if runs
+            .iter()
+            .all(|r| r.equal_samples.report.gpu_timing == Some(GpuTiming::Timestamps))
+        {
+            "GPU seconds (timestamp queries)"
         } else {
             "seconds (wall clock)"
         };

@@ -293,6 +293,21 @@ impl GpuMcpgGuide {
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
+        self.record_end_frame_timed(ctx, encoder, None)
+    }
+
+    /// [`record_end_frame`](Self::record_end_frame) with timestamps written at the beginning
+    /// and end of its compute pass (a device with `TIMESTAMP_QUERY`), so that a renderer can
+    /// time the guide's per-frame work on the GPU's clock beside its own passes.
+    ///
+    /// # Errors
+    /// As [`record_end_frame`](Self::record_end_frame).
+    pub fn record_end_frame_timed(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) -> Result<(), GpuError> {
         let m = self.maintenance(ctx)?;
         let grid = |invocations: u32| ctx.workgroup_grid(invocations, crate::WORKGROUP_SIZE);
         let p = &self.params;
@@ -305,7 +320,7 @@ impl GpuMcpgGuide {
             };
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("mcpg end of frame"),
-            timestamp_writes: None,
+            timestamp_writes,
         });
         pass.set_bind_group(0, &self.bind_group, &[]);
         if p.cache_enabled != 0 {
