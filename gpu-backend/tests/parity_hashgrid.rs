@@ -207,7 +207,8 @@ fn concurrent_inserts_end_with_the_cpu_key_set() {
 
 /// `StaticGrid::vertex_key` and `jittered_vertex` on 20 000 positions over 10⁻³..10⁶ scene
 /// units with three cell widths (25, 0.37, 3), uniforms incl. 0, 1 − ε/2, 1, negatives and the ties u = 1 − f:
-/// keys and vertices bit for bit. Broken once on purpose (the WGSL jittered vertex compared
+/// vertices bit for bit; keys bit for bit, or (at most 20 of them) the key of a quotient
+/// position/width within 3 ULP of the CPU's, as WGSL's division allows. Broken once on purpose (the WGSL jittered vertex compared
 /// u > 1 − f instead of ≥): failed.
 #[test]
 fn static_keys_and_jittered_vertices_match_the_cpu() {
@@ -254,12 +255,48 @@ fn static_keys_and_jittered_vertices_match_the_cpu() {
     let (keys, jittered) = HashgridKernels::new()
         .static_vertices(ctx, &queries)
         .unwrap();
+    let mut near_boundaries = 0;
     for (i, q) in queries.iter().enumerate() {
         let grid = StaticGrid::new(q.width).unwrap();
-        assert_eq!(keys[i], grid.vertex_key(q.position, q.u_corner), "{q:?}");
+        let key = grid.vertex_key(q.position, q.u_corner);
+        if keys[i] != key {
+            // WGSL divides within 2.5 ULP: a quotient position/width that close to a cell
+            // boundary (or to the corner choice's threshold) may fall on either side of it.
+            let quotient = q.position / q.width;
+            let taken = quotients_within_ulps(quotient, 3)
+                .any(|p| CellKey::unclassed(stochastic_trilinear(p, q.u_corner)) == keys[i]);
+            assert!(taken, "{q:?}: GPU {:?} CPU {key:?}", keys[i]);
+            near_boundaries += 1;
+        }
         let v = jittered_vertex(q.position, q.u_jitter);
         assert_eq!(jittered[i], v, "{q:?}");
     }
+    // Lavapipe divides correctly rounded (0 here); an NVIDIA H200 had 1 of the 20 000.
+    assert!(
+        near_boundaries <= 20,
+        "{near_boundaries} keys differ within 3 ULP"
+    );
+}
+
+/// Every vector whose components lie within `ulps` ULP of `q`'s (including `q`).
+fn quotients_within_ulps(q: Vec3, ulps: u32) -> impl Iterator<Item = Vec3> {
+    let around = move |x: f32| {
+        let (mut down, mut up) = (vec![x], vec![x]);
+        for _ in 0..ulps {
+            down.push(down.last().unwrap().next_down());
+            up.push(up.last().unwrap().next_up());
+        }
+        down.into_iter()
+            .chain(up.into_iter().skip(1))
+            .collect::<Vec<f32>>()
+    };
+    let (xs, ys, zs) = (around(q.x), around(q.y), around(q.z));
+    xs.into_iter().flat_map(move |x| {
+        let zs = zs.clone();
+        ys.clone()
+            .into_iter()
+            .flat_map(move |y| zs.clone().into_iter().map(move |z| Vec3::new(x, y, z)))
+    })
 }
 
 /// The age counter. (1) Serial insert-and-touch on the GPU of 120 keys (a third already in

@@ -3,7 +3,7 @@
 //!
 //! Runs on whatever wgpu adapter exists (lavapipe in CI); every test skips with a printed
 //! reason when there is no adapter, and fails instead when `MCG_REQUIRE_GPU=1` (CI sets it).
-//! Hashes, checksums, table outcomes, packed words and states must match bit for bit; the
+//! Hashes, checksums, table outcomes, packed words and integers must match bit for bit; the
 //! vMF lobes go through `exp` and `log`, which WGSL only bounds loosely, so they are compared
 //! within tolerances derived from WGSL's precision rules (see `common::tolerance`).
 
@@ -302,8 +302,10 @@ fn vmf_stats_update_matches_the_cpu() {
             };
             let t = 0.5 * f64::from((d - mu).length_squared());
             let e = f64::from(before.one_minus_mean_cosine);
-            let tol = 32.0 * EPS * ((2.0 * t).sqrt() + e + t) + 400.0 * EPS * EPS;
             let c = f64::from(cpu.one_minus_mean_cosine);
+            // Plus the update's division, within 2.5 ULP in WGSL (an NVIDIA H200 gave
+            // 0.99999994 for a fresh state's 1).
+            let tol = 32.0 * EPS * ((2.0 * t).sqrt() + e + t) + 400.0 * EPS * EPS + 4.0 * EPS * c;
             assert_close!(f64::from(g.one_minus_mean_cosine), c, tol, "{i}: 1 − r̄");
         }
     }
@@ -311,8 +313,8 @@ fn vmf_stats_update_matches_the_cpu() {
 
 /// `VmfMixture<4>` pdf, component choice and `sample_with_pdf` on 8 192 mixtures (fixed seed;
 /// κ from the switch-point list, weights with zeros, uniforms incl. 0 and 1 − ε/2).
-/// Hypotheses: the component index and the rescaled uniform are bit-exact (only +, −, one
-/// division and comparisons, all correctly rounded on lavapipe); the pdf is within
+/// Hypotheses: the component index is exact and the rescaled uniform within 4 ULP
+/// (`rescaled_uniform_matches`: +, −, comparisons and one division); the pdf is within
 /// Σ wᵢ Vᵢ(ω) tolᵢ + 4ε of the CPU's, tolᵢ = `tolerance::pdf` of each lobe; the sampled
 /// direction within `tolerance::direction` of the CPU's sample of the chosen lobe with the
 /// same uniforms; the sample's pdf within the pdf tolerance of the CPU's mixture pdf at the
@@ -368,10 +370,15 @@ fn vmf_mixture_matches_the_cpu() {
         let (index, u) = m.select(q.uniforms.x);
         let e = evals[i];
         assert_eq!(
-            (e.component, e.u.to_bits()),
-            (index, u.to_bits()),
+            e.component, index,
             "{i}: component choice of u = {}",
             q.uniforms.x
+        );
+        assert!(
+            rescaled_uniform_matches(e.u, u),
+            "{i}: rescaled uniform of u = {}: GPU {} CPU {u}",
+            q.uniforms.x,
+            e.u
         );
         let cpu = f64::from(m.pdf(q.direction));
         let tol = pdf_tolerance(m, q.direction);
@@ -399,7 +406,7 @@ fn vmf_mixture_matches_the_cpu() {
         assert_close!(f64::from(g.pdf), at, tol_p, "{i}: sample pdf, GPU vs CPU");
     }
     println!(
-        "mixture parity ({n} mixtures of 4): choices bit-exact; largest error / tolerance: \
+        "mixture parity ({n} mixtures of 4): choices exact; largest error / tolerance: \
          pdf {worst_pdf:.3}, direction {worst_dir:.3}"
     );
 }
@@ -492,7 +499,7 @@ fn vmf_convolution_matches_the_cpu() {
 
 /// `VmfMixtureKernel::<K>` for K = 1 and 3 (the kernel's `VMF_MIXTURE_K` replaced on the
 /// host): on 512 mixtures each (fixed seed, κ in [0.5, 50], weights in (0.1, 3)), the
-/// component and the rescaled uniform equal the CPU's bit for bit and the pdf is within
+/// component equals the CPU's, the rescaled uniform is within 4 ULP of it and the pdf is within
 /// 10⁻⁴ relative (κ ≤ 50 keeps `tolerance::pdf` below 10⁻⁴, see the K = 4 test). A wrong K
 /// misreads the packed layout and fails. Broken once on purpose (the host left K at 4):
 /// failed.
@@ -517,10 +524,11 @@ fn vmf_mixture_kernel_takes_any_k() {
             .unwrap();
         for ((m, q), e) in mixtures.iter().zip(&queries).zip(&evals) {
             let (index, u) = m.select(q.uniforms.x);
-            assert_eq!(
-                (e.component, e.u.to_bits()),
-                (index, u.to_bits()),
-                "K = {K}"
+            assert_eq!(e.component, index, "K = {K}");
+            assert!(
+                rescaled_uniform_matches(e.u, u),
+                "K = {K}: GPU {} CPU {u}",
+                e.u
             );
             let cpu = m.pdf(q.direction);
             assert_close!(e.pdf, cpu, 1e-4 * cpu + 1e-30, "K = {K}: pdf, GPU vs CPU");
@@ -528,6 +536,13 @@ fn vmf_mixture_kernel_takes_any_k() {
     }
     check::<1>(ctx, &mut rng);
     check::<3>(ctx, &mut rng);
+}
+
+/// The rescaled uniform (u − start)/w of a mixture's component choice: within 4 ULP of the
+/// CPU's, WGSL's division being within 2.5 ULP (lavapipe's is correctly rounded and matched
+/// bit for bit; an NVIDIA H200's was 1 ULP off).
+fn rescaled_uniform_matches(gpu: f32, cpu: f32) -> bool {
+    f64::from((gpu - cpu).abs()) <= 4.0 * EPS * f64::from(cpu.abs()) + f64::from(f32::MIN_POSITIVE)
 }
 
 /// `pack_mixtures` writes the layout the WGSL struct has for K = 4 (checked against naga in
