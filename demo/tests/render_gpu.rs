@@ -1265,6 +1265,11 @@ fn render_on_the_gpu(method: Method) {
     let guide_passes = if method == Method::Mcpg { 2 } else { 0 };
     assert_eq!(report.end_frame_times_s.len(), guide_passes);
     assert!(report.end_frame_times_s.iter().all(|&t| t > 0.0));
+    // The guide's pass is part of its frame's time (timestamped with the frame's passes).
+    for (end, frame) in report.end_frame_times_s.iter().zip(&report.frame_times_s) {
+        assert!(end < frame, "end of frame {end} s in a frame of {frame} s");
+    }
+    assert!(report.adapter_type.is_some());
 }
 
 /// Hypothesis: `mcmm` on the GPU estimates direct light without bias in the furnace

@@ -16,14 +16,16 @@ fn mcg_rounded3(x: vec3<f32>) -> vec3<f32> {
     return max(x, vec3<f32>(-MCG_F32_MAX));
 }
 
-// `f32::is_finite`: neither infinite nor NaN.
+// `f32::is_finite`: neither infinite nor NaN, from the bits (the exponent not all ones), like
+// `mcg_is_nan`: WGSL lets an implementation assume that no value is infinite or NaN, under
+// which `abs(x) <= MCG_F32_MAX` may be folded to true.
 fn mcg_is_finite(x: f32) -> bool {
-    return abs(x) <= MCG_F32_MAX;
+    return (bitcast<u32>(x) << 1u) < ((bitcast<u32>(MCG_F32_MAX) + 1u) << 1u);
 }
 
-// `Vec3::is_finite`: every component finite.
+// `Vec3::is_finite`: every component finite (`mcg_is_finite`).
 fn mcg_is_finite3(v: vec3<f32>) -> bool {
-    return all(abs(v) <= vec3<f32>(MCG_F32_MAX));
+    return all((bitcast<vec3<u32>>(v) << vec3<u32>(1u)) < vec3<u32>((bitcast<u32>(MCG_F32_MAX) + 1u) << 1u));
 }
 
 // `f32::is_nan` from the bits: the exponent all ones and a non-zero mantissa, i.e. the bits

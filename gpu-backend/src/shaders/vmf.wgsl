@@ -19,7 +19,7 @@
     VMF_NEWTON_RELATIVE_STEP, VMF_PRIOR_DECAY_COUNT, VMF_SERIES_LIMIT, VMF_SIN_POLY_0,
     VMF_SIN_POLY_1, VMF_SIN_POLY_2, VMF_UNIFORM_SPHERE_PDF
 }
-#import mcg::math::mcg_is_finite3
+#import mcg::math::{mcg_is_finite, mcg_is_finite3}
 #import mcg::sampling::mcg_frame_to_world
 
 // 16 bytes, the layout of `mcg_vmf::Vmf`: mean direction μ (unit) and concentration κ ≥ 0.
@@ -203,7 +203,7 @@ fn vmf_kappa_from_mean_cosine(r: f32) -> f32 {
 // glam's `try_normalize`: v/|v| when 1/|v| is finite and positive.
 fn vmf_try_normalize(v: vec3<f32>, out: ptr<function, vec3<f32>>) -> bool {
     let rcp = 1.0 / sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
-    if rcp > 0.0 && rcp <= MCG_F32_MAX {
+    if rcp > 0.0 && mcg_is_finite(rcp) {
         *out = v * rcp;
         return true;
     }
@@ -217,7 +217,8 @@ fn vmf_posterior_one_minus_mean_cosine(stats: VmfSufficientStats, prior: VmfMapP
     let n_eff = select(n * n, n, prior.decay == VMF_PRIOR_DECAY_COUNT);
     let prior_weight = max(prior.weight, 0.0);
     let prior_complement = 1.0 - prior.mean_cosine;
-    if prior_weight > MCG_F32_MAX {
+    // +∞ from its bits (WGSL may assume no value is infinite and fold `> MCG_F32_MAX`).
+    if bitcast<u32>(prior_weight) == bitcast<u32>(MCG_F32_MAX) + 1u {
         return prior_complement;
     }
     let total = n_eff + prior_weight;
@@ -279,7 +280,7 @@ struct VmfFitParams {
 // cancellation-free complement forms. Returns false (and leaves `stats` alone) for a
 // negative or non-finite weight or point.
 fn vmf_stats_update(stats: ptr<function, VmfSufficientStats>, x: vec3<f32>, y: vec3<f32>, weight: f32, params: VmfFitParams) -> bool {
-    if !(weight >= 0.0 && weight <= MCG_F32_MAX && mcg_is_finite3(x) && mcg_is_finite3(y)) {
+    if !(weight >= 0.0 && mcg_is_finite(weight) && mcg_is_finite3(x) && mcg_is_finite3(y)) {
         return false;
     }
     let s = *stats;

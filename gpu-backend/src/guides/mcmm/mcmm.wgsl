@@ -149,7 +149,7 @@ fn mcmm_length_robust(v: vec3<f32>) -> f32 {
         return sqrt(length_squared);
     }
     let largest = max(max(abs(v.x), abs(v.y)), abs(v.z));
-    if !(largest <= MCG_F32_MAX) {
+    if !mcg_is_finite(largest) {
         return MCG_F32_MAX;
     }
     return min(largest * length(v / largest), MCG_F32_MAX);
@@ -238,7 +238,7 @@ fn mcmm_ratio(value: f32, density: f32) -> f32 {
 // acceptance. A NaN, infinite or negative f counts as 0. Returns whether S was accepted.
 fn mcmm_update(tentative: ptr<function, MarkovPixelState>, current: ptr<function, MarkovPixelState>, x1: vec3<f32>, x2: vec3<f32>, f_in: f32, from_hemisphere: bool, u: f32, params: McmmParams) -> bool {
     var f = 0.0;
-    if f_in >= 0.0 && f_in <= MCG_F32_MAX {
+    if f_in >= 0.0 && mcg_is_finite(f_in) {
         f = f_in;
     }
     let accepted = f > 0.0 && (!markov_pixel_state_is_valid(*current) || u * (*current).score < f);
