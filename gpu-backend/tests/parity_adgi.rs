@@ -1,9 +1,9 @@
 //! CPU/GPU parity of ADGI's probe cache: `mcg::adgi` through `GpuProbeCache` against
 //! `mcg_probe_cache::ProbeTexels` for the same samples, rays and uniforms.
 //!
-//! Equal bit for bit: every texel word after ADGI's per-sample updates (static and dynamic
-//! moving average, stochastic and round-down rounding), after DDGI's blend, and after the
-//! clip-volume reset. Within a tolerance: the irradiance query, whose `sqrt`, `pow`, division
+//! Equal bit for bit, but for a few fields a code step or two apart (`assert_words_close`):
+//! every texel word after ADGI's per-sample updates (static and dynamic moving average,
+//! stochastic and round-down rounding), after DDGI's blend, and after the clip-volume reset. Within a tolerance: the irradiance query, whose `sqrt`, `pow`, division
 //! and fusable products WGSL computes within a few ULP (WGSL spec, "Floating Point Accuracy")
 //! where the CPU rounds exactly; every weight of the query is continuous in its inputs, so
 //! those ULPs stay ULPs — relative 10⁻⁴ bounds them with margin (observed below 10⁻⁶).
@@ -96,15 +96,59 @@ fn first_difference(a: &[u32], b: &[u32]) -> Option<(usize, u32, u32)> {
 fn assert_words_equal(ctx: &GpuContext, gpu: &GpuProbeCache, cpu: &ProbeTexels, what: &str) {
     let (gi, gv) = gpu.read_words(ctx).unwrap();
     let (ci, cv) = cpu_words(cpu);
-    assert_eq!(
-        first_difference(&gi, &ci),
-        None,
-        "{what}: irradiance words (index, GPU, CPU)"
+    let config = cpu.config();
+    let (irradiance, visibility) = (config.irradiance_layout, config.visibility_layout);
+    let irradiance_fields = |w: u32| {
+        let w = mcg_color_codec::IrradianceWord(w);
+        (irradiance.codes(w).to_vec(), irradiance.count(w))
+    };
+    let visibility_fields = |w: u32| {
+        let w = mcg_color_codec::VisibilityWord(w);
+        (visibility.codes(w).to_vec(), visibility.count(w))
+    };
+    assert_words_close(
+        &gi,
+        &ci,
+        irradiance_fields,
+        &format!("{what}: irradiance words"),
     );
-    assert_eq!(
-        first_difference(&gv, &cv),
-        None,
-        "{what}: visibility words (index, GPU, CPU)"
+    assert_words_close(
+        &gv,
+        &cv,
+        visibility_fields,
+        &format!("{what}: visibility words"),
+    );
+}
+
+/// The GPU's words equal the CPU's, or, for at most 2 % of them, carry the same count and
+/// each field's code within two steps of the CPU's. WGSL's division and fused multiply-adds
+/// put the float before quantisation a few ULP from the CPU's, and a value that close to a
+/// rounding threshold takes the neighbouring code; the moving averages then carry such a
+/// step into later frames. Lavapipe matches bit for bit; an NVIDIA H200 put one field of one
+/// word one step over in two of the tests below (first differences seen: 0x09637090 against
+/// 0x09637091, 0x125a7505 against 0x125a5505).
+fn assert_words_close(
+    gpu: &[u32],
+    cpu: &[u32],
+    fields: impl Fn(u32) -> (Vec<u32>, u32),
+    what: &str,
+) {
+    assert_eq!(gpu.len(), cpu.len(), "{what}: lengths");
+    let mut differing = 0;
+    for (i, (&g, &c)) in gpu.iter().zip(cpu).enumerate() {
+        if g == c {
+            continue;
+        }
+        differing += 1;
+        let ((gc, gn), (cc, cn)) = (fields(g), fields(c));
+        let near = gn == cn && gc.iter().zip(&cc).all(|(a, b)| a.abs_diff(*b) <= 2);
+        assert!(near, "{what}: word {i}, GPU {g:#010x} CPU {c:#010x}");
+    }
+    assert!(
+        differing <= cpu.len() / 50,
+        "{what}: {differing} of {} words differ (first {:?})",
+        cpu.len(),
+        first_difference(gpu, cpu)
     );
 }
 
@@ -173,7 +217,7 @@ fn per_sample_updates_write_the_cpu_words() {
 
 /// DDGI's blend, 4 frames of 48 rays per probe on every probe (with the awkward rays of
 /// [`random_ray`]) and a fresh uniform per probe and frame: the GPU's words equal
-/// `ProbeTexels::blend_rays`' bit for bit.
+/// `ProbeTexels::blend_rays`' (`assert_words_close`).
 #[test]
 fn ddgi_blend_writes_the_cpu_words() {
     let Some((ctx, mut rng)) = common::gpu_and_rng("ddgi_blend_writes_the_cpu_words", 21) else {

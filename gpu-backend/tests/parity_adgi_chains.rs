@@ -62,12 +62,13 @@ fn heuristic_words(w: &[u32]) -> Vec<mcg_color_codec::HeuristicsWord> {
 }
 
 /// The guiding function of both forms on a 7 × 5 × 4 grid (its proxies partly filled on the
-/// upper faces): the GPU's table (f_s per probe; f_d max-pooled into 3 × 2 × 2 proxies) equals
-/// the CPU's `decode_field` + `max_pool` bit for bit, and h(p, ω) at 2 000 points (a fifth
-/// outside the grid, some zero or NaN directions) with feedback ĝ (NaN, negative, 0, large
-/// among it) equals `GuidingFunction::guiding_value`: bit for bit for the dynamic form
-/// (h = f), within 7 ULP (WGSL's `exp` bound) for the static form's exp(min(ĝ/f, 1)) f
-/// (lavapipe: 4 ULP at worst).
+/// upper faces): the GPU's table (f_s per probe; f_d max-pooled into 3 × 2 × 2 proxies) is
+/// the CPU's `decode_field` + `max_pool` within 3 ULP (the decode's division), and h(p, ω)
+/// at 2 000 points (a fifth outside the grid, some zero or NaN directions) with feedback ĝ
+/// (NaN, negative, 0, large among it) is `GuidingFunction::guiding_value` within 3 ULP for
+/// the dynamic form (h = f) and 10 ULP (plus WGSL's `exp` bound) for the static form's
+/// exp(min(ĝ/f, 1)) f. Lavapipe: the table and the dynamic form bit for bit, the static
+/// form 4 ULP at worst.
 #[test]
 fn guiding_values_match_the_cpu() {
     let Some((ctx, mut rng)) = common::gpu_and_rng("guiding_values_match_the_cpu", 30) else {
@@ -130,8 +131,15 @@ fn guiding_values_match_the_cpu() {
         gpu.guide_from_words(ctx, &w).unwrap();
         gpu.write_feedback(ctx, &feedback).unwrap();
         let got_table = gpu.read_guide_table(ctx).unwrap();
-        let bits = |t: &[f32]| t.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(&got_table), bits(&table), "{kind:?}: guide table");
+        // The decode divides a code by its field's maximum: within 2.5 ULP in WGSL, so 3 ULP
+        // (an NVIDIA H200 differed; lavapipe matches bit for bit).
+        for (i, (&g, &c)) in got_table.iter().zip(&table).enumerate() {
+            let e = common::ulps(g, c);
+            assert!(
+                e <= 3,
+                "{kind:?}: guide table entry {i}: GPU {g} CPU {c} ({e} ULP)"
+            );
+        }
         assert!(table.iter().filter(|&&x| x > 0.0).count() > table.len() / 2);
         let h = GuidingFunction::new(cells, &table, Some(&feedback), params).unwrap();
         let got = gpu.guide_values(ctx, &gpu_queries).unwrap();
@@ -142,9 +150,10 @@ fn guiding_values_match_the_cpu() {
             let e = common::ulps(g, c);
             worst = worst.max(e);
             positive += usize::from(c > 0.0);
-            // WGSL's exp is within 3 + 2|x| ULP (x ≤ cap = 1), the CPU's within 1, and the
-            // product with f rounds once more: 7 ULP. The dynamic form has no exp.
-            let bound = if kind == ChainKind::Static { 7 } else { 0 };
+            // The table's 3 ULP; then WGSL's exp, within 3 + 2|x| ULP (x ≤ cap = 1), the
+            // CPU's within 1, and the product with f rounding once more: 7 ULP more. The
+            // dynamic form has no exp.
+            let bound = if kind == ChainKind::Static { 10 } else { 3 };
             assert!(
                 e <= bound,
                 "{kind:?} h({p}, {d}): GPU {g} CPU {c} ({e} ULP)"
