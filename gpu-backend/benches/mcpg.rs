@@ -1,6 +1,7 @@
 //! The GPU MCPG guide's cost (group `mcpg_vertex`): 65 536 invocations, one path vertex each
 //! (a shading point on a plane under one sphere light), guided by `mcg::mcpg` (begin, sample
-//! with the exact pdf, an analytic trace, finish) against the same kernel with cosine
+//! with the exact pdf, an analytic trace, finish) against the same kernel without the finish
+//! (`unfinished`: the finish's cost is the difference), the same kernel with cosine
 //! sampling, against a kernel that only finds and reads the N_mc candidates' states as
 //! `mcpg_begin` does (`reads`: the memory reads no implementation of MCPG Alg. 1 avoids, a
 //! floor under `guided`), and against the same dispatch of a kernel that only writes its
@@ -55,6 +56,7 @@ fn benches(c: &mut Criterion) {
         guide.bind_group_layout(),
     );
     let guided = kernel.pipeline(ctx, "guided_vertex");
+    let unfinished = kernel.pipeline(ctx, "unfinished_vertex");
     let cosine = kernel.pipeline(ctx, "cosine_vertex");
     let reads = kernel.pipeline(ctx, "reads_vertex");
     let launch = kernel.pipeline(ctx, "launch_vertex");
@@ -79,6 +81,7 @@ fn benches(c: &mut Criterion) {
     let mut g = c.benchmark_group("mcpg_vertex");
     g.sample_size(20);
     g.bench_function("guided", |b| b.iter(|| run(&guided, &guide)));
+    g.bench_function("unfinished", |b| b.iter(|| run(&unfinished, &guide)));
     g.bench_function("cosine", |b| b.iter(|| run(&cosine, &guide)));
     g.bench_function("reads", |b| b.iter(|| run(&reads, &guide)));
     g.bench_function("launch", |b| b.iter(|| run(&launch, &guide)));

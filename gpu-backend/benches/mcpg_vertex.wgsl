@@ -1,7 +1,8 @@
 // One guided path vertex per invocation, as a renderer's kernel runs it with `mcg::mcpg` (the
 // guide at group 1): a shading point on a plane, MCPG's begin, sample (with its exact pdf), an
-// analytic trace to one sphere light, finish; `cosine_vertex` is the same kernel with cosine
-// sampling and no guide; `reads_vertex` only finds and reads the N_mc candidates' states, as
+// analytic trace to one sphere light, finish; `unfinished_vertex` the same without the finish
+// (Alg. 3's update and store, the cache's add: their cost is the difference); `cosine_vertex`
+// is the same kernel with cosine sampling and no guide; `reads_vertex` only finds and reads the N_mc candidates' states, as
 // `mcpg_begin` does (the reads no implementation of Alg. 1 avoids: a floor under `guided_vertex`);
 // `launch_vertex` only writes its output (the cost of the dispatch, the bounds check and the
 // store that every kernel pays).
@@ -37,6 +38,16 @@ fn point(i: u32) -> vec3<f32> {
 
 @compute @workgroup_size(MCG_WORKGROUP_SIZE)
 fn guided_vertex(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    vertex(id, groups, true);
+}
+
+@compute @workgroup_size(MCG_WORKGROUP_SIZE)
+fn unfinished_vertex(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    vertex(id, groups, false);
+}
+
+// `guided_vertex`'s body; `finish` false leaves out `mcpg_finish` (`unfinished_vertex`).
+fn vertex(id: vec3<u32>, groups: vec3<u32>, finish: bool) {
     let i = mcg_invocation_index(id, groups);
     if i >= arrayLength(&estimates) {
         return;
@@ -63,7 +74,9 @@ fn guided_vertex(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_work
         obs = mcpg_observation_hit(y, normalize(y - vec3<f32>(0.0, 0.0, 3.0)), vec3<f32>(40.0), weight);
     }
     let f = McpgFinishUniforms(mcg_rng_uniform(&rng), mcg_rng_uniform(&rng), mcg_rng_uniform(&rng), mcg_rng_uniform(&rng), mcg_rng_uniform(&rng));
-    mcpg_finish(&v, s, obs, f);
+    if finish {
+        mcpg_finish(&v, s, obs, f);
+    }
     estimates[i] = e;
 }
 
