@@ -2,8 +2,9 @@
 // guide at group 1): a shading point on a plane, MCPG's begin, sample (with its exact pdf), an
 // analytic trace to one sphere light, finish; `unfinished_vertex` the same without the finish
 // (Alg. 3's update and store, the cache's add: their cost is the difference); `cosine_vertex`
-// is the same kernel with cosine sampling and no guide; `reads_vertex` only finds and reads the N_mc candidates' states, as
-// `mcpg_begin` does (the reads no implementation of Alg. 1 avoids: a floor under `guided_vertex`);
+// is the same kernel with cosine sampling and no guide; `reads_vertex` only finds and reads
+// the N_mc candidates' states, as `mcpg_begin` does (the reads no implementation of Alg. 1
+// avoids: a floor under `guided_vertex`);
 // `launch_vertex` only writes its output (the cost of the dispatch, the bounds check and the
 // store that every kernel pays).
 

@@ -3,7 +3,8 @@
 //!
 //! Equal bit for bit, but for a few fields a code step or two apart (`assert_words_close`):
 //! every texel word after ADGI's per-sample updates (static and dynamic moving average,
-//! stochastic and round-down rounding), after DDGI's blend, and after the clip-volume reset. Within a tolerance: the irradiance query, whose `sqrt`, `pow`, division
+//! stochastic and round-down rounding), after DDGI's blend, and after the clip-volume reset.
+//! Within a tolerance: the irradiance query, whose `sqrt`, `pow`, division
 //! and fusable products WGSL computes within a few ULP (WGSL spec, "Floating Point Accuracy")
 //! where the CPU rounds exactly; every weight of the query is continuous in its inputs, so
 //! those ULPs stay ULPs — relative 10⁻⁴ bounds them with margin (observed below 10⁻⁶).

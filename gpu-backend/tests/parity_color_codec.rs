@@ -20,9 +20,9 @@ use common::gpu_and_rng;
 
 /// R11G11B10, RGB9E5, gamma-5 R10G10B10A2, and the ADGI irradiance (log codec with
 /// round-down, nearest and stochastic rounding; count field), visibility and heuristics
-/// words bit for bit, and their decoded
-/// values exactly (the heuristics' fractions within [`decoded_close`]'s 4 ULP: a division), on 50 000 colours over 2⁻³⁰..2¹⁷ (log-uniform), negatives, zeros,
-/// overflow, infinities and the rounding ties of the float formats. Broken once on purpose
+/// words bit for bit, and their decoded values exactly (the heuristics' fractions within
+/// [`decoded_close`]'s 4 ULP: a division), on 50 000 colours over 2⁻³⁰..2¹⁷ (log-uniform),
+/// negatives, zeros, overflow, infinities and the rounding ties of the float formats. Broken once on purpose
 /// (round-half-up instead of half-even in the WGSL ufloat): failed.
 #[test]
 fn packed_colour_words_match_the_cpu_bit_for_bit() {

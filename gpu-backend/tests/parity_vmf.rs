@@ -542,7 +542,7 @@ fn vmf_mixture_kernel_takes_any_k() {
 /// CPU's, WGSL's division being within 2.5 ULP (lavapipe's is correctly rounded and matched
 /// bit for bit; an NVIDIA H200's was 1 ULP off).
 fn rescaled_uniform_matches(gpu: f32, cpu: f32) -> bool {
-    f64::from((gpu - cpu).abs()) <= 4.0 * EPS * f64::from(cpu.abs()) + f64::from(f32::MIN_POSITIVE)
+    common::ulps(gpu, cpu) <= 4
 }
 
 /// `pack_mixtures` writes the layout the WGSL struct has for K = 4 (checked against naga in

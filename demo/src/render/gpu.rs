@@ -1494,14 +1494,7 @@ impl GpuTracer {
                 .ctx
                 .device()
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-            let timestamp_writes = self.timer.as_ref().and_then(|t| {
-                let slot = i as u32;
-                (slot < t.pairs).then(|| wgpu::ComputePassTimestampWrites {
-                    query_set: &t.queries,
-                    beginning_of_pass_write_index: Some(2 * slot),
-                    end_of_pass_write_index: Some(2 * slot + 1),
-                })
-            });
+            let timestamp_writes = self.timer.as_ref().and_then(|t| t.pass_writes(i as u32));
             timed_tiles += u32::from(timestamp_writes.is_some());
             {
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -1532,17 +1525,12 @@ impl GpuTracer {
         self.last_end_frame_s = None;
         match method {
             Method::Mcpg | Method::McpgNee => {
-                let g = self.guided.as_mut().expect("checked in frame_params");
-                if let Some(t) = self.timer.as_ref().filter(|t| free_pair < t.pairs) {
+                if let Some(writes) = self.timer.as_ref().and_then(|t| t.pass_writes(free_pair)) {
+                    let g = self.guided.as_mut().expect("checked in frame_params");
                     let mut encoder = self
                         .ctx
                         .device()
                         .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-                    let writes = wgpu::ComputePassTimestampWrites {
-                        query_set: &t.queries,
-                        beginning_of_pass_write_index: Some(2 * free_pair),
-                        end_of_pass_write_index: Some(2 * free_pair + 1),
-                    };
                     g.guide
                         .record_end_frame_timed(&self.ctx, &mut encoder, Some(writes))?;
                     self.ctx.queue().submit([encoder.finish()]);
@@ -1790,6 +1778,15 @@ impl Timer {
             period_ns: f64::from(ctx.queue().get_timestamp_period()),
             pairs: Self::PAIRS,
         }
+    }
+
+    /// The timestamp writes of a pass into query pair `slot`, `None` past the set's pairs.
+    fn pass_writes(&self, slot: u32) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+        (slot < self.pairs).then(|| wgpu::ComputePassTimestampWrites {
+            query_set: &self.queries,
+            beginning_of_pass_write_index: Some(2 * slot),
+            end_of_pass_write_index: Some(2 * slot + 1),
+        })
     }
 
     /// The GPU time of each of the first `pairs` query pairs, in seconds.

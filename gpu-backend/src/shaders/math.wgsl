@@ -16,23 +16,27 @@ fn mcg_rounded3(x: vec3<f32>) -> vec3<f32> {
     return max(x, vec3<f32>(-MCG_F32_MAX));
 }
 
-// `f32::is_finite`: neither infinite nor NaN, from the bits (the exponent not all ones), like
-// `mcg_is_nan`: WGSL lets an implementation assume that no value is infinite or NaN, under
-// which `abs(x) <= MCG_F32_MAX` may be folded to true.
+// The bits of +∞: those of f32::MAX plus one. For tests on the bits: WGSL lets an
+// implementation assume that no value is infinite or NaN, under which comparisons such as
+// `abs(x) <= MCG_F32_MAX` may be folded to true and `x != x` to false (lavapipe does the latter).
+fn mcg_infinity_bits() -> u32 {
+    return bitcast<u32>(MCG_F32_MAX) + 1u;
+}
+
+// `f32::is_finite`: neither infinite nor NaN, from the bits: without the sign, below +∞'s.
 fn mcg_is_finite(x: f32) -> bool {
-    return (bitcast<u32>(x) << 1u) < ((bitcast<u32>(MCG_F32_MAX) + 1u) << 1u);
+    return (bitcast<u32>(x) << 1u) < (mcg_infinity_bits() << 1u);
 }
 
 // `Vec3::is_finite`: every component finite (`mcg_is_finite`).
 fn mcg_is_finite3(v: vec3<f32>) -> bool {
-    return all((bitcast<vec3<u32>>(v) << vec3<u32>(1u)) < vec3<u32>((bitcast<u32>(MCG_F32_MAX) + 1u) << 1u));
+    return mcg_is_finite(v.x) && mcg_is_finite(v.y) && mcg_is_finite(v.z);
 }
 
 // `f32::is_nan` from the bits: the exponent all ones and a non-zero mantissa, i.e. the bits
-// without the sign above those of +∞ (the bits of f32::MAX plus one). Comparisons such as
-// `x != x` do not detect NaN on every driver (lavapipe compiles them as never true).
+// without the sign above those of +∞.
 fn mcg_is_nan(x: f32) -> bool {
-    return (bitcast<u32>(x) << 1u) > ((bitcast<u32>(MCG_F32_MAX) + 1u) << 1u);
+    return (bitcast<u32>(x) << 1u) > (mcg_infinity_bits() << 1u);
 }
 
 // Whether any component is NaN (`mcg_is_nan`).

@@ -5,7 +5,7 @@
 // see those files for the derivations (MCMM eq. 4, MCPG eq. 4, Jakob 2012).
 
 #import mcg::constants::{
-    MCG_F32_MAX, MCG_FRAC_1_PI, MCG_FRAC_PI_2, VMF_COS_POLY_0, VMF_COS_POLY_1, VMF_COS_POLY_2,
+    MCG_FRAC_1_PI, MCG_FRAC_PI_2, VMF_COS_POLY_0, VMF_COS_POLY_1, VMF_COS_POLY_2,
     VMF_EXP_M1_KAHAN_LIMIT, VMF_EXP_M1_SERIES_0, VMF_EXP_M1_SERIES_1, VMF_EXP_M1_SERIES_2,
     VMF_EXP_M1_SERIES_3, VMF_EXP_M1_SERIES_4, VMF_EXP_M1_SERIES_5, VMF_EXP_M1_SERIES_6,
     VMF_EXP_M1_SERIES_7, VMF_KAPPA_DIRECT_EXPM1, VMF_KAPPA_MAX, VMF_KAPPA_SAMPLE_SATURATED,
@@ -19,7 +19,7 @@
     VMF_NEWTON_RELATIVE_STEP, VMF_PRIOR_DECAY_COUNT, VMF_SERIES_LIMIT, VMF_SIN_POLY_0,
     VMF_SIN_POLY_1, VMF_SIN_POLY_2, VMF_UNIFORM_SPHERE_PDF
 }
-#import mcg::math::{mcg_is_finite, mcg_is_finite3}
+#import mcg::math::{mcg_infinity_bits, mcg_is_finite, mcg_is_finite3}
 #import mcg::sampling::mcg_frame_to_world
 
 // 16 bytes, the layout of `mcg_vmf::Vmf`: mean direction μ (unit) and concentration κ ≥ 0.
@@ -217,8 +217,7 @@ fn vmf_posterior_one_minus_mean_cosine(stats: VmfSufficientStats, prior: VmfMapP
     let n_eff = select(n * n, n, prior.decay == VMF_PRIOR_DECAY_COUNT);
     let prior_weight = max(prior.weight, 0.0);
     let prior_complement = 1.0 - prior.mean_cosine;
-    // +∞ from its bits (WGSL may assume no value is infinite and fold `> MCG_F32_MAX`).
-    if bitcast<u32>(prior_weight) == bitcast<u32>(MCG_F32_MAX) + 1u {
+    if bitcast<u32>(prior_weight) == mcg_infinity_bits() {
         return prior_complement;
     }
     let total = n_eff + prior_weight;

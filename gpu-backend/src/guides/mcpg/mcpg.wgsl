@@ -36,7 +36,7 @@
     MCPG_TRANSITION_DROPPED, MCPG_TRANSITION_REJECTED, MCPG_TRANSITION_STORED,
     VMF_CLAMPED_COSINE_KAPPA, VMF_KAPPA_MAX, VMF_PRIOR_DECAY_SQUARED_COUNT, VMF_UNIFORM_SPHERE_PDF
 }
-#import mcg::math::{mcg_is_finite, mcg_is_finite3, mcg_is_nan, mcg_rounded}
+#import mcg::math::{mcg_infinity_bits, mcg_is_finite, mcg_is_finite3, mcg_is_nan, mcg_rounded}
 #import mcg::sampling::{mcg_cosine_hemisphere_pdf, mcg_cosine_hemisphere_sample, mcg_pcg_hash}
 #import mcg::vmf::{
     Vmf, VmfFitParams, VmfMapPrior, vmf_normalization, vmf_posterior_one_minus_mean_cosine,
@@ -373,7 +373,7 @@ fn mcpg_insert(table: HashgridTable, key: HashgridCellKey, touch: bool, frame: u
 fn mcpg_distance_prior(s: MarkovGridState, x: vec3<f32>) -> VmfMapPrior {
     let d = vec3<f32>(s.mean_target_x, s.mean_target_y, s.mean_target_z) - x;
     let d2 = dot(d, d);
-    var weight = bitcast<f32>(0x7f800000u);
+    var weight = bitcast<f32>(mcg_infinity_bits());
     if d2 > 0.0 {
         let ratio = mcpg_params.prior_scale / d2;
         weight = select(max(ratio, mcpg_params.prior_min_weight), mcpg_params.prior_min_weight, ratio != ratio);
