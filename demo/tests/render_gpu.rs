@@ -404,6 +404,42 @@ fn gpu_mcpg_furnace_matches_the_truncated_neumann_series() {
     }
 }
 
+/// `GpuTracer::warm_up` leaves no trace: after it, a fresh guide renders `mcpg` frames bit
+/// for bit as without it (the warm-up's `bsdf` frames write only the image buffer, which
+/// every frame overwrites, and neither the guide nor the emission allocation's moments).
+/// The furnace (every path meets emission, and its weight depends on the guide's lobes), one
+/// pixel (one invocation, its 4 paths one after the other), so the frames are deterministic;
+/// each frame is guided by what the frames before it learned. Warming up with `mcpg` frames instead (which train the
+/// guide) fails it.
+#[test]
+fn gpu_warm_up_leaves_the_render_as_it_was() {
+    let scene = furnace(Vec3::new(0.5, 0.3, 0.8), Vec3::new(1.0, 2.0, 0.5));
+    let Some(mut gpu) = mcpg_tracer("gpu_warm_up_leaves_the_render_as_it_was", &scene, 1, 1) else {
+        return;
+    };
+    let settings = RenderSettings {
+        width: 1,
+        height: 1,
+        spp: 4,
+        bounces: 3,
+        seed: 3,
+        method: Method::Mcpg,
+    };
+    let frames = |gpu: &mut GpuTracer, warm_up: bool| {
+        gpu.start_mcpg(&guide_config(&scene, 1, 1)).unwrap();
+        if warm_up {
+            assert!(gpu.warm_up(&settings, 0.02).unwrap() > 0);
+        }
+        (0..8)
+            .map(|frame| gpu.render_frame(&settings, frame).unwrap().0[0].to_array())
+            .collect::<Vec<_>>()
+    };
+    let cold = frames(&mut gpu, false);
+    let warm = frames(&mut gpu, true);
+    assert!(cold.iter().flatten().any(|&c| c > 0.0), "{cold:?}");
+    assert_eq!(cold, warm);
+}
+
 /// The mean luminance estimate w̄ over a guide's valid states (both grids).
 fn mean_weight(states: impl IntoIterator<Item = GridState>) -> f64 {
     let (sum, n) = states

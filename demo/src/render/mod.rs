@@ -72,6 +72,10 @@ pub enum Device {
     Gpu,
 }
 
+/// Seconds of untimed load a hardware GPU gets before a render's timed frames
+/// ([`GpuTracer::warm_up`]), so that they run at its working clocks, not at an idle GPU's.
+pub const GPU_WARM_UP_S: f64 = 0.5;
+
 /// The arguments of `mcg-demo render`.
 #[derive(Clone, Debug, clap::Parser)]
 #[command(
@@ -399,6 +403,10 @@ pub struct RenderReport {
     /// as lavapipe, whose passes run on this machine's cores; `DiscreteGpu`, …), when the GPU
     /// rendered.
     pub adapter_type: Option<String>,
+    /// The untimed `bsdf` frames a hardware GPU rendered before the timed ones
+    /// ([`GpuTracer::warm_up`] for [`GPU_WARM_UP_S`]; 0 on a software adapter), when the GPU
+    /// rendered.
+    pub gpu_warm_up_frames: Option<u32>,
     /// Seconds of each frame's tracing (scene building and upload of animated frames
     /// excluded): wall clock on the CPU; on the GPU the summed timestamp-query time of the
     /// frame's passes when the adapter has timestamps, else the wall clock from the first
@@ -504,6 +512,13 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     if let Some(g) = gpu.as_deref() {
         g.image_entries(&settings)?;
     }
+    let gpu_warm_up_frames = match gpu.as_deref_mut() {
+        Some(g) if g.adapter_info().device_type != mcg_gpu_backend::wgpu::DeviceType::Cpu => {
+            Some(g.warm_up(&settings, GPU_WARM_UP_S)?)
+        }
+        Some(_) => Some(0),
+        None => None,
+    };
     let progress = progress_bar(args)?;
     let pixels = (args.width * args.height) as usize;
     let mut sum = Accumulation::new(pixels, args.ramp_frames);
@@ -566,6 +581,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
         adapter_type: gpu
             .as_deref()
             .map(|g| format!("{:?}", g.adapter_info().device_type)),
+        gpu_warm_up_frames,
         width: args.width,
         height: args.height,
         spp: args.spp,

@@ -44,7 +44,7 @@ use crate::render::guided::{EMISSION_SAMPLES, MaterialScatter};
 use crate::render::mcmm::McmmScore;
 use crate::render::output::{self, Errors, RgbImage, srgb_encode};
 use crate::render::scene::{SceneFile, frame_time};
-use crate::render::{Device, ProbeOptions, RenderArgs, Rendered, render};
+use crate::render::{Device, GPU_WARM_UP_S, ProbeOptions, RenderArgs, Rendered, render};
 use crate::report::{Section, Table};
 
 /// The scene of the section: a room lit through a slit around a panel (GI, MCPG's case).
@@ -750,20 +750,29 @@ fn study_section(
         let (runs, budget, slowest) = compute_runs(ctx, study, device, &reference_path)?;
         let device_name = runs[0].equal_samples.report.device;
         let clock = if runs.iter().all(|r| costs_are_cpu(&r.equal_samples)) {
-            "CPU seconds (all threads)"
+            "CPU seconds (all threads)".to_owned()
         } else if runs
             .iter()
             .all(|r| r.equal_samples.report.gpu_timing == Some(GpuTiming::Timestamps))
         {
-            "GPU seconds (timestamp queries)"
+            if runs
+                .iter()
+                .any(|r| r.equal_samples.report.gpu_warm_up_frames > Some(0))
+            {
+                format!(
+                    "GPU seconds (timestamp queries, after {GPU_WARM_UP_S} s of untimed frames)"
+                )
+            } else {
+                "GPU seconds (timestamp queries)".to_owned()
+            }
         } else {
-            "seconds (wall clock)"
+            "seconds (wall clock)".to_owned()
         };
         let id = |name: &str| format!("guided-rendering-{}-{device_name}-{name}.png", study.key);
         section.heading(&format!("{} on the {device_name}", study.title));
-        image_figures(ctx, section, study, &runs, &reference, budget, clock, &id)?;
-        error_charts(ctx, section, study, &runs, budget, clock, &id)?;
-        let (table, mut device_summary) = results_table(study, &runs, budget, slowest, clock);
+        image_figures(ctx, section, study, &runs, &reference, budget, &clock, &id)?;
+        error_charts(ctx, section, study, &runs, budget, &clock, &id)?;
+        let (table, mut device_summary) = results_table(study, &runs, budget, slowest, &clock);
         section.table(table);
         let targets = match study.targets {
             Targets::Mcmm => Some(mcmm_targets(ctx, section, study, &runs, &reference, &id)?),
