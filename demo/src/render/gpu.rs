@@ -1224,9 +1224,11 @@ impl GpuTracer {
     ///
     /// A GPU lowers its clocks while it idles and raises them over some hundreds of
     /// milliseconds of load. A short render (64 frames of 128² take 25 ms of an H200's time,
-    /// between read-backs) may run entirely at the idle clocks, and did in the default report,
-    /// whose GPU renders follow minutes of CPU work: there `bsdf` measured 2.1 ms a frame
-    /// against 0.38 ms when rendered alone. The warm-up writes only the image buffer, which
+    /// between read-backs) may run entirely at the idle clocks. The likeliest reading of the
+    /// default report on an H200, whose GPU renders follow minutes of CPU work: there `bsdf`
+    /// measured 2.1 ms a frame (5.6×, about an H200's idle-to-boost clock ratio) against
+    /// 0.38 ms when rendered alone, and the methods' costs fell in the order they ran
+    /// (`scripts/device-check` tests it). The warm-up writes only the image buffer, which
     /// every frame overwrites; no guide sees it.
     ///
     /// # Errors
