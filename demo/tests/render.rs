@@ -14,7 +14,7 @@ use common::{
     upward_reflection, with_texture,
 };
 use glam::{Quat, Vec2, Vec3};
-use mcg_demo::render::bvh::Hit;
+use mcg_demo::render::bvh::{Hit, Triangle};
 use mcg_demo::render::cpu::{
     BsdfSampler, Method, Observation, RenderSettings, Vertex, VertexSampler, path_seed,
     render_frame, trace_path,
@@ -25,8 +25,8 @@ use mcg_demo::render::guided::{McpgSampler, new_guide};
 use mcg_demo::render::material::BsdfSample;
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
 use mcg_demo::render::scene::{
-    Camera, ENVIRONMENT_PICK, MIN_TEXTURE_POWER, Scene, SceneError, SceneFile, frame_time,
-    luminance,
+    Camera, ENVIRONMENT_PICK, MIN_TEXTURE_POWER, Scene, SceneError, SceneFile, TriangleAttributes,
+    frame_time, luminance,
 };
 use mcg_demo::render::scene_generator::{
     DOOR_OPENS_AT_FRAME, SCENE_NAMES, SKY_ROOM_ENVIRONMENT, built_in_files, built_in_scenes,
@@ -81,6 +81,108 @@ fn built_in_scenes_are_the_generators_output_and_load() {
             (*read - *made).abs().max_element() <= step,
             "{read} vs {made}"
         );
+    }
+}
+
+/// `--subdivide`: the hidden-light room split twice (`SceneFile::with_subdivision(2)`).
+/// In the file's triangle order, each emitting triangle stays as it is and every other one
+/// becomes 16 children of its material and front face (normals within 10⁻⁴) whose areas add
+/// up to its own (within 10⁻⁴ relative). And 4,096 rays from inside the room (from the camera,
+/// and from random points between its walls, in uniform random directions) meet the same
+/// surfaces as in the file: both miss or both hit, at distances within 10⁻⁴ (1 + t) of each
+/// other, in the same plane (the room has coplanar surfaces of different materials and
+/// facing, so which of them a ray meets is not compared). The children's corner colours and
+/// texture coordinates are their parent's at the corners' barycentrics
+/// (`TriangleAttributes::at_corners`). Twelve splits (1.6·10⁹ triangles) are refused. A
+/// middle child wound the other way fails the normals, and corners moved off the midpoints
+/// fail the areas (checked once).
+#[test]
+fn subdivided_scenes_hit_what_the_file_does() {
+    let open = || SceneFile::open(scenes_dir().join("hidden_light_room.gltf")).unwrap();
+    let plain = open().build(0.0).unwrap();
+    let split = open().with_subdivision(2).build(0.0).unwrap();
+    assert_eq!(split.emitters.len(), plain.emitters.len());
+    assert!(matches!(
+        open().with_subdivision(12).build(0.0),
+        Err(SceneError::TooManyTriangles { .. })
+    ));
+    // The triangles in the order the file (and the subdivision) made them.
+    let in_file_order = |s: &Scene| {
+        let mut t = vec![None; s.bvh.triangles.len()];
+        for (leaf, &i) in s.bvh.source.iter().enumerate() {
+            t[i as usize] = Some(s.bvh.triangles[leaf]);
+        }
+        t.into_iter().map(Option::unwrap).collect::<Vec<_>>()
+    };
+    let cross = |t: &Triangle| Vec3::from(t.e1).cross(Vec3::from(t.e2));
+    let mut children = in_file_order(&split).into_iter();
+    for parent in in_file_order(&plain) {
+        let n = if plain.materials[parent.material as usize].emission == [0.0; 3] {
+            16
+        } else {
+            1
+        };
+        let mut area = 0.0;
+        for child in children.by_ref().take(n) {
+            assert_eq!(child.material, parent.material);
+            let (a, b) = (cross(&parent).normalize(), cross(&child).normalize());
+            assert!(a.dot(b) > 1.0 - 1e-4, "{parent:?}: {child:?}");
+            area += cross(&child).length();
+        }
+        let whole = cross(&parent).length();
+        assert!(
+            (area - whole).abs() <= 1e-4 * whole,
+            "{parent:?}: {area} vs {whole}"
+        );
+    }
+    assert!(children.next().is_none());
+    let normal = |s: &Scene, i: u32| cross(&s.bvh.triangles[i as usize]).normalize();
+    let root = plain.bvh.nodes[0];
+    let (lo, hi) = (Vec3::from(root.min), Vec3::from(root.max));
+    let mut state = 17u32;
+    let mut u = || next_uniform(&mut state);
+    for i in 0..4096 {
+        let origin = if i % 2 == 0 {
+            plain.camera.position
+        } else {
+            lo + (hi - lo) * Vec3::new(0.05 + 0.9 * u(), 0.05 + 0.9 * u(), 0.05 + 0.9 * u())
+        };
+        let z = 2.0 * u() - 1.0;
+        let phi = 2.0 * std::f32::consts::PI * u();
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        let direction = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+        let a = plain.bvh.intersect(origin, direction, 1e-4, f32::INFINITY);
+        let b = split.bvh.intersect(origin, direction, 1e-4, f32::INFINITY);
+        match (a, b) {
+            (None, None) => {}
+            (Some(a), Some(b)) => {
+                assert!(
+                    (a.t - b.t).abs() <= 1e-4 * (1.0 + a.t),
+                    "ray {i}: {a:?} vs {b:?}"
+                );
+                let (na, nb) = (normal(&plain, a.triangle), normal(&split, b.triangle));
+                assert!(na.dot(nb).abs() > 1.0 - 1e-4, "ray {i}: {na} vs {nb}");
+            }
+            _ => panic!("ray {i}: {a:?} vs {b:?}"),
+        }
+    }
+    let parent = TriangleAttributes {
+        uv: [[0.0, 0.0], [1.0, 0.5], [0.25, 1.0]],
+        color: [
+            TriangleAttributes::pack_color([1.0, 0.5, 0.0, 1.0]),
+            TriangleAttributes::pack_color([0.0, 1.0, 0.25, 0.5]),
+            TriangleAttributes::pack_color([0.2, 0.4, 1.0, 1.0]),
+        ],
+    };
+    let corners = [[0.5, 0.0], [0.5, 0.5], [0.0, 0.5]];
+    let child = parent.at_corners(corners);
+    for (k, [b1, b2]) in corners.into_iter().enumerate() {
+        let at = |c: usize| [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]][c];
+        let [c1, c2] = at(k);
+        assert_eq!(child.uv_at(c1, c2), parent.uv_at(b1, b2));
+        let (got, want) = (child.color_at(c1, c2), parent.color_at(b1, b2));
+        assert!((got - want).abs().max_element() <= 1e-4, "{got} vs {want}");
+        assert!((child.alpha_at(c1, c2) - parent.alpha_at(b1, b2)).abs() <= 1e-4);
     }
 }
 
@@ -1470,6 +1572,7 @@ fn render_command_writes_exr_png_and_json() {
         yfov: None,
         environment_rotation: None,
         no_portals: false,
+        subdivide: 0,
         probes: ProbeOptions::default(),
     };
     let first = render(&args).unwrap();

@@ -1281,6 +1281,7 @@ fn render_on_the_gpu(method: Method) {
         yfov: None,
         environment_rotation: None,
         no_portals: false,
+        subdivide: 0,
         probes: ProbeOptions::default(),
     };
     let rendered = render(&args).unwrap();

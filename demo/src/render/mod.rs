@@ -197,6 +197,11 @@ pub struct RenderArgs {
     /// then do not aim at the openings.
     #[arg(long)]
     pub no_portals: bool,
+    /// Split every triangle that emits nothing into 4^N at its edges' midpoints
+    /// ([`scene::SceneFile::with_subdivision`]): the same image in expectation, from a BVH over
+    /// more triangles, to see what a method's frame costs against the rays' as scenes grow.
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=12))]
+    pub subdivide: u32,
     /// For a file without a camera: one looking down −Z at the whole scene (45° vertical
     /// field of view; [`scene::SceneFile::with_auto_camera`]); without it such a file is an
     /// error.
@@ -487,6 +492,9 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
     }
     if args.no_portals {
         file = file.without_portals();
+    }
+    if args.subdivide > 0 {
+        file = file.with_subdivision(args.subdivide);
     }
     let reference = read_reference(args)?;
     let reference_own_error = read_reference_own_error(args, reference.as_ref())?;

@@ -141,6 +141,13 @@ pub enum SceneError {
         /// The depth of the tree.
         depth: usize,
     },
+    /// [`SceneFile::with_subdivision`] would make more than [`MAX_TRIANGLES`] triangles.
+    TooManyTriangles {
+        /// The file.
+        path: PathBuf,
+        /// The triangles the subdivision would make.
+        triangles: u64,
+    },
     /// A texture is not an 8-bit image, or cannot be decoded.
     UnsupportedTexture {
         /// The file.
@@ -203,6 +210,11 @@ impl fmt::Display for SceneError {
                     path.display()
                 )
             }
+            Self::TooManyTriangles { path, triangles } => write!(
+                f,
+                "{}: subdivided, it would have {triangles} triangles; at most {MAX_TRIANGLES}",
+                path.display()
+            ),
             Self::BvhTooDeep { path, depth } => write!(
                 f,
                 "{}: the BVH over its triangles is {depth} levels deep; the tracer walks at \
@@ -301,9 +313,91 @@ pub struct SceneFile {
     portals: Vec<Portal>,
     /// Whether a scene without a camera gets [`auto_camera`]'s.
     auto_camera: bool,
+    /// How often each non-emitting triangle is split in four ([`SceneFile::with_subdivision`]).
+    subdivision: u32,
     /// A camera that replaces the file's ([`SceneFile::with_camera`]): eye, target and the
     /// vertical field of view (radians) if given.
     camera: Option<(Vec3, Vec3, Option<f32>)>,
+}
+
+/// The most triangles a scene may have after [`SceneFile::with_subdivision`] (2²⁴: 1.2 GB of
+/// triangles and attributes).
+pub const MAX_TRIANGLES: u32 = 1 << 24;
+
+/// Whether a triangle of `material` emits (and so is never subdivided).
+fn emits(material: &Material) -> bool {
+    material.emission != [0.0; 3]
+}
+
+/// The triangles [`subdivide`] makes.
+fn subdivided_count(triangles: &[Triangle], materials: &[Material], levels: u32) -> u64 {
+    let split = 4u64.saturating_pow(levels);
+    triangles
+        .iter()
+        .map(|t| {
+            if emits(&materials[t.material as usize]) {
+                1
+            } else {
+                split
+            }
+        })
+        .fold(0, u64::saturating_add)
+}
+
+/// [`SceneFile::with_subdivision`]: every non-emitting triangle split into four at its edges'
+/// midpoints, `levels` times. A child keeps its parent's winding (so its front face, and
+/// glTF's counter-clockwise rule) and material; its corners' positions are the midpoints of
+/// its parent's (`(a + b) / 2`, the same for both triangles that share an edge), and its
+/// attributes those of its parent at its corners' barycentrics.
+fn subdivide(
+    triangles: &[Triangle],
+    attributes: &[TriangleAttributes],
+    materials: &[Material],
+    levels: u32,
+) -> (Vec<Triangle>, Vec<TriangleAttributes>) {
+    /// A corner: its position and its barycentrics (b1, b2) in the original triangle.
+    type Corner = (Vec3, [f32; 2]);
+    fn split(corners: [Corner; 3], levels: u32, emit: &mut impl FnMut([Corner; 3])) {
+        if levels == 0 {
+            emit(corners);
+            return;
+        }
+        let mid = |(p, a): Corner, (q, b): Corner| {
+            ((p + q) * 0.5, [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])])
+        };
+        let [c0, c1, c2] = corners;
+        let (m01, m12, m20) = (mid(c0, c1), mid(c1, c2), mid(c2, c0));
+        for child in [
+            [c0, m01, m20],
+            [m01, c1, m12],
+            [m20, m12, c2],
+            [m01, m12, m20],
+        ] {
+            split(child, levels - 1, emit);
+        }
+    }
+    let mut out = Vec::new();
+    let mut out_attributes = Vec::new();
+    for (t, a) in triangles.iter().zip(attributes) {
+        if emits(&materials[t.material as usize]) {
+            out.push(*t);
+            out_attributes.push(*a);
+            continue;
+        }
+        let v0 = Vec3::from(t.v0);
+        let corners = [
+            (v0, [0.0, 0.0]),
+            (v0 + Vec3::from(t.e1), [1.0, 0.0]),
+            (v0 + Vec3::from(t.e2), [0.0, 1.0]),
+        ];
+        split(corners, levels, &mut |[(p0, b0), (p1, b1), (p2, b2)]| {
+            let mut child = Triangle::new(p0, p1, p2, t.material);
+            child.emitter_pmf = t.emitter_pmf;
+            out.push(child);
+            out_attributes.push(a.at_corners([b0, b1, b2]));
+        });
+    }
+    (out, out_attributes)
 }
 
 /// What a material's texture slot reads: an image (its index in the document) through a map
@@ -457,6 +551,20 @@ impl TriangleAttributes {
         };
         let [c0, c1, c2] = self.color.map(unpack);
         c0 + b1 * (c1 - c0) + b2 * (c2 - c0)
+    }
+
+    /// The attributes of the triangle whose corners lie at barycentrics `corners` (each
+    /// `(b1, b2)`) of this one: texture coordinates and colours interpolated there (colours
+    /// rounded to 16-bit unorms again).
+    #[must_use]
+    pub fn at_corners(&self, corners: [[f32; 2]; 3]) -> Self {
+        Self {
+            uv: corners.map(|[b1, b2]| self.uv_at(b1, b2)),
+            color: corners.map(|[b1, b2]| {
+                let c = self.color_at(b1, b2);
+                Self::pack_color([c.x, c.y, c.z, self.alpha_at(b1, b2)])
+            }),
+        }
     }
 
     /// The vertex colours' alpha at barycentrics (`b1`, `b2`), interpolated as
@@ -619,6 +727,7 @@ impl SceneFile {
             environment_map,
             portals,
             auto_camera: false,
+            subdivision: 0,
             camera: None,
         })
     }
@@ -720,6 +829,20 @@ impl SceneFile {
         Ok(self)
     }
 
+    /// The file with every triangle that emits nothing split into four at its edges'
+    /// midpoints, `levels` times over (4^`levels` triangles each, `render --subdivide`): the
+    /// same surfaces, textures and vertex colours (interpolated to the new corners) in more
+    /// triangles, so that a ray costs what it costs in a larger BVH while the image stays the
+    /// same in expectation. Emitting triangles stay as they are, so light sampling and the
+    /// emitters' own structures do not change. For measuring how a method's frame cost
+    /// compares with the rays' as the scene grows; [`SceneFile::build`] refuses more than
+    /// [`MAX_TRIANGLES`].
+    #[must_use]
+    pub fn with_subdivision(mut self, levels: u32) -> Self {
+        self.subdivision = levels;
+        self
+    }
+
     /// The file without the portals its extras name: light samples of the environment then
     /// ignore the openings (`render --no-portals`).
     #[must_use]
@@ -784,6 +907,17 @@ impl SceneFile {
         }
         if triangles.is_empty() {
             return Err(SceneError::NoTriangles { path: path.clone() });
+        }
+        if self.subdivision > 0 {
+            let made = subdivided_count(&triangles, &materials, self.subdivision);
+            if made > MAX_TRIANGLES as u64 {
+                return Err(SceneError::TooManyTriangles {
+                    path: path.clone(),
+                    triangles: made,
+                });
+            }
+            (triangles, attributes) =
+                subdivide(&triangles, &attributes, &materials, self.subdivision);
         }
         let camera = match (camera, self.camera) {
             (file, Some((eye, target, yfov))) => {

@@ -154,6 +154,7 @@ fn args(
         yfov: None,
         environment_rotation: None,
         no_portals: false,
+        subdivide: 0,
         probes: ProbeOptions {
             probe_spacing: s.probe_spacing,
             probe_rays: s.probe_rays,

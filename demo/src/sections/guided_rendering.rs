@@ -220,6 +220,7 @@ fn args(
         yfov: None,
         environment_rotation: None,
         no_portals: false,
+        subdivide: 0,
         probes: ProbeOptions::default(),
     }
 }

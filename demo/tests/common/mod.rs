@@ -424,6 +424,7 @@ pub fn door_args(method: Method, out: PathBuf, frames: u32) -> RenderArgs {
         yfov: None,
         environment_rotation: None,
         no_portals: false,
+        subdivide: 0,
         probes: ProbeOptions {
             probe_spacing: 1.0,
             probe_rays: 16,
