@@ -38,6 +38,21 @@
 //!   `precise`; lavapipe fuses). The vMF twin does not: its `exp`/`log` differ from the CPU's
 //!   anyway, and its parity tests allow for fused operations.
 //!
+//! # Numerics on real GPUs
+//! WGSL promises less than IEEE arithmetic, and GPUs use the latitude (lavapipe mostly does
+//! not, so the parity tests also feed the inputs that would expose it). The WGSL follows
+//! these rules:
+//! - Finiteness and NaN are read from the bits (`mcg_is_finite`, `mcg_is_nan`,
+//!   `mcg_is_positive`, `mcg_positive_part3` in `mcg::math`), never from comparisons: WGSL lets
+//!   a compiler assume no NaN or infinity, so `x != x` may fold to false and `!(x > 0.0)` may
+//!   become `x <= 0.0`. Such guards sit where data enters (the caller's values, buffers the
+//!   host writes); `min`, `max` and `clamp` return the operand that is not NaN.
+//! - `log` is only accurate to 2⁻²¹ absolute on [½, 2], so quantities near 0 that are divided
+//!   or compared relatively (expm1, ln(1 + x)) come from series there, not from `log` near 1.
+//! - Division is not exact: x/x need not be 1 (an NVIDIA GPU gives 0.99999994), and products
+//!   may fuse into FMAs; results that must match the CPU bit for bit wrap products in
+//!   `mcg_rounded`, and none relies on a division being exact.
+//!
 //! [wgpu]: https://wgpu.rs
 #![cfg_attr(docsrs, feature(doc_cfg))]
 

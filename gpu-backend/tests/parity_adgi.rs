@@ -432,7 +432,9 @@ fn camera_volumes() -> ClipVolumes {
 /// Pilot rays and their state over 4 frames (reference, detect, reference, detect) on the
 /// 9 × 9 × 9 grid: the GPU's directions are the CPU's `pilot_direction` within 2·10⁻⁶ (WGSL's
 /// `sin`/`cos`) in the same octant, traced exactly for the probes in V_out; after each frame's
-/// hits (random distances with misses, random radiance) the reference f_v, f_r
+/// hits (random distances with misses, random radiance, NaN for a failed ray: f_r = 0, the
+/// luminance's `mcg_rounded` products turn NaN into −f32::MAX, WGSL's `max` returning the
+/// operand that is not NaN) the reference f_v, f_r
 /// (`octant_heuristics`, eq. 11-12) and the trigger states (`temporal_gradient` +
 /// `TemporalTrigger::apply`, eq. 13-17) equal the CPU's within relative 10⁻⁵ (`exp` in f_v).
 #[test]
@@ -487,7 +489,9 @@ fn pilot_rays_and_trigger_match_the_cpu() {
                 } else {
                     rng.random_range(0.0f32..3.0)
                 },
-                radiance: Vec3::new(rng.random(), rng.random(), rng.random()) * 4.0,
+                // Every 13th a failed ray (NaN): f_r = 0.
+                radiance: Vec3::new(rng.random(), rng.random(), rng.random()) * 4.0
+                    + Vec3::splat(if i % 13 == 5 { f32::NAN } else { 0.0 }),
                 probe: (i / 8) as u32,
             })
             .collect();

@@ -22,7 +22,9 @@ use common::gpu_and_rng;
 /// round-down, nearest and stochastic rounding; count field), visibility and heuristics
 /// words bit for bit, and their decoded values exactly (the heuristics' fractions within
 /// [`decoded_close`]'s 4 ULP: a division), on 50 000 colours over 2⁻³⁰..2¹⁷ (log-uniform),
-/// negatives, zeros, overflow, infinities and the rounding ties of the float formats. Broken once on purpose
+/// negatives, zeros, overflow, infinities, NaN (as 0: tested on the bits; with the guards
+/// written as a no-NaN driver may rewrite them, e.g. `v_in <= 0.0` for the ufloat's
+/// `!(v_in > 0.0)`, the NaN colours failed) and the rounding ties of the float formats. Broken once on purpose
 /// (round-half-up instead of half-even in the WGSL ufloat): failed.
 #[test]
 fn packed_colour_words_match_the_cpu_bit_for_bit() {
@@ -54,6 +56,8 @@ fn packed_colour_words_match_the_cpu_bit_for_bit() {
         1e9,
         f32::INFINITY,
         f32::NEG_INFINITY,
+        f32::NAN,
+        -f32::NAN,
         6.1035156e-5,
         1.0 + 1.0 / 128.0,
         1.0 + 3.0 / 128.0,
@@ -306,7 +310,9 @@ fn nan_samples_leave_texel_words_unchanged() {
 /// (0..2¹⁵) with random chromaticities, with and without the sign bit. Hypothesis: words equal
 /// the CPU's exactly; decoded values within [`decoded_close`]'s 4 ULP (XYZ: the decoder's
 /// `exp2` is the CPU's, table-driven, but its divisions are WGSL's, within 2.5 ULP) and 16 ULP
-/// (RGB, through the matrix). Broken once on purpose (the chroma
+/// (RGB, through the matrix). NaN packs as 0, tested on the bits: with the clamps written as
+/// a no-NaN driver may rewrite them (`select(c, 0, c <= 0)`), the NaN colours failed. Broken
+/// once on purpose (the chroma
 /// candidate not corrected by the exact sign test): words differed and the test failed.
 #[test]
 fn logluv32_matches_the_cpu_bit_for_bit() {

@@ -110,7 +110,11 @@ fn vmf_pdf_and_samples_match_the_cpu() {
 /// cosine round trip on 2 000 fits (fixed seed): μ within 64 ε, κ within 64 ε relative (no
 /// exp/log on that path: only +, −, ×, ÷ and sqrt), "no lobe" exactly where the CPU says
 /// `None`; product scale within the tolerance of its three C(κ) and one exp; A₃(κ) within
-/// the error of its expm1. Broken once on purpose (N instead of N² in the WGSL posterior):
+/// the error of its expm1. Includes NaN statistics weights (no lobe), prior mean cosines of
+/// NaN, 1.5 and −0.5 (clamped to [0, 1], NaN as 0, as on the CPU: the WGSL used r_p as given,
+/// and the NaN case failed) and NaN κs (A₃ = 0; with `kappa <= 0.0`, what a driver may make of
+/// `!(kappa > 0.0)`, it failed; so did w̄ ≤ 0 for the weight's guard). Broken once on purpose
+/// (N instead of N² in the WGSL posterior):
 /// failed.
 #[test]
 fn vmf_reconstruction_and_products_match_the_cpu() {
@@ -141,8 +145,17 @@ fn vmf_reconstruction_and_products_match_the_cpu() {
         if i % 97 == 0 {
             s.mean_target = x; // ȳ = x: no lobe.
         }
+        if i % 89 == 1 {
+            s.weight_sum = f32::NAN; // Not valid: no lobe.
+        }
         let prior = MapPrior {
-            mean_cosine: [0.0, 0.3][i % 2],
+            // Out of range and NaN: clamped to [0, 1], NaN as 0.
+            mean_cosine: match i % 61 {
+                0 => f32::NAN,
+                1 => 1.5,
+                2 => -0.5,
+                _ => [0.0, 0.3][i % 2],
+            },
             weight: [0.0, 0.2, 1.0, f32::INFINITY][i % 4],
             decay: if i % 5 == 0 {
                 PriorDecay::Count
@@ -151,7 +164,11 @@ fn vmf_reconstruction_and_products_match_the_cpu() {
             },
         };
         let other = Vmf::new(random_unit(&mut rng), KAPPAS[i % KAPPAS.len()]).unwrap();
-        let kappa = KAPPAS[(i / 3) % KAPPAS.len()];
+        let kappa = if i % 53 == 0 {
+            f32::NAN
+        } else {
+            KAPPAS[(i / 3) % KAPPAS.len()]
+        };
         stats.push(s);
         queries.push(VmfStatsQuery::new(x, prior, other, kappa));
     }
@@ -213,8 +230,8 @@ fn vmf_reconstruction_and_products_match_the_cpu() {
         }
         let kappa = q.kappa;
         let a = mcg_vmf::mean_cosine_from_kappa(kappa);
-        let kd = f64::from(kappa);
-        let tol = tolerance::mean_cosine(kd);
+        // NaN: A₃ = 0 exactly.
+        let tol = tolerance::mean_cosine(f64::from(kappa).max(0.0));
         assert_close!(f64::from(g.mean_cosine), f64::from(a), tol, "A₃({kappa})");
         // Banerjee's κ of the GPU's own A₃ (arithmetic only) matches the CPU's of the same r.
         let kb = mcg_vmf::kappa_from_mean_cosine(g.mean_cosine);
@@ -416,7 +433,10 @@ fn vmf_mixture_matches_the_cpu() {
 /// Hypothesis: μ is copied bit for bit and κ' agrees within the propagated error of the
 /// inputs' A₃ on the GPU: |Δκ'| ≤ (ΔA(κ) A(κ_k) + A(κ) ΔA(κ_k) + ΔA(κ') + 4ε)/A₃'(κ') +
 /// 4·10⁻⁷ κ' (the two Newton stops), ΔA = `tolerance::mean_cosine`, and the same for the
-/// inverse alone (ΔA(κ') + 2ε over the slope). Broken once on purpose (the WGSL inverse
+/// inverse alone (ΔA(κ') + 2ε over the slope). NaN kernel κs and NaN mean cosines give κ' = 0
+/// as on the CPU: the guards test NaN from the bits. Written as a driver may rewrite them
+/// under WGSL's no-NaN assumption (`kappa <= 0.0` for `!(kappa > 0.0)`; `r <= 0.0` with the
+/// Newton loop's `next <= 0.0`), the NaN cases failed. Broken once on purpose (the WGSL inverse
 /// returned Banerjee's approximation without Newton steps): failed.
 #[test]
 fn vmf_convolution_matches_the_cpu() {
@@ -430,11 +450,13 @@ fn vmf_convolution_matches_the_cpu() {
     let params: Vec<[f32; 2]> = (0..n)
         .map(|i| {
             let kernel = match i % 5 {
+                0 if i % 10 == 0 => f32::NAN,
                 0 => -1.0,
                 1 => KAPPAS[(i / 5) % KAPPAS.len()],
                 _ => 10f32.powf(rng.random_range(-3.0..5.0)),
             };
             let r = match i % 3 {
+                0 if i % 33 == 0 => f32::NAN,
                 0 => rng.random::<f32>(),
                 1 => 1.0 - 10f32.powf(rng.random_range(-7.0..0.0)),
                 _ => 10f32.powf(rng.random_range(-8.0..0.0)),

@@ -38,14 +38,14 @@
     CODEC_VISIBILITY_MEAN_SQ_INV_GAMMA, CODEC_VISIBILITY_MEAN_SQ_MAX_CODE,
     CODEC_VISIBILITY_MEAN_SQ_SHIFT, MCG_LOG2_E
 }
-#import mcg::math::{mcg_any_nan2, mcg_any_nan3, mcg_rounded, mcg_rounded3}
+#import mcg::math::{mcg_any_nan2, mcg_any_nan3, mcg_is_nan, mcg_is_positive, mcg_rounded, mcg_rounded3}
 
 // `f32_to_ufloat`: the unsigned small float with 5 exponent bits and `n` mantissa bits
 // (n = 6 for R11, 5 for B10), rounded to nearest even, negatives and NaN to 0, overflow to
-// the largest finite code.
+// the largest finite code. The colour is the caller's: NaN is tested on the bits.
 fn codec_f32_to_ufloat(v_in: f32, n: u32) -> u32 {
     let max_code = (30u << n) | ((1u << n) - 1u);
-    let v = select(0.0, v_in, v_in > 0.0);
+    let v = select(0.0, v_in, mcg_is_positive(v_in));
     let bits = bitcast<u32>(v);
     let exp32 = bits >> 23u;
     let sig = (bits & 0x7fffffu) | (select(0u, 1u, exp32 != 0u) << 23u);
@@ -92,8 +92,9 @@ fn codec_pow2(k: i32) -> f32 {
     return bitcast<f32>(u32(k + 127) << 23u);
 }
 
+// A channel clamped to [0, CODEC_RGB9E5_MAX], NaN to 0 (tested on the bits).
 fn codec_rgb9e5_clamp(v: f32) -> f32 {
-    if v >= 0.0 {
+    if v >= 0.0 && !mcg_is_nan(v) {
         return min(v, CODEC_RGB9E5_MAX);
     }
     return 0.0;
@@ -130,7 +131,7 @@ fn codec_rgb9e5_unpack(word: u32) -> vec3<f32> {
 // `Gamma5R10G10B10A2::encode_channel`: v in [0, 1] (clamped), c = 2^{log2(v)/5} by the
 // codec's own ln and exp2, rounded to nearest (ties to even) in 10 bits.
 fn codec_gamma5_encode_channel(v_in: f32) -> u32 {
-    let v = select(0.0, min(v_in, 1.0), v_in > CODEC_GAMMA5_MIN_INPUT);
+    let v = select(0.0, min(v_in, 1.0), v_in > CODEC_GAMMA5_MIN_INPUT && !mcg_is_nan(v_in));
     let c0 = codec_fast_exp2(codec_fast_ln_ge1(max(v, CODEC_GAMMA5_MIN_INPUT)) * (MCG_LOG2_E / CODEC_RTXGI_IRRADIANCE_GAMMA));
     let c = select(0.0, min(c0, 1.0), v > 0.0);
     return min(u32(round(c * f32(CODEC_GAMMA5_MAX_CODE))), CODEC_GAMMA5_MAX_CODE);

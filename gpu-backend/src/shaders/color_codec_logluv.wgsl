@@ -27,7 +27,7 @@
     CODEC_LOGLUV_XYZ_TO_SRGB_7, CODEC_LOGLUV_XYZ_TO_SRGB_8, CODEC_LOGLUV_Y_MAX, CODEC_LOGLUV_Y_MIN,
     MCG_F32_MAX
 }
-#import mcg::math::{mcg_rounded, mcg_rounded3}
+#import mcg::math::{mcg_positive_part3, mcg_rounded, mcg_rounded3}
 
 @group(#{MCG_CODEC_LOGLUV_GROUP}) @binding(#{MCG_CODEC_LOGLUV_BINDING})
 var<storage, read> mcg_codec_logluv_tables: array<f32>;
@@ -99,7 +99,7 @@ fn codec_logluv_chroma(v: vec3<f32>, pick: vec3<f32>, scale: f32) -> u32 {
 
 // `LogLuv32::pack_xyz`: CIE XYZ (negatives and NaN as 0) to the word.
 fn codec_logluv32_pack_xyz(xyz: vec3<f32>) -> u32 {
-    let c = select(vec3<f32>(0.0), xyz, xyz >= vec3<f32>(0.0));
+    let c = mcg_positive_part3(xyz);
     let y = c.y;
     var le = 0u;
     if y >= CODEC_LOGLUV_Y_MAX {
@@ -161,7 +161,7 @@ fn codec_mat3_mul(c0: vec3<f32>, c1: vec3<f32>, c2: vec3<f32>, v: vec3<f32>) -> 
 
 // `LogLuv32.encode(rgb)`: linear sRGB (negatives and NaN as 0) through SRGB_TO_XYZ.
 fn codec_logluv32_pack(rgb: vec3<f32>) -> u32 {
-    let c = select(vec3<f32>(0.0), rgb, rgb > vec3<f32>(0.0));
+    let c = mcg_positive_part3(rgb);
     let xyz = codec_mat3_mul(
         vec3<f32>(CODEC_LOGLUV_SRGB_TO_XYZ_0, CODEC_LOGLUV_SRGB_TO_XYZ_1, CODEC_LOGLUV_SRGB_TO_XYZ_2),
         vec3<f32>(CODEC_LOGLUV_SRGB_TO_XYZ_3, CODEC_LOGLUV_SRGB_TO_XYZ_4, CODEC_LOGLUV_SRGB_TO_XYZ_5),

@@ -39,6 +39,19 @@ fn mcg_is_nan(x: f32) -> bool {
     return (bitcast<u32>(x) << 1u) > (mcg_infinity_bits() << 1u);
 }
 
+// `x > 0.0` from the bits (+0 < x ≤ +∞; false for NaN), for guards on data that may be NaN.
+// Under WGSL's no-NaN assumption a compiler may rewrite `!(x > 0.0)` as `x <= 0.0` or
+// `select(0.0, x, x > 0.0)` as `select(x, 0.0, x <= 0.0)`, which let a NaN through.
+fn mcg_is_positive(x: f32) -> bool {
+    return bitcast<u32>(x) - 1u < mcg_infinity_bits();
+}
+
+// The components of `v` that are > 0 (`mcg_is_positive`), the others 0: negatives, zeros and
+// NaN become 0.
+fn mcg_positive_part3(v: vec3<f32>) -> vec3<f32> {
+    return select(vec3<f32>(0.0), v, bitcast<vec3<u32>>(v) - vec3<u32>(1u) < vec3<u32>(mcg_infinity_bits()));
+}
+
 // Whether any component is NaN (`mcg_is_nan`).
 fn mcg_any_nan2(v: vec2<f32>) -> bool {
     return mcg_is_nan(v.x) || mcg_is_nan(v.y);

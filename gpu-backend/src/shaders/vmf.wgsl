@@ -19,7 +19,7 @@
     VMF_NEWTON_RELATIVE_STEP, VMF_PRIOR_DECAY_COUNT, VMF_SERIES_LIMIT, VMF_SIN_POLY_0,
     VMF_SIN_POLY_1, VMF_SIN_POLY_2, VMF_UNIFORM_SPHERE_PDF
 }
-#import mcg::math::{mcg_infinity_bits, mcg_is_finite, mcg_is_finite3}
+#import mcg::math::{mcg_infinity_bits, mcg_is_finite, mcg_is_finite3, mcg_is_positive}
 #import mcg::sampling::mcg_frame_to_world
 
 // 16 bytes, the layout of `mcg_vmf::Vmf`: mean direction μ (unit) and concentration κ ≥ 0.
@@ -167,9 +167,10 @@ fn vmf_sample_with_pdf(lobe: Vmf, u: vec2<f32>) -> VmfSample {
     return VmfSample(w, vmf_normalization(lobe.kappa) * exp(lobe.kappa * r));
 }
 
-// Mean cosine A₃(κ) = coth κ − 1/κ (Banerjee et al. 2005 eq. 4.1), series below 0.5.
+// Mean cosine A₃(κ) = coth κ − 1/κ (Banerjee et al. 2005 eq. 4.1), series below 0.5; 0 for
+// κ ≤ 0 or NaN (tested on the bits: a convolution kernel's κ is the caller's).
 fn vmf_mean_cosine_from_kappa(kappa: f32) -> f32 {
-    if !(kappa > 0.0) {
+    if !mcg_is_positive(kappa) {
         return 0.0;
     }
     if kappa < VMF_SERIES_LIMIT {
@@ -192,9 +193,9 @@ fn vmf_kappa_from_one_minus_mean_cosine(e: f32) -> f32 {
     return min(r * (3.0 - r * r) / (e * (2.0 - e)), VMF_KAPPA_MAX);
 }
 
-// Banerjee's κ from the mean cosine r (`kappa_from_mean_cosine`).
+// Banerjee's κ from the mean cosine r (`kappa_from_mean_cosine`); 0 for r ≤ 0 or NaN.
 fn vmf_kappa_from_mean_cosine(r: f32) -> f32 {
-    if !(r > 0.0) {
+    if !mcg_is_positive(r) {
         return 0.0;
     }
     return vmf_kappa_from_one_minus_mean_cosine(1.0 - r);
@@ -216,7 +217,8 @@ fn vmf_posterior_one_minus_mean_cosine(stats: VmfSufficientStats, prior: VmfMapP
     let n = f32(stats.sample_count);
     let n_eff = select(n * n, n, prior.decay == VMF_PRIOR_DECAY_COUNT);
     let prior_weight = max(prior.weight, 0.0);
-    let prior_complement = 1.0 - prior.mean_cosine;
+    // r_p clamped to [0, 1], NaN as 0 (the CPU's `max(0.0).min(1.0)`), tested on the bits.
+    let prior_complement = 1.0 - select(0.0, min(prior.mean_cosine, 1.0), mcg_is_positive(prior.mean_cosine));
     if bitcast<u32>(prior_weight) == mcg_infinity_bits() {
         return prior_complement;
     }
@@ -231,7 +233,7 @@ fn vmf_posterior_one_minus_mean_cosine(stats: VmfSufficientStats, prior: VmfMapP
 // The lobe at shading point `x` (MCMM Alg. 2 lines 5-7, MCPG Alg. 2 lines 6-8): false, and
 // `out` untouched, for empty statistics or when ȳ coincides with `x` (`to_vmf` → None).
 fn vmf_from_sufficient_stats(stats: VmfSufficientStats, x: vec3<f32>, prior: VmfMapPrior, out: ptr<function, Vmf>) -> bool {
-    if stats.sample_count == 0u || !(stats.weight_sum > 0.0) {
+    if stats.sample_count == 0u || !mcg_is_positive(stats.weight_sum) {
         return false;
     }
     let mean_target = vec3<f32>(stats.mean_target_x, stats.mean_target_y, stats.mean_target_z);
@@ -352,9 +354,9 @@ fn vmf_one_minus_mean_cosine(kappa: f32) -> f32 {
 // κ with A₃(κ) = r to f32 precision (`kappa_from_mean_cosine_exact`): Newton's method from
 // Banerjee's κ on A₃(κ) = r, or on 1 − A₃(κ) = 1 − r from r = VMF_NEWTON_COMPLEMENT_FROM on;
 // at most VMF_NEWTON_MAX_ITERATIONS steps, stopping at a relative step of
-// VMF_NEWTON_RELATIVE_STEP; clamped to [0, VMF_KAPPA_MAX].
+// VMF_NEWTON_RELATIVE_STEP; clamped to [0, VMF_KAPPA_MAX]; 0 for r ≤ 0 or NaN.
 fn vmf_kappa_from_mean_cosine_exact(r: f32) -> f32 {
-    if !(r > 0.0) {
+    if !mcg_is_positive(r) {
         return 0.0;
     }
     if r >= 1.0 {

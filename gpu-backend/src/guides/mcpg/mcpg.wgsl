@@ -376,7 +376,7 @@ fn mcpg_distance_prior(s: MarkovGridState, x: vec3<f32>) -> VmfMapPrior {
     var weight = bitcast<f32>(mcg_infinity_bits());
     if d2 > 0.0 {
         let ratio = mcpg_params.prior_scale / d2;
-        weight = select(max(ratio, mcpg_params.prior_min_weight), mcpg_params.prior_min_weight, ratio != ratio);
+        weight = select(max(ratio, mcpg_params.prior_min_weight), mcpg_params.prior_min_weight, mcg_is_nan(ratio));
     }
     return VmfMapPrior(0.0, weight, VMF_PRIOR_DECAY_SQUARED_COUNT);
 }
