@@ -196,7 +196,7 @@ impl EnvironmentMap {
     pub fn coordinates(d: Vec3) -> Vec2 {
         Vec2::new(
             d.x.atan2(-d.z) * (0.5 / PI) + 0.5,
-            d.y.clamp(-1.0, 1.0).acos() * (1.0 / PI),
+            d.x.hypot(d.z).atan2(d.y) * (1.0 / PI),
         )
     }
 
@@ -244,9 +244,11 @@ impl EnvironmentMap {
     /// `d`: `P(texel)·W·H / (2π² sin θ)`; 0 at the poles and in texels it never picks.
     #[must_use]
     pub fn pdf(&self, d: Vec3) -> f32 {
-        let uv = Self::coordinates(self.to_map(d));
+        let turned = self.to_map(d);
+        let uv = Self::coordinates(turned);
         let (column, row) = self.texel_of(uv);
-        let sin = (PI * uv.y).sin();
+        // sin θ of the unit direction itself (as accurate at the poles as anywhere).
+        let sin = turned.x.hypot(turned.z);
         if !(sin > 0.0) {
             return 0.0;
         }

@@ -1948,9 +1948,21 @@ impl Scene {
     /// FNV-1a over everything that decides the scene's image — the camera, the triangles (with
     /// their materials' indices and light-selection weights), materials, attributes, textures
     /// and texels, the environment with its map and rotation, and the portals — so that a
-    /// cached render of the scene is found again only for the same scene.
+    /// cached render of the scene is found again only for the same scene. The triangles and
+    /// their attributes in the file's order ([`Bvh::source`]), not the tree's leaf order, so
+    /// that another tree over the same scene keeps its fingerprint.
     #[must_use]
     pub fn fingerprint(&self) -> u64 {
+        let mut in_file_order: Vec<usize> = (0..self.bvh.triangles.len()).collect();
+        in_file_order.sort_unstable_by_key(|&leaf| self.bvh.source[leaf]);
+        let triangles: Vec<Triangle> = in_file_order
+            .iter()
+            .map(|&leaf| self.bvh.triangles[leaf])
+            .collect();
+        let attributes: Vec<TriangleAttributes> = in_file_order
+            .iter()
+            .filter_map(|&leaf| self.attributes.get(leaf).copied())
+            .collect();
         let c = &self.camera;
         let vectors = [c.position, c.right, c.up, c.forward, self.environment];
         let floats = vectors
@@ -1964,10 +1976,10 @@ impl Scene {
                     .chain([m.rotation(), m.width() as f32])
             }))
             .flat_map(f32::to_le_bytes);
-        let bytes = bytemuck::cast_slice::<_, u8>(&self.bvh.triangles)
+        let bytes = bytemuck::cast_slice::<_, u8>(&triangles)
             .iter()
             .chain(bytemuck::cast_slice::<_, u8>(&self.materials))
-            .chain(bytemuck::cast_slice::<_, u8>(&self.attributes))
+            .chain(bytemuck::cast_slice::<_, u8>(&attributes))
             .chain(bytemuck::cast_slice::<_, u8>(&self.textures))
             .chain(bytemuck::cast_slice::<_, u8>(&self.texels))
             .chain(bytemuck::cast_slice::<_, u8>(&self.portals))

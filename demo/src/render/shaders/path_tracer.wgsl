@@ -22,7 +22,7 @@
 #import mcg::constants::{MCG_F32_MAX, MCG_FRAC_1_PI, MCG_PI, MCMM_PRIOR_LIGHT_SIZE, MCMM_SCORE_TECHNIQUE,
     MCPG_MAX_CANDIDATES, MCPG_NO_LOBE, MCPG_SCATTER_CUSTOM}
 #import mcg::markov::{MarkovPixelState, markov_pixel_state_is_valid}
-#import mcg::math::mcg_is_finite
+#import mcg::math::{mcg_is_finite, mcg_is_positive}
 #import mcg::mcmm::{
     mcg_mcmm_params, mcmm_choose_technique, mcmm_collaborative_discovery, mcmm_empty_state,
     mcmm_load_previous, mcmm_ratio, mcmm_select_uniform, mcmm_store_current, mcmm_technique_pdf,
@@ -450,9 +450,13 @@ fn smith_g1(c: f32, a2: f32) -> f32 {
     return 2.0 * c / (c + sqrt(a2 + (1.0 - a2) * c * c));
 }
 
-// Schlick 1994, eq. 24.
+// Schlick 1994, eq. 24. The fifth power by multiplications, as the CPU's `powi(5)`: `pow`
+// is exp2(5·log2(x)), which at x = 0 passes through −∞, a value WGSL lets a driver assume
+// never occurs.
 fn schlick(f0: vec3<f32>, c: f32) -> vec3<f32> {
-    let k = pow(1.0 - clamp(c, 0.0, 1.0), 5.0);
+    let x = 1.0 - clamp(c, 0.0, 1.0);
+    let x2 = x * x;
+    let k = x2 * x2 * x;
     return f0 + (vec3<f32>(1.0) - f0) * k;
 }
 
@@ -507,7 +511,8 @@ fn material_sample(m: Material, n: vec3<f32>, wo: vec3<f32>, u: vec3<f32>) -> Bs
         wi = mcg_cosine_hemisphere_sample(n, clamp(u.yz, vec2<f32>(0.0), vec2<f32>(1.0))).direction;
     }
     let pdf = material_pdf(m, n, wo, wi);
-    if !(pdf > 0.0) {
+    // From the bits: a degenerate half vector can make the pdf NaN.
+    if !mcg_is_positive(pdf) {
         return BsdfSample(wi, 0.0, vec3<f32>(0.0), false);
     }
     return BsdfSample(wi, pdf, material_eval(m, n, wo, wi) / pdf, true);
@@ -909,10 +914,11 @@ fn environment_turn(d: vec3<f32>, sign: f32) -> vec3<f32> {
     return vec3<f32>(c * d.x + s * d.z, d.y, c * d.z - s * d.x);
 }
 
-// `EnvironmentMap::coordinates`: the image coordinates (u, v) of the unit direction `d`.
+// `EnvironmentMap::coordinates`: the image coordinates (u, v) of the unit direction `d`; θ
+// as atan2(sin θ, cos θ), well conditioned at the poles where acos(d.y) is not.
 fn environment_coordinates(d: vec3<f32>) -> vec2<f32> {
     return vec2<f32>(atan2(d.x, -d.z) * (0.5 / MCG_PI) + 0.5,
-                     acos(clamp(d.y, -1.0, 1.0)) * (1.0 / MCG_PI));
+                     atan2(length(d.xz), d.y) * (1.0 / MCG_PI));
 }
 
 // `EnvironmentMap::texel_of`: the texel (column, row) that holds the image coordinates `uv`.
@@ -934,8 +940,11 @@ fn environment_texel_probability(texel: vec2<u32>) -> f32 {
 
 // `EnvironmentMap::pdf`: the solid-angle density with which `environment_sample` draws `d`.
 fn environment_map_pdf(d: vec3<f32>) -> f32 {
-    let uv = environment_coordinates(environment_turn(d, -1.0));
-    let s = sin(MCG_PI * uv.y);
+    let turned = environment_turn(d, -1.0);
+    let uv = environment_coordinates(turned);
+    // sin θ of the unit direction itself: WGSL's `sin` is only accurate to 2⁻¹¹ absolute, so
+    // sin(π v) would be off by tens of per cent in the rows at the poles.
+    let s = length(turned.xz);
     if !(s > 0.0) {
         return 0.0;
     }
