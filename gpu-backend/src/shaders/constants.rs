@@ -106,6 +106,7 @@ fn push_core_constants(out: &mut String) {
     out.push_str("// mcg-gpu-backend: dispatch shape and float constants of Rust's core.\n");
     push_u32(out, "MCG_WORKGROUP_SIZE", WORKGROUP_SIZE);
     push_f32(out, "MCG_F32_MAX", f32::MAX);
+    push_f32(out, "MCG_F32_MIN_POSITIVE", f32::MIN_POSITIVE);
     push_f32(out, "MCG_F32_EPSILON", f32::EPSILON);
     // 1 − ε/2, the largest f32 below 1 (the CPU crates clamp rescaled uniforms to it).
     push_f32(out, "MCG_ONE_MINUS_EPSILON", 1.0 - f32::EPSILON / 2.0);

@@ -5,6 +5,7 @@
 // mcg-gpu-backend: dispatch shape and float constants of Rust's core.
 const MCG_WORKGROUP_SIZE: u32 = 64u;
 const MCG_F32_MAX: f32 = 3.4028235e38;
+const MCG_F32_MIN_POSITIVE: f32 = 1.1754944e-38;
 const MCG_F32_EPSILON: f32 = 1.1920929e-7;
 const MCG_ONE_MINUS_EPSILON: f32 = 0.99999994;
 const MCG_FRAC_1_PI: f32 = 0.31830987;

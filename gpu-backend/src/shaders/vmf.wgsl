@@ -5,7 +5,7 @@
 // see those files for the derivations (MCMM eq. 4, MCPG eq. 4, Jakob 2012).
 
 #import mcg::constants::{
-    MCG_FRAC_1_PI, MCG_FRAC_PI_2, VMF_COS_POLY_0, VMF_COS_POLY_1, VMF_COS_POLY_2,
+    MCG_F32_MIN_POSITIVE, MCG_FRAC_1_PI, MCG_FRAC_PI_2, VMF_COS_POLY_0, VMF_COS_POLY_1, VMF_COS_POLY_2,
     VMF_EXP_M1_KAHAN_LIMIT, VMF_EXP_M1_SERIES_0, VMF_EXP_M1_SERIES_1, VMF_EXP_M1_SERIES_2,
     VMF_EXP_M1_SERIES_3, VMF_EXP_M1_SERIES_4, VMF_EXP_M1_SERIES_5, VMF_EXP_M1_SERIES_6,
     VMF_EXP_M1_SERIES_7, VMF_KAPPA_DIRECT_EXPM1, VMF_KAPPA_MAX, VMF_KAPPA_SAMPLE_SATURATED,
@@ -201,11 +201,23 @@ fn vmf_kappa_from_mean_cosine(r: f32) -> f32 {
     return vmf_kappa_from_one_minus_mean_cosine(1.0 - r);
 }
 
-// glam's `try_normalize`: v/|v| when 1/|v| is finite and positive.
+// `normalize_robust`: v/|v| where |v|² is a normal f32; else (|v|² overflows, or underflows
+// into the subnormals where it loses precision) v scaled by its largest component magnitude
+// first. False for a zero, infinite or NaN v (the tests on the bits: WGSL lets a compiler
+// assume no NaN or infinity reaches a comparison).
 fn vmf_try_normalize(v: vec3<f32>, out: ptr<function, vec3<f32>>) -> bool {
-    let rcp = 1.0 / sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
-    if rcp > 0.0 && mcg_is_finite(rcp) {
-        *out = v * rcp;
+    let length_squared = v.x * v.x + v.y * v.y + v.z * v.z;
+    var w = v;
+    if !(mcg_is_finite(length_squared) && length_squared >= MCG_F32_MIN_POSITIVE) {
+        let largest = max(max(abs(v.x), abs(v.y)), abs(v.z));
+        if !(mcg_is_positive(largest) && mcg_is_finite(largest)) {
+            return false;
+        }
+        w = v / largest;
+    }
+    let rcp = 1.0 / sqrt(w.x * w.x + w.y * w.y + w.z * w.z);
+    if mcg_is_positive(rcp) && mcg_is_finite(rcp) {
+        *out = w * rcp;
         return true;
     }
     return false;
