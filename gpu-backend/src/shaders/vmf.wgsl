@@ -5,7 +5,7 @@
 // see those files for the derivations (MCMM eq. 4, MCPG eq. 4, Jakob 2012).
 
 #import mcg::constants::{
-    MCG_F32_MIN_POSITIVE, MCG_FRAC_1_PI, MCG_FRAC_PI_2, VMF_COS_POLY_0, VMF_COS_POLY_1, VMF_COS_POLY_2,
+    MCG_F32_EPSILON, MCG_F32_MIN_POSITIVE, MCG_FRAC_1_PI, MCG_FRAC_PI_2, VMF_COS_POLY_0, VMF_COS_POLY_1, VMF_COS_POLY_2,
     VMF_EXP_M1_KAHAN_LIMIT, VMF_EXP_M1_SERIES_0, VMF_EXP_M1_SERIES_1, VMF_EXP_M1_SERIES_2,
     VMF_EXP_M1_SERIES_3, VMF_EXP_M1_SERIES_4, VMF_EXP_M1_SERIES_5, VMF_EXP_M1_SERIES_6,
     VMF_EXP_M1_SERIES_7, VMF_KAPPA_DIRECT_EXPM1, VMF_KAPPA_MAX, VMF_KAPPA_SAMPLE_SATURATED,
@@ -99,14 +99,16 @@ fn vmf_sin_cos_turns(t: f32) -> vec2<f32> {
     );
 }
 
-// C(κ) = g(−2κ)/(4π), g(x) = x/expm1(x); κ/(2π) above VMF_KAPPA_SATURATED.
+// C(κ) = g(−2κ)/(4π), g(x) = x/expm1(x); κ/(2π) above VMF_KAPPA_SATURATED. g = 1 for
+// |x| < ε, where x/expm1(x) = 1 − x/2 + … rounds to 1 within an ULP: a subnormal x would
+// otherwise divide by an expm1 that hardware flushing subnormals to zero makes 0.
 fn vmf_normalization(kappa: f32) -> f32 {
     if kappa > VMF_KAPPA_SATURATED {
         return kappa * (0.5 * MCG_FRAC_1_PI);
     }
     let x = -2.0 * kappa;
     var g = 1.0;
-    if x != 0.0 {
+    if abs(x) >= MCG_F32_EPSILON {
         g = x / vmf_exp_m1(x);
     }
     return g * VMF_UNIFORM_SPHERE_PDF;
