@@ -52,6 +52,11 @@ fn mcg_positive_part3(v: vec3<f32>) -> vec3<f32> {
     return select(vec3<f32>(0.0), v, bitcast<vec3<u32>>(v) - vec3<u32>(1u) < vec3<u32>(mcg_infinity_bits()));
 }
 
+// `v.abs().max_element()`: the largest component magnitude (for rescaling before a length).
+fn mcg_max_abs3(v: vec3<f32>) -> f32 {
+    return max(max(abs(v.x), abs(v.y)), abs(v.z));
+}
+
 // Whether any component is NaN (`mcg_is_nan`).
 fn mcg_any_nan2(v: vec2<f32>) -> bool {
     return mcg_is_nan(v.x) || mcg_is_nan(v.y);

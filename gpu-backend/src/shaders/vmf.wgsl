@@ -19,7 +19,9 @@
     VMF_NEWTON_RELATIVE_STEP, VMF_PRIOR_DECAY_COUNT, VMF_SERIES_LIMIT, VMF_SIN_POLY_0,
     VMF_SIN_POLY_1, VMF_SIN_POLY_2, VMF_UNIFORM_SPHERE_PDF
 }
-#import mcg::math::{mcg_infinity_bits, mcg_is_finite, mcg_is_finite3, mcg_is_positive}
+#import mcg::math::{
+    mcg_infinity_bits, mcg_is_finite, mcg_is_finite3, mcg_is_positive, mcg_max_abs3
+}
 #import mcg::sampling::mcg_frame_to_world
 
 // 16 bytes, the layout of `mcg_vmf::Vmf`: mean direction μ (unit) and concentration κ ≥ 0.
@@ -211,7 +213,7 @@ fn vmf_try_normalize(v: vec3<f32>, out: ptr<function, vec3<f32>>) -> bool {
     let length_squared = v.x * v.x + v.y * v.y + v.z * v.z;
     var w = v;
     if !(mcg_is_finite(length_squared) && length_squared >= MCG_F32_MIN_POSITIVE) {
-        let largest = max(max(abs(v.x), abs(v.y)), abs(v.z));
+        let largest = mcg_max_abs3(v);
         if !(mcg_is_positive(largest) && mcg_is_finite(largest)) {
             return false;
         }

@@ -16,7 +16,7 @@
 #import mcg::constants::{
     MCG_F32_MAX, MCMM_MAX_TILE_SIZE, MCMM_PRIOR_LIGHT_SIZE, VMF_PRIOR_DECAY_SQUARED_COUNT
 }
-#import mcg::math::mcg_is_finite
+#import mcg::math::{mcg_is_finite, mcg_max_abs3}
 #import mcg::sampling::{mcg_cosine_hemisphere_pdf, mcg_cosine_hemisphere_sample, mcg_rng_uniform}
 #import mcg::vmf::{
     Vmf, VmfFitParams, VmfMapPrior, VmfSufficientStats, vmf_from_sufficient_stats, vmf_pdf,
@@ -148,7 +148,7 @@ fn mcmm_length_robust(v: vec3<f32>) -> f32 {
     if mcg_is_finite(length_squared) {
         return sqrt(length_squared);
     }
-    let largest = max(max(abs(v.x), abs(v.y)), abs(v.z));
+    let largest = mcg_max_abs3(v);
     if !mcg_is_finite(largest) {
         return MCG_F32_MAX;
     }

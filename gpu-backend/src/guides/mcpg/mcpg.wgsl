@@ -36,7 +36,9 @@
     MCPG_TRANSITION_DROPPED, MCPG_TRANSITION_REJECTED, MCPG_TRANSITION_STORED,
     VMF_CLAMPED_COSINE_KAPPA, VMF_KAPPA_MAX, VMF_PRIOR_DECAY_SQUARED_COUNT, VMF_UNIFORM_SPHERE_PDF
 }
-#import mcg::math::{mcg_infinity_bits, mcg_is_finite, mcg_is_finite3, mcg_is_nan, mcg_rounded}
+#import mcg::math::{
+    mcg_infinity_bits, mcg_is_finite, mcg_is_finite3, mcg_is_nan, mcg_max_abs3, mcg_rounded
+}
 #import mcg::sampling::{mcg_cosine_hemisphere_pdf, mcg_cosine_hemisphere_sample, mcg_pcg_hash}
 #import mcg::vmf::{
     Vmf, VmfFitParams, VmfMapPrior, vmf_normalization, vmf_posterior_one_minus_mean_cosine,
@@ -401,7 +403,7 @@ fn mcpg_prepare_candidate(state: MarkovGridState, collided: bool, is_static: boo
 
 // `Vmf::new(m, |m|)`: the unit mean of a non-zero, finite `m` with κ = |m| ≤ VMF_KAPPA_MAX.
 fn mcpg_vmf_new(m: vec3<f32>, kappa: f32, out: ptr<function, Vmf>) -> bool {
-    let largest = max(max(abs(m.x), abs(m.y)), abs(m.z));
+    let largest = mcg_max_abs3(m);
     if !mcg_is_finite3(m) || !mcg_is_finite(kappa) || kappa > VMF_KAPPA_MAX || largest == 0.0 {
         return false;
     }
