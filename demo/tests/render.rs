@@ -11,7 +11,7 @@ use std::f64::consts::PI;
 use common::{
     TileStats, assert_pixel_mean, assert_spread, assert_tiles_agree, emissive_texture_furnace,
     furnace, masked_furnace, scenes_dir, sky_floor, sky_map, sky_map_floor, sky_settings,
-    upward_reflection, with_texture,
+    uniform_direction, upward_reflection, with_texture,
 };
 use glam::{Quat, Vec2, Vec3};
 use mcg_demo::render::bvh::{Hit, Triangle};
@@ -108,11 +108,11 @@ fn subdivided_scenes_hit_what_the_file_does() {
     ));
     // The triangles in the order the file (and the subdivision) made them.
     let in_file_order = |s: &Scene| {
-        let mut t = vec![None; s.bvh.triangles.len()];
-        for (leaf, &i) in s.bvh.source.iter().enumerate() {
-            t[i as usize] = Some(s.bvh.triangles[leaf]);
-        }
-        t.into_iter().map(Option::unwrap).collect::<Vec<_>>()
+        let order = s.bvh.input_order();
+        order
+            .into_iter()
+            .map(|leaf| s.bvh.triangles[leaf])
+            .collect::<Vec<_>>()
     };
     let cross = |t: &Triangle| Vec3::from(t.e1).cross(Vec3::from(t.e2));
     let mut children = in_file_order(&split).into_iter();
@@ -147,10 +147,7 @@ fn subdivided_scenes_hit_what_the_file_does() {
         } else {
             lo + (hi - lo) * Vec3::new(0.05 + 0.9 * u(), 0.05 + 0.9 * u(), 0.05 + 0.9 * u())
         };
-        let z = 2.0 * u() - 1.0;
-        let phi = 2.0 * std::f32::consts::PI * u();
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        let direction = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+        let direction = uniform_direction(&mut u);
         let a = plain.bvh.intersect(origin, direction, 1e-4, f32::INFINITY);
         let b = split.bvh.intersect(origin, direction, 1e-4, f32::INFINITY);
         match (a, b) {
@@ -1296,10 +1293,7 @@ fn alpha_masks_cut_holes_without_bias() {
     let origin = scene.camera.position;
     let mut through_holes = 0;
     for _ in 0..4096 {
-        let z = 2.0 * u() - 1.0;
-        let phi = core::f32::consts::TAU * u();
-        let r = (1.0 - z * z).sqrt();
-        let d = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+        let d = uniform_direction(&mut u);
         let brute = (0..scene.bvh.triangles.len() as u32)
             .filter_map(|i| {
                 let (t, b1, b2) =

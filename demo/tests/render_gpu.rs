@@ -9,7 +9,7 @@ mod common;
 use common::{
     assert_lit_pixels_agree, assert_pixel_mean, assert_spread, assert_tiles_agree,
     emissive_texture_furnace, furnace, masked_furnace, run_mean, scenes_dir, sky_floor, sky_map,
-    sky_map_floor, sky_settings, tile_stats, upward_reflection, with_texture,
+    sky_map_floor, sky_settings, tile_stats, uniform_direction, upward_reflection, with_texture,
 };
 use glam::Vec3;
 use mcg_demo::render::cpu::{BsdfSampler, Method, RenderSettings, render_frame};
@@ -65,14 +65,6 @@ fn built_in(name: &str) -> Scene {
         .unwrap()
         .build(0.0)
         .unwrap()
-}
-
-/// A direction uniform on the sphere from two of `u`'s uniforms.
-fn uniform_direction(u: &mut impl FnMut() -> f32) -> Vec3 {
-    let z = 2.0 * u() - 1.0;
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = std::f32::consts::TAU * u();
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 
 /// A point uniform in the box of `scene`'s BVH root (inside and outside its walls), from three

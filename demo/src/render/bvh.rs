@@ -243,6 +243,17 @@ impl Bvh {
         }
     }
 
+    /// The leaf-order index of each input triangle, in input order (the inverse of
+    /// [`Bvh::source`]): `triangles[input_order()[i]]` is the builder's `i`-th input.
+    #[must_use]
+    pub fn input_order(&self) -> Vec<usize> {
+        let mut order = vec![0; self.source.len()];
+        for (leaf, &input) in self.source.iter().enumerate() {
+            order[input as usize] = leaf;
+        }
+        order
+    }
+
     /// The tree's surface-area-heuristic cost (MacDonald and Booth 1990, "Heuristics for ray
     /// tracing using space subdivision"): Σ over inner nodes of their box's area plus Σ over
     /// leaves of their box's area times their triangles, over the root box's area. For rays

@@ -412,6 +412,8 @@ pub struct RenderReport {
     /// ([`GpuTracer::warm_up`] for [`GPU_WARM_UP_S`]; 0 on a software adapter), when the GPU
     /// rendered.
     pub gpu_warm_up_frames: Option<u32>,
+    /// The scene's triangles (after `--subdivide`; of the last frame's scene).
+    pub triangles: usize,
     /// Seconds of each frame's tracing (scene building and upload of animated frames
     /// excluded): wall clock on the CPU; on the GPU the summed timestamp-query time of the
     /// frame's passes when the adapter has timestamps, else the wall clock from the first
@@ -590,6 +592,7 @@ pub fn render(args: &RenderArgs) -> Result<Rendered> {
             .as_deref()
             .map(|g| format!("{:?}", g.adapter_info().device_type)),
         gpu_warm_up_frames,
+        triangles: scene.bvh.triangles.len(),
         width: args.width,
         height: args.height,
         spp: args.spp,

@@ -1949,12 +1949,11 @@ impl Scene {
     /// their materials' indices and light-selection weights), materials, attributes, textures
     /// and texels, the environment with its map and rotation, and the portals — so that a
     /// cached render of the scene is found again only for the same scene. The triangles and
-    /// their attributes in the file's order ([`Bvh::source`]), not the tree's leaf order, so
+    /// their attributes in the file's order ([`Bvh::input_order`]), not the tree's leaf order, so
     /// that another tree over the same scene keeps its fingerprint.
     #[must_use]
     pub fn fingerprint(&self) -> u64 {
-        let mut in_file_order: Vec<usize> = (0..self.bvh.triangles.len()).collect();
-        in_file_order.sort_unstable_by_key(|&leaf| self.bvh.source[leaf]);
+        let in_file_order = self.bvh.input_order();
         let triangles: Vec<Triangle> = in_file_order
             .iter()
             .map(|&leaf| self.bvh.triangles[leaf])

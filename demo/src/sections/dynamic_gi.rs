@@ -189,13 +189,11 @@ impl Runs {
 
     /// The median frame time over all frames of all seeds, in seconds.
     fn median_frame_time(&self) -> f64 {
-        let mut t: Vec<f64> = self
-            .runs
-            .iter()
-            .flat_map(|r| r.report.frame_times_s.iter().copied())
-            .collect();
-        t.sort_by(f64::total_cmp);
-        t.get(t.len() / 2).copied().unwrap_or(f64::NAN)
+        super::median(
+            self.runs
+                .iter()
+                .flat_map(|r| r.report.frame_times_s.iter().copied()),
+        )
     }
 }
 

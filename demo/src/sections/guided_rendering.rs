@@ -746,17 +746,6 @@ fn subdivisions(samples: usize) -> &'static [u32] {
 /// The frames [`cost_by_triangles`] renders per method; the first is not counted.
 const COST_FRAMES: u32 = 5;
 
-/// The median of `values` (NaN for none).
-fn median(values: &[f64]) -> f64 {
-    let mut v = values.to_vec();
-    v.sort_by(f64::total_cmp);
-    match v.len() {
-        0 => f64::NAN,
-        n if n % 2 == 1 => v[n / 2],
-        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
-    }
-}
-
 /// What a frame of each method costs as `study`'s scene grows: its triangles that emit
 /// nothing split into 4^L ([`subdivisions`]), so the image stays the same in expectation
 /// while every ray walks a larger tree. A table per device in `section`; returns the numbers
@@ -792,21 +781,16 @@ fn cost_by_triangles(
     let mut rows = Vec::new();
     for device in devices {
         for &level in levels {
-            let triangles = SceneFile::open(study.scene)?
-                .with_subdivision(level)
-                .build(0.0)?
-                .bvh
-                .triangles
-                .len();
             let mut costs = Vec::new();
-            let mut device_name = "";
+            let (mut device_name, mut triangles) = ("", 0);
             for &method in study.methods {
                 let mut a = args(study, method, COST_FRAMES, ctx.config.seed, None);
                 a.subdivide = level;
                 let r = render_on(device, &a)?;
                 bar.inc(1);
                 device_name = r.report.device;
-                costs.push((method, median(&frame_costs(&r)[1..])));
+                triangles = r.report.triangles;
+                costs.push((method, super::median(frame_costs(&r)[1..].iter().copied())));
             }
             let bsdf = costs
                 .iter()

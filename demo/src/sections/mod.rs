@@ -22,6 +22,13 @@ use indicatif::{ProgressBar, ProgressStyle};
 use crate::report::Section;
 use crate::{Config, Result};
 
+/// The median of `values`: the upper of the middle two for an even count, NaN for none.
+pub(crate) fn median(values: impl IntoIterator<Item = f64>) -> f64 {
+    let mut v: Vec<f64> = values.into_iter().collect();
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
 /// Signature of a section builder.
 pub type BuildFn = fn(&Context<'_>) -> Result<Section>;
 

@@ -20,6 +20,14 @@ pub fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
 }
 
+/// A direction uniform on the sphere from two of `u`'s uniforms.
+pub fn uniform_direction(u: &mut impl FnMut() -> f32) -> Vec3 {
+    let z = 2.0 * u() - 1.0;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = std::f32::consts::TAU * u();
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
 /// A closed cube of side 2 m around the camera; every face Lambertian of albedo `rho` and
 /// emitting `le` from its inner (front) face.
 pub fn furnace(rho: Vec3, le: Vec3) -> Scene {
