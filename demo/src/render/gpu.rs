@@ -99,6 +99,15 @@ pub const HELD_VERTICES: u32 = 3;
 /// triangles, 7 % shorter).
 pub const EMITTER_LIST_DEF: &str = "MCG_DEMO_EMITTER_LIST";
 
+/// The shader def of the `mcpg` pipeline when its frames draw emission-only directions (a
+/// mean K above 0, [`GpuTracer::set_mcpg_emission_samples`]): without it the directions'
+/// loop is not compiled, so the paper's one direction per vertex carries none of its code.
+/// llvmpipe runs all of a kernel's code whether or not an invocation takes it, and the loop
+/// is about 3,600 of the K = 0 kernel's 29,100 instructions there (`scripts/gpu-instructions`:
+/// left out, K = 0 frames of scene (a) execute 5 % fewer instructions with 15 % fewer L1i
+/// misses, and take 5-9 % less time); a GPU allots registers for all of a kernel's code.
+pub const EMISSION_DIRECTIONS_DEF: &str = "MCG_DEMO_EMISSION_DIRECTIONS";
+
 /// The shader def that compiles the reading of vertex colours and textures (WGSL
 /// `material_at`, `triangle_emission`), set where the uploaded scene has
 /// [`Scene::attributes`]: without it a scene without textures would pay for that code on
@@ -196,16 +205,20 @@ pub struct GuidedDefs {
     pub hold_all: bool,
     /// [`EMITTER_LIST_DEF`]: at most [`EMITTER_LIST_MAX`] emitter triangles.
     pub emitter_list: bool,
+    /// [`EMISSION_DIRECTIONS_DEF`]: `mcpg` draws emission-only directions (a mean K > 0).
+    pub emission_directions: bool,
     /// What the uploaded scene asks of every kernel (attributes, alpha masks, environment).
     pub scene: SceneDefs,
 }
 
 impl Default for GuidedDefs {
-    /// Held vertices for short paths, the emitters' tree, no attributes, no masks.
+    /// Held vertices for short paths, the emitters' tree, no emission-only directions (the
+    /// tracer's default K = 0), no attributes, no masks.
     fn default() -> Self {
         Self {
             hold_all: true,
             emitter_list: false,
+            emission_directions: false,
             scene: SceneDefs::default(),
         }
     }
@@ -657,7 +670,8 @@ pub fn composed_mcmm_shader(scene: SceneDefs) -> Result<String> {
 }
 
 /// The tracer's WGSL for `mcpg` (`lights` false) or `mcpg-nee` (true): [`composed_shader`]
-/// with [`MCPG_DEF`] defined, and [`HOLD_ALL_DEF`] and [`EMITTER_LIST_DEF`] as `guided` says.
+/// with [`MCPG_DEF`] defined, and [`HOLD_ALL_DEF`], [`EMITTER_LIST_DEF`] and
+/// [`EMISSION_DIRECTIONS_DEF`] as `guided` says.
 ///
 /// # Errors
 /// When composition fails (an unknown import).
@@ -673,6 +687,9 @@ pub fn composed_mcpg_shader(lights: bool, guided: GuidedDefs) -> Result<String> 
     }
     if guided.emitter_list {
         defs.push((EMITTER_LIST_DEF, 1));
+    }
+    if guided.emission_directions {
+        defs.push((EMISSION_DIRECTIONS_DEF, 1));
     }
     Ok(shaders::compose(SHADER, &defs)?)
 }
@@ -835,7 +852,9 @@ impl GpuTracer {
     /// How many emission-only directions `mcpg` draws per vertex on average, as the CPU
     /// tracer's [`super::guided::McpgSampler::with_emission_samples`] (the default: 0, the
     /// paper's one direction), spread over the depths as before
-    /// ([`GpuTracer::set_mcpg_emission_allocation`]); the next frame starts a new measurement.
+    /// ([`GpuTracer::set_mcpg_emission_allocation`]); the next frame starts a new measurement
+    /// (and compiles the guided shaders again when the mean crosses 0,
+    /// [`EMISSION_DIRECTIONS_DEF`]).
     pub fn set_mcpg_emission_samples(&mut self, count: u32) {
         self.mcpg_emission = EmissionAllocation::new(count, self.mcpg_emission.policy());
     }
@@ -1405,11 +1424,13 @@ impl GpuTracer {
     /// Compiles the light-sampling pipeline `method` needs on its first frame (`nee`, or
     /// `mcpg-nee` around the current guide; the other methods' are made up front), and the
     /// guided shaders again when a frame of `bounces` falls on the other side of
-    /// [`HELD_VERTICES`] than they were compiled for ([`HOLD_ALL_DEF`]).
+    /// [`HELD_VERTICES`] than they were compiled for ([`HOLD_ALL_DEF`]), or the mean K of
+    /// `mcpg`'s emission-only directions on the other side of 0 ([`EMISSION_DIRECTIONS_DEF`]).
     fn prepare_pipeline(&mut self, method: Method, bounces: u32) -> Result<()> {
         if matches!(method, Method::Mcpg | Method::McpgNee) {
             self.set_guided_defs(GuidedDefs {
                 hold_all: bounces <= HELD_VERTICES,
+                emission_directions: self.mcpg_emission.mean() > 0,
                 ..self.guided_defs
             })?;
         }
@@ -1979,14 +2000,15 @@ mod tests {
         );
         assert_eq!((tracer, guide), (8, 0), "render binds 1–8 as storage");
         for lights in [false, true] {
-            for (hold_all, emitter_list, scene) in [
-                (false, false, SceneDefs::default()),
-                (true, false, textured),
-                (true, true, masked),
+            for (hold_all, emitter_list, emission_directions, scene) in [
+                (false, false, true, SceneDefs::default()),
+                (true, false, false, textured),
+                (true, true, true, masked),
             ] {
                 let defs = GuidedDefs {
                     hold_all,
                     emitter_list,
+                    emission_directions,
                     scene,
                 };
                 let (_, tracer, guide) = validate(&composed_mcpg_shader(lights, defs).unwrap());

@@ -1274,12 +1274,20 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
             // the light-sampling ones `mcpg` does not use moved along a lattice
             // (`emission_uniforms`); density and material only where emission is met
             // (`cpu::emission_weighted`).
+            // Compiled only where the frame's mean K is above 0 (`gpu::EMISSION_DIRECTIONS_DEF`):
+            // the paper's one direction carries none of the loop's code (a SIMD CPU driver runs
+            // all of a kernel's code, and a GPU's registers are allotted for all of it).
+#ifdef MCG_DEMO_EMISSION_DIRECTIONS
             let count = emission_samples(depth);
+#else
+            let count = 0u;
+#endif
             let share = 1.0 / f32(1u + count);
             last_share = share;
             // `EmissionMoments::add_direction`'s sums of the directions' luminance.
             var first = 0.0;
             var second = 0.0;
+#ifdef MCG_DEMO_EMISSION_DIRECTIONS
             // In batches: the directions and their emitters first, then their shadow rays in
             // one walk, then the density and material of the unoccluded ones only (a SIMD
             // group runs every block of its invocations, llvmpipe even those none takes).
@@ -1317,6 +1325,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, u32>) 
                     }
                 }
             }
+#endif
             if moment_base != NO_MOMENTS {
                 let m = moment_base + min(depth, MAX_RECORDED - 1u);
                 image[m] += vec4<f32>(1.0, f32(count), first, second);
