@@ -437,10 +437,13 @@ pub const EMISSION_LATTICE: Vec3 = Vec3::new(0.819_172_5, 0.671_043_6, 0.549_700
 #[must_use]
 pub fn emission_uniforms(first: Vec3, i: u32) -> Vec3 {
     let v = first + i as f32 * EMISSION_LATTICE;
-    // For uniforms `first` in [0, 1)³, v ≥ 0 and ⌊v⌋ is its truncation: `as_ivec3` is one
-    // SSE2 conversion where `floor` is three calls into libm at baseline x86-64 (3.7 % of an
-    // `mcpg` frame's instructions). NaN and ∞ still end in [0, 1) through the `min`.
-    (v - v.as_ivec3().as_vec3()).min(Vec3::splat(1.0 - f32::EPSILON / 2.0))
+    // ⌊v⌋ as the truncation, less 1 where it lies above v (v < 0): SSE2 conversions and a
+    // compare, where `floor` is three calls into libm at baseline x86-64 (3.7 % of an `mcpg`
+    // frame's instructions). The same as `v.floor()` for |v| < 2³¹; NaN and +∞ end in [0, 1)
+    // through the `min`, as with `floor`.
+    let t = v.as_ivec3().as_vec3();
+    let whole = t - Vec3::select(t.cmpgt(v), Vec3::ONE, Vec3::ZERO);
+    (v - whole).min(Vec3::splat(1.0 - f32::EPSILON / 2.0))
 }
 
 /// f·cos/p times the emission that the direction `wi` sampled at `vertex` meets from `origin`,
@@ -834,6 +837,11 @@ mod tests {
                     next_uniform(&mut state),
                 );
                 assert_eq!(emission_uniforms(first, 0), first);
+                // Rotations by any offset, negative ones too, stay mod 1 as with `floor`.
+                let shifted = first - Vec3::new(1.5, 0.25, 3.0);
+                let v = shifted + 3.0 * EMISSION_LATTICE;
+                let fract = (v - v.floor()).min(Vec3::splat(1.0 - f32::EPSILON / 2.0));
+                assert_eq!(emission_uniforms(shifted, 3), fract);
                 (0..8)
                     .map(|i| {
                         let u = emission_uniforms(first, i);
