@@ -2201,3 +2201,82 @@ fn mcmm_chain_prior_speeds_up_the_warm_up() {
         "chain prior {informed} valid chains, uninformed {uninformed}"
     );
 }
+
+/// Files that break glTF 2.0's rules give an error naming the file and the fault, never a
+/// panic or an endless walk (found by running `render` over the glTF-Validator's test
+/// files): a node hierarchy with a cycle (the walk over the scene's nodes used to loop
+/// forever), and a primitive whose `POSITION` names a missing accessor (gltf 1.4's validation
+/// panics on it). A channel the renderer does not play (here CUBICSPLINE) no longer refuses
+/// the whole file: the scene renders with its rest pose and a warning.
+#[test]
+fn malformed_files_give_errors_and_unplayed_animations_warnings() {
+    let dir = temp_dir("malformed");
+    let base = minimal_gltf(&dir, "base.gltf", true, true, 4);
+    let edited = |name: &str, edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut doc: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&base).unwrap()).unwrap();
+        edit(&mut doc);
+        let path = dir.join(name);
+        std::fs::write(&path, doc.to_string()).unwrap();
+        path
+    };
+
+    let cycle = edited("cycle.gltf", &|doc| {
+        doc["nodes"][0]["children"] = serde_json::json!([1]);
+        doc["nodes"][1]["children"] = serde_json::json!([0]);
+        doc["scenes"][0]["nodes"] = serde_json::json!([0]);
+    });
+    let err = SceneFile::open(&cycle)
+        .unwrap()
+        .build(0.0)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("cycle.gltf") && err.contains("reached twice"),
+        "{err}"
+    );
+
+    let missing = edited("missing_accessor.gltf", &|doc| {
+        doc["accessors"] = serde_json::json!([]);
+        doc["bufferViews"] = serde_json::json!([]);
+    });
+    let err = SceneFile::open(&missing)
+        .map(|_| ())
+        .expect_err("an error")
+        .to_string();
+    assert!(
+        err.contains("missing_accessor.gltf") && err.contains("parser gave up"),
+        "{err}"
+    );
+
+    let cubic = edited("cubic.gltf", &|doc| {
+        // Keyframe time 0 (the positions' first float) and the three positions as in-tangent,
+        // value and out-tangent.
+        doc["accessors"]
+            .as_array_mut()
+            .unwrap()
+            .push(serde_json::json!({
+                "bufferView": 0, "componentType": 5126, "count": 1, "type": "SCALAR",
+                "min": [0.0], "max": [0.0]
+            }));
+        doc["animations"] = serde_json::json!([{
+            "channels": [{ "sampler": 0, "target": { "node": 0, "path": "translation" } }],
+            "samplers": [{ "input": 1, "output": 0, "interpolation": "CUBICSPLINE" }]
+        }]);
+    });
+    let file = SceneFile::open(&cubic).unwrap();
+    assert!(
+        !file.is_animated(),
+        "an unplayed channel does not animate the scene"
+    );
+    let scene = file.build(0.0).expect("the file renders in its rest pose");
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("not played (CUBICSPLINE interpolation)")),
+        "{:?}",
+        scene.warnings
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -37,7 +37,10 @@
 //!   and occlusion textures).
 //! - **Animations**: translation, rotation and scale channels with STEP or LINEAR
 //!   interpolation (rotations LINEAR by normalised lerp of the quaternions), evaluated at
-//!   the time of the frame ([`frame_time`]); the dynamic built-in scene uses them.
+//!   the time of the frame ([`frame_time`]); the dynamic built-in scene uses them. Other
+//!   channels (CUBICSPLINE, morph-target weights, nodes given as a matrix) are not played:
+//!   their nodes keep their rest transforms, and [`Scene::warnings`] says so. Skins are not
+//!   read: a skinned mesh is placed by its node's transform, without its joints' deformation.
 //!
 //! Conventions (glTF 2.0): metres, radians, linear scene-referred RGB radiance; emission from
 //! the front face only (counter-clockwise winding seen from the front). glTF has no
@@ -157,8 +160,9 @@ pub enum SceneError {
         /// What is wrong.
         reason: String,
     },
-    /// An animation uses CUBICSPLINE interpolation, morph targets, or targets a node whose
-    /// transform is a matrix; or its keyframes are unreadable.
+    /// A played animation channel's keyframes are unreadable, differ in count from its times,
+    /// or do not match its property (channels the renderer does not play are skipped with a
+    /// warning).
     UnsupportedAnimation {
         /// The file.
         path: PathBuf,
@@ -292,6 +296,33 @@ impl Camera {
         let sy = (1.0 - 2.0 * y / height as f32) * tan_y;
         (self.forward + sx * self.right + sy * self.up).normalize()
     }
+}
+
+/// `gltf::Gltf::open` of `path`, a panic inside the parser turned into
+/// [`SceneError::Unreadable`]: gltf 1.4's validation indexes the accessors a primitive names
+/// before checking that they exist (`POSITION` naming a missing accessor panics in
+/// `gltf_json::mesh`), and a bad file must never take the process down. The panic's own
+/// message is kept off the terminal while the parser runs (the process-wide hook is swapped
+/// for that time; files are opened on the main thread, before any render starts).
+fn parse(path: &Path) -> Result<gltf::Result<gltf::Gltf>, SceneError> {
+    let previous = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let parsed = std::panic::catch_unwind(|| gltf::Gltf::open(path));
+    std::panic::set_hook(previous);
+    parsed.map_err(|payload| {
+        let message = payload
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| payload.downcast_ref::<&str>().copied())
+            .unwrap_or("no message");
+        SceneError::Unreadable {
+            path: path.to_path_buf(),
+            reason: format!(
+                "the glTF parser gave up on it ({message}); an index in the file likely names \
+                 something that does not exist"
+            ),
+        }
+    })
 }
 
 /// A glTF file in memory: the document and its buffers, ready to be built into a [`Scene`] at
@@ -666,7 +697,7 @@ impl SceneFile {
             path: path.clone(),
             reason: e.to_string(),
         };
-        let gltf::Gltf { document, blob } = gltf::Gltf::open(&path).map_err(unreadable)?;
+        let gltf::Gltf { document, blob } = parse(&path)?.map_err(unreadable)?;
         let buffers = gltf::import_buffers(&document, path.parent(), blob).map_err(unreadable)?;
         if document.scenes().len() == 0 {
             return Err(SceneError::NoScene { path });
@@ -860,7 +891,34 @@ impl SceneFile {
     /// Whether the file has animations (then each frame needs its own [`SceneFile::build`]).
     #[must_use]
     pub fn is_animated(&self) -> bool {
-        self.document.animations().len() > 0
+        self.document
+            .animations()
+            .flat_map(|a| a.channels().collect::<Vec<_>>())
+            .any(|c| self.unplayed_channel(&c).is_none())
+    }
+
+    /// Why the renderer does not play `channel` (its node then keeps its rest transform, and
+    /// [`Scene::warnings`] says so), or `None` when it does: CUBICSPLINE interpolation,
+    /// morph-target weights, and a node whose transform is a matrix (glTF 2.0 animates only
+    /// nodes given as translation, rotation and scale).
+    fn unplayed_channel(&self, channel: &gltf::animation::Channel) -> Option<String> {
+        let target = channel.target();
+        if target.property() == Property::MorphTargetWeights {
+            return Some("morph-target weights".to_owned());
+        }
+        if channel.sampler().interpolation() == Interpolation::CubicSpline {
+            return Some("CUBICSPLINE interpolation".to_owned());
+        }
+        if matches!(
+            target.node().transform(),
+            gltf::scene::Transform::Matrix { .. }
+        ) {
+            return Some(format!(
+                "node {} has a matrix transform",
+                target.node().index()
+            ));
+        }
+        None
     }
 
     /// Builds the scene at animation time `time` (seconds).
@@ -887,7 +945,21 @@ impl SceneFile {
         let mut stack: Vec<(gltf::Node, Mat4)> =
             scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
         stack.reverse();
+        // glTF 2.0 ("Nodes and Hierarchy"): the nodes form disjoint strict trees, so a scene
+        // reaches each node once; a cycle would make this walk endless.
+        let mut reached = vec![false; self.document.nodes().len()];
         while let Some((node, parent)) = stack.pop() {
+            if std::mem::replace(&mut reached[node.index()], true) {
+                return Err(SceneError::Unreadable {
+                    path: path.clone(),
+                    reason: format!(
+                        "node {} is reached twice from the scene (a cycle in the node \
+                         hierarchy, a node with two parents, or listed twice), which glTF 2.0 \
+                         forbids",
+                        node.index()
+                    ),
+                });
+            }
             let world = parent * locals[node.index()];
             if !world.is_finite() {
                 return Err(SceneError::NonFinite {
@@ -1063,6 +1135,27 @@ impl SceneFile {
             warnings.push(format!(
                 "{which}: alphaMode BLEND is not read; the surface is rendered opaque"
             ));
+        }
+        for animation in document.animations() {
+            let mut reasons: Vec<String> = Vec::new();
+            let mut unplayed = 0;
+            for channel in animation.channels() {
+                if let Some(reason) = self.unplayed_channel(&channel) {
+                    unplayed += 1;
+                    if !reasons.contains(&reason) {
+                        reasons.push(reason);
+                    }
+                }
+            }
+            if unplayed > 0 {
+                warnings.push(format!(
+                    "animation {}: {unplayed} of its {} channels are not played ({}); their \
+                     nodes keep their rest transforms",
+                    animation.index(),
+                    animation.channels().count(),
+                    reasons.join(", ")
+                ));
+            }
         }
         let lines: Vec<String> = document
             .meshes()
@@ -1263,13 +1356,13 @@ impl SceneFile {
                 reason,
             };
             for channel in animation.channels() {
+                if self.unplayed_channel(&channel).is_some() {
+                    continue;
+                }
                 let node = channel.target().node().index();
                 let interpolation = channel.sampler().interpolation();
-                if interpolation == Interpolation::CubicSpline {
-                    return Err(unsupported("CUBICSPLINE interpolation".to_owned()));
-                }
                 let Some(node_trs) = trs[node].as_mut() else {
-                    return Err(unsupported(format!("node {node} has a matrix transform")));
+                    continue;
                 };
                 let reader = channel.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
                 let times: Vec<f32> = reader
@@ -1285,7 +1378,11 @@ impl SceneFile {
                         v.map(|[x, y, z]| [x, y, z, 0.0]).collect()
                     }
                     (Property::Rotation, ReadOutputs::Rotations(v)) => v.into_f32().collect(),
-                    _ => return Err(unsupported("morph-target weights".to_owned())),
+                    _ => {
+                        return Err(unsupported(
+                            "keyframe values that do not match the channel's property".to_owned(),
+                        ));
+                    }
                 };
                 if times.is_empty() || times.len() != values.len() {
                     return Err(unsupported(

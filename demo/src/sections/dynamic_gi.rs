@@ -15,7 +15,8 @@
 //! 4. the median frame time of each method and device.
 //!
 //! Every method runs on the CPU, and again on the GPU when the report's device list
-//! ([`super::guided_rendering::devices`]: any wgpu adapter, unless `MCG_REPORT_GPU=0`)
+//! ([`super::guided_rendering::device_choice`]: a hardware adapter, or a software one whose
+//! renders fit the report's budget; `MCG_REPORT_GPU` overrides it)
 //! has one; the GPU's runs are labelled `<method> (gpu)`.
 
 use std::path::PathBuf;
@@ -292,7 +293,7 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
         s.reference_spp,
         s.reference_bounces,
     ));
-    let devices = devices();
+    let devices = devices(ctx);
     let bar = ctx.progress(
         u64::from(s.seeds) * (METHODS.len() * devices.len()) as u64,
         "dynamic GI: adgi vs ddgi",

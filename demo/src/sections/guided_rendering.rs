@@ -50,27 +50,98 @@ use crate::report::{Section, Table};
 /// The scene of the section: a room lit through a slit around a panel (GI, MCPG's case).
 pub const SCENE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/hidden_light_room.gltf");
 
-/// The environment variable that overrides [`devices`]: `0` renders on the CPU only (unset or
-/// any other value: on the GPU too where wgpu finds an adapter).
+/// The environment variable that overrides [`device_choice`]: `0` renders on the CPU only,
+/// `1` on the GPU too wherever wgpu finds an adapter (a slow software one included); unset
+/// or any other value: the choice of [`device_choice`].
 pub const REPORT_GPU_VAR: &str = "MCG_REPORT_GPU";
 
-/// The devices the section renders on: the CPU, and the GPU when wgpu finds an adapter, a
-/// software one included (lavapipe's llvmpipe,
-/// [`DeviceType::Cpu`](mcg_gpu_backend::wgpu::DeviceType::Cpu)): its WGSL tracer then runs on
-/// the CPU's cores, and its frames take about 1.5× (`bsdf`) to 2× (`mcpg`) the
-/// rayon tracer's wall clock (128², 8 spp on 2 cores: 0.094 against 0.063 s, 0.49 against
-/// 0.27 s), so the report on such a machine takes about 6½ minutes instead of 2. The
-/// report labels the adapter and reads its times as orders of magnitude.
-/// [`REPORT_GPU_VAR`] overrides the choice.
-#[must_use]
-pub fn devices() -> Vec<Device> {
-    let forced = std::env::var(REPORT_GPU_VAR).ok();
-    let gpu = forced.as_deref() != Some("0") && crate::render::gpu_adapter_info().is_some();
-    if gpu {
-        vec![Device::Cpu, Device::Gpu]
-    } else {
-        vec![Device::Cpu]
-    }
+/// What a software adapter's share of the full report costs, in frames of scene (a)'s
+/// `bsdf` at [`Settings::FULL`] (128², 8 spp, 3 bounces) on that adapter: on the 2-vCPU AMD
+/// EPYC VM (Zen 4) lavapipe's frames took 0.077 s and its renders 257 s of the report
+/// (6 min 55 s with, 2 min 38 s without it, references cached), ≈ 3 300 frames; on a 2-vCPU
+/// Intel Xeon VM (Ice Lake) 0.20 s a frame and about 11 minutes.
+const SOFTWARE_GPU_REPORT_FRAMES: f64 = 3_300.0;
+
+/// The most the full report spends on a software adapter's renders by its prediction
+/// ([`SOFTWARE_GPU_REPORT_FRAMES`] × the measured frame), so that the default run stays
+/// under 10 minutes on 2 cores: the CPU's own renders take another 2½-4 minutes there.
+pub const SOFTWARE_GPU_BUDGET_S: f64 = 300.0;
+
+/// The devices the report renders on, and why the GPU is not among them when an adapter was
+/// found ([`device_choice`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DeviceChoice {
+    /// The CPU, then the GPU where it takes part.
+    pub devices: Vec<Device>,
+    /// One sentence for the report and the terminal when an adapter was left out.
+    pub note: Option<String>,
+}
+
+/// The devices the report's renders run on, decided once per process: the CPU, and the GPU
+/// when wgpu finds an adapter. A hardware adapter always takes part. A software one
+/// ([`DeviceType::Cpu`](mcg_gpu_backend::wgpu::DeviceType::Cpu), such as lavapipe's
+/// llvmpipe, whose WGSL tracer then runs on the CPU's cores at 1.5-2.7× the rayon tracer's
+/// wall clock) takes part in the full report only where its share is predicted to fit in
+/// [`SOFTWARE_GPU_BUDGET_S`]: four frames of scene (a)'s `bsdf` are timed on it first
+/// (about 2 s), since the same 2-core machine type ran lavapipe 2.6× slower on one CPU than
+/// another while the rayon tracer differed by 1.25×. In the smaller reports (`--quick`, the
+/// tests) it always does. [`REPORT_GPU_VAR`]: `0` leaves the GPU out, `1` takes any adapter.
+pub fn device_choice(samples: usize, seed: u64) -> &'static DeviceChoice {
+    static CHOICE: std::sync::OnceLock<DeviceChoice> = std::sync::OnceLock::new();
+    CHOICE.get_or_init(|| {
+        let cpu_only = |note: Option<String>| DeviceChoice {
+            devices: vec![Device::Cpu],
+            note,
+        };
+        let forced = std::env::var(REPORT_GPU_VAR).ok();
+        if forced.as_deref() == Some("0") {
+            return cpu_only(None);
+        }
+        let Some(info) = crate::render::gpu_adapter_info() else {
+            return cpu_only(None);
+        };
+        let both = DeviceChoice {
+            devices: vec![Device::Cpu, Device::Gpu],
+            note: None,
+        };
+        let software = info.device_type == mcg_gpu_backend::wgpu::DeviceType::Cpu;
+        if forced.as_deref() == Some("1") || !software || samples < crate::Config::DEFAULT_SAMPLES {
+            return both;
+        }
+        let study = Study::hidden_light(samples);
+        let timed = render_on(Device::Gpu, &args(&study, Method::Bsdf, 4, seed, None));
+        let frame = match timed {
+            Ok(r) => super::median(r.report.frame_times_s[1..].iter().copied()),
+            Err(e) => {
+                return cpu_only(Some(format!(
+                    "The GPU tracer on {} was left out: its timing frames failed ({e}).",
+                    info.name
+                )));
+            }
+        };
+        let predicted = SOFTWARE_GPU_REPORT_FRAMES * frame;
+        if predicted <= SOFTWARE_GPU_BUDGET_S {
+            return both;
+        }
+        cpu_only(Some(format!(
+            "The GPU tracer on {name} (a software adapter: its shaders run on this machine's \
+             cores) was left out of this report: a frame of scene (a)'s bsdf took it {ms:.0} ms, \
+             so its renders would have added about {minutes:.0} minutes, beyond the \
+             {budget:.0} the report allows them. `{REPORT_GPU_VAR}=1 cargo run --release -p \
+             mcg-demo` includes them; `render --device gpu` renders any scene on it.",
+            name = info.name,
+            ms = 1e3 * frame,
+            minutes = predicted / 60.0,
+            budget = SOFTWARE_GPU_BUDGET_S / 60.0,
+        )))
+    })
+}
+
+/// The devices of [`device_choice`] for `ctx`'s report.
+pub fn devices(ctx: &Context<'_>) -> Vec<Device> {
+    device_choice(ctx.config.samples, ctx.config.seed)
+        .devices
+        .clone()
 }
 
 /// The methods compared on scene (a), in display order: the two a renderer has without a
@@ -225,32 +296,58 @@ fn args(
     }
 }
 
-/// The cached reference of `s`, rendered when missing; returns its path.
-fn reference(ctx: &Context<'_>, study: &Study, seed: u64) -> Result<PathBuf> {
+/// The seed of a study's reference render for a report of seed `seed` (independent of the
+/// measured renders' streams).
+#[must_use]
+pub fn reference_seed(seed: u64) -> u64 {
+    seed ^ 0x0005_eed0_f7ef
+}
+
+/// The file name of `study`'s reference for a report of seed `seed`: scene, size, bounces,
+/// samples, the reference's seed and the scene's fingerprint (which keeps a reference of an
+/// older version of the scene, a file or map rewritten by `mcg-demo scenes`, from being taken
+/// for this one's).
+///
+/// # Errors
+/// When the scene cannot be read or built.
+pub fn reference_name(study: &Study, seed: u64) -> Result<String> {
     let s = &study.settings;
-    let dir = ctx.out_dir().join("reference");
     let stem = Path::new(study.scene)
         .file_stem()
         .and_then(|n| n.to_str())
         .unwrap_or("scene");
-    // The scene's fingerprint keeps a reference of an older version of the scene (a file or
-    // map rewritten by `mcg-demo scenes`) from being taken for this one's.
     let fingerprint = SceneFile::open(study.scene)?.build(0.0)?.fingerprint();
-    let path = dir.join(format!(
-        "{4}_{0}x{0}_b{1}_nee_{2}spp_seed{3:x}_{fingerprint:016x}.exr",
+    Ok(format!(
+        "{stem}_{0}x{0}_b{1}_nee_{2}spp_seed{3:x}_{fingerprint:016x}.exr",
         s.size,
         s.bounces,
         s.reference_spp * s.reference_frames,
-        seed,
-        stem
-    ));
+        reference_seed(seed),
+    ))
+}
+
+/// The cached reference of `study`, copied from the committed ones or rendered when missing
+/// (`nee`, [`Settings::reference_spp`] × [`Settings::reference_frames`]); returns its path.
+fn reference(ctx: &Context<'_>, study: &Study) -> Result<PathBuf> {
+    let s = &study.settings;
+    let dir = ctx.out_dir().join("reference");
+    let path = dir.join(reference_name(study, ctx.config.seed)?);
     let variance_path = output::variance_path(&path);
     if path.exists() && variance_path.exists() {
         return Ok(path);
     }
     std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    if copy_committed_reference(&path)? {
+        return Ok(path);
+    }
     let bar = ctx.progress(1, "guided rendering: reference");
-    let mut a = args(study, Method::Nee, s.reference_frames, seed, None);
+    let mut a = args(
+        study,
+        Method::Nee,
+        s.reference_frames,
+        reference_seed(ctx.config.seed),
+        None,
+    );
     a.spp = s.reference_spp;
     let r = render_on(Device::Cpu, &a)?;
     r.image.write_exr(&path)?;
@@ -259,6 +356,38 @@ fn reference(ctx: &Context<'_>, study: &Study, seed: u64) -> Result<PathBuf> {
         .write_exr(&variance_path)?;
     bar.finish_and_clear();
     Ok(path)
+}
+
+/// The folder of the references committed with the demo ([`COMMITTED_REFERENCES`]'s files:
+/// the default report's, named as [`reference`] names them).
+pub const COMMITTED_REFERENCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/references");
+
+/// Copies the committed reference of `path`'s name and its variance file from
+/// [`COMMITTED_REFERENCES`] to `path`, when both are there: a fresh checkout's report then
+/// skips rendering them (the hidden-light room's 16 384 spp take 2½-4½ minutes on 2 cores).
+/// The name holds the settings and the scene's fingerprint, so a changed scene or size
+/// renders its own; `tests/report.rs` checks that the committed files still agree with the
+/// `nee` tracer. Returns whether it copied.
+///
+/// # Errors
+/// When a committed file exists but cannot be copied.
+fn copy_committed_reference(path: &Path) -> Result<bool> {
+    let Some(name) = path.file_name() else {
+        return Ok(false);
+    };
+    let committed = Path::new(COMMITTED_REFERENCES).join(name);
+    let committed_variance = output::variance_path(&committed);
+    if !(committed.exists() && committed_variance.exists()) {
+        return Ok(false);
+    }
+    for (from, to) in [
+        (committed, path.to_path_buf()),
+        (committed_variance, output::variance_path(path)),
+    ] {
+        std::fs::copy(&from, &to)
+            .map_err(|e| format!("cannot copy {} to {}: {e}", from.display(), to.display()))?;
+    }
+    Ok(true)
 }
 
 /// One method's renders on one device.
@@ -608,6 +737,12 @@ impl Study {
 pub fn build(ctx: &Context<'_>) -> Result<Section> {
     let mut section = Section::new("guided-rendering", "Guided rendering");
     let mut summary = serde_json::Map::new();
+    if let Some(note) = &device_choice(ctx.config.samples, ctx.config.seed).note {
+        if ctx.config.progress {
+            eprintln!("{note}");
+        }
+        section.paragraph(note);
+    }
     let hidden = Study::hidden_light(ctx.config.samples);
     let reference_path = study_section(ctx, &hidden, &mut section, &mut summary)?;
     section.paragraph(&format!(
@@ -756,7 +891,7 @@ fn cost_by_triangles(
     section: &mut Section,
 ) -> Result<serde_json::Value> {
     let levels = subdivisions(ctx.config.samples);
-    let devices = devices();
+    let devices = devices(ctx);
     let bar = ctx.progress(
         (levels.len() * study.methods.len() * devices.len()) as u64,
         "guided rendering: cost by triangles",
@@ -838,10 +973,9 @@ fn study_section(
     section: &mut Section,
     summary: &mut serde_json::Map<String, serde_json::Value>,
 ) -> Result<PathBuf> {
-    let seed = ctx.config.seed;
-    let reference_path = reference(ctx, study, seed ^ 0x0005_eed0_f7ef)?;
+    let reference_path = reference(ctx, study)?;
     let reference = RgbImage::read_exr(&reference_path)?;
-    for device in devices() {
+    for device in devices(ctx) {
         let (runs, budget, slowest) = compute_runs(ctx, study, device, &reference_path)?;
         let device_name = runs[0].equal_samples.report.device;
         let clock = if runs.iter().all(|r| costs_are_cpu(&r.equal_samples)) {
