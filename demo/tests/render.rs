@@ -2280,3 +2280,72 @@ fn malformed_files_give_errors_and_unplayed_animations_warnings() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// KHR_lights_punctual: a point light becomes 20 front-emitting triangles (an icosahedron
+/// about the light node's position, radius `POINT_LIGHT_RADIUS` × the scene's diagonal) whose
+/// emitted power π·L·A equals the light's 4π·I per channel (I = colour × intensity, within
+/// f32 rounding, 10⁻⁵ relative), every face wound outward; a spot light is not rendered, and a
+/// warning names it. The one triangle of the base file emits nothing, so the point light is
+/// the scene's only emitter.
+#[test]
+fn point_lights_become_small_spheres_of_their_power() {
+    let dir = temp_dir("point-light");
+    let base = minimal_gltf(&dir, "base.gltf", true, false, 4);
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&base).unwrap()).unwrap();
+    doc["extensionsUsed"] = serde_json::json!(["KHR_lights_punctual"]);
+    doc["extensions"] = serde_json::json!({ "KHR_lights_punctual": { "lights": [
+        { "type": "point", "color": [1.0, 0.5, 0.25], "intensity": 40.0 },
+        { "type": "spot", "intensity": 10.0, "spot": {} }
+    ] } });
+    let centre = Vec3::new(0.3, 0.3, 0.5);
+    let nodes = doc["nodes"].as_array_mut().unwrap();
+    nodes.push(
+        serde_json::json!({ "translation": centre.to_array(), "scale": [3.0, 3.0, 3.0],
+        "extensions": { "KHR_lights_punctual": { "light": 0 } } }),
+    );
+    nodes.push(serde_json::json!({ "extensions": { "KHR_lights_punctual": { "light": 1 } } }));
+    doc["scenes"][0]["nodes"] = serde_json::json!([0, 1, 2, 3]);
+    let path = dir.join("lights.gltf");
+    std::fs::write(&path, doc.to_string()).unwrap();
+
+    let scene = SceneFile::open(&path).unwrap().build(0.0).unwrap();
+    let emitting: Vec<&Triangle> = scene
+        .bvh
+        .triangles
+        .iter()
+        .filter(|t| scene.materials[t.material as usize].emission != [0.0; 3])
+        .collect();
+    assert_eq!(emitting.len(), 20, "one icosahedron");
+    let mut power = [0.0f64; 3];
+    for t in &emitting {
+        let v0 = Vec3::from(t.v0);
+        let (e1, e2) = (Vec3::from(t.e1), Vec3::from(t.e2));
+        let centroid = v0 + (e1 + e2) / 3.0;
+        assert!(
+            e1.cross(e2).dot(centroid - centre) > 0.0,
+            "front faces point outward"
+        );
+        let emission = scene.materials[t.material as usize].emission;
+        for c in 0..3 {
+            power[c] += std::f64::consts::PI * f64::from(emission[c]) * f64::from(t.area());
+        }
+    }
+    for (c, colour) in [1.0, 0.5, 0.25].into_iter().enumerate() {
+        let expected = 4.0 * std::f64::consts::PI * 40.0 * colour;
+        assert!(
+            (power[c] / expected - 1.0).abs() < 1e-5,
+            "channel {c}: {} against {expected}",
+            power[c]
+        );
+    }
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("light 1: spot and directional lights")),
+        "{:?}",
+        scene.warnings
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
