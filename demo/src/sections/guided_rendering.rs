@@ -59,7 +59,9 @@ pub const REPORT_GPU_VAR: &str = "MCG_REPORT_GPU";
 /// `bsdf` at [`Settings::FULL`] (128², 8 spp, 3 bounces) on that adapter: on the 2-vCPU AMD
 /// EPYC VM (Zen 4) lavapipe's frames took 0.077 s and its renders 257 s of the report
 /// (6 min 55 s with, 2 min 38 s without it, references cached), ≈ 3 300 frames; on a 2-vCPU
-/// Intel Xeon VM (Ice Lake) 0.20 s a frame and about 11 minutes.
+/// Intel Xeon VM (Ice Lake) 0.16-0.20 s a frame and about 12 minutes (≈ 3 600-4 500 frames;
+/// the report took 22 min 23 s there with lavapipe and its references to render, 5 min 22 s
+/// without lavapipe and with the committed references).
 const SOFTWARE_GPU_REPORT_FRAMES: f64 = 3_300.0;
 
 /// The most the full report spends on a software adapter's renders by its prediction
