@@ -65,7 +65,7 @@ pub const REPORT_GPU_VAR: &str = "MCG_REPORT_GPU";
 const SOFTWARE_GPU_REPORT_FRAMES: f64 = 3_300.0;
 
 /// The most the full report spends on a software adapter's renders by its prediction
-/// ([`SOFTWARE_GPU_REPORT_FRAMES`] × the measured frame), so that the default run stays
+/// (about 3 300 × its measured frame of scene (a)'s `bsdf`), so that the default run stays
 /// under 10 minutes on 2 cores: the CPU's own renders take another 2½-4 minutes there.
 pub const SOFTWARE_GPU_BUDGET_S: f64 = 300.0;
 
@@ -360,8 +360,8 @@ fn reference(ctx: &Context<'_>, study: &Study) -> Result<PathBuf> {
     Ok(path)
 }
 
-/// The folder of the references committed with the demo ([`COMMITTED_REFERENCES`]'s files:
-/// the default report's, named as [`reference`] names them).
+/// The folder of the references committed with the demo: the default report's, named as
+/// [`reference_name`] names them.
 pub const COMMITTED_REFERENCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/references");
 
 /// Copies the committed reference of `path`'s name and its variance file from
