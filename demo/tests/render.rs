@@ -2345,5 +2345,22 @@ fn point_lights_become_small_spheres_of_their_power() {
         "{:?}",
         scene.warnings
     );
+    // The spot light alone: no emitter, and the error says why the light gives none.
+    doc["scenes"][0]["nodes"] = serde_json::json!([0, 1, 3]);
+    let spot_only = dir.join("spot_only.gltf");
+    std::fs::write(&spot_only, doc.to_string()).unwrap();
+    let err = SceneFile::open(&spot_only).unwrap().build(0.0).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            SceneError::NoEmitters {
+                unrendered_lights: 1,
+                ..
+            }
+        ) && err
+            .to_string()
+            .contains("its 1 spot or directional light is not rendered"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -125,10 +125,13 @@ pub enum SceneError {
         /// The file.
         path: PathBuf,
     },
-    /// No triangle emits light (no material with a positive emissive factor).
+    /// No triangle emits light (no material with a positive emissive factor, no point light).
     NoEmitters {
         /// The file.
         path: PathBuf,
+        /// The file's spot and directional lights in the scene (`KHR_lights_punctual`), which
+        /// the renderer does not render.
+        unrendered_lights: usize,
     },
     /// A mesh primitive has no POSITION attribute.
     MissingPositions {
@@ -204,11 +207,27 @@ impl fmt::Display for SceneError {
             Self::NoTriangles { path } => {
                 write!(f, "{}: the default scene has no triangles", path.display())
             }
-            Self::NoEmitters { path } => write!(
+            Self::NoEmitters {
+                path,
+                unrendered_lights,
+            } => write!(
                 f,
-                "{}: no emitters — no material has a positive emissiveFactor, so the image \
-                 would be black (--environment R,G,B lights it from outside)",
-                path.display()
+                "{}: no emitters — no material has a positive emissiveFactor and no point \
+                 light is there{}, so the image would be black (--environment R,G,B lights it \
+                 from outside)",
+                path.display(),
+                if *unrendered_lights > 0 {
+                    format!(
+                        " (its {unrendered_lights} spot or directional light{} not rendered)",
+                        if *unrendered_lights > 1 {
+                            "s are"
+                        } else {
+                            " is"
+                        }
+                    )
+                } else {
+                    String::new()
+                }
             ),
             Self::MissingPositions { path, mesh } => write!(
                 f,
@@ -1067,7 +1086,13 @@ impl SceneFile {
             (None, None) => return Err(SceneError::NoCamera { path: path.clone() }),
         };
         let mut scene = Scene::new_lit(camera, &triangles, materials, warnings, self.environment)
-            .ok_or_else(|| SceneError::NoEmitters { path: path.clone() })?;
+            .ok_or_else(|| SceneError::NoEmitters {
+            path: path.clone(),
+            unrendered_lights: lights
+                .iter()
+                .filter(|(l, _)| !matches!(l.kind(), gltf::khr_lights_punctual::Kind::Point))
+                .count(),
+        })?;
         if let Some(map) = &self.environment_map {
             scene.environment_map = Some(Arc::clone(map));
         }
