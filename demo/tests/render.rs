@@ -278,9 +278,16 @@ fn minimal_gltf(dir: &Path, name: &str, camera: bool, emissive: bool, mode: u32)
 /// A copy of the glTF file `gltf`, named `name` beside it, whose default scene's extras are
 /// `{"mcg": mcg}`.
 fn with_scene_extras(gltf: &Path, name: &str, mcg: serde_json::Value) -> PathBuf {
+    edited_gltf(gltf, name, |doc| {
+        doc["scenes"][0]["extras"] = serde_json::json!({ "mcg": mcg });
+    })
+}
+
+/// A copy of the glTF file `gltf`, named `name` beside it, with its JSON changed by `edit`.
+fn edited_gltf(gltf: &Path, name: &str, edit: impl FnOnce(&mut serde_json::Value)) -> PathBuf {
     let mut doc: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(gltf).unwrap()).unwrap();
-    doc["scenes"][0]["extras"] = serde_json::json!({ "mcg": mcg });
+    edit(&mut doc);
     let path = gltf.with_file_name(name);
     std::fs::write(&path, doc.to_string()).unwrap();
     path
@@ -2074,13 +2081,11 @@ fn unread_features_are_named_in_the_warnings() {
     let plain = minimal_gltf(&dir, "plain.gltf", true, true, 4);
     let scene = SceneFile::open(&plain).unwrap().build(0.0).unwrap();
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
-    let mut doc: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&plain).unwrap()).unwrap();
-    doc["extensionsUsed"] =
-        serde_json::json!(["KHR_materials_clearcoat", "KHR_materials_emissive_strength"]);
-    doc["materials"][0]["alphaMode"] = serde_json::json!("BLEND");
-    let path = dir.join("unread.gltf");
-    std::fs::write(&path, serde_json::to_string(&doc).unwrap()).unwrap();
+    let path = edited_gltf(&plain, "unread.gltf", |doc| {
+        doc["extensionsUsed"] =
+            serde_json::json!(["KHR_materials_clearcoat", "KHR_materials_emissive_strength"]);
+        doc["materials"][0]["alphaMode"] = serde_json::json!("BLEND");
+    });
     let warnings = SceneFile::open(&path).unwrap().build(0.0).unwrap().warnings;
     for expected in ["extension KHR_materials_clearcoat", "material 0: alphaMode"] {
         assert!(
@@ -2103,38 +2108,36 @@ fn unread_features_are_named_in_the_warnings() {
 fn vertex_colours_multiply_the_base_colour() {
     let dir = temp_dir("vertex_colours");
     let plain = minimal_gltf(&dir, "plain.gltf", true, true, 4);
-    let mut doc: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&plain).unwrap()).unwrap();
     let positions: [f32; 9] = [0.0, 0.0, -1.0, 1.0, 0.0, -1.0, 0.0, 1.0, -1.0];
     let colours = [
         Vec3::new(1.0, 0.5, 0.0),
         Vec3::new(0.0, 1.0, 0.25),
         Vec3::new(0.2, 0.4, 1.0),
     ];
-    let floats = positions
-        .into_iter()
-        .chain(colours.iter().flat_map(|c| c.to_array()));
-    let bytes: Vec<u8> = floats.flat_map(f32::to_le_bytes).collect();
-    doc["buffers"][0] = serde_json::json!({ "byteLength": 72,
-        "uri": format!("data:application/octet-stream;base64,{}", base64(&bytes)) });
-    doc["bufferViews"]
-        .as_array_mut()
-        .unwrap()
-        .push(serde_json::json!({ "buffer": 0, "byteOffset": 36, "byteLength": 36 }));
-    doc["accessors"].as_array_mut().unwrap().push(
-        serde_json::json!({ "bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC3" }),
-    );
-    doc["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = serde_json::json!(1);
-    doc["materials"][0]["pbrMetallicRoughness"] =
-        serde_json::json!({ "baseColorFactor": [0.5, 1.0, 1.0, 1.0] });
-    doc["nodes"]
-        .as_array_mut()
-        .unwrap()
-        .push(serde_json::json!({ "mesh": 0, "scale": [-1.0, 1.0, 1.0] }));
-    let nodes = doc["nodes"].as_array().unwrap().len();
-    doc["scenes"][0]["nodes"] = serde_json::json!((0..nodes).collect::<Vec<_>>());
-    let path = dir.join("coloured.gltf");
-    std::fs::write(&path, serde_json::to_string(&doc).unwrap()).unwrap();
+    let path = edited_gltf(&plain, "coloured.gltf", |doc| {
+        let floats = positions
+            .into_iter()
+            .chain(colours.iter().flat_map(|c| c.to_array()));
+        let bytes: Vec<u8> = floats.flat_map(f32::to_le_bytes).collect();
+        doc["buffers"][0] = serde_json::json!({ "byteLength": 72,
+            "uri": format!("data:application/octet-stream;base64,{}", base64(&bytes)) });
+        doc["bufferViews"]
+            .as_array_mut()
+            .unwrap()
+            .push(serde_json::json!({ "buffer": 0, "byteOffset": 36, "byteLength": 36 }));
+        doc["accessors"].as_array_mut().unwrap().push(
+            serde_json::json!({ "bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC3" }),
+        );
+        doc["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = serde_json::json!(1);
+        doc["materials"][0]["pbrMetallicRoughness"] =
+            serde_json::json!({ "baseColorFactor": [0.5, 1.0, 1.0, 1.0] });
+        doc["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(serde_json::json!({ "mesh": 0, "scale": [-1.0, 1.0, 1.0] }));
+        let nodes = doc["nodes"].as_array().unwrap().len();
+        doc["scenes"][0]["nodes"] = serde_json::json!((0..nodes).collect::<Vec<_>>());
+    });
     let scene = SceneFile::open(&path).unwrap().build(0.0).unwrap();
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
     assert_eq!(scene.bvh.triangles.len(), 2);
@@ -2210,16 +2213,8 @@ fn mcmm_chain_prior_speeds_up_the_warm_up() {
 fn malformed_files_give_errors_and_unplayed_animations_warnings() {
     let dir = temp_dir("malformed");
     let base = minimal_gltf(&dir, "base.gltf", true, true, 4);
-    let edited = |name: &str, edit: &dyn Fn(&mut serde_json::Value)| {
-        let mut doc: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&base).unwrap()).unwrap();
-        edit(&mut doc);
-        let path = dir.join(name);
-        std::fs::write(&path, doc.to_string()).unwrap();
-        path
-    };
 
-    let cycle = edited("cycle.gltf", &|doc| {
+    let cycle = edited_gltf(&base, "cycle.gltf", |doc| {
         doc["nodes"][0]["children"] = serde_json::json!([1]);
         doc["nodes"][1]["children"] = serde_json::json!([0]);
         doc["scenes"][0]["nodes"] = serde_json::json!([0]);
@@ -2234,7 +2229,7 @@ fn malformed_files_give_errors_and_unplayed_animations_warnings() {
         "{err}"
     );
 
-    let missing = edited("missing_accessor.gltf", &|doc| {
+    let missing = edited_gltf(&base, "missing_accessor.gltf", |doc| {
         doc["accessors"] = serde_json::json!([]);
         doc["bufferViews"] = serde_json::json!([]);
     });
@@ -2247,7 +2242,7 @@ fn malformed_files_give_errors_and_unplayed_animations_warnings() {
         "{err}"
     );
 
-    let cubic = edited("cubic.gltf", &|doc| {
+    let cubic = edited_gltf(&base, "cubic.gltf", |doc| {
         // Keyframe time 0 (the positions' first float) and the three positions as in-tangent,
         // value and out-tangent.
         doc["accessors"]
@@ -2289,23 +2284,21 @@ fn malformed_files_give_errors_and_unplayed_animations_warnings() {
 fn point_lights_become_small_spheres_of_their_power() {
     let dir = temp_dir("point-light");
     let base = minimal_gltf(&dir, "base.gltf", true, false, 4);
-    let mut doc: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&base).unwrap()).unwrap();
-    doc["extensionsUsed"] = serde_json::json!(["KHR_lights_punctual"]);
-    doc["extensions"] = serde_json::json!({ "KHR_lights_punctual": { "lights": [
-        { "type": "point", "color": [1.0, 0.5, 0.25], "intensity": 40.0 },
-        { "type": "spot", "intensity": 10.0, "spot": {} }
-    ] } });
     let centre = Vec3::new(0.3, 0.3, 0.5);
-    let nodes = doc["nodes"].as_array_mut().unwrap();
-    nodes.push(
-        serde_json::json!({ "translation": centre.to_array(), "scale": [3.0, 3.0, 3.0],
-        "extensions": { "KHR_lights_punctual": { "light": 0 } } }),
-    );
-    nodes.push(serde_json::json!({ "extensions": { "KHR_lights_punctual": { "light": 1 } } }));
-    doc["scenes"][0]["nodes"] = serde_json::json!([0, 1, 2, 3]);
-    let path = dir.join("lights.gltf");
-    std::fs::write(&path, doc.to_string()).unwrap();
+    let path = edited_gltf(&base, "lights.gltf", |doc| {
+        doc["extensionsUsed"] = serde_json::json!(["KHR_lights_punctual"]);
+        doc["extensions"] = serde_json::json!({ "KHR_lights_punctual": { "lights": [
+            { "type": "point", "color": [1.0, 0.5, 0.25], "intensity": 40.0 },
+            { "type": "spot", "intensity": 10.0, "spot": {} }
+        ] } });
+        let nodes = doc["nodes"].as_array_mut().unwrap();
+        nodes.push(
+            serde_json::json!({ "translation": centre.to_array(), "scale": [3.0, 3.0, 3.0],
+            "extensions": { "KHR_lights_punctual": { "light": 0 } } }),
+        );
+        nodes.push(serde_json::json!({ "extensions": { "KHR_lights_punctual": { "light": 1 } } }));
+        doc["scenes"][0]["nodes"] = serde_json::json!([0, 1, 2, 3]);
+    });
 
     let scene = SceneFile::open(&path).unwrap().build(0.0).unwrap();
     let emitting: Vec<&Triangle> = scene
@@ -2346,9 +2339,9 @@ fn point_lights_become_small_spheres_of_their_power() {
         scene.warnings
     );
     // The spot light alone: no emitter, and the error says why the light gives none.
-    doc["scenes"][0]["nodes"] = serde_json::json!([0, 1, 3]);
-    let spot_only = dir.join("spot_only.gltf");
-    std::fs::write(&spot_only, doc.to_string()).unwrap();
+    let spot_only = edited_gltf(&path, "spot_only.gltf", |doc| {
+        doc["scenes"][0]["nodes"] = serde_json::json!([0, 1, 3]);
+    });
     let err = SceneFile::open(&spot_only).unwrap().build(0.0).unwrap_err();
     assert!(
         matches!(

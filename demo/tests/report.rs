@@ -127,23 +127,17 @@ fn committed_references_agree_with_the_nee_tracer() {
         let mut worst: f64 = 0.0;
         for tile in [TILE, w] {
             let frames = common::tile_stats((w, h, tile, FRAMES), |f| images[f as usize].clone());
-            let tiles_x = w / tile;
+            // The reference's tile means, and the tile means of its per-pixel variances
+            // (Σ Var Rₚ / n; over n once more, the variance of the tile mean).
+            let means = common::tile_stats((w, h, tile, 1), |_| reference.pixels.clone());
+            let variances = common::tile_stats((w, h, tile, 1), |_| variance.pixels.clone());
             let n = f64::from(tile * tile);
-            let mut sums = vec![[(0.0f64, 0.0f64); 3]; frames.len()];
-            for (p, (value, var)) in reference.pixels.iter().zip(&variance.pixels).enumerate() {
-                let (x, y) = (p as u32 % w, p as u32 / w);
-                let t = ((y / tile) * tiles_x + x / tile) as usize;
-                for c in 0..3 {
-                    sums[t][c].0 += f64::from(value[c]) / n;
-                    sums[t][c].1 += f64::from(var[c]) / (n * n);
-                }
-            }
             let tests = (frames.len() * 3) as f64;
             let reference_dof = f64::from(s.reference_frames - 1);
-            for (t, (stats, reference)) in frames.iter().zip(&sums).enumerate() {
+            for (t, stats) in frames.iter().enumerate() {
                 for c in 0..3 {
                     let stats: &RunningStats = &stats[c];
-                    let (r, r_var) = reference[c];
+                    let (r, r_var) = (means[t][c].mean(), variances[t][c].mean() / n);
                     let v = stats.variance() / f64::from(FRAMES);
                     let welch = WelchResult {
                         t: (stats.mean() - r) / (v + r_var).sqrt(),

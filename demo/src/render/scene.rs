@@ -1051,7 +1051,7 @@ impl SceneFile {
         if triangles.is_empty() {
             return Err(SceneError::NoTriangles { path: path.clone() });
         }
-        self.push_point_lights(
+        let unrendered_lights = self.push_point_lights(
             &lights,
             &mut materials,
             &mut triangles,
@@ -1088,10 +1088,7 @@ impl SceneFile {
         let mut scene = Scene::new_lit(camera, &triangles, materials, warnings, self.environment)
             .ok_or_else(|| SceneError::NoEmitters {
             path: path.clone(),
-            unrendered_lights: lights
-                .iter()
-                .filter(|(l, _)| !matches!(l.kind(), gltf::khr_lights_punctual::Kind::Point))
-                .count(),
+            unrendered_lights,
         })?;
         if let Some(map) = &self.environment_map {
             scene.environment_map = Some(Arc::clone(map));
@@ -1122,6 +1119,8 @@ impl SceneFile {
     /// projected area of a convex body is A/4); its `range` is not read (the falloff is the
     /// physical 1/d²). Spot and directional lights are not rendered; the warnings say so.
     ///
+    /// Returns how many lights it did not render (spot and directional).
+    ///
     /// # Errors
     /// [`SceneError::NonFinite`] for an intensity or colour that is not finite and ≥ 0.
     fn push_point_lights(
@@ -1131,19 +1130,12 @@ impl SceneFile {
         triangles: &mut Vec<Triangle>,
         attributes: &mut Vec<TriangleAttributes>,
         warnings: &mut Vec<String>,
-    ) -> Result<(), SceneError> {
+    ) -> Result<usize, SceneError> {
         use gltf::khr_lights_punctual::Kind;
         if lights.is_empty() {
-            return Ok(());
+            return Ok(0);
         }
-        let (lo, hi) = triangles.iter().fold(
-            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |(lo, hi), t| {
-                let v0 = Vec3::from(t.v0);
-                let (v1, v2) = (v0 + Vec3::from(t.e1), v0 + Vec3::from(t.e2));
-                (lo.min(v0).min(v1).min(v2), hi.max(v0).max(v1).max(v2))
-            },
-        );
+        let (lo, hi) = bounds(triangles);
         let radius = POINT_LIGHT_RADIUS * (hi - lo).length();
         let faces = icosahedron(radius);
         let area: f32 = faces
@@ -1189,7 +1181,7 @@ impl SceneFile {
                 skipped.join(", ")
             ));
         }
-        Ok(())
+        Ok(skipped.len())
     }
 
     /// The document's materials after the default one (index 0), checked finite; warns of
@@ -1632,13 +1624,7 @@ fn texture_use(info: &gltf::texture::Info) -> Result<TextureUse, u32> {
 /// field of view, looking down −Z at the centre of their bounding box from the distance at
 /// which the box's bounding sphere just fits the field of view.
 fn auto_camera(triangles: &[Triangle]) -> Camera {
-    let (lo, hi) = triangles
-        .iter()
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), t| {
-            let v0 = Vec3::from(t.v0);
-            let (v1, v2) = (v0 + Vec3::from(t.e1), v0 + Vec3::from(t.e2));
-            (lo.min(v0).min(v1).min(v2), hi.max(v0).max(v1).max(v2))
-        });
+    let (lo, hi) = bounds(triangles);
     let yfov = core::f32::consts::FRAC_PI_4;
     let centre = 0.5 * (lo + hi);
     let radius = (0.5 * (hi - lo).length()).max(1e-3);
@@ -1649,6 +1635,17 @@ fn auto_camera(triangles: &[Triangle]) -> Camera {
         forward: Vec3::NEG_Z,
         yfov,
     }
+}
+
+/// The corners (lowest, highest) of the axis-aligned box around `triangles`' vertices.
+fn bounds(triangles: &[Triangle]) -> (Vec3, Vec3) {
+    triangles
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), t| {
+            let v0 = Vec3::from(t.v0);
+            let (v1, v2) = (v0 + Vec3::from(t.e1), v0 + Vec3::from(t.e2));
+            (lo.min(v0).min(v1).min(v2), hi.max(v0).max(v1).max(v2))
+        })
 }
 
 /// Reads the environment map `map` for the scene file `path`, turned by `degrees` about +Y
