@@ -184,15 +184,27 @@ fn measure_seeds(
     mode: u32,
     salt: u32,
     seeds: u32,
-) -> (RunningStats, f64) {
+) -> (RunningStats, Vec<f64>) {
     let mut bias = RunningStats::default();
-    let mut mse = 0.0;
+    let mut mse = Vec::with_capacity(seeds as usize);
     for s in 0..seeds {
         let (b, m) = relative_errors(&run(ctx, bench, scene, mode, 0x6d63_0000 + salt * 64 + s));
         bias.push(b);
-        mse += m / f64::from(seeds);
+        mse.push(m);
     }
     (bias, mse)
+}
+
+fn mean(values: &[f64]) -> f64 {
+    values.iter().sum::<f64>() / values.len() as f64
+}
+
+/// The median, the mean of the two middle values for an even count.
+fn median(values: &[f64]) -> f64 {
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let n = sorted.len();
+    0.5 * (sorted[(n - 1) / 2] + sorted[n / 2])
 }
 
 /// Two lights of radius 0.5 at height 3, 3 units apart, one ten times brighter: chains
@@ -268,7 +280,7 @@ fn gpu_mcpg_is_unbiased_and_beats_cosine_sampling() {
     .into_iter()
     .enumerate()
     {
-        let (bias, guided) = measure_seeds(
+        let (bias, per_seed) = measure_seeds(
             ctx,
             &mut bench,
             &scene,
@@ -276,6 +288,7 @@ fn gpu_mcpg_is_unbiased_and_beats_cosine_sampling() {
             2 * k as u32,
             3 * SEEDS,
         );
+        let guided = mean(&per_seed);
         let cosine = cosine_mse(&scene);
         let z = z_test(&bias, 0.0);
         let ratio = guided / cosine;
@@ -319,12 +332,17 @@ fn plain_mean_of_the_candidate_pdfs_is_detected_as_biased() {
 }
 
 /// Velocity prediction (MCPG eq. 9-10) pays on the moving light: without the light's previous
-/// position the chains lag behind and the mean squared relative error is at least 4× larger
-/// (issue table: 0.018 vs 0.67 relative to cosine). Over 24 seeds each: the per-seed MSE is
-/// heavy-tailed (a rare path that finds the light through an untrained direction), and the
-/// GPU's racing stores make every launch differ, so with 8 seeds one run in CI measured
-/// 5.92 with velocity against 15.1 without (2.6×), where repeated runs give 2.3-3.0 against
-/// 16-43.
+/// position the chains lag behind and the mean squared relative error is several times larger
+/// (issue table: 0.018 vs 0.67 relative to cosine).
+///
+/// Hypothesis: the median over 24 seeds of the per-seed MSE without velocity is at least 3× the
+/// median with it. The median, not the mean: the per-seed MSE is heavy-tailed (a rare path that
+/// finds the light through an untrained direction), and the GPU's racing stores make every
+/// launch differ. Three runs on lavapipe gave medians 2.54 / 12.57, 2.46 / 12.68 and
+/// 2.36 / 16.05 (ratios 4.9-6.8), per-seed values 1.4-4.7 with velocity and 4.7-74 without;
+/// the means (2.3-2.6 against 14.8-15.5) once reached 4.24 against 13.23 in CI through one
+/// outlying seed, which is why a 4× bar on the means failed there. With the velocity term
+/// switched off in both runs the ratio is about 1 and the test fails.
 #[test]
 fn gpu_mcpg_tracks_a_moving_light_with_velocity_prediction() {
     let Some(ctx) = gpu_or_skip("gpu_mcpg_tracks_a_moving_light_with_velocity_prediction") else {
@@ -334,8 +352,9 @@ fn gpu_mcpg_tracks_a_moving_light_with_velocity_prediction() {
     let scene = ToyScene::moving_light(0.03);
     let (_, with) = measure_seeds(ctx, &mut bench, &scene, MODE_GUIDED, 30, 3 * SEEDS);
     let (_, without) = measure_seeds(ctx, &mut bench, &scene, MODE_NO_VELOCITY, 31, 3 * SEEDS);
-    println!("moving light: MSE with velocity {with:.4}, without {without:.4}");
-    assert!(without >= 4.0 * with, "{without:.4} < 4 × {with:.4}");
+    let (with, without) = (median(&with), median(&without));
+    println!("moving light: median per-seed MSE with velocity {with:.4}, without {without:.4}");
+    assert!(without >= 3.0 * with, "{without:.4} < 3 × {with:.4}");
 }
 
 /// The discard heuristic (MCPG sec. 5): after the light vanishes (frame 16), lobe samples
