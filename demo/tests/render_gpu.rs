@@ -1264,6 +1264,7 @@ fn render_on_the_gpu(method: Method) {
         mcpg_emission_allocation: mcg_demo::render::emission_allocation::Allocation::Adaptive,
         mcpg_cache_add: mcg_demo::render::guided::CACHE_ADD_PROBABILITY,
         mcpg_confidence: mcg_demo::render::guided::CONFIDENCE_SAMPLES,
+        mcpg_candidates: mcg_markov_guide::mcpg::McpgParams::PAPER.candidates,
         mcpg_alpha_min: mcg_demo::render::guided::ALPHA_MIN,
         ramp_frames: 1,
         mcmm_score: McmmScore::TileMixture,

@@ -45,7 +45,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
-use mcg_markov_guide::mcpg::{Guide, GuideConfig};
+use mcg_markov_guide::mcpg::{Guide, GuideConfig, MAX_CANDIDATES, McpgParams};
 use mcg_probe_cache::ProbeGrid;
 
 use crate::Result;
@@ -153,6 +153,12 @@ pub struct RenderArgs {
     /// samples); 0 is the paper's rule.
     #[arg(long, default_value_t = guided::CONFIDENCE_SAMPLES)]
     pub mcpg_confidence: f32,
+    /// `mcpg`'s N_mc, the candidates each vertex reads from the grids (MCPG Alg. 1), 1 to 8 on
+    /// either device; the paper's 5 by default. Fewer make a vertex cheaper and its mixture
+    /// poorer: on scene (a) 3 and 4 lost to 5 at equal time (`markov-guide/benches/README.md`).
+    #[arg(long, default_value_t = McpgParams::PAPER.candidates,
+          value_parser = clap::value_parser!(u32).range(1..=MAX_CANDIDATES as i64))]
+    pub mcpg_candidates: u32,
     /// `mcpg`'s α_min, the smallest blend factor of the chains' update (MCPG Alg. 3 line 5;
     /// [`guided::ALPHA_MIN`]); 0.01 is the MCPG authors' engine value, which the crate's
     /// `McpgParams::PAPER` keeps.
@@ -861,12 +867,14 @@ impl CpuGuide {
 
 /// MCPG's configuration for `args` on `scene`: [`guide_config`], without the irradiance
 /// cache under `--no-irradiance-cache`, N_c from `--mcpg-confidence`, α_min from
-/// `--mcpg-alpha-min`, the cache's add probability from `--mcpg-cache-add`.
+/// `--mcpg-alpha-min`, N_mc from `--mcpg-candidates`, the cache's add probability from
+/// `--mcpg-cache-add`.
 #[must_use]
 pub fn mcpg_config(scene: &Scene, args: &RenderArgs) -> GuideConfig {
     let mut config = guide_config(scene, args.width, args.height);
     config.params.confidence_samples = args.mcpg_confidence;
     config.params.fit.alpha_min = args.mcpg_alpha_min;
+    config.params.candidates = args.mcpg_candidates;
     if args.no_irradiance_cache {
         config.cache = None;
     }
@@ -1214,5 +1222,25 @@ mod tests {
         assert!(
             RenderArgs::try_parse_from(["render", "--scene", "x", "--ramp-frames", "0"]).is_err()
         );
+    }
+
+    /// `--mcpg-candidates` defaults to the paper's N_mc = 5 and takes 1 to the guide's
+    /// [`MAX_CANDIDATES`].
+    #[test]
+    fn candidates_default_to_the_papers_and_stay_in_range() {
+        use clap::Parser;
+        let parse = |n: Option<&str>| {
+            let mut v = vec!["render", "--scene", "x.gltf"];
+            if let Some(n) = n {
+                v.extend_from_slice(&["--mcpg-candidates", n]);
+            }
+            RenderArgs::try_parse_from(v).map(|a| a.mcpg_candidates)
+        };
+        assert_eq!(parse(None).ok(), Some(5));
+        assert_eq!(parse(Some("1")).ok(), Some(1));
+        assert_eq!(parse(Some("8")).ok(), Some(MAX_CANDIDATES as u32));
+        for bad in ["0", "9", "-1", "five"] {
+            assert!(parse(Some(bad)).is_err(), "{bad}");
+        }
     }
 }

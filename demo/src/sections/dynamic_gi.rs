@@ -146,6 +146,7 @@ fn args(
         mcpg_emission_allocation: crate::render::emission_allocation::Allocation::Adaptive,
         mcpg_cache_add: crate::render::guided::CACHE_ADD_PROBABILITY,
         mcpg_confidence: crate::render::guided::CONFIDENCE_SAMPLES,
+        mcpg_candidates: mcg_markov_guide::mcpg::McpgParams::PAPER.candidates,
         mcpg_alpha_min: crate::render::guided::ALPHA_MIN,
         ramp_frames: 1,
         mcmm_score: McmmScore::TileMixture,

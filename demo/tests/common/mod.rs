@@ -423,6 +423,7 @@ pub fn door_args(method: Method, out: PathBuf, frames: u32) -> RenderArgs {
         mcpg_emission_allocation: mcg_demo::render::emission_allocation::Allocation::Adaptive,
         mcpg_cache_add: mcg_demo::render::guided::CACHE_ADD_PROBABILITY,
         mcpg_confidence: mcg_demo::render::guided::CONFIDENCE_SAMPLES,
+        mcpg_candidates: mcg_markov_guide::mcpg::McpgParams::PAPER.candidates,
         mcpg_alpha_min: mcg_demo::render::guided::ALPHA_MIN,
         ramp_frames: 1,
         mcmm_score: McmmScore::TileMixture,
