@@ -95,7 +95,25 @@ fn run_subcommand(name: &str, args: &[String]) -> ExitCode {
     }
 }
 
+/// Turns off Mesa's Vulkan device-select layer where it would print errors: the layer (loaded
+/// implicitly beside lavapipe and Mesa's GPU drivers) asks Wayland for the display's GPU, and
+/// libwayland prints "error: XDG_RUNTIME_DIR is invalid or not set in the environment." twice
+/// where there is no desktop session (CI, ssh, containers), in a run that is fine. The layer
+/// only reorders the adapters; wgpu enumerates and chooses them itself. Its own switch,
+/// `NODEVICE_SELECT=1`, is set only where `XDG_RUNTIME_DIR` is unset and the user has not set
+/// the switch either way.
+#[allow(unsafe_code)]
+fn quiet_mesa_device_select() {
+    use std::env::{set_var, var_os};
+    if var_os("XDG_RUNTIME_DIR").is_none() && var_os("NODEVICE_SELECT").is_none() {
+        // SAFETY: the first statement of `main`, before this process starts any thread, so no
+        // other thread reads or writes the environment meanwhile (`set_var`'s requirement).
+        unsafe { set_var("NODEVICE_SELECT", "1") };
+    }
+}
+
 fn main() -> ExitCode {
+    quiet_mesa_device_select();
     let args: Vec<String> = std::env::args().skip(1).collect();
     if let Some(name @ ("render" | "scenes")) = args.first().map(String::as_str) {
         return run_subcommand(name, &args[1..]);
