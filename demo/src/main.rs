@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
-use clap::Parser;
+use clap::{Arg, CommandFactory, FromArgMatches, Parser};
 use mcg_demo::Config;
 use mcg_demo::render::{RenderArgs, ScenesArgs, run_render, scene_generator};
 
@@ -73,7 +73,10 @@ fn parse_args(args: impl IntoIterator<Item = String>) -> Result<Command, String>
 fn run_subcommand(name: &str, args: &[String]) -> ExitCode {
     let argv = std::iter::once(format!("mcg-demo {name}")).chain(args.iter().cloned());
     let result = if name == "render" {
-        let args = RenderArgs::try_parse_from(argv).unwrap_or_else(|e| e.exit());
+        let args = render_command()
+            .try_get_matches_from(argv)
+            .and_then(|m| RenderArgs::from_arg_matches(&m))
+            .unwrap_or_else(|e| e.exit());
         let started = Instant::now();
         run_render(&args).map(|paths| {
             for p in paths {
@@ -93,6 +96,84 @@ fn run_subcommand(name: &str, args: &[String]) -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// `render`'s clap command with its help in plain text: the options' help comes from the
+/// doc comments of [`RenderArgs`] and its value enums, whose intra-doc links (`` [`x`] ``,
+/// `` [`x`](path) ``, `[text](path)`) rustdoc renders and a terminal would show as written.
+/// An option's possible values are listed in its cleaned help instead of by clap.
+fn render_command() -> clap::Command {
+    RenderArgs::command().mut_args(|arg| {
+        let values = arg.get_possible_values();
+        let mut help = arg.get_help().map(|h| plain_text(&h.to_string()));
+        let mut long = arg.get_long_help().map(|h| plain_text(&h.to_string()));
+        let listed =
+            values.iter().any(|v| v.get_help().is_some()) && !arg.is_hide_possible_values_set();
+        if listed {
+            let names: Vec<&str> = values.iter().map(|v| v.get_name()).collect();
+            let list: Vec<String> = values
+                .iter()
+                .map(|v| {
+                    let text = v.get_help().map(|h| plain_text(&h.to_string()));
+                    format!("- {}: {}", v.get_name(), text.unwrap_or_default())
+                })
+                .collect();
+            long = long
+                .or_else(|| help.clone())
+                .map(|h| format!("{h}\n\nPossible values:\n{}", list.join("\n")));
+            help = help.map(|h| format!("{h} [possible values: {}]", names.join(", ")));
+        }
+        let mut arg: Arg = if listed {
+            arg.hide_possible_values(true)
+        } else {
+            arg
+        };
+        if let Some(h) = help {
+            arg = arg.help(h);
+        }
+        if let Some(h) = long {
+            arg = arg.long_help(h);
+        }
+        arg
+    })
+}
+
+/// `text` with rustdoc's link syntax taken out: `` [`x`] `` and `` [`x`](path) `` become
+/// `` `x` ``, `[text](path)` becomes `text`; other brackets stay.
+fn plain_text(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(open) = rest.find('[') {
+        out.push_str(&rest[..open]);
+        let after = &rest[open + 1..];
+        let Some(close) = after.find(']') else {
+            out.push_str(&rest[open..]);
+            return out;
+        };
+        let inner = &after[..close];
+        let tail = &after[close + 1..];
+        let code = inner.len() >= 2 && inner.starts_with('`') && inner.ends_with('`');
+        let target = tail
+            .strip_prefix('(')
+            .and_then(|t| t.find(')').map(|end| &t[end + 1..]))
+            .filter(|_| !inner.is_empty() && !inner.contains('['));
+        match target {
+            Some(after_target) => {
+                out.push_str(inner);
+                rest = after_target;
+            }
+            None if code => {
+                out.push_str(inner);
+                rest = tail;
+            }
+            None => {
+                out.push('[');
+                rest = after;
+            }
+        }
+    }
+    out.push_str(rest);
+    out
 }
 
 /// Turns off Mesa's Vulkan device-select layer where it would print errors: the layer (loaded
@@ -180,5 +261,48 @@ mod tests {
         assert!(parse(&["--out"]).is_err());
         assert!(parse(&["--bogus"]).is_err());
         assert!(parse(&["--samples", "ten"]).is_err());
+    }
+
+    #[test]
+    fn plain_text_takes_out_rustdoc_links_only() {
+        assert_eq!(plain_text("see [`gpu`]; ok"), "see `gpu`; ok");
+        assert_eq!(
+            plain_text("[`Bvh::occluded`](super::bvh::Bvh::occluded)."),
+            "`Bvh::occluded`."
+        );
+        assert_eq!(
+            plain_text("the [paper's rule](crate::x) here"),
+            "the paper's rule here"
+        );
+        assert_eq!(
+            plain_text("[0, 1) and [a] and [`x`"),
+            "[0, 1) and [a] and [`x`"
+        );
+        assert_eq!(plain_text("no links"), "no links");
+    }
+
+    /// `render --help` and `-h` show no link syntax, and still list every method with its help.
+    #[test]
+    fn render_help_is_plain_text_with_the_possible_values() {
+        let mut cmd = render_command();
+        let long = cmd.render_long_help().to_string();
+        let short = cmd.render_help().to_string();
+        for help in [&long, &short] {
+            assert!(!help.contains("[`"), "{help}");
+            assert!(!help.contains("]("), "{help}");
+        }
+        assert!(long.contains("- mcpg-nee: MCPG's guide"), "{long}");
+        assert!(!long.contains("[possible values"), "{long}");
+        assert!(
+            short.contains("[possible values: bsdf, nee, mcpg"),
+            "{short}"
+        );
+        // Parsing is unchanged.
+        let m = render_command()
+            .try_get_matches_from(["render", "--scene", "x.gltf", "--method", "mcpg"])
+            .expect("parses");
+        let args = <mcg_demo::render::RenderArgs as clap::FromArgMatches>::from_arg_matches(&m)
+            .expect("arguments");
+        assert_eq!(args.method, mcg_demo::render::cpu::Method::Mcpg);
     }
 }
