@@ -2358,3 +2358,27 @@ fn point_lights_become_small_spheres_of_their_power() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `--mcpg-candidates` reaches the guide both devices start from ([`mcpg_config`]), and the
+/// default is the paper's N_mc.
+#[test]
+fn mcpg_candidates_reach_the_guides_configuration() {
+    let scene = SceneFile::open(scenes_dir().join("hidden_light_room.gltf"))
+        .unwrap()
+        .build(0.0)
+        .unwrap();
+    let mut args = common::door_args(Method::Mcpg, PathBuf::from("unused"), 1);
+    assert_eq!(
+        mcg_demo::render::mcpg_config(&scene, &args)
+            .params
+            .candidates,
+        mcg_markov_guide::mcpg::McpgParams::PAPER.candidates
+    );
+    args.mcpg_candidates = 3;
+    assert_eq!(
+        mcg_demo::render::mcpg_config(&scene, &args)
+            .params
+            .candidates,
+        3
+    );
+}
