@@ -107,8 +107,8 @@ fn render_command() -> clap::Command {
         let values = arg.get_possible_values();
         let mut help = arg.get_help().map(|h| plain_text(&h.to_string()));
         let mut long = arg.get_long_help().map(|h| plain_text(&h.to_string()));
-        let listed =
-            values.iter().any(|v| v.get_help().is_some()) && !arg.is_hide_possible_values_set();
+        let hidden = arg.is_hide_possible_values_set();
+        let listed = !hidden && values.iter().any(|v| v.get_help().is_some());
         if listed {
             let names: Vec<&str> = values.iter().map(|v| v.get_name()).collect();
             let list: Vec<String> = values
@@ -123,11 +123,7 @@ fn render_command() -> clap::Command {
                 .map(|h| format!("{h}\n\nPossible values:\n{}", list.join("\n")));
             help = help.map(|h| format!("{h} [possible values: {}]", names.join(", ")));
         }
-        let mut arg: Arg = if listed {
-            arg.hide_possible_values(true)
-        } else {
-            arg
-        };
+        let mut arg: Arg = arg.hide_possible_values(hidden || listed);
         if let Some(h) = help {
             arg = arg.help(h);
         }

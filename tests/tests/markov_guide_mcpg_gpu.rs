@@ -282,8 +282,8 @@ fn far_light() -> ToyScene {
 /// the plain mean: in a CI run of [`gpu_mcpg_tracks_a_moving_light_with_velocity_prediction`]
 /// one outlying seed lifted the plain mean of the same scene and mode over 24 seeds to 4.24,
 /// which here would be a ratio of 0.017 against the bar's 0.018 (three runs of this test:
-/// medians of means 2.46-2.58, means 2.46-2.67, ratios 0.0099-0.0103). Without velocity prediction the moving light's ratio is
-/// 0.067 and the test fails.
+/// medians of means 2.46-2.58, means 2.46-2.67, ratios 0.0099-0.0103). Without velocity
+/// prediction the moving light's ratio is 0.067 and the test fails.
 #[test]
 fn gpu_mcpg_is_unbiased_and_beats_cosine_sampling() {
     let Some(ctx) = gpu_or_skip("gpu_mcpg_is_unbiased_and_beats_cosine_sampling") else {
