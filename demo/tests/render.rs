@@ -1582,7 +1582,6 @@ fn mcmm_is_unbiased_given_learned_chains() {
 fn render_command_writes_exr_png_and_json() {
     let dir = temp_dir("command");
     let mut args = RenderArgs {
-        scene: scenes_dir().join("hidden_light_room.gltf"),
         method: Method::Nee,
         device: Device::Cpu,
         width: 24,
@@ -1592,26 +1591,8 @@ fn render_command_writes_exr_png_and_json() {
         bounces: 2,
         seed: 5,
         out: dir.clone(),
-        reference: None,
         no_progress: true,
-        no_irradiance_cache: false,
-        mcpg_reflected: mcg_demo::render::guided::Reflected::Path,
-        mcpg_emission_samples: mcg_demo::render::guided::EMISSION_SAMPLES,
-        mcpg_emission_allocation: mcg_demo::render::emission_allocation::Allocation::Adaptive,
-        mcpg_cache_add: mcg_demo::render::guided::CACHE_ADD_PROBABILITY,
-        mcpg_confidence: mcg_demo::render::guided::CONFIDENCE_SAMPLES,
-        mcpg_candidates: mcg_markov_guide::mcpg::McpgParams::PAPER.candidates,
-        mcpg_alpha_min: mcg_demo::render::guided::ALPHA_MIN,
-        ramp_frames: 1,
-        mcmm_score: McmmScore::TileMixture,
-        environment: None,
-        auto_camera: false,
-        camera: None,
-        yfov: None,
-        environment_rotation: None,
-        no_portals: false,
-        subdivide: 0,
-        probes: ProbeOptions::default(),
+        ..RenderArgs::new(scenes_dir().join("hidden_light_room.gltf"))
     };
     let first = render(&args).unwrap();
     let paths = write_outputs(&dir, &first).unwrap();

@@ -21,7 +21,7 @@ use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
 use mcg_demo::render::scene::{
     Scene, SceneFile, TextureInfo, TriangleAttributes, WRAP_CLAMP, WRAP_MIRROR,
 };
-use mcg_demo::render::{Device, ProbeOptions, RenderArgs, render};
+use mcg_demo::render::{Device, RenderArgs, render};
 use mcg_gpu_backend::sampling::next_uniform;
 use mcg_gpu_backend::testing::gpu_or_skip;
 use mcg_markov_guide::mcpg::{GridState, Guide};
@@ -1246,7 +1246,6 @@ fn render_command_on_the_gpu() {
 
 fn render_on_the_gpu(method: Method) {
     let args = RenderArgs {
-        scene: scenes_dir().join("hidden_light_room.gltf"),
         method,
         device: Device::Gpu,
         width: 24,
@@ -1256,26 +1255,8 @@ fn render_on_the_gpu(method: Method) {
         bounces: if method == Method::Mcmm { 1 } else { 2 },
         seed: 3,
         out: std::env::temp_dir(),
-        reference: None,
         no_progress: true,
-        no_irradiance_cache: false,
-        mcpg_reflected: mcg_demo::render::guided::Reflected::Path,
-        mcpg_emission_samples: mcg_demo::render::guided::EMISSION_SAMPLES,
-        mcpg_emission_allocation: mcg_demo::render::emission_allocation::Allocation::Adaptive,
-        mcpg_cache_add: mcg_demo::render::guided::CACHE_ADD_PROBABILITY,
-        mcpg_confidence: mcg_demo::render::guided::CONFIDENCE_SAMPLES,
-        mcpg_candidates: mcg_markov_guide::mcpg::McpgParams::PAPER.candidates,
-        mcpg_alpha_min: mcg_demo::render::guided::ALPHA_MIN,
-        ramp_frames: 1,
-        mcmm_score: McmmScore::TileMixture,
-        environment: None,
-        auto_camera: false,
-        camera: None,
-        yfov: None,
-        environment_rotation: None,
-        no_portals: false,
-        subdivide: 0,
-        probes: ProbeOptions::default(),
+        ..RenderArgs::new(scenes_dir().join("hidden_light_room.gltf"))
     };
     let rendered = render(&args).unwrap();
     let report = &rendered.report;

@@ -218,6 +218,34 @@ pub struct RenderArgs {
     pub probes: ProbeOptions,
 }
 
+impl RenderArgs {
+    /// The arguments `mcg-demo render --scene SCENE` parses to: every option at the command
+    /// line's default. Callers set what they change with struct update syntax:
+    ///
+    /// ```
+    /// use mcg_demo::render::cpu::Method;
+    /// use mcg_demo::render::{Device, RenderArgs};
+    ///
+    /// let args = RenderArgs {
+    ///     method: Method::Mcpg,
+    ///     device: Device::Cpu,
+    ///     frames: 64,
+    ///     ..RenderArgs::new("room.gltf")
+    /// };
+    /// assert_eq!((args.width, args.spp, args.bounces), (256, 16, 3));
+    /// ```
+    #[must_use]
+    pub fn new(scene: impl Into<PathBuf>) -> Self {
+        use clap::Parser as _;
+        // The scene is set after parsing so that no path (one starting with `-`, one that is
+        // not UTF-8) can be read as anything else.
+        let mut args = Self::try_parse_from(["mcg-demo render", "--scene", "scene.gltf"])
+            .expect("the command line's defaults parse");
+        args.scene = scene.into();
+        args
+    }
+}
+
 /// The options of `adgi`/`ddgi`, of the per-state references (`--reference-spp`) and of the
 /// frames kept besides the mean (`--keep-frames`).
 #[derive(Clone, Debug, clap::Args)]
@@ -1221,6 +1249,24 @@ mod tests {
         assert_eq!(ramped.ramp_frames, 6);
         assert!(
             RenderArgs::try_parse_from(["render", "--scene", "x", "--ramp-frames", "0"]).is_err()
+        );
+    }
+
+    /// `RenderArgs::new` is the command line with only `--scene` given, for any path (one that
+    /// starts with `-` too, which the parser would take for an option).
+    #[test]
+    fn new_is_the_command_lines_defaults_for_any_scene() {
+        use clap::Parser;
+        let parsed = RenderArgs::parse_from(["render", "--scene", "x.gltf"]);
+        assert_eq!(
+            format!("{:?}", RenderArgs::new("x.gltf")),
+            format!("{parsed:?}")
+        );
+        let odd = RenderArgs::new("-o.gltf");
+        assert_eq!(odd.scene, PathBuf::from("-o.gltf"));
+        assert_eq!(
+            format!("{:?}", RenderArgs::new("x.gltf").out),
+            format!("{:?}", odd.out)
         );
     }
 

@@ -19,14 +19,11 @@
 //! renders fit the report's budget; `MCG_REPORT_GPU` overrides it)
 //! has one; the GPU's runs are labelled `<method> (gpu)`.
 
-use std::path::PathBuf;
-
 use super::Context;
 use super::guided_rendering::{devices, image_strip};
 use crate::Result;
 use crate::plot::{self, Axis, LineChart, PALETTE, Series, SeriesLabelPosition};
 use crate::render::cpu::Method;
-use crate::render::mcmm::McmmScore;
 use crate::render::output::{Errors, RgbImage};
 use crate::render::scene_generator::DOOR_ROOM_OPENS_AT_FRAME;
 use crate::render::{Device, ProbeOptions, RenderArgs, Rendered, render};
@@ -128,7 +125,6 @@ fn args(
     seed: u64,
 ) -> RenderArgs {
     RenderArgs {
-        scene: PathBuf::from(SCENE),
         method,
         device,
         width: s.size,
@@ -138,25 +134,7 @@ fn args(
         bounces: 1,
         seed,
         out: ctx.out_dir().to_path_buf(),
-        reference: None,
         no_progress: true,
-        no_irradiance_cache: false,
-        mcpg_reflected: crate::render::guided::Reflected::Path,
-        mcpg_emission_samples: crate::render::guided::EMISSION_SAMPLES,
-        mcpg_emission_allocation: crate::render::emission_allocation::Allocation::Adaptive,
-        mcpg_cache_add: crate::render::guided::CACHE_ADD_PROBABILITY,
-        mcpg_confidence: crate::render::guided::CONFIDENCE_SAMPLES,
-        mcpg_candidates: mcg_markov_guide::mcpg::McpgParams::PAPER.candidates,
-        mcpg_alpha_min: crate::render::guided::ALPHA_MIN,
-        ramp_frames: 1,
-        mcmm_score: McmmScore::TileMixture,
-        environment: None,
-        auto_camera: false,
-        camera: None,
-        yfov: None,
-        environment_rotation: None,
-        no_portals: false,
-        subdivide: 0,
         probes: ProbeOptions {
             probe_spacing: s.probe_spacing,
             probe_rays: s.probe_rays,
@@ -165,6 +143,7 @@ fn args(
             event_error_threshold: s.threshold,
             keep_frames: s.shown_frames().to_vec(),
         },
+        ..RenderArgs::new(SCENE)
     }
 }
 

@@ -41,10 +41,9 @@ use crate::plot::{self, Axis, LineChart, PALETTE, Series, SeriesLabelPosition};
 use crate::render::cpu::Method;
 use crate::render::gpu::GpuTiming;
 use crate::render::guided::{EMISSION_SAMPLES, MaterialScatter};
-use crate::render::mcmm::McmmScore;
 use crate::render::output::{self, Errors, RgbImage, srgb_encode};
 use crate::render::scene::{SceneFile, frame_time};
-use crate::render::{Device, GPU_WARM_UP_S, ProbeOptions, RenderArgs, Rendered, render};
+use crate::render::{Device, GPU_WARM_UP_S, RenderArgs, Rendered, render};
 use crate::report::{Section, Table};
 
 /// The scene of the section: a room lit through a slit around a panel (GI, MCPG's case).
@@ -266,7 +265,6 @@ fn args(
 ) -> RenderArgs {
     let s = &study.settings;
     RenderArgs {
-        scene: PathBuf::from(study.scene),
         method,
         device: Device::Cpu,
         width: s.size,
@@ -279,23 +277,8 @@ fn args(
         reference: reference.map(Path::to_path_buf),
         no_progress: true,
         no_irradiance_cache: !study.mcpg_cache,
-        mcpg_reflected: crate::render::guided::Reflected::Path,
         mcpg_emission_samples: study.mcpg_emission,
-        mcpg_emission_allocation: crate::render::emission_allocation::Allocation::Adaptive,
-        mcpg_cache_add: crate::render::guided::CACHE_ADD_PROBABILITY,
-        mcpg_confidence: crate::render::guided::CONFIDENCE_SAMPLES,
-        mcpg_candidates: mcg_markov_guide::mcpg::McpgParams::PAPER.candidates,
-        mcpg_alpha_min: crate::render::guided::ALPHA_MIN,
-        ramp_frames: 1,
-        mcmm_score: McmmScore::TileMixture,
-        environment: None,
-        auto_camera: false,
-        camera: None,
-        yfov: None,
-        environment_rotation: None,
-        no_portals: false,
-        subdivide: 0,
-        probes: ProbeOptions::default(),
+        ..RenderArgs::new(study.scene)
     }
 }
 

@@ -10,7 +10,6 @@ use mcg_demo::render::bvh::Triangle;
 use mcg_demo::render::cpu::{Method, RenderSettings};
 use mcg_demo::render::environment::EnvironmentMap;
 use mcg_demo::render::material::Material;
-use mcg_demo::render::mcmm::McmmScore;
 use mcg_demo::render::scene::{Camera, Scene, TextureInfo, TriangleAttributes, WRAP_REPEAT};
 use mcg_demo::render::{Device, ProbeOptions, RenderArgs};
 use mcg_tests::{RunningStats, welch_t_test};
@@ -405,7 +404,6 @@ pub fn temp_dir(prefix: &str, name: &str) -> PathBuf {
 /// Settings of a small render of the door room with per-state references.
 pub fn door_args(method: Method, out: PathBuf, frames: u32) -> RenderArgs {
     RenderArgs {
-        scene: scenes_dir().join("door_room.gltf"),
         method,
         device: Device::Cpu,
         width: 24,
@@ -415,25 +413,7 @@ pub fn door_args(method: Method, out: PathBuf, frames: u32) -> RenderArgs {
         bounces: 3,
         seed: 7,
         out,
-        reference: None,
         no_progress: true,
-        no_irradiance_cache: false,
-        mcpg_reflected: mcg_demo::render::guided::Reflected::Path,
-        mcpg_emission_samples: mcg_demo::render::guided::EMISSION_SAMPLES,
-        mcpg_emission_allocation: mcg_demo::render::emission_allocation::Allocation::Adaptive,
-        mcpg_cache_add: mcg_demo::render::guided::CACHE_ADD_PROBABILITY,
-        mcpg_confidence: mcg_demo::render::guided::CONFIDENCE_SAMPLES,
-        mcpg_candidates: mcg_markov_guide::mcpg::McpgParams::PAPER.candidates,
-        mcpg_alpha_min: mcg_demo::render::guided::ALPHA_MIN,
-        ramp_frames: 1,
-        mcmm_score: McmmScore::TileMixture,
-        environment: None,
-        auto_camera: false,
-        camera: None,
-        yfov: None,
-        environment_rotation: None,
-        no_portals: false,
-        subdivide: 0,
         probes: ProbeOptions {
             probe_spacing: 1.0,
             probe_rays: 16,
@@ -441,5 +421,6 @@ pub fn door_args(method: Method, out: PathBuf, frames: u32) -> RenderArgs {
             reference_bounces: 4,
             ..ProbeOptions::default()
         },
+        ..RenderArgs::new(scenes_dir().join("door_room.gltf"))
     }
 }
