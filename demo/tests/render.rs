@@ -32,7 +32,7 @@ use mcg_demo::render::scene_generator::{
     DOOR_OPENS_AT_FRAME, SCENE_NAMES, SKY_ROOM_ENVIRONMENT, built_in_files, built_in_scenes,
     sun_sky,
 };
-use mcg_demo::render::{Device, ProbeOptions, RenderArgs, output, render, write_outputs};
+use mcg_demo::render::{Device, RenderArgs, output, render, write_outputs};
 use mcg_gpu_backend::sampling::next_uniform;
 use mcg_tests::RunningStats;
 use mcg_tests::assert_chi_square;
@@ -1649,14 +1649,17 @@ fn render_command_writes_exr_png_and_json() {
 fn reference_variance_is_what_it_adds_to_the_error() {
     let run = |seed: u64| {
         let args = RenderArgs {
-            scene: scenes_dir().join("hidden_light_room.gltf"),
+            method: Method::Nee,
+            device: Device::Cpu,
             width: 32,
             height: 32,
             spp: 8,
             frames: 32,
+            bounces: 3,
             seed,
-            probes: ProbeOptions::default(),
-            ..common::door_args(Method::Nee, PathBuf::new(), 16)
+            out: PathBuf::new(),
+            no_progress: true,
+            ..RenderArgs::new(scenes_dir().join("hidden_light_room.gltf"))
         };
         let r = render(&args).unwrap();
         (r.image.pixels, r.variance.unwrap().pixels)
@@ -2348,7 +2351,10 @@ fn mcpg_candidates_reach_the_guides_configuration() {
         .unwrap()
         .build(0.0)
         .unwrap();
-    let mut args = common::door_args(Method::Mcpg, PathBuf::from("unused"), 1);
+    let mut args = RenderArgs {
+        method: Method::Mcpg,
+        ..RenderArgs::new(scenes_dir().join("hidden_light_room.gltf"))
+    };
     assert_eq!(
         mcg_demo::render::mcpg_config(&scene, &args)
             .params
