@@ -44,6 +44,35 @@ impl Located {
     pub const fn home(self) -> u32 {
         self.home
     }
+
+    pub(crate) const fn new(home: u32, checksum: u32) -> Self {
+        Self { home, checksum }
+    }
+
+    pub(crate) const fn checksum(self) -> u32 {
+        self.checksum
+    }
+}
+
+/// Eviction's test of one slot: a key idle for more than `max_age` frames at `frame` becomes a
+/// tombstone (`true`). Both lock-free tables evict with it.
+#[inline]
+pub(crate) fn evict_idle(checksum: &mut u32, age: u32, frame: u32, max_age: u32) -> bool {
+    let idle = *checksum > TOMBSTONE && frame.wrapping_sub(age) > max_age;
+    if idle {
+        *checksum = TOMBSTONE;
+    }
+    idle
+}
+
+/// [`trim_tombstones`] over atomic checksum words in slot order (exclusive access).
+pub(crate) fn trim_atomic_tombstones<'a>(words: impl Iterator<Item = &'a mut AtomicU32>) {
+    let mut words: Vec<&mut AtomicU32> = words.collect();
+    let mut plain: Vec<u32> = words.iter_mut().map(|w| *w.get_mut()).collect();
+    trim_tombstones(&mut plain);
+    for (w, v) in words.into_iter().zip(plain) {
+        *w.get_mut() = v;
+    }
 }
 
 /// The slot index of a hash grid that many threads fill at once: checksums are
@@ -319,22 +348,15 @@ impl ConcurrentTable {
             .zip(self.ages.iter_mut())
             .enumerate()
         {
-            let w = word.get_mut();
-            if *w > TOMBSTONE && frame.wrapping_sub(*age.get_mut()) > max_age {
-                *w = TOMBSTONE;
+            if evict_idle(word.get_mut(), *age.get_mut(), frame, max_age) {
                 evicted += 1;
                 on_evict(slot as u32);
             }
         }
         // Only an eviction makes tombstones, and only `trim_tombstones` and `clear` make
         // empty slots: with nothing evicted, the last trim left nothing to trim.
-        if evicted == 0 {
-            return 0;
-        }
-        let mut words: Vec<u32> = self.checksums.iter_mut().map(|w| *w.get_mut()).collect();
-        trim_tombstones(&mut words);
-        for (a, w) in self.checksums.iter_mut().zip(words) {
-            *a.get_mut() = w;
+        if evicted > 0 {
+            trim_atomic_tombstones(self.checksums.iter_mut());
         }
         evicted
     }

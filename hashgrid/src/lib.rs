@@ -20,6 +20,7 @@
 //! | [`SlotIndexer`] | `h mod B` for any capacity, a mask for powers of two | MCPG sec. 4 |
 //! | [`HashTable`] | fixed-capacity table, checksum array + `Pod` value array, bounded wrapping probing, ages | MCPG sec. 4, Alg. 1 `grid.load` |
 //! | [`ConcurrentTable`] | lock-free insert by compare-and-swap on the checksum | MCPG sec. 4 "Synchronization" |
+//! | [`ConcurrentSlots`] | the same table with each slot's checksum, age and value in one cache line | MCPG sec. 4 "Synchronization" |
 //! | [`constants`] | every prime, seed and default, as tables for the WGSL prelude | — |
 //!
 //! ## Conventions
@@ -42,11 +43,13 @@
 //! - Probing is linear and bounded by `max_probes` ([`Insert::Full`] beyond): size tables for
 //!   a load ≲ 0.25 or raise the limit.
 //! - [`ConcurrentTable`] claims slots by compare-and-swap on the checksum word; the caller owns
-//!   the values. The crate's five `unsafe` blocks: its `&[AtomicU32]` → `&[u32]` upload view,
-//!   three SSE2 compare intrinsics in the probe loop, the prefetch (`_mm_prefetch`, a hint)
-//!   of [`HashTable::find_many`], [`HashTable::get_many`], [`ConcurrentTable::locate`] and
-//!   [`prefetch_line`], the batched lookups' SSE2 hash of four keys
-//!   at once (register arithmetic, no pointers), and the call of their AVX2 hash of eight
+//!   the values. [`ConcurrentSlots`] does the same with the values inside the table, a slot's
+//!   checksum, age and value in one cache line: one line per lookup instead of three.
+//! - The crate's five `unsafe` blocks: its `&[AtomicU32]` → `&[u32]` upload view, three SSE2
+//!   compare intrinsics in the probe loop, the prefetch (`_mm_prefetch`, a hint) of
+//!   [`HashTable::find_many`], [`HashTable::get_many`], [`ConcurrentTable::locate`],
+//!   [`ConcurrentSlots::locate`] and [`prefetch_line`], the batched lookups' SSE2 hash of four
+//!   keys at once (register arithmetic, no pointers), and the call of their AVX2 hash of eight
 //!   keys at once, only after `is_x86_feature_detected!("avx2")` (with the `std` feature).
 //!
 //! The measurements behind these choices, the peer benchmarks (hashbrown, `FxHashMap`,
@@ -79,7 +82,7 @@
 //! - `std` (default): float functions from the standard library; implies `alloc`. On x86-64
 //!   it also lets [`HashTable::find_many`] and [`HashTable::get_many`] hash eight keys at
 //!   once with AVX2 where the CPU has it (detected at run time; same results).
-//! - `alloc`: the tables ([`HashTable`], [`ConcurrentTable`]). Without it the crate is keys,
+//! - `alloc`: the tables ([`HashTable`], [`ConcurrentTable`], [`ConcurrentSlots`]). Without it the crate is keys,
 //!   hashes, levels and vertex choice only.
 //! - `libm`: float functions from `libm` for `#![no_std]` builds
 //!   (`default-features = false, features = ["libm"]`, add `"alloc"` for the tables).
@@ -127,6 +130,8 @@ pub use glam;
 mod capacity;
 #[cfg(feature = "alloc")]
 mod concurrent;
+#[cfg(feature = "alloc")]
+mod concurrent_slots;
 pub mod constants;
 mod error;
 mod hash;
@@ -142,6 +147,8 @@ mod trilinear;
 pub use capacity::{SlotIndexer, next_prime};
 #[cfg(feature = "alloc")]
 pub use concurrent::{ConcurrentTable, Located};
+#[cfg(feature = "alloc")]
+pub use concurrent_slots::ConcurrentSlots;
 pub use error::{GridError, TableError};
 pub use hash::{
     BucketHash, checksum, fold_and_checksum, hash_fold, hash_mix, hash_mix_coherent,

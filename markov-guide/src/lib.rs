@@ -15,7 +15,7 @@
 //! | [`mcmm::ScoreDensity`] | the density in the score f: the chain's technique (paper) or the tile's mixture (SSMIS denominator; our extension) | MCMM Alg. 3 line 1, eq. 9 |
 //! | [`mcmm::CosineChainTechnique`], [`mcmm::McmmPrior`] | a chain as an `mcg_smis::Technique`; uninformed or light-size prior | MCMM eq. 8-9, sec. 5 |
 //! | [`mcpg::Guide`], [`mcpg::GuidedVertex`], [`mcpg::GuideConfig`] | MCPG as one object: `begin` / `sample` / `pdf` / `finish` per vertex through `&self` from many threads, `end_frame` per frame; scene and camera scaling, cosine product | MCPG Alg. 1-3, sec. 4-5 |
-//! | [`mcpg::SharedGrid`], [`mcpg::SharedStates`] | lock-free grid of 32-byte states (seqlock per slot) on `mcg_hashgrid::ConcurrentTable` | MCPG sec. 4 "Synchronization" |
+//! | [`mcpg::SharedGrid`], [`mcpg::SharedState`] | lock-free grid of 32-byte states (seqlock per slot), each slot one cache line of `mcg_hashgrid::ConcurrentSlots` | MCPG sec. 4 "Synchronization" |
 //! | [`mcpg::IrradianceCache`], [`mcpg::CacheCell`] | adaptive hash grid of radiance, coarser levels on collision, small accumulation factor; `Pod` cells | MCPG sec. 4 "Irradiance Caching" |
 //! | [`mcpg::GridState`] | world-space chain state (w̄, N, ȳ, r̄, T, v) in 32 bytes | MCPG Table 1 |
 //! | [`mcpg::prepare_candidate`], [`mcpg::CandidateSet`], [`mcpg::GridEnsemble`] | candidates from the adaptive and static grids, velocity prediction, collision and normal rejection, reservoir choice | MCPG Alg. 1, eq. 10 |

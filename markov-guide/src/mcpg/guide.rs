@@ -225,8 +225,8 @@ pub const SLOTS_PER_PIXEL: u32 = 8;
 
 /// The most adaptive-table slots [`GuideConfig::for_pixels`] gives: 2²², [`SLOTS_PER_PIXEL`]
 /// per pixel up to 724 × 724 pixels and 2 per pixel at 1920 × 1080 (the paper's engine ships
-/// 32,777,259 slots). Memory per slot: 72 bytes in the CPU guide (a state on its own 64-byte
-/// line, its checksum and age; 288 MiB at 2²²), 44 bytes in `mcg-gpu-backend`'s
+/// 32,777,259 slots). Memory per slot: 64 bytes in the CPU guide (a state, its checksum and age
+/// in one cache line; 256 MiB at 2²²), 44 bytes in `mcg-gpu-backend`'s
 /// `GpuMcpgGuide` (176 MiB).
 ///
 /// It used to be [`GuideConfig::PAPER`]'s 2²⁰, which 1920 × 1080 fills: `mcg-demo`'s

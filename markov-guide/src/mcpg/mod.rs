@@ -110,6 +110,6 @@ pub use params::{DiscardRule, McpgParams};
 pub use resampling::{CandidateSet, GridKind, distance_prior, prepare_candidate};
 pub use sampling::{CosineVertexTechnique, SampleChoice, choose_technique};
 #[cfg(feature = "std")]
-pub use shared_grid::{SharedGrid, SharedStates};
+pub use shared_grid::{SharedGrid, SharedState};
 pub use state::GridState;
 pub use update::{Observation, should_discard, update, update_from};

@@ -1,40 +1,21 @@
 //! A hash grid of [`GridState`]s that many threads read and write through `&self`.
 
-use std::boxed::Box;
 use std::vec::Vec;
 
 use core::sync::atomic::{AtomicU32, Ordering, fence};
 
-use mcg_hashgrid::{BucketHash, CellKey, ConcurrentTable, Located, TableError};
+use mcg_hashgrid::{BucketHash, CellKey, ConcurrentSlots, Located, TableError};
 
 use super::GridState;
 
 /// The words of one [`GridState`] (32 bytes = 8 words) stored as atomics.
 const WORDS: usize = 8;
 
-/// One slot: the state's words and its sequence word in one 64-byte cache line, so that a
-/// load touches one line besides the checksum.
-#[repr(C, align(64))]
-#[derive(Debug)]
-struct Slot {
-    words: [AtomicU32; WORDS],
-    sequence: AtomicU32,
-}
-
-impl Slot {
-    fn empty() -> Self {
-        Self {
-            words: core::array::from_fn(|_| AtomicU32::new(0)),
-            sequence: AtomicU32::new(0),
-        }
-    }
-}
-
-/// Per-slot [`GridState`]s that many threads load and store at once, each state as eight
-/// [`AtomicU32`] words behind a sequence word (a seqlock).
+/// One [`GridState`] that many threads load and store at once: its eight words as
+/// [`AtomicU32`]s behind a sequence word (a seqlock), 36 bytes.
 ///
 /// # The rule that makes torn writes harmless
-/// - A writer first moves the slot's sequence word from an even value s to s + 1 by
+/// - A writer first moves the sequence word from an even value s to s + 1 by
 ///   compare-and-swap. When the word is odd (another writer is inside) or the swap fails, the
 ///   store is **dropped**: MCPG's stores are overwrites at a randomly chosen vertex anyway (the
 ///   GPU's racing writes lose one of two states the same way). Then the eight words, then the
@@ -45,150 +26,104 @@ impl Slot {
 ///
 /// So a reader sees either a state some writer wrote whole, or nothing. With one thread no
 /// store is ever dropped and no read ever misses: single-threaded runs are deterministic bit
-/// for bit. The states keep [`GridState`]'s `#[repr(C)]` layout word for word
-/// ([`SharedStates::snapshot`] copies them out for upload); on the CPU each state and its
-/// sequence word share one 64-byte cache line (64 bytes per slot).
-#[derive(Debug)]
-pub struct SharedStates {
-    slots: Box<[Slot]>,
+/// for bit. The words keep [`GridState`]'s `#[repr(C)]` layout word for word
+/// ([`SharedGrid::snapshot`] copies them out for upload).
+#[derive(Debug, Default)]
+pub struct SharedState {
+    sequence: AtomicU32,
+    words: [AtomicU32; WORDS],
 }
 
-impl SharedStates {
-    /// `len` empty states.
-    #[must_use]
-    pub fn new(len: usize) -> Self {
-        Self {
-            slots: (0..len).map(|_| Slot::empty()).collect(),
-        }
-    }
-
-    /// The number of slots.
-    #[must_use]
-    pub fn len(&self) -> usize {
-        self.slots.len()
-    }
-
-    /// `true` when there are no slots.
-    #[must_use]
-    pub fn is_empty(&self) -> bool {
-        self.slots.is_empty()
-    }
-
-    /// The state at `slot`, or `None` when a writer was inside (a torn read) or `slot` is out
-    /// of range.
+impl SharedState {
+    /// The state, or `None` when a writer was inside (a torn read).
     #[inline]
     #[must_use]
-    pub fn load(&self, slot: u32) -> Option<GridState> {
-        let Slot { words, sequence } = self.slots.get(slot as usize)?;
-        let before = sequence.load(Ordering::Acquire);
+    pub fn load(&self) -> Option<GridState> {
+        let before = self.sequence.load(Ordering::Acquire);
         if before & 1 == 1 {
             return None;
         }
-        let raw: [u32; WORDS] = core::array::from_fn(|k| words[k].load(Ordering::Relaxed));
+        let raw: [u32; WORDS] = core::array::from_fn(|k| self.words[k].load(Ordering::Relaxed));
         fence(Ordering::Acquire);
-        if sequence.load(Ordering::Relaxed) != before {
+        if self.sequence.load(Ordering::Relaxed) != before {
             return None;
         }
         Some(bytemuck::cast(raw))
     }
 
-    /// [`load`](Self::load) into `out`: `false`, with `out` unchanged, for a torn read or a
-    /// slot out of range.
+    /// Writes `state` (all eight words) unless another writer is inside; returns whether it
+    /// was written.
     #[inline]
-    pub(crate) fn load_into(&self, slot: u32, out: &mut GridState) -> bool {
-        match self.load(slot) {
-            Some(state) => {
-                *out = state;
-                true
-            }
-            None => false,
-        }
-    }
-
-    /// Asks for the cache line of the state at `slot` (a prefetch hint; nothing for a slot
-    /// out of range).
-    #[inline]
-    pub fn prefetch(&self, slot: u32) {
-        if let Some(s) = self.slots.get(slot as usize) {
-            mcg_hashgrid::prefetch_line(s);
-        }
-    }
-
-    /// Writes `state` at `slot` (all eight words) unless another writer is inside; returns
-    /// whether it was written.
-    #[inline]
-    pub fn store(&self, slot: u32, state: &GridState) -> bool {
+    pub fn store(&self, state: &GridState) -> bool {
         let raw: [u32; WORDS] = bytemuck::cast(*state);
-        self.write(slot, |words| {
+        self.write(|words| {
             for (w, v) in words.iter().zip(raw) {
                 w.store(v, Ordering::Relaxed);
             }
         })
     }
 
-    /// Sets w̄ of the state at `slot` to 0 (the discard heuristic's action, MCPG sec. 5),
-    /// unless another writer is inside; returns whether it was written.
+    /// Sets w̄ to 0 (the discard heuristic's action, MCPG sec. 5) unless another writer is
+    /// inside; returns whether it was written.
     #[inline]
-    pub fn clear_weight(&self, slot: u32) -> bool {
-        self.write(slot, |words| words[3].store(0, Ordering::Relaxed))
+    pub fn clear_weight(&self) -> bool {
+        self.write(|words| words[3].store(0, Ordering::Relaxed))
     }
 
     #[inline]
-    fn write(&self, slot: u32, body: impl FnOnce(&[AtomicU32; WORDS])) -> bool {
-        let Some(Slot { words, sequence }) = self.slots.get(slot as usize) else {
-            return false;
-        };
-        let s = sequence.load(Ordering::Relaxed);
+    fn write(&self, body: impl FnOnce(&[AtomicU32; WORDS])) -> bool {
+        let s = self.sequence.load(Ordering::Relaxed);
         if s & 1 == 1
-            || sequence
+            || self
+                .sequence
                 .compare_exchange(s, s.wrapping_add(1), Ordering::Relaxed, Ordering::Relaxed)
                 .is_err()
         {
             return false;
         }
         fence(Ordering::Release);
-        body(words);
-        sequence.store(s.wrapping_add(2), Ordering::Release);
+        body(&self.words);
+        self.sequence.store(s.wrapping_add(2), Ordering::Release);
         true
     }
 
-    /// Empties `slot` (exclusive access, no sequence protocol needed).
-    pub fn reset(&mut self, slot: u32) {
-        if let Some(Slot { words, .. }) = self.slots.get_mut(slot as usize) {
-            for w in words.iter_mut() {
-                *w.get_mut() = 0;
-            }
-        }
+    /// The state, read with exclusive access (no sequence protocol needed).
+    #[must_use]
+    pub fn get_mut(&mut self) -> GridState {
+        bytemuck::cast(self.words.each_mut().map(|a| *a.get_mut()))
     }
 
-    /// Every state, copied in slot order: the `#[repr(C)]` array to upload to the GPU
-    /// (`bytemuck::cast_slice` gives its bytes). Takes `&mut self`, so no writer is inside.
-    #[must_use]
-    pub fn snapshot(&mut self) -> Vec<GridState> {
-        self.slots
-            .iter_mut()
-            .map(|s| bytemuck::cast(s.words.each_mut().map(|a| *a.get_mut())))
-            .collect()
+    /// Empties the state (exclusive access).
+    pub fn reset(&mut self) {
+        for w in &mut self.words {
+            *w.get_mut() = 0;
+        }
     }
 }
 
-/// One grid's slot index ([`ConcurrentTable`]) and its states ([`SharedStates`]): MCPG's
+/// One grid's states in a lock-free table ([`ConcurrentSlots`] of [`SharedState`]s): MCPG's
 /// `grid.load` and `grid.store` through `&self` from many threads, without locks or replay.
+///
+/// Each slot's checksum, age and state share one 64-byte cache line, so a candidate found in
+/// its home slot costs one line: with the checksums, ages and states in three arrays (the
+/// GPU's layout, which [`checksums`](ConcurrentSlots::checksums),
+/// [`ages`](ConcurrentSlots::ages) and [`snapshot`](Self::snapshot) copy out), a guided CPU
+/// frame of `mcg-demo`'s hidden-light room took 2-5 % more time with two threads and 4-8 %
+/// more with one, and a frame missed the first-level data cache 1.5 times as often
+/// (`benches/README.md`).
 #[derive(Debug)]
 pub struct SharedGrid {
-    table: ConcurrentTable,
-    states: SharedStates,
+    table: ConcurrentSlots<SharedState>,
 }
 
 impl SharedGrid {
-    /// An empty grid of `capacity` slots, probing at most 8, with the mixing hash.
+    /// An empty grid of `capacity` slots, probing at most 8, with the default bucket hash.
     ///
     /// # Errors
     /// A [`TableError`] for a capacity below 8.
     pub fn new(capacity: u32) -> Result<Self, TableError> {
         Ok(Self {
-            table: ConcurrentTable::new(capacity, 8, BucketHash::default())?,
-            states: SharedStates::new(capacity as usize),
+            table: ConcurrentSlots::new(capacity, 8, BucketHash::default())?,
         })
     }
 
@@ -206,14 +141,13 @@ impl SharedGrid {
     /// tracking it only returns 0.
     pub fn evict_older_than(&mut self, max_age: u32) -> u32 {
         self.table.advance_frame();
-        let states = &mut self.states;
         self.table
-            .evict_older_than(max_age, |slot| states.reset(slot))
+            .evict_older_than(max_age, |_, state| state.reset())
     }
 
-    /// The slot index.
+    /// The table: slots, checksums and ages.
     #[must_use]
-    pub const fn table(&self) -> &ConcurrentTable {
+    pub const fn table(&self) -> &ConcurrentSlots<SharedState> {
         &self.table
     }
 
@@ -223,7 +157,7 @@ impl SharedGrid {
     #[must_use]
     pub fn load(&self, key: &CellKey) -> Option<(GridState, u32)> {
         let slot = self.table.find(key)?;
-        Some((self.states.load(slot)?, slot))
+        Some((self.state(slot)?, slot))
     }
 
     /// The slot holding `key`, if any (the first half of [`load`](Self::load), for loading
@@ -234,16 +168,14 @@ impl SharedGrid {
         self.table.find(key)
     }
 
-    /// Where the lookup of `key` starts ([`ConcurrentTable::locate`]), with the cache lines it
-    /// will read asked for: the home slot's checksum word and its state (at a low load most
-    /// keys sit in their home slot). Locate a vertex's candidates first, then
+    /// Where the lookup of `key` starts ([`ConcurrentSlots::locate`]), with the cache line it
+    /// will read asked for: the home slot's checksum, age and state (at a low load most keys
+    /// sit in their home slot). Locate a vertex's candidates first, then
     /// [`find_located`](Self::find_located) them: their cache misses overlap.
     #[inline]
     #[must_use]
     pub fn locate(&self, key: &CellKey) -> Located {
-        let at = self.table.locate(key);
-        self.states.prefetch(at.home());
-        at
+        self.table.locate(key)
     }
 
     /// The slot of the key `at` was [`locate`](Self::locate)d for, if any: the same as
@@ -254,39 +186,51 @@ impl SharedGrid {
         self.table.find_located(at)
     }
 
-    /// The state at `slot`; `None` for a torn read (the second half of [`load`](Self::load)).
+    /// The state at `slot`; `None` for a torn read or a slot out of range (the second half
+    /// of [`load`](Self::load)).
     #[inline]
     #[must_use]
     pub fn state(&self, slot: u32) -> Option<GridState> {
-        self.states.load(slot)
+        self.table.value(slot)?.load()
     }
 
     /// The state at `slot` written into `out`; `false` (and `out` unchanged) for a torn read.
     #[inline]
     pub(crate) fn load_into(&self, slot: u32, out: &mut GridState) -> bool {
-        self.states.load_into(slot, out)
+        match self.state(slot) {
+            Some(state) => {
+                *out = state;
+                true
+            }
+            None => false,
+        }
     }
 
     /// Writes `state` at `key` (claiming a slot if needed). `false` when the probe
     /// neighbourhood is full or another writer holds the slot: the state is dropped.
     #[inline]
     pub fn store(&self, key: &CellKey, state: &GridState) -> bool {
-        match self.table.insert_or_get(key).slot() {
-            Some(slot) => self.states.store(slot, state),
-            None => false,
-        }
+        self.table
+            .insert_or_get(key)
+            .slot()
+            .and_then(|slot| self.table.value(slot))
+            .is_some_and(|s| s.store(state))
     }
 
     /// Zeroes w̄ at `slot` (the discard heuristic).
     #[inline]
     pub fn discard(&self, slot: u32) -> bool {
-        self.states.clear_weight(slot)
+        self.table
+            .value(slot)
+            .is_some_and(SharedState::clear_weight)
     }
 
-    /// The states in slot order, for upload beside [`ConcurrentTable::checksums`].
+    /// The states in slot order, for upload beside the table's
+    /// [`checksums`](ConcurrentSlots::checksums): the `#[repr(C)]` array the GPU reads
+    /// (`bytemuck::cast_slice` gives its bytes). Takes `&mut self`, so no writer is inside.
     #[must_use]
     pub fn snapshot(&mut self) -> Vec<GridState> {
-        self.states.snapshot()
+        self.table.values_mut().map(SharedState::get_mut).collect()
     }
 
     /// Number of occupied slots.
@@ -298,9 +242,6 @@ impl SharedGrid {
     /// Empties every slot.
     pub fn clear(&mut self) {
         self.table.clear();
-        for slot in 0..self.states.len() as u32 {
-            self.states.reset(slot);
-        }
     }
 }
 
