@@ -36,11 +36,16 @@ use super::scene::{Light, Scene};
 #[serde(rename_all = "kebab-case")]
 pub enum Method {
     /// BSDF sampling only; lights are found by chance.
+    #[value(help = "BSDF sampling only; lights are found by chance")]
     Bsdf,
     /// BSDF sampling plus light sampling, combined by multiple importance sampling.
+    #[value(
+        help = "BSDF sampling plus one light sample per vertex, combined by MIS (what renderers use today)"
+    )]
     Nee,
     /// MCPG's guide (Alber et al. 2025) at every scattering vertex, no light sampling: the
     /// guide learns where light comes from without being told where the lights are.
+    #[value(help = "MCPG's path guide at every vertex, no light sampling (Alber et al. 2025)")]
     Mcpg,
     /// MCPG's guide for the scattered direction plus one light sample per vertex, the two
     /// combined by MIS with the guide's exact mixture density — mcg's extension of MCPG (the
@@ -48,10 +53,12 @@ pub enum Method {
     /// chains learn only the MIS-weighted share of the emission their directions hit
     /// ([`NextHit::emission_weight`]), so the guide learns the light that light sampling cannot
     /// reach.
+    #[value(help = "MCPG's guide plus nee's light sample, combined by MIS (mcg's extension)")]
     McpgNee,
     /// MCMM's screen-space chains (Dittebrandt et al. 2023) at the first hit, for direct light
     /// only (`--bounces 1`), no light sampling: rendered by [`super::mcmm::McmmRenderer`] on
     /// the CPU, not by [`render_frame`] (which would treat it as `bsdf`).
+    #[value(help = "MCMM's screen-space chains at the first hit, direct light only (--bounces 1)")]
     Mcmm,
     /// ADGI's adaptive probe GI (DDGI's irradiance probes, their rays placed by ADGI's
     /// guide within DDGI's ray budget): the first hit lit by one light sample plus the probes'
@@ -59,10 +66,14 @@ pub enum Method {
     /// is not used: the probes gather all bounces). On the GPU its whole per-frame update
     /// runs there (pilot rays, heuristics, feedback ĝ, static and dynamic chains, their rays
     /// and texel updates), recorded into the frame's encoder.
+    #[value(
+        help = "ADGI: DDGI's irradiance probes with rays placed by ADGI's guide (--bounces unused)"
+    )]
     Adgi,
     /// DDGI (Majercik et al. 2019): the same shading as `adgi`, probes updated by uniform rays
     /// and DDGI's blend; rendered by [`super::probe_gi::ProbeGi`] on the CPU (`--bounces` is
     /// not used).
+    #[value(help = "DDGI: irradiance probes updated by uniform rays (--bounces unused)")]
     Ddgi,
     /// `adgi` with mcg's refill extension ([`mcg_probe_cache::UpdatePolicy::AdgiRefill`]):
     /// texels of a probe whose change signal rises restart at a short window that later
@@ -70,12 +81,14 @@ pub enum Method {
     /// full — ADGI's paper recovers slowly where its dynamic rays miss the octants that
     /// changed. On the GPU its decisions run on the host (the CPU's updater) and only its
     /// rays and the shading on the GPU.
+    #[value(help = "adgi whose changed probes restart short windows (mcg's extension)")]
     AdgiRefill,
     /// `adgi` with mcg's blend extension ([`mcg_probe_cache::UpdatePolicy::AdgiBlend`]):
     /// ADGI's pilot rays, staggered so that a change is seen on the frame after it, restart
     /// the windows of the probes it touches and send them extra rays, which DDGI's blend
     /// spreads over all their texels — ADGI's per-texel samples are too few per frame in
     /// the renderer to beat DDGI's blend after a change.
+    #[value(help = "adgi whose changed probes get extra rays and DDGI's blend (mcg's extension)")]
     AdgiBlend,
 }
 

@@ -47,6 +47,7 @@ pub enum Allocation {
     /// K̄ at every vertex.
     Uniform,
     /// K(d) + 1 ∝ σ(d) from the previous frame (the module docs) — the default.
+    #[value(help = "K(d) + 1 in proportion to depth d's spread in the frame before, the same mean")]
     #[default]
     Adaptive,
 }

@@ -346,9 +346,13 @@ impl GuideUniforms {
 pub enum Reflected {
     /// The path's estimate ([`Observation::reflected`]) where the path scattered at the next
     /// hit, the cache where it ended there — mcg's extension.
+    #[value(
+        help = "The path's own estimate where it went on, the cache where it ended (mcg's extension)"
+    )]
     #[default]
     Path,
     /// The irradiance cache at every vertex (MCPG sec. 4).
+    #[value(help = "The irradiance cache at every vertex (the paper's rule)")]
     Cache,
 }
 

@@ -139,10 +139,14 @@ pub enum McmmScore {
     /// [`ScoreDensity::TileMixture`]: the score is the pixel's one-sample SSMIS estimate, with
     /// p_h = [`DEFENSIVE_PROBABILITY`], the prior [`CHAIN_PRIOR`] and the screen-wide window
     /// of [`WINDOW_HALF_WIDTH_FRACTION`] (mcg's extension).
+    #[value(
+        help = "The pixel's one-sample estimate of its tile's mixture, p_h = 0.4 (mcg's extension)"
+    )]
     #[default]
     TileMixture,
     /// [`ScoreDensity::Technique`]: the paper's score, divided by the chain's own density, with
     /// the paper's p_h = 0.2 and uninformed prior.
+    #[value(help = "The chain's own technique density, p_h = 0.2 (the paper's)")]
     Paper,
 }
 

@@ -65,10 +65,15 @@ use states::{DynamicErrors, ReferenceSettings, SceneStates};
 pub enum Device {
     /// The GPU when a wgpu adapter exists, the method has a WGSL twin and the device can
     /// hold the scene and the image; the CPU otherwise (with a one-line message saying why).
+    #[value(
+        help = "The GPU when one can render the method and the scene, else the CPU (saying why)"
+    )]
     Auto,
     /// The CPU tracer (rayon threads).
+    #[value(help = "The CPU tracer (rayon threads)")]
     Cpu,
     /// The WGSL tracer ([`gpu`]); an error when there is no adapter.
+    #[value(help = "The WGSL tracer on wgpu; an error when there is no adapter")]
     Gpu,
 }
 
@@ -104,6 +109,7 @@ pub struct RenderArgs {
     /// Frames; the output is their mean (an animated scene moves from frame to frame), weighted
     /// by `--ramp-frames`.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(help = "Frames; the output is their mean (an animated scene moves from frame to frame)")]
     pub frames: u32,
     /// Scattering events per path (1 = direct light only).
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=64))]
@@ -113,67 +119,113 @@ pub struct RenderArgs {
     pub seed: u64,
     /// Output folder (created if missing).
     #[arg(long, default_value = "out/render")]
+    #[arg(help_heading = "Output and measurement")]
     pub out: PathBuf,
     /// A reference EXR of the same size: per-frame errors go into the JSON, and the
     /// reference's own error too when its variance file (`REF.variance.exr`, which `render`
     /// writes beside every plain mean of a still scene) lies beside it.
     #[arg(long)]
+    #[arg(
+        help = "A reference EXR of the same size: each frame's errors go into the JSON (and the reference's own error, from REF.variance.exr beside it)",
+        help_heading = "Output and measurement"
+    )]
     pub reference: Option<PathBuf>,
     /// No progress bar.
     #[arg(long)]
+    #[arg(help_heading = "Output and measurement")]
     pub no_progress: bool,
     /// `mcpg` without its irradiance cache: the guide learns from the emission its rays hit
     /// only (as MCPG Fig. 8 compares on direct light).
     #[arg(long)]
+    #[arg(
+        help = "mcpg without its irradiance cache: the chains learn only from the emission their rays hit",
+        help_heading = "mcpg and mcpg-nee"
+    )]
     pub no_irradiance_cache: bool,
     /// Where `mcpg`'s training takes the radiance reflected at the next hit, on either device:
     /// the path's own estimate where the path went on (mcg's extension; the GPU tracer holds
     /// a path's vertices for it, the first two of paths deeper than 3 bounces), or the irradiance cache at every vertex (the
     /// paper's rule) ([`guided::Reflected`]); with `--no-irradiance-cache`, neither.
     #[arg(long, value_enum, default_value_t = guided::Reflected::Path)]
+    #[arg(
+        help = "Where mcpg's training takes the radiance reflected at the next hit",
+        help_heading = "mcpg and mcpg-nee"
+    )]
     pub mcpg_reflected: guided::Reflected,
     /// How many directions `mcpg` draws per vertex, besides the path's, from the guide's
     /// mixture for the emission they meet, the emission along each of the K + 1 directions
     /// counting 1/(K + 1) (mcg's extension), on either device ([`guided::EMISSION_SAMPLES`]);
     /// 0 is the paper's one direction. `mcpg-nee` samples its lights instead.
     #[arg(long, default_value_t = guided::EMISSION_SAMPLES)]
+    #[arg(
+        help = "Directions per vertex that mcpg draws from its guide, besides the path's, for the emission they meet (mcg's extension; 0 is the paper's one direction)",
+        help_heading = "mcpg and mcpg-nee"
+    )]
     pub mcpg_emission_samples: u32,
     /// How `mcpg` spreads its emission-only directions over the depths of a path, on either
     /// device: as many at every vertex, or, with the same mean, by each depth's variance
     /// measured in the frame before ([`emission_allocation::Allocation`], mcg's extension; the
     /// GPU tracer measures it in about [`gpu::MOMENT_PIXELS`] evenly spaced pixels).
     #[arg(long, value_enum, default_value_t = emission_allocation::Allocation::Adaptive)]
+    #[arg(
+        help = "How mcpg spreads those directions over the depths of a path",
+        help_heading = "mcpg and mcpg-nee"
+    )]
     pub mcpg_emission_allocation: emission_allocation::Allocation,
     /// The share of `mcpg`'s vertices whose sample goes into its irradiance cache, in (0, 1]
     /// ([`guided::CACHE_ADD_PROBABILITY`]; 1 is the paper's rule).
     #[arg(long, default_value_t = guided::CACHE_ADD_PROBABILITY)]
+    #[arg(
+        help = "The share of mcpg's vertices that add their sample to its irradiance cache, in (0, 1]; 1 is the paper's rule",
+        help_heading = "mcpg and mcpg-nee"
+    )]
     pub mcpg_cache_add: f32,
     /// `mcpg`'s young-chain confidence N_c (mcg's extension of MCPG Alg. 2: a chain of fewer
     /// samples lends part of its share to the material and continues after the material's
     /// samples); 0 is the paper's rule.
     #[arg(long, default_value_t = guided::CONFIDENCE_SAMPLES)]
+    #[arg(
+        help = "mcpg's young-chain confidence N_c: a chain of fewer samples lends part of its share to the material (mcg's extension; 0 is the paper's rule)",
+        help_heading = "mcpg and mcpg-nee"
+    )]
     pub mcpg_confidence: f32,
     /// `mcpg`'s N_mc, the candidates each vertex reads from the grids (MCPG Alg. 1), 1 to 8 on
     /// either device; the paper's 5 by default. Fewer make a vertex cheaper and its mixture
     /// poorer: on scene (a) 3 and 4 lost to 5 at equal time (`markov-guide/benches/README.md`).
     #[arg(long, default_value_t = McpgParams::PAPER.candidates,
           value_parser = clap::value_parser!(u32).range(1..=MAX_CANDIDATES as i64))]
+    #[arg(
+        help = "mcpg's N_mc, the chain states each vertex reads from the grids (MCPG Alg. 1), 1 to 8",
+        help_heading = "mcpg and mcpg-nee"
+    )]
     pub mcpg_candidates: u32,
     /// `mcpg`'s α_min, the smallest blend factor of the chains' update (MCPG Alg. 3 line 5;
     /// [`guided::ALPHA_MIN`]); 0.01 is the MCPG authors' engine value, which the crate's
     /// `McpgParams::PAPER` keeps.
     #[arg(long, default_value_t = guided::ALPHA_MIN, value_parser = parse_alpha_min)]
+    #[arg(
+        help = "mcpg's α_min, the smallest blend factor of the chains' update (MCPG Alg. 3; the authors' engine uses 0.01)",
+        help_heading = "mcpg and mcpg-nee"
+    )]
     pub mcpg_alpha_min: f32,
     /// The warm-up ramp R of the accumulated mean: frame i enters it with the weight
     /// min(1, (i + 1)/R) ([`frame_weight`]), so the frames of a guide that is still learning
     /// count less. 1 (the default) is the plain mean over all frames, which the report's
     /// targets are measured on; [`guided::RAMP_FRAMES`] is what suits `mcpg` on scene (a).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(
+        help = "Weight frame i of the mean by min(1, (i + 1)/R), so that a learning guide's first frames count less; 1 is the plain mean",
+        help_heading = "Output and measurement"
+    )]
     pub ramp_frames: u32,
     /// The score of `mcmm`'s chains (MCMM Alg. 3): the tile's mixture density (the pixel's
     /// one-sample SSMIS estimate, with the defensive probability p_h = 0.4) or the paper's,
     /// the chain's own technique density (with the paper's p_h = 0.2).
     #[arg(long, value_enum, default_value_t = McmmScore::TileMixture)]
+    #[arg(
+        help = "The score of mcmm's chains (MCMM Alg. 3)",
+        help_heading = "mcmm"
+    )]
     pub mcmm_score: McmmScore,
     /// An environment around the scene, what a ray that leaves it sees (glTF has none):
     /// `R,G,B`, a uniform radiance (linear, W·sr⁻¹·m⁻² per channel;
@@ -184,34 +236,62 @@ pub struct RenderArgs {
     /// luminance ([`scene::ENVIRONMENT_PICK`] of its light samples where the scene also has
     /// emitters). It replaces an environment the file's extras name.
     #[arg(long, value_parser = parse_environment)]
+    #[arg(
+        help = "What rays that leave the scene see: R,G,B (a uniform linear radiance) or FILE.exr / FILE.hdr (an equirectangular map, its centre along −Z, its top row +Y); replaces the file's",
+        help_heading = "Scene"
+    )]
     pub environment: Option<EnvironmentArg>,
     /// A camera at EX,EY,EZ looking at TX,TY,TZ with +Y up, replacing the file's (or giving a
     /// file without one a camera; [`scene::SceneFile::with_camera`]): six comma-separated
     /// numbers, in the scene's metres.
     #[arg(long, value_parser = parse_look_at, value_name = "EX,EY,EZ,TX,TY,TZ", allow_hyphen_values = true)]
+    #[arg(
+        help = "A camera at EX,EY,EZ looking at TX,TY,TZ (+Y up, in metres), replacing the file's",
+        help_heading = "Scene"
+    )]
     pub camera: Option<[Vec3; 2]>,
     /// The vertical field of view of `--camera`, degrees (default: the file camera's, else 45).
     #[arg(long, requires = "camera")]
+    #[arg(
+        help = "The vertical field of view of --camera in degrees (default: the file camera's, else 45)",
+        help_heading = "Scene"
+    )]
     pub yfov: Option<f32>,
     /// Turn the environment map by this many degrees about +Y (right-handed: at 90 the map's
     /// centre lies along −X; [`environment::EnvironmentMap::with_rotation`]), replacing the
     /// rotation the file's extras name; no effect on a uniform environment.
     #[arg(long, allow_hyphen_values = true)]
+    #[arg(
+        help = "Turn the environment map by this many degrees about +Y (at 90 its centre lies along −X), replacing the file's rotation",
+        help_heading = "Scene"
+    )]
     pub environment_rotation: Option<f32>,
     /// Ignore the portals the file's extras name (`mcg.portals`, as the built-in sky and sun
     /// rooms name their windows; [`scene::Scene::portals`]): light samples of the environment
     /// then do not aim at the openings.
     #[arg(long)]
+    #[arg(
+        help = "Ignore the portals the file names: light samples of the environment then do not aim at the openings",
+        help_heading = "Scene"
+    )]
     pub no_portals: bool,
     /// Split every triangle that emits nothing into 4^N at its edges' midpoints
     /// ([`scene::SceneFile::with_subdivision`]): the same image in expectation, from a BVH over
     /// more triangles, to see what a method's frame costs against the rays' as scenes grow.
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=12))]
+    #[arg(
+        help = "Split every triangle that emits nothing into 4^N (the same image in expectation, from a BVH over more triangles)",
+        help_heading = "Scene"
+    )]
     pub subdivide: u32,
     /// For a file without a camera: one looking down −Z at the whole scene (45° vertical
     /// field of view; [`scene::SceneFile::with_auto_camera`]); without it such a file is an
     /// error.
     #[arg(long)]
+    #[arg(
+        help = "For a file without a camera: one looking down −Z at the whole scene (45° vertical field of view)",
+        help_heading = "Scene"
+    )]
     pub auto_camera: bool,
     /// Probe GI and per-state reference options.
     #[command(flatten)]
@@ -253,24 +333,48 @@ pub struct ProbeOptions {
     /// `adgi`/`ddgi`: the spacing of the probe grid in metres (fitted to the scene's bounds,
     /// [`probe_gi::fit_grid`]).
     #[arg(long, default_value_t = DEFAULT_PROBE_SPACING)]
+    #[arg(
+        help = "The spacing of the probe grid in metres (fitted to the scene's bounds)",
+        help_heading = "adgi and ddgi"
+    )]
     pub probe_spacing: f32,
     /// `adgi`/`ddgi`: probe rays per probe per frame of `ddgi`; `adgi` spends the same total.
     #[arg(long, default_value_t = DEFAULT_PROBE_RAYS, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    #[arg(
+        help = "Probe rays per probe per frame of ddgi; adgi spends the same total",
+        help_heading = "adgi and ddgi"
+    )]
     pub probe_rays: u32,
     /// Renders a `nee` reference of each scene state with this many samples per pixel
     /// (cached in `<out>/reference/`) and records each frame's errors against its state's
     /// reference, over the image and the event region (not with `--reference`).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(
+        help = "Render a nee reference of each scene state with this many spp (cached in <out>/reference/) and record each frame's errors against it, over the image and the event region",
+        help_heading = "Output and measurement"
+    )]
     pub reference_spp: Option<u32>,
     /// Scattering events per path of the `--reference-spp` references.
     #[arg(long, default_value_t = DEFAULT_REFERENCE_BOUNCES, value_parser = clap::value_parser!(u32).range(1..=64))]
+    #[arg(
+        help = "Scattering events per path of the --reference-spp references",
+        help_heading = "Output and measurement"
+    )]
     pub reference_bounces: u32,
     /// The event region's relMSE that `frames_to_threshold` waits for (`--reference-spp`).
     #[arg(long, default_value_t = states::DEFAULT_EVENT_ERROR_THRESHOLD)]
+    #[arg(
+        help = "The event region's relMSE that frames_to_threshold waits for (with --reference-spp)",
+        help_heading = "Output and measurement"
+    )]
     pub event_error_threshold: f64,
     /// Frames whose own images are kept besides the mean (comma-separated); written as
     /// `<method>_frame<N>.png` and `.exr`.
     #[arg(long, value_delimiter = ',')]
+    #[arg(
+        help = "Frames whose own images are kept besides the mean (comma-separated), as <method>_frame<N>.png and .exr",
+        help_heading = "Output and measurement"
+    )]
     pub keep_frames: Vec<u32>,
 }
 
@@ -1268,6 +1372,39 @@ mod tests {
             format!("{:?}", RenderArgs::new("x.gltf").out),
             format!("{:?}", odd.out)
         );
+    }
+
+    /// `render --help` is written for users: no rustdoc paths or code spans (the struct's and
+    /// the enums' doc comments, which cite items like `guided::Reflected`, stay for rustdoc),
+    /// every method described, and the options grouped under their headings.
+    #[test]
+    fn help_speaks_to_users() {
+        use clap::CommandFactory;
+        let help = RenderArgs::command().render_long_help().to_string();
+        for leak in ["`", "::", "[`"] {
+            assert!(!help.contains(leak), "{leak:?} in render --help:\n{help}");
+        }
+        for method in [
+            "- bsdf:",
+            "- nee:",
+            "- mcpg:",
+            "- mcpg-nee:",
+            "- mcmm:",
+            "- adgi:",
+        ] {
+            assert!(help.contains(method), "{method} missing");
+        }
+        for heading in [
+            "Output and measurement:",
+            "Scene:",
+            "mcpg and mcpg-nee:",
+            "mcmm:",
+            "adgi and ddgi:",
+        ] {
+            assert!(help.contains(heading), "{heading} missing");
+        }
+        let short = RenderArgs::command().render_help().to_string();
+        assert!(short.lines().count() < help.lines().count() / 2);
     }
 
     /// `--mcpg-candidates` defaults to the paper's N_mc = 5 and takes 1 to the guide's
