@@ -23,8 +23,10 @@
 //! - `peers_insert/2^b`: the distinct keys into an emptied table / map (emptying not timed).
 //! - `peers_concurrent_insert/2^b`: 2 threads of a persistent pool (`common/pool.rs`, what is
 //!   timed is documented there), each inserting a contiguous half of the distinct keys:
-//!   `ConcurrentTable::insert_or_get`, `DashMap::entry().or_insert`, and the `entry` of an
-//!   `FxHashMap` behind a `Mutex` locked per key.
+//!   `ConcurrentTable::insert_or_get` (alone, and with an atomic add to the slot's entry of a
+//!   separate value array), `ConcurrentSlots::insert_or_get` with the same add to the slot's
+//!   value, `DashMap::entry().or_insert`, and the `entry` of an `FxHashMap` behind a
+//!   `Mutex` locked per key (both adding to the value too).
 //!
 //! Instruction counts of the same passes (robust on a noisy machine):
 //! `scripts/hashgrid-instructions`.
@@ -32,12 +34,13 @@
 use std::collections::HashMap;
 use std::hash::BuildHasher;
 use std::hint::black_box;
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Mutex, RwLock};
 use std::time::{Duration, Instant};
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use dashmap::DashMap;
-use mcg_hashgrid::{ConcurrentTable, HashTable};
+use mcg_hashgrid::{ConcurrentSlots, ConcurrentTable, HashTable};
 use rustc_hash::{FxBuildHasher, FxHashMap};
 
 #[path = "common/flush.rs"]
@@ -306,6 +309,52 @@ fn bench_concurrent(c: &mut Criterion) {
                     b.iter_custom(|n| {
                         (0..n)
                             .map(|_| workers.run(2, || table.write().unwrap().clear()))
+                            .sum()
+                    })
+                });
+            },
+        );
+        // The table with a separate value array, each insert adding 1 to its value's first
+        // word: the layout `ConcurrentSlots` puts in one line.
+        let values: Vec<[AtomicU32; 8]> = (0..1u32 << bits).map(|_| Default::default()).collect();
+        pool::with_workers(
+            |w, n| {
+                let t = table.read().unwrap();
+                for k in black_box(pool::share(keys, w, n)) {
+                    if let Some(value) = t.insert_or_get(k).slot().map(|s| &values[s as usize]) {
+                        value[0].fetch_add(1, Ordering::Relaxed);
+                    }
+                }
+            },
+            |workers| {
+                g.bench_function(id("mcg_concurrent_table_values"), |b| {
+                    b.iter_custom(|n| {
+                        (0..n)
+                            .map(|_| workers.run(2, || table.write().unwrap().clear()))
+                            .sum()
+                    })
+                });
+            },
+        );
+        // The same inserts into the table that holds its values, each also adding 1 to its
+        // value's first word (as the peers below do to theirs).
+        let slots = RwLock::new(
+            ConcurrentSlots::<[AtomicU32; 8]>::new(1 << bits, MAX_PROBES, bench_hash()).unwrap(),
+        );
+        pool::with_workers(
+            |w, n| {
+                let t = slots.read().unwrap();
+                for k in black_box(pool::share(keys, w, n)) {
+                    if let Some(value) = t.insert_or_get(k).slot().and_then(|s| t.value(s)) {
+                        value[0].fetch_add(1, Ordering::Relaxed);
+                    }
+                }
+            },
+            |workers| {
+                g.bench_function(id("mcg_concurrent_slots"), |b| {
+                    b.iter_custom(|n| {
+                        (0..n)
+                            .map(|_| workers.run(2, || slots.write().unwrap().clear()))
                             .sum()
                     })
                 });
