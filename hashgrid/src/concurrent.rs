@@ -10,18 +10,20 @@ use crate::error::TableError;
 use crate::hash::BucketHash;
 use crate::key::CellKey;
 use crate::probe::{self, Insert, Slots};
-use crate::table::{trim_tombstones, validate};
+use crate::table::{trim_tombstones_in, validate};
 
-struct AtomicSlots<'a>(&'a [AtomicU32]);
+/// The atomic checksum words of a lock-free table, wherever they live (`word` finds a slot's
+/// word in an element of the slice), as the probe reads and claims them.
+pub(crate) struct AtomicSlots<'a, E, F>(pub(crate) &'a [E], pub(crate) F);
 
-impl Slots for AtomicSlots<'_> {
+impl<E, F: Fn(&E) -> &AtomicU32> Slots for AtomicSlots<'_, E, F> {
     #[inline(always)]
     fn load(&mut self, slot: u32) -> u32 {
-        self.0[slot as usize].load(Ordering::Acquire)
+        (self.1)(&self.0[slot as usize]).load(Ordering::Acquire)
     }
     #[inline(always)]
     fn claim(&mut self, slot: u32, current: u32, checksum: u32) -> Result<(), u32> {
-        self.0[slot as usize]
+        (self.1)(&self.0[slot as usize])
             .compare_exchange(current, checksum, Ordering::AcqRel, Ordering::Acquire)
             .map(|_| ())
     }
@@ -45,12 +47,58 @@ impl Located {
         self.home
     }
 
-    pub(crate) const fn new(home: u32, checksum: u32) -> Self {
-        Self { home, checksum }
+    /// `key`'s home slot and checksum under `hash` and `indexer` (the hash, once).
+    #[inline]
+    pub(crate) fn of(key: &CellKey, hash: BucketHash, indexer: &SlotIndexer) -> Self {
+        let (h, checksum) = hash.hash_and_checksum(key);
+        Self {
+            home: indexer.index(h),
+            checksum,
+        }
     }
 
-    pub(crate) const fn checksum(self) -> u32 {
-        self.checksum
+    /// The slot of the located key among `slots`, whose atomic checksum words `word` gives:
+    /// both lock-free tables' lookup, before they touch the slot's age.
+    #[inline]
+    pub(crate) fn find_in<E>(
+        self,
+        slots: &[E],
+        word: impl Fn(&E) -> &AtomicU32,
+        indexer: &SlotIndexer,
+        max_probes: u32,
+    ) -> Option<u32> {
+        // A real key's checksum is never EMPTY or TOMBSTONE; the default `Located` has EMPTY,
+        // which the probe would otherwise "find" in an empty slot.
+        if self.checksum <= TOMBSTONE {
+            return None;
+        }
+        probe::find(
+            slots,
+            |s| word(s).load(Ordering::Acquire),
+            indexer,
+            max_probes,
+            self.home,
+            self.checksum,
+        )
+    }
+
+    /// Finds or claims the located key's slot among `slots` ([`probe::insert_or_get`] on the
+    /// atomic checksum words `word` gives): both lock-free tables' insert, before the touch.
+    #[inline]
+    pub(crate) fn insert_in<E>(
+        self,
+        slots: &[E],
+        word: impl Fn(&E) -> &AtomicU32,
+        indexer: &SlotIndexer,
+        max_probes: u32,
+    ) -> Insert {
+        probe::insert_or_get(
+            &mut AtomicSlots(slots, word),
+            indexer,
+            max_probes,
+            self.home,
+            self.checksum,
+        )
     }
 }
 
@@ -63,16 +111,6 @@ pub(crate) fn evict_idle(checksum: &mut u32, age: u32, frame: u32, max_age: u32)
         *checksum = TOMBSTONE;
     }
     idle
-}
-
-/// [`trim_tombstones`] over atomic checksum words in slot order (exclusive access).
-pub(crate) fn trim_atomic_tombstones<'a>(words: impl Iterator<Item = &'a mut AtomicU32>) {
-    let mut words: Vec<&mut AtomicU32> = words.collect();
-    let mut plain: Vec<u32> = words.iter_mut().map(|w| *w.get_mut()).collect();
-    trim_tombstones(&mut plain);
-    for (w, v) in words.into_iter().zip(plain) {
-        *w.get_mut() = v;
-    }
 }
 
 /// The slot index of a hash grid that many threads fill at once: checksums are
@@ -190,11 +228,7 @@ impl ConcurrentTable {
     /// `key`'s home slot and checksum (the hash, once), nothing asked for.
     #[inline]
     fn located(&self, key: &CellKey) -> Located {
-        let (h, checksum) = self.hash.hash_and_checksum(key);
-        Located {
-            home: self.indexer.index(h),
-            checksum,
-        }
+        Located::of(key, self.hash, &self.indexer)
     }
 
     /// Where the probe for `key` starts (its home slot and checksum, hashed once), with the
@@ -218,19 +252,7 @@ impl ConcurrentTable {
     #[inline]
     #[must_use]
     pub fn find_located(&self, at: Located) -> Option<u32> {
-        // A real key's checksum is never EMPTY or TOMBSTONE; the default `Located` has EMPTY,
-        // which the probe would otherwise "find" in an empty slot.
-        if at.checksum <= TOMBSTONE {
-            return None;
-        }
-        let slot = probe::find(
-            &self.checksums,
-            |w| w.load(Ordering::Acquire),
-            &self.indexer,
-            self.max_probes,
-            at.home,
-            at.checksum,
-        )?;
+        let slot = at.find_in(&self.checksums, |w| w, &self.indexer, self.max_probes)?;
         self.touch(slot);
         Some(slot)
     }
@@ -288,14 +310,9 @@ impl ConcurrentTable {
     /// from many threads at once. [`Insert::Full`] when the probe limit is reached.
     #[inline]
     pub fn insert_or_get(&self, key: &CellKey) -> Insert {
-        let at = self.located(key);
-        let r = probe::insert_or_get(
-            &mut AtomicSlots(&self.checksums),
-            &self.indexer,
-            self.max_probes,
-            at.home,
-            at.checksum,
-        );
+        let r = self
+            .located(key)
+            .insert_in(&self.checksums, |w| w, &self.indexer, self.max_probes);
         if let Some(slot) = r.slot() {
             self.touch(slot);
         }
@@ -356,7 +373,7 @@ impl ConcurrentTable {
         // Only an eviction makes tombstones, and only `trim_tombstones` and `clear` make
         // empty slots: with nothing evicted, the last trim left nothing to trim.
         if evicted > 0 {
-            trim_atomic_tombstones(self.checksums.iter_mut());
+            trim_tombstones_in(&mut self.checksums, AtomicU32::get_mut);
         }
         evicted
     }

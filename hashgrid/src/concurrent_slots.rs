@@ -6,13 +6,13 @@ use alloc::vec::Vec;
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use crate::capacity::SlotIndexer;
-use crate::concurrent::{Located, evict_idle, trim_atomic_tombstones};
+use crate::concurrent::{Located, evict_idle};
 use crate::constants::{EMPTY, TOMBSTONE};
 use crate::error::TableError;
 use crate::hash::BucketHash;
 use crate::key::CellKey;
-use crate::probe::{self, Insert, Slots};
-use crate::table::validate;
+use crate::probe::{self, Insert};
+use crate::table::{trim_tombstones_in, validate};
 
 /// One slot: its checksum word, its age word and the value, from the start of a cache line.
 #[repr(C, align(64))]
@@ -21,23 +21,6 @@ struct Slot<V> {
     checksum: AtomicU32,
     age: AtomicU32,
     value: V,
-}
-
-/// The checksum words of a slot array, as the probe's insert reads and claims them.
-struct SlotChecksums<'a, V>(&'a [Slot<V>]);
-
-impl<V> Slots for SlotChecksums<'_, V> {
-    #[inline(always)]
-    fn load(&mut self, slot: u32) -> u32 {
-        self.0[slot as usize].checksum.load(Ordering::Acquire)
-    }
-    #[inline(always)]
-    fn claim(&mut self, slot: u32, current: u32, checksum: u32) -> Result<(), u32> {
-        self.0[slot as usize]
-            .checksum
-            .compare_exchange(current, checksum, Ordering::AcqRel, Ordering::Acquire)
-            .map(|_| ())
-    }
 }
 
 /// A lock-free hash table whose every slot is one 64-byte-aligned record: the key's checksum,
@@ -163,8 +146,7 @@ impl<V> ConcurrentSlots<V> {
     /// `key`'s home slot and checksum (the hash, once), nothing asked for.
     #[inline]
     fn located(&self, key: &CellKey) -> Located {
-        let (h, checksum) = self.hash.hash_and_checksum(key);
-        Located::new(self.indexer.index(h), checksum)
+        Located::of(key, self.hash, &self.indexer)
     }
 
     /// Where the probe for `key` starts, with the cache line of its home slot asked for (a
@@ -185,18 +167,7 @@ impl<V> ConcurrentSlots<V> {
     #[inline]
     #[must_use]
     pub fn find_located(&self, at: Located) -> Option<u32> {
-        // A real key's checksum is never EMPTY or TOMBSTONE; the default `Located` has EMPTY.
-        if at.checksum() <= TOMBSTONE {
-            return None;
-        }
-        let slot = probe::find(
-            &self.slots,
-            |s| s.checksum.load(Ordering::Acquire),
-            &self.indexer,
-            self.max_probes,
-            at.home(),
-            at.checksum(),
-        )?;
+        let slot = at.find_in(&self.slots, |s| &s.checksum, &self.indexer, self.max_probes)?;
         self.touch(slot);
         Some(slot)
     }
@@ -215,13 +186,11 @@ impl<V> ConcurrentSlots<V> {
     /// evicted one).
     #[inline]
     pub fn insert_or_get(&self, key: &CellKey) -> Insert {
-        let at = self.located(key);
-        let r = probe::insert_or_get(
-            &mut SlotChecksums(&self.slots),
+        let r = self.located(key).insert_in(
+            &self.slots,
+            |s| &s.checksum,
             &self.indexer,
             self.max_probes,
-            at.home(),
-            at.checksum(),
         );
         if let Some(slot) = r.slot() {
             self.touch(slot);
@@ -291,7 +260,7 @@ impl<V> ConcurrentSlots<V> {
             }
         }
         if evicted > 0 {
-            trim_atomic_tombstones(self.slots.iter_mut().map(|s| &mut s.checksum));
+            trim_tombstones_in(&mut self.slots, |s| s.checksum.get_mut());
         }
         evicted
     }

@@ -30,19 +30,28 @@ pub(crate) fn validate(capacity: u32, max_probes: u32) -> Result<SlotIndexer, Ta
 /// Clears tombstones that are followed (in probe order) by an empty slot: no key can sit
 /// behind them, so lookups and inserts may stop there. Returns how many were cleared.
 pub(crate) fn trim_tombstones(words: &mut [u32]) -> u32 {
-    let n = words.len();
-    let Some(empty) = words.iter().position(|&w| w == EMPTY) else {
+    trim_tombstones_in(words, |w| w)
+}
+
+/// [`trim_tombstones`] over slots whose checksum word `word` gives (exclusive access): the
+/// lock-free tables' atomic words, in place.
+pub(crate) fn trim_tombstones_in<E>(
+    slots: &mut [E],
+    mut word: impl FnMut(&mut E) -> &mut u32,
+) -> u32 {
+    let n = slots.len();
+    let Some(empty) = slots.iter_mut().position(|s| *word(s) == EMPTY) else {
         return 0;
     };
     let mut cleared = 0;
     let mut next_is_empty = true;
     for step in 1..n {
-        let i = (empty + n - step) % n;
-        if words[i] == TOMBSTONE && next_is_empty {
-            words[i] = EMPTY;
+        let w = word(&mut slots[(empty + n - step) % n]);
+        if *w == TOMBSTONE && next_is_empty {
+            *w = EMPTY;
             cleared += 1;
         } else {
-            next_is_empty = words[i] == EMPTY;
+            next_is_empty = *w == EMPTY;
         }
     }
     cleared
