@@ -149,7 +149,8 @@ fn event_region_is_where_the_references_differ() {
 /// reference, the event frame, the event region's errors and frames-to-threshold.
 #[test]
 fn ddgi_and_adgi_run_at_equal_rays_with_per_frame_errors() {
-    let out = temp_dir("mcg-probe-gi", "door");
+    let scratch = temp_dir("mcg-probe-gi", "door");
+    let out = scratch.path().to_path_buf();
     let frames = DOOR_ROOM_OPENS_AT_FRAME + 4;
     let mut rays = Vec::new();
     for method in [
@@ -189,7 +190,6 @@ fn ddgi_and_adgi_run_at_equal_rays_with_per_frame_errors() {
     assert_equal_budgets(&rays[0], &rays[1]);
     assert_equal_budgets(&rays[0], &rays[2]);
     assert_equal_budgets(&rays[0], &rays[3]);
-    std::fs::remove_dir_all(&out).unwrap();
 }
 
 /// The report section "Dynamic GI" in smoke mode writes its figures and its JSON, with both
@@ -197,7 +197,8 @@ fn ddgi_and_adgi_run_at_equal_rays_with_per_frame_errors() {
 /// the GPU too when the report renders there.
 #[test]
 fn dynamic_gi_section_smoke() {
-    let out = temp_dir("mcg-probe-gi", "section");
+    let scratch = temp_dir("mcg-probe-gi", "section");
+    let out = scratch.path().to_path_buf();
     let config = mcg_demo::Config {
         out_dir: out.clone(),
         samples: 20_000,
@@ -241,5 +242,4 @@ fn dynamic_gi_section_smoke() {
         }
         assert_equal_budgets(&rays("ddgi-gpu", 0), &rays("adgi-gpu", 0));
     }
-    std::fs::remove_dir_all(&out).unwrap();
 }

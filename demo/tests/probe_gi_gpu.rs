@@ -360,7 +360,8 @@ fn gpu_probe_methods_run_at_equal_rays_with_per_frame_errors() {
     if gpu_or_skip(test).is_none() {
         return;
     }
-    let out = temp_dir("mcg-probe-gpu", "door");
+    let scratch = temp_dir("mcg-probe-gpu", "door");
+    let out = scratch.path().to_path_buf();
     let frames = DOOR_ROOM_OPENS_AT_FRAME + 4;
     let mut rays: Vec<Vec<u64>> = Vec::new();
     for method in [Method::Ddgi, Method::Adgi, Method::AdgiRefill] {
@@ -397,7 +398,6 @@ fn gpu_probe_methods_run_at_equal_rays_with_per_frame_errors() {
     }
     assert_equal_budgets(&rays[0], &rays[1]);
     assert_equal_budgets(&rays[0], &rays[2]);
-    std::fs::remove_dir_all(&out).unwrap();
 }
 
 /// The static chains' samples traced on the GPU (`GpuTracer::record_chain_rays`, kernel

@@ -10,7 +10,7 @@ use std::f64::consts::PI;
 
 use common::{
     TileStats, assert_pixel_mean, assert_spread, assert_tiles_agree, emissive_texture_furnace,
-    furnace, masked_furnace, scenes_dir, sky_floor, sky_map, sky_map_floor, sky_settings,
+    furnace, masked_furnace, scenes_dir, sky_floor, sky_map, sky_map_floor, sky_settings, temp_dir,
     uniform_direction, upward_reflection, with_texture,
 };
 use glam::{Quat, Vec2, Vec3};
@@ -36,12 +36,6 @@ use mcg_demo::render::{Device, RenderArgs, output, render, write_outputs};
 use mcg_gpu_backend::sampling::next_uniform;
 use mcg_tests::RunningStats;
 use mcg_tests::assert_chi_square;
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mcg-render-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// The committed scenes are the generator's output, byte for byte (regenerate them with
 /// `cargo run --release -p mcg-demo -- scenes`), and each loads with a camera and light
@@ -355,7 +349,8 @@ fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
 /// Bad files give typed errors that name the file; good embedded and binary files load.
 #[test]
 fn gltf_errors_are_typed_and_name_the_file() {
-    let dir = temp_dir("errors");
+    let scratch = temp_dir("mcg-render", "errors");
+    let dir = scratch.path().to_path_buf();
     let missing = dir.join("missing.gltf");
     let e = SceneFile::open(&missing).unwrap_err();
     assert!(
@@ -468,7 +463,6 @@ fn gltf_errors_are_typed_and_name_the_file() {
     std::fs::write(&truncated, &glb(json, bin)[..100]).unwrap();
     let e = SceneFile::open(&truncated).unwrap_err();
     assert!(e.to_string().contains("truncated.glb"), "{e}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Strips and fans become the triangles glTF defines, in their primitive's winding (the
@@ -479,7 +473,8 @@ fn gltf_errors_are_typed_and_name_the_file() {
 /// that keeps the odd triangles' order flips every second triangle, and fails.
 #[test]
 fn strips_and_fans_are_triangulated_and_lines_skipped() {
-    let dir = temp_dir("topology");
+    let scratch = temp_dir("mcg-render", "topology");
+    let dir = scratch.path().to_path_buf();
     let pentagon: [[f32; 3]; 5] = [
         [0.0, 0.0, -1.0],
         [1.0, 0.0, -1.0],
@@ -549,7 +544,6 @@ fn strips_and_fans_are_triangulated_and_lines_skipped() {
         scene.warnings,
         ["mesh 0: points and lines have no area and are not rendered"]
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Furnace test. Hypothesis: in a closed room of one albedo ρ and one emission L_e on every
@@ -882,7 +876,8 @@ fn cameras_given_on_the_command_line_replace_the_file_s() {
     let down = Camera::looking_at(Vec3::Y, Vec3::ZERO, 1.0);
     assert!((down.up - Vec3::Z).length() < 1e-6 && (down.right - Vec3::NEG_X).length() < 1e-6);
 
-    let dir = temp_dir("cameras");
+    let scratch = temp_dir("mcg-render", "cameras");
+    let dir = scratch.path().to_path_buf();
     let no_camera = minimal_gltf(&dir, "no_camera.gltf", false, true, 4);
     let scene = SceneFile::open(&no_camera)
         .unwrap()
@@ -948,7 +943,8 @@ fn turned_environment_maps_move_their_texels_about_y() {
     let centre = turn(std::f32::consts::FRAC_PI_2, Vec3::NEG_Z);
     assert!((centre - Vec3::NEG_X).length() < 1e-6, "{centre}");
 
-    let dir = temp_dir("turned-maps");
+    let scratch = temp_dir("mcg-render", "turned-maps");
+    let dir = scratch.path().to_path_buf();
     let exr = write_map(&dir.join("sky.exr"), &map, map.texels().to_vec());
     let dark = minimal_gltf(&dir, "dark.gltf", true, false, 4);
     let scene = SceneFile::open(&dark)
@@ -1018,7 +1014,8 @@ fn environment_map_furnace_matches_the_map_s_reflection() {
 /// is wrong.
 #[test]
 fn environment_maps_load_from_files() {
-    let dir = temp_dir("environment-maps");
+    let scratch = temp_dir("mcg-render", "environment-maps");
+    let dir = scratch.path().to_path_buf();
     let map = sky_map();
     let exr = write_map(&dir.join("sky.exr"), &map, map.texels().to_vec());
     let dark = minimal_gltf(&dir, "dark.gltf", true, false, 4);
@@ -1580,7 +1577,8 @@ fn mcmm_is_unbiased_given_learned_chains() {
 /// per frame, and a reference of the wrong size is an error.
 #[test]
 fn render_command_writes_exr_png_and_json() {
-    let dir = temp_dir("command");
+    let scratch = temp_dir("mcg-render", "command");
+    let dir = scratch.path().to_path_buf();
     let mut args = RenderArgs {
         method: Method::Nee,
         device: Device::Cpu,
@@ -1633,7 +1631,6 @@ fn render_command_writes_exr_png_and_json() {
     assert!(k.iter().all(|&k| k.is_finite() && k >= 0.0), "{k:?}");
     args.width = 8;
     assert!(render(&args).unwrap_err().to_string().contains("nee.exr"));
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Hypothesis: a reference's own error ([`output::own_error`]) is what it adds to an error
@@ -1833,7 +1830,8 @@ fn textured_triangle_file(
 /// triangle; BLEND is rendered opaque with a warning, and OPAQUE ignores alpha.
 #[test]
 fn alpha_modes_are_read() {
-    let dir = temp_dir("alpha");
+    let scratch = temp_dir("mcg-render", "alpha");
+    let dir = scratch.path().to_path_buf();
     let material = |mode: &str, alpha: f32, cutoff: Option<f32>, textured: bool| {
         let mut pbr = serde_json::json!({ "baseColorFactor": [1.0, 1.0, 1.0, alpha] });
         if textured {
@@ -1900,7 +1898,8 @@ fn alpha_modes_are_read() {
 /// same image read linearly).
 #[test]
 fn textures_multiply_their_factors() {
-    let dir = temp_dir("texture");
+    let scratch = temp_dir("mcg-render", "texture");
+    let dir = scratch.path().to_path_buf();
     let material = serde_json::json!({
         "pbrMetallicRoughness": {
             "baseColorFactor": [0.5, 1.0, 1.0, 1.0], "baseColorTexture": { "index": 0 },
@@ -1952,7 +1951,6 @@ fn textures_multiply_their_factors() {
             2.0 * texel
         );
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// `KHR_texture_transform` maps a slot's texture coordinates, and its `texCoord` overrides the
@@ -1964,7 +1962,8 @@ fn textures_multiply_their_factors() {
 /// or not at all, fails.
 #[test]
 fn texture_transforms_map_each_slot_s_coordinates() {
-    let dir = temp_dir("texture_transform");
+    let scratch = temp_dir("mcg-render", "texture_transform");
+    let dir = scratch.path().to_path_buf();
     let transform = serde_json::json!({ "KHR_texture_transform": {
         "offset": [0.5, 0.0], "rotation": core::f32::consts::FRAC_PI_2, "scale": [1.0, 2.0] } });
     let material = serde_json::json!({
@@ -2017,7 +2016,6 @@ fn texture_transforms_map_each_slot_s_coordinates() {
         );
         assert_eq!((m.metallic, m.roughness), (0.5, 0.8));
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A texture's sampler decides how coordinates outside [0, 1] wrap: on [`textured_triangle`],
@@ -2026,7 +2024,8 @@ fn texture_transforms_map_each_slot_s_coordinates() {
 /// texels worked by hand at four points; REPEAT in place of either mode changes two of them.
 #[test]
 fn samplers_wrap_coordinates_outside_the_unit_square() {
-    let dir = temp_dir("texture_wrap");
+    let scratch = temp_dir("mcg-render", "texture_wrap");
+    let dir = scratch.path().to_path_buf();
     let material = serde_json::json!({
         "pbrMetallicRoughness": { "baseColorTexture": { "index": 0,
             "extensions": { "KHR_texture_transform": { "scale": [3.0, 3.0] } } } },
@@ -2055,14 +2054,14 @@ fn samplers_wrap_coordinates_outside_the_unit_square() {
             "({u}, {v}): {got} vs {expected}"
         );
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// What a file uses and the loader does not read is named in the scene's warnings (one
 /// sentence per feature), and a file that uses none of it has none.
 #[test]
 fn unread_features_are_named_in_the_warnings() {
-    let dir = temp_dir("unread");
+    let scratch = temp_dir("mcg-render", "unread");
+    let dir = scratch.path().to_path_buf();
     let plain = minimal_gltf(&dir, "plain.gltf", true, true, 4);
     let scene = SceneFile::open(&plain).unwrap().build(0.0).unwrap();
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
@@ -2079,7 +2078,6 @@ fn unread_features_are_named_in_the_warnings() {
         );
     }
     assert_eq!(warnings.len(), 2, "{warnings:?}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Vertex colours (`COLOR_0`) multiply the base colour, interpolated over the triangle, and
@@ -2091,7 +2089,8 @@ fn unread_features_are_named_in_the_warnings() {
 /// warning. Not swapping the colours with the vertices fails the mirrored copy.
 #[test]
 fn vertex_colours_multiply_the_base_colour() {
-    let dir = temp_dir("vertex_colours");
+    let scratch = temp_dir("mcg-render", "vertex_colours");
+    let dir = scratch.path().to_path_buf();
     let plain = minimal_gltf(&dir, "plain.gltf", true, true, 4);
     let positions: [f32; 9] = [0.0, 0.0, -1.0, 1.0, 0.0, -1.0, 0.0, 1.0, -1.0];
     let colours = [
@@ -2149,7 +2148,6 @@ fn vertex_colours_multiply_the_base_colour() {
             );
         }
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Hypothesis: mcg's lobe prior ([`mcg_demo::render::mcmm::CHAIN_PRIOR`], r_p = 0.9) makes
@@ -2196,7 +2194,8 @@ fn mcmm_chain_prior_speeds_up_the_warm_up() {
 /// the whole file: the scene renders with its rest pose and a warning.
 #[test]
 fn malformed_files_give_errors_and_unplayed_animations_warnings() {
-    let dir = temp_dir("malformed");
+    let scratch = temp_dir("mcg-render", "malformed");
+    let dir = scratch.path().to_path_buf();
     let base = minimal_gltf(&dir, "base.gltf", true, true, 4);
 
     let cycle = edited_gltf(&base, "cycle.gltf", |doc| {
@@ -2256,7 +2255,6 @@ fn malformed_files_give_errors_and_unplayed_animations_warnings() {
         "{:?}",
         scene.warnings
     );
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// KHR_lights_punctual: a point light becomes 20 front-emitting triangles (an icosahedron
@@ -2267,7 +2265,8 @@ fn malformed_files_give_errors_and_unplayed_animations_warnings() {
 /// the scene's only emitter.
 #[test]
 fn point_lights_become_small_spheres_of_their_power() {
-    let dir = temp_dir("point-light");
+    let scratch = temp_dir("mcg-render", "point-light");
+    let dir = scratch.path().to_path_buf();
     let base = minimal_gltf(&dir, "base.gltf", true, false, 4);
     let centre = Vec3::new(0.3, 0.3, 0.5);
     let path = edited_gltf(&base, "lights.gltf", |doc| {
@@ -2340,7 +2339,6 @@ fn point_lights_become_small_spheres_of_their_power() {
             .contains("its 1 spot or directional light is not rendered"),
         "{err}"
     );
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// `--mcpg-candidates` reaches the guide both devices start from ([`mcpg_config`]), and the

@@ -2,19 +2,7 @@
 
 mod common;
 
-use std::path::PathBuf;
-use std::time::{SystemTime, UNIX_EPOCH};
-
 use mcg_demo::Config;
-
-/// A fresh folder under the system temp dir, unique to this process and moment.
-fn temp_out_dir() -> PathBuf {
-    let nanos = SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map(|d| d.as_nanos())
-        .unwrap_or(0);
-    std::env::temp_dir().join(format!("mcg-demo-smoke-{}-{nanos}", std::process::id()))
-}
 
 /// The `src="…"` attributes of a page, in order.
 fn image_sources(html: &str) -> Vec<String> {
@@ -27,7 +15,12 @@ fn image_sources(html: &str) -> Vec<String> {
 
 #[test]
 fn report_writes_index_and_all_figures() {
-    let out_dir = temp_out_dir();
+    // A fresh folder under the system's temporary directory, removed when the test ends.
+    let scratch = tempfile::Builder::new()
+        .prefix("mcg-demo-smoke-")
+        .tempdir()
+        .unwrap();
+    let out_dir = scratch.path().join("report");
     let config = Config {
         out_dir: out_dir.clone(),
         samples: 20_000,
@@ -59,8 +52,6 @@ fn report_writes_index_and_all_figures() {
             "{src} is not a PNG"
         );
     }
-
-    std::fs::remove_dir_all(&out_dir).ok();
 }
 
 /// Hypothesis: every reference committed in `demo/references/` (the default report's, which

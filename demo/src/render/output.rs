@@ -329,8 +329,11 @@ mod tests {
 
     #[test]
     fn exr_round_trip() {
-        let dir = std::env::temp_dir().join(format!("mcg-exr-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let scratch = tempfile::Builder::new()
+            .prefix("mcg-exr-")
+            .tempdir()
+            .unwrap();
+        let dir = scratch.path();
         let image = RgbImage {
             width: 3,
             height: 2,
@@ -343,6 +346,5 @@ mod tests {
         assert_eq!(RgbImage::read_exr(&path).unwrap(), image);
         image.write_png(&dir.join("a.png")).unwrap();
         assert!(RgbImage::read_exr(&dir.join("missing.exr")).is_err());
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -394,11 +394,13 @@ pub fn assert_equal_budgets(ddgi: &[u64], adgi: &[u64]) {
     assert!(a * 100 >= d * 99, "adgi traced {a} rays, ddgi {d}");
 }
 
-/// A fresh folder `<prefix>-<name>-<pid>` under the system's temporary directory.
-pub fn temp_dir(prefix: &str, name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("{prefix}-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A fresh folder `<prefix>-<name>-…` under the system's temporary directory, removed with
+/// everything in it when the returned guard drops (also when the test fails).
+pub fn temp_dir(prefix: &str, name: &str) -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("{prefix}-{name}-"))
+        .tempdir()
+        .unwrap()
 }
 
 /// Settings of a small render of the door room with per-state references.
