@@ -63,13 +63,14 @@
 //! (mcg-demo's `--mcpg-emission-samples`, mcg's extension). Its relative MSE is then 0.04 of
 //! BSDF sampling's at equal samples and 0.20 at equal CPU time, and 3.5 times lower than with
 //! the paper's one direction. Against light sampling (next-event estimation with MIS, what
-//! renderers use today) it ties at equal CPU time: 0.93 of its error × time on an AMD Zen 4
-//! core, 0.99-1.11 on an Intel Ice Lake server core, where a guided frame costs 4.3 times a
-//! light-sampled one instead of 3.5; the extra directions are a third of a guided frame. Beside
-//! light sampling — the guide sampling the scattered direction, one light sample per vertex,
-//! MIS with [`GuidedVertex::pdf`], the chains learning only the MIS-weighted share of the
-//! emission ([`VertexObservation::emission_weight`]) — it reaches 0.28 of light sampling's
-//! relative MSE, 0.70-0.74 at equal CPU time (`benches/README.md` has the commands).
+//! renderers use today) it is about even at equal CPU time: 0.93 of its error × time on an AMD
+//! Zen 4 core, 0.98-1.14 (1.07 on average over four seeds) on an Intel Ice Lake server core,
+//! where a guided frame costs 4.3 times a light-sampled one instead of 3.5; the extra
+//! directions are a third of a guided frame. Beside light sampling — the guide sampling the
+//! scattered direction, one light sample per vertex, MIS with [`GuidedVertex::pdf`], the
+//! chains learning only the MIS-weighted share of the emission
+//! ([`VertexObservation::emission_weight`]) — it reaches 0.28 of light sampling's relative
+//! MSE, 0.70-0.74 at equal CPU time (`benches/README.md` has the commands).
 //!
 //! # The parts
 //! Per path vertex x with normal n at time T:
