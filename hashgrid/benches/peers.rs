@@ -38,7 +38,10 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Mutex, RwLock};
 use std::time::{Duration, Instant};
 
-use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use criterion::measurement::WallTime;
+use criterion::{
+    BenchmarkGroup, BenchmarkId, Criterion, Throughput, criterion_group, criterion_main,
+};
 use dashmap::DashMap;
 use mcg_hashgrid::{ConcurrentSlots, ConcurrentTable, HashTable};
 use rustc_hash::{FxBuildHasher, FxHashMap};
@@ -295,7 +298,9 @@ fn bench_concurrent(c: &mut Criterion) {
         // In an RwLock only so that the bench can empty it between runs (`clear` takes
         // `&mut`); each worker takes the read lock once per run.
         let table = RwLock::new(ConcurrentTable::new(1 << bits, MAX_PROBES, bench_hash()).unwrap());
-        pool::with_workers(
+        two_thread_fill(
+            &mut g,
+            id("mcg_concurrent_table"),
             |w, n| {
                 let t = table.read().unwrap();
                 let mut inserted = 0_u32;
@@ -304,20 +309,14 @@ fn bench_concurrent(c: &mut Criterion) {
                 }
                 black_box(inserted);
             },
-            |workers| {
-                g.bench_function(id("mcg_concurrent_table"), |b| {
-                    b.iter_custom(|n| {
-                        (0..n)
-                            .map(|_| workers.run(2, || table.write().unwrap().clear()))
-                            .sum()
-                    })
-                });
-            },
+            || table.write().unwrap().clear(),
         );
         // The table with a separate value array, each insert adding 1 to its value's first
         // word: the layout `ConcurrentSlots` puts in one line.
         let values: Vec<[AtomicU32; 8]> = (0..1u32 << bits).map(|_| Default::default()).collect();
-        pool::with_workers(
+        two_thread_fill(
+            &mut g,
+            id("mcg_concurrent_table_values"),
             |w, n| {
                 let t = table.read().unwrap();
                 for k in black_box(pool::share(keys, w, n)) {
@@ -326,22 +325,16 @@ fn bench_concurrent(c: &mut Criterion) {
                     }
                 }
             },
-            |workers| {
-                g.bench_function(id("mcg_concurrent_table_values"), |b| {
-                    b.iter_custom(|n| {
-                        (0..n)
-                            .map(|_| workers.run(2, || table.write().unwrap().clear()))
-                            .sum()
-                    })
-                });
-            },
+            || table.write().unwrap().clear(),
         );
         // The same inserts into the table that holds its values, each also adding 1 to its
         // value's first word (as the peers below do to theirs).
         let slots = RwLock::new(
             ConcurrentSlots::<[AtomicU32; 8]>::new(1 << bits, MAX_PROBES, bench_hash()).unwrap(),
         );
-        pool::with_workers(
+        two_thread_fill(
+            &mut g,
+            id("mcg_concurrent_slots"),
             |w, n| {
                 let t = slots.read().unwrap();
                 for k in black_box(pool::share(keys, w, n)) {
@@ -350,52 +343,52 @@ fn bench_concurrent(c: &mut Criterion) {
                     }
                 }
             },
-            |workers| {
-                g.bench_function(id("mcg_concurrent_slots"), |b| {
-                    b.iter_custom(|n| {
-                        (0..n)
-                            .map(|_| workers.run(2, || slots.write().unwrap().clear()))
-                            .sum()
-                    })
-                });
-            },
+            || slots.write().unwrap().clear(),
         );
         let dash: DashMap<u64, State, FxBuildHasher> =
             DashMap::with_capacity_and_hasher(keys.len(), FxBuildHasher);
-        pool::with_workers(
+        two_thread_fill(
+            &mut g,
+            id("dashmap_fx"),
             |w, n| {
                 for &k in black_box(pool::share(&packed, w, n)) {
                     dash.entry(k).or_insert([0.0; 8])[0] += 1.0;
                 }
             },
-            |workers| {
-                g.bench_function(id("dashmap_fx"), |b| {
-                    b.iter_custom(|n| (0..n).map(|_| workers.run(2, || dash.clear())).sum())
-                });
-            },
+            || dash.clear(),
         );
         let locked = Mutex::new(FxHashMap::<u64, State>::with_capacity_and_hasher(
             keys.len(),
             FxBuildHasher,
         ));
-        pool::with_workers(
+        two_thread_fill(
+            &mut g,
+            id("mutex_fxhashmap"),
             |w, n| {
                 for &k in black_box(pool::share(&packed, w, n)) {
                     locked.lock().unwrap().entry(k).or_insert([0.0; 8])[0] += 1.0;
                 }
             },
-            |workers| {
-                g.bench_function(id("mutex_fxhashmap"), |b| {
-                    b.iter_custom(|n| {
-                        (0..n)
-                            .map(|_| workers.run(2, || locked.lock().unwrap().clear()))
-                            .sum()
-                    })
-                });
-            },
+            || locked.lock().unwrap().clear(),
         );
         g.finish();
     }
+}
+
+/// One case of `group`: `fill(worker, workers)` on the pool's two threads per run, each run
+/// timed from the first worker's start to the last one's end, the map emptied by `reset`
+/// before it (untimed).
+fn two_thread_fill(
+    group: &mut BenchmarkGroup<'_, WallTime>,
+    id: BenchmarkId,
+    fill: impl Fn(usize, usize) + Sync,
+    reset: impl Fn(),
+) {
+    pool::with_workers(fill, |workers| {
+        group.bench_function(id, |b| {
+            b.iter_custom(|n| (0..n).map(|_| workers.run(2, &reset)).sum())
+        });
+    });
 }
 
 criterion_group!(benches, bench_lookup, bench_insert, bench_concurrent);
