@@ -15,11 +15,7 @@ fn image_sources(html: &str) -> Vec<String> {
 
 #[test]
 fn report_writes_index_and_all_figures() {
-    // A fresh folder under the system's temporary directory, removed when the test ends.
-    let scratch = tempfile::Builder::new()
-        .prefix("mcg-demo-smoke-")
-        .tempdir()
-        .unwrap();
+    let scratch = common::temp_dir("mcg-demo", "smoke");
     let out_dir = scratch.path().join("report");
     let config = Config {
         out_dir: out_dir.clone(),
