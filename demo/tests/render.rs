@@ -21,7 +21,7 @@ use mcg_demo::render::cpu::{
 };
 use mcg_demo::render::emission_allocation::{Allocation, EmissionAllocation};
 use mcg_demo::render::environment::{EnvironmentMap, Portal};
-use mcg_demo::render::guided::{McpgSampler, new_guide};
+use mcg_demo::render::guided::{EMISSION_SAMPLES, McpgSampler, new_guide};
 use mcg_demo::render::material::BsdfSample;
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
 use mcg_demo::render::scene::{
@@ -557,9 +557,10 @@ fn strips_and_fans_are_triangulated_and_lines_skipped() {
 /// frames of learning
 /// (it must show spread, i.e. have sampled lobes); dividing its samples by the material's
 /// density instead of the guided mixture's fails it (checked once). `mcpg` runs without and
-/// with three emission-only directions per vertex, at every vertex and spread over the depths
-/// by their variances (a random ⌊K(d)⌋ or ⌈K(d)⌉ per vertex; every face emits, so each of its
-/// rays finds emission; counting it with ½ instead of ¼ fails the test).
+/// with three emission-only directions per vertex, at every vertex, spread over the depths
+/// by their variances and over classes of depth and contribution (a random ⌊K⌋ or ⌈K⌉ per
+/// vertex; every face emits, so each of its rays finds emission; counting it with ½ instead
+/// of ¼ fails the test).
 #[test]
 fn furnace_matches_the_truncated_neumann_series() {
     let (rho, le) = (Vec3::new(0.5, 0.3, 0.8), Vec3::new(1.0, 2.0, 0.5));
@@ -572,6 +573,7 @@ fn furnace_matches_the_truncated_neumann_series() {
         (Method::Mcpg, 0, Allocation::Uniform),
         (Method::Mcpg, 3, Allocation::Uniform),
         (Method::Mcpg, 3, Allocation::Adaptive),
+        (Method::Mcpg, 3, Allocation::Contribution),
         (Method::McpgNee, 0, Allocation::Uniform),
     ] {
         let settings = RenderSettings {
@@ -1153,7 +1155,10 @@ fn bsdf_and_nee_agree_per_tile() {
 }
 
 /// Hypothesis: `mcpg` and `mcpg-nee` are unbiased — the mean of independent runs equals the
-/// `nee` image. `mcpg` on the built-in hidden-light room (B = 3, MCPG's case); `mcpg-nee` on
+/// `nee` image. `mcpg` on the built-in hidden-light room (B = 3, MCPG's case), with the
+/// paper's one direction and with the renderer's emission-only directions spread by the
+/// default allocation (over classes of depth and contribution from the third frame on);
+/// `mcpg-nee` on
 /// the many-lights room (B = 2, where light samples and guided lobes both find the lights, so
 /// that their MIS weights matter). 32×32 pixels (4 tiles of 16×16). Each guided method: 32
 /// independent runs (seeds 100–131), each a fresh guide learning over `frames` frames of 4 spp;
@@ -1164,16 +1169,24 @@ fn bsdf_and_nee_agree_per_tile() {
 /// independent); threshold: Bonferroni over the 12 tests of a method at family-wise
 /// α = 10⁻⁴, the Student-t quantile of 1 − α/24 at the test's Welch degrees of freedom
 /// (today `mcpg` 5.0 at 50 dof, worst |t| 2.2; `mcpg-nee` 4.65 at 123 dof, worst |t| 2.0). Dividing the guided samples by the material's density instead
-/// of the guided mixture's fails it for `mcpg` at t = 42 (checked once). Weighting `mcpg-nee`'s light
+/// of the guided mixture's fails it for `mcpg` at t = 42, and weighting the emission-only
+/// directions 1/7 whatever a vertex's K at t = 6.1 (checked once each). Weighting `mcpg-nee`'s light
 /// samples with the material's density instead of the guide's is not visible here (worst
 /// |z| 1.7: the lights are small, so the light sample's weight is near 1 either way); the
 /// furnace test [`mcpg_nee_weights_light_samples_with_the_samplers_density`] catches it.
 #[test]
 fn guided_methods_agree_with_nee_per_tile() {
     let (w, h) = (32u32, 32u32);
-    for (method, scene, bounces, frames) in [
-        (Method::Mcpg, "hidden_light_room.gltf", 3, 4),
-        (Method::McpgNee, "many_lights_room.gltf", 2, 8),
+    for (method, scene, bounces, frames, emission) in [
+        (Method::Mcpg, "hidden_light_room.gltf", 3, 4, 0),
+        (
+            Method::Mcpg,
+            "hidden_light_room.gltf",
+            3,
+            4,
+            EMISSION_SAMPLES,
+        ),
+        (Method::McpgNee, "many_lights_room.gltf", 2, 8, 0),
     ] {
         let file = SceneFile::open(scenes_dir().join(scene)).unwrap();
         let scene = file.build(0.0).unwrap();
@@ -1192,13 +1205,23 @@ fn guided_methods_agree_with_nee_per_tile() {
         let guided = common::tile_stats((w, h, 16, 32), |run| {
             let s = settings(method, 100 + run);
             let mut guide = new_guide(&scene, w, h).unwrap();
+            let mut spread = EmissionAllocation::new(emission, Allocation::default());
             common::run_mean(frames, |f| {
-                let image = render_frame(&scene, &s, f, || McpgSampler::new(&guide), || ());
+                let sampler = || {
+                    let sampler = McpgSampler::new(&guide);
+                    if emission > 0 {
+                        sampler.with_emission_allocation(&spread)
+                    } else {
+                        sampler
+                    }
+                };
+                let image = render_frame(&scene, &s, f, sampler, || ());
                 guide.end_frame();
+                spread.end_frame();
                 image
             })
         });
-        let name = format!("{} vs nee", method.name());
+        let name = format!("{} ({emission} emission directions) vs nee", method.name());
         assert_tiles_agree(&guided, &reference, 1e-4, &name);
     }
 }

@@ -554,10 +554,11 @@ fn gpu_emission_allocation_counts_and_draws_k_per_depth() {
     };
     gpu.render_frame(&settings, 0).unwrap();
     let first = *gpu.mcpg_emission_moments().unwrap();
-    assert_eq!(first.vertices[0], u64::from(w * h * 4));
+    assert_eq!(first.depths[0].vertices, f64::from(w * h * 4));
     for d in 0..3 {
-        assert!(first.vertices[d] > 0, "depth {d}: {first:?}");
-        assert_eq!(first.directions[d], 4 * first.vertices[d], "depth {d}");
+        let m = first.depths[d];
+        assert!(m.vertices > 0.0, "depth {d}: {m:?}");
+        assert_eq!(m.directions, 4.0 * m.vertices, "depth {d}");
     }
     let k = *gpu.mcpg_emission_per_depth();
     assert!(
@@ -569,10 +570,11 @@ fn gpu_emission_allocation_counts_and_draws_k_per_depth() {
     let second = *gpu.mcpg_emission_moments().unwrap();
     let counts = frame_counts(&k, settings.seed, 1);
     for d in 0..3 {
-        assert!(second.vertices[d] > 0, "depth {d}: {second:?}");
+        let m = second.depths[d];
+        assert!(m.vertices > 0.0, "depth {d}: {m:?}");
         assert_eq!(
-            second.directions[d],
-            u64::from(counts[d]) * second.vertices[d],
+            m.directions,
+            f64::from(counts[d]) * m.vertices,
             "depth {d}: K(d) = {}",
             k[d]
         );

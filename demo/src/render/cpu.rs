@@ -225,11 +225,12 @@ pub trait VertexSampler {
         let _ = seed;
     }
     /// How many times the tracer asks [`VertexSampler::sample_emission`] at this vertex of
-    /// depth `depth` (asked once per vertex of a method without light sampling, before the
+    /// depth `depth`, reached with the path throughput `throughput` (asked once per vertex of
+    /// a method without light sampling, after [`VertexSampler::sample`] and before the
     /// directions), K; the emission found along each of the vertex's K + 1 directions then
     /// counts 1/(K + 1). The default: 0.
-    fn emission_samples(&mut self, depth: u32) -> u32 {
-        let _ = depth;
+    fn emission_samples(&mut self, depth: u32, throughput: Vec3) -> u32 {
+        let _ = (depth, throughput);
         0
     }
     /// What one of the directions of [`VertexSampler::sample_emission`] at depth `depth`
@@ -402,7 +403,7 @@ pub fn trace_path<S: VertexSampler>(
         } else {
             // The directions' uniforms: the light sample's, which `mcpg` does not use, moved
             // along a lattice ([`emission_uniforms`]).
-            let gathers = sampler.emission_samples(depth);
+            let gathers = sampler.emission_samples(depth, throughput);
             share = 1.0 / (1 + gathers) as f32;
             for i in 0..gathers {
                 let ue = emission_uniforms(Vec3::new(ul, u1, u2), i);

@@ -21,13 +21,35 @@
 //! decided before any of them is traced, and the emission along each of the K + 1 directions
 //! of the vertex counts 1/(K + 1), so the estimate stays unbiased whatever the allocation.
 //!
+//! [`Allocation::Contribution`] (the default) goes one step further, within each depth: a
+//! vertex whose light reaches the pixel strongly gets more directions than one whose light
+//! hardly counts. Its expected contribution, known before any direction is traced, is
+//! c = lum(β)·sum_mc: the path throughput β to the vertex times the guide's own estimate of
+//! the radiance reflected there (MCPG Alg. 1's sum_mc = Σ w̄,
+//! [`GuidedVertex::weight_sum`](mcg_markov_guide::mcpg::GuidedVertex::weight_sum)) — the
+//! quantity by which adjoint-driven splitting (Vorba and Křivánek 2016, "Adjoint-Driven
+//! Russian Roulette and Splitting in Light Transport Simulation", sec. 4) multiplies a path.
+//! How much c says about a direction's spread depends on the scene and on how well the guide
+//! has learnt it, so it is not trusted as it is: each vertex falls into a class, its depth d
+//! and the octave of c/c̄(d) ([`contribution_bin`], c̄(d) the previous frame's mean at d), and
+//! the rule above runs over the classes instead of the depths, K(class) + 1 ∝ σ(class) with
+//! the same directions in all. Where c predicts the spread the directions follow it; where it
+//! does not, the classes' σ are alike and so are their K. A class's σ comes from all frames
+//! so far, older ones weighing less ([`CLASS_MEMORY`]): from a single frame, a class whose
+//! directions happened to meet no light would get almost none in the next, and its rare hits
+//! would then count many times over (on the many-lights room that made the error 1.5 times
+//! larger). On scene (a) (128², 8 spp × 64 frames, 3 bounces, seeds 7-10) `mcpg`'s relMSE
+//! net of the reference's own error is 13 % lower than with `Adaptive`, at the same cost per
+//! frame (4 % fewer instructions); on the many-lights room, where the guide misses lights and
+//! c says little, the error is the same (`markov-guide/benches/README.md`).
+//!
 //! The CPU tracer's samplers gather [`EmissionMoments`] from every vertex. The WGSL tracer
 //! gathers the same sums in about [`gpu::MOMENT_PIXELS`](super::gpu::MOMENT_PIXELS) evenly
 //! spaced pixels, written after the pixels in its image buffer
 //! ([`gpu::moment_entries`](super::gpu::moment_entries)), and the host turns them into the next
 //! frame's K(d) with the same [`allocate`]; there the count is drawn once per depth and frame
 //! ([`gpu::frame_counts`](super::gpu::frame_counts)) rather than per vertex, so that a SIMD group
-//! runs one loop length.
+//! runs one loop length; there `Contribution` is `Adaptive`.
 
 use std::sync::Mutex;
 
@@ -36,43 +58,150 @@ use glam::Vec3;
 use super::cpu::MAX_RECORDED;
 use super::scene::luminance;
 
-/// The smallest mean number of directions [`Allocation::Adaptive`] gives a depth: one
-/// direction at every fourth vertex, so that its second moment stays measured.
+/// The smallest mean number of directions [`Allocation::Adaptive`] gives a depth (and
+/// [`Allocation::Contribution`] a class): one direction at every fourth vertex, so that its
+/// second moment stays measured.
 pub const MIN_PER_VERTEX: f32 = 0.25;
 
-/// How [`EmissionAllocation`] spreads the directions over the depths.
+/// The largest K(d) of [`Allocation::Adaptive`], as a multiple of K̄.
+pub const DEPTH_CAP: f32 = 4.0;
+
+/// The largest K(class) of [`Allocation::Contribution`], as a multiple of K̄: a bound on the
+/// cost of one vertex (96 directions with the renderer's K̄ = 6). Scene (a) gained a little
+/// from 4 to 16 and nothing beyond.
+pub const CONTRIBUTION_CAP: f32 = 16.0;
+
+/// How much of a class's statistics [`Allocation::Contribution`] keeps from one frame to the
+/// next: its σ comes from all frames so far, the frame k frames back weighted by this to the
+/// k-th power, as one frame's rare hits would make it swing.
+pub const CLASS_MEMORY: f64 = 0.9;
+
+/// The octaves of c/c̄(d) that [`Allocation::Contribution`] tells apart at each depth
+/// ([`contribution_bin`]): below 1/16 of the depth's mean (with c = 0, the vertices without a
+/// valid candidate), one bin per octave from 1/16 to 64, and 64 times the mean and above.
+pub const CONTRIBUTION_BINS: usize = 12;
+
+/// ⌊log₂ r⌋ + this is the bin of r = c/c̄(d) (clamped to the bins).
+const BIN_OFFSET: i32 = 5;
+
+/// The classes of one depth: its [`CONTRIBUTION_BINS`], then the vertices drawn before the
+/// depth had a mean c̄(d).
+const CLASSES_PER_DEPTH: usize = CONTRIBUTION_BINS + 1;
+
+/// All classes of [`Allocation::Contribution`].
+const CLASSES: usize = MAX_RECORDED * CLASSES_PER_DEPTH;
+
+/// How [`EmissionAllocation`] spreads the directions over the vertices.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Allocation {
     /// K̄ at every vertex.
     Uniform,
-    /// K(d) + 1 ∝ σ(d) from the previous frame (the module docs) — the default.
+    /// K(d) + 1 ∝ σ(d) from the previous frame (the module docs).
     #[value(help = "K(d) + 1 in proportion to depth d's spread in the frame before, the same mean")]
-    #[default]
     Adaptive,
+    /// K + 1 ∝ σ over classes of depth and expected contribution (the module docs) — the
+    /// default. The GPU tracer, whose vertices of one depth draw one count, measures no
+    /// contributions and spreads by depth, as `Adaptive`.
+    #[value(
+        help = "Like adaptive, over classes of depth and the vertex's expected contribution (throughput times the guide's radiance; adaptive on the GPU)"
+    )]
+    #[default]
+    Contribution,
 }
 
-/// One frame's statistics of the emission-only directions, per depth (up to
-/// the tracer's 16 recorded depths; deeper vertices count as the deepest).
+/// One class's statistics of the emission-only directions in a frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Moments {
+    /// Vertices that drew their number of directions (a float, so that
+    /// [`EmissionAllocation`] can age a class's counts with its sums; exact to 2⁵³).
+    pub vertices: f64,
+    /// Directions drawn.
+    pub directions: f64,
+    /// Σ of the luminance of the directions' estimates.
+    pub first: f64,
+    /// Σ of the squared luminance of the directions' estimates.
+    pub second: f64,
+}
+
+impl Moments {
+    /// A direction whose estimate has luminance `l` (a non-finite one counts as 0).
+    fn add_direction(&mut self, l: f64) {
+        self.directions += 1.0;
+        if l.is_finite() {
+            self.first += l;
+            self.second += l * l;
+        }
+    }
+
+    fn merge(&mut self, other: &Self) {
+        self.vertices += other.vertices;
+        self.directions += other.directions;
+        self.first += other.first;
+        self.second += other.second;
+    }
+
+    /// Every count and sum times `factor`.
+    fn scale(&mut self, factor: f64) {
+        self.vertices *= factor;
+        self.directions *= factor;
+        self.first *= factor;
+        self.second *= factor;
+    }
+
+    /// σ of one direction's estimate, `None` without directions.
+    fn deviation(&self) -> Option<f64> {
+        (self.directions > 0.0).then(|| {
+            let n = self.directions;
+            let mean = self.first / n;
+            (self.second / n - mean * mean).max(0.0).sqrt()
+        })
+    }
+}
+
+/// Where a vertex's statistics go and which K it draws: its depth's slot and its class.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VertexClass {
+    depth: usize,
+    class: usize,
+}
+
+impl VertexClass {
+    /// The class of a vertex at `depth` that knows no contribution (K(d) of its depth).
+    #[must_use]
+    pub fn of_depth(depth: u32) -> Self {
+        let depth = EmissionMoments::slot(depth);
+        Self {
+            depth,
+            class: depth * CLASSES_PER_DEPTH + CONTRIBUTION_BINS,
+        }
+    }
+}
+
+/// One frame's statistics of the emission-only directions, per depth (up to the tracer's 16
+/// recorded depths; deeper vertices count as the deepest) and per class of
+/// [`Allocation::Contribution`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EmissionMoments {
-    /// Vertices that drew their number of directions.
-    pub vertices: [u64; MAX_RECORDED],
-    /// Directions drawn.
-    pub directions: [u64; MAX_RECORDED],
-    /// Σ of the luminance of the directions' estimates.
-    pub first: [f64; MAX_RECORDED],
-    /// Σ of the squared luminance of the directions' estimates.
-    pub second: [f64; MAX_RECORDED],
+    /// Per depth.
+    pub depths: [Moments; MAX_RECORDED],
+    /// Per class (depth and bin, [`VertexClass`]); empty where no contributions were
+    /// measured (the GPU tracer's statistics).
+    pub classes: [Moments; CLASSES],
+    /// Σ of the vertices' expected contributions c per depth, over the vertices that
+    /// measured one.
+    pub contribution: [f64; MAX_RECORDED],
+    /// The vertices that measured one, per depth.
+    pub contributed: [u64; MAX_RECORDED],
 }
 
 impl Default for EmissionMoments {
     fn default() -> Self {
         Self {
-            vertices: [0; MAX_RECORDED],
-            directions: [0; MAX_RECORDED],
-            first: [0.0; MAX_RECORDED],
-            second: [0.0; MAX_RECORDED],
+            depths: [Moments::default(); MAX_RECORDED],
+            classes: [Moments::default(); CLASSES],
+            contribution: [0.0; MAX_RECORDED],
+            contributed: [0; MAX_RECORDED],
         }
     }
 }
@@ -82,68 +211,94 @@ impl EmissionMoments {
         (depth as usize).min(MAX_RECORDED - 1)
     }
 
-    /// A vertex at `depth`.
-    pub fn add_vertex(&mut self, depth: u32) {
-        self.vertices[Self::slot(depth)] += 1;
+    /// A vertex of class `at` ([`EmissionAllocation::class`]) and expected contribution
+    /// `contribution` (`None` where it was not measured; a non-finite or negative one counts
+    /// as 0).
+    pub fn add_vertex(&mut self, at: VertexClass, contribution: Option<f32>) {
+        self.depths[at.depth].vertices += 1.0;
+        self.classes[at.class].vertices += 1.0;
+        if let Some(c) = contribution {
+            self.contributed[at.depth] += 1;
+            if c.is_finite() && c > 0.0 {
+                self.contribution[at.depth] += f64::from(c);
+            }
+        }
     }
 
-    /// A direction at `depth` whose estimate (throughput included) is `value`; a non-finite
-    /// value counts as 0.
-    pub fn add_direction(&mut self, depth: u32, value: Vec3) {
-        let d = Self::slot(depth);
+    /// A direction at a vertex of class `at` whose estimate (throughput included) is `value`;
+    /// a non-finite value counts as 0.
+    pub fn add_direction(&mut self, at: VertexClass, value: Vec3) {
         let l = f64::from(luminance(value));
-        self.directions[d] += 1;
-        if l.is_finite() {
-            self.first[d] += l;
-            self.second[d] += l * l;
-        }
+        self.depths[at.depth].add_direction(l);
+        self.classes[at.class].add_direction(l);
     }
 
     /// Adds `other`'s counts and sums.
     pub fn merge(&mut self, other: &Self) {
+        for (m, o) in self.depths.iter_mut().zip(&other.depths) {
+            m.merge(o);
+        }
+        for (m, o) in self.classes.iter_mut().zip(&other.classes) {
+            m.merge(o);
+        }
         for d in 0..MAX_RECORDED {
-            self.vertices[d] += other.vertices[d];
-            self.directions[d] += other.directions[d];
-            self.first[d] += other.first[d];
-            self.second[d] += other.second[d];
+            self.contribution[d] += other.contribution[d];
+            self.contributed[d] += other.contributed[d];
         }
     }
 }
 
-/// K(d) for every depth from one frame's `moments` with the mean `mean` (the module docs): K̄
-/// everywhere when no direction met emission; a depth without directions gets the largest
-/// σ of the others (so it is measured next time).
+/// K(d) for every depth from one frame's `moments` with the mean `mean` (the module docs),
+/// in [[`MIN_PER_VERTEX`], [`DEPTH_CAP`]·K̄]: K̄ everywhere when no direction met emission; a
+/// depth without directions gets the largest σ of the others (so it is measured next time).
 #[must_use]
 pub fn allocate(mean: f32, moments: &EmissionMoments) -> [f32; MAX_RECORDED] {
-    let mut out = [mean; MAX_RECORDED];
-    let root = |d: usize| {
-        (moments.directions[d] > 0).then(|| {
-            let n = moments.directions[d] as f64;
-            let mean = moments.first[d] / n;
-            (moments.second[d] / n - mean * mean).max(0.0).sqrt()
-        })
-    };
-    let largest = (0..MAX_RECORDED).filter_map(root).fold(0.0_f64, f64::max);
+    spread(mean, DEPTH_CAP * mean, &moments.depths)
+}
+
+/// K + 1 ∝ σ over `classes`, the same directions in all, in [[`MIN_PER_VERTEX`], `cap`]:
+/// K̄ everywhere when no direction met emission; a class with vertices but no directions
+/// gets the largest σ of the others; one without vertices keeps K̄.
+fn spread<const N: usize>(mean: f32, cap: f32, classes: &[Moments; N]) -> [f32; N] {
+    let mut out = [mean; N];
+    let largest = classes
+        .iter()
+        .filter_map(Moments::deviation)
+        .fold(0.0_f64, f64::max);
     if !(largest > 0.0) || !(mean > 0.0) {
         return out;
     }
     let (mut vertices, mut weighted) = (0.0_f64, 0.0_f64);
-    for d in 0..MAX_RECORDED {
-        let n = moments.vertices[d] as f64;
+    for c in classes {
+        let n = c.vertices;
         vertices += n;
-        weighted += n * root(d).unwrap_or(largest);
+        weighted += n * c.deviation().unwrap_or(largest);
     }
     if !(weighted > 0.0) {
         return out;
     }
     let scale = (f64::from(mean) + 1.0) * vertices / weighted;
-    for (d, k) in out.iter_mut().enumerate() {
-        if moments.vertices[d] > 0 {
-            let s = root(d).unwrap_or(largest);
-            *k = ((scale * s - 1.0) as f32).clamp(MIN_PER_VERTEX, 4.0 * mean);
+    for (k, c) in out.iter_mut().zip(classes) {
+        if c.vertices > 0.0 {
+            let s = c.deviation().unwrap_or(largest);
+            *k = ((scale * s - 1.0) as f32).clamp(MIN_PER_VERTEX, cap);
         }
     }
     out
+}
+
+/// The bin of [`Allocation::Contribution`] of a vertex whose contribution is `ratio` times
+/// its depth's mean: ⌊log₂ ratio⌋ + 5 in [0, [`CONTRIBUTION_BINS`]) (read from the float's
+/// exponent); 0 for 0, negative and NaN ratios, the last bin for +∞.
+#[must_use]
+pub fn contribution_bin(ratio: f32) -> usize {
+    if !(ratio > 0.0) {
+        return 0;
+    }
+    // The biased exponent of a positive float (+∞ included) is ⌊log₂⌋ + 127; subnormals
+    // read as −127, below every bin.
+    let octave = (ratio.to_bits() >> 23) as i32 - 127;
+    (octave + BIN_OFFSET).clamp(0, CONTRIBUTION_BINS as i32 - 1) as usize
 }
 
 /// ⌊k⌋, plus one when `u < k − ⌊k⌋` (`u` uniform in [0, 1)), so that the mean is `k` (≥ 0).
@@ -153,26 +308,35 @@ pub fn round_stochastically(k: f32, u: f32) -> u32 {
     whole as u32 + u32::from(u < k - whole)
 }
 
-/// The directions per vertex of one render: the mean K̄, the policy, this frame's K(d) and the
-/// statistics being gathered for the next (from every rayon task's sampler at once, or from
-/// the GPU tracer's recording pixels).
+/// The directions per vertex of one render: the mean K̄, the policy, this frame's K per depth
+/// and class and the statistics being gathered for the next (from every rayon task's
+/// sampler at once, or from the GPU tracer's recording pixels).
 #[derive(Debug)]
 pub struct EmissionAllocation {
     mean: f32,
     policy: Allocation,
     per_depth: [f32; MAX_RECORDED],
+    per_class: [f32; CLASSES],
+    /// The classes' statistics of the frames so far, each frame's weight
+    /// [`CLASS_MEMORY`] times the next's.
+    history: [Moments; CLASSES],
+    /// 1/c̄(d) from the frame before; 0 where unknown (the depth's vertices then draw K(d)).
+    inverse_mean: [f32; MAX_RECORDED],
     gathered: Mutex<EmissionMoments>,
 }
 
 impl EmissionAllocation {
     /// `mean` directions per vertex on average, spread by `policy`; the first frame spends
-    /// `mean` at every depth.
+    /// `mean` at every vertex.
     #[must_use]
     pub fn new(mean: u32, policy: Allocation) -> Self {
         Self {
             mean: mean as f32,
             policy,
             per_depth: [mean as f32; MAX_RECORDED],
+            per_class: [mean as f32; CLASSES],
+            history: [Moments::default(); CLASSES],
+            inverse_mean: [0.0; MAX_RECORDED],
             gathered: Mutex::new(EmissionMoments::default()),
         }
     }
@@ -183,22 +347,40 @@ impl EmissionAllocation {
         self.mean as u32
     }
 
-    /// How the directions are spread over the depths.
+    /// How the directions are spread.
     #[must_use]
     pub fn policy(&self) -> Allocation {
         self.policy
     }
 
-    /// K(d) of this frame, per depth.
+    /// K(d) of this frame, per depth: for [`Allocation::Contribution`] the mean over the
+    /// depth's classes, weighted by their vertices in the frame before.
     #[must_use]
     pub fn per_depth(&self) -> &[f32; MAX_RECORDED] {
         &self.per_depth
     }
 
-    /// The number of directions for a vertex at `depth`: [`round_stochastically`] of K(d).
+    /// The class of a vertex at `depth` whose expected contribution is `contribution`
+    /// (for [`Allocation::Contribution`] once its depth has a mean c̄(d); otherwise
+    /// [`VertexClass::of_depth`]).
     #[must_use]
-    pub fn samples_at(&self, depth: u32, u: f32) -> u32 {
-        round_stochastically(self.per_depth[EmissionMoments::slot(depth)], u)
+    pub fn class(&self, depth: u32, contribution: f32) -> VertexClass {
+        let at = VertexClass::of_depth(depth);
+        let inverse = self.inverse_mean[at.depth];
+        if self.policy != Allocation::Contribution || !(inverse > 0.0) {
+            return at;
+        }
+        VertexClass {
+            depth: at.depth,
+            class: at.depth * CLASSES_PER_DEPTH + contribution_bin(contribution * inverse),
+        }
+    }
+
+    /// The number of directions for a vertex of class `at`: [`round_stochastically`] of its
+    /// K.
+    #[must_use]
+    pub fn samples_at(&self, at: VertexClass, u: f32) -> u32 {
+        round_stochastically(self.per_class[at.class], u)
     }
 
     /// Adds one sampler's statistics of this frame.
@@ -209,16 +391,55 @@ impl EmissionAllocation {
             .merge(moments);
     }
 
-    /// After a frame: K(d) of the next one from this frame's statistics ([`allocate`]; K̄ for
-    /// [`Allocation::Uniform`]), and empty statistics.
+    /// After a frame: the next frame's K per depth and class from this frame's statistics
+    /// ([`allocate`] for [`Allocation::Adaptive`] and for [`Allocation::Contribution`]
+    /// without classes, the classes' spread otherwise; K̄ for [`Allocation::Uniform`]), the
+    /// depths' means c̄(d), and empty statistics.
     pub fn end_frame(&mut self) {
         let moments = std::mem::take(
             self.gathered
                 .get_mut()
                 .unwrap_or_else(std::sync::PoisonError::into_inner),
         );
-        if self.policy == Allocation::Adaptive {
-            self.per_depth = allocate(self.mean, &moments);
+        let by_class =
+            self.policy == Allocation::Contribution && moments.contributed.iter().any(|&n| n > 0);
+        if by_class {
+            for (h, m) in self.history.iter_mut().zip(&moments.classes) {
+                h.scale(CLASS_MEMORY);
+                h.merge(m);
+            }
+            self.per_class = spread(self.mean, CONTRIBUTION_CAP * self.mean, &self.history);
+            for (d, k) in self.per_depth.iter_mut().enumerate() {
+                let classes = d * CLASSES_PER_DEPTH..(d + 1) * CLASSES_PER_DEPTH;
+                let (mut n, mut spent) = (0.0, 0.0);
+                for (c, kc) in moments.classes[classes.clone()]
+                    .iter()
+                    .zip(&self.per_class[classes])
+                {
+                    n += c.vertices;
+                    spent += c.vertices * f64::from(*kc);
+                }
+                *k = if n > 0.0 {
+                    (spent / n) as f32
+                } else {
+                    self.mean
+                };
+            }
+            for (d, inverse) in self.inverse_mean.iter_mut().enumerate() {
+                let (n, sum) = (moments.contributed[d], moments.contribution[d]);
+                *inverse = if n > 0 && sum > 0.0 {
+                    (n as f64 / sum) as f32
+                } else {
+                    0.0
+                };
+            }
+        } else {
+            if self.policy != Allocation::Uniform {
+                self.per_depth = allocate(self.mean, &moments);
+            }
+            for (d, k) in self.per_depth.iter().enumerate() {
+                self.per_class[d * CLASSES_PER_DEPTH..(d + 1) * CLASSES_PER_DEPTH].fill(*k);
+            }
         }
     }
 }
@@ -231,9 +452,12 @@ mod tests {
     fn moments(per_depth: &[(u64, u64, f64)]) -> EmissionMoments {
         let mut m = EmissionMoments::default();
         for (d, &(v, n, second)) in per_depth.iter().enumerate() {
-            m.vertices[d] = v;
-            m.directions[d] = n;
-            m.second[d] = second;
+            m.depths[d] = Moments {
+                vertices: v as f64,
+                directions: n as f64,
+                first: 0.0,
+                second,
+            };
         }
         m
     }
@@ -252,7 +476,7 @@ mod tests {
         assert!((spent - 800.0).abs() < 1e-3);
         assert_eq!(k[5], 4.0, "a depth without vertices keeps K̄");
         let mut constant = moments(&[(100, 400, 400.0), (100, 400, 6400.0)]);
-        constant.first[1] = 1600.0;
+        constant.depths[1].first = 1600.0;
         let k = allocate(4.0, &constant);
         assert_eq!(k[1], MIN_PER_VERTEX, "σ(1) = 0: {k:?}");
         let k = allocate(4.0, &moments(&[(100, 400, 0.0), (100, 400, 6400.0)]));
@@ -277,12 +501,12 @@ mod tests {
     #[test]
     fn vertices_draw_the_mean_and_frames_update_it() {
         let mut a = EmissionAllocation::new(4, Allocation::Adaptive);
-        assert_eq!(a.samples_at(0, 0.9), 4);
+        assert_eq!(a.samples_at(VertexClass::of_depth(0), 0.9), 4);
         a.merge(&moments(&[(100, 400, 400.0), (100, 400, 3600.0)]));
         a.end_frame();
         assert!((a.per_depth()[0] - 1.5).abs() < 1e-5, "{:?}", a.per_depth());
         let mean: f32 = (0..1000)
-            .map(|i| a.samples_at(0, (i as f32 + 0.5) / 1000.0) as f32)
+            .map(|i| a.samples_at(VertexClass::of_depth(0), (i as f32 + 0.5) / 1000.0) as f32)
             .sum::<f32>()
             / 1000.0;
         assert!((mean - 1.5).abs() < 1e-3, "{mean}");
@@ -290,5 +514,146 @@ mod tests {
         u.merge(&moments(&[(100, 400, 400.0), (100, 400, 6400.0)]));
         u.end_frame();
         assert_eq!(u.per_depth(), &[4.0; MAX_RECORDED]);
+    }
+
+    /// The class index of `bin` at `depth`.
+    fn class(depth: usize, bin: usize) -> VertexClass {
+        VertexClass {
+            depth,
+            class: depth * CLASSES_PER_DEPTH + bin,
+        }
+    }
+
+    /// `n` vertices of class `at` with contribution `c`, each with `per_vertex` directions
+    /// whose luminances alternate between 0 and `2σ` (mean σ, deviation σ).
+    fn add(m: &mut EmissionMoments, at: VertexClass, c: f32, n: u32, per_vertex: u32, sigma: f32) {
+        for i in 0..n {
+            m.add_vertex(at, Some(c));
+            for j in 0..per_vertex {
+                let l = if (i + j) % 2 == 0 { 2.0 * sigma } else { 0.0 };
+                m.add_direction(at, Vec3::splat(l));
+            }
+        }
+    }
+
+    /// The bins are the octaves of c/c̄ from 1/16 to 64, read from the exponent: 0 for
+    /// nothing, negative, NaN and subnormal ratios, the last bin for 64 and above.
+    #[test]
+    fn contribution_bins_are_octaves_of_the_ratio() {
+        for (ratio, bin) in [
+            (0.0, 0),
+            (-1.0, 0),
+            (f32::NAN, 0),
+            (1e-40, 0),
+            (0.0624, 0),
+            (0.0625, 1),
+            (0.5, 4),
+            (0.999, 4),
+            (1.0, 5),
+            (1.999, 5),
+            (2.0, 6),
+            (63.9, 10),
+            (64.0, 11),
+            (1e30, 11),
+            (f32::INFINITY, 11),
+        ] {
+            assert_eq!(contribution_bin(ratio), bin, "{ratio}");
+            if ratio > 0.0 && ratio.is_normal() {
+                let octave = ratio.log2().floor() as i32;
+                assert_eq!(bin as i32, (octave + 5).clamp(0, 11), "{ratio}");
+            }
+        }
+    }
+
+    /// `Contribution`: the first frame measures c̄(d) only (every vertex in its depth's
+    /// class); the next sorts vertices by c/c̄ and K + 1 ∝ σ over the classes, the same
+    /// directions in all: σ 1 and 4 at equal counts give (K + 1) in the ratio 1 : 4.
+    #[test]
+    fn contribution_classes_follow_their_standard_deviation() {
+        let mut a = EmissionAllocation::new(4, Allocation::Contribution);
+        let unknown = VertexClass::of_depth(1);
+        assert_eq!(a.class(1, 3.0), unknown, "no c̄ yet");
+        let mut m = EmissionMoments::default();
+        add(&mut m, unknown, 1.0, 100, 4, 2.0);
+        add(&mut m, unknown, 8.0, 100, 4, 2.0);
+        a.merge(&m);
+        a.end_frame();
+        // c̄(1) = 4.5: c = 1 falls in the octave of 2⁻³ (bin 2), c = 8 in that of 1 (bin 5).
+        let (low, high) = (a.class(1, 1.0), a.class(1, 8.0));
+        assert_eq!((low, high), (class(1, 2), class(1, 5)));
+        assert_eq!(
+            a.class(0, 1.0),
+            VertexClass::of_depth(0),
+            "depth 0 had no vertices"
+        );
+        let mut m = EmissionMoments::default();
+        add(&mut m, low, 1.0, 1000, 4, 1.0);
+        add(&mut m, high, 8.0, 1000, 4, 4.0);
+        a.merge(&m);
+        a.end_frame();
+        let k = |at: VertexClass| a.per_class[at.class];
+        let ratio = (k(high) + 1.0) / (k(low) + 1.0);
+        assert!((ratio - 4.0).abs() < 1e-4, "{} {}", k(low), k(high));
+        // K(1) reports the vertex-weighted mean of the depth's classes.
+        let mean = (k(low) + k(high)) / 2.0;
+        assert!(
+            (a.per_depth()[1] - mean).abs() < 1e-4,
+            "{:?}",
+            a.per_depth()
+        );
+        let draws: f32 = (0..1000)
+            .map(|i| a.samples_at(high, (i as f32 + 0.5) / 1000.0) as f32)
+            .sum::<f32>()
+            / 1000.0;
+        assert!((draws - k(high)).abs() < 1e-2, "{draws}");
+    }
+
+    /// A class keeps its σ from earlier frames ([`CLASS_MEMORY`]): a frame in which its
+    /// directions found nothing lowers its σ, one without directions leaves it, where a
+    /// single frame would give it the largest σ of the others.
+    #[test]
+    fn contribution_classes_remember_earlier_frames() {
+        let mut a = EmissionAllocation::new(4, Allocation::Contribution);
+        let mut m = EmissionMoments::default();
+        add(&mut m, VertexClass::of_depth(0), 1.0, 10, 0, 0.0);
+        a.merge(&m);
+        a.end_frame();
+        let (low, high) = (class(0, 5), class(0, 8));
+        assert_eq!((a.class(0, 1.0), a.class(0, 8.0)), (low, high));
+        let frame = |a: &mut EmissionAllocation, low_directions| {
+            let mut m = EmissionMoments::default();
+            add(&mut m, low, 1.0, 1000, low_directions, 1.0);
+            add(&mut m, high, 8.0, 1000, 4, 4.0);
+            a.merge(&m);
+            a.end_frame();
+            (a.per_class[low.class], a.per_class[high.class])
+        };
+        let first = frame(&mut a, 4);
+        // The low class draws no directions: a single frame would give it σ = 4, the
+        // largest, and K = K(high); with its history its σ stays 1.
+        let second = frame(&mut a, 0);
+        assert!(second.0 < second.1, "{second:?}");
+        assert!((second.0 - first.0).abs() < 1e-2, "{first:?} {second:?}");
+    }
+
+    /// The GPU tracer's statistics have no contributions: `Contribution` then spreads by
+    /// depth exactly as `Adaptive`, and every class of a depth draws its K(d).
+    #[test]
+    fn contribution_without_contributions_is_adaptive() {
+        let depths = moments(&[(100, 400, 400.0), (100, 400, 6400.0)]);
+        let mut adaptive = EmissionAllocation::new(4, Allocation::Adaptive);
+        let mut contribution = EmissionAllocation::new(4, Allocation::Contribution);
+        for a in [&mut adaptive, &mut contribution] {
+            a.merge(&depths);
+            a.end_frame();
+        }
+        assert_eq!(adaptive.per_depth(), contribution.per_depth());
+        assert_eq!(contribution.class(1, 5.0), VertexClass::of_depth(1));
+        for bin in 0..CLASSES_PER_DEPTH {
+            assert_eq!(
+                contribution.per_class[class(1, bin).class],
+                adaptive.per_depth()[1]
+            );
+        }
     }
 }

@@ -397,11 +397,12 @@ pub fn gather_moments(entries: &[[f32; 4]], moments: &mut EmissionMoments) {
     for pixel in entries.chunks_exact(MAX_RECORDED) {
         for (d, e) in pixel.iter().enumerate() {
             // Counts below 2²⁴ per pixel are exact in f32.
-            moments.vertices[d] += e[0] as u64;
-            moments.directions[d] += e[1] as u64;
+            let m = &mut moments.depths[d];
+            m.vertices += f64::from(e[0]);
+            m.directions += f64::from(e[1]);
             if e[2].is_finite() && e[3].is_finite() {
-                moments.first[d] += f64::from(e[2]);
-                moments.second[d] += f64::from(e[3]);
+                m.first += f64::from(e[2]);
+                m.second += f64::from(e[3]);
             }
         }
     }
@@ -1279,7 +1280,7 @@ impl GpuTracer {
     pub fn image_entries(&self, settings: &RenderSettings) -> Result<(usize, u32)> {
         let (width, height) = (settings.width, settings.height);
         let mcpg = settings.method == Method::Mcpg;
-        let moment_stride = if mcpg && self.mcpg_emission.policy() == Allocation::Adaptive {
+        let moment_stride = if mcpg && self.mcpg_emission.policy() != Allocation::Uniform {
             (width * height).div_ceil(MOMENT_PIXELS).max(1)
         } else {
             0

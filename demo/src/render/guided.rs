@@ -24,9 +24,9 @@ use mcg_markov_guide::mcpg::{
 };
 
 use super::cpu::{MAX_RECORDED, Observation, Vertex, VertexSampler};
-use super::emission_allocation::{EmissionAllocation, EmissionMoments};
+use super::emission_allocation::{EmissionAllocation, EmissionMoments, VertexClass};
 use super::material::{BsdfSample, Material};
-use super::scene::Scene;
+use super::scene::{Scene, luminance};
 
 /// The material at a vertex as the guide's fallback technique: [`Material::sample`] with the
 /// lobe choice and the first direction uniform taken from one uniform (the part of `u.x` below
@@ -180,6 +180,8 @@ pub struct McpgSampler<'g> {
     /// Directions per vertex by depth, shared by the frame's samplers, and this sampler's
     /// statistics for it (merged when the sampler is dropped).
     allocation: Option<(&'g EmissionAllocation, EmissionMoments)>,
+    /// The class of the vertex whose directions are being gathered.
+    class: VertexClass,
 }
 
 impl<'g> McpgSampler<'g> {
@@ -195,6 +197,7 @@ impl<'g> McpgSampler<'g> {
             reflected: Reflected::Path,
             emission_samples: 0,
             allocation: None,
+            class: VertexClass::of_depth(0),
         }
     }
 
@@ -256,7 +259,8 @@ impl Drop for McpgSampler<'_> {
 /// less relMSE × frame time on lavapipe (seeds 7-8, 32 frames), so 6 is the default. The
 /// directions come from the whole mixture ([`GuidedVertex::sample_mixture`]), not only from
 /// the state Alg. 1 chose (4-6 % less error than from that state's lobe), and K is the mean
-/// of a per-depth allocation ([`super::emission_allocation`]) on either device.
+/// of an allocation ([`super::emission_allocation`]): per depth on either device, on the CPU
+/// also by each vertex's expected contribution.
 pub const EMISSION_SAMPLES: u32 = 6;
 
 /// The guide's own uniforms in the CPU tracer: two 24-bit uniforms from each 64-bit output of
@@ -418,19 +422,30 @@ impl VertexSampler for McpgSampler<'_> {
         material_weighted(v, &s)
     }
 
-    fn emission_samples(&mut self, depth: u32) -> u32 {
+    fn emission_samples(&mut self, depth: u32, throughput: Vec3) -> u32 {
         match &mut self.allocation {
             Some((allocation, moments)) => {
-                moments.add_vertex(depth);
-                allocation.samples_at(depth, self.rng.pair()[0])
+                // The expected contribution: the guide's radiance at the vertex (sum_mc, 0
+                // where no candidate is valid) carried to the pixel by the throughput.
+                let guided = self
+                    .current
+                    .as_ref()
+                    .filter(|c| c.open && c.depth == depth)
+                    .map_or(0.0, |c| c.vertex.weight_sum());
+                let contribution = luminance(throughput) * guided;
+                let at = allocation.class(depth, contribution);
+                moments.add_vertex(at, Some(contribution));
+                self.class = at;
+                allocation.samples_at(at, self.rng.pair()[0])
             }
             None => self.emission_samples,
         }
     }
 
-    fn emission_gathered(&mut self, depth: u32, value: Vec3) {
+    fn emission_gathered(&mut self, _depth: u32, value: Vec3) {
         if let Some((_, moments)) = &mut self.allocation {
-            moments.add_direction(depth, value);
+            // A direction of the vertex whose class `emission_samples` set, at `_depth`.
+            moments.add_direction(self.class, value);
         }
     }
 

@@ -162,13 +162,14 @@ pub struct RenderArgs {
         help_heading = "mcpg and mcpg-nee"
     )]
     pub mcpg_emission_samples: u32,
-    /// How `mcpg` spreads its emission-only directions over the depths of a path, on either
-    /// device: as many at every vertex, or, with the same mean, by each depth's variance
-    /// measured in the frame before ([`emission_allocation::Allocation`], mcg's extension; the
-    /// GPU tracer measures it in about [`gpu::MOMENT_PIXELS`] evenly spaced pixels).
-    #[arg(long, value_enum, default_value_t = emission_allocation::Allocation::Adaptive)]
+    /// How `mcpg` spreads its emission-only directions over the vertices of a path: as many
+    /// at every vertex, or, with the same mean, by each depth's variance measured in the
+    /// frames before, on the CPU also by each vertex's expected contribution
+    /// ([`emission_allocation::Allocation`], mcg's extension; the GPU tracer measures the
+    /// depths in about [`gpu::MOMENT_PIXELS`] evenly spaced pixels).
+    #[arg(long, value_enum, default_value_t = emission_allocation::Allocation::Contribution)]
     #[arg(
-        help = "How mcpg spreads those directions over the depths of a path",
+        help = "How mcpg spreads those directions over the vertices of a path",
         help_heading = "mcpg and mcpg-nee"
     )]
     pub mcpg_emission_allocation: emission_allocation::Allocation,

@@ -763,8 +763,12 @@ pub fn build(ctx: &Context<'_>) -> Result<Section> {
          already begun and a walk of the emitters' own small tree, with a shadow ray only \
          where it meets an emitter; drawn from the whole mixture (not only the lobe of the \
          state Alg. 1 chose) with uniforms from a randomly shifted R3 lattice, and spread over \
-         the path's depths by each depth's variance measured in the frame before, at the same \
-         mean (`--mcpg-emission-allocation uniform` spends as many at every vertex). \
+         the path's depths by each depth's variance measured in the frames before, at the same \
+         mean; on the CPU also within a depth, by the variance measured for vertices of like \
+         expected contribution (the path's throughput times the guide's own radiance \
+         estimate, sum_mc) \
+         (`--mcpg-emission-allocation adaptive` spreads by depth only, `uniform` spends as \
+         many at every vertex). \
          FLIP is NVIDIA's LDR-FLIP of the sRGB images (the PNGs) at 67 pixels per degree. \
          The reference is cached in {}.",
         hidden.settings.bounces,

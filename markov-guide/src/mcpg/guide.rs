@@ -886,6 +886,17 @@ impl<'g, S: Scatter> GuidedVertex<'g, S> {
         self.set.states()
     }
 
+    /// sum_mc = Σ w̄ over the accessed states (MCPG Alg. 1), 0 when none is valid. Each w̄ is
+    /// its chain's moving average of the target f_mc = lum(f·cos/p · L) (eq. 7), so sum_mc is
+    /// N_mc times the guide's estimate of the luminance of the radiance reflected at the
+    /// vertex: known before anything is traced from it, for a renderer that spends more
+    /// samples where a vertex carries more light (mcg-demo's emission-only directions).
+    #[inline]
+    #[must_use]
+    pub fn weight_sum(&self) -> f32 {
+        self.set.weight_sum()
+    }
+
     /// The index of the state Alg. 1 chose, `None` when every candidate had w̄ = 0.
     #[must_use]
     pub fn selected(&self) -> Option<usize> {
