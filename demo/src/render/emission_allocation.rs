@@ -1,4 +1,4 @@
-//! How many emission-only directions `mcpg` spends at each depth of a path (mcg's extension
+//! How many emission-only directions `mcpg` spends at each vertex of a path (mcg's extension
 //! of its emission-only directions, [`super::guided::EMISSION_SAMPLES`]).
 //!
 //! A direction that only gathers the emission it meets is worth its cost where it meets
@@ -15,9 +15,9 @@
 //! ([`EmissionAllocation::new`]). A vertex's K + 1 directions (the path's own among them, all
 //! from the same mixture) leave the variance σ(d)²/(K + 1), and this allocation minimises
 //! Σ_d N_d σ(d)²/(K(d) + 1) for the same number of directions in all (a Lagrange multiplier,
-//! as for the sample counts of stratified sampling). K(d) is kept in
-//! [[`MIN_PER_VERTEX`], 4·K̄] (so every depth keeps being measured), and a vertex draws
-//! ⌊K(d)⌋ or ⌈K(d)⌉ directions with the probabilities that make their mean K(d). The number is
+//! as for the sample counts of stratified sampling). K(d) is kept in [[`MIN_PER_VERTEX`],
+//! [`DEPTH_CAP`]·K̄] (so every depth keeps being measured), and a vertex draws ⌊K(d)⌋ or
+//! ⌈K(d)⌉ directions with the probabilities that make their mean K(d). The number is
 //! decided before any of them is traced, and the emission along each of the K + 1 directions
 //! of the vertex counts 1/(K + 1), so the estimate stays unbiased whatever the allocation.
 //!
@@ -26,9 +26,10 @@
 //! hardly counts. Its expected contribution, known before any direction is traced, is
 //! c = lum(β)·sum_mc: the path throughput β to the vertex times the guide's own estimate of
 //! the radiance reflected there (MCPG Alg. 1's sum_mc = Σ w̄,
-//! [`GuidedVertex::weight_sum`](mcg_markov_guide::mcpg::GuidedVertex::weight_sum)) — the
-//! quantity by which adjoint-driven splitting (Vorba and Křivánek 2016, "Adjoint-Driven
-//! Russian Roulette and Splitting in Light Transport Simulation", sec. 4) multiplies a path.
+//! [`GuidedVertex::weight_sum`](mcg_markov_guide::mcpg::GuidedVertex::weight_sum)), the
+//! estimate from which adjoint-driven splitting (Vorba and Křivánek 2016, "Adjoint-Driven
+//! Russian Roulette and Splitting in Light Transport Simulation") decides how often to split
+//! a path.
 //! How much c says about a direction's spread depends on the scene and on how well the guide
 //! has learnt it, so it is not trusted as it is: each vertex falls into a class, its depth d
 //! and the octave of c/c̄(d) ([`contribution_bin`], c̄(d) the previous frame's mean at d), and

@@ -59,18 +59,20 @@
 //! 8 samples per pixel × 64 frames, no light sampling, [`McpgParams::confidence_samples`] 16),
 //! the guide also draws more directions per vertex from the begun vertex's whole mixture
 //! ([`GuidedVertex::sample_mixture`]) for the emission they meet: K = 6 on average, spread over
-//! the path's depths, the emission along each of the K + 1 directions weighted 1/(K + 1)
-//! (mcg-demo's `--mcpg-emission-samples`, mcg's extension). Its relative MSE is then 0.04 of
-//! BSDF sampling's at equal samples and 0.20 at equal CPU time, and 3.5 times lower than with
-//! the paper's one direction. Against light sampling (next-event estimation with MIS, what
-//! renderers use today) it is about even at equal CPU time: 0.93 of its error × time on an AMD
-//! Zen 4 core, 0.98-1.14 (1.07 on average over four seeds) on an Intel Ice Lake server core,
-//! where a guided frame costs 4.3 times a light-sampled one instead of 3.5; the extra
-//! directions are a third of a guided frame. Beside light sampling — the guide sampling the
-//! scattered direction, one light sample per vertex, MIS with [`GuidedVertex::pdf`], the
-//! chains learning only the MIS-weighted share of the emission
-//! ([`VertexObservation::emission_weight`]) — it reaches 0.28 of light sampling's relative
-//! MSE, 0.70-0.74 at equal CPU time (`benches/README.md` has the commands).
+//! the path's depths and over classes of like expected contribution (the throughput times
+//! [`GuidedVertex::weight_sum`]), the emission along each of the K + 1 directions weighted
+//! 1/(K + 1) (mcg-demo's `--mcpg-emission-samples` and `--mcpg-emission-allocation`, mcg's
+//! extension). Its relative MSE is then 0.035 of BSDF sampling's at equal samples, and 4.3
+//! times lower than with the paper's one direction. Against light sampling (next-event
+//! estimation with MIS, what renderers use today) it is about even at equal CPU time, a little
+//! ahead: 0.93-1.03 of its error × time (0.97 on average over four seeds) on an Intel Ice Lake
+//! server core, where a guided frame costs 4.3 times a light-sampled one; with the directions
+//! spread by depth only it was 1.07 there and 0.93 on an AMD Zen 4 core, whose guided frame
+//! costs 3.5 times. The extra directions are a third of a guided frame. Beside light
+//! sampling — the guide sampling the scattered direction, one light sample per vertex, MIS
+//! with [`GuidedVertex::pdf`], the chains learning only the MIS-weighted share of the
+//! emission ([`VertexObservation::emission_weight`]) — it reaches 0.28 of light sampling's
+//! relative MSE, 0.70-0.74 at equal CPU time (`benches/README.md` has the commands).
 //!
 //! # The parts
 //! Per path vertex x with normal n at time T:
