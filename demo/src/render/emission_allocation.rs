@@ -126,10 +126,11 @@ pub struct Moments {
 }
 
 impl Moments {
-    /// A direction whose estimate has luminance `l` (a non-finite one counts as 0).
+    /// A direction whose estimate has luminance `l` (a non-finite one counts as 0; most are 0,
+    /// and add nothing to the sums).
     fn add_direction(&mut self, l: f64) {
         self.directions += 1.0;
-        if l.is_finite() {
+        if l != 0.0 && l.is_finite() {
             self.first += l;
             self.second += l * l;
         }

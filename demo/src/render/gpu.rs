@@ -864,6 +864,8 @@ impl GpuTracer {
     /// ([`EmissionAllocation`]; the default: [`Allocation::Uniform`]): with
     /// [`Allocation::Adaptive`] a frame records the directions' statistics (in pixels
     /// [`GpuParams::moment_stride`] apart) and the next spends K(d) by them.
+    /// [`Allocation::Contribution`] does the same here: the GPU tracer measures no
+    /// contributions, and its vertices of one depth draw one count.
     pub fn set_mcpg_emission_allocation(&mut self, policy: Allocation) {
         self.mcpg_emission = EmissionAllocation::new(self.mcpg_emission.mean(), policy);
     }
