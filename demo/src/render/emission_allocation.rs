@@ -38,7 +38,7 @@
 //! does not, the classes' σ are alike and so are their K. A class's σ comes from all frames
 //! so far, older ones weighing less ([`CLASS_MEMORY`]): from a single frame, a class whose
 //! directions happened to meet no light would get almost none in the next, and its rare hits
-//! would then count many times over (on the many-lights room that made the error 1.5 times
+//! would then count many times over (on the many-lights room that made the error 1.7 times
 //! larger). On scene (a) (128², 8 spp × 64 frames, 3 bounces, seeds 7-10) `mcpg`'s relMSE
 //! net of the reference's own error is 13 % lower than with `Adaptive`, at the same cost per
 //! frame (4 % fewer instructions); on the many-lights room, where the guide misses lights and
