@@ -214,6 +214,38 @@ fn pdf_integrates_to_one() {
     }
 }
 
+/// `GuidedVertex::weight_sum` is sum_mc = Σ w̄ over the prepared candidates (MCPG Alg. 1):
+/// 0 on an empty guide, and on a trained one the sum of `candidates()`' w̄ in load order,
+/// larger than any one of them where two or more are valid.
+#[test]
+fn weight_sum_is_the_candidates_sum() {
+    let scene = ToyScene::single_light();
+    let mut guide = toy_guide(Hemisphere::CosineProduct);
+    let mut rng = Pcg64Mcg::seed_from_u64(12);
+    fn begin<'g>(guide: &'g Guide, rng: &mut Pcg64Mcg) -> GuidedVertex<'g, Lambertian> {
+        guide.begin(
+            Vertex::surface(shading_point(3), TOY_NORMAL),
+            Lambertian { normal: TOY_NORMAL },
+            &BeginUniforms::from_fn(5, || rng.random()),
+        )
+    }
+    assert_eq!(begin(&guide, &mut rng).weight_sum(), 0.0, "empty guide");
+    run(&mut guide, &scene, 6, 6, 64, &mut rng);
+    let mut checked = 0;
+    for _ in 0..100 {
+        let v = begin(&guide, &mut rng);
+        let states = v.candidates();
+        let sum = states.iter().fold(0.0_f32, |a, s| a + s.weight_sum);
+        assert_eq!(v.weight_sum(), sum, "{states:?}");
+        if states.iter().filter(|s| s.weight_sum > 0.0).count() >= 2 {
+            let largest = states.iter().map(|s| s.weight_sum).fold(0.0, f32::max);
+            assert!(v.weight_sum() > largest);
+            checked += 1;
+        }
+    }
+    assert!(checked > 0, "no vertex had two valid candidates");
+}
+
 /// The cosine product sends fewer guided directions below the surface. The chains are trained
 /// on hits spread over a disc of radius 1.5 whose centre is 10° above the horizon of the
 /// points (the same accepted observations in both modes, so the states are the same); then
