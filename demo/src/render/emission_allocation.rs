@@ -188,13 +188,10 @@ pub struct EmissionMoments {
     /// Per depth.
     pub depths: [Moments; MAX_RECORDED],
     /// Per class (depth and bin, [`VertexClass`]); empty where no contributions were
-    /// measured (the GPU tracer's statistics).
+    /// measured (the GPU tracer's statistics, which fill `depths` only).
     pub classes: [Moments; CLASSES],
-    /// Σ of the vertices' expected contributions c per depth, over the vertices that
-    /// measured one.
+    /// Σ of the vertices' expected contributions c per depth.
     pub contribution: [f64; MAX_RECORDED],
-    /// The vertices that measured one, per depth.
-    pub contributed: [u64; MAX_RECORDED],
 }
 
 impl Default for EmissionMoments {
@@ -203,7 +200,6 @@ impl Default for EmissionMoments {
             depths: [Moments::default(); MAX_RECORDED],
             classes: [Moments::default(); CLASSES],
             contribution: [0.0; MAX_RECORDED],
-            contributed: [0; MAX_RECORDED],
         }
     }
 }
@@ -214,16 +210,12 @@ impl EmissionMoments {
     }
 
     /// A vertex of class `at` ([`EmissionAllocation::class`]) and expected contribution
-    /// `contribution` (`None` where it was not measured; a non-finite or negative one counts
-    /// as 0).
-    pub fn add_vertex(&mut self, at: VertexClass, contribution: Option<f32>) {
+    /// `contribution` (a non-finite or negative one counts as 0).
+    pub fn add_vertex(&mut self, at: VertexClass, contribution: f32) {
         self.depths[at.depth].vertices += 1.0;
         self.classes[at.class].vertices += 1.0;
-        if let Some(c) = contribution {
-            self.contributed[at.depth] += 1;
-            if c.is_finite() && c > 0.0 {
-                self.contribution[at.depth] += f64::from(c);
-            }
+        if contribution.is_finite() && contribution > 0.0 {
+            self.contribution[at.depth] += f64::from(contribution);
         }
     }
 
@@ -243,9 +235,8 @@ impl EmissionMoments {
         for (m, o) in self.classes.iter_mut().zip(&other.classes) {
             m.merge(o);
         }
-        for d in 0..MAX_RECORDED {
-            self.contribution[d] += other.contribution[d];
-            self.contributed[d] += other.contributed[d];
+        for (c, o) in self.contribution.iter_mut().zip(&other.contribution) {
+            *c += o;
         }
     }
 }
@@ -403,8 +394,9 @@ impl EmissionAllocation {
                 .get_mut()
                 .unwrap_or_else(std::sync::PoisonError::into_inner),
         );
-        let by_class =
-            self.policy == Allocation::Contribution && moments.contributed.iter().any(|&n| n > 0);
+        // Only the CPU tracer's samplers measure contributions and fill the classes.
+        let by_class = self.policy == Allocation::Contribution
+            && moments.classes.iter().any(|c| c.vertices > 0.0);
         if by_class {
             for (h, m) in self.history.iter_mut().zip(&moments.classes) {
                 h.scale(CLASS_MEMORY);
@@ -428,9 +420,9 @@ impl EmissionAllocation {
                 };
             }
             for (d, inverse) in self.inverse_mean.iter_mut().enumerate() {
-                let (n, sum) = (moments.contributed[d], moments.contribution[d]);
-                *inverse = if n > 0 && sum > 0.0 {
-                    (n as f64 / sum) as f32
+                let (n, sum) = (moments.depths[d].vertices, moments.contribution[d]);
+                *inverse = if n > 0.0 && sum > 0.0 {
+                    (n / sum) as f32
                 } else {
                     0.0
                 };
@@ -530,7 +522,7 @@ mod tests {
     /// whose luminances alternate between 0 and `2σ` (mean σ, deviation σ).
     fn add(m: &mut EmissionMoments, at: VertexClass, c: f32, n: u32, per_vertex: u32, sigma: f32) {
         for i in 0..n {
-            m.add_vertex(at, Some(c));
+            m.add_vertex(at, c);
             for j in 0..per_vertex {
                 let l = if (i + j) % 2 == 0 { 2.0 * sigma } else { 0.0 };
                 m.add_direction(at, Vec3::splat(l));

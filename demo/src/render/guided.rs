@@ -423,18 +423,14 @@ impl VertexSampler for McpgSampler<'_> {
     }
 
     fn emission_samples(&mut self, depth: u32, throughput: Vec3) -> u32 {
+        // The expected contribution: the guide's radiance at the vertex (sum_mc, 0 where no
+        // candidate is valid) carried to the pixel by the throughput.
+        let guided = self.open_at(depth).map_or(0.0, GuidedVertex::weight_sum);
+        let contribution = luminance(throughput) * guided;
         match &mut self.allocation {
             Some((allocation, moments)) => {
-                // The expected contribution: the guide's radiance at the vertex (sum_mc, 0
-                // where no candidate is valid) carried to the pixel by the throughput.
-                let guided = self
-                    .current
-                    .as_ref()
-                    .filter(|c| c.open && c.depth == depth)
-                    .map_or(0.0, |c| c.vertex.weight_sum());
-                let contribution = luminance(throughput) * guided;
                 let at = allocation.class(depth, contribution);
-                moments.add_vertex(at, Some(contribution));
+                moments.add_vertex(at, contribution);
                 self.class = at;
                 allocation.samples_at(at, self.rng.pair()[0])
             }
