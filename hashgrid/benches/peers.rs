@@ -19,7 +19,9 @@
 //!   line per lookup, what a slot layout with the checksum beside the value would approach.
 //! - `peers_lookup_cold/2^b`: the same passes, each after flushing the structure's memory from
 //!   every cache level (`clflush` over the table's two arrays; over every entry of a map and
-//!   its control bytes, `common/flush.rs`), untimed.
+//!   its control bytes, `common/flush.rs`), untimed. `hashbrown_load_quarter` is a control:
+//!   hashbrown holding the same keys at the table's load of 1/4 (`with_capacity` of twice the
+//!   keys), i.e. about the table's memory per key instead of half of it.
 //! - `peers_insert/2^b`: the distinct keys into an emptied table / map (emptying not timed).
 //! - `peers_concurrent_insert/2^b`: 2 threads of a persistent pool (`common/pool.rs`, what is
 //!   timed is documented there), each inserting a contiguous half of the distinct keys:
@@ -90,6 +92,14 @@ fn hashbrown_map(s: &Sized) -> hashbrown::HashMap<u64, State> {
     s.fill.iter().map(|k| (pack(k), [1.0; 8])).collect()
 }
 
+/// [`hashbrown_map`] sized to the table's load of 1/4: `with_capacity(2n)` gives the power of
+/// two of buckets above 8/7 · 2n, i.e. 4n buckets for the streams' n = 2ᵇ/4 keys.
+fn hashbrown_map_at_load_quarter(s: &Sized) -> hashbrown::HashMap<u64, State> {
+    let mut m = hashbrown::HashMap::with_capacity(2 * s.fill.len());
+    m.extend(s.fill.iter().map(|k| (pack(k), [1.0; 8])));
+    m
+}
+
 /// Times `run` after an untimed `reset`, `iters` times.
 fn timed<S>(
     iters: u64,
@@ -112,6 +122,7 @@ struct Lookups {
     s: Sized,
     t: HashTable<State>,
     brown: hashbrown::HashMap<u64, State>,
+    brown_quarter: hashbrown::HashMap<u64, State>,
     fx: HashMap<u64, State, FxBuildHasher>,
     std_map: HashMap<u64, State>,
     packed: Vec<u64>,
@@ -123,6 +134,7 @@ fn bench_lookup(c: &mut Criterion) {
         let l = Lookups {
             t: table(&s),
             brown: hashbrown_map(&s),
+            brown_quarter: hashbrown_map_at_load_quarter(&s),
             fx: map(&s),
             std_map: map(&s),
             packed: s.queries.iter().map(pack).collect(),
@@ -224,6 +236,18 @@ fn bench_lookup_cold(c: &mut Criterion, bits: u32, l: &Lookups, slots: &mut [Opt
                 |_| flush_entries(l.brown.iter(), l.brown.capacity()),
                 |_| {
                     black_box(hashbrown_pass(&l.brown, &l.packed));
+                },
+            )
+        })
+    });
+    g.bench_function(id("hashbrown_load_quarter"), |b| {
+        b.iter_custom(|n| {
+            timed(
+                n,
+                &mut (),
+                |_| flush_entries(l.brown_quarter.iter(), l.brown_quarter.capacity()),
+                |_| {
+                    black_box(hashbrown_pass(&l.brown_quarter, &l.packed));
                 },
             )
         })
