@@ -19,8 +19,8 @@ use mcg_demo::render::cpu::{
     BsdfSampler, Method, Observation, RenderSettings, Vertex, VertexSampler, path_seed,
     render_frame, trace_path,
 };
-use mcg_demo::render::emission_allocation::{Allocation, EmissionAllocation};
 use mcg_demo::render::environment::{EnvironmentMap, Portal};
+use mcg_demo::render::guided::Allocation;
 use mcg_demo::render::guided::{EMISSION_SAMPLES, McpgSampler, new_guide};
 use mcg_demo::render::material::BsdfSample;
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
@@ -34,6 +34,7 @@ use mcg_demo::render::scene_generator::{
 };
 use mcg_demo::render::{Device, RenderArgs, output, render, write_outputs};
 use mcg_gpu_backend::sampling::next_uniform;
+use mcg_markov_guide::mcpg::EmissionAllocation;
 use mcg_tests::RunningStats;
 use mcg_tests::assert_chi_square;
 
@@ -589,7 +590,7 @@ fn furnace_matches_the_truncated_neumann_series() {
             // Three frames of learning first, so that the tested frame samples the lobes (and
             // spreads its emission-only directions by the depths' measured variances).
             let mut guide = new_guide(&scene, 16, 16).unwrap();
-            let mut spread = EmissionAllocation::new(emission, allocation);
+            let mut spread = EmissionAllocation::new(emission, allocation.into());
             for frame in 0..3 {
                 let sampler = || McpgSampler::new(&guide).with_emission_allocation(&spread);
                 render_frame(&scene, &settings, frame, sampler, || ());
@@ -1205,7 +1206,7 @@ fn guided_methods_agree_with_nee_per_tile() {
         let guided = common::tile_stats((w, h, 16, 32), |run| {
             let s = settings(method, 100 + run);
             let mut guide = new_guide(&scene, w, h).unwrap();
-            let mut spread = EmissionAllocation::new(emission, Allocation::default());
+            let mut spread = EmissionAllocation::new(emission, Allocation::default().into());
             common::run_mean(frames, |f| {
                 let sampler = || {
                     let sampler = McpgSampler::new(&guide);

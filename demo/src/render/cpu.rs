@@ -233,11 +233,11 @@ pub trait VertexSampler {
         let _ = (depth, throughput);
         0
     }
-    /// What one of the directions of [`VertexSampler::sample_emission`] at depth `depth`
-    /// added to the pixel before its weight 1/(K + 1) (0 when it met no emission), for
-    /// samplers that measure them. The default ignores it.
-    fn emission_gathered(&mut self, depth: u32, value: Vec3) {
-        let _ = (depth, value);
+    /// What one of the directions of [`VertexSampler::sample_emission`] at the vertex of the
+    /// last [`VertexSampler::emission_samples`] added to the pixel before its weight 1/(K + 1)
+    /// (0 when it met no emission), for samplers that measure them. The default ignores it.
+    fn emission_gathered(&mut self, value: Vec3) {
+        let _ = value;
     }
     /// A direction at `vertex`, after [`VertexSampler::sample`] there, whose ray only gathers
     /// the emission it meets (`None` gathers nothing); the tracer divides by
@@ -412,7 +412,7 @@ pub fn trace_path<S: VertexSampler>(
                     .map_or(Vec3::ZERO, |wi| {
                         throughput * emission_weighted(scene, sampler, &vertex, origin_next, wi)
                     });
-                sampler.emission_gathered(depth, value);
+                sampler.emission_gathered(value);
                 radiance += share * value;
             }
         }

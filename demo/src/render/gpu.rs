@@ -52,11 +52,12 @@ pub use probes::{
     PROBE_GI_DEF, PROBE_STORAGE_BUFFERS, composed_probe_shader,
 };
 
+use mcg_markov_guide::mcpg::{
+    EmissionAllocation, EmissionMoments, EmissionPolicy, round_stochastically,
+};
+
 use super::bvh::{BvhNode, Triangle};
 use super::cpu::{MAX_RECORDED, Method, RenderSettings};
-use super::emission_allocation::{
-    Allocation, EmissionAllocation, EmissionMoments, round_stochastically,
-};
 use super::guided::Reflected;
 use super::material::Material;
 use super::scene::{Camera, Scene, TextureInfo, TriangleAttributes};
@@ -360,7 +361,7 @@ const COUNT_SALT: u32 = 0x2545_f491;
 /// of the longest of theirs (drawn per vertex, lavapipe's frames took 10-15 % longer for the
 /// same mean). A depth with K(d) > 0 gets at least one direction, so that every frame measures
 /// it: a depth left without directions for a frame gets the largest σ of the others in the
-/// next allocation ([`super::emission_allocation::allocate`]), and K(0) ≈ 0.5 then swung to
+/// next allocation ([`mcg_markov_guide::mcpg::allocate`]), and K(0) ≈ 0.5 then swung to
 /// about 4.4 for a frame. The number is fixed before the frame's samples, so the estimate
 /// stays unbiased.
 #[must_use]
@@ -758,7 +759,7 @@ impl GpuTracer {
             image: None,
             timer,
             guided: None,
-            mcpg_emission: EmissionAllocation::new(0, Allocation::Uniform),
+            mcpg_emission: EmissionAllocation::new(0, EmissionPolicy::Uniform),
             mcpg_reflected: Reflected::Cache,
             mcpg_moments: None,
             guided_module: None,
@@ -861,13 +862,13 @@ impl GpuTracer {
     }
 
     /// How `mcpg` spreads its emission-only directions over the depths, as the CPU tracer does
-    /// ([`EmissionAllocation`]; the default: [`Allocation::Uniform`]): with
-    /// [`Allocation::Adaptive`] a frame records the directions' statistics (in pixels
+    /// ([`EmissionAllocation`]; the default: [`EmissionPolicy::Uniform`]): with
+    /// [`EmissionPolicy::Adaptive`] a frame records the directions' statistics (in pixels
     /// [`GpuParams::moment_stride`] apart) and the next spends K(d) by them.
-    /// [`Allocation::Contribution`] does the same here: the GPU tracer measures no
+    /// [`EmissionPolicy::Contribution`] does the same here: the GPU tracer measures no
     /// contributions, and its vertices of one depth draw one count.
-    pub fn set_mcpg_emission_allocation(&mut self, policy: Allocation) {
-        self.mcpg_emission = EmissionAllocation::new(self.mcpg_emission.mean(), policy);
+    pub fn set_mcpg_emission_allocation(&mut self, policy: impl Into<EmissionPolicy>) {
+        self.mcpg_emission = EmissionAllocation::new(self.mcpg_emission.mean(), policy.into());
     }
 
     /// K(d) of `mcpg`'s next frame, per depth.
@@ -878,7 +879,7 @@ impl GpuTracer {
 
     /// The statistics of the emission-only directions that the last `mcpg` frame recorded,
     /// summed over its recording pixels (`None` before one, and under
-    /// [`Allocation::Uniform`]).
+    /// [`EmissionPolicy::Uniform`]).
     #[must_use]
     pub fn mcpg_emission_moments(&self) -> Option<&EmissionMoments> {
         self.mcpg_moments.as_ref()
@@ -1282,7 +1283,7 @@ impl GpuTracer {
     pub fn image_entries(&self, settings: &RenderSettings) -> Result<(usize, u32)> {
         let (width, height) = (settings.width, settings.height);
         let mcpg = settings.method == Method::Mcpg;
-        let moment_stride = if mcpg && self.mcpg_emission.policy() != Allocation::Uniform {
+        let moment_stride = if mcpg && self.mcpg_emission.policy() != EmissionPolicy::Uniform {
             (width * height).div_ceil(MOMENT_PIXELS).max(1)
         } else {
             0

@@ -18,13 +18,13 @@
 
 use glam::{Vec2, Vec3};
 use mcg_markov_guide::mcpg::{
-    BeginUniforms, CandidateUniforms, FinishUniforms, GridUniforms, Guide, GuideConfig, GuideError,
+    BeginUniforms, CandidateUniforms, EMISSION_DEPTHS, EmissionAllocation, EmissionClass,
+    EmissionMoments, EmissionPolicy, FinishUniforms, GridUniforms, Guide, GuideConfig, GuideError,
     GuidedSample, GuidedVertex, PendingFinish, SampleUniforms, Scatter, Vertex as GuideVertex,
     VertexObservation,
 };
 
 use super::cpu::{MAX_RECORDED, Observation, Vertex, VertexSampler};
-use super::emission_allocation::{EmissionAllocation, EmissionMoments, VertexClass};
 use super::material::{BsdfSample, Material};
 use super::scene::{Scene, luminance};
 
@@ -181,7 +181,7 @@ pub struct McpgSampler<'g> {
     /// statistics for it (merged when the sampler is dropped).
     allocation: Option<(&'g EmissionAllocation, EmissionMoments)>,
     /// The class of the vertex whose directions are being gathered.
-    class: VertexClass,
+    class: EmissionClass,
 }
 
 impl<'g> McpgSampler<'g> {
@@ -197,7 +197,7 @@ impl<'g> McpgSampler<'g> {
             reflected: Reflected::Path,
             emission_samples: 0,
             allocation: None,
-            class: VertexClass::of_depth(0),
+            class: EmissionClass::of_depth(0),
         }
     }
 
@@ -259,9 +259,47 @@ impl Drop for McpgSampler<'_> {
 /// less relMSE × frame time on lavapipe (seeds 7-8, 32 frames), so 6 is the default. The
 /// directions come from the whole mixture ([`GuidedVertex::sample_mixture`]), not only from
 /// the state Alg. 1 chose (4-6 % less error than from that state's lobe), and K is the mean
-/// of an allocation ([`super::emission_allocation`]): per depth on either device, on the CPU
-/// also by each vertex's expected contribution.
+/// of an allocation ([`EmissionAllocation`], [`Allocation`]): per depth on either device, on the
+/// CPU also by each vertex's expected contribution.
 pub const EMISSION_SAMPLES: u32 = 6;
+
+// The tracer records as many depths as the allocation tells apart (the WGSL tracer's moment
+// entries per recording pixel, `gpu::moment_entries`).
+const _: () = assert!(MAX_RECORDED == EMISSION_DEPTHS);
+
+/// `--mcpg-emission-allocation`: how `mcpg` spreads its [`EMISSION_SAMPLES`] over the vertices,
+/// the command line's and the JSON's name for [`EmissionPolicy`] ([`EmissionAllocation`] gives
+/// the rules).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Allocation {
+    /// K̄ at every vertex ([`EmissionPolicy::Uniform`]).
+    #[value(help = "The same number at every vertex")]
+    Uniform,
+    /// K(d) + 1 ∝ σ(d) over the depths ([`EmissionPolicy::Adaptive`]).
+    #[value(help = "K(d) + 1 in proportion to depth d's spread in the frame before, the same mean")]
+    Adaptive,
+    /// K + 1 ∝ σ over classes of depth and expected contribution
+    /// ([`EmissionPolicy::Contribution`]) — the default. The GPU tracer, whose vertices of one
+    /// depth draw one count, measures no contributions and spreads by depth, as `Adaptive`
+    /// (per-vertex counts would make a SIMD group run its longest lane's loop:
+    /// `markov-guide/benches/README.md`).
+    #[value(
+        help = "Like adaptive, over classes of depth and the vertex's expected contribution (throughput times the guide's radiance; adaptive on the GPU)"
+    )]
+    #[default]
+    Contribution,
+}
+
+impl From<Allocation> for EmissionPolicy {
+    fn from(a: Allocation) -> Self {
+        match a {
+            Allocation::Uniform => Self::Uniform,
+            Allocation::Adaptive => Self::Adaptive,
+            Allocation::Contribution => Self::Contribution,
+        }
+    }
+}
 
 /// The guide's own uniforms in the CPU tracer: two 24-bit uniforms from each 64-bit output of
 /// WyRand (Wang Yi's wyhash generator, through `fastrand`), seeded per path.
@@ -438,9 +476,9 @@ impl VertexSampler for McpgSampler<'_> {
         }
     }
 
-    fn emission_gathered(&mut self, _depth: u32, value: Vec3) {
+    fn emission_gathered(&mut self, value: Vec3) {
         if let Some((_, moments)) = &mut self.allocation {
-            // A direction of the vertex whose class `emission_samples` set, at `_depth`.
+            // A direction of the vertex whose class `emission_samples` set.
             moments.add_direction(self.class, value);
         }
     }

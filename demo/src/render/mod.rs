@@ -27,7 +27,6 @@
 
 pub mod bvh;
 pub mod cpu;
-pub mod emission_allocation;
 pub mod environment;
 pub mod gpu;
 pub mod guided;
@@ -45,12 +44,11 @@ use std::time::Instant;
 
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
-use mcg_markov_guide::mcpg::{Guide, GuideConfig, MAX_CANDIDATES, McpgParams};
+use mcg_markov_guide::mcpg::{EmissionAllocation, Guide, GuideConfig, MAX_CANDIDATES, McpgParams};
 use mcg_probe_cache::ProbeGrid;
 
 use crate::Result;
 use cpu::{BsdfSampler, Method, RenderSettings, render_frame};
-use emission_allocation::EmissionAllocation;
 use gpu::{GpuTiming, GpuTracer};
 use guided::{McpgSampler, guide_config};
 use mcmm::{McmmRenderer, McmmScore, mcmm_params};
@@ -165,14 +163,14 @@ pub struct RenderArgs {
     /// How `mcpg` spreads its emission-only directions over the vertices of a path: as many
     /// at every vertex, or, with the same mean, by each depth's variance measured in the
     /// frames before, on the CPU also by each vertex's expected contribution
-    /// ([`emission_allocation::Allocation`], mcg's extension; the GPU tracer measures the
-    /// depths in about [`gpu::MOMENT_PIXELS`] evenly spaced pixels).
-    #[arg(long, value_enum, default_value_t = emission_allocation::Allocation::Contribution)]
+    /// ([`guided::Allocation`], mcg's extension; the GPU tracer measures the depths in about
+    /// [`gpu::MOMENT_PIXELS`] evenly spaced pixels).
+    #[arg(long, value_enum, default_value_t = guided::Allocation::Contribution)]
     #[arg(
         help = "How mcpg spreads those directions over the vertices of a path",
         help_heading = "mcpg and mcpg-nee"
     )]
-    pub mcpg_emission_allocation: emission_allocation::Allocation,
+    pub mcpg_emission_allocation: guided::Allocation,
     /// The share of `mcpg`'s vertices whose sample goes into its irradiance cache, in (0, 1]
     /// ([`guided::CACHE_ADD_PROBABILITY`]; 1 is the paper's rule).
     #[arg(long, default_value_t = guided::CACHE_ADD_PROBABILITY)]
@@ -529,7 +527,7 @@ pub struct RenderReport {
     /// How `mcpg` spread them over the depths (`--mcpg-emission-allocation`); absent for
     /// other methods.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub mcpg_emission_allocation: Option<emission_allocation::Allocation>,
+    pub mcpg_emission_allocation: Option<guided::Allocation>,
     /// `mcpg`'s K(d) after the last frame, per depth of a scattering vertex (the next frame's
     /// allocation); absent for other methods.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -1080,7 +1078,7 @@ fn start_guide(
                 reflected,
                 Box::new(EmissionAllocation::new(
                     emission_samples(args, scene),
-                    args.mcpg_emission_allocation,
+                    args.mcpg_emission_allocation.into(),
                 )),
             )
         }

@@ -1,83 +1,35 @@
-//! How many emission-only directions `mcpg` spends at each vertex of a path (mcg's extension
-//! of its emission-only directions, [`super::guided::EMISSION_SAMPLES`]).
-//!
-//! A direction that only gathers the emission it meets is worth its cost where it meets
-//! emission: at the vertices that see a light. Which depths those are depends on the scene —
-//! in the room lit from behind a panel the camera's hits see almost none of the light and the
-//! ceiling above the tray sees it whole; in a room with visible lights it is the other way
-//! round. [`Allocation::Adaptive`] measures it: each frame it collects, per depth d, the
-//! standard deviation σ(d) of one direction's estimate (its luminance times the path's
-//! throughput: what it adds to the pixel), and the next frame spends
-//!
-//! K(d) = (K̄ + 1) · Σ_d N_d / Σ_d N_d σ(d) · σ(d) − 1
-//!
-//! directions on average at a vertex of depth d, N_d the vertices at that depth, K̄ the mean
-//! ([`EmissionAllocation::new`]). A vertex's K + 1 directions (the path's own among them, all
-//! from the same mixture) leave the variance σ(d)²/(K + 1), and this allocation minimises
-//! Σ_d N_d σ(d)²/(K(d) + 1) for the same number of directions in all (a Lagrange multiplier,
-//! as for the sample counts of stratified sampling). K(d) is kept in [[`MIN_PER_VERTEX`],
-//! [`DEPTH_CAP`]·K̄] (so every depth keeps being measured), and a vertex draws ⌊K(d)⌋ or
-//! ⌈K(d)⌉ directions with the probabilities that make their mean K(d). The number is
-//! decided before any of them is traced, and the emission along each of the K + 1 directions
-//! of the vertex counts 1/(K + 1), so the estimate stays unbiased whatever the allocation.
-//!
-//! [`Allocation::Contribution`] (the default) goes one step further, within each depth: a
-//! vertex whose light reaches the pixel strongly gets more directions than one whose light
-//! hardly counts. Its expected contribution, known before any direction is traced, is
-//! c = lum(β)·sum_mc: the path throughput β to the vertex times the guide's own estimate of
-//! the radiance reflected there (MCPG Alg. 1's sum_mc = Σ w̄,
-//! [`GuidedVertex::weight_sum`](mcg_markov_guide::mcpg::GuidedVertex::weight_sum)), the
-//! estimate from which adjoint-driven splitting (Vorba and Křivánek 2016, "Adjoint-Driven
-//! Russian Roulette and Splitting in Light Transport Simulation") decides how often to split
-//! a path.
-//! How much c says about a direction's spread depends on the scene and on how well the guide
-//! has learnt it, so it is not trusted as it is: each vertex falls into a class, its depth d
-//! and the octave of c/c̄(d) ([`contribution_bin`], c̄(d) the previous frame's mean at d), and
-//! the rule above runs over the classes instead of the depths, K(class) + 1 ∝ σ(class) with
-//! the same directions in all. Where c predicts the spread the directions follow it; where it
-//! does not, the classes' σ are alike and so are their K. A class's σ comes from all frames
-//! so far, older ones weighing less ([`CLASS_MEMORY`]): from a single frame, a class whose
-//! directions happened to meet no light would get almost none in the next, and its rare hits
-//! would then count many times over (on the many-lights room that made the error 1.7 times
-//! larger). On scene (a) (128², 8 spp × 64 frames, 3 bounces, seeds 7-10) `mcpg`'s relMSE
-//! net of the reference's own error is 13 % lower than with `Adaptive`, at the same cost per
-//! frame (4 % fewer instructions); on the many-lights room, where the guide misses lights and
-//! c says little, the error is the same (`markov-guide/benches/README.md`).
-//!
-//! The CPU tracer's samplers gather [`EmissionMoments`] from every vertex. The WGSL tracer
-//! gathers the same sums in about [`gpu::MOMENT_PIXELS`](super::gpu::MOMENT_PIXELS) evenly
-//! spaced pixels, written after the pixels in its image buffer
-//! ([`gpu::moment_entries`](super::gpu::moment_entries)), and the host turns them into the next
-//! frame's K(d) with the same [`allocate`]; there the count is drawn once per depth and frame
-//! ([`gpu::frame_counts`](super::gpu::frame_counts)) rather than per vertex, so that a SIMD group
-//! runs one loop length; there `Contribution` is `Adaptive`.
+//! [`EmissionAllocation`]: how many emission-only directions a renderer draws at each guided
+//! vertex (mcg's extension of MCPG), and the statistics it spreads them by.
 
 use std::sync::Mutex;
 
 use glam::Vec3;
 
-use super::cpu::MAX_RECORDED;
-use super::scene::luminance;
+use super::guide::luminance;
 
-/// The smallest mean number of directions [`Allocation::Adaptive`] gives a depth (and
-/// [`Allocation::Contribution`] a class): one direction at every fourth vertex, so that its
+/// The depths [`EmissionMoments`] and [`EmissionAllocation`] tell apart: vertices deeper than
+/// this count as the deepest.
+pub const EMISSION_DEPTHS: usize = 16;
+
+/// The smallest mean number of directions [`EmissionPolicy::Adaptive`] gives a depth (and
+/// [`EmissionPolicy::Contribution`] a class): one direction at every fourth vertex, so that its
 /// second moment stays measured.
 pub const MIN_PER_VERTEX: f32 = 0.25;
 
-/// The largest K(d) of [`Allocation::Adaptive`], as a multiple of K̄.
+/// The largest K(d) of [`EmissionPolicy::Adaptive`], as a multiple of K̄.
 pub const DEPTH_CAP: f32 = 4.0;
 
-/// The largest K(class) of [`Allocation::Contribution`], as a multiple of K̄: a bound on the
-/// cost of one vertex (96 directions with the renderer's K̄ = 6). Scene (a) gained a little
-/// from 4 to 16 and nothing beyond.
+/// The largest K(class) of [`EmissionPolicy::Contribution`], as a multiple of K̄: a bound on the
+/// cost of one vertex (96 directions with K̄ = 6). mcg-demo's room lit from behind a panel
+/// gained a little from 4 to 16 and nothing beyond.
 pub const CONTRIBUTION_CAP: f32 = 16.0;
 
-/// How much of a class's statistics [`Allocation::Contribution`] keeps from one frame to the
+/// How much of a class's statistics [`EmissionPolicy::Contribution`] keeps from one frame to the
 /// next: its σ comes from all frames so far, the frame k frames back weighted by this to the
 /// k-th power, as one frame's rare hits would make it swing.
 pub const CLASS_MEMORY: f64 = 0.9;
 
-/// The octaves of c/c̄(d) that [`Allocation::Contribution`] tells apart at each depth
+/// The octaves of c/c̄(d) that [`EmissionPolicy::Contribution`] tells apart at each depth
 /// ([`contribution_bin`]): below 1/16 of the depth's mean (with c = 0, the vertices without a
 /// valid candidate), one bin per octave from 1/16 to 64, and 64 times the mean and above.
 pub const CONTRIBUTION_BINS: usize = 12;
@@ -89,31 +41,26 @@ const BIN_OFFSET: i32 = 5;
 /// depth had a mean c̄(d).
 const CLASSES_PER_DEPTH: usize = CONTRIBUTION_BINS + 1;
 
-/// All classes of [`Allocation::Contribution`].
-const CLASSES: usize = MAX_RECORDED * CLASSES_PER_DEPTH;
+/// All classes of [`EmissionPolicy::Contribution`].
+const CLASSES: usize = EMISSION_DEPTHS * CLASSES_PER_DEPTH;
 
 /// How [`EmissionAllocation`] spreads the directions over the vertices.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Allocation {
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum EmissionPolicy {
     /// K̄ at every vertex.
     Uniform,
-    /// K(d) + 1 ∝ σ(d) from the previous frame (the module docs).
-    #[value(help = "K(d) + 1 in proportion to depth d's spread in the frame before, the same mean")]
+    /// K(d) + 1 ∝ σ(d) over the depths, from the previous frame ([`EmissionAllocation`]).
     Adaptive,
-    /// K + 1 ∝ σ over classes of depth and expected contribution (the module docs) — the
-    /// default. The GPU tracer, whose vertices of one depth draw one count, measures no
-    /// contributions and spreads by depth, as `Adaptive`.
-    #[value(
-        help = "Like adaptive, over classes of depth and the vertex's expected contribution (throughput times the guide's radiance; adaptive on the GPU)"
-    )]
+    /// K + 1 ∝ σ over classes of depth and expected contribution, from the frames so far
+    /// ([`EmissionAllocation`]) — the default. Without contributions in the statistics (a
+    /// tracer that fills [`EmissionMoments::depths`] only) the same as `Adaptive`.
     #[default]
     Contribution,
 }
 
 /// One class's statistics of the emission-only directions in a frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Moments {
+pub struct DirectionMoments {
     /// Vertices that drew their number of directions (a float, so that
     /// [`EmissionAllocation`] can age a class's counts with its sums; exact to 2⁵³).
     pub vertices: f64,
@@ -125,7 +72,7 @@ pub struct Moments {
     pub second: f64,
 }
 
-impl Moments {
+impl DirectionMoments {
     /// A direction whose estimate has luminance `l` (a non-finite one counts as 0; most are 0,
     /// and add nothing to the sums).
     fn add_direction(&mut self, l: f64) {
@@ -163,12 +110,12 @@ impl Moments {
 
 /// Where a vertex's statistics go and which K it draws: its depth's slot and its class.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct VertexClass {
+pub struct EmissionClass {
     depth: usize,
     class: usize,
 }
 
-impl VertexClass {
+impl EmissionClass {
     /// The class of a vertex at `depth` that knows no contribution (K(d) of its depth).
     #[must_use]
     pub fn of_depth(depth: u32) -> Self {
@@ -180,38 +127,38 @@ impl VertexClass {
     }
 }
 
-/// One frame's statistics of the emission-only directions, per depth (up to the tracer's 16
-/// recorded depths; deeper vertices count as the deepest) and per class of
-/// [`Allocation::Contribution`].
+/// One frame's statistics of the emission-only directions, per depth (up to
+/// [`EMISSION_DEPTHS`]; deeper vertices count as the deepest) and per class of
+/// [`EmissionPolicy::Contribution`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EmissionMoments {
     /// Per depth.
-    pub depths: [Moments; MAX_RECORDED],
-    /// Per class (depth and bin, [`VertexClass`]); empty where no contributions were
-    /// measured (the GPU tracer's statistics, which fill `depths` only).
-    pub classes: [Moments; CLASSES],
+    pub depths: [DirectionMoments; EMISSION_DEPTHS],
+    /// Per class (depth and bin, [`EmissionClass`]); empty where no contributions were
+    /// measured (a tracer that fills `depths` only, such as mcg-demo's WGSL tracer).
+    pub classes: [DirectionMoments; CLASSES],
     /// Σ of the vertices' expected contributions c per depth.
-    pub contribution: [f64; MAX_RECORDED],
+    pub contribution: [f64; EMISSION_DEPTHS],
 }
 
 impl Default for EmissionMoments {
     fn default() -> Self {
         Self {
-            depths: [Moments::default(); MAX_RECORDED],
-            classes: [Moments::default(); CLASSES],
-            contribution: [0.0; MAX_RECORDED],
+            depths: [DirectionMoments::default(); EMISSION_DEPTHS],
+            classes: [DirectionMoments::default(); CLASSES],
+            contribution: [0.0; EMISSION_DEPTHS],
         }
     }
 }
 
 impl EmissionMoments {
     fn slot(depth: u32) -> usize {
-        (depth as usize).min(MAX_RECORDED - 1)
+        (depth as usize).min(EMISSION_DEPTHS - 1)
     }
 
     /// A vertex of class `at` ([`EmissionAllocation::class`]) and expected contribution
     /// `contribution` (a non-finite or negative one counts as 0).
-    pub fn add_vertex(&mut self, at: VertexClass, contribution: f32) {
+    pub fn add_vertex(&mut self, at: EmissionClass, contribution: f32) {
         self.depths[at.depth].vertices += 1.0;
         self.classes[at.class].vertices += 1.0;
         if contribution.is_finite() && contribution > 0.0 {
@@ -221,7 +168,7 @@ impl EmissionMoments {
 
     /// A direction at a vertex of class `at` whose estimate (throughput included) is `value`;
     /// a non-finite value counts as 0.
-    pub fn add_direction(&mut self, at: VertexClass, value: Vec3) {
+    pub fn add_direction(&mut self, at: EmissionClass, value: Vec3) {
         let l = f64::from(luminance(value));
         self.depths[at.depth].add_direction(l);
         self.classes[at.class].add_direction(l);
@@ -241,22 +188,22 @@ impl EmissionMoments {
     }
 }
 
-/// K(d) for every depth from one frame's `moments` with the mean `mean` (the module docs),
+/// K(d) for every depth from one frame's `moments` with the mean `mean` ([`EmissionAllocation`]),
 /// in [[`MIN_PER_VERTEX`], [`DEPTH_CAP`]·K̄]: K̄ everywhere when no direction met emission; a
 /// depth without directions gets the largest σ of the others (so it is measured next time).
 #[must_use]
-pub fn allocate(mean: f32, moments: &EmissionMoments) -> [f32; MAX_RECORDED] {
+pub fn allocate(mean: f32, moments: &EmissionMoments) -> [f32; EMISSION_DEPTHS] {
     spread(mean, DEPTH_CAP * mean, &moments.depths)
 }
 
 /// K + 1 ∝ σ over `classes`, the same directions in all, in [[`MIN_PER_VERTEX`], `cap`]:
 /// K̄ everywhere when no direction met emission; a class with vertices but no directions
 /// gets the largest σ of the others; one without vertices keeps K̄.
-fn spread<const N: usize>(mean: f32, cap: f32, classes: &[Moments; N]) -> [f32; N] {
+fn spread<const N: usize>(mean: f32, cap: f32, classes: &[DirectionMoments; N]) -> [f32; N] {
     let mut out = [mean; N];
     let largest = classes
         .iter()
-        .filter_map(Moments::deviation)
+        .filter_map(DirectionMoments::deviation)
         .fold(0.0_f64, f64::max);
     if !(largest > 0.0) || !(mean > 0.0) {
         return out;
@@ -280,7 +227,7 @@ fn spread<const N: usize>(mean: f32, cap: f32, classes: &[Moments; N]) -> [f32; 
     out
 }
 
-/// The bin of [`Allocation::Contribution`] of a vertex whose contribution is `ratio` times
+/// The bin of [`EmissionPolicy::Contribution`] of a vertex whose contribution is `ratio` times
 /// its depth's mean: ⌊log₂ ratio⌋ + 5 in [0, [`CONTRIBUTION_BINS`]) (read from the float's
 /// exponent); 0 for 0, negative and NaN ratios, the last bin for +∞.
 #[must_use]
@@ -301,20 +248,116 @@ pub fn round_stochastically(k: f32, u: f32) -> u32 {
     whole as u32 + u32::from(u < k - whole)
 }
 
-/// The directions per vertex of one render: the mean K̄, the policy, this frame's K per depth
-/// and class and the statistics being gathered for the next (from every rayon task's
-/// sampler at once, or from the GPU tracer's recording pixels).
+/// How many emission-only directions a renderer draws at each guided vertex (mcg's extension
+/// of MCPG): the mean K̄, the policy, this frame's K per depth and class, and the statistics
+/// being gathered for the next (from many threads at once, or from a GPU tracer's sums).
+///
+/// MCPG knows no lights: a vertex spends its one direction either on the light or on the
+/// surfaces that lead to it. A renderer can draw K more directions from the begun vertex's
+/// whole mixture ([`GuidedVertex::sample_mixture`](super::GuidedVertex::sample_mixture): no new
+/// lookups), trace each only for the emission it meets, and weight the emission found along
+/// each of the K + 1 directions (the path's own among them) 1/(K + 1). Every direction comes
+/// from the density [`GuidedVertex::pdf`](super::GuidedVertex::pdf) gives, so the estimate
+/// stays unbiased for any K that is decided before the directions are traced; K may differ from
+/// vertex to vertex.
+///
+/// A direction that only gathers the emission it meets is worth its cost where it meets
+/// emission: at the vertices that see a light. Which depths those are depends on the scene —
+/// in a room lit from behind a panel the camera's hits see almost none of the light and the
+/// ceiling above the panel sees it whole; in a room with visible lights it is the other way
+/// round. [`EmissionPolicy::Adaptive`] measures it: each frame it collects, per depth d, the
+/// standard deviation σ(d) of one direction's estimate (its luminance times the path's
+/// throughput: what it adds to the pixel), and the next frame spends
+///
+/// K(d) = (K̄ + 1) · Σ_d N_d / Σ_d N_d σ(d) · σ(d) − 1
+///
+/// directions on average at a vertex of depth d, N_d the vertices at that depth, K̄ the mean
+/// ([`EmissionAllocation::new`]). A vertex's K + 1 directions leave the variance
+/// σ(d)²/(K + 1), and this allocation minimises Σ_d N_d σ(d)²/(K(d) + 1) for the same number
+/// of directions in all (a Lagrange multiplier, as for the sample counts of stratified
+/// sampling). K(d) is kept in [[`MIN_PER_VERTEX`], [`DEPTH_CAP`]·K̄] (so every depth keeps
+/// being measured), and a vertex draws ⌊K(d)⌋ or ⌈K(d)⌉ directions with the probabilities that
+/// make their mean K(d) ([`round_stochastically`]).
+///
+/// [`EmissionPolicy::Contribution`] (the default) goes one step further, within each depth: a
+/// vertex whose light reaches the pixel strongly gets more directions than one whose light
+/// hardly counts. Its expected contribution, known before any direction is traced, is
+/// c = lum(β)·sum_mc: the path throughput β to the vertex times the guide's own estimate of
+/// the radiance reflected there (MCPG Alg. 1's sum_mc = Σ w̄,
+/// [`GuidedVertex::weight_sum`](super::GuidedVertex::weight_sum)), the estimate from which
+/// adjoint-driven splitting (Vorba and Křivánek 2016, "Adjoint-Driven Russian Roulette and
+/// Splitting in Light Transport Simulation") decides how often to split a path.
+/// How much c says about a direction's spread depends on the scene and on how well the guide
+/// has learnt it, so it is not trusted as it is: each vertex falls into a class, its depth d
+/// and the octave of c/c̄(d) ([`contribution_bin`], c̄(d) the previous frame's mean at d), and
+/// the rule above runs over the classes instead of the depths, K(class) + 1 ∝ σ(class) with
+/// the same directions in all. Where c predicts the spread the directions follow it; where it
+/// does not, the classes' σ are alike and so are their K. A class's σ comes from all frames
+/// so far, older ones weighing less ([`CLASS_MEMORY`]): from a single frame, a class whose
+/// directions happened to meet no light would get almost none in the next, and its rare hits
+/// would then count many times over (in mcg-demo's room with many lights that made the error
+/// 1.7 times larger).
+///
+/// In mcg-demo's CPU path tracer (a room lit from behind a panel, 128², 8 spp × 64 frames,
+/// 3 bounces, K̄ = 6) the directions cut the relative MSE about fourfold against the paper's
+/// one direction, and `Contribution` cuts it by another 13 % against `Adaptive` at the same
+/// cost per frame; in its room with many lights, where the guide misses lights and c says
+/// little, the error is the same (`benches/README.md`).
+///
+/// # Use
+/// One [`EmissionAllocation`] per render. Per vertex, after [`Guide::begin`](super::Guide::begin):
+/// [`EmissionAllocation::class`] of the vertex's depth and c, [`EmissionAllocation::samples_at`]
+/// for its K, and the statistics into the thread's own [`EmissionMoments`]
+/// ([`EmissionMoments::add_vertex`], then [`EmissionMoments::add_direction`] for each direction,
+/// the ones that met nothing included). At the end of a frame every thread's moments go to
+/// [`EmissionAllocation::merge`] (from many threads at once), then
+/// [`EmissionAllocation::end_frame`] sets the next frame's counts. A tracer that cannot measure
+/// c (mcg-demo's WGSL tracer, which draws one K per depth and frame so that a SIMD group runs
+/// one loop length) fills [`EmissionMoments::depths`] only; `Contribution` then spreads by depth,
+/// as `Adaptive`.
+///
+/// ```
+/// use mcg_markov_guide::glam::Vec3;
+/// use mcg_markov_guide::mcpg::{EmissionAllocation, EmissionMoments, EmissionPolicy};
+///
+/// let mut allocation = EmissionAllocation::new(6, EmissionPolicy::Contribution);
+/// for _frame in 0..3 {
+///     let mut moments = EmissionMoments::default(); // one per thread
+///     for i in 0..1000 {
+///         // A vertex at depth 1: throughput luminance × the guide's sum_mc.
+///         let c = 0.5 * (1 + i % 7) as f32;
+///         let class = allocation.class(1, c);
+///         moments.add_vertex(class, c);
+///         let k = allocation.samples_at(class, (i as f32 + 0.5) / 1000.0);
+///         for j in 0..k {
+///             // The emission along the j-th direction, times the throughput and f·cos/p:
+///             // here the brighter vertices meet more light.
+///             let found = if (i + j as usize) % 4 == 0 { Vec3::splat(c) } else { Vec3::ZERO };
+///             moments.add_direction(class, found);
+///             // radiance += found / (k + 1) as f32;
+///         }
+///     }
+///     allocation.merge(&moments);
+///     allocation.end_frame();
+/// }
+/// // The same mean, spread towards the classes whose directions vary most.
+/// let (dim, bright) = (allocation.class(1, 0.5), allocation.class(1, 3.5));
+/// let draws = |class| -> u32 {
+///     (0..1000).map(|i| allocation.samples_at(class, (i as f32 + 0.5) / 1000.0)).sum()
+/// };
+/// assert!(draws(bright) > draws(dim));
+/// ```
 #[derive(Debug)]
 pub struct EmissionAllocation {
     mean: f32,
-    policy: Allocation,
-    per_depth: [f32; MAX_RECORDED],
+    policy: EmissionPolicy,
+    per_depth: [f32; EMISSION_DEPTHS],
     per_class: [f32; CLASSES],
     /// The classes' statistics of the frames so far, each frame's weight
     /// [`CLASS_MEMORY`] times the next's.
-    history: [Moments; CLASSES],
+    history: [DirectionMoments; CLASSES],
     /// 1/c̄(d) from the frame before; 0 where unknown (the depth's vertices then draw K(d)).
-    inverse_mean: [f32; MAX_RECORDED],
+    inverse_mean: [f32; EMISSION_DEPTHS],
     gathered: Mutex<EmissionMoments>,
 }
 
@@ -322,14 +365,14 @@ impl EmissionAllocation {
     /// `mean` directions per vertex on average, spread by `policy`; the first frame spends
     /// `mean` at every vertex.
     #[must_use]
-    pub fn new(mean: u32, policy: Allocation) -> Self {
+    pub fn new(mean: u32, policy: EmissionPolicy) -> Self {
         Self {
             mean: mean as f32,
             policy,
-            per_depth: [mean as f32; MAX_RECORDED],
+            per_depth: [mean as f32; EMISSION_DEPTHS],
             per_class: [mean as f32; CLASSES],
-            history: [Moments::default(); CLASSES],
-            inverse_mean: [0.0; MAX_RECORDED],
+            history: [DirectionMoments::default(); CLASSES],
+            inverse_mean: [0.0; EMISSION_DEPTHS],
             gathered: Mutex::new(EmissionMoments::default()),
         }
     }
@@ -342,28 +385,28 @@ impl EmissionAllocation {
 
     /// How the directions are spread.
     #[must_use]
-    pub fn policy(&self) -> Allocation {
+    pub fn policy(&self) -> EmissionPolicy {
         self.policy
     }
 
-    /// K(d) of this frame, per depth: for [`Allocation::Contribution`] the mean over the
+    /// K(d) of this frame, per depth: for [`EmissionPolicy::Contribution`] the mean over the
     /// depth's classes, weighted by their vertices in the frame before.
     #[must_use]
-    pub fn per_depth(&self) -> &[f32; MAX_RECORDED] {
+    pub fn per_depth(&self) -> &[f32; EMISSION_DEPTHS] {
         &self.per_depth
     }
 
     /// The class of a vertex at `depth` whose expected contribution is `contribution`
-    /// (for [`Allocation::Contribution`] once its depth has a mean c̄(d); otherwise
-    /// [`VertexClass::of_depth`]).
+    /// (for [`EmissionPolicy::Contribution`] once its depth has a mean c̄(d); otherwise
+    /// [`EmissionClass::of_depth`]).
     #[must_use]
-    pub fn class(&self, depth: u32, contribution: f32) -> VertexClass {
-        let at = VertexClass::of_depth(depth);
+    pub fn class(&self, depth: u32, contribution: f32) -> EmissionClass {
+        let at = EmissionClass::of_depth(depth);
         let inverse = self.inverse_mean[at.depth];
-        if self.policy != Allocation::Contribution || !(inverse > 0.0) {
+        if self.policy != EmissionPolicy::Contribution || !(inverse > 0.0) {
             return at;
         }
-        VertexClass {
+        EmissionClass {
             depth: at.depth,
             class: at.depth * CLASSES_PER_DEPTH + contribution_bin(contribution * inverse),
         }
@@ -372,7 +415,7 @@ impl EmissionAllocation {
     /// The number of directions for a vertex of class `at`: [`round_stochastically`] of its
     /// K.
     #[must_use]
-    pub fn samples_at(&self, at: VertexClass, u: f32) -> u32 {
+    pub fn samples_at(&self, at: EmissionClass, u: f32) -> u32 {
         round_stochastically(self.per_class[at.class], u)
     }
 
@@ -385,8 +428,8 @@ impl EmissionAllocation {
     }
 
     /// After a frame: the next frame's K per depth and class from this frame's statistics
-    /// ([`allocate`] for [`Allocation::Adaptive`] and for [`Allocation::Contribution`]
-    /// without classes, the classes' spread otherwise; K̄ for [`Allocation::Uniform`]), the
+    /// ([`allocate`] for [`EmissionPolicy::Adaptive`] and for [`EmissionPolicy::Contribution`]
+    /// without classes, the classes' spread otherwise; K̄ for [`EmissionPolicy::Uniform`]), the
     /// depths' means c̄(d), and empty statistics.
     pub fn end_frame(&mut self) {
         let moments = std::mem::take(
@@ -394,8 +437,8 @@ impl EmissionAllocation {
                 .get_mut()
                 .unwrap_or_else(std::sync::PoisonError::into_inner),
         );
-        // Only the CPU tracer's samplers measure contributions and fill the classes.
-        let by_class = self.policy == Allocation::Contribution
+        // Only a tracer that measures contributions fills the classes.
+        let by_class = self.policy == EmissionPolicy::Contribution
             && moments.classes.iter().any(|c| c.vertices > 0.0);
         if by_class {
             for (h, m) in self.history.iter_mut().zip(&moments.classes) {
@@ -428,7 +471,7 @@ impl EmissionAllocation {
                 };
             }
         } else {
-            if self.policy != Allocation::Uniform {
+            if self.policy != EmissionPolicy::Uniform {
                 self.per_depth = allocate(self.mean, &moments);
             }
             for (d, k) in self.per_depth.iter().enumerate() {
@@ -446,7 +489,7 @@ mod tests {
     fn moments(per_depth: &[(u64, u64, f64)]) -> EmissionMoments {
         let mut m = EmissionMoments::default();
         for (d, &(v, n, second)) in per_depth.iter().enumerate() {
-            m.depths[d] = Moments {
+            m.depths[d] = DirectionMoments {
                 vertices: v as f64,
                 directions: n as f64,
                 first: 0.0,
@@ -479,11 +522,11 @@ mod tests {
         assert_eq!((k[0], k[1]), (MIN_PER_VERTEX, 4.0), "cap");
         assert_eq!(
             allocate(4.0, &EmissionMoments::default()),
-            [4.0; MAX_RECORDED]
+            [4.0; EMISSION_DEPTHS]
         );
         assert_eq!(
             allocate(4.0, &moments(&[(100, 400, 0.0), (100, 400, 0.0)])),
-            [4.0; MAX_RECORDED]
+            [4.0; EMISSION_DEPTHS]
         );
         // A depth with vertices but no directions is treated as the best measured one.
         let k = allocate(2.0, &moments(&[(100, 0, 0.0), (100, 200, 200.0)]));
@@ -494,25 +537,25 @@ mod tests {
     /// effect at `end_frame`, the uniform one never.
     #[test]
     fn vertices_draw_the_mean_and_frames_update_it() {
-        let mut a = EmissionAllocation::new(4, Allocation::Adaptive);
-        assert_eq!(a.samples_at(VertexClass::of_depth(0), 0.9), 4);
+        let mut a = EmissionAllocation::new(4, EmissionPolicy::Adaptive);
+        assert_eq!(a.samples_at(EmissionClass::of_depth(0), 0.9), 4);
         a.merge(&moments(&[(100, 400, 400.0), (100, 400, 3600.0)]));
         a.end_frame();
         assert!((a.per_depth()[0] - 1.5).abs() < 1e-5, "{:?}", a.per_depth());
         let mean: f32 = (0..1000)
-            .map(|i| a.samples_at(VertexClass::of_depth(0), (i as f32 + 0.5) / 1000.0) as f32)
+            .map(|i| a.samples_at(EmissionClass::of_depth(0), (i as f32 + 0.5) / 1000.0) as f32)
             .sum::<f32>()
             / 1000.0;
         assert!((mean - 1.5).abs() < 1e-3, "{mean}");
-        let mut u = EmissionAllocation::new(4, Allocation::Uniform);
+        let mut u = EmissionAllocation::new(4, EmissionPolicy::Uniform);
         u.merge(&moments(&[(100, 400, 400.0), (100, 400, 6400.0)]));
         u.end_frame();
-        assert_eq!(u.per_depth(), &[4.0; MAX_RECORDED]);
+        assert_eq!(u.per_depth(), &[4.0; EMISSION_DEPTHS]);
     }
 
     /// The class index of `bin` at `depth`.
-    fn class(depth: usize, bin: usize) -> VertexClass {
-        VertexClass {
+    fn class(depth: usize, bin: usize) -> EmissionClass {
+        EmissionClass {
             depth,
             class: depth * CLASSES_PER_DEPTH + bin,
         }
@@ -520,7 +563,14 @@ mod tests {
 
     /// `n` vertices of class `at` with contribution `c`, each with `per_vertex` directions
     /// whose luminances alternate between 0 and `2σ` (mean σ, deviation σ).
-    fn add(m: &mut EmissionMoments, at: VertexClass, c: f32, n: u32, per_vertex: u32, sigma: f32) {
+    fn add(
+        m: &mut EmissionMoments,
+        at: EmissionClass,
+        c: f32,
+        n: u32,
+        per_vertex: u32,
+        sigma: f32,
+    ) {
         for i in 0..n {
             m.add_vertex(at, c);
             for j in 0..per_vertex {
@@ -564,8 +614,8 @@ mod tests {
     /// directions in all: σ 1 and 4 at equal counts give (K + 1) in the ratio 1 : 4.
     #[test]
     fn contribution_classes_follow_their_standard_deviation() {
-        let mut a = EmissionAllocation::new(4, Allocation::Contribution);
-        let unknown = VertexClass::of_depth(1);
+        let mut a = EmissionAllocation::new(4, EmissionPolicy::Contribution);
+        let unknown = EmissionClass::of_depth(1);
         assert_eq!(a.class(1, 3.0), unknown, "no c̄ yet");
         let mut m = EmissionMoments::default();
         add(&mut m, unknown, 1.0, 100, 4, 2.0);
@@ -577,7 +627,7 @@ mod tests {
         assert_eq!((low, high), (class(1, 2), class(1, 5)));
         assert_eq!(
             a.class(0, 1.0),
-            VertexClass::of_depth(0),
+            EmissionClass::of_depth(0),
             "depth 0 had no vertices"
         );
         let mut m = EmissionMoments::default();
@@ -585,7 +635,7 @@ mod tests {
         add(&mut m, high, 8.0, 1000, 4, 4.0);
         a.merge(&m);
         a.end_frame();
-        let k = |at: VertexClass| a.per_class[at.class];
+        let k = |at: EmissionClass| a.per_class[at.class];
         let ratio = (k(high) + 1.0) / (k(low) + 1.0);
         assert!((ratio - 4.0).abs() < 1e-4, "{} {}", k(low), k(high));
         // K(1) reports the vertex-weighted mean of the depth's classes.
@@ -607,9 +657,9 @@ mod tests {
     /// single frame would give it the largest σ of the others.
     #[test]
     fn contribution_classes_remember_earlier_frames() {
-        let mut a = EmissionAllocation::new(4, Allocation::Contribution);
+        let mut a = EmissionAllocation::new(4, EmissionPolicy::Contribution);
         let mut m = EmissionMoments::default();
-        add(&mut m, VertexClass::of_depth(0), 1.0, 10, 0, 0.0);
+        add(&mut m, EmissionClass::of_depth(0), 1.0, 10, 0, 0.0);
         a.merge(&m);
         a.end_frame();
         let (low, high) = (class(0, 5), class(0, 8));
@@ -630,19 +680,19 @@ mod tests {
         assert!((second.0 - first.0).abs() < 1e-2, "{first:?} {second:?}");
     }
 
-    /// The GPU tracer's statistics have no contributions: `Contribution` then spreads by
+    /// Statistics without contributions (a GPU tracer's): `Contribution` then spreads by
     /// depth exactly as `Adaptive`, and every class of a depth draws its K(d).
     #[test]
     fn contribution_without_contributions_is_adaptive() {
         let depths = moments(&[(100, 400, 400.0), (100, 400, 6400.0)]);
-        let mut adaptive = EmissionAllocation::new(4, Allocation::Adaptive);
-        let mut contribution = EmissionAllocation::new(4, Allocation::Contribution);
+        let mut adaptive = EmissionAllocation::new(4, EmissionPolicy::Adaptive);
+        let mut contribution = EmissionAllocation::new(4, EmissionPolicy::Contribution);
         for a in [&mut adaptive, &mut contribution] {
             a.merge(&depths);
             a.end_frame();
         }
         assert_eq!(adaptive.per_depth(), contribution.per_depth());
-        assert_eq!(contribution.class(1, 5.0), VertexClass::of_depth(1));
+        assert_eq!(contribution.class(1, 5.0), EmissionClass::of_depth(1));
         for bin in 0..CLASSES_PER_DEPTH {
             assert_eq!(
                 contribution.per_class[class(1, bin).class],
