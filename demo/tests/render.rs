@@ -20,8 +20,7 @@ use mcg_demo::render::cpu::{
     render_frame, trace_path,
 };
 use mcg_demo::render::environment::{EnvironmentMap, Portal};
-use mcg_demo::render::guided::Allocation;
-use mcg_demo::render::guided::{EMISSION_SAMPLES, McpgSampler, new_guide};
+use mcg_demo::render::guided::{Allocation, EMISSION_SAMPLES, McpgSampler, new_guide};
 use mcg_demo::render::material::BsdfSample;
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
 use mcg_demo::render::scene::{

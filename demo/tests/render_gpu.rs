@@ -15,8 +15,7 @@ use glam::Vec3;
 use mcg_demo::render::cpu::{BsdfSampler, Method, RenderSettings, render_frame};
 use mcg_demo::render::environment::EnvironmentMap;
 use mcg_demo::render::gpu::{GpuHit, GpuRay, GpuTiming, GpuTracer, SEGMENT_BATCH, frame_counts};
-use mcg_demo::render::guided::Allocation;
-use mcg_demo::render::guided::{McpgSampler, Reflected, guide_config};
+use mcg_demo::render::guided::{Allocation, McpgSampler, Reflected, guide_config};
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
 use mcg_demo::render::scene::{
     Scene, SceneFile, TextureInfo, TriangleAttributes, WRAP_CLAMP, WRAP_MIRROR,

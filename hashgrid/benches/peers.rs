@@ -228,30 +228,23 @@ fn bench_lookup_cold(c: &mut Criterion, bits: u32, l: &Lookups, slots: &mut [Opt
             )
         })
     });
-    g.bench_function(id("hashbrown_foldhash"), |b| {
-        b.iter_custom(|n| {
-            timed(
-                n,
-                &mut (),
-                |_| flush_entries(l.brown.iter(), l.brown.capacity()),
-                |_| {
-                    black_box(hashbrown_pass(&l.brown, &l.packed));
-                },
-            )
-        })
-    });
-    g.bench_function(id("hashbrown_load_quarter"), |b| {
-        b.iter_custom(|n| {
-            timed(
-                n,
-                &mut (),
-                |_| flush_entries(l.brown_quarter.iter(), l.brown_quarter.capacity()),
-                |_| {
-                    black_box(hashbrown_pass(&l.brown_quarter, &l.packed));
-                },
-            )
-        })
-    });
+    for (name, map) in [
+        ("hashbrown_foldhash", &l.brown),
+        ("hashbrown_load_quarter", &l.brown_quarter),
+    ] {
+        g.bench_function(id(name), |b| {
+            b.iter_custom(|n| {
+                timed(
+                    n,
+                    &mut (),
+                    |_| flush_entries(map.iter(), map.capacity()),
+                    |_| {
+                        black_box(hashbrown_pass(map, &l.packed));
+                    },
+                )
+            })
+        });
+    }
     g.bench_function(id("fxhashmap"), |b| {
         b.iter_custom(|n| {
             timed(

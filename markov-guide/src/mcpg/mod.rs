@@ -62,8 +62,8 @@
 //! the path's depths and over classes of like expected contribution (the throughput times
 //! [`GuidedVertex::weight_sum`]) by [`EmissionAllocation`], the emission along each of the
 //! K + 1 directions weighted 1/(K + 1) (mcg's extension; mcg-demo's `--mcpg-emission-samples`
-//! and `--mcpg-emission-allocation`). Its relative MSE is then 0.035 of BSDF sampling's at equal samples, and 4.3
-//! times lower than with the paper's one direction. Against light sampling (next-event
+//! and `--mcpg-emission-allocation`). Its relative MSE is then 0.035 of BSDF sampling's at
+//! equal samples, and 4.3 times lower than with the paper's one direction. Against light sampling (next-event
 //! estimation with MIS, what renderers use today) it is about even at equal CPU time, a little
 //! ahead: 0.93-1.03 of its error × time (0.97 on average over four seeds) on an Intel Ice Lake
 //! server core, where a guided frame costs 4.3 times a light-sampled one; with the directions
