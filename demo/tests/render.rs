@@ -25,7 +25,7 @@ use mcg_demo::render::material::BsdfSample;
 use mcg_demo::render::mcmm::{McmmRenderer, McmmScore, mcmm_params};
 use mcg_demo::render::scene::{
     Camera, ENVIRONMENT_PICK, MIN_TEXTURE_POWER, Scene, SceneError, SceneFile, TriangleAttributes,
-    frame_time, luminance,
+    frame_time,
 };
 use mcg_demo::render::scene_generator::{
     DOOR_OPENS_AT_FRAME, SCENE_NAMES, SKY_ROOM_ENVIRONMENT, built_in_files, built_in_scenes,
@@ -33,7 +33,7 @@ use mcg_demo::render::scene_generator::{
 };
 use mcg_demo::render::{Device, RenderArgs, output, render, write_outputs};
 use mcg_gpu_backend::sampling::next_uniform;
-use mcg_markov_guide::mcpg::EmissionAllocation;
+use mcg_markov_guide::mcpg::{EmissionAllocation, luminance};
 use mcg_tests::RunningStats;
 use mcg_tests::assert_chi_square;
 

@@ -29,9 +29,9 @@ use core::f32::consts::{PI, TAU};
 use std::path::Path;
 
 use glam::{Vec2, Vec3};
+use mcg_markov_guide::mcpg::luminance;
 
 use super::output::RgbImage;
-use super::scene::luminance;
 
 /// An equirectangular environment map with its sampling tables (see the module docs).
 #[derive(Clone, Debug, PartialEq)]

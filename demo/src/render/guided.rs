@@ -21,12 +21,12 @@ use mcg_markov_guide::mcpg::{
     BeginUniforms, CandidateUniforms, EMISSION_DEPTHS, EmissionAllocation, EmissionClass,
     EmissionMoments, EmissionPolicy, FinishUniforms, GridUniforms, Guide, GuideConfig, GuideError,
     GuidedSample, GuidedVertex, PendingFinish, SampleUniforms, Scatter, Vertex as GuideVertex,
-    VertexObservation,
+    VertexObservation, luminance,
 };
 
 use super::cpu::{MAX_RECORDED, Observation, Vertex, VertexSampler};
 use super::material::{BsdfSample, Material};
-use super::scene::{Scene, luminance};
+use super::scene::Scene;
 
 /// The material at a vertex as the guide's fallback technique: [`Material::sample`] with the
 /// lobe choice and the first direction uniform taken from one uniform (the part of `u.x` below

@@ -108,14 +108,14 @@ use mcg_markov_guide::mcmm::{
     McmmParams, McmmPrior, PixelState, PixelStateBuffers, SampleChoice, ScoreDensity,
     bspline_offset, choose_technique, collaborative_discovery, technique_pdf, update,
 };
-use mcg_markov_guide::mcpg::Scatter;
+use mcg_markov_guide::mcpg::{Scatter, luminance};
 use mcg_smis::{select_uniform, xor_source_lane};
 use mcg_vmf::{MapPrior, PriorDecay};
 use rayon::prelude::*;
 
 use super::cpu::{RenderSettings, offset, path_seed};
 use super::guided::MaterialScatter;
-use super::scene::{Scene, luminance};
+use super::scene::Scene;
 use crate::Result;
 
 /// Tile width in pixels (the population one xor permutation acts on).

@@ -68,6 +68,7 @@ use std::sync::Arc;
 
 use glam::{Mat4, Quat, Vec2, Vec3};
 use gltf::animation::{Interpolation, Property, util::ReadOutputs};
+use mcg_markov_guide::mcpg::luminance;
 
 use bytemuck::{Pod, Zeroable};
 
@@ -1855,12 +1856,6 @@ pub fn srgb_to_linear(c: f32) -> f32 {
     } else {
         ((c + 0.055) / 1.055).powf(2.4)
     }
-}
-
-/// Rec. 709 luminance of linear RGB.
-#[must_use]
-pub fn luminance(c: Vec3) -> f32 {
-    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
 }
 
 impl Scene {

@@ -835,7 +835,7 @@ struct LightSample {
     pdf: f32,
 }
 
-// `scene::luminance`: Rec. 709 luminance of linear RGB.
+// `mcpg::luminance`: Rec. 709 luminance of linear RGB.
 fn luminance(c: vec3<f32>) -> f32 {
     return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
 }

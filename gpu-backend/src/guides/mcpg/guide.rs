@@ -94,11 +94,11 @@ impl GpuMcpgGuide {
     /// The binding of the guide's words (`mcpg_words`) in the guide's group.
     pub const GUIDE_WORDS_BINDING: u32 = 2;
     /// The binding of the same words viewed as `vec4<u32>` (`mcpg_words4`) in the guide's
-    /// group: a candidate's state is read as two 16-byte loads instead of eight atomic word
-    /// loads (WGSL has no plain load from an atomic array). The view aliases
-    /// [`GUIDE_WORDS_BINDING`](Self::GUIDE_WORDS_BINDING)'s buffer; a read racing a writer
-    /// may come back torn, which the state's guard stamp (a hash of its eight words) detects,
-    /// and the candidate is dropped, as a torn atomic read was.
+    /// group: a candidate's state is read, and a locked writer's state written, as two 16-byte
+    /// accesses instead of eight atomic word accesses (WGSL has no plain access to an atomic
+    /// array). The view aliases [`GUIDE_WORDS_BINDING`](Self::GUIDE_WORDS_BINDING)'s buffer;
+    /// a read racing a writer may come back torn, which the state's guard stamp (a hash of its
+    /// eight words) detects, and the candidate is dropped, as a torn atomic read was.
     pub const GUIDE_WORDS_VEC4_BINDING: u32 = 3;
 
     /// The largest buffer, in bytes, the guide may bind on `ctx`'s device: the smaller of

@@ -101,7 +101,7 @@ struct McpgParams {
 
 @group(#{MCG_MCPG_GROUP}) @binding(0) var<uniform> mcpg_params: McpgParams;
 @group(#{MCG_MCPG_GROUP}) @binding(2) var<storage, read_write> mcpg_words: array<atomic<u32>>;
-// The same buffer as `mcpg_words`, viewed as vec4 for the states' plain loads
+// The same buffer as `mcpg_words`, viewed as vec4 for the states' plain loads and stores
 // (`GpuMcpgGuide::GUIDE_WORDS_VEC4_BINDING`): every state starts at a multiple of 4 words.
 @group(#{MCG_MCPG_GROUP}) @binding(3) var<storage, read_write> mcpg_words4: array<vec4<u32>>;
 
@@ -307,11 +307,15 @@ fn mcpg_lock(guard_word: u32) -> bool {
     return false;
 }
 
+// Writes the eight words as two 16-byte plain stores through the vec4 view, then the stamp
+// into the guard. WGSL's atomics are relaxed, so eight atomic stores ordered the words no
+// better against a reader: what keeps a reader from using a mix of old and new words is the
+// stamp, a hash of all eight, which `mcpg_load_state` checks. (On lavapipe each store with a
+// per-invocation address is a loop over the SIMD group's lanes: two instead of eight.)
 fn mcpg_write_and_unlock(is_static: bool, slot: u32, w: array<u32, 8>) {
-    let base = mcpg_state_word(is_static, slot);
-    for (var i = 0u; i < 8u; i += 1u) {
-        atomicStore(&mcpg_words[base + i], w[i]);
-    }
+    let q = mcpg_state_word(is_static, slot) / 4u;
+    mcpg_words4[q] = vec4<u32>(w[0], w[1], w[2], w[3]);
+    mcpg_words4[q + 1u] = vec4<u32>(w[4], w[5], w[6], w[7]);
     atomicStore(&mcpg_words[mcpg_guard_word(is_static, slot)], mcpg_stamp(w));
 }
 
