@@ -558,7 +558,7 @@ pub struct RenderReport {
     /// included.
     pub frame_times_s: Vec<f64>,
     /// CPU seconds (user + system, all threads) of this process during each frame, where the
-    /// system reports them (Linux `/proc/self/stat`; empty elsewhere). On a machine shared with
+    /// system reports them (its process CPU clock; empty where it has none). On a machine shared with
     /// other work they measure a frame's cost better than the wall clock.
     pub frame_cpu_times_s: Vec<f64>,
     /// Of the frame times, those of each frame's [`Guide::end_frame`] (`mcpg` only; empty for
@@ -1146,16 +1146,13 @@ fn cpu_frame(
     Ok(image)
 }
 
-/// CPU seconds (user + system) this process has used, from `/proc/self/stat` (fields 14 and
-/// 15, in clock ticks of 1/100 s); `None` where that file does not exist.
+/// CPU seconds (user + system, all threads) this process has used, from the system's
+/// process CPU clock (`clock_gettime(CLOCK_PROCESS_CPUTIME_ID)`, nanoseconds, on Linux and
+/// macOS; `GetProcessTimes`, 100 ns, on Windows); `None` where the system gives none.
 fn process_cpu_seconds() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // The fields after the parenthesised command name start with field 3.
-    let rest = stat.get(stat.rfind(')')? + 2..)?;
-    let mut fields = rest.split_whitespace().skip(11);
-    let user: f64 = fields.next()?.parse().ok()?;
-    let system: f64 = fields.next()?.parse().ok()?;
-    Some((user + system) / 100.0)
+    cpu_time::ProcessTime::try_now()
+        .ok()
+        .map(|t| t.as_duration().as_secs_f64())
 }
 
 /// The process-wide GPU tracer, created on first use; the error says why there is none.

@@ -385,9 +385,10 @@ struct Runs {
     equal_time: Option<Rendered>,
 }
 
-/// The least total CPU time (seconds) that [`frame_costs`] trusts: the process's CPU clock
-/// counts in 10 ms ticks, so much shorter runs read as 0 (which made the equal-time frame
-/// count unbounded) and runs of fewer than 10 ticks are mostly rounding.
+/// The least total CPU time (seconds) that [`frame_costs`] trusts: shorter runs (the tests'
+/// small renders) are mostly the threads' start-up and scheduling, and where the system's
+/// process clock counts in coarse ticks they read as 0 (which made the equal-time frame count
+/// unbounded).
 const MIN_CPU_SECONDS: f64 = 0.1;
 
 /// The most frames an equal-time render gets, as a multiple of the equal-samples frames.
