@@ -56,27 +56,23 @@
 //! `DashMap`, std's `HashMap`) and how to run them are in `benches/README.md`.
 //!
 //! ## Performance
-//! Against hashbrown (foldhash) holding the same keys (fastest of repeated passes on a shared
-//! 2-vCPU AMD EPYC VM, baseline x86-64, 2¹⁶ / 2¹⁹ slots at load 1/4; peer ÷ mcg, > 1: mcg
-//! faster; seventh session of issue 21): with warm caches [`HashTable::get`] 0.80–0.81 /
-//! 0.66–0.70 (33 instructions against 33), [`HashTable::find_many`] plus the value reads
-//! 1.08–1.10 / 1.02–1.07 (39 instructions), [`HashTable::get_many`] 1.01–1.03 / 0.73–0.78;
-//! with the structures flushed from the caches `get` 0.75–0.77 / 0.79–0.83 (and 1.08–1.39 from
-//! 2²⁰ to 2²² slots, where hashbrown's control bytes leave the L2 cache), `get_many`
-//! 1.25–1.26 / 1.51–1.56 and `find_many` 1.31–1.32 / 1.39–1.41 (both hash a chunk of 16 keys,
-//! eight at a time with AVX2 where `std` detects it at run time, and prefetch its lines before
-//! deciding the chunk before it; with SSE2 instead, four at a time, `find_many` warm
-//! 0.87–0.89 / 0.88–0.96 at 50 instructions, `get_many` 0.84–0.86 / 0.68–0.72); an
-//! insert 0.87–1.06 / 0.71–0.75 (fourth session); [`ConcurrentTable`] inserted from two
-//! threads 4.0–4.7× / 3.4–5.4× faster than `DashMap` and 3.9–10.1× at 2²² on the idle VM
-//! (ninth session; 1.45–2.84× on two cores shared with four builds). The rest of the gap is instructions per lookup:
-//! the 4-word key's hash is 20 of `get`'s 33 (foldhash hashes a packed `u64` in ≈ 5) and no
-//! cheaper finisher passes the occupancy suite, while a prototype with the checksum beside the
-//! value (one line per lookup) gained at most 8 %. Run
+//! Against hashbrown (foldhash) holding the same keys: peer ÷ mcg (> 1: mcg faster), baseline
+//! x86-64, 2-vCPU VMs, 2¹⁶ / 2¹⁹ slots at the table's load of 1/4, fastest of repeated passes:
+//!
+//! | operation | warm caches | caches flushed |
+//! |---|---|---|
+//! | [`HashTable::get`] (33 instructions, hashbrown 33) | 0.80–0.81 / 0.66–0.70 | 0.75–0.83 (AMD EPYC), 0.92–0.99 (Intel Ice Lake); 1.08–1.39 from 2²⁰ slots |
+//! | [`HashTable::find_many`] + value reads | 1.08–1.10 / 1.02–1.07 (AVX2; SSE2 0.87–0.96) | 1.31–1.41 |
+//! | [`HashTable::get_many`] | 1.01–1.03 / 0.73–0.78 | 1.25–1.56 |
+//! | insert | 0.87–1.06 / 0.71–0.75 | — |
+//! | [`ConcurrentTable`], inserts from 2 threads, ÷ `DashMap` | 3.4–5.4× at 2¹⁹, 3.9–10.1× at 2²² | — |
+//!
+//! What is left of the warm gap is the 4-word key's hash (20 of `get`'s 33 instructions; no
+//! cheaper finisher passes the occupancy suite); of the cold gap below 2²⁰ slots, the memory
+//! per key that load 1/4 costs (hashbrown held at load 1/4 is the slower, 1.01–1.20). Run
+//! `cargo bench -p mcg-hashgrid --bench peers`, `scripts/hashgrid-instructions` or
 //! `cargo run --release -p mcg-hashgrid --example instructions -- CASE BITS PASSES time`
-//! (`cold` instead of `time` flushes the caches first),
-//! `cargo bench -p mcg-hashgrid --bench peers` and `scripts/hashgrid-instructions`; numbers
-//! and diary: `benches/README.md`.
+//! (`cold` instead of `time` flushes the caches first); numbers and diary: `benches/README.md`.
 //!
 //! ## Features
 //! - `std` (default): float functions from the standard library; implies `alloc`. On x86-64
