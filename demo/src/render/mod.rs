@@ -558,8 +558,8 @@ pub struct RenderReport {
     /// included.
     pub frame_times_s: Vec<f64>,
     /// CPU seconds (user + system, all threads) of this process during each frame, where the
-    /// system reports them (its process CPU clock; empty where it has none). On a machine shared with
-    /// other work they measure a frame's cost better than the wall clock.
+    /// system reports them (its process CPU clock; empty where it has none). On a machine
+    /// shared with other work they measure a frame's cost better than the wall clock.
     pub frame_cpu_times_s: Vec<f64>,
     /// Of the frame times, those of each frame's [`Guide::end_frame`] (`mcpg` only; empty for
     /// the other methods); on the GPU the guide's per-frame pass, timestamped like the frame

@@ -55,24 +55,24 @@
 //! densities and the transition with its store each take 10-25 %. Two threads sharing one
 //! `&Guide` ran 1.8-2.1 times as fast as one.
 //!
-//! In mcg-demo's 3-bounce CPU path tracer of a small room lit from behind a panel (128 × 128,
-//! 8 samples per pixel × 64 frames, no light sampling, [`McpgParams::confidence_samples`] 16),
-//! the guide also draws more directions per vertex from the begun vertex's whole mixture
-//! ([`GuidedVertex::sample_mixture`]) for the emission they meet: K = 6 on average, spread over
-//! the path's depths and over classes of like expected contribution (the throughput times
-//! [`GuidedVertex::weight_sum`]) by [`EmissionAllocation`], the emission along each of the
-//! K + 1 directions weighted 1/(K + 1) (mcg's extension; mcg-demo's `--mcpg-emission-samples`
-//! and `--mcpg-emission-allocation`). Its relative MSE is then 0.035 of BSDF sampling's at
-//! equal samples, and 4.3 times lower than with the paper's one direction. Against light sampling (next-event
-//! estimation with MIS, what renderers use today) it is about even at equal CPU time, a little
-//! ahead: 0.93-1.03 of its error × time (0.97 on average over four seeds) on an Intel Ice Lake
-//! server core, where a guided frame costs 4.3 times a light-sampled one; with the directions
-//! spread by depth only it was 1.07 there and 0.93 on an AMD Zen 4 core, whose guided frame
-//! costs 3.5 times. The extra directions are a third of a guided frame. Beside light
-//! sampling — the guide sampling the scattered direction, one light sample per vertex, MIS
-//! with [`GuidedVertex::pdf`], the chains learning only the MIS-weighted share of the
-//! emission ([`VertexObservation::emission_weight`]) — it reaches 0.28 of light sampling's
-//! relative MSE, 0.70-0.74 at equal CPU time (`benches/README.md` has the commands).
+//! In mcg-demo's 3-bounce CPU path tracer of a small room lit from behind a panel (128 × 128, 8
+//! samples per pixel × 64 frames, no light sampling, [`McpgParams::confidence_samples`] 16), the
+//! guide also draws more directions per vertex from the begun vertex's whole mixture
+//! ([`GuidedVertex::sample_mixture`]) for the emission they meet: K = 6 on average, spread over the
+//! path's depths and over classes of like expected contribution (the throughput times
+//! [`GuidedVertex::weight_sum`]) by [`EmissionAllocation`], the emission along each of the K + 1
+//! directions weighted 1/(K + 1) (mcg's extension; mcg-demo's `--mcpg-emission-samples` and
+//! `--mcpg-emission-allocation`). Its relative MSE is then 0.035 of BSDF sampling's at equal
+//! samples, and 4.3 times lower than with the paper's one direction. Against light sampling
+//! (next-event estimation with MIS, what renderers use today) it is about even at equal CPU time, a
+//! little ahead: 0.93-1.03 of its error × time (0.97 on average over four seeds) on an Intel Ice
+//! Lake server core, where a guided frame costs 4.3 times a light-sampled one; with the directions
+//! spread by depth only it was 1.07 there and 0.93 on an AMD Zen 4 core, whose guided frame costs
+//! 3.5 times. The extra directions are a third of a guided frame. Beside light sampling — the guide
+//! sampling the scattered direction, one light sample per vertex, MIS with [`GuidedVertex::pdf`],
+//! the chains learning only the MIS-weighted share of the emission
+//! ([`VertexObservation::emission_weight`]) — it reaches 0.28 of light sampling's relative MSE,
+//! 0.70-0.74 at equal CPU time (`benches/README.md` has the commands).
 //!
 //! # The parts
 //! Per path vertex x with normal n at time T:
