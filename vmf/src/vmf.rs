@@ -5,7 +5,7 @@ use core::f32::consts::FRAC_1_PI;
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 
-use crate::constants::{KAPPA_DIRECT_EXPM1, KAPPA_SAMPLE_SATURATED, KAPPA_SATURATED, KAPPA_TINY};
+use crate::constants::{KAPPA_SAMPLE_SATURATED, KAPPA_SATURATED, KAPPA_TINY};
 use crate::{Frame, UNIFORM_SPHERE_PDF, VmfError, math};
 
 /// A von Mises-Fisher lobe on S²: mean direction μ (unit length) and concentration κ ≥ 0.
@@ -234,6 +234,15 @@ pub(crate) fn normalization(kappa: f32) -> f32 {
 ///   that 1 + x does not cancel as ξ → 1;
 /// - above [`KAPPA_SAMPLE_SATURATED`], e^{−2κ} vanishes: expm1(−2κ) = −1 and no `exp` is needed.
 ///
+/// e^{−2κ} and expm1(−2κ) both come from the inlined polynomial of
+/// [`sample_batch`](crate::sample_batch) (`math::exp_expm1_fast`, Cephes' `expf`; expm1 keeps
+/// its relative precision as 2κ → 0), one evaluation instead of the platform's `expf` and,
+/// below κ = ¼, Kahan's expm1 (a second `expf` and a `logf`). The `ln` stays the platform's:
+/// near the antipode (r → −2) sin θ = √(−r(2 + r)) takes its relative error to the polar
+/// angle, and the polynomial `ln` of `sample_batch` (a few ulps) moved θ by up to 4·10⁻⁴ rad
+/// there (`polar_angle_is_the_exact_inverse_cdf`, κ = 0.1, ξ = 1 − 5·2⁻²⁴), where libm's
+/// `logf` (under one ulp) stays within the test's bound.
+///
 /// ξ is clamped into [0, 1 − 2⁻²⁴] first ([`clamp_uniform`]; NaN → 0), so no ξ gives NaN.
 #[inline(always)]
 pub(crate) fn cos_theta_minus_one(kappa: f32, xi: f32) -> f32 {
@@ -244,14 +253,10 @@ pub(crate) fn cos_theta_minus_one(kappa: f32, xi: f32) -> f32 {
     let (decay, scale) = if kappa > KAPPA_SAMPLE_SATURATED {
         (0.0, -1.0)
     } else {
-        let decay = math::exp(-2.0 * kappa);
-        // expm1(−2κ): `decay − 1` cannot cancel once 2κ > ½ (see `math::exp_m1`).
-        let scale = if kappa > KAPPA_DIRECT_EXPM1 {
-            decay - 1.0
-        } else {
-            math::exp_m1(-2.0 * kappa)
-        };
-        (decay, scale)
+        // −2κ ∈ [−34, 0): inside the polynomial's range [−87, 0]. Its expm1 is `decay − 1`
+        // wherever that cannot cancel (above κ = ¼, `KAPPA_DIRECT_EXPM1`, the WGSL twin's
+        // switch) and r + r²P(r) near 0.
+        math::exp_expm1_fast(-2.0 * kappa)
     };
     let x = xi * scale;
     // Selects rather than branches: whether ξ falls in the tail is a coin flip.
