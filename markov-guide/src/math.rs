@@ -53,6 +53,7 @@ pub(crate) fn all_finite(v: mcg_vmf::glam::Vec3) -> bool {
 
 /// Radiance that may reach a chain's estimate or the irradiance cache: 0 when any component
 /// is NaN or infinite, else `v` with negative components made 0 (one rule for both).
+#[cfg(feature = "std")]
 #[inline(always)]
 pub(crate) fn finite_radiance(v: mcg_vmf::glam::Vec3) -> mcg_vmf::glam::Vec3 {
     if all_finite(v) {

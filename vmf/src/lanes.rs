@@ -22,9 +22,107 @@ use crate::{MapPrior, SufficientStats, Vmf};
 /// can tell from 0.
 const EXP_FLOOR: f32 = -87.0;
 
-/// The per-lane inputs [`VmfLanes::from_stats`] gathers: ȳ − x (3), N_eff, N_p, 1 − r_p,
-/// 1 − r̄ and the weight.
-const LANE_INPUTS: usize = 8;
+/// What [`VmfLanes::set_from_inputs`] builds its lobes from, lane-wise (structure of arrays):
+/// per lane the offset ȳ − x from the shading point to the statistics' mean target, the parts
+/// of [`SufficientStats::to_vmf`]'s MAP posterior (N_eff, N_p and 1 − r_p, from
+/// [`MapPrior`]: the posterior complement is (N_eff (1 − r̄) + N_p (1 − r_p)) / (N_eff + N_p)),
+/// 1 − r̄, and the mixture weight.
+///
+/// [`set`](Self::set) fills a lane from statistics and a prior as
+/// [`VmfLanes::from_stats`] does. A guide whose per-lane quantities come from its own
+/// arrays (MCPG's distance prior N_p = max(N_min, s/|ȳ − x|²), its shares) can instead write
+/// the arrays in passes over whole lanes, which the compiler vectorises, and hand them over
+/// once. A lane with weight 0 (or a weight that is not finite and positive) stays empty.
+///
+/// # Example
+/// ```
+/// use mcg_vmf::{LobeInputs, MapPrior, SufficientStats, VmfLanes, glam::Vec3};
+///
+/// let stats = SufficientStats {
+///     mean_target: Vec3::new(0.0, 0.0, 4.0),
+///     weight_sum: 2.0,
+///     one_minus_mean_cosine: 0.05,
+///     sample_count: 12,
+/// };
+/// let x = Vec3::ZERO;
+/// let prior = MapPrior::inverse_square_distance(1.0, 1e-4, stats.target_distance(x));
+/// let mut inputs = LobeInputs::<4>::EMPTY;
+/// inputs.set(1, &stats, x, prior, 0.5);
+/// let mut lanes = VmfLanes::<4>::EMPTY;
+/// lanes.set_from_inputs(&inputs, None);
+/// // The lobe `SufficientStats::to_vmf` builds, in lane 1 with weight ½.
+/// assert_eq!(lanes.lobe(1), stats.to_vmf(x, prior).unwrap());
+/// assert_eq!(lanes.weight(1), 0.5);
+/// assert!(!lanes.is_set(0));
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LobeInputs<const N: usize> {
+    /// x of ȳ − x.
+    pub offset_x: [f32; N],
+    /// y of ȳ − x.
+    pub offset_y: [f32; N],
+    /// z of ȳ − x.
+    pub offset_z: [f32; N],
+    /// N_eff, the sample count as the prior's decay weighs it (N² or N,
+    /// [`PriorDecay`](crate::PriorDecay)).
+    pub n_eff: [f32; N],
+    /// N_p ≥ 0, the prior's virtual samples (+∞: the prior alone).
+    pub prior_weight: [f32; N],
+    /// 1 − r_p, the complement of the prior's mean cosine.
+    pub prior_complement: [f32; N],
+    /// 1 − r̄, the complement of the statistics' mean cosine.
+    pub one_minus_mean_cosine: [f32; N],
+    /// The lane's mixture weight; 0 for a lane without a lobe (N = 0 or w̄ = 0).
+    pub weight: [f32; N],
+}
+
+impl<const N: usize> Default for LobeInputs<N> {
+    fn default() -> Self {
+        Self::EMPTY
+    }
+}
+
+impl<const N: usize> LobeInputs<N> {
+    /// Every lane without a lobe (all zero, no prior).
+    pub const EMPTY: Self = Self {
+        offset_x: [0.0; N],
+        offset_y: [0.0; N],
+        offset_z: [0.0; N],
+        n_eff: [0.0; N],
+        prior_weight: [0.0; N],
+        prior_complement: [1.0; N],
+        one_minus_mean_cosine: [0.0; N],
+        weight: [0.0; N],
+    };
+
+    /// Lane `i` from `stats` seen from `x` with `prior` and mixture weight `weight` (0 when the
+    /// statistics are empty: N = 0 or w̄ = 0), what [`VmfLanes::from_stats`] gathers per lane.
+    ///
+    /// # Panics
+    /// If `i ≥ N`.
+    #[inline(always)]
+    pub fn set(
+        &mut self,
+        i: usize,
+        stats: &SufficientStats,
+        x: Vec3,
+        prior: MapPrior,
+        weight: f32,
+    ) {
+        let d = stats.mean_target - x;
+        let (n_eff, prior_weight, prior_complement) = stats.posterior_parts(prior);
+        // w̄ > 0 (`is_valid`) and N ≠ 0, as 1/0 for the lane pass.
+        let has = (stats.sample_count != 0) & stats.is_valid();
+        self.offset_x[i] = d.x;
+        self.offset_y[i] = d.y;
+        self.offset_z[i] = d.z;
+        self.n_eff[i] = n_eff;
+        self.prior_weight[i] = prior_weight;
+        self.prior_complement[i] = prior_complement;
+        self.one_minus_mean_cosine[i] = stats.one_minus_mean_cosine;
+        self.weight[i] = if has { weight } else { 0.0 };
+    }
+}
 
 /// Up to `N` vMF lobes with mixture weights, stored lane-wise: the density
 /// Σᵢ wᵢ V(ω | μᵢ, κᵢ) in one pass over the lanes.
@@ -108,8 +206,7 @@ impl<const N: usize> VmfLanes<N> {
 
     /// The lobes [`SufficientStats::to_vmf`] builds at `x`, each multiplied by `product`
     /// ([`Vmf::product_lobe`]) when given, with mixture weights: `lane(i)` gives lane `i`'s
-    /// statistics, prior and weight (it is called once per lane, and again for the rare lane
-    /// the scalar path redoes, so it must give the same answer each time). What a guide that
+    /// statistics, prior and weight (called once per lane, into [`LobeInputs`]). What a guide that
     /// reconstructs every accessed state's lobe at a shading point (MCPG Alg. 2 lines 6-8,
     /// with Open PGL's cosine product) does per vertex, in one pass over the lanes. Lanes
     /// whose `to_vmf` gives `None` (empty statistics, ȳ at `x`) or whose weight is not finite
@@ -144,64 +241,63 @@ impl<const N: usize> VmfLanes<N> {
     ) {
         // Gather the lanes' inputs (the fields of the statistics, the posterior's parts and
         // the weights) into arrays, then do the arithmetic over whole lanes.
-        let mut lanes = [[0.0_f32; N]; LANE_INPUTS];
+        let mut inputs = LobeInputs::EMPTY;
         for i in 0..N {
             let (s, prior, weight) = lane(i);
-            let d = s.mean_target - x;
-            let (n_eff, prior_weight, prior_complement) = s.posterior_parts(prior);
-            // w̄ > 0 (`is_valid`) and N ≠ 0, as 1/0 for the lane pass.
-            let has = (s.sample_count != 0) & s.is_valid();
-            let inputs = [
-                d.x,
-                d.y,
-                d.z,
-                n_eff,
-                prior_weight,
-                prior_complement,
-                s.one_minus_mean_cosine,
-                if has { weight } else { 0.0 },
-            ];
-            for (values, v) in lanes.iter_mut().zip(inputs) {
-                values[i] = v;
-            }
+            inputs.set(i, &s, x, prior, weight);
         }
+        self.set_from_inputs(&inputs, product);
+    }
+
+    /// The lobes of `inputs` (see [`LobeInputs`]), each multiplied by `product`
+    /// ([`Vmf::product_lobe`]) when given, with their weights: every lane of `self` is
+    /// overwritten. μ and κ of every lane are bit-identical to [`SufficientStats::to_vmf`]'s
+    /// (then `product_lobe`'s) for the statistics and prior the lane's inputs come from (see
+    /// [`from_stats`](Self::from_stats)); a lane whose |ȳ − x|² leaves the normal range is
+    /// redone by the scalar path.
+    #[inline]
+    pub fn set_from_inputs(&mut self, inputs: &LobeInputs<N>, product: Option<&Vmf>) {
         match product {
-            Some(p) => self.lobes_from_inputs::<true>(&lanes, p),
-            None => self.lobes_from_inputs::<false>(&lanes, &Vmf::uniform()),
+            Some(p) => self.lobes_from_inputs::<true>(inputs, p),
+            None => self.lobes_from_inputs::<false>(inputs, &Vmf::uniform()),
         }
-        // A lane marked by a negative weight has |ȳ − x|² outside the normal range.
+        // A lane marked by a negative weight has |ȳ − x|² outside the normal range: `to_vmf`'s
+        // μ (`normalize_robust`, which rescales) with the same κ.
         for i in 0..N {
             if self.weight[i] < 0.0 {
                 self.set(i, &Vmf::uniform(), 0.0);
-                let (s, prior, weight) = lane(i);
-                if let Some(lobe) = s.to_vmf(x, prior) {
+                let d = Vec3::new(inputs.offset_x[i], inputs.offset_y[i], inputs.offset_z[i]);
+                if let Some(mu) = math::normalize_robust(d) {
+                    let kappa = kappa_lane(
+                        inputs.n_eff[i],
+                        inputs.prior_weight[i],
+                        inputs.prior_complement[i],
+                        inputs.one_minus_mean_cosine[i],
+                    );
+                    let lobe = Vmf::from_unit_mean(mu, kappa);
                     let lobe = product.map_or(lobe, |p| lobe.product_lobe(p));
-                    self.set(i, &lobe, weight);
+                    self.set(i, &lobe, inputs.weight[i]);
                 }
             }
         }
     }
 
-    /// The lanes from [`from_stats`](Self::from_stats)' gathered inputs: μ from the offsets
-    /// ȳ − x, κ from the posterior's parts (N_eff, N_p, 1 − r_p, 1 − r̄), times `product` when
-    /// `PRODUCT`, and the scales. A lane whose |ȳ − x|² leaves the normal range gets the
-    /// negated weight (the caller redoes it by the scalar path). Writes every lane of `self`.
+    /// The lanes from `inputs`: μ from the offsets ȳ − x, κ from the posterior's parts
+    /// (N_eff, N_p, 1 − r_p, 1 − r̄), times `product` when `PRODUCT`, and the scales. A lane
+    /// whose |ȳ − x|² leaves the normal range gets the negated weight (the caller redoes it by
+    /// the scalar path). Writes every lane of `self`.
     #[inline(always)]
-    fn lobes_from_inputs<const PRODUCT: bool>(
-        &mut self,
-        lanes: &[[f32; N]; LANE_INPUTS],
-        product: &Vmf,
-    ) {
-        let [
-            dx,
-            dy,
-            dz,
+    fn lobes_from_inputs<const PRODUCT: bool>(&mut self, inputs: &LobeInputs<N>, product: &Vmf) {
+        let LobeInputs {
+            offset_x: dx,
+            offset_y: dy,
+            offset_z: dz,
             n_eff,
             prior_weight,
             prior_complement,
-            sample,
+            one_minus_mean_cosine: sample,
             weight,
-        ] = lanes;
+        } = inputs;
         for i in 0..N {
             let d = Vec3::new(dx[i], dy[i], dz[i]);
             let l2 = d.length_squared();

@@ -13,6 +13,7 @@
 //! | [`SufficientStats`], [`FitParams`], [`MapPrior`] | parallax-aware fit (ȳ, r̄, w̄, N) with α = max(1/N, α_min) and the N² MAP prior | MCMM Table 1, Alg. 2-3; MCPG Table 1, Alg. 2-3 |
 //! | [`Vmf::product`], [`Vmf::convolve`], [`Vmf::clamped_cosine`] | closed-form product with its scale, approximate convolution, cosine lobe | — |
 //! | [`VmfLanes`] | a weighted mixture of a few lobes stored lane-wise, its density in one vectorised pass | MCPG eq. 6-7 |
+//! | [`LobeInputs`] | the lanes' statistics and MAP posterior parts, for building [`VmfLanes`] in whole-lane passes | MCPG Alg. 2 lines 6-8 |
 //! | [`VmfMixture`] | K-lobe mixture, one uniform reused for the component choice | MCMM eq. 5 |
 //! | [`Frame`] | branchless orthonormal frame | Duff et al. 2017 |
 //! | [`uniform_sphere`], [`UNIFORM_SPHERE_PDF`] | uniform directions on S², the baseline of every guided sampler | pbrt-v4 `SampleUniformSphere` |
@@ -81,7 +82,7 @@ mod features {
 pub use batch::sample_batch;
 pub use error::{MixtureError, VmfError};
 pub use frame::Frame;
-pub use lanes::VmfLanes;
+pub use lanes::{LobeInputs, VmfLanes};
 pub use mean_cosine::{
     KAPPA_MAX, kappa_from_mean_cosine, kappa_from_mean_cosine_exact, mean_cosine_from_kappa,
 };

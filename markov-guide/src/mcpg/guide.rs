@@ -6,13 +6,13 @@ use mcg_hashgrid::{
     normal_class, stochastic_corner, stochastic_trilinear,
 };
 use mcg_vmf::glam::{IVec3, Vec2, Vec3};
-use mcg_vmf::{MapPrior, SufficientStats, Vmf, VmfLanes};
+use mcg_vmf::{LobeInputs, Vmf, VmfLanes};
 
 use super::resampling::prepare_in_place;
 use super::single_scattering::jittered_view_direction;
 use super::{
     CacheConfig, CandidateSet, GridKind, GridState, GridUniforms, IrradianceCache, McpgParams,
-    Observation, SharedGrid, distance_prior, should_discard, update,
+    Observation, SharedGrid, should_discard, update,
 };
 use crate::error::GuideError;
 use crate::{cosine_hemisphere, cosine_hemisphere_pdf};
@@ -849,24 +849,59 @@ impl<'g, S: Scatter> GuidedVertex<'g, S> {
             _ => None,
         };
         let states = self.set.states();
-        // A young state lends the part y_k = `young_share` of its share to the scatter
-        // technique: computed once here for the lobes' weights and the scatter share.
-        let mut young = [0.0_f32; MAX_CANDIDATES];
-        for (y, s) in young.iter_mut().zip(states) {
-            *y = params.young_share(s.sample_count());
+        // The states' fields lane by lane (the states are stored whole), then every lane's
+        // inputs in passes over all lanes, which the compiler runs four lanes wide: the
+        // distance prior (`distance_prior`), the posterior's parts
+        // (`SufficientStats::posterior_parts` with r_p = 0 and the N² decay) and the share,
+        // with the same operations as those functions, so the lobes are the same bits.
+        let mut target = [[0.0_f32; MAX_CANDIDATES]; 3];
+        let mut weight_sum = [0.0_f32; MAX_CANDIDATES];
+        let mut count = [0.0_f32; MAX_CANDIDATES];
+        let mut inputs = LobeInputs::<MAX_CANDIDATES>::EMPTY;
+        for (k, s) in states.iter().enumerate() {
+            target[0][k] = s.mean_target.x;
+            target[1][k] = s.mean_target.y;
+            target[2][k] = s.mean_target.z;
+            weight_sum[k] = s.weight_sum;
+            count[k] = s.sample_count() as f32;
+            inputs.one_minus_mean_cosine[k] = s.one_minus_mean_cosine;
         }
-        let lane = |k: usize| match states.get(k) {
-            // `prepare_in_place` zeroed w̄ of every invalid state: w̄ > 0 is valid here.
-            Some(s) if s.weight_sum > 0.0 => (
-                s.stats(),
-                distance_prior(s, x, params),
-                (s.weight_sum / total) * (1.0 - young[k]),
-            ),
-            _ => (SufficientStats::EMPTY, MapPrior::NONE, 0.0),
-        };
+        // A young state lends the part y_k = `young_share` of its share to the scatter
+        // technique: computed once here for the lobes' weights and the scatter share. The
+        // parameters are read before the loop and every quotient is formed in every lane and
+        // then selected: a load or a division under a branch keeps the loop from vectorising.
+        let confident = params.confidence_samples > 0.0;
+        let per_sample = 1.0 / params.confidence_samples;
+        let (scale, min_weight) = (params.prior_scale, params.prior_min_weight);
+        let mut young = [0.0_f32; MAX_CANDIDATES];
+        for k in 0..MAX_CANDIDATES {
+            let y = (1.0 - count[k] * per_sample).max(0.0);
+            young[k] = if confident & (count[k] != 0.0) {
+                y
+            } else {
+                0.0
+            };
+            let (dx, dy, dz) = (target[0][k] - x.x, target[1][k] - x.y, target[2][k] - x.z);
+            let d2 = dx * dx + dy * dy + dz * dz;
+            let prior = (scale / d2).max(min_weight);
+            let prior = if d2 > 0.0 { prior } else { f32::INFINITY };
+            // `prior != prior`: NaN (a float compare, no class test).
+            #[allow(clippy::eq_op)]
+            let prior = if prior != prior { min_weight } else { prior };
+            inputs.offset_x[k] = dx;
+            inputs.offset_y[k] = dy;
+            inputs.offset_z[k] = dz;
+            inputs.n_eff[k] = count[k] * count[k];
+            inputs.prior_weight[k] = prior.max(0.0);
+            // `prepare_in_place` zeroed w̄ of every invalid state: w̄ > 0 is valid here; lanes
+            // past the offered states hold w̄ = 0 and N = 0.
+            let has = (weight_sum[k] > 0.0) & (count[k] != 0.0);
+            let share = (weight_sum[k] / total) * (1.0 - young[k]);
+            inputs.weight[k] = if has { share } else { 0.0 };
+        }
         // Every lobe at once (Alg. 2 lines 6-8; with the cosine product's lobe only,
         // μ' ∝ κμ + κ_c n, κ' = |κμ + κ_c n|), lane-wise, bit-identical to building each.
-        self.lobes.set_from_stats(x, cosine.as_ref(), lane);
+        self.lobes.set_from_inputs(&inputs, cosine.as_ref());
         for ((k, s), y) in states.iter().enumerate().zip(young) {
             if !(s.weight_sum > 0.0) {
                 continue;
@@ -1209,10 +1244,9 @@ impl PendingFinish<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mcpg::distance_prior;
+    use mcg_vmf::{MapPrior, SufficientStats};
 
-    /// `candidate_keys` memoises cells per grid and level; it must give [`Guide::key`]'s
-    /// keys bit for bit, for every grid choice, level jitter and corner (here a 4096-vertex
-    /// sweep over points, camera distances and uniforms, uniforms at 0, near 1 and beyond).
     #[test]
     fn adaptive_capacity_follows_the_pixels_within_bounds() {
         assert_eq!(GuideConfig::adaptive_capacity_for(0), 1 << 12);
@@ -1231,6 +1265,9 @@ mod tests {
         assert!(Guide::new(c).is_ok());
     }
 
+    /// `candidate_keys` memoises cells per grid and level; it must give [`Guide::key`]'s
+    /// keys bit for bit, for every grid choice, level jitter and corner (here a 4096-vertex
+    /// sweep over points, camera distances and uniforms, uniforms at 0, near 1 and beyond).
     #[test]
     fn candidate_keys_equal_the_single_keys() {
         let mut config = GuideConfig::for_scene(Vec3::ZERO, Vec3::splat(10.0));
@@ -1275,5 +1312,135 @@ mod tests {
                 assert_eq!(keys[k], guide.key(x, class, target, &g), "vertex {i}, {k}");
             }
         }
+    }
+
+    /// `build_lobes` forms the distance prior, the posterior's parts and the shares in passes
+    /// over whole lanes; its lobes, weights and scatter share must be those of the per-state
+    /// path (`distance_prior`, `young_share` and `VmfLanes::from_stats`, which gives
+    /// `SufficientStats::to_vmf`'s lobes) bit for bit: 2048 random candidate sets of one to
+    /// eight states per configuration (both hemisphere modes, N_c off and on), with the edge
+    /// cases ȳ at x, ȳ − x underflowing and overflowing in |ȳ − x|², N = 0 and w̄ = 0.
+    #[test]
+    fn build_lobes_equals_the_per_state_lobes() {
+        let mut seed = 0x2545_f491_u32;
+        let mut next = || {
+            seed = seed.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+            (seed >> 8) as f32 / (1u32 << 24) as f32
+        };
+        let mut lobes = 0;
+        for (hemisphere, confidence) in [
+            (Hemisphere::Sphere, 0.0),
+            (Hemisphere::CosineProduct, 0.0),
+            (Hemisphere::CosineProduct, 16.0),
+        ] {
+            let mut config = GuideConfig::for_scene(Vec3::ZERO, Vec3::splat(10.0));
+            config.cache = None;
+            config.hemisphere = hemisphere;
+            config.params.confidence_samples = confidence;
+            let guide = Guide::new(config).unwrap();
+            let params = &guide.config.params;
+            for round in 0..2048_usize {
+                let x = Vec3::new(next(), next(), next()) * 10.0;
+                let n = Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize();
+                let u = BeginUniforms::from_fn(MAX_CANDIDATES, &mut next);
+                let mut v = guide.begin(Vertex::surface(x, n), Lambertian { normal: n }, &u);
+                let count = 1 + round % MAX_CANDIDATES;
+                let states = v.set.restart();
+                for (k, state) in states.iter_mut().enumerate() {
+                    let target = Vec3::new(next(), next(), next()) * 10.0;
+                    let stats = SufficientStats {
+                        mean_target: match (round + k) % 23 {
+                            0 => x,
+                            1 => x + Vec3::new(1e-24, 0.0, 0.0),
+                            2 => Vec3::new(3e19, -1e19, 2e19),
+                            _ => target,
+                        },
+                        weight_sum: if (round + k) % 17 == 3 {
+                            0.0
+                        } else {
+                            5.0 * next()
+                        },
+                        one_minus_mean_cosine: next().powi(3) * 1.5,
+                        sample_count: if (round + k) % 19 == 4 {
+                            0
+                        } else {
+                            1 + (next() * 40.0) as u32
+                        },
+                    };
+                    *state = if k < count {
+                        GridState::from_stats(&stats, 0.0, Vec3::ZERO)
+                    } else {
+                        GridState::EMPTY
+                    };
+                }
+                for _ in 0..count {
+                    v.set.offer_stored(next());
+                }
+                // Stale lanes and share from the begun vertex: build_lobes writes over them.
+                v.scatter_share = 0.0;
+                v.build_lobes();
+
+                let total = v.set.weight_sum();
+                let states = v.set.states();
+                let cosine = match hemisphere {
+                    Hemisphere::CosineProduct => Vmf::clamped_cosine(n).ok(),
+                    Hemisphere::Sphere => None,
+                };
+                let young: [f32; MAX_CANDIDATES] = core::array::from_fn(|k| {
+                    states
+                        .get(k)
+                        .map_or(0.0, |s| params.young_share(s.sample_count()))
+                });
+                let want = if total > 0.0 {
+                    VmfLanes::<MAX_CANDIDATES>::from_stats(x, cosine.as_ref(), |k| {
+                        match states.get(k) {
+                            Some(s) if s.weight_sum > 0.0 => (
+                                s.stats(),
+                                distance_prior(s, x, params),
+                                (s.weight_sum / total) * (1.0 - young[k]),
+                            ),
+                            _ => (SufficientStats::EMPTY, MapPrior::NONE, 0.0),
+                        }
+                    })
+                } else {
+                    VmfLanes::EMPTY
+                };
+                let mut scatter_share = 0.0_f32;
+                for (k, s) in states.iter().enumerate() {
+                    if s.weight_sum > 0.0 && total > 0.0 {
+                        let share = s.weight_sum / total;
+                        scatter_share += if want.is_set(k) {
+                            share * young[k]
+                        } else {
+                            share
+                        };
+                    }
+                }
+                for k in 0..MAX_CANDIDATES {
+                    assert_eq!(v.lobes.is_set(k), want.is_set(k), "round {round} lane {k}");
+                    if want.is_set(k) {
+                        lobes += 1;
+                        assert_eq!(v.lobes.lobe(k), want.lobe(k), "round {round} lane {k}");
+                        assert_eq!(
+                            v.lobes.weight(k).to_bits(),
+                            want.weight(k).to_bits(),
+                            "round {round} lane {k}"
+                        );
+                    }
+                }
+                let w = Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize();
+                assert_eq!(
+                    v.lobes.pdf(w).to_bits(),
+                    want.pdf(w).to_bits(),
+                    "round {round}"
+                );
+                assert_eq!(
+                    v.scatter_share.to_bits(),
+                    scatter_share.to_bits(),
+                    "round {round}"
+                );
+            }
+        }
+        assert!(lobes > 10_000, "{lobes}");
     }
 }
