@@ -783,8 +783,11 @@ impl Guide {
             kinds[k] = kind;
             located[k] = self.grid(kind).locate(key);
         });
-        for ((slot, kind), at) in v.slots.iter_mut().zip(kinds).zip(located).take(count) {
-            *slot = self.grid(kind).find_located(at).map(|s| (kind, s));
+        for k in 0..count {
+            v.slots[k] = self
+                .grid(kinds[k])
+                .find_located(located[k])
+                .map(|s| (kinds[k], s));
         }
         // The states go straight into the candidate set's storage: the loaded state, or
         // `EMPTY` for a slot without a state, a hash collision, a torn read (which leaves its
@@ -801,11 +804,19 @@ impl Guide {
             }
         }
         let now = self.frame as f32;
-        for (state, kind) in states.iter_mut().zip(&kinds).take(count) {
+        for k in 0..count {
             // An `EMPTY` state is invalid: prepared to w̄ = 0 like a collision (Alg. 1 line 6).
-            prepare_in_place(state, false, *kind, x, vertex.normal, now, params);
+            prepare_in_place(
+                &mut states[k],
+                false,
+                kinds[k],
+                x,
+                vertex.normal,
+                now,
+                params,
+            );
         }
-        for c in u.candidates.iter().take(count) {
+        for c in &u.candidates[..count] {
             v.set.offer_stored(c.reservoir);
         }
         v.build_lobes();
