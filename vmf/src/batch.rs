@@ -1,8 +1,9 @@
 //! Sampling many lobes at once: the inverse CDF of [`Vmf::sample`] in a branch-free form whose
 //! loop the compiler vectorises.
 //!
-//! [`Vmf::sample`] branches on κ and calls the platform's `ln`/`exp`; per call that is the
-//! fastest form, but the calls keep a loop over many lobes scalar. [`sample_batch`] computes the
+//! [`Vmf::sample`] branches on κ and calls the platform's `ln` (its `exp` is the inlined
+//! polynomial used here too); per call that is the most accurate form near the antipode, but the
+//! call keeps a loop over many lobes scalar. [`sample_batch`] computes the
 //! same inverse CDF (see `cos_theta_minus_one` in `vmf.rs` for the derivation) with every
 //! branch turned into a select and with an inlined `ln` (atanh series) and `exp` (Cephes' `expf`),
 //! so that a loop over lobes runs several lanes at once.

@@ -42,17 +42,21 @@
 //!
 //! # Performance
 //! One full guided vertex without tracing (`begin` with N_mc = 5, `sample`, one more `pdf`,
-//! `finish`) executes about 4,750 instructions, 53 times a cosine-hemisphere sample (89); with
-//! the irradiance cache about 5,820 (65 times); on an idle AMD Zen 4 core that is about
-//! 0.53-0.56 µs (0.64-0.70 µs with the cache) against 6.9 ns, on a 2.8 GHz Intel Ice Lake
-//! server core 0.96 µs (1.07 µs) against 11 ns. `begin` hashes (and prefetches)
+//! `finish`) executes about 4,340 instructions, 49 times a cosine-hemisphere sample (89); with
+//! the irradiance cache about 5,370 (60 times); on a 2-vCPU Intel Ice Lake server VM that is
+//! about 0.48-0.54 µs (0.63-0.66 µs with the cache) against 7-9 ns (before the lobes' inputs
+//! were formed lane-wise: 0.53-0.56 µs against 6.9 ns on an idle AMD Zen 4 core, 0.96 µs
+//! against 11 ns on the Ice Lake). `begin` hashes (and prefetches)
 //! all its candidates before it probes any: 160 instructions more than probing each in turn,
 //! which renderers, whose states do not stay in the caches, get back as a 4-5 % cheaper guided
 //! frame; and each grid slot keeps its checksum, age and state in one cache line
 //! ([`SharedGrid`]), which took another 2-8 % off that frame against three arrays (a third
-//! fewer first-level cache misses). No single step dominates: the five keys,
-//! lookups and seqlocked loads, the five lobes (μ, posterior κ, cosine product, C(κ)), the
-//! densities and the transition with its store each take 10-25 %. Two threads sharing one
+//! fewer first-level cache misses). The lobes' inputs (the distance prior, the posterior's parts,
+//! the shares) are formed in passes over all lanes ([`mcg_vmf::LobeInputs`]), which the compiler
+//! runs four wide: 5 % fewer instructions and about 18 % less time per vertex than candidate by
+//! candidate. No single step dominates: the five keys, lookups and seqlocked loads, the five
+//! lobes (μ, posterior κ, cosine product, C(κ)), the densities and the transition with its
+//! store each take 10-25 %. Two threads sharing one
 //! `&Guide` ran 1.8-2.1 times as fast as one.
 //!
 //! In mcg-demo's 3-bounce CPU path tracer of a small room lit from behind a panel (128 × 128, 8
@@ -65,10 +69,10 @@
 //! `--mcpg-emission-allocation`). Its relative MSE is then 0.035 of BSDF sampling's at equal
 //! samples, and 4.3 times lower than with the paper's one direction. Against light sampling
 //! (next-event estimation with MIS, what renderers use today) it is about even at equal CPU time, a
-//! little ahead: 0.93-1.03 of its error × time (0.97 on average over four seeds) on an Intel Ice
-//! Lake server core, where a guided frame costs 4.3 times a light-sampled one; with the directions
-//! spread by depth only it was 1.07 there and 0.93 on an AMD Zen 4 core, whose guided frame costs
-//! 3.5 times. The extra directions are a third of a guided frame. Beside light sampling — the guide
+//! little ahead: 0.90-0.97 of its error × time (0.935 on average over four seeds) on an Intel
+//! Ice Lake server core, where a guided frame costs 3.9-4.0 times a light-sampled one; with the
+//! directions spread by depth only (and the lobes built candidate by candidate) it was 1.07 there
+//! and 0.93 on an AMD Zen 4 core, whose guided frame cost 3.5 times. The extra directions are a third of a guided frame. Beside light sampling — the guide
 //! sampling the scattered direction, one light sample per vertex, MIS with [`GuidedVertex::pdf`],
 //! the chains learning only the MIS-weighted share of the emission
 //! ([`VertexObservation::emission_weight`]) — it reaches 0.28 of light sampling's relative MSE,
